@@ -1,0 +1,7 @@
+"""``python -m mftyre`` runs the command-line interface."""
+
+import sys
+
+from mftyre.cli import main
+
+sys.exit(main())

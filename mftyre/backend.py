@@ -1,0 +1,223 @@
+"""The few operations whose NumPy and CasADi spellings differ.
+
+The Magic Formula equations in :mod:`mftyre.formula` are written once against a backend object ``be`` and
+never call ``numpy`` or ``casadi`` directly. Two backends exist:
+
+* :data:`NUMPY` evaluates on (broadcast) float64 arrays;
+* :data:`CASADI` builds ``casadi.SX`` (or ``MX``) expressions with the same operations.
+
+Both offer the elementary functions, comparisons folded into :meth:`where`, the MATLAB-style ``sign`` (with
+sign(0) = 0) and the "non-zero" sign used by the Magic Formula's singularity guards (sign(0) = +1), and two
+iteration primitives: :meth:`fixed_point` and :meth:`solve_bracketed`. NumPy iterates until every element has
+converged (with an iteration cap); CasADi unrolls a fixed, documented number of iterations so the resulting
+expression graph is static and differentiable.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["NumpyBackend", "CasadiBackend", "NUMPY", "CASADI"]
+
+
+class NumpyBackend:
+    """Element-wise operations on NumPy float64 arrays."""
+
+    name = "numpy"
+    pi = np.pi
+    eps = np.finfo(float).eps
+
+    sin = staticmethod(np.sin)
+    cos = staticmethod(np.cos)
+    tan = staticmethod(np.tan)
+    atan = staticmethod(np.arctan)
+    atan2 = staticmethod(np.arctan2)
+    acos = staticmethod(np.arccos)
+    sqrt = staticmethod(np.sqrt)
+    exp = staticmethod(np.exp)
+    log = staticmethod(np.log)
+    log10 = staticmethod(np.log10)
+    abs = staticmethod(np.abs)
+    sign = staticmethod(np.sign)
+    fmin = staticmethod(np.minimum)
+    fmax = staticmethod(np.maximum)
+    power = staticmethod(np.power)
+    logical_and = staticmethod(np.logical_and)
+    logical_or = staticmethod(np.logical_or)
+    logical_not = staticmethod(np.logical_not)
+    isnan = staticmethod(np.isnan)
+
+    @staticmethod
+    def where(cond, a, b):
+        return np.where(cond, a, b)
+
+    @staticmethod
+    def sign_nz(x):
+        """sign(x) with sign(0) = +1: the guard used in the Magic Formula's epsilon terms."""
+        return np.where(x < 0, -1.0, 1.0)
+
+    @staticmethod
+    def clip(x, lo, hi):
+        return np.minimum(np.maximum(x, lo), hi)
+
+    @staticmethod
+    def zeros_like(x):
+        return np.zeros_like(x, dtype=float)
+
+    @staticmethod
+    def fixed_point(step, x0, tol, max_iter=100, unrolled=None):
+        """Iterate ``x = step(x)`` until every element changes by at most ``tol``.
+
+        Returns ``(x, aux)`` where ``step`` returns ``(x_new, aux)``. Raises if not converged in
+        ``max_iter`` iterations (never returns an unconverged value silently).
+        """
+        x = x0
+        for _ in range(max_iter):
+            x_new, aux = step(x)
+            done = np.all((np.abs(x_new - x) <= tol) | ~np.isfinite(x_new))
+            x = x_new
+            if done:
+                return x, aux
+        raise ArithmeticError(f"fixed-point iteration did not converge in {max_iter} iterations")
+
+    @staticmethod
+    def solve_bracketed(fun, a, b, fa, fb, xtol, widen=None, max_iter=100, unrolled=None):
+        """Root of ``fun`` between ``a`` and ``b`` (``fa``, ``fb`` of opposite sign or zero), element-wise.
+
+        Dekker's method: secant steps from the best point ``b``, bisection whenever the secant leaves
+        the half of the bracket next to ``b``, steps of at least xtol/2; the bracket [a, b] always holds a
+        sign change. ``fun(x, idx)``
+        evaluates the elements ``idx`` (a tuple of index arrays) at ``x``. Iterates until |b - a| <= xtol
+        or f(b) = 0 for every element. ``widen(a, b, fb, idx) -> b'``, if given, first moves ``b`` (only where
+        fa and fb have the same non-zero sign, at most ``max_iter`` times) until the bracket holds a root;
+        elements still without a sign change return the end with the smaller |f|.
+        """
+        shape = np.shape(a)
+        a, b = np.atleast_1d(np.array(a, dtype=float)), np.atleast_1d(np.array(b, dtype=float))
+        fa, fb = np.atleast_1d(np.array(fa, dtype=float)), np.atleast_1d(np.array(fb, dtype=float))
+        for _ in range(max_iter if widen is not None else 0):
+            idx = np.nonzero(fa * fb > 0)
+            if idx[0].size == 0:
+                break
+            b[idx] = widen(a[idx], b[idx], fb[idx], idx)
+            fb[idx] = fun(b[idx], idx)
+        swap = np.abs(fa) < np.abs(fb)
+        a, b, fa, fb = np.where(swap, b, a), np.where(swap, a, b), np.where(swap, fb, fa), np.where(swap, fa, fb)
+        c, fc = a.copy(), fa.copy()
+        active = (fa * fb < 0) & (np.abs(b - a) > xtol)
+        for _ in range(max_iter):
+            if not active.any():
+                break
+            idx = np.nonzero(active)
+            ai, bi, ci, fai, fbi, fci = a[idx], b[idx], c[idx], fa[idx], fb[idx], fc[idx]
+            mid = 0.5 * (ai + bi)
+            secant = bi - fbi * (bi - ci) / (fbi - fci)
+            inside = (fbi != fci) & ((secant - bi) * (secant - mid) <= 0)
+            new = np.where(inside, secant, mid)
+            # a step shorter than xtol/2 is lengthened to xtol/2 towards a: once b is that close to the
+            # root the next point lands beyond it and the bracket collapses (as in Brent's method)
+            new = np.where(np.abs(new - bi) < 0.5 * xtol, bi + 0.5 * xtol * np.sign(ai - bi), new)
+            fnew = fun(new, idx)
+            keep_a = fnew * fai < 0
+            ai, fai = np.where(keep_a, ai, bi), np.where(keep_a, fai, fbi)
+            ci, fci = bi, fbi
+            bi, fbi = new, fnew
+            swap = np.abs(fai) < np.abs(fbi)
+            ai, bi = np.where(swap, bi, ai), np.where(swap, ai, bi)
+            fai, fbi = np.where(swap, fbi, fai), np.where(swap, fai, fbi)
+            a[idx], b[idx], c[idx], fa[idx], fb[idx], fc[idx] = ai, bi, ci, fai, fbi, fci
+            active[idx] = (fbi != 0) & (np.abs(bi - ai) > xtol)
+        else:
+            if active.any():
+                raise ArithmeticError(f"bracketed root search did not converge in {max_iter} iterations")
+        return np.where(np.abs(fb) <= np.abs(fa), b, a).reshape(shape)
+
+
+class CasadiBackend:
+    """The same operations on CasADi SX/MX expressions (fixed iteration counts for loops)."""
+
+    name = "casadi"
+    pi = np.pi
+    eps = np.finfo(float).eps
+
+    def __init__(self):
+        import casadi as ca
+
+        self.ca = ca
+        self.sin, self.cos, self.tan = ca.sin, ca.cos, ca.tan
+        self.atan, self.atan2, self.acos = ca.atan, ca.atan2, ca.acos
+        self.sqrt, self.exp, self.log = ca.sqrt, ca.exp, ca.log
+        self.abs, self.sign = ca.fabs, ca.sign
+        self.fmin, self.fmax = ca.fmin, ca.fmax
+        self.logical_and, self.logical_or, self.logical_not = ca.logic_and, ca.logic_or, ca.logic_not
+
+    def log10(self, x):
+        return self.ca.log(x) / np.log(10.0)
+
+    def power(self, x, y):
+        return self.ca.power(x, y)
+
+    def isnan(self, x):
+        return x != x
+
+    def where(self, cond, a, b):
+        return self.ca.if_else(cond, a, b)
+
+    def sign_nz(self, x):
+        return self.ca.if_else(x < 0, -1.0, 1.0)
+
+    def clip(self, x, lo, hi):
+        return self.ca.fmin(self.ca.fmax(x, lo), hi)
+
+    def zeros_like(self, x):
+        return 0 * x
+
+    def fixed_point(self, step, x0, tol, max_iter=100, unrolled=8):
+        """``unrolled`` iterations of ``x = step(x)`` (the contraction rate must make that enough)."""
+        x, aux = x0, None
+        for _ in range(unrolled):
+            x, aux = step(x)
+        return x, aux
+
+    def solve_bracketed(self, fun, a, b, fa, fb, xtol, widen=None, max_iter=100, unrolled=40):
+        """Up to 8 widening steps, then ``unrolled`` steps of Dekker's method (see
+        :meth:`NumpyBackend.solve_bracketed`)."""
+        ca = self.ca
+        for _ in range(8 if widen is not None else 0):
+            same_sign = fa * fb > 0
+            b = ca.if_else(same_sign, widen(a, b, fb, None), b)
+            fb = ca.if_else(same_sign, fun(b, None), fb)
+
+        def ordered(a, b, fa, fb):
+            swap = ca.fabs(fa) < ca.fabs(fb)
+            return (ca.if_else(swap, b, a), ca.if_else(swap, a, b), ca.if_else(swap, fb, fa),
+                    ca.if_else(swap, fa, fb))
+
+        a, b, fa, fb = ordered(a, b, fa, fb)
+        c, fc = a, fa
+        for _ in range(unrolled):
+            open_ = ca.logic_and(fa * fb < 0, ca.fabs(b - a) > xtol)
+            mid = 0.5 * (a + b)
+            secant = b - fb * (b - c) / (fb - fc)
+            inside = ca.logic_and(fb != fc, (secant - b) * (secant - mid) <= 0)
+            new = ca.if_else(inside, secant, mid)
+            new = ca.if_else(ca.fabs(new - b) < 0.5 * xtol, b + 0.5 * xtol * ca.sign(a - b), new)
+            fnew = fun(new, None)
+            keep_a = fnew * fa < 0
+            a2, fa2 = ca.if_else(keep_a, a, b), ca.if_else(keep_a, fa, fb)
+            a2, b2, fa2, fb2 = ordered(a2, new, fa2, fnew)
+            a, b, fa, fb, c, fc = (ca.if_else(open_, x2, x) for x2, x in
+                                   ((a2, a), (b2, b), (fa2, fa), (fb2, fb), (b, c), (fb, fc)))
+        return ca.if_else(ca.fabs(fb) <= ca.fabs(fa), b, a)
+
+
+NUMPY = NumpyBackend()
+_CASADI = None
+
+
+def __getattr__(name):  # lazy CASADI so that importing mftyre does not import casadi
+    global _CASADI
+    if name == "CASADI":
+        if _CASADI is None:
+            _CASADI = CasadiBackend()
+        return _CASADI
+    raise AttributeError(name)

@@ -1,0 +1,73 @@
+"""Drop-in replacement for the MATLAB evaluator MFeval: ``mfeval(tir, inputs, use_mode) -> (N, 30)``.
+
+Input columns ``[Fz kappa alpha gamma phit Vx P omega]`` (6 to 8 columns, ISO-W, SI); a missing or zero P
+means INFLPRES, a missing or zero omega means "estimate it" (decided per row; MFeval decides per call).
+``use_mode`` has three digits: hundreds 1/2 = limit checks on/off, tens 1/2 = alpha* off/on, units 1/2 =
+turn slip off/on.
+
+Output columns, in MFeval's order (half lengths doubled to 2a, 2b as MFeval reports them):
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .backend import NUMPY
+from .errors import ModelInputError
+from .formula import Modes
+from .formula.normalisation import condition_inputs
+from .model import MFModel, _as_float_arrays, load_tir
+
+__all__ = ["mfeval", "MFEVAL_COLUMNS"]
+
+MFEVAL_COLUMNS = ("Fx", "Fy", "Fz", "Mx", "My", "Mz", "kappa", "alpha", "gamma", "phit", "Vx", "P", "Re", "rho",
+                  "2a", "t", "mux", "muy", "omega", "Rl", "2b", "Mzr", "Cx", "Cy", "Cz", "Kya", "sigmax", "sigmay",
+                  "iKya", "Kxk")
+__doc__ += "    " + " ".join(MFEVAL_COLUMNS) + "\n"
+
+_FROM_OUTPUT = {"Fx": "fx", "Fy": "fy", "Fz": "fz", "Mx": "mx", "My": "my", "Mz": "mz", "kappa": "kappa",
+                "alpha": "alpha", "gamma": "gamma", "phit": "phit", "Vx": "vx", "P": "p", "Re": "re", "rho": "rho",
+                "t": "t", "mux": "mux", "muy": "muy", "omega": "omega", "Rl": "rl", "Mzr": "mzr", "Cx": "cx",
+                "Cy": "cy", "Cz": "cz", "Kya": "kya", "sigmax": "sigmax", "sigmay": "sigmay", "Kxk": "kxk"}
+
+
+def mfeval(tir, inputs, use_mode: int, *, kzgr0: str = "published") -> np.ndarray:
+    """Evaluate like MFeval. ``tir``: a path or an :class:`MFModel`; ``kzgr0='mfeval'`` reproduces MFeval's
+    turn-slip K_zgamma,r0 (see :data:`mftyre.formula.options.KZGR0_FORMS`)."""
+    model = tir if isinstance(tir, MFModel) else load_tir(tir)
+    modes = Modes.from_use_mode(use_mode, kzgr0=kzgr0)
+    table = np.atleast_2d(np.asarray(inputs, dtype=float))
+    if table.ndim != 2 or not 6 <= table.shape[1] <= 8:
+        raise ModelInputError(f"inputs must be an (N, 6..8) array [Fz kappa alpha gamma phit Vx P omega], "
+                              f"got shape {np.shape(inputs)}")
+    prm = model.params
+    n = table.shape[0]
+    pressure = table[:, 6] if table.shape[1] > 6 else np.zeros(n)
+    omega = table[:, 7] if table.shape[1] > 7 else np.zeros(n)
+    arrays = _as_float_arrays(dict(fz=table[:, 0], kappa=table[:, 1], alpha=table[:, 2], gamma=table[:, 3],
+                                   phit=table[:, 4], vx=table[:, 5],
+                                   p=np.where(pressure == 0, prm.INFLPRES, pressure), omega=omega))
+    if np.any(arrays["p"] < 0):
+        raise ModelInputError("pressure column P must be positive (or 0 for INFLPRES)")
+    out = model._evaluate_arrays(arrays, omega != 0, modes)
+
+    result = np.empty((n, len(MFEVAL_COLUMNS)))
+    for j, name in enumerate(MFEVAL_COLUMNS):
+        if name in _FROM_OUTPUT:
+            result[:, j] = out[_FROM_OUTPUT[name]]
+    result[:, MFEVAL_COLUMNS.index("2a")] = 2.0 * out["a"]
+    result[:, MFEVAL_COLUMNS.index("2b")] = 2.0 * out["b"]
+    # MFeval reports a placeholder deflection of 1e-6 m where the tyre carries no load
+    rho_col = MFEVAL_COLUMNS.index("rho")
+    result[:, rho_col] = np.where(out["fz"] == 0, 1e-6, result[:, rho_col])
+    # "instantaneous" cornering stiffness: forward difference over consecutive rows of the call
+    with np.errstate(all="ignore"):
+        sign = -1.0 if model.mirrored else 1.0
+        alpha_used = sign * condition_inputs(prm, arrays["fz"], arrays["kappa"], sign * arrays["alpha"],
+                                             arrays["gamma"], arrays["phit"], arrays["vx"], arrays["p"], modes,
+                                             NUMPY).alpha
+        if n > 1:
+            diff = np.diff(out["fy"]) / np.diff(alpha_used)
+            result[:, MFEVAL_COLUMNS.index("iKya")] = np.append(diff, diff[-1])
+        else:
+            result[:, MFEVAL_COLUMNS.index("iKya")] = 0.0
+    return result

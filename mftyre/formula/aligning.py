@@ -1,0 +1,100 @@
+"""Aligning torque: pneumatic trail t, residual torque Mzr and Mz = -t Fy' + Mzr + s Fx (4.E31-4.E78).
+
+Where the MF 6.1 book equations and the MF-Tyre implementation differ, the forms of Besselink, Schmeitz &
+Pacejka (2010) are used, as in the reference evaluator (they reproduce MF-Tyre):
+
+* Dt (paper A60) with gamma (not |gamma*|) and the pressure factor (1 - PPZ1 dpi), no sign(Vx);
+* Bt (paper A58) with QBZ4 gamma + QBZ5 |gamma| (the book's QBZ6 does not exist in .tir files);
+* alpha_r,eq, alpha_t,eq (paper A54, A55) with tan/atan, and s (paper A56) normalised by Fz0, not Fz0';
+* the trail is multiplied by LFZO (as MF-Tyre does);
+* Fy' = Gyk(gamma) Fy0(gamma = 0) (4.E74); MF 5.2 uses -t (Fy - SVyk) instead.
+With limits on, the load in t and Mzr is at least FZMIN.
+"""
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+from .normalisation import smooth_low_speed
+
+__all__ = ["aligning_coefficients", "aligning_torque"]
+
+
+def _load_for_moments(s, modes, be):
+    if modes.limits:
+        return be.where(s.Fz <= 0, 0.0, s.Fz_low)
+    return s.Fz
+
+
+def aligning_coefficients(prm, s, lat, gyk, modes, be) -> SimpleNamespace:
+    """Trail and residual-torque coefficients (4.E33-4.E47), turn-slip factors zeta5-zeta8 included."""
+    dfz, dpi, gs = s.dfz, s.dpi, s.gamma_star
+    R0 = prm.UNLOADED_RADIUS
+    Fz = _load_for_moments(s, modes, be)
+    c = SimpleNamespace()
+    SHt = prm.QHZ1 + prm.QHZ2 * dfz + (prm.QHZ3 + prm.QHZ4 * dfz) * gs  # (4.E35)
+    c.Kya_prime = lat.Kya + 1e-6 * be.sign_nz(lat.Kya)  # (4.E39)
+    SHf = lat.SHy + lat.SVy / c.Kya_prime  # (4.E38)
+    c.alpha_r = s.alpha_star + SHf  # (4.E37)
+    c.alpha_t = s.alpha_star + SHt  # (4.E34)
+    zeta5 = s.zeta5 if modes.turn_slip else 1.0
+    c.Dt = ((prm.QDZ1 + prm.QDZ2 * dfz) * (1.0 - prm.PPZ1 * dpi)
+            * (1.0 + prm.QDZ3 * s.gamma + prm.QDZ4 * s.gamma**2) * Fz * (R0 / s.Fz0p) * prm.LTR * zeta5)  # paper A60
+    c.Bt = ((prm.QBZ1 + prm.QBZ2 * dfz + prm.QBZ3 * dfz**2) * (1.0 + prm.QBZ4 * s.gamma + prm.QBZ5 * be.abs(s.gamma))
+            * prm.LKY / s.LMUY_star)  # paper A58
+    c.Ct = prm.QCZ1  # (4.E41)
+    c.Et = ((prm.QEZ1 + prm.QEZ2 * dfz + prm.QEZ3 * dfz**2)
+            * (1.0 + (prm.QEZ4 + prm.QEZ5 * gs) * (2.0 / be.pi) * be.atan(c.Bt * c.Ct * c.alpha_t)))  # (4.E44)
+    if modes.limits:
+        c.Et = be.fmin(c.Et, 1.0)
+
+    if modes.turn_slip:
+        zeta0, zeta2, zeta6 = 0.0, s.zeta2, s.zeta6
+        phit = s.phit
+        mz_inf = prm.QCRP1 * be.abs(lat.muy) * R0 * Fz * be.sqrt(Fz / s.Fz0p) * prm.LMP  # (4.95)
+        mz_inf = be.where(mz_inf < 0, 1e-6, mz_inf)
+        c_drp = prm.QDRP1  # (4.96)
+        d_drp = mz_inf / be.sin(0.5 * be.pi * c_drp)  # (4.94)
+        if modes.kzgr0 == "published":  # (4.99)
+            k_zgr0 = Fz * R0 * (prm.QDZ8 + prm.QDZ9 * dfz + (prm.QDZ10 + prm.QDZ11 * dfz) * be.abs(s.gamma)) * prm.LKZC
+        else:  # the reference evaluator's form
+            k_zgr0 = Fz * R0 * (prm.QDZ8 * prm.QDZ9 * dfz + prm.QDZ10 + prm.QDZ11 * dfz * be.abs(s.gamma)) * prm.LKZC
+        b_drp = k_zgr0 / (c_drp * d_drp * (1.0 - s.eps_gamma))  # (4.98)
+        d_rp = d_drp * be.sin(c_drp * be.atan(b_drp * R0 * phit))  # (4.93)
+        mz90 = mz_inf * (2.0 / be.pi) * be.atan(prm.QCRP2 * R0 * be.abs(phit)) * gyk  # (4.103)
+        # (4.104): Cr = zeta7 = (2/pi) acos(Mz90 / |Drphi|); a ratio above 1 gives zeta7 = 0 (real part).
+        # At phit = 0 both vanish linearly: use the limit of the ratio there.
+        ratio_limit = (mz_inf * (2.0 / be.pi) * prm.QCRP2 * gyk * (1.0 - s.eps_gamma)
+                       / be.abs(k_zgr0 + 1e-30 * be.sign_nz(k_zgr0)))
+        ratio = be.where(phit == 0, ratio_limit, mz90 / be.abs(d_rp))
+        zeta7 = (2.0 / be.pi) * be.acos(be.fmin(ratio, 1.0))
+        zeta8 = 1.0 + d_rp  # (4.97)
+    else:
+        zeta0 = zeta2 = zeta6 = zeta7 = zeta8 = 1.0
+
+    c.Dr = (Fz * R0 * ((prm.QDZ6 + prm.QDZ7 * dfz) * prm.LRES * zeta2
+                       + ((prm.QDZ8 + prm.QDZ9 * dfz) * (1.0 + prm.PPZ2 * dpi)
+                          + (prm.QDZ10 + prm.QDZ11 * dfz) * be.abs(gs)) * gs * prm.LKZC * zeta0)
+            * s.LMUY_star * be.sign(s.vx) * be.cos(s.alpha_star) + zeta8 - 1.0)  # (4.E47)
+    c.Br = (prm.QBZ9 * prm.LKY / s.LMUY_star + prm.QBZ10 * lat.By * lat.Cy) * zeta6  # (4.E45)
+    c.Cr = zeta7  # (4.E46)
+    return c
+
+
+def aligning_torque(prm, s, c, kxk, fx, fy, svyk, fy0_gamma0, gyk, modes, be):
+    """(Mz, t, Mzr) under combined slip (4.E71-4.E78, paper A54-A56)."""
+    R0 = prm.UNLOADED_RADIUS
+    k_ratio2 = (kxk / c.Kya_prime) ** 2 * s.kappa**2
+    alpha_r_eq = be.atan(be.sqrt(be.tan(c.alpha_r) ** 2 + k_ratio2)) * be.sign(c.alpha_r)  # paper A54
+    alpha_t_eq = be.atan(be.sqrt(be.tan(c.alpha_t) ** 2 + k_ratio2)) * be.sign(c.alpha_t)  # paper A55
+    arm = R0 * (prm.SSZ1 + prm.SSZ2 * (fy / prm.FNOMIN) + (prm.SSZ3 + prm.SSZ4 * s.dfz) * s.gamma) * prm.LS  # paper A56
+    mzr = c.Dr * be.cos(c.Cr * be.atan(c.Br * alpha_r_eq))  # (4.E75)
+    bt = c.Bt * alpha_t_eq
+    t = c.Dt * be.cos(c.Ct * be.atan(bt - c.Et * (bt - be.atan(bt)))) * s.cos_alpha_prime  # (4.E73)
+    t = t * prm.LFZO
+    t, mzr = smooth_low_speed(s, t, be), smooth_low_speed(s, mzr, be)
+    if prm.version == "52":
+        mz = -t * (fy - svyk) + mzr + arm * fx
+    else:
+        fy_prime = gyk * fy0_gamma0  # (4.E74)
+        mz = -t * fy_prime + mzr + arm * fx  # (4.E71), (4.E72)
+    return mz, t, mzr

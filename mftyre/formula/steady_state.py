@@ -1,0 +1,57 @@
+"""Steady-state evaluation: conditioned inputs -> every output of the model, for any backend."""
+from __future__ import annotations
+
+from . import aligning, derived, lateral, longitudinal, moments, normalisation, turnslip, vertical
+
+__all__ = ["steady_state", "OUTPUT_NAMES"]
+
+#: Every output, in the order of :class:`mftyre.model.MFOutputs`.
+OUTPUT_NAMES = (
+    "fx", "fy", "fz", "mx", "my", "mz",
+    "kappa", "alpha", "gamma", "phit", "vx", "p", "omega",
+    "re", "rho", "rl", "a", "b", "t", "mzr", "mux", "muy",
+    "cx", "cy", "cz", "kya", "kxk", "sigmax", "sigmay",
+)
+
+
+def steady_state(prm, fz, kappa, alpha, gamma, phit, vx, p, omega, omega_given, modes, be) -> dict:
+    """All outputs at the given inputs (ISO-W, SI).
+
+    ``omega_given`` is True (use ``omega``), False (estimate it from kappa and Vx) or a boolean array
+    choosing per element.
+    """
+    s = normalisation.condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be)
+    omega, r_omega, re = vertical.spin_and_radius(prm, s, omega, omega_given, be)
+    if modes.turn_slip:
+        s.phi, s.eps_gamma = turnslip.spin_slip(prm, s, omega, be)
+        turnslip.zeta_factors(prm, s, be)
+
+    lon = longitudinal.pure_longitudinal(prm, s, modes, be)
+    lat = lateral.pure_lateral(prm, s, s.gamma_star, modes, be)
+    fx = longitudinal.combined_longitudinal(prm, s, lon.Fx0, modes, be)
+    fy, gyk, svyk = lateral.combined_lateral(prm, s, lat.Fy0, lat.muy, modes, be)
+
+    coeffs = aligning.aligning_coefficients(prm, s, lat, gyk, modes, be)
+    fy0_gamma0 = None if prm.version == "52" else lateral.pure_lateral(prm, s, 0.0, modes, be).Fy0
+    mz, t, mzr = aligning.aligning_torque(prm, s, coeffs, lon.Kxk, fx, fy, svyk, fy0_gamma0, gyk, modes, be)
+    mx = moments.overturning_moment(prm, s, fy, be)
+    my = moments.rolling_resistance_moment(prm, s, fx, be)
+
+    if prm.version == "62":
+        rl, rho = vertical.loaded_radius_62(prm, s.uFz, r_omega, omega, fx, fy, s.gamma, s.dpi, be)
+        fz_cz = s.Fz
+    else:
+        rho = vertical.deflection_61(prm, s.Fz_low, r_omega, omega, fx, fy, s.dpi, be)
+        rl = be.fmax(r_omega - rho, 0.0)
+        fz_cz = s.Fz_low
+    cz = fz_cz / be.where(fz_cz == 0, 1e-6, rho)
+    a, b = vertical.contact_patch(prm, s.uFz, s.dpi, be)
+    cx, cy, sigmax, sigmay = derived.carcass_stiffness_and_relaxation(prm, s, lon.Kxk, lat.Kya, be)
+
+    muy = be.abs(lat.muy) if modes.limits else lat.muy
+    return dict(
+        fx=fx, fy=fy, fz=s.uFz, mx=mx, my=my, mz=mz,
+        kappa=s.kappa_out, alpha=s.alpha_out, gamma=s.ugamma, phit=s.phit, vx=s.vx, p=s.p, omega=omega,
+        re=re, rho=rho, rl=rl, a=a, b=b, t=t, mzr=mzr, mux=lon.mux, muy=muy,
+        cx=cx, cy=cy, cz=cz, kya=lat.Kya, kxk=lon.Kxk, sigmax=sigmax, sigmay=sigmay,
+    )

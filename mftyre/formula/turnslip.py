@@ -1,0 +1,51 @@
+"""Turn slip and camber spin: the spin slip phi and the reduction factors zeta (Pacejka 2012, Section 4.3.3).
+
+With turn slip switched off every zeta is 1 (zeta0 = 1 as well), i.e. the equations reduce to the
+pure-slip/combined-slip model for small camber.
+
+Sign convention: ISO-W axes (z up). The spin is phi = (psi_dot - (1 - eps_gamma) omega sin(gamma)) / Vc'
+with psi_dot = -phit Vc'; this is (4.76) written for a z axis pointing up, which removes the leading minus
+sign of the book's adapted-SAE form (the MF-Tyre and reference-evaluator convention).
+"""
+from __future__ import annotations
+
+__all__ = ["spin_slip", "zeta_factors", "lateral_shift_turn_slip"]
+
+
+def spin_slip(prm, s, omega, be):
+    """phi (4.76) and the camber reduction factor eps_gamma (4.90)."""
+    eps_gamma = prm.PECP1 * (1.0 + prm.PECP2 * s.dfz)  # (4.90)
+    vsy = -be.tan(s.alpha) * be.abs(s.vx)
+    vc = be.sqrt(s.vx**2 + vsy**2)
+    # singularity protection: below VXLOW the speed in the spin definition is held at +-VXLOW
+    vc_prime = be.where(be.abs(s.vx) < prm.VXLOW, prm.VXLOW * be.sign_nz(s.vx), vc)
+    psi_dot = -s.phit * vc_prime  # (4.75)
+    phi = (psi_dot - (1.0 - eps_gamma) * omega * be.sin(s.gamma)) / vc_prime  # (4.76)
+    return phi, eps_gamma
+
+
+def zeta_factors(prm, s, be):
+    """zeta1, zeta2, zeta3, zeta5, zeta6 from the spin phi (stored in ``s``)."""
+    R0, phi = prm.UNLOADED_RADIUS, s.phi
+    bxp = prm.PDXP1 * (1.0 + prm.PDXP2 * s.dfz) * be.cos(be.atan(prm.PDXP3 * s.kappa))  # (4.106)
+    s.zeta1 = be.cos(be.atan(bxp * R0 * phi))  # (4.105)
+    byp = prm.PDYP1 * (1.0 + prm.PDYP2 * s.dfz) * be.cos(be.atan(prm.PDYP3 * be.tan(s.alpha)))  # (4.78)
+    s.zeta2 = be.cos(be.atan(byp * (R0 * be.abs(phi) + prm.PDYP4 * be.sqrt(R0 * be.abs(phi)))))  # (4.77)
+    s.zeta3 = be.cos(be.atan(prm.PKYP1 * R0**2 * phi**2))  # (4.79)
+    s.zeta5 = be.cos(be.atan(prm.QDTP1 * R0 * phi))  # (4.91)
+    s.zeta6 = be.cos(be.atan(prm.QBRP1 * R0 * phi))  # (4.102)
+
+
+def lateral_shift_turn_slip(prm, s, kya, kya0, kyg0, svyg, limits, be):
+    """zeta4 = 1 + S_Hyphi - S_Vygamma / K'_ya (4.84) with S_Hyphi from (4.80)-(4.89)."""
+    R0, phi = prm.UNLOADED_RADIUS, s.phi
+    kya_prime = kya + 1e-6 * be.sign_nz(kya)  # (4.E39)
+    kya0_prime = kya0 + 1e-6 * be.sign_nz(kya0)
+    c_hyp = prm.PHYP1  # (4.85)
+    d_hyp = (prm.PHYP2 + prm.PHYP3 * s.dfz) * be.sign(s.vx)  # (4.86)
+    e_hyp = min(prm.PHYP4, 1.0) if limits else prm.PHYP4  # (4.87)
+    k_yrp0 = kyg0 / (1.0 - s.eps_gamma)  # (4.89)
+    b_hyp = k_yrp0 / (c_hyp * d_hyp * kya0_prime)  # (4.88)
+    x = b_hyp * R0 * phi
+    s_hyp = d_hyp * be.sin(c_hyp * be.atan(x - e_hyp * (x - be.atan(x)))) * be.sign(s.vx)  # (4.80)
+    return 1.0 + s_hyp - svyg / kya_prime  # (4.84)

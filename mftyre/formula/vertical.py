@@ -1,0 +1,186 @@
+"""Vertical tyre behaviour: radii, spin estimate, Fz(rho, p) both ways, contact patch.
+
+Equations: Besselink, Schmeitz & Pacejka (2010), paper (1)-(10); Pacejka (2012) A3.1-A3.3; MF-Tyre/MF-Swift
+6.2 vertical-force relation (as documented in its equation manual, 2013) with
+
+* free spinning radius          R_omega = R0 (Q_RE0 + Q_V1 (omega R0 / V0)^2)                 paper (1)
+* vertical stiffness            Cz = Cz0 (1 + PFZ1 dpi)                                         paper (5)
+* effective rolling radius      Re = R_omega - Fz0/Cz (DREFF atan(BREFF Fz/Fz0) + FREFF Fz/Fz0)  paper (7)
+* MF 6.1 load-deflection        Fz = (1 + Q_V2 |omega| R0/V0 - (Q_FCX Fx/Fz0)^2 - (Q_FCY Fy/Fz0)^2)
+                                     (1 + PFZ1 dpi) (Q_FZ1 rho/R0 + Q_FZ2 (rho/R0)^2) Fz0         A3.3, paper (3)
+  with Q_FZ1 = sqrt((Cz0 R0/Fz0)^2 - 4 Q_FZ2)                                                   paper (4)
+* MF 6.2 adds the camber deflection rho_zgamma (Q_CAM1-3), the camber/side-force asymmetry S_Fygamma
+  (Q_FYS1-3) and the deflection-dependent side-force term (rho/R0)^Q_FCY2.
+* bottoming (both versions): when the loaded radius falls below RIM_RADIUS + BOTTOM_OFFST the rim
+  pushes through the tyre with BOTTOM_STIFF: Fz_bottom = BOTTOM_STIFF (RIM_RADIUS + BOTTOM_OFFST - Rl).
+* contact patch (paper (9), (10)): a = R0 (Q_RA2 Fz/(Cz R0) + Q_RA1 sqrt(Fz/(Cz R0))),
+  b = w (Q_RB2 Fz/(Cz R0) + Q_RB1 (Fz/(Cz R0))^(1/3)), with the load capped at the bottoming load.
+
+Loaded radius from the load. MF 6.1: the quadratic in rho/R0 is solved in the cancellation-free form
+x = 2c / (B + sqrt(B^2 + 4 A c)), finite also for Q_FZ2 = 0 (linear tyre) where the textbook root formula
+divides by zero. MF 6.2: the relation is not monotone near zero deflection (Q_FCY2 < 0 makes the side-force
+term grow without bound as rho -> 0), so a secant started near R0 can diverge. mftyre brackets the root
+between the free radius and a deflection where the load is exceeded, then refines with Dekker's method (secant with
+bisection safeguard) to 1e-13 m; whenever a root with Rl <= R_omega exists it is found. When even zero free deflection already gives
+more than the requested load (a cambered tyre at almost no load, touching with its shoulder) the loaded radius
+is R_omega: the contact is about to be lost.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "free_radius", "vertical_stiffness", "effective_rolling_radius", "spin_and_radius",
+    "vertical_force_61", "vertical_force_62", "deflection_61", "loaded_radius_62", "contact_patch",
+]
+
+
+def free_radius(prm, omega, be):
+    """R_omega: centrifugal growth of the free radius, paper (1)."""
+    return prm.UNLOADED_RADIUS * (prm.Q_RE0 + prm.Q_V1 * (omega * prm.UNLOADED_RADIUS / prm.LONGVL) ** 2)
+
+
+def vertical_stiffness(prm, dpi):
+    """Cz at pressure: Cz0 (1 + PFZ1 dpi), paper (5)."""
+    return prm.VERTICAL_STIFFNESS * (1.0 + prm.PFZ1 * dpi)
+
+
+def effective_rolling_radius(prm, r_omega, fz, dpi, be):
+    """Re, paper (7)."""
+    Fz0 = prm.FNOMIN
+    return r_omega - (Fz0 / vertical_stiffness(prm, dpi)) * (
+        prm.DREFF * be.atan(prm.BREFF * fz / Fz0) + prm.FREFF * fz / Fz0)
+
+
+def spin_and_radius(prm, s, omega_in, omega_given, be):
+    """Spin omega, free radius R_omega and effective rolling radius Re.
+
+    Where the spin is not given it follows from the longitudinal slip: omega = (1 + kappa) Vx / Re (2.5),
+    solved together with Re(omega) by fixed-point iteration from Re = 0.965 R0 (the iteration contracts by
+    about 2 Q_V1 (omega R0/V0)^2 per step).
+    """
+    def step(re):
+        omega = (1.0 + s.ukappa) * s.vx / re
+        r_omega = free_radius(prm, omega, be)
+        return effective_rolling_radius(prm, r_omega, s.uFz, s.dpi, be), (omega, r_omega)
+
+    if omega_given is True:
+        omega = omega_in
+    else:
+        re0 = 0.965 * prm.UNLOADED_RADIUS + be.zeros_like(s.vx * s.uFz * s.ukappa)
+        re, (omega_est, _) = be.fixed_point(step, re0, tol=1e-13, max_iter=200, unrolled=8)
+        omega_est = (1.0 + s.ukappa) * s.vx / re  # consistent with the converged radius
+        omega = omega_est if omega_given is False else be.where(omega_given, omega_in, omega_est)
+    r_omega = free_radius(prm, omega, be)
+    re = effective_rolling_radius(prm, r_omega, s.uFz, s.dpi, be)
+    return omega, r_omega, re
+
+
+def _q_fz1(prm):
+    """Q_FZ1 from the nominal stiffness, paper (4)."""
+    return np.sqrt((prm.VERTICAL_STIFFNESS * prm.UNLOADED_RADIUS / prm.FNOMIN) ** 2 - 4.0 * prm.Q_FZ2)
+
+
+def _bottoming_force(prm, rl, be):
+    return prm.BOTTOM_STIFF * be.fmax(prm.RIM_RADIUS + prm.BOTTOM_OFFST - rl, 0.0)
+
+
+def vertical_force_61(prm, rho, r_omega, omega, fx, fy, dpi, be):
+    """MF 6.1 Fz(rho, p): A3.3 / paper (3) with the speed, Fx and Fy factors, plus bottoming."""
+    R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
+    x = rho / R0
+    correction = (1.0 + prm.Q_V2 * (R0 / prm.LONGVL) * be.abs(omega) - (prm.Q_FCX * fx / Fz0) ** 2
+                  - (prm.Q_FCY * fy / Fz0) ** 2) * (1.0 + prm.PFZ1 * dpi)
+    return correction * (_q_fz1(prm) * x + prm.Q_FZ2 * x**2) * Fz0 + _bottoming_force(prm, r_omega - rho, be)
+
+
+def deflection_61(prm, fz, r_omega, omega, fx, fy, dpi, be):
+    """Inverse of :func:`vertical_force_61`: deflection rho >= 0 carrying the load ``fz``."""
+    R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
+    correction = (1.0 + prm.Q_V2 * (R0 / prm.LONGVL) * be.abs(omega) - (prm.Q_FCX * fx / Fz0) ** 2
+                  - (prm.Q_FCY * fy / Fz0) ** 2) * (1.0 + prm.PFZ1 * dpi)
+    A, B = prm.Q_FZ2 * correction * Fz0, _q_fz1(prm) * correction * Fz0
+
+    def root(a, b, c):  # positive root of a x^2 + b x = c, cancellation free
+        return 2.0 * c / (b + be.sqrt(b**2 + 4.0 * a * c))
+
+    x = be.fmax(root(A, B, fz), 0.0)
+    # past the bottoming deflection the rim adds BOTTOM_STIFF (R0 x - rho_b)
+    rho_b = r_omega - prm.RIM_RADIUS - prm.BOTTOM_OFFST
+    Kb = prm.BOTTOM_STIFF * R0
+    x_b = root(A, B + Kb, fz + prm.BOTTOM_STIFF * rho_b)
+    return be.where(x * R0 > rho_b, x_b, x) * R0
+
+
+def vertical_force_62(prm, rl, r_omega, omega, fx, fy, gamma, dpi, be):
+    """MF 6.2 Fz(Rl): returns (Fz, rho_z) at loaded radius ``rl``."""
+    R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
+    ratio = rl / r_omega
+    s_fygamma = (prm.Q_FYS1 + prm.Q_FYS2 * ratio + prm.Q_FYS3 * ratio**2) * gamma
+    rho_free = be.fmax(r_omega - rl, 0.0)
+    tread_width = (1.075 - 0.5 * prm.ASPECT_RATIO) * prm.WIDTH  # reference tread width
+    if prm.Q_CAM1 == 0.0 and prm.Q_CAM2 == 0.0:
+        rho_camber = -prm.Q_CAM3 * rho_free * be.abs(gamma)
+    else:
+        growth = (prm.Q_CAM1 * rl + prm.Q_CAM2 * rl**2) / (prm.Q_CAM1 * r_omega + prm.Q_CAM2 * r_omega**2)
+        rho_camber = growth**2 * (tread_width / 8.0) * be.abs(be.tan(gamma)) - prm.Q_CAM3 * rho_free * be.abs(gamma)
+    rho = be.fmax(rho_free + rho_camber, 1e-12)
+    correction = (1.0 + prm.Q_V2 * (R0 / prm.LONGVL) * be.abs(omega) - (prm.Q_FCX * fx / Fz0) ** 2
+                  - ((rho / R0) ** prm.Q_FCY2 * prm.Q_FCY * (fy - s_fygamma) / Fz0) ** 2) * (1.0 + prm.PFZ1 * dpi)
+    fz = correction * (_q_fz1(prm) * (rho / R0) + prm.Q_FZ2 * (rho / R0) ** 2) * Fz0
+    return fz + _bottoming_force(prm, rl, be), rho
+
+
+def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
+    """Inverse of :func:`vertical_force_62`: (Rl, rho_z) carrying ``fz``, see the module notes."""
+    args = (r_omega, omega, fx, fy, gamma, dpi)
+    if be.name == "numpy":
+        fz, *args = (np.atleast_1d(v) for v in np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (fz, *args))))
+
+    def residual(rl, idx):
+        sub = args if idx is None else [v[idx] for v in args]
+        target = fz if idx is None else fz[idx]
+        return vertical_force_62(prm, rl, *sub, be)[0] - target
+
+    r_omega = args[0]
+    f_top = residual(r_omega, None)  # < 0 when the free tyre carries less than fz
+    contact = f_top < 0
+    # first point: the MF 6.1 relation without the side-force term (a lower bound of the deflection
+    # without camber); second point: the linear extrapolation of the load from zero deflection through
+    # the first point, an upper bound since Fz/rho grows with rho; widen if that still fails to bracket
+    rho_1 = deflection_61(prm, fz, r_omega, omega, fx, 0.0 * fy, dpi, be)
+    f_1 = residual(r_omega - rho_1, None)
+    load_1 = f_1 + fz
+    ratio = be.where(load_1 > 0, fz / be.where(load_1 > 0, load_1, 1.0), 2.0)
+    rho_2 = rho_1 * be.clip(ratio, 0.25, 4.0) * be.where(ratio > 1, 1.02, 0.98) + 1e-9
+    f_2 = residual(r_omega - rho_2, None)
+
+    def widen(rl_1, rl_2, f_2, idx):  # more deflection while the load is short, less while it is exceeded
+        top = r_omega if idx is None else r_omega[idx]
+        return top - (top - rl_2) * be.where(f_2 < 0, 1.5, 0.5)
+
+    f_1, f_2 = be.where(contact, f_1, 0.0 * f_1), be.where(contact, f_2, 0.0 * f_2)
+    rl = be.solve_bracketed(residual, r_omega - rho_1, r_omega - rho_2, f_1, f_2, xtol=1e-13, widen=widen,
+                            max_iter=200, unrolled=30)
+    rl = be.where(contact, rl, r_omega)
+    return rl, vertical_force_62(prm, rl, *args, be)[1]
+
+
+def contact_patch(prm, fz, dpi, be):
+    """Half length a and half width b of the contact patch, paper (9), (10) (MF 5.2: Q_A1, Q_A2)."""
+    R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
+    cz = vertical_stiffness(prm, dpi)
+    fz_bottoming = (R0 - prm.RIM_RADIUS - prm.BOTTOM_OFFST) * cz
+    fz = be.where(R0 - fz / cz < prm.RIM_RADIUS + prm.BOTTOM_OFFST, fz_bottoming, fz)
+    if prm.version == "52":
+        q_a1, q_a2 = prm.Q_A1, prm.Q_A2
+        if q_a1 == 0.0 and q_a2 == 0.0:  # MF-Tyre 5.2 default from the stiffness ratio
+            y = np.log10(R0 * prm.VERTICAL_STIFFNESS / Fz0)
+            q_a1 = -0.0388 * y**3 + 0.2509 * y**2 - 0.6283 * y + 0.6279
+            q_a2 = 1.693 * q_a1**2
+        a = R0 * (q_a2 * fz / Fz0 + q_a1 * be.sqrt(fz / Fz0))
+        return a, prm.WIDTH / 2.0 + 0.0 * a
+    load = fz / (cz * R0)
+    a = R0 * (prm.Q_RA2 * load + prm.Q_RA1 * be.sqrt(load))
+    b = prm.WIDTH * (prm.Q_RB2 * load + prm.Q_RB1 * load ** (1.0 / 3.0))
+    return a, b

@@ -1,0 +1,197 @@
+"""MFModel: the public face of the steady-state Magic Formula.
+
+    >>> import mftyre
+    >>> model = mftyre.load_tir("tir_files/car_205_60R15_mf61.tir")
+    >>> out = model.evaluate(fz=4000, kappa=0.0, alpha=np.linspace(-0.2, 0.2, 41))
+    >>> out.fy, out.mz, out.to_frame()
+
+Axes and units: ISO-W (TYDEX W) contact-point axes, SI units (N, N m, rad, m, m/s, Pa, rad/s).
+
+Tyre side. ``TYRESIDE`` in a .tir file names the side on which the tyre was measured. A model mounted on the
+other side (``side=`` of :func:`load_tir` / :class:`MFModel`) is the mirror image of the measured tyre in the
+wheel's x-z plane: the lateral inputs alpha, gamma and phit change sign before the equations, and the lateral
+outputs Fy, Mx, Mz and Mzr change sign after them. Everything else (Fx, Fz, My, radii, patch, friction,
+stiffnesses, trail, relaxation lengths) is unchanged: mirroring turns the tyre's own asymmetries (ply steer,
+conicity, the camber-induced shifts) into their mirror images and keeps the symmetric behaviour as it is.
+"""
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from .errors import ModelInputError
+from .formula import OUTPUT_NAMES, Modes, steady_state
+from .backend import NUMPY
+
+__all__ = ["MFModel", "MFOutputs", "load_tir", "OUTPUT_UNITS"]
+
+#: Unit and meaning of every output.
+OUTPUT_UNITS = {
+    "fx": ("N", "longitudinal force"),
+    "fy": ("N", "lateral force"),
+    "fz": ("N", "vertical load (input, negative values set to 0)"),
+    "mx": ("N m", "overturning moment"),
+    "my": ("N m", "rolling-resistance moment (negative rolling forwards)"),
+    "mz": ("N m", "self-aligning moment"),
+    "kappa": ("-", "longitudinal slip as used (low-speed scaled, not saturated)"),
+    "alpha": ("rad", "slip angle as used (0 at standstill, not saturated)"),
+    "gamma": ("rad", "inclination angle (input)"),
+    "phit": ("1/m", "turn slip as used"),
+    "vx": ("m/s", "longitudinal speed of the wheel centre"),
+    "p": ("Pa", "inflation pressure as used (saturated to the .tir range with limits)"),
+    "omega": ("rad/s", "wheel spin (input or estimated from kappa and Vx)"),
+    "re": ("m", "effective rolling radius"),
+    "rho": ("m", "vertical deflection"),
+    "rl": ("m", "loaded radius"),
+    "a": ("m", "contact patch half length"),
+    "b": ("m", "contact patch half width"),
+    "t": ("m", "pneumatic trail"),
+    "mzr": ("N m", "residual aligning moment"),
+    "mux": ("-", "longitudinal friction coefficient"),
+    "muy": ("-", "lateral friction coefficient"),
+    "cx": ("N/m", "longitudinal carcass stiffness"),
+    "cy": ("N/m", "lateral carcass stiffness"),
+    "cz": ("N/m", "vertical stiffness Fz/rho"),
+    "kya": ("N/rad", "cornering stiffness (negative in ISO-W)"),
+    "kxk": ("N", "longitudinal slip stiffness"),
+    "sigmax": ("m", "longitudinal relaxation length"),
+    "sigmay": ("m", "lateral relaxation length"),
+}
+assert tuple(OUTPUT_UNITS) == OUTPUT_NAMES
+
+_MIRRORED_INPUTS = ("alpha", "gamma", "phit")
+_MIRRORED_OUTPUTS = ("fy", "mx", "mz", "mzr", "alpha", "gamma", "phit")
+_SIDES = ("left", "right")
+
+
+class MFOutputs:
+    """Every output of one evaluation as named NumPy arrays (see :data:`OUTPUT_UNITS`)."""
+
+    __slots__ = OUTPUT_NAMES
+
+    def __init__(self, **values):
+        for name in OUTPUT_NAMES:
+            setattr(self, name, values[name])
+
+    def __getitem__(self, name):
+        if name not in OUTPUT_NAMES:
+            raise KeyError(f"no output {name!r}; outputs are {', '.join(OUTPUT_NAMES)}")
+        return getattr(self, name)
+
+    def keys(self):
+        return OUTPUT_NAMES
+
+    def as_dict(self) -> dict:
+        return {name: getattr(self, name) for name in OUTPUT_NAMES}
+
+    def to_frame(self):
+        """A pandas DataFrame, one row per evaluated point, one column per output (SI)."""
+        import pandas as pd
+
+        cols = {name: np.ravel(np.broadcast_to(getattr(self, name), np.shape(self.fx))) for name in OUTPUT_NAMES}
+        return pd.DataFrame(cols)
+
+    def __repr__(self):
+        return f"MFOutputs(shape={np.shape(self.fx)}, outputs={', '.join(OUTPUT_NAMES)})"
+
+
+def load_tir(path, *, side: str | None = None, strict: bool = False) -> "MFModel":
+    """Read a .tir property file and return its :class:`MFModel` (mounted on ``side``, default the file's)."""
+    from .tir import read_tir
+
+    return MFModel(read_tir(path, strict=strict), side=side)
+
+
+class MFModel:
+    """A steady-state Magic Formula tyre defined by a parameter set.
+
+    ``side``: 'left' or 'right', the side the tyre is mounted on; default: the file's TYRESIDE (no mirroring).
+    """
+
+    def __init__(self, params, *, side: str | None = None):
+        self._params = params
+        file_side = str(params["TYRESIDE"]).strip().strip("'\"").lower() if "TYRESIDE" in params else "right"
+        if file_side not in _SIDES:
+            raise ModelInputError(f"TYRESIDE must be 'LEFT' or 'RIGHT', got {params['TYRESIDE']!r}")
+        if side is None:
+            side = file_side
+        side = str(side).lower()
+        if side not in _SIDES:
+            raise ModelInputError(f"side must be 'left' or 'right', got {side!r}")
+        self.side = side
+        self.mirrored = side != file_side
+
+    @property
+    def params(self):
+        """The :class:`mftyre.params.TyreParameters` (SI) of this model."""
+        return self._params
+
+    def with_params(self, **changes) -> "MFModel":
+        """A new model with some parameters changed, e.g. ``model.with_params(INFLPRES=2.0e5, LMUY=0.9)``."""
+        return MFModel(self._params.replace(**changes), side=self.side)
+
+    def with_side(self, side: str) -> "MFModel":
+        """The same tyre mounted on ``side``."""
+        return MFModel(self._params, side=side)
+
+    # ------------------------------------------------------------------------------------------ evaluation
+    def evaluate(self, fz, kappa, alpha, gamma=0.0, phit=0.0, vx=None, p=None, omega=None, *,
+                 turn_slip: bool = False, alpha_star: bool = False, limits: bool = True,
+                 kzgr0: str = "published") -> MFOutputs:
+        """Evaluate every output; inputs broadcast like NumPy.
+
+        fz [N], kappa [-], alpha [rad], gamma [rad], phit [1/m], vx [m/s] (default LONGVL), p [Pa] (default
+        INFLPRES), omega [rad/s] (default: estimated from kappa and vx). Keywords switch turn slip, alpha*
+        (4.E3-4.E4), the .tir limits and low-speed model, and the form of the turn-slip K_zgamma,r0
+        ('published' (4.99) or 'mfeval').
+        """
+        modes = Modes(limits=limits, alpha_star=alpha_star, turn_slip=turn_slip, kzgr0=kzgr0)
+        prm = self._params
+        inputs = dict(fz=fz, kappa=kappa, alpha=alpha, gamma=gamma, phit=phit,
+                      vx=prm.LONGVL if vx is None else vx, p=prm.INFLPRES if p is None else p,
+                      omega=0.0 if omega is None else omega)
+        arrays = _as_float_arrays(inputs)
+        if np.any(arrays["p"] <= 0):
+            raise ModelInputError("inflation pressure p must be positive (in Pa); "
+                                  f"got minimum {np.min(arrays['p'])!r}")
+        return MFOutputs(**self._evaluate_arrays(arrays, omega is not None, modes))
+
+    def _evaluate_arrays(self, arrays: dict, omega_given, modes: Modes) -> dict:
+        """Evaluate broadcast float arrays (no validation). ``omega_given``: bool or boolean array."""
+        shape = arrays["fz"].shape
+        flat = {k: (-v if self.mirrored and k in _MIRRORED_INPUTS else v).ravel() for k, v in arrays.items()}
+        if not isinstance(omega_given, bool):
+            omega_given = np.ravel(omega_given)
+        with np.errstate(all="ignore"):
+            out = steady_state(self._params, flat["fz"], flat["kappa"], flat["alpha"], flat["gamma"],
+                               flat["phit"], flat["vx"], flat["p"], flat["omega"], omega_given, modes, NUMPY)
+        n = flat["fz"].size
+        out = {k: np.broadcast_to(np.asarray(v, dtype=float), (n,)).reshape(shape) for k, v in out.items()}
+        if self.mirrored:
+            out = {k: (-v if k in _MIRRORED_OUTPUTS else v) for k, v in out.items()}
+        return out
+
+    def __repr__(self):
+        src = getattr(self._params, "source", None)
+        return f"MFModel(FITTYP={self._params.fittyp}, side={self.side!r}, source={src!r})"
+
+
+def _as_float_arrays(inputs: dict) -> dict:
+    """Broadcast the inputs to one shape as float arrays; NaN or non-numeric -> ModelInputError."""
+    arrays = {}
+    for name, value in inputs.items():
+        try:
+            arr = np.asarray(value, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise ModelInputError(f"input {name!r} must be numeric, got {value!r}") from exc
+        if np.isnan(arr).any():
+            raise ModelInputError(f"input {name!r} contains NaN at {np.argwhere(np.isnan(arr))[:5].tolist()}")
+        arrays[name] = arr
+    try:
+        broadcast = np.broadcast_arrays(*arrays.values())
+    except ValueError as exc:
+        shapes = {k: v.shape for k, v in arrays.items()}
+        raise ModelInputError(f"inputs cannot be broadcast to one shape: {shapes}") from exc
+    return {k: np.array(v) for k, v in zip(arrays, broadcast)}
