@@ -5,6 +5,9 @@ Commands
 check FILE.tir [FILE ...]   parse and validate property files; prints ``FILE:LINE: severity: message``
                             (``FILE: severity: message`` when no line applies) and a summary; exit status 1
                             when any file has an error, 0 otherwise.
+eval FILE.tir [sweeps] [options]
+                            evaluate the steady-state model on a grid of inputs; prints a table, optionally
+                            writes a CSV file (``--csv``) and a PNG plot (``--plot``). See :func:`_add_eval`.
 
 Adding a command: write ``_add_<name>(subparsers)`` that creates the sub-parser and sets
 ``func=<handler>`` (a function ``(args) -> int``), and call it from :func:`build_parser`.
@@ -65,9 +68,8 @@ def _strip_location(message: str, path: str) -> str:
 
 
 # ------------------------------------------------------------------------------------------ (more)
-# Other commands (eval, fit, gaps, plot, fmu) are added here by their modules' authors:
-#   def _add_eval(sub): ...   (uses mftyre.load_tir)
-# and registered in build_parser() below.
+# Other commands (fit, gaps, plot, fmu) are added here by their modules' authors and registered in
+# build_parser() below.
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -75,17 +77,19 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     _add_check(sub)
+    _add_eval(sub)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line ``argv`` (default: sys.argv[1:]); returns the exit status."""
     parser = build_parser()
+    argv = _join_negative_values(list(sys.argv[1:] if argv is None else argv))
     try:
         args = parser.parse_args(argv)
-    except SystemExit as exc:  # argparse exits on --help and on usage errors
-        return int(exc.code or 0)
-    return int(args.func(args))
+        return int(args.func(args))
+    except SystemExit as exc:  # argparse exits on --help and on usage errors (also raised by handlers)
+        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -16,13 +16,10 @@ conicity, the camber-induced shifts) into their mirror images and keeps the symm
 """
 from __future__ import annotations
 
-import warnings
-from pathlib import Path
-
 import numpy as np
 
 from .errors import ModelInputError
-from .formula import OUTPUT_NAMES, Modes, steady_state
+from .formula import OUTPUT_NAMES, Modes, steady_state, vertical
 from .backend import NUMPY
 
 __all__ = ["MFModel", "MFOutputs", "load_tir", "OUTPUT_UNITS"]
@@ -153,9 +150,7 @@ class MFModel:
                       vx=prm.LONGVL if vx is None else vx, p=prm.INFLPRES if p is None else p,
                       omega=0.0 if omega is None else omega)
         arrays = _as_float_arrays(inputs)
-        if np.any(arrays["p"] <= 0):
-            raise ModelInputError("inflation pressure p must be positive (in Pa); "
-                                  f"got minimum {np.min(arrays['p'])!r}")
+        self._check_pressure(arrays["p"])
         return MFOutputs(**self._evaluate_arrays(arrays, omega is not None, modes))
 
     def _evaluate_arrays(self, arrays: dict, omega_given, modes: Modes) -> dict:
@@ -172,6 +167,91 @@ class MFModel:
         if self.mirrored:
             out = {k: (-v if k in _MIRRORED_OUTPUTS else v) for k, v in out.items()}
         return out
+
+    # ------------------------------------------------------------------------------------------ casadi
+    def casadi_function(self, inputs=("fz", "kappa", "alpha", "gamma", "phit", "vx", "p"), outputs=OUTPUT_NAMES,
+                        *, turn_slip: bool = False, alpha_star: bool = False, limits: bool = True,
+                        kzgr0: str = "published", fixed: dict | None = None, name: str = "mftyre"):
+        """A ``casadi.Function`` of the same equations, built from ``casadi.SX`` scalars.
+
+        ``inputs``: the symbolic inputs, any of fz kappa alpha gamma phit vx p omega (in that order of
+        arguments as given). Inputs not listed take the value in ``fixed`` or their default (gamma = phit = 0,
+        vx = LONGVL, p = INFLPRES; omega estimated from kappa and vx with 8 unrolled fixed-point steps).
+        ``outputs``: any of :data:`OUTPUT_NAMES`; the echoed inputs are named ``kappa_used``, ``alpha_used``...
+        in the function (CasADi needs distinct input and output names). The MF 6.2 loaded radius is solved with a fixed number of
+        bracketing and Dekker steps (see :mod:`mftyre.backend`). Evaluate many points with ``f.map(n)``.
+        """
+        import casadi as ca
+        from .backend import CASADI
+
+        allowed = ("fz", "kappa", "alpha", "gamma", "phit", "vx", "p", "omega")
+        unknown = [n for n in (*inputs, *(fixed or {})) if n not in allowed]
+        if unknown:
+            raise ModelInputError(f"unknown input(s) {unknown}; inputs are {', '.join(allowed)}")
+        bad = [n for n in outputs if n not in OUTPUT_NAMES]
+        if bad:
+            raise ModelInputError(f"unknown output(s) {bad}; outputs are {', '.join(OUTPUT_NAMES)}")
+        prm = self._params
+        values = dict(gamma=0.0, phit=0.0, vx=prm.LONGVL, p=prm.INFLPRES, omega=0.0)
+        values.update(fixed or {})
+        symbols = {n: ca.SX.sym(n) for n in inputs}
+        values.update(symbols)
+        missing = [n for n in ("fz", "kappa", "alpha") if n not in values]
+        if missing:
+            raise ModelInputError(f"input(s) {missing} must be symbolic or given in `fixed`")
+        if self.mirrored:
+            values = {k: (-v if k in _MIRRORED_INPUTS else v) for k, v in values.items()}
+        modes = Modes(limits=limits, alpha_star=alpha_star, turn_slip=turn_slip, kzgr0=kzgr0)
+        omega_given = "omega" in inputs or "omega" in (fixed or {})
+        out = steady_state(prm, values["fz"], values["kappa"], values["alpha"], values["gamma"], values["phit"],
+                           values["vx"], values["p"], values["omega"], omega_given, modes, CASADI)
+        sign = {k: (-1.0 if self.mirrored and k in _MIRRORED_OUTPUTS else 1.0) for k in outputs}
+        out_names = [f"{k}_used" if k in allowed else k for k in outputs]
+        return ca.Function(name, [symbols[n] for n in inputs], [sign[k] * ca.SX(out[k]) for k in outputs],
+                           list(inputs), out_names)
+
+    # ---------------------------------------------------------------------------------------- vertical
+    def vertical_force(self, rl, p=None, omega=0.0, fx=0.0, fy=0.0, gamma=0.0):
+        """Fz [N] at loaded radius ``rl`` [m]: the MF 6.1 load-deflection relation (A3.3) with rho = R_omega -
+        Rl, or for FITTYP 62 the MF 6.2 relation with camber, Fx/Fy and speed terms; bottoming included."""
+        a = _as_float_arrays(dict(rl=rl, p=self._params.INFLPRES if p is None else p, omega=omega, fx=fx,
+                                  fy=fy, gamma=gamma))
+        self._check_pressure(a["p"])
+        if self.mirrored:
+            a["fy"], a["gamma"] = -a["fy"], -a["gamma"]
+        prm = self._params
+        dpi = (a["p"] - prm.NOMPRES) / prm.NOMPRES
+        r_omega = vertical.free_radius(prm, a["omega"], NUMPY)
+        with np.errstate(all="ignore"):
+            if prm.version == "62":
+                return vertical.vertical_force_62(prm, a["rl"], r_omega, a["omega"], a["fx"], a["fy"], a["gamma"],
+                                                  dpi, NUMPY)[0]
+            return vertical.vertical_force_61(prm, r_omega - a["rl"], r_omega, a["omega"], a["fx"], a["fy"], dpi,
+                                              NUMPY)
+
+    def loaded_radius(self, fz, p=None, omega=0.0, fx=0.0, fy=0.0, gamma=0.0):
+        """(Rl, rho) [m] carrying the load ``fz`` [N]: the inverse of :meth:`vertical_force` (no limits applied)."""
+        a = _as_float_arrays(dict(fz=fz, p=self._params.INFLPRES if p is None else p, omega=omega, fx=fx,
+                                  fy=fy, gamma=gamma))
+        self._check_pressure(a["p"])
+        if self.mirrored:
+            a["fy"], a["gamma"] = -a["fy"], -a["gamma"]
+        prm = self._params
+        dpi = (a["p"] - prm.NOMPRES) / prm.NOMPRES
+        r_omega = vertical.free_radius(prm, a["omega"], NUMPY)
+        fz_pos = np.maximum(a["fz"], 0.0)
+        with np.errstate(all="ignore"):
+            if prm.version == "62":
+                rl, rho = vertical.loaded_radius_62(prm, fz_pos, r_omega, a["omega"], a["fx"], a["fy"], a["gamma"],
+                                                    dpi, NUMPY)
+                return rl.reshape(fz_pos.shape), rho.reshape(fz_pos.shape)
+            rho = vertical.deflection_61(prm, fz_pos, r_omega, a["omega"], a["fx"], a["fy"], dpi, NUMPY)
+            return np.maximum(r_omega - rho, 0.0), rho
+
+    @staticmethod
+    def _check_pressure(p):
+        if np.any(p <= 0):
+            raise ModelInputError(f"inflation pressure p must be positive (in Pa); got minimum {np.min(p)!r}")
 
     def __repr__(self):
         src = getattr(self._params, "source", None)
