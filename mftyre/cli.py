@@ -16,8 +16,15 @@ Adding a command: write ``_add_<name>(subparsers)`` that creates the sub-parser 
 from __future__ import annotations
 
 import argparse
+import math
+import os
+import re
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
 
 __all__ = ["main", "build_parser"]
 
@@ -65,6 +72,398 @@ def _strip_location(message: str, path: str) -> str:
         return message
     m = re.match(r"(\d+:)?\s*", message[len(prefix):])
     return message[len(prefix) + m.end():]
+
+
+# ----------------------------------------------------------------------------------------------- eval
+# Sweep inputs of `mftyre eval`: name -> (SI unit, {accepted unit (lower case): factor to SI}).
+_SWEEPS: dict[str, tuple[str, dict[str, float]]] = {
+    "fz": ("N", {"n": 1.0, "kn": 1e3}),
+    "kappa": ("-", {"-": 1.0, "%": 1e-2}),
+    "alpha": ("rad", {"rad": 1.0, "deg": math.pi / 180, "°": math.pi / 180}),
+    "gamma": ("rad", {"rad": 1.0, "deg": math.pi / 180, "°": math.pi / 180}),
+    "phit": ("1/m", {"1/m": 1.0, "/m": 1.0, "rad/m": 1.0, "1/km": 1e-3}),
+    "vx": ("m/s", {"m/s": 1.0, "km/h": 1 / 3.6, "kph": 1 / 3.6, "mph": 0.44704}),
+    "p": ("Pa", {"pa": 1.0, "kpa": 1e3, "mpa": 1e6, "bar": 1e5, "psi": 4.4482216152605 / 0.0254**2}),
+    "omega": ("rad/s", {"rad/s": 1.0, "rpm": 2 * math.pi / 60}),
+}
+_EXAMPLES = {"fz": "3kN,5kN", "kappa": "-10%:10%:21", "alpha": "-10deg:10deg:21", "gamma": "-3deg,0deg,3deg",
+             "phit": "0/m,0.1/m", "vx": "30km/h,60km/h", "p": "1.8bar,2.2bar", "omega": "100rpm,200rpm"}
+#: Outputs printed when --outputs is not given.
+_DEFAULT_OUTPUTS = ("fx", "fy", "mz", "mx", "my", "rl")
+_NUMBER = re.compile(r"\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*(.*?)\s*$")
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """The values of one sweep option: ``values`` in SI; ``unit``/``factor``: the unit the user wrote (for plot
+    axes and legends; the SI unit when none or several were written), value_SI = value_in_unit * factor."""
+
+    name: str
+    values: np.ndarray
+    unit: str
+    factor: float
+    plain: bool  # no unit written
+
+    def label(self, value: float) -> str:
+        unit = "" if self.unit == "-" else f" {self.unit}"
+        return f"{self.name} = {value / self.factor:g}{unit}"
+
+
+def _units_hint(name: str) -> str:
+    si, units = _SWEEPS[name]
+    spelled = {"n": "N", "kn": "kN", "pa": "Pa", "kpa": "kPa", "mpa": "MPa"}
+    return ", ".join(spelled.get(u, u) for u in units)
+
+
+def parse_sweep(name: str, text: str) -> Sweep:
+    """Parse the value of a sweep option: ``VALUE``, ``V1,V2,...`` or ``START:STOP:COUNT`` (linspace, COUNT an
+    integer >= 2); each value may carry a unit (``-10deg``, ``2.2bar``, ``4kN``, ``50km/h``). A value without
+    a unit is SI. Raises ValueError with a message naming what was expected."""
+    si, units = _SWEEPS[name]
+    syntax = f"a value, a comma list or START:STOP:COUNT, values in {si} or with a unit ({_units_hint(name)})"
+    text = text.strip()
+    if not text:
+        raise ValueError(f"empty value; expected {syntax}")
+
+    def quantity(item: str):
+        m = _NUMBER.fullmatch(item)
+        if not m or not item.strip():
+            raise ValueError(f"cannot read {item.strip()!r} as a number with an optional unit; expected {syntax}")
+        number, unit = float(m.group(1)), m.group(2)
+        if not unit:
+            return number, None
+        key = unit.lower().replace(" ", "")
+        if key not in units:
+            raise ValueError(f"unknown unit {unit!r} in {item.strip()!r}; {name} takes {_units_hint(name)} "
+                             f"(a plain number is {si})")
+        return number, key
+
+    if ":" in text:
+        parts = text.split(":")
+        if len(parts) != 3:
+            raise ValueError(f"{text!r} has {len(parts)} ':'-separated fields; a range is START:STOP:COUNT")
+        count_text = parts[2].strip()
+        if not re.fullmatch(r"\d+", count_text) or int(count_text) < 2:
+            raise ValueError(f"range {text!r}: COUNT must be an integer >= 2, got {count_text!r} "
+                             "(START:STOP:COUNT gives COUNT equally spaced values from START to STOP)")
+        items = [quantity(parts[0]), quantity(parts[1])]
+        count = int(count_text)
+    else:
+        raw = text.split(",")
+        if any(not r.strip() for r in raw):
+            raise ValueError(f"{text!r} has an empty item; expected {syntax}")
+        items = [quantity(r) for r in raw]
+        count = None
+    written = {u for _, u in items}
+    if None in written and len(written) > 1:
+        raise ValueError(f"{text!r} mixes values with and without a unit; give the unit on every value, "
+                         f"e.g. {_EXAMPLES[name]!r}")
+    si_values = [v * (units[u] if u else 1.0) for v, u in items]
+    if count is not None:
+        values = np.linspace(si_values[0], si_values[1], count)
+    else:
+        values = np.asarray(si_values, dtype=float)
+    if not np.all(np.isfinite(values)):
+        raise ValueError(f"{text!r} is not finite")
+    if len(written) == 1 and None not in written:
+        (key,) = written
+        shown = {"n": "N", "kn": "kN", "pa": "Pa", "kpa": "kPa", "mpa": "MPa", "/m": "1/m"}.get(key, key)
+        return Sweep(name, values, shown, units[key], False)
+    return Sweep(name, values, si, 1.0, None in written)
+
+
+def _sweep_type(name: str):
+    def convert(text: str) -> Sweep:
+        try:
+            return parse_sweep(name, text)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    convert.__name__ = f"{name} sweep"
+    return convert
+
+
+def _outputs_type(text: str) -> tuple[str, ...]:
+    from .model import OUTPUT_UNITS
+
+    names = [n.strip().lower() for n in text.split(",")]
+    if names == ["all"]:
+        return tuple(OUTPUT_UNITS)
+    bad = [n for n in names if n not in OUTPUT_UNITS]
+    if bad or not names:
+        raise argparse.ArgumentTypeError(
+            f"unknown output(s) {', '.join(repr(b) for b in bad)}; expected a comma list of "
+            f"{', '.join(OUTPUT_UNITS)} (or 'all')")
+    return tuple(dict.fromkeys(names))
+
+
+class _SweepAction(argparse.Action):
+    """Store the parsed sweep and remember the order of the sweep options on the command line."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        setattr(namespace, self.dest, values)
+        order = [n for n in (getattr(namespace, "sweep_order", None) or []) if n != self.dest]
+        namespace.sweep_order = order + [self.dest]
+
+
+def _sweep_option(name: str) -> str:
+    return "--" + name
+
+
+def _join_negative_values(argv: list[str]) -> list[str]:
+    """``--alpha -0.2:0.2:41`` -> ``--alpha=-0.2:0.2:41``: argparse would take the value for an option."""
+    options = {_sweep_option(n) for n in _SWEEPS}
+    out, i = [], 0
+    while i < len(argv):
+        a = argv[i]
+        if a == "--":
+            out.extend(argv[i:])
+            break
+        if a in options and i + 1 < len(argv) and re.match(r"-[\d.]", argv[i + 1]):
+            out.append(f"{a}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(a)
+        i += 1
+    return out
+
+
+def _add_eval(sub) -> None:
+    p = sub.add_parser(
+        "eval",
+        help="evaluate the model on a grid of inputs (table, CSV, plot)",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="""\
+Evaluate the steady-state Magic Formula of a .tir file on a grid of inputs (ISO-W axes, SI units).
+
+Each input option takes a single value, a comma list (4000,6000) or START:STOP:COUNT (COUNT equally spaced
+values, COUNT >= 2). Values may carry a unit: angles deg/rad, pressure bar/kPa/MPa/psi/Pa, load N/kN, speed
+m/s, km/h, mph, spin rad/s or rpm, kappa '%%', turn slip 1/m; a plain number is SI (p=220000 means Pa).
+With several inputs swept the grid is every combination (outer product, in command-line order, the last
+option varying fastest); the table has one row per point: the swept inputs as given, then the outputs.
+An output that is also a swept input is shown as NAME_used (its value as used by the model, e.g. the
+pressure after the .tir limits).
+
+Defaults: fz = FNOMIN, kappa = alpha = gamma = phit = 0, vx = LONGVL, p = INFLPRES, omega estimated
+from kappa and vx.
+
+--csv writes the same columns with full precision, names suffixed by the SI unit: "fy [N]". Without
+--outputs the CSV holds every output. --plot draws the outputs against the swept input with the most
+values (or --x), one line per combination of the other swept inputs, in the units written on the
+command line.""",
+        epilog="example: mftyre eval tyre.tir --fz 3kN,4kN,5kN --alpha -10deg:10deg:41 --p 2.2bar --plot fy.png",
+    )
+    p.add_argument("file", metavar="FILE.tir", help="tyre property file")
+    group = p.add_argument_group("inputs (value, list V1,V2,... or range START:STOP:COUNT; units allowed)")
+    helps = {
+        "fz": "vertical load [N]; kN allowed (default FNOMIN)",
+        "kappa": "longitudinal slip [-]; %% allowed (default 0)",
+        "alpha": "slip angle [rad]; deg allowed (default 0)",
+        "gamma": "inclination angle [rad]; deg allowed (default 0)",
+        "phit": "turn slip [1/m] (default 0)",
+        "vx": "forward speed [m/s]; km/h, mph allowed (default LONGVL)",
+        "p": "inflation pressure [Pa]; bar, kPa, MPa, psi allowed (default INFLPRES)",
+        "omega": "wheel spin [rad/s]; rpm allowed (default: estimated from kappa and vx)",
+    }
+    for name in _SWEEPS:
+        group.add_argument(_sweep_option(name), dest=name, type=_sweep_type(name), action=_SweepAction,
+                           metavar="SPEC", help=helps[name])
+    modes = p.add_argument_group("model options")
+    modes.add_argument("--side", choices=("left", "right"), help="side the tyre is mounted on (default: TYRESIDE)")
+    modes.add_argument("--turn-slip", action="store_true", help="switch the turn-slip model on")
+    modes.add_argument("--alpha-star", action="store_true", help="use alpha* = tan(alpha) sign(Vx) (4.E3)")
+    modes.add_argument("--no-limits", action="store_true", help="ignore the .tir input limits and low-speed model")
+    modes.add_argument("--kzgr0", choices=("published", "mfeval"), default="published",
+                       help="form of the turn-slip K_zgamma,r0 (default published)")
+    out = p.add_argument_group("output")
+    out.add_argument("--outputs", type=_outputs_type, metavar="NAMES",
+                     help="comma list of outputs to print/write/plot, or 'all' (default table and plot: "
+                          f"{','.join(_DEFAULT_OUTPUTS)}; default CSV: all)")
+    out.add_argument("--csv", metavar="OUT.csv", help="write the table as CSV (column names 'name [unit]')")
+    out.add_argument("--plot", metavar="OUT.png", help="draw the outputs against the swept input, save as PNG")
+    out.add_argument("--x", choices=tuple(_SWEEPS), help="swept input for the plot's x axis")
+    out.add_argument("-q", "--quiet", action="store_true", help="do not print the table")
+    p.set_defaults(func=_cmd_eval, parser=p, sweep_order=None)
+
+
+def _cmd_eval(args) -> int:
+    import warnings
+
+    from .errors import MFTyreError
+
+    parser = args.parser
+    given = [n for n in (args.sweep_order or [])]
+    swept = [n for n in given if getattr(args, n).values.size > 1]
+    src = Path(args.file)
+    for opt, target in (("--csv", args.csv), ("--plot", args.plot)):
+        if target is not None and _same_path(Path(target), src):
+            parser.error(f"argument {opt}: {target!r} is the input .tir file; choose another output file")
+    if args.csv is not None and args.plot is not None and _same_path(Path(args.csv), Path(args.plot)):
+        parser.error(f"argument --plot: {args.plot!r} is also the --csv file; choose two different files")
+    if args.plot is not None and not swept:
+        parser.error("argument --plot: nothing to plot; sweep at least one input over several values "
+                     "(e.g. --alpha -10deg:10deg:41)")
+    if args.x is not None and args.x not in swept:
+        parser.error(f"argument --x: {args.x!r} is not swept; swept inputs: {', '.join(swept) or 'none'}")
+    if args.p is not None and args.p.plain and np.any(np.abs(args.p.values) < 1e3):
+        print(f"mftyre eval: warning: --p {args.p.values.min():g} Pa is below 1 kPa: a plain number is pascal; "
+              "write e.g. 2.2bar or 220kPa", file=sys.stderr)
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            from .model import load_tir
+
+            model = load_tir(args.file, side=args.side)
+            inputs, shape = _eval_grid(args, swept, model.params)
+            out = model.evaluate(**inputs, turn_slip=args.turn_slip, alpha_star=args.alpha_star,
+                                 limits=not args.no_limits, kzgr0=args.kzgr0)
+        for w in caught:
+            print(f"mftyre eval: warning: {w.message}", file=sys.stderr)
+        table_cols = args.outputs or _DEFAULT_OUTPUTS
+        if not args.quiet:
+            print(_eval_header(args, model, given, swept, shape))
+            print(_format_table(_eval_frame(args, out, swept, shape, table_cols)))
+        if args.csv is not None:
+            frame = _eval_frame(args, out, swept, shape, args.outputs or tuple(out.keys()))
+            frame.to_csv(args.csv, index=False)
+            print(f"wrote {args.csv} ({len(frame)} rows, {frame.shape[1]} columns)", file=sys.stderr)
+        if args.plot is not None:
+            _eval_plot(args, model, out, swept, shape, args.outputs or _DEFAULT_OUTPUTS)
+            print(f"wrote {args.plot}", file=sys.stderr)
+    except MFTyreError as exc:
+        print(f"mftyre eval: error: {exc}", file=sys.stderr)
+        return 1
+    except OSError as exc:
+        print(f"mftyre eval: error: cannot write output: {exc}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _same_path(a: Path, b: Path) -> bool:
+    try:
+        if a.exists() and b.exists():
+            return os.path.samefile(a, b)
+    except OSError:
+        pass
+    return a.resolve() == b.resolve()
+
+
+def _eval_grid(args, swept: list[str], prm) -> tuple[dict, tuple[int, ...]]:
+    """The evaluate() inputs: swept inputs as an outer-product grid (command-line order, 'ij'), others scalar."""
+    grids = np.meshgrid(*(getattr(args, n).values for n in swept), indexing="ij") if swept else []
+    grid_of = dict(zip(swept, grids))
+    shape = tuple(getattr(args, n).values.size for n in swept)
+    inputs = {}
+    for name in _SWEEPS:
+        sweep = getattr(args, name)
+        if name in grid_of:
+            inputs[name] = grid_of[name]
+        elif sweep is not None:
+            inputs[name] = float(sweep.values[0])
+        elif name == "fz":
+            inputs[name] = float(prm.FNOMIN)
+        elif name in ("kappa", "alpha", "gamma", "phit"):
+            inputs[name] = 0.0
+        else:  # vx, p, omega: the model's defaults
+            inputs[name] = None
+    return inputs, shape
+
+
+def _eval_frame(args, out, swept: list[str], shape, outputs) -> "pd.DataFrame":
+    """Swept inputs as given, then the outputs; column names 'name [SI unit]'."""
+    import pandas as pd
+
+    from .model import OUTPUT_UNITS
+
+    n = int(np.prod(shape)) if shape else 1
+    cols = {}
+    grids = np.meshgrid(*(getattr(args, s).values for s in swept), indexing="ij") if swept else []
+    for name, grid in zip(swept, grids):
+        cols[f"{name} [{_SWEEPS[name][0]}]"] = grid.ravel()
+    for name in outputs:
+        label = f"{name}_used" if name in swept else name
+        cols[f"{label} [{OUTPUT_UNITS[name][0]}]"] = np.broadcast_to(out[name], shape).reshape(n)
+    return pd.DataFrame(cols)
+
+
+def _format_table(frame) -> str:
+    return frame.to_string(index=False, float_format=lambda v: f"{v:.6g}")
+
+
+def _eval_header(args, model, given, swept, shape) -> str:
+    prm = model.params
+    fixed = []
+    for name in _SWEEPS:
+        if name in swept:
+            continue
+        unit = _SWEEPS[name][0]
+        sweep = getattr(args, name)
+        if sweep is not None:
+            fixed.append(f"{name} = {sweep.values[0]:g}" + ("" if unit == "-" else f" {unit}"))
+        elif name == "fz":
+            fixed.append(f"fz = {prm.FNOMIN:g} N (FNOMIN)")
+        elif name == "vx":
+            fixed.append(f"vx = {prm.LONGVL:g} m/s (LONGVL)")
+        elif name == "p":
+            fixed.append(f"p = {prm.INFLPRES:g} Pa (INFLPRES)")
+        elif name == "omega":
+            fixed.append("omega from kappa and vx")
+        else:
+            fixed.append(f"{name} = 0")
+    modes = [m for m, on in (("turn slip", args.turn_slip), ("alpha*", args.alpha_star),
+                             ("no limits", args.no_limits)) if on]
+    npts = int(np.prod(shape)) if shape else 1
+    head = (f"# {args.file}: FITTYP {prm.fittyp}, mounted {model.side}; {npts} point{'s' * (npts != 1)}"
+            f"{'; ' + ', '.join(modes) if modes else ''}")
+    return head + "\n# " + "; ".join(fixed)
+
+
+def _eval_plot(args, model, out, swept, shape, outputs) -> None:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from .model import OUTPUT_UNITS
+
+    if args.x is not None:
+        xname = args.x
+    else:  # the swept input with the most values; the first on the command line on ties
+        xname = max(swept, key=lambda n: (shape[swept.index(n)], -swept.index(n)))
+    ix = swept.index(xname)
+    xs = getattr(args, xname)
+    others = [n for n in swept if n != xname]
+    other_shape = tuple(shape[swept.index(n)] for n in others)
+    combos = list(np.ndindex(*other_shape)) if others else [()]
+    labels = [", ".join(getattr(args, n).label(getattr(args, n).values[i]) for n, i in zip(others, c))
+              for c in combos]
+
+    nout = len(outputs)
+    ncols = 1 if nout <= 2 else 2
+    nrows = math.ceil(nout / ncols)
+    fig = Figure(figsize=(5.0 * ncols, 2.6 * nrows + 0.6), dpi=100, layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(nrows, ncols, sharex=True, squeeze=False).ravel()
+    x = xs.values / xs.factor
+    xunit = xs.unit
+    for k, name in enumerate(outputs):
+        ax = axes[k]
+        y = np.moveaxis(np.broadcast_to(out[name], shape), ix, -1).reshape(-1, x.size)
+        for row, label in zip(y, labels):
+            ax.plot(x, row, label=label or None, lw=1.2)
+        unit, meaning = OUTPUT_UNITS[name]
+        ax.set_ylabel(f"{name} [{unit}]")
+        ax.set_title(meaning, fontsize=9)
+        ax.grid(True, lw=0.3)
+        if k >= nout - ncols:
+            ax.set_xlabel(f"{xname} [{xunit}]")
+        ax.tick_params(labelbottom=True)
+    for ax in axes[nout:]:
+        ax.set_visible(False)
+    if others and len(combos) <= 12:
+        axes[0].legend(fontsize=7)
+    fig.suptitle(f"{Path(args.file).name} (FITTYP {model.params.fittyp}, {model.side})", fontsize=10)
+    path = Path(args.plot)
+    fmt = path.suffix[1:].lower() if path.suffix[1:].lower() in fig.canvas.get_supported_filetypes() else "png"
+    fig.savefig(path, format=fmt)
 
 
 # ------------------------------------------------------------------------------------------ (more)

@@ -21,7 +21,7 @@ x = 2c / (B + sqrt(B^2 + 4 A c)), finite also for Q_FZ2 = 0 (linear tyre) where 
 divides by zero. MF 6.2: the relation is not monotone near zero deflection (Q_FCY2 < 0 makes the side-force
 term grow without bound as rho -> 0), so a secant started near R0 can diverge. mftyre brackets the root
 between the free radius and a deflection where the load is exceeded, then refines with Dekker's method (secant with
-bisection safeguard) to 1e-13 m; whenever a root with Rl <= R_omega exists it is found. When even zero free deflection already gives
+bisection safeguard) to 1e-12 m; whenever a root with Rl <= R_omega exists it is found. When even zero free deflection already gives
 more than the requested load (a cambered tyre at almost no load, touching with its shoulder) the loaded radius
 is R_omega: the contact is about to be lost.
 """
@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
-    "free_radius", "vertical_stiffness", "effective_rolling_radius", "spin_and_radius",
+    "free_radius", "vertical_stiffness", "rolling_radius_reduction", "spin_and_radius",
     "vertical_force_61", "vertical_force_62", "deflection_61", "loaded_radius_62", "contact_patch",
 ]
 
@@ -45,11 +45,10 @@ def vertical_stiffness(prm, dpi):
     return prm.VERTICAL_STIFFNESS * (1.0 + prm.PFZ1 * dpi)
 
 
-def effective_rolling_radius(prm, r_omega, fz, dpi, be):
-    """Re, paper (7)."""
+def rolling_radius_reduction(prm, fz, dpi, be):
+    """R_omega - Re = Fz0/Cz (DREFF atan(BREFF Fz/Fz0) + FREFF Fz/Fz0), paper (7)."""
     Fz0 = prm.FNOMIN
-    return r_omega - (Fz0 / vertical_stiffness(prm, dpi)) * (
-        prm.DREFF * be.atan(prm.BREFF * fz / Fz0) + prm.FREFF * fz / Fz0)
+    return (Fz0 / vertical_stiffness(prm, dpi)) * (prm.DREFF * be.atan(prm.BREFF * fz / Fz0) + prm.FREFF * fz / Fz0)
 
 
 def spin_and_radius(prm, s, omega_in, omega_given, be):
@@ -59,21 +58,21 @@ def spin_and_radius(prm, s, omega_in, omega_given, be):
     solved together with Re(omega) by fixed-point iteration from Re = 0.965 R0 (the iteration contracts by
     about 2 Q_V1 (omega R0/V0)^2 per step).
     """
+    reduction = rolling_radius_reduction(prm, s.uFz, s.dpi, be)
+    wheel_speed = (1.0 + s.ukappa) * s.vx  # omega Re (2.5)
+
     def step(re):
-        omega = (1.0 + s.ukappa) * s.vx / re
-        r_omega = free_radius(prm, omega, be)
-        return effective_rolling_radius(prm, r_omega, s.uFz, s.dpi, be), (omega, r_omega)
+        return free_radius(prm, wheel_speed / re, be) - reduction, None
 
     if omega_given is True:
         omega = omega_in
     else:
-        re0 = 0.965 * prm.UNLOADED_RADIUS + be.zeros_like(s.vx * s.uFz * s.ukappa)
-        re, (omega_est, _) = be.fixed_point(step, re0, tol=1e-13, max_iter=200, unrolled=8)
-        omega_est = (1.0 + s.ukappa) * s.vx / re  # consistent with the converged radius
+        re0 = 0.965 * prm.UNLOADED_RADIUS + be.zeros_like(wheel_speed * reduction)
+        re, _ = be.fixed_point(step, re0, tol=1e-13, max_iter=200, unrolled=8)
+        omega_est = wheel_speed / re  # consistent with the converged radius
         omega = omega_est if omega_given is False else be.where(omega_given, omega_in, omega_est)
     r_omega = free_radius(prm, omega, be)
-    re = effective_rolling_radius(prm, r_omega, s.uFz, s.dpi, be)
-    return omega, r_omega, re
+    return omega, r_omega, r_omega - reduction
 
 
 def _q_fz1(prm):
@@ -160,7 +159,7 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
         return top - (top - rl_2) * be.where(f_2 < 0, 1.5, 0.5)
 
     f_1, f_2 = be.where(contact, f_1, 0.0 * f_1), be.where(contact, f_2, 0.0 * f_2)
-    rl = be.solve_bracketed(residual, r_omega - rho_1, r_omega - rho_2, f_1, f_2, xtol=1e-13, widen=widen,
+    rl = be.solve_bracketed(residual, r_omega - rho_1, r_omega - rho_2, f_1, f_2, xtol=1e-12, widen=widen,
                             max_iter=200, unrolled=30)
     rl = be.where(contact, rl, r_omega)
     return rl, vertical_force_62(prm, rl, *args, be)[1]

@@ -1,0 +1,61 @@
+"""MFModel.casadi_function evaluates the same equations as the NumPy path."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import mftyre
+from conftest import TIR_FILES
+from mftyre.errors import ModelInputError
+from mftyre.formula import OUTPUT_NAMES
+
+casadi = pytest.importorskip("casadi")
+
+
+def _random_inputs(prm, n, seed, turn_slip):
+    rng = np.random.default_rng(seed)
+    return dict(fz=rng.uniform(0.1, 2.5, n) * prm.FNOMIN, kappa=rng.uniform(-0.6, 0.6, n),
+                alpha=rng.uniform(-0.4, 0.4, n), gamma=rng.uniform(-0.08, 0.08, n),
+                phit=rng.uniform(-0.5, 0.5, n) if turn_slip else np.zeros(n),
+                vx=rng.uniform(-30, 35, n), p=rng.uniform(0.8, 1.2, n) * prm.NOMPRES)
+
+
+@pytest.mark.parametrize("tir", ["car_205_60R15_mf61.tir", "car_205_60R15_mf62_swift.tir"])
+@pytest.mark.parametrize("turn_slip,alpha_star,limits", [(False, False, True), (True, False, True),
+                                                          (False, True, False), (True, True, False)])
+def test_casadi_matches_numpy(tir, turn_slip, alpha_star, limits):
+    model = mftyre.load_tir(TIR_FILES / tir)
+    x = _random_inputs(model.params, 400, seed=7, turn_slip=turn_slip)
+    f = model.casadi_function(turn_slip=turn_slip, alpha_star=alpha_star, limits=limits)
+    values = f.map(len(x["fz"]))(*[v[None, :] for v in x.values()])
+    ref = model.evaluate(**x, turn_slip=turn_slip, alpha_star=alpha_star, limits=limits)
+    for name, value in zip(OUTPUT_NAMES, values):
+        ours, expected = np.asarray(value).ravel(), ref[name]
+        scale = max(1.0, np.max(np.abs(expected)))
+        np.testing.assert_allclose(ours, expected, rtol=1e-10, atol=1e-10 * scale, err_msg=name)
+
+
+def test_casadi_subset_of_inputs_and_outputs_with_fixed_values():
+    model = mftyre.load_tir(TIR_FILES / "car_205_60R15_mf61.tir").with_side("right")
+    f = model.casadi_function(inputs=("alpha", "kappa"), outputs=("fy", "mz", "alpha"),
+                              fixed=dict(fz=5000.0, gamma=0.03, p=2.0e5))
+    assert f.name_in() == ["alpha", "kappa"] and f.name_out() == ["fy", "mz", "alpha_used"]
+    fy, mz, alpha_used = (float(v) for v in f(0.05, 0.02))
+    ref = model.evaluate(5000.0, 0.02, 0.05, gamma=0.03, p=2.0e5)
+    assert fy == pytest.approx(float(ref.fy), rel=1e-12)
+    assert mz == pytest.approx(float(ref.mz), rel=1e-12)
+    assert alpha_used == pytest.approx(0.05)
+    # the Jacobian exists and matches a central difference
+    a = casadi.SX.sym("a")
+    dfy = casadi.Function("dfy", [a], [casadi.jacobian(f(a, 0.02)[0], a)])
+    h = 1e-6
+    fd = (float(f(0.05 + h, 0.02)[0]) - float(f(0.05 - h, 0.02)[0])) / (2 * h)
+    assert float(dfy(0.05)) == pytest.approx(fd, rel=1e-6)
+
+
+def test_casadi_function_rejects_unknown_names():
+    model = mftyre.load_tir(TIR_FILES / "car_205_60R15_mf61.tir")
+    with pytest.raises(ModelInputError, match="unknown input"):
+        model.casadi_function(inputs=("fz", "slip"))
+    with pytest.raises(ModelInputError, match="unknown output"):
+        model.casadi_function(outputs=("fy", "force"))
