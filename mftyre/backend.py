@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["NumpyBackend", "CasadiBackend", "NUMPY", "CASADI"]
+__all__ = ["NumpyBackend", "CasadiBackend", "NUMPY", "CASADI", "casadi_backend"]
 
 
 class NumpyBackend:
@@ -133,22 +133,50 @@ class NumpyBackend:
 
 
 class CasadiBackend:
-    """The same operations on CasADi SX/MX expressions (fixed iteration counts for loops)."""
+    """The same operations on CasADi SX/MX expressions (fixed iteration counts for loops).
+
+    ``smooth=eps`` replaces the kinks of the equations by smooth functions, for gradient-based optimisation
+    only (the exact model is the default):
+
+    ========  =====================================  ==================================
+    exact      smooth                                 largest difference
+    ========  =====================================  ==================================
+    |x|        sqrt(x^2 + eps^2)                      eps (at x = 0)
+    sign(x)    x / sqrt(x^2 + eps^2)                  1 at x = 0, < 0.5 (eps/x)^2 for |x| >> eps
+    min(a,b)   (a + b - sqrt((a - b)^2 + eps^2)) / 2  eps / 2 (at a = b)
+    max(a,b)   (a + b + sqrt((a - b)^2 + eps^2)) / 2  eps / 2 (at a = b)
+    ========  =====================================  ==================================
+
+    ``eps`` is in the units of the argument (forces, angles, slips alike), so choose it small against the
+    smallest scale that matters (1e-6 is a good start). Case distinctions on conditions (below VXLOW, rolling
+    backwards, outside the .tir ranges) stay exact: keep an optimisation inside one case. The iterations
+    (spin, MF 6.2 loaded radius) always use the exact operations.
+    """
 
     name = "casadi"
     pi = np.pi
     eps = np.finfo(float).eps
 
-    def __init__(self):
+    def __init__(self, smooth: float | None = None):
         import casadi as ca
 
         self.ca = ca
+        self.smooth = smooth
         self.sin, self.cos, self.tan = ca.sin, ca.cos, ca.tan
         self.atan, self.atan2, self.acos = ca.atan, ca.atan2, ca.acos
         self.sqrt, self.exp, self.log = ca.sqrt, ca.exp, ca.log
-        self.abs, self.sign = ca.fabs, ca.sign
-        self.fmin, self.fmax = ca.fmin, ca.fmax
         self.logical_and, self.logical_or, self.logical_not = ca.logic_and, ca.logic_or, ca.logic_not
+        if smooth is None:
+            self.abs, self.sign = ca.fabs, ca.sign
+            self.fmin, self.fmax = ca.fmin, ca.fmax
+        else:
+            if not smooth > 0:
+                raise ValueError(f"smooth must be a positive number, got {smooth!r}")
+            e2 = float(smooth) ** 2
+            self.abs = lambda x: ca.sqrt(x * x + e2)
+            self.sign = lambda x: x / ca.sqrt(x * x + e2)
+            self.fmin = lambda a, b: 0.5 * (a + b - ca.sqrt((a - b) ** 2 + e2))
+            self.fmax = lambda a, b: 0.5 * (a + b + ca.sqrt((a - b) ** 2 + e2))
 
     def log10(self, x):
         return self.ca.log(x) / np.log(10.0)
@@ -163,10 +191,10 @@ class CasadiBackend:
         return self.ca.if_else(cond, a, b)
 
     def sign_nz(self, x):
-        return self.ca.if_else(x < 0, -1.0, 1.0)
+        return self.ca.if_else(x < 0, -1.0, 1.0) if self.smooth is None else self.sign(x)
 
     def clip(self, x, lo, hi):
-        return self.ca.fmin(self.ca.fmax(x, lo), hi)
+        return self.fmin(self.fmax(x, lo), hi)
 
     def zeros_like(self, x):
         return 0 * x
@@ -207,7 +235,14 @@ class CasadiBackend:
             a2, b2, fa2, fb2 = ordered(a2, new, fa2, fnew)
             a, b, fa, fb, c, fc = (ca.if_else(open_, x2, x) for x2, x in
                                    ((a2, a), (b2, b), (fa2, fa), (fb2, fb), (b, c), (fb, fc)))
-        return ca.if_else(ca.fabs(fb) <= ca.fabs(fa), b, a)
+        best = ca.if_else(ca.fabs(fb) <= ca.fabs(fa), b, a)
+        # one Newton step at the converged point: same value, and derivatives that are exactly those of
+        # the implicit function (the unrolled bracketing steps alone would differentiate the iteration)
+        x = ca.SX.sym("x") if isinstance(best, ca.SX) else ca.MX.sym("x")
+        fx = fun(x, None)
+        slope = ca.substitute(ca.jacobian(fx, x), x, best)
+        f_best = ca.substitute(fx, x, best)
+        return best - ca.if_else(slope != 0, f_best / slope, 0.0)
 
 
 NUMPY = NumpyBackend()
@@ -221,3 +256,8 @@ def __getattr__(name):  # lazy CASADI so that importing mftyre does not import c
             _CASADI = CasadiBackend()
         return _CASADI
     raise AttributeError(name)
+
+
+def casadi_backend(smooth: float | None = None) -> CasadiBackend:
+    """The exact CasADi backend, or a smoothed one (see :class:`CasadiBackend`)."""
+    return __getattr__("CASADI") if smooth is None else CasadiBackend(smooth)

@@ -30,11 +30,12 @@ _FROM_OUTPUT = {"Fx": "fx", "Fy": "fy", "Fz": "fz", "Mx": "mx", "My": "my", "Mz"
                 "Cy": "cy", "Cz": "cz", "Kya": "kya", "sigmax": "sigmax", "sigmay": "sigmay", "Kxk": "kxk"}
 
 
-def mfeval(tir, inputs, use_mode: int, *, kzgr0: str = "published") -> np.ndarray:
-    """Evaluate like MFeval. ``tir``: a path or an :class:`MFModel`; ``kzgr0='mfeval'`` reproduces MFeval's
-    turn-slip K_zgamma,r0 (see :data:`mftyre.formula.options.KZGR0_FORMS`)."""
+def mfeval(tir, inputs, use_mode: int, *, turn_slip_form: str = "published") -> np.ndarray:
+    """Evaluate like MFeval. ``tir``: a path or an :class:`MFModel`; ``turn_slip_form='mfeval'`` reproduces
+    MFeval's turn-slip equations (see :data:`mftyre.formula.options.TURN_SLIP_FORMS`); the default is the
+    published form."""
     model = tir if isinstance(tir, MFModel) else load_tir(tir)
-    modes = Modes.from_use_mode(use_mode, kzgr0=kzgr0)
+    modes = Modes.from_use_mode(use_mode, turn_slip_form=turn_slip_form)
     table = np.atleast_2d(np.asarray(inputs, dtype=float))
     if table.ndim != 2 or not 6 <= table.shape[1] <= 8:
         raise ModelInputError(f"inputs must be an (N, 6..8) array [Fz kappa alpha gamma phit Vx P omega], "

@@ -138,7 +138,7 @@ class MFModel:
     # ------------------------------------------------------------------------------------------ evaluation
     def evaluate(self, fz, kappa, alpha, gamma=0.0, phit=0.0, vx=None, p=None, omega=None, *,
                  turn_slip: bool = False, alpha_star: bool = False, limits: bool = True,
-                 kzgr0: str = "published") -> MFOutputs:
+                 turn_slip_form: str = "published") -> MFOutputs:
         """Evaluate every output; inputs broadcast like NumPy.
 
         fz [N], kappa [-], alpha [rad], gamma [rad], phit [1/m], vx [m/s] (default LONGVL), p [Pa] (default
@@ -146,7 +146,7 @@ class MFModel:
         (4.E3-4.E4), the .tir limits and low-speed model, and the form of the turn-slip K_zgamma,r0
         ('published' (4.99) or 'mfeval').
         """
-        modes = Modes(limits=limits, alpha_star=alpha_star, turn_slip=turn_slip, kzgr0=kzgr0)
+        modes = Modes(limits=limits, alpha_star=alpha_star, turn_slip=turn_slip, turn_slip_form=turn_slip_form)
         prm = self._params
         inputs = dict(fz=fz, kappa=kappa, alpha=alpha, gamma=gamma, phit=phit,
                       vx=prm.LONGVL if vx is None else vx, p=prm.INFLPRES if p is None else p,
@@ -179,18 +179,27 @@ class MFModel:
     # ------------------------------------------------------------------------------------------ casadi
     def casadi_function(self, inputs=("fz", "kappa", "alpha", "gamma", "phit", "vx", "p"), outputs=OUTPUT_NAMES,
                         *, turn_slip: bool = False, alpha_star: bool = False, limits: bool = True,
-                        kzgr0: str = "published", fixed: dict | None = None, name: str = "mftyre"):
+                        turn_slip_form: str = "published", fixed: dict | None = None, parameters=(),
+                        smooth: float | None = None, name: str = "mftyre"):
         """A ``casadi.Function`` of the same equations, built from ``casadi.SX`` scalars.
 
-        ``inputs``: the symbolic inputs, any of fz kappa alpha gamma phit vx p omega (in that order of
-        arguments as given). Inputs not listed take the value in ``fixed`` or their default (gamma = phit = 0,
-        vx = LONGVL, p = INFLPRES; omega estimated from kappa and vx with 8 unrolled fixed-point steps).
+        ``inputs``: the symbolic inputs, any of fz kappa alpha gamma phit vx p omega, as the first arguments in
+        the order given. Inputs not listed take the value in ``fixed`` or their default (gamma = phit = 0,
+        vx = LONGVL, p = INFLPRES; omega estimated from kappa and vx with 8 unrolled fixed-point steps, which
+        converge to machine precision: the contraction factor is about 2 Q_V1 (omega R0 / V0)^2 < 1e-2).
+        ``parameters``: .tir parameter names made symbolic too (further arguments, after the inputs), e.g.
+        ``("LMUY", "PKY1")`` for identification or design studies; parameters that select a form of the
+        equations (FITTYP, FZMIN, QSX1-QSX14, Q_CAM1, Q_CAM2, Q_A1, Q_A2, PHYP4, TYRESIDE) must stay numbers.
         ``outputs``: any of :data:`OUTPUT_NAMES`; the echoed inputs are named ``kappa_used``, ``alpha_used``...
-        in the function (CasADi needs distinct input and output names). The MF 6.2 loaded radius is solved with a fixed number of
-        bracketing and Dekker steps (see :mod:`mftyre.backend`). Evaluate many points with ``f.map(n)``.
+        in the function (CasADi needs distinct input and output names).
+        ``smooth``: None for the exact model, or eps > 0 for smooth kinks (see
+        :class:`mftyre.backend.CasadiBackend`).
+        The MF 6.2 loaded radius is solved with up to 8 bracket-widening and 30 Dekker steps and a final
+        Newton step, so its derivatives are those of the implicit function. Evaluate many points with
+        ``f.map(n)``; :mod:`mftyre.compiled` compiles the function to C.
         """
         import casadi as ca
-        from .backend import CASADI
+        from .backend import casadi_backend
 
         allowed = ("fz", "kappa", "alpha", "gamma", "phit", "vx", "p", "omega")
         unknown = [n for n in (*inputs, *(fixed or {})) if n not in allowed]
@@ -209,14 +218,17 @@ class MFModel:
             raise ModelInputError(f"input(s) {missing} must be symbolic or given in `fixed`")
         if self.mirrored:
             values = {k: (-v if k in _MIRRORED_INPUTS else v) for k, v in values.items()}
-        modes = Modes(limits=limits, alpha_star=alpha_star, turn_slip=turn_slip, kzgr0=kzgr0)
+        parameter_symbols = {n: ca.SX.sym(n) for n in parameters}
+        equations_prm = _SymbolicParameters(prm, parameter_symbols) if parameters else prm
+        modes = Modes(limits=limits, alpha_star=alpha_star, turn_slip=turn_slip, turn_slip_form=turn_slip_form)
         omega_given = "omega" in inputs or "omega" in (fixed or {})
-        out = steady_state(prm, values["fz"], values["kappa"], values["alpha"], values["gamma"], values["phit"],
-                           values["vx"], values["p"], values["omega"], omega_given, modes, CASADI)
+        out = steady_state(equations_prm, values["fz"], values["kappa"], values["alpha"], values["gamma"],
+                           values["phit"], values["vx"], values["p"], values["omega"], omega_given, modes,
+                           casadi_backend(smooth))
         sign = {k: (-1.0 if self.mirrored and k in _MIRRORED_OUTPUTS else 1.0) for k in outputs}
         out_names = [f"{k}_used" if k in allowed else k for k in outputs]
-        return ca.Function(name, [symbols[n] for n in inputs], [sign[k] * ca.SX(out[k]) for k in outputs],
-                           list(inputs), out_names)
+        return ca.Function(name, [symbols[n] for n in inputs] + list(parameter_symbols.values()),
+                           [sign[k] * ca.SX(out[k]) for k in outputs], list(inputs) + list(parameters), out_names)
 
     # ---------------------------------------------------------------------------------------- vertical
     def vertical_force(self, rl, p=None, omega=0.0, fx=0.0, fy=0.0, gamma=0.0):
@@ -264,6 +276,35 @@ class MFModel:
     def __repr__(self):
         src = getattr(self._params, "source", None)
         return f"MFModel(FITTYP={self._params.fittyp}, side={self.side!r}, source={src!r})"
+
+
+#: Parameters that choose between forms of the equations (Python branches): they cannot be symbolic.
+STRUCTURAL_PARAMETERS = frozenset(["FITTYP", "TYRESIDE", "FZMIN", "Q_CAM1", "Q_CAM2", "Q_A1", "Q_A2", "PHYP4",
+                                   *(f"QSX{i}" for i in range(1, 15))])
+
+
+class _SymbolicParameters:
+    """A parameter set in which some parameters are CasADi symbols (for :meth:`MFModel.casadi_function`)."""
+
+    def __init__(self, params, symbols: dict):
+        fixed = sorted(set(symbols) & STRUCTURAL_PARAMETERS)
+        if fixed:
+            raise ModelInputError(f"parameter(s) {fixed} select the form of the equations and must stay numbers")
+        unknown = sorted(n for n in symbols if n not in params)
+        if unknown:
+            raise ModelInputError(f"unknown parameter(s) {unknown}")
+        self._params, self._symbols = params, symbols
+        self.version, self.fittyp = params.version, params.fittyp
+
+    def __getattr__(self, name):
+        symbols = self.__dict__["_symbols"]
+        return symbols[name] if name in symbols else getattr(self.__dict__["_params"], name)
+
+    def __getitem__(self, name):
+        return self._symbols[name] if name in self._symbols else self._params[name]
+
+    def __contains__(self, name):
+        return name in self._params
 
 
 def _as_float_arrays(inputs: dict) -> dict:

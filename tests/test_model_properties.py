@@ -112,7 +112,7 @@ def test_file_side_evaluates_unmirrored_equations(name):
     model = _sample(name)
     prm = model.params
     assert str(prm.TYRESIDE).strip("'\" ").upper() == "LEFT"
-    left = mftyre.load_tir(TIR_FILES / name, side="left") if False else model.with_side("left")
+    left = model.with_side("left")
     assert not left.mirrored
     x = _input_grid(model)
     for turn_slip in (False, True):
@@ -206,10 +206,17 @@ def test_lateral_force_odd_in_joint_alpha_gamma(name):
         assert np.min(np.abs(a.fy[:, 0, :])) > 1.0
 
 
+#: Further asymmetries that act under combined slip only: RHX1 (4.E57, Gxa not even in alpha), RHY1, RHY2
+#: (4.E65, Gyk not even in kappa), RVY1, RVY2 (4.E66/67: SVyk is even in alpha, so it is an offset of Fy),
+#: RBY3 (4.E62, Byk not even in alpha), SSZ1 (paper A56: s Fx with a constant arm is even in alpha).
+COMBINED_ASYMMETRY_PARAMETERS = ("RHX1", "RHY1", "RHY2", "RVY1", "RVY2", "RBY3", "SSZ1")
+
+
 @pytest.mark.parametrize("name", SAMPLE_FILES)
 def test_symmetric_tyre_same_on_both_sides(name):
-    """A tyre without asymmetries at zero camber and turn slip gives the same Fx, Fy, Mz on either side."""
-    model = _symmetric(_sample(name))
+    """A tyre without asymmetries at zero camber and turn slip gives the same Fx, Fy, Mz on either side,
+    under combined slip too."""
+    model = _symmetric(_sample(name)).with_params(**{n: 0.0 for n in COMBINED_ASYMMETRY_PARAMETERS})
     other = model.with_side("right" if model.side == "left" else "left")
     kw = dict(fz=np.array([2500.0, 5000.0])[:, None], kappa=np.array([0.0, 0.05, -0.1])[:, None, None],
               alpha=np.array([-0.2, -0.01, 0.0, 0.03]), limits=False)
@@ -276,38 +283,48 @@ def test_continuity_across_vxlow(name, turn_slip):
     grid = np.meshgrid([1000.0, 4000.0, 7000.0], [-0.2, -0.01, 0.0, 0.05], [-0.1, 0.0, 0.02, 0.3],
                        [0.0, 0.06], [0.0, 0.4], indexing="ij")
     x = dict(zip(("fz", "kappa", "alpha", "gamma", "phit"), (g.ravel() for g in grid)))
+    jumps = []
     for sign in (1.0, -1.0):
         lo = model.evaluate(**x, vx=sign * prm.VXLOW * (1 - 1e-9), turn_slip=turn_slip)
         hi = model.evaluate(**x, vx=sign * prm.VXLOW * (1 + 1e-9), turn_slip=turn_slip)
         for k in OUTPUT_NAMES:
             atol = 1e-6 * _tol(model, k) if (k in FORCES or k in MOMENTS) else 1e-9
-            np.testing.assert_allclose(lo[k], hi[k], rtol=1e-6, atol=atol,
-                                       err_msg=f"{name}: {k} jumps at Vx = {sign:+.0f} VXLOW")
+            bad = ~(np.abs(lo[k] - hi[k]) <= atol + 1e-6 * np.abs(hi[k]))
+            if np.any(bad):
+                i = np.argmax(np.where(bad, np.abs(lo[k] - hi[k]), -1.0))
+                point = {n: float(v[i]) for n, v in x.items()}
+                jumps.append(f"{k} at Vx = {sign:+.0f} VXLOW: {bad.sum()} points, largest step "
+                             f"{lo[k][i] - hi[k][i]:.6g} (below {lo[k][i]:.6g}, above {hi[k][i]:.6g}) at {point}")
+    assert not jumps, f"{name}: outputs jump across VXLOW\n" + "\n".join(jumps)
 
 
 @pytest.mark.parametrize("name", SAMPLE_FILES)
 def test_low_speed_forces_fade_smoothly_to_zero(name):
-    """Below VXLOW the slip (and the shifts) fade out: F(Vx) goes to 0 at Vx = 0, monotonically for small slip,
-    with increments no larger than the linear-range slope K slip / VXLOW allows."""
-    model = _sample(name)
-    prm = model.params
+    """Below VXLOW the slip (and the shifts) fade out: F(Vx) goes to 0 at Vx = 0, with increments no larger
+    than the linear-range slope K slip / VXLOW allows; without shifts, monotonically for small slip (with the
+    file's shifts |F| may dip slightly just below VXLOW where the slip is no longer reduced but the shifts
+    still fade in)."""
+    base = _sample(name)
+    prm = base.params
     vx = np.linspace(0.0, 2.0 * prm.VXLOW, 4001)
     dv = vx[1] - vx[0]
+    low = vx <= prm.VXLOW
     fz = 4000.0
     kappa, alpha = 0.02, 0.02
-    fx = model.evaluate(fz=fz, kappa=kappa, alpha=0.0, vx=vx).fx
-    fy = model.evaluate(fz=fz, kappa=0.0, alpha=alpha, vx=vx).fy
-    nominal = model.evaluate(fz=fz, kappa=0.0, alpha=0.0)
-    for force, k_slip, label in ((fx, nominal.kxk * kappa, "Fx"), (fy, nominal.kya * alpha, "Fy")):
-        assert force[0] == pytest.approx(0.0, abs=1e-9 * prm.FNOMIN), f"{label} at Vx = 0"
-        assert abs(force[-1]) > 0.1 * abs(k_slip), f"{label} above VXLOW should carry the slip"
-        low = vx <= prm.VXLOW
-        mag = np.abs(force[low])
-        assert np.all(np.diff(mag) >= -1e-9 * prm.FNOMIN), f"{label} magnitude not monotone below VXLOW"
-        steps = np.abs(np.diff(force))
-        assert np.max(steps) <= 1.5 * abs(k_slip) / prm.VXLOW * dv + 1e-6 * prm.FNOMIN, f"{label} has a step"
-        # the sign is right all the way down
-        assert np.all(np.sign(force[1:]) == np.sign(k_slip)), label
+    for model, shifts in ((base, True), (_symmetric(base), False)):
+        for sign in (1.0, -1.0):
+            fx = model.evaluate(fz=fz, kappa=kappa, alpha=0.0, vx=sign * vx).fx
+            fy = model.evaluate(fz=fz, kappa=0.0, alpha=alpha, vx=sign * vx).fy
+            nominal = model.evaluate(fz=fz, kappa=0.0, alpha=0.0)
+            for force, k_slip, label in ((fx, nominal.kxk * kappa * sign, "Fx"), (fy, nominal.kya * alpha, "Fy")):
+                label = f"{label} (shifts={shifts}, sign(Vx)={sign:+.0f})"
+                assert force[0] == pytest.approx(0.0, abs=1e-9 * prm.FNOMIN), f"{label} at Vx = 0"
+                assert abs(force[-1]) > 0.1 * abs(k_slip), f"{label} above VXLOW should carry the slip"
+                steps = np.abs(np.diff(force))
+                assert np.max(steps) <= 1.5 * abs(k_slip) / prm.VXLOW * dv + 1e-6 * prm.FNOMIN, f"{label} steps"
+                assert np.all(np.sign(force[1:]) == np.sign(k_slip)), f"{label} sign"
+                if not shifts:
+                    assert np.all(np.diff(np.abs(force[low])) >= -1e-9 * prm.FNOMIN), f"{label} not monotone"
     # at exactly Vx = 0 the aligning moment is gone too
     at0 = model.evaluate(fz=fz, kappa=0.1, alpha=0.1, vx=0.0)
     assert at0.mz == pytest.approx(0.0, abs=1e-9 * prm.FNOMIN * prm.UNLOADED_RADIUS)
@@ -406,10 +423,10 @@ def test_pressure_trends_mf61():
     rl, _ = model.loaded_radius(fz, p=p)
     assert np.all(np.diff(rl, axis=1) > 0)
     # magnitude: Cz at the nominal load follows Cz0 (1 + PFZ1 dpi) to within the non-linearity Q_FZ2
+    # and by about the factor (1 + PFZ1 dpi) (exactly so for a linear tyre; Q_FZ2 bends it a little)
     dpi = (p - prm.NOMPRES) / prm.NOMPRES
-    ratio = out.cz[2] / out.cz[2][np.argmin(np.abs(dpi))] if np.any(dpi == 0) else None
-    if ratio is not None:
-        np.testing.assert_allclose(ratio, (1 + prm.PFZ1 * dpi), rtol=0.02)
+    cz0 = model.evaluate(fz=fz, kappa=0.0, alpha=0.0, p=prm.NOMPRES).cz
+    np.testing.assert_allclose(out.cz / cz0, np.broadcast_to(1 + prm.PFZ1 * dpi, out.cz.shape), rtol=0.03)
 
 
 # ------------------------------------------------------------------------------ loaded radius <-> Fz
@@ -430,7 +447,16 @@ def test_loaded_radius_and_vertical_force_are_inverse(spec):
         assert rl.shape == (5, 3, 3, 3)
         assert np.all(np.isfinite(rl)) and np.all(rl > 0) and np.all(rho > 0)
         back = m.vertical_force(rl, p=p, omega=omega, fx=500.0, fy=fy, gamma=gamma)
-        np.testing.assert_allclose(back, np.broadcast_to(fz, back.shape), rtol=1e-9, atol=1e-6)
+        # MF 6.2: a cambered tyre touching the road with its shoulder already carries a load at Rl = R_omega
+        # (the camber deflection); loads below that have no root, and the documented answer is Rl = R_omega.
+        r_omega = prm.UNLOADED_RADIUS * (prm.Q_RE0 + prm.Q_V1 * (omega * prm.UNLOADED_RADIUS / prm.LONGVL) ** 2)
+        f_top = m.vertical_force(r_omega, p=p, omega=omega, fx=500.0, fy=fy, gamma=gamma)
+        reachable = np.broadcast_to(fz, back.shape) > f_top
+        if prm.version == "61":
+            assert np.all(reachable)
+        assert np.mean(reachable) > 0.9
+        np.testing.assert_allclose(back[reachable], np.broadcast_to(fz, back.shape)[reachable], rtol=1e-9, atol=1e-6)
+        np.testing.assert_allclose(rl[~reachable], r_omega, rtol=0, atol=1e-12)
         # and the other way round, from radii
         rls = np.linspace(prm.UNLOADED_RADIUS - 0.04, prm.UNLOADED_RADIUS - 0.005, 5)[:, None, None, None]
         f = m.vertical_force(rls, p=p, omega=omega, fx=500.0, fy=fy, gamma=gamma)

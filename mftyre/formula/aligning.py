@@ -49,23 +49,22 @@ def aligning_coefficients(prm, s, lat, gyk, modes, be) -> SimpleNamespace:
 
     if modes.turn_slip:
         zeta0, zeta2, zeta6 = 0.0, s.zeta2, s.zeta6
-        phit = s.phit
+        published = modes.turn_slip_form == "published"
         mz_inf = prm.QCRP1 * be.abs(lat.muy) * R0 * Fz * be.sqrt(Fz / s.Fz0p) * prm.LMP  # (4.95)
-        mz_inf = be.where(mz_inf < 0, 1e-6, mz_inf)
+        mz_inf = be.where(mz_inf <= 0, 1e-6, mz_inf)  # kept positive (also at zero load)
         c_drp = prm.QDRP1  # (4.96)
         d_drp = mz_inf / be.sin(0.5 * be.pi * c_drp)  # (4.94)
-        if modes.kzgr0 == "published":  # (4.99)
+        if published:  # (4.99)
             k_zgr0 = Fz * R0 * (prm.QDZ8 + prm.QDZ9 * dfz + (prm.QDZ10 + prm.QDZ11 * dfz) * be.abs(s.gamma)) * prm.LKZC
         else:  # the reference evaluator's form
             k_zgr0 = Fz * R0 * (prm.QDZ8 * prm.QDZ9 * dfz + prm.QDZ10 + prm.QDZ11 * dfz * be.abs(s.gamma)) * prm.LKZC
         b_drp = k_zgr0 / (c_drp * d_drp * (1.0 - s.eps_gamma))  # (4.98)
-        d_rp = d_drp * be.sin(c_drp * be.atan(b_drp * R0 * phit))  # (4.93)
-        mz90 = mz_inf * (2.0 / be.pi) * be.atan(prm.QCRP2 * R0 * be.abs(phit)) * gyk  # (4.103)
-        # (4.104): Cr = zeta7 = (2/pi) acos(Mz90 / |Drphi|); a ratio above 1 gives zeta7 = 0 (real part).
-        # At phit = 0 both vanish linearly: use the limit of the ratio there.
-        ratio_limit = (mz_inf * (2.0 / be.pi) * prm.QCRP2 * gyk * (1.0 - s.eps_gamma)
-                       / be.abs(k_zgr0 + 1e-30 * be.sign_nz(k_zgr0)))
-        ratio = be.where(phit == 0, ratio_limit, mz90 / be.abs(d_rp))
+        spin = s.phi if published else s.phit
+        d_rp = d_drp * be.sin(c_drp * be.atan(b_drp * R0 * spin))  # (4.93)
+        mz90 = mz_inf * (2.0 / be.pi) * be.atan(prm.QCRP2 * R0 * be.abs(s.phit)) * gyk  # (4.103)
+        # (4.104): Cr = zeta7 = (2/pi) acos(Mz90 / |D_rphi|); a ratio above 1 gives 0 (the real part of acos);
+        # without turn slip (Mz90 = 0) the ratio is 0 and Cr = 1 as in the model without turn slip
+        ratio = be.where(mz90 == 0, 0.0, mz90 / be.abs(d_rp))
         zeta7 = (2.0 / be.pi) * be.acos(be.fmin(ratio, 1.0))
         zeta8 = 1.0 + d_rp  # (4.97)
     else:

@@ -23,7 +23,7 @@ def steady_state(prm, fz, kappa, alpha, gamma, phit, vx, p, omega, omega_given, 
     s = normalisation.condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be)
     omega, r_omega, re = vertical.spin_and_radius(prm, s, omega, omega_given, be)
     if modes.turn_slip:
-        s.phi, s.eps_gamma = turnslip.spin_slip(prm, s, omega, be)
+        s.phi, s.eps_gamma = turnslip.spin_slip(prm, s, omega, modes, be)
         turnslip.zeta_factors(prm, s, be)
 
     lon = longitudinal.pure_longitudinal(prm, s, modes, be)

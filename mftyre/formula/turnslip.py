@@ -1,26 +1,38 @@
 """Turn slip and camber spin: the spin slip phi and the reduction factors zeta (Pacejka 2012, Section 4.3.3).
 
-With turn slip switched off every zeta is 1 (zeta0 = 1 as well), i.e. the equations reduce to the
-pure-slip/combined-slip model for small camber.
+With turn slip switched off every zeta is 1 (zeta0 = 1 as well): the pure/combined-slip model for small camber.
 
-Sign convention: ISO-W axes (z up). The spin is phi = (psi_dot - (1 - eps_gamma) omega sin(gamma)) / Vc'
-with psi_dot = -phit Vc'; this is (4.76) written for a z axis pointing up, which removes the leading minus
-sign of the book's adapted-SAE form (the MF-Tyre and reference-evaluator convention).
+Two forms (``Modes.turn_slip_form``):
+
+* "published" (default): the spin as printed, phi = -(1/Vc') (psi_dot - (1 - eps_gamma) omega sin(gamma)) (4.76)
+  with psi_dot = -phit Vc' (4.75), i.e. phi = phit + (1 - eps_gamma) omega sin(gamma) / Vc'. This is the form in
+  which the model is consistent with itself: at zero turn slip the camber spin reproduces, to first order, the
+  camber thrust and camber moment of the model without turn slip (S_Hyphi -> Kyg0 gamma / Kya, D_rphi -> the
+  camber part of D_r, Cr -> 1); ``tests/test_turn_slip.py`` checks it. Below VXLOW the speed is held at
+  Vc' = max(Vc, VXLOW) (continuous, positive in both directions of travel).
+* "mfeval": the reference evaluator's choices, reproduced for comparison: (4.76) without the minus sign (its
+  authors' reading of the axis systems), Vc' = VXLOW sign(Vx) below VXLOW, D_rphi from phit instead of phi,
+  and K_zgamma,r0 = Fz R0 (QDZ8 QDZ9 dfz + QDZ10 + QDZ11 dfz |gamma|) LKZC instead of (4.99).
 """
 from __future__ import annotations
 
 __all__ = ["spin_slip", "zeta_factors", "lateral_shift_turn_slip"]
 
 
-def spin_slip(prm, s, omega, be):
+def spin_slip(prm, s, omega, modes, be):
     """phi (4.76) and the camber reduction factor eps_gamma (4.90)."""
     eps_gamma = prm.PECP1 * (1.0 + prm.PECP2 * s.dfz)  # (4.90)
     vsy = -be.tan(s.alpha) * be.abs(s.vx)
     vc = be.sqrt(s.vx**2 + vsy**2)
-    # singularity protection: below VXLOW the speed in the spin definition is held at +-VXLOW
-    vc_prime = be.where(be.abs(s.vx) < prm.VXLOW, prm.VXLOW * be.sign_nz(s.vx), vc)
-    psi_dot = -s.phit * vc_prime  # (4.75)
-    phi = (psi_dot - (1.0 - eps_gamma) * omega * be.sin(s.gamma)) / vc_prime  # (4.76)
+    camber_spin = (1.0 - eps_gamma) * omega * be.sin(s.gamma)
+    if modes.turn_slip_form == "published":
+        vc_prime = be.fmax(vc, prm.VXLOW)  # singularity protection, continuous
+        psi_dot = -s.phit * vc_prime  # (4.75)
+        phi = -(psi_dot - camber_spin) / vc_prime  # (4.76)
+    else:
+        vc_prime = be.where(be.abs(s.vx) < prm.VXLOW, prm.VXLOW * be.sign_nz(s.vx), vc)
+        psi_dot = -s.phit * vc_prime
+        phi = (psi_dot - camber_spin) / vc_prime
     return phi, eps_gamma
 
 
@@ -42,7 +54,7 @@ def lateral_shift_turn_slip(prm, s, kya, kya0, kyg0, svyg, limits, be):
     kya_prime = kya + 1e-6 * be.sign_nz(kya)  # (4.E39)
     kya0_prime = kya0 + 1e-6 * be.sign_nz(kya0)
     c_hyp = prm.PHYP1  # (4.85)
-    d_hyp = (prm.PHYP2 + prm.PHYP3 * s.dfz) * be.sign(s.vx)  # (4.86)
+    d_hyp = (prm.PHYP2 + prm.PHYP3 * s.dfz) * be.sign_nz(s.vx)  # (4.86); +1 at standstill keeps B_Hyphi finite
     e_hyp = min(prm.PHYP4, 1.0) if limits else prm.PHYP4  # (4.87)
     k_yrp0 = kyg0 / (1.0 - s.eps_gamma)  # (4.89)
     b_hyp = k_yrp0 / (c_hyp * d_hyp * kya0_prime)  # (4.88)

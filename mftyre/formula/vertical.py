@@ -21,7 +21,7 @@ x = 2c / (B + sqrt(B^2 + 4 A c)), finite also for Q_FZ2 = 0 (linear tyre) where 
 divides by zero. MF 6.2: the relation is not monotone near zero deflection (Q_FCY2 < 0 makes the side-force
 term grow without bound as rho -> 0), so a secant started near R0 can diverge. mftyre brackets the root
 between the free radius and a deflection where the load is exceeded, then refines with Dekker's method (secant with
-bisection safeguard) to 1e-12 m; whenever a root with Rl <= R_omega exists it is found. When even zero free deflection already gives
+bisection safeguard) to 1e-15 m; whenever a root with Rl <= R_omega exists it is found. When even zero free deflection already gives
 more than the requested load (a cambered tyre at almost no load, touching with its shoulder) the loaded radius
 is R_omega: the contact is about to be lost.
 """
@@ -159,7 +159,7 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
         return top - (top - rl_2) * be.where(f_2 < 0, 1.5, 0.5)
 
     f_1, f_2 = be.where(contact, f_1, 0.0 * f_1), be.where(contact, f_2, 0.0 * f_2)
-    rl = be.solve_bracketed(residual, r_omega - rho_1, r_omega - rho_2, f_1, f_2, xtol=1e-12, widen=widen,
+    rl = be.solve_bracketed(residual, r_omega - rho_1, r_omega - rho_2, f_1, f_2, xtol=1e-15, widen=widen,
                             max_iter=200, unrolled=30)
     rl = be.where(contact, rl, r_omega)
     return rl, vertical_force_62(prm, rl, *args, be)[1]
