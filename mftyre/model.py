@@ -234,14 +234,8 @@ class MFModel:
     def vertical_force(self, rl, p=None, omega=0.0, fx=0.0, fy=0.0, gamma=0.0):
         """Fz [N] at loaded radius ``rl`` [m]: the MF 6.1 load-deflection relation (A3.3) with rho = R_omega -
         Rl, or for FITTYP 62 the MF 6.2 relation with camber, Fx/Fy and speed terms; bottoming included."""
-        a = _as_float_arrays(dict(rl=rl, p=self._params.INFLPRES if p is None else p, omega=omega, fx=fx,
-                                  fy=fy, gamma=gamma))
-        self._check_pressure(a["p"])
-        if self.mirrored:
-            a["fy"], a["gamma"] = -a["fy"], -a["gamma"]
+        a, dpi, r_omega = self._vertical_inputs(rl=rl, p=p, omega=omega, fx=fx, fy=fy, gamma=gamma)
         prm = self._params
-        dpi = (a["p"] - prm.NOMPRES) / prm.NOMPRES
-        r_omega = vertical.free_radius(prm, a["omega"], NUMPY)
         with np.errstate(all="ignore"):
             if prm.version == "62":
                 return vertical.vertical_force_62(prm, a["rl"], r_omega, a["omega"], a["fx"], a["fy"], a["gamma"],
@@ -251,14 +245,8 @@ class MFModel:
 
     def loaded_radius(self, fz, p=None, omega=0.0, fx=0.0, fy=0.0, gamma=0.0):
         """(Rl, rho) [m] carrying the load ``fz`` [N]: the inverse of :meth:`vertical_force` (no limits applied)."""
-        a = _as_float_arrays(dict(fz=fz, p=self._params.INFLPRES if p is None else p, omega=omega, fx=fx,
-                                  fy=fy, gamma=gamma))
-        self._check_pressure(a["p"])
-        if self.mirrored:
-            a["fy"], a["gamma"] = -a["fy"], -a["gamma"]
+        a, dpi, r_omega = self._vertical_inputs(fz=fz, p=p, omega=omega, fx=fx, fy=fy, gamma=gamma)
         prm = self._params
-        dpi = (a["p"] - prm.NOMPRES) / prm.NOMPRES
-        r_omega = vertical.free_radius(prm, a["omega"], NUMPY)
         fz_pos = np.maximum(a["fz"], 0.0)
         with np.errstate(all="ignore"):
             if prm.version == "62":
@@ -267,6 +255,15 @@ class MFModel:
                 return rl.reshape(fz_pos.shape), rho.reshape(fz_pos.shape)
             rho = vertical.deflection_61(prm, fz_pos, r_omega, a["omega"], a["fx"], a["fy"], dpi, NUMPY)
             return np.maximum(r_omega - rho, 0.0), rho
+
+    def _vertical_inputs(self, p, **inputs):
+        """Validated, broadcast, side-mirrored inputs of the vertical relations, dpi and R_omega."""
+        a = _as_float_arrays(dict(inputs, p=self._params.INFLPRES if p is None else p))
+        self._check_pressure(a["p"])
+        if self.mirrored:
+            a["fy"], a["gamma"] = -a["fy"], -a["gamma"]
+        dpi = (a["p"] - self._params.NOMPRES) / self._params.NOMPRES
+        return a, dpi, vertical.free_radius(self._params, a["omega"], NUMPY)
 
     @staticmethod
     def _check_pressure(p):
