@@ -16,9 +16,9 @@ left (counter-clockwise seen from above). A left turn therefore has r > 0 and la
 Unknowns: steer angle ``delta`` of the front wheels (both the same, no Ackermann; positive = to the left),
 body sideslip angle ``beta`` (direction of the CoG velocity from the x axis, positive = to the left), yaw
 rate ``r`` and the longitudinal slip ``kappa`` shared by the two wheels of the driven axle (``drive``: 'rear'
-(default) or 'front'). The wheels of the other axle roll with kappa = 0 (free rolling, rolling resistance
-neglected). The driven slip is the simple stand-in for a differential: it balances the drag the tyres and the
-air produce, so that the speed stays constant.
+(default) or 'front'). The wheels of the other axle roll with kappa = 0 (free rolling; they carry only the
+tyre's small zero-slip force offset, rolling resistance is neglected). The driven slip is the simple stand-in
+for a differential: it balances the drag the tyres and the air produce, so that the speed stays constant.
 
 Kinematics. Wheel i sits at (x_i, y_i): FL (a, +tf/2), FR (a, -tf/2), RL (-b, +tr/2), RR (-b, -tr/2). Its centre
 moves with (body axes)
@@ -68,9 +68,11 @@ and the elementary functions of CasADi. The two paths are checked against each o
 Optimisation. :meth:`Vehicle.max_lateral_acceleration` uses ``casadi.Opti`` with IPOPT and exact derivatives
 (CasADi algorithmic differentiation through the Magic Formula); the inflation pressures of the front and rear
 tyres can be design variables bounded by the .tir range [PRESMIN, PRESMAX]. The independent check
-:meth:`Vehicle.brute_force_max_lateral_acceleration` uses only the NumPy path: it sweeps the sideslip angle and
-solves the three equilibrium equations for (delta, r, kappa) with a finite-difference Newton method of its
-own, then takes the largest ay (no CasADi, no IPOPT, no exact derivatives). :func:`optimal_braking_slip`
+:meth:`Vehicle.brute_force_max_lateral_acceleration` uses only the NumPy path: it walks the curve of steady
+states from straight running by pseudo-arclength continuation (finite-difference Newton of its own) and takes
+its highest point (no CasADi, no optimiser, no exact derivatives). Near the limit that curve can fold back in
+the steer angle (the car oversteers at the limit): the highest ay is then reached while the steer decreases,
+and :meth:`Vehicle.steady_state` at a given steer has two solutions (or none beyond the fold). :func:`optimal_braking_slip`
 maximises the braking force -Fx of one tyre over kappa at a given slip angle (IPOPT), checked by
 :func:`brute_force_braking_slip` on a fine kappa grid.
 """
@@ -78,7 +80,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -110,6 +112,7 @@ class VehicleParams:
     roll_stiffness_front: float = 0.60   #: front share of the total roll stiffness [-] (0..1)
     roll_centre_front: float = 0.0       #: front roll-centre height [m] (0: all transfer through roll stiffness)
     roll_centre_rear: float = 0.0        #: rear roll-centre height [m]
+    max_steer: float = 0.6               #: steer lock of the front wheels [rad] (bound of the optimisation)
     drive: str = "rear"                  #: driven axle, 'rear' or 'front' (its two wheels share one slip)
     cd_area: float = 0.0                 #: drag coefficient x frontal area [m^2] (0: no drag)
     cl_area: float = 0.0                 #: downforce coefficient x area [m^2] (positive = downforce)
@@ -118,7 +121,7 @@ class VehicleParams:
     g: float = 9.81                      #: gravitational acceleration [m/s^2]
 
     def __post_init__(self):
-        positive = ("mass", "a", "b", "track_front", "track_rear", "h_cog", "rho_air", "g")
+        positive = ("mass", "a", "b", "track_front", "track_rear", "h_cog", "max_steer", "rho_air", "g")
         bad = [n for n in positive if not getattr(self, n) > 0]
         if bad:
             raise ModelInputError(f"vehicle parameter(s) {bad} must be positive")
@@ -143,17 +146,20 @@ class VehicleParams:
 # ----------------------------------------------------------------------------------------------- results
 @dataclass(frozen=True)
 class SolverStats:
-    """What a solver reported: name, success flag, return status, iteration count and wall time [s]."""
+    """What a solver reported: name, success flag, return status, iteration count, wall time [s] of the solve
+    call(s) (the first IPOPT solve of a cached problem also builds the solver) and the number of solver runs."""
 
     solver: str
     success: bool
     return_status: str
     iterations: int
     solve_time: float
+    attempts: int = 1
 
     def __str__(self):
+        more = f" in {self.attempts} attempts" if self.attempts > 1 else ""
         return (f"{self.solver}: {self.return_status} ({'ok' if self.success else 'FAILED'}), "
-                f"{self.iterations} iterations, {1e3 * self.solve_time:.1f} ms")
+                f"{self.iterations} iterations{more}, {1e3 * self.solve_time:.1f} ms")
 
 
 @dataclass(frozen=True)
@@ -191,8 +197,8 @@ class SteadyState:
         return self.V / self.r if self.r != 0 else math.inf
 
     def summary(self) -> str:
-        return (f"V={self.V:.2f} m/s  ay={self.ay:.3f} m/s^2 ({self.ay_g:.3f} g)  delta={math.degrees(self.delta):.3f} deg"
-                f"  beta={math.degrees(self.beta):.3f} deg  r={self.r:.4f} rad/s  kappa={self.kappa:.5f}"
+        return (f"V={self.V:.2f} m/s  ay={self.ay:.3f} m/s^2 ({self.ay_g:.3f} g)"
+                f"  delta={math.degrees(self.delta):.3f} deg  beta={math.degrees(self.beta):.3f} deg  r={self.r:.4f} rad/s  kappa={self.kappa:.5f}"
                 f"  p=({self.p_front / 1e5:.3f}, {self.p_rear / 1e5:.3f}) bar")
 
 
@@ -204,6 +210,7 @@ class MaxLateralResult:
     state: SteadyState
     pressures_optimised: bool
     stats: SolverStats
+    active_bounds: tuple = ()      #: bounds active at the optimum (steer lock, slip-angle trust region, PRESMIN...)
 
     @property
     def ay_g(self) -> float:
@@ -408,7 +415,10 @@ class Vehicle:
         Numeric inputs (floats or broadcastable arrays) give a NumPy array of shape (3, *broadcast shape);
         any CasADi SX/MX input gives a 3x1 CasADi expression. Pressures default to the tyres' INFLPRES.
         """
-        s = self.wheel_states(V, delta, beta, r, kappa, p_front, p_rear)
+        return self._residuals_of(self.wheel_states(V, delta, beta, r, kappa, p_front, p_rear))
+
+    @staticmethod
+    def _residuals_of(s):
         rx = sum(s[w]["Fx"] for w in WHEELS) - s["total"]["FX"]
         ry = sum(s[w]["Fy"] for w in WHEELS) - s["total"]["FY"]
         rn = sum(s[w]["x"] * s[w]["Fy"] - s[w]["y"] * s[w]["Fx"] + s[w]["mz"] for w in WHEELS)
@@ -455,6 +465,17 @@ class Vehicle:
         beta = P.b * r / V - P.mass * P.a * V * r / (L * cr)
         return beta, r, 0.0
 
+    def _start_point(self, V, sign, pf, pr, ay0_g=0.5):
+        """(delta, beta, r, kappa) of the steady state at the steer that the linear single-track model needs
+        for ay = ``ay0_g`` g: a feasible point well inside the limit, from which IPOPT starts."""
+        P = self.params
+        _, r1, _ = self.linear_guess(V, 1e-3, pf, pr)        # linear: everything proportional to steer
+        d0 = sign * 1e-3 * ay0_g * P.g / (V * r1)
+        ss = self.steady_state(V, d0, pf, pr)
+        if ss.stats.success:
+            return (d0, ss.beta, ss.r, ss.kappa)
+        return (d0, *self.linear_guess(V, d0, pf, pr))
+
     # ------------------------------------------------------------------------------------ steady state
     def _get_rootfinder(self):
         if self._rootfinder is None:
@@ -475,7 +496,9 @@ class Vehicle:
         CasADi Newton rootfinder with exact Jacobian, started from ``x0`` = (beta, r, kappa) or the linear
         single-track guess. If Newton fails from there, the steer is ramped up from zero in up to
         ``max_continuation`` steps (warm-started). ``stats.success`` says whether a solution was found; when
-        there is none (beyond the limit), the last iterate is returned with ``success=False``.
+        there is none (beyond the limit), the last iterate is returned with ``success=False``. Where the
+        steady-state curve folds back in steer (see the module docstring), one steer has two steady states;
+        from the default start Newton finds the one of lower ay.
         """
         rf = self._get_rootfinder()
         pf, pr = self._pressures(p_front, p_rear)
@@ -508,7 +531,7 @@ class Vehicle:
         return self.state(V, delta, *x, pf, pr, stats=stats)
 
     # ------------------------------------------------------------------------------------ max ay (IPOPT)
-    def _build_max_ay(self, optimise_pressures: bool, sign: float, ipopt_options: dict | None):
+    def _build_max_ay(self, optimise_pressures: bool, sign: float, slip_angle_max, ipopt_options: dict | None):
         import casadi as ca
 
         P = self.params
@@ -516,37 +539,48 @@ class Vehicle:
         x = opti.variable(4)                         # delta, beta, r, kappa
         V = opti.parameter()
         if optimise_pressures:
+            p_scale = 1e5                            # pressures in bar inside the NLP
             pv = opti.variable(2)
             p_lo, p_hi = self.pressure_bounds()
-            p_scale = 1e5
             opti.subject_to(opti.bounded(p_lo / p_scale, pv, p_hi / p_scale))
-            pressures = pv * p_scale
         else:
-            pv = opti.parameter(2)
             p_scale = 1.0
-            pressures = pv
+            pv = opti.parameter(2)
         delta, beta, r, kappa = x[0], x[1], x[2], x[3]
+        s = self.wheel_states(V, delta, beta, r, kappa, pv[0] * p_scale, pv[1] * p_scale)
         opti.minimize(-sign * V * r / P.g)
-        opti.subject_to(self.scaled_residuals(V, delta, beta, r, kappa, pressures[0], pressures[1]) == 0)
-        opti.subject_to(opti.bounded(-0.6, delta, 0.6))
+        opti.subject_to(self._residuals_of(s) / self._scales() == 0)
+        opti.subject_to(opti.bounded(-P.max_steer, delta, P.max_steer))
         opti.subject_to(opti.bounded(-0.5, beta, 0.5))
-        opti.subject_to(opti.bounded(-0.3, kappa, 0.3))
+        opti.subject_to(opti.bounded(-0.15, kappa, 0.15))
         opti.subject_to(sign * r >= 0)
+        if slip_angle_max:
+            for w in WHEELS:
+                opti.subject_to(opti.bounded(-slip_angle_max, s[w]["alpha"], slip_angle_max))
         options = {"print_level": 0, "tol": 1e-10, "acceptable_tol": 1e-8, "max_iter": 200, "sb": "yes"}
         options.update(ipopt_options or {})
         opti.solver("ipopt", {"expand": True, "print_time": False}, options)
         return SimpleNamespace(opti=opti, x=x, V=V, pv=pv, p_scale=p_scale)
 
     def max_lateral_acceleration(self, V, pressures=None, *, turn: str = "left", x0=None,
+                                 slip_angle_max: float | None = 0.35, starts=(0.5, 0.7, 0.3),
                                  ipopt_options: dict | None = None) -> MaxLateralResult:
         """The largest steady-state lateral acceleration ay = V r at speed ``V`` [m/s] (IPOPT, exact derivatives).
 
         Decision variables: steer delta, sideslip beta, yaw rate r, driven slip kappa; constraints: the three
-        equilibrium equations (scaled). ``pressures``: None (the tyres' INFLPRES), a pair (p_front, p_rear) [Pa],
-        or 'optimise' (both become design variables within the tyres' [PRESMIN, PRESMAX]). ``turn``: 'left'
-        (r > 0) or 'right'. ``x0`` = (delta, beta, r, kappa[, p_front, p_rear]) overrides the starting point
-        (default: the linear single-track state at delta = 0.02 rad). The Opti problem is built once per mode
-        and re-solved with new parameter values, so sweeps are cheap.
+        equilibrium equations (scaled by m g, m g, m g L), |delta| <= ``params.max_steer``, |beta| <= 0.5,
+        |kappa| <= 0.15 and, unless ``slip_angle_max`` is None, |alpha| <= ``slip_angle_max`` [rad] at every
+        wheel: a trust region that keeps IPOPT's early steps on the physical branch (the tyres' force peaks lie
+        well inside it; :attr:`MaxLateralResult.active_bounds` names any bound active at the optimum).
+
+        ``pressures``: None (the tyres' INFLPRES), a pair (p_front, p_rear) [Pa], or 'optimise' (both become
+        design variables within the tyres' [PRESMIN, PRESMAX]). ``turn``: 'left' (r > 0) or 'right'.
+
+        Start: ``x0`` = (delta, beta, r, kappa[, p_front, p_rear]), else the steady state (solved) at the steer
+        the linear single-track model needs for ay = ``starts[0]`` g; if IPOPT fails from there, it is
+        restarted from the next entry of ``starts`` (``stats.attempts`` counts the solves, ``stats.iterations``
+        and ``stats.solve_time`` add them up). The Opti problem is built once per mode and re-solved with new
+        parameter values, so sweeps are cheap. ``ay`` is signed (negative in a right turn).
         """
         if turn not in _TURN:
             raise ModelInputError(f"turn must be 'left' or 'right', got {turn!r}")
@@ -554,37 +588,67 @@ class Vehicle:
         optimise = isinstance(pressures, str)
         if optimise and pressures not in ("optimise", "optimize"):
             raise ModelInputError(f"pressures must be None, (p_front, p_rear) or 'optimise', got {pressures!r}")
-        key = (optimise, sign, tuple(sorted((ipopt_options or {}).items())))
+        key = (optimise, sign, slip_angle_max, tuple(sorted((ipopt_options or {}).items())))
         if key not in self._opti_cache:
-            self._opti_cache[key] = self._build_max_ay(optimise, sign, ipopt_options)
+            self._opti_cache[key] = self._build_max_ay(optimise, sign, slip_angle_max, ipopt_options)
         prob = self._opti_cache[key]
         opti = prob.opti
         pf, pr = self._pressures(*(pressures if (pressures is not None and not optimise) else (None, None)))
         opti.set_value(prob.V, V)
-        if x0 is None:
-            d0 = 0.02 * sign
-            x0 = (d0, *self.linear_guess(V, d0, pf, pr))
-        x0 = list(x0)
-        opti.set_initial(prob.x, x0[:4])
-        if optimise:
-            p0 = x0[4:6] if len(x0) >= 6 else [pf, pr]
-            opti.set_initial(prob.pv, [p / prob.p_scale for p in p0])
-        else:
+        if not optimise:
             opti.set_value(prob.pv, [pf, pr])
-        t0 = time.perf_counter()
-        try:
-            sol = opti.solve()
-            values, pvals = sol.value(prob.x), sol.value(prob.pv)
-        except RuntimeError:  # not converged: report the last iterate with the solver's status
-            values, pvals = opti.debug.value(prob.x), opti.debug.value(prob.pv)
-        wall = time.perf_counter() - t0
-        st = opti.stats()
-        stats = SolverStats("ipopt", bool(st.get("success", False)), str(st.get("return_status", "")),
-                            int(st.get("iter_count", -1)), wall)
+        guesses = [x0] if x0 is not None else [None] * len(starts)
+        iters, wall, attempts = 0, 0.0, 0
+        for k, guess in enumerate(guesses):
+            if guess is None:
+                guess = self._start_point(V, sign, pf, pr, starts[k])
+            guess = list(guess)
+            opti.set_initial(prob.x, guess[:4])
+            if optimise:
+                p0 = guess[4:6] if len(guess) >= 6 else [pf, pr]
+                opti.set_initial(prob.pv, [p / prob.p_scale for p in p0])
+            t0 = time.perf_counter()
+            try:
+                sol = opti.solve()
+                values, pvals = sol.value(prob.x), sol.value(prob.pv)
+            except RuntimeError:  # not converged: keep the last iterate and the solver's status
+                values, pvals = opti.debug.value(prob.x), opti.debug.value(prob.pv)
+            wall += time.perf_counter() - t0
+            st = opti.stats()
+            iters += int(st.get("iter_count", 0))
+            attempts += 1
+            success = bool(st.get("success", False))
+            if success:
+                break
+        stats = SolverStats("ipopt", success, str(st.get("return_status", "")), iters, wall, attempts)
         values = np.atleast_1d(values).astype(float)
         pvals = np.atleast_1d(pvals).astype(float) * prob.p_scale
+        if optimise:  # IPOPT relaxes bounds by ~1e-8 relative: put the pressures back into the .tir range
+            pvals = np.clip(pvals, *self.pressure_bounds())
         state = self.state(V, *values, pvals[0], pvals[1], stats=stats)
-        return MaxLateralResult(ay=state.ay, state=state, pressures_optimised=optimise, stats=stats)
+        active = self._active_bounds(state, optimise, slip_angle_max)
+        return MaxLateralResult(ay=state.ay, state=state, pressures_optimised=optimise, stats=stats,
+                                active_bounds=active)
+
+    def _active_bounds(self, state, optimise, slip_angle_max, tol=1e-6):
+        P = self.params
+        active = []
+        if abs(state.delta) > P.max_steer - tol:
+            active.append("max_steer")
+        if abs(state.beta) > 0.5 - tol:
+            active.append("beta")
+        if abs(state.kappa) > 0.15 - tol:
+            active.append("kappa")
+        if slip_angle_max:
+            active += [f"slip_angle_{w}" for w in WHEELS if abs(state.wheels[w]["alpha"]) > slip_angle_max - tol]
+        if optimise:
+            lo, hi = self.pressure_bounds()
+            for name, p in (("front", state.p_front), ("rear", state.p_rear)):
+                if p < lo + tol * 1e5:
+                    active.append(f"PRESMIN_{name}")
+                if p > hi - tol * 1e5:
+                    active.append(f"PRESMAX_{name}")
+        return tuple(active)
 
     # ------------------------------------------------------------------------------------ brute force
     def _curve_residuals(self, U, V, pf, pr):
