@@ -17,14 +17,16 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import re
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+
 import numpy as np
+
+from .tir import same_file
 
 __all__ = ["main", "build_parser"]
 
@@ -273,8 +275,8 @@ command line.""",
     modes.add_argument("--turn-slip", action="store_true", help="switch the turn-slip model on")
     modes.add_argument("--alpha-star", action="store_true", help="use alpha* = tan(alpha) sign(Vx) (4.E3)")
     modes.add_argument("--no-limits", action="store_true", help="ignore the .tir input limits and low-speed model")
-    modes.add_argument("--kzgr0", choices=("published", "mfeval"), default="published",
-                       help="form of the turn-slip K_zgamma,r0 (default published)")
+    modes.add_argument("--turn-slip-form", choices=("published", "mfeval"), default="published",
+                       help="turn-slip equations as published (default) or as the MFeval reference evaluator")
     out = p.add_argument_group("output")
     out.add_argument("--outputs", type=_outputs_type, metavar="NAMES",
                      help="comma list of outputs to print/write/plot, or 'all' (default table and plot: "
@@ -296,9 +298,9 @@ def _cmd_eval(args) -> int:
     swept = [n for n in given if getattr(args, n).values.size > 1]
     src = Path(args.file)
     for opt, target in (("--csv", args.csv), ("--plot", args.plot)):
-        if target is not None and _same_path(Path(target), src):
+        if target is not None and same_file(Path(target), src):
             parser.error(f"argument {opt}: {target!r} is the input .tir file; choose another output file")
-    if args.csv is not None and args.plot is not None and _same_path(Path(args.csv), Path(args.plot)):
+    if args.csv is not None and args.plot is not None and same_file(Path(args.csv), Path(args.plot)):
         parser.error(f"argument --plot: {args.plot!r} is also the --csv file; choose two different files")
     if args.plot is not None and not swept:
         parser.error("argument --plot: nothing to plot; sweep at least one input over several values "
@@ -316,13 +318,16 @@ def _cmd_eval(args) -> int:
             model = load_tir(args.file, side=args.side)
             inputs, shape = _eval_grid(args, swept, model.params)
             out = model.evaluate(**inputs, turn_slip=args.turn_slip, alpha_star=args.alpha_star,
-                                 limits=not args.no_limits, kzgr0=args.kzgr0)
+                                 limits=not args.no_limits, turn_slip_form=args.turn_slip_form)
         for w in caught:
             print(f"mftyre eval: warning: {w.message}", file=sys.stderr)
         table_cols = args.outputs or _DEFAULT_OUTPUTS
         if not args.quiet:
             print(_eval_header(args, model, given, swept, shape))
             print(_format_table(_eval_frame(args, out, swept, shape, table_cols)))
+        for target in (args.csv, args.plot):
+            if target is not None:
+                Path(target).parent.mkdir(parents=True, exist_ok=True)
         if args.csv is not None:
             frame = _eval_frame(args, out, swept, shape, args.outputs or tuple(out.keys()))
             frame.to_csv(args.csv, index=False)
@@ -337,15 +342,6 @@ def _cmd_eval(args) -> int:
         print(f"mftyre eval: error: cannot write output: {exc}", file=sys.stderr)
         return 1
     return 0
-
-
-def _same_path(a: Path, b: Path) -> bool:
-    try:
-        if a.exists() and b.exists():
-            return os.path.samefile(a, b)
-    except OSError:
-        pass
-    return a.resolve() == b.resolve()
 
 
 def _eval_grid(args, swept: list[str], prm) -> tuple[dict, tuple[int, ...]]:
@@ -477,6 +473,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
     _add_check(sub)
     _add_eval(sub)
+    from .fmu_command import register as register_fmu
+
+    register_fmu(sub)
     return parser
 
 

@@ -437,7 +437,8 @@ def _line(name: str, value: str, comment: str = "") -> str:
     return text
 
 
-def _same_file(a: Path, b: Path) -> bool:
+def same_file(a: Path, b: Path) -> bool:
+    """True when ``a`` and ``b`` name the same file (existing files compared by inode)."""
     try:
         if a.exists() and b.exists():
             return os.path.samefile(a, b)
@@ -504,7 +505,7 @@ def write_tir(params: TyreParameters, path, *, overwrite: bool = False) -> Path:
     if not isinstance(params, TyreParameters):
         raise ModelInputError(f"write_tir expects TyreParameters, got {type(params).__name__}")
     p = Path(path)
-    if params.source and _same_file(p, Path(params.source)):
+    if params.source and same_file(p, Path(params.source)):
         raise _err(str(p), None, None,
                    "refusing to overwrite the file these parameters were read from "
                    "(params.source); write to a different path")

@@ -1,0 +1,242 @@
+"""FMI 2.0 co-simulation slave of the mftyre Magic Formula tyre (pythonfmu).
+
+Built by ``mftyre fmu build FILE.tir -o tyre.fmu`` (see fmu/build.py and fmu/README.md); not meant to be run
+directly. The FMU's resources hold this script, ``mftyre_fmu_core.py`` (the computation), ``config.json`` (what
+was built), ``tyre.tir`` (the embedded property file), ``functions/`` (the model as serialised CasADi functions
+and, for the build platform, compiled C libraries) and ``vendor/mftyre`` (a copy of the mftyre package used
+when the host's Python has none installed).
+
+FMI behaviour
+-------------
+* Parameters are read when initialisation ends; the outputs are computed then from the inputs' current values,
+  so they are valid right after fmi2ExitInitializationMode, and after every fmi2DoStep (the steady model has no
+  state: the outputs are those of the inputs at the end of the step, whatever the step size).
+* No Python exception ever leaves this class (pythonfmu would turn it into fmi2Fatal). Problems are logged with
+  status fmi2Error (category logStatusError) and reported through the FMI status: an unusable configuration (bad
+  parameter, unreadable .tir) or a non-finite input makes fmi2DoStep return fmi2Discard and leaves the outputs at
+  their last valid values; the ``status`` output says why (0 ok, 1 input rejected, 2 configuration error).
+* fmi2Reset returns the instance to the state after instantiation (pythonfmu re-creates the object).
+"""
+import json
+import math
+import os
+import sys
+import traceback
+from xml.etree.ElementTree import Element, SubElement
+
+from pythonfmu import Fmi2Causality, Fmi2Initial, Fmi2Slave, Fmi2Variability, Integer, Real, String
+from pythonfmu.enums import Fmi2Status
+
+# Units of the variables (FMI unit names) and their SI base-unit exponents for <UnitDefinitions>.
+_UNIT_BASES = {
+    "N": dict(kg=1, m=1, s=-2), "N.m": dict(kg=1, m=2, s=-2), "m": dict(m=1), "m/s": dict(m=1, s=-1),
+    "rad": dict(rad=1), "rad/s": dict(rad=1, s=-1), "Pa": dict(kg=1, m=-1, s=-2),
+}
+
+_INPUTS = {  # name -> (unit, description); start values come from config.json
+    "vx": ("m/s", "wheel-centre velocity along the wheel heading x (ISO-W); rig mode: the rig speed"),
+    "vy": ("m/s", "vehicle mode: wheel-centre velocity along y (ISO-W, to the left)"),
+    "omega": ("rad/s", "vehicle mode: wheel spin speed (positive rolling forwards)"),
+    "gamma": ("rad", "inclination (camber) angle, ISO-W"),
+    "z": ("m", "vehicle mode, vertical_input=position: wheel-centre height (same reference as road_z)"),
+    "road_z": ("m", "vehicle mode, vertical_input=position: road height under the wheel"),
+    "Fz_in": ("N", "vertical load (vertical_input=load, and rig mode)"),
+    "p": ("Pa", "inflation pressure (may change during the run)"),
+    "kappa_in": ("1", "rig mode: longitudinal slip"),
+    "alpha_in": ("rad", "rig mode: slip angle (ISO-W)"),
+}
+
+_PARAMETERS = {  # name -> description; start values come from config.json
+    "tir_file": "property file: empty = the .tir embedded in the FMU (resources/tyre.tir), else a path",
+    "model": "tyre model: steady (Magic Formula, no states) or swift (rigid ring; not available yet)",
+    "side": "side the tyre is mounted on: left or right (mirrors the lateral behaviour)",
+    "input_mode": "vehicle (wheel-centre velocities, spin, vertical position or load) or rig (kappa, alpha, Fz)",
+    "vertical_input": "vehicle mode: load (Fz_in is the load) or position (Fz from z - road_z)",
+    "evaluator": "auto (compiled C, else CasADi VM), compiled, casadi or numpy (reference, slow)",
+}
+
+
+class MFTyre(Fmi2Slave):
+    """Magic Formula 6.1/6.2 tyre (mftyre): forces and moments at the wheel centre, slips, radii, contact patch."""
+
+    author = "mftyre developers"
+    description = ("Magic Formula 6.1/6.2 steady-state tyre from a .tir file (mftyre), ISO-W axes, SI units. "
+                   "Needs Python with numpy and casadi (see documentation).")
+    version = "0.1.0"
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self._config = self._read_config()
+        cfg = self._config
+        starts = cfg.get("inputs", {})
+        for name in _INPUTS:
+            setattr(self, name, float(starts.get(name, 0.0)))
+        params = cfg.get("parameters", {})
+        for name in _PARAMETERS:
+            setattr(self, name, str(params.get(name, "")))
+        from mftyre_fmu_core import OUTPUTS
+
+        self._output_units = {k: v[0] for k, v in OUTPUTS.items()}
+        for name in OUTPUTS:
+            setattr(self, name, 0.0)
+        self.status = 0
+        self._core = None
+        self._mode = None
+        self._problem = None  # configuration error message, once found
+
+        for name, description in _PARAMETERS.items():
+            self.register_variable(String(name, causality=Fmi2Causality.parameter,
+                                          variability=Fmi2Variability.fixed, description=description))
+        for name, (unit, description) in _INPUTS.items():
+            self.register_variable(Real(name, causality=Fmi2Causality.input, variability=Fmi2Variability.continuous,
+                                        description=description))
+        for name, (unit, description) in OUTPUTS.items():
+            self.register_variable(Real(name, causality=Fmi2Causality.output, variability=Fmi2Variability.continuous,
+                                        initial=Fmi2Initial.calculated, description=description))
+        self.register_variable(Integer("status", causality=Fmi2Causality.output, variability=Fmi2Variability.discrete,
+                                       initial=Fmi2Initial.calculated,
+                                       description="0 ok; 1 last input rejected (non-finite), outputs held; "
+                                                   "2 configuration error (see log), outputs invalid"))
+
+    # ------------------------------------------------------------------------------------------ model description
+    def to_xml(self, model_options=dict()):
+        """pythonfmu's description plus units and the InitialUnknowns that FMI 2.0 requires for the outputs."""
+        root = super().to_xml(model_options)
+        units = dict(self._output_units)
+        units.update({k: v[0] for k, v in _INPUTS.items()})
+        units = {k: u for k, u in units.items() if u != "1"}
+        defs = Element("UnitDefinitions")
+        for unit in sorted(set(units.values())):
+            SubElement(SubElement(defs, "Unit", name=unit), "BaseUnit",
+                       {k: str(v) for k, v in _UNIT_BASES[unit].items()})
+        position = list(root).index(root.find("CoSimulation")) + 1
+        root.insert(position, defs)
+        outputs = []
+        for i, sv in enumerate(root.find("ModelVariables"), start=1):
+            name = sv.get("name")
+            real = sv.find("Real")
+            if real is not None and name in units:
+                real.set("unit", units[name])
+            if sv.get("causality") == "output":
+                outputs.append(i)
+        structure = root.find("ModelStructure")
+        initial = SubElement(structure, "InitialUnknowns")
+        for i in outputs:
+            SubElement(initial, "Unknown", index=str(i))
+        return root
+
+    def _read_config(self):
+        try:
+            with open(os.path.join(self.resources or ".", "config.json"), encoding="utf-8") as fh:
+                return json.load(fh)
+        except Exception:  # building without a config: generic start values
+            return {}
+
+    # ------------------------------------------------------------------------------------------------- logging
+    def _error(self, message):
+        self.log(message, Fmi2Status.error)
+
+    # -------------------------------------------------------------------------------------------------- set-up
+    def exit_initialization_mode(self):
+        try:
+            self._setup()
+            self._compute()
+        except Exception as exc:  # never let an exception reach pythonfmu (fmi2Fatal)
+            self._fail(f"initialisation failed: {exc}\n{traceback.format_exc(limit=3)}")
+
+    def _fail(self, message):
+        self._problem = message
+        self.status = 2
+        self._error(message)
+
+    def _setup(self):
+        cfg = self._config
+        self._problem = None
+        model_name = self.model.strip().lower()
+        if model_name == "swift":
+            raise ValueError("parameter model='swift': the SWIFT rigid-ring model is not available in this version "
+                             "of the tyre FMU; use model='steady'")
+        if model_name != "steady":
+            raise ValueError(f"parameter model must be 'steady' or 'swift', got {self.model!r}")
+        mode = self.input_mode.strip().lower()
+        if mode not in ("vehicle", "rig"):
+            raise ValueError(f"parameter input_mode must be 'vehicle' or 'rig', got {self.input_mode!r}")
+        vertical = self.vertical_input.strip().lower()
+        if vertical not in ("load", "position"):
+            raise ValueError(f"parameter vertical_input must be 'load' or 'position', got {self.vertical_input!r}")
+        side = self.side.strip().lower() or None
+        if side not in (None, "left", "right"):
+            raise ValueError(f"parameter side must be 'left' or 'right', got {self.side!r}")
+        resources = self.resources or "."
+        self._import_mftyre(resources)
+        import mftyre
+        from mftyre_fmu_core import SteadyTyre
+
+        tir = self.tir_file.strip()
+        embedded = not tir
+        path = os.path.join(resources, cfg.get("tir", "tyre.tir")) if embedded else tir
+        if not os.path.isfile(path):
+            raise ValueError(f"parameter tir_file: no such file {path!r}")
+        model = mftyre.load_tir(path, side=side)
+        shipped = embedded and model.side == cfg.get("side")
+        functions_dir = os.path.join(resources, "functions") if shipped else None
+        index = cfg.get("functions") if shipped else None
+        self._core = SteadyTyre(model, self.evaluator.strip().lower() or "auto", functions_dir, index,
+                                log=lambda m: self.log(m, Fmi2Status.warning))
+        self._mode = "rig" if mode == "rig" else vertical
+        self.log(f"{cfg.get('tir_name', os.path.basename(path)) if embedded else path}: FITTYP "
+                 f"{model.params.fittyp}, mounted {model.side}, input_mode {mode}"
+                 f"{'' if mode == 'rig' else ', vertical_input ' + vertical}, evaluator {self._core.path}",
+                 Fmi2Status.ok)
+
+    @staticmethod
+    def _import_mftyre(resources):
+        try:
+            import mftyre  # noqa: F401  (the host's installed package)
+        except ImportError:
+            sys.path.append(os.path.join(resources, "vendor"))
+            import mftyre  # noqa: F401
+
+    # ------------------------------------------------------------------------------------------------- stepping
+    def do_step(self, current_time, step_size):
+        try:
+            if self._problem is not None or self._core is None:
+                self._error("the tyre is not usable: " + (self._problem or "initialisation did not complete"))
+                return False
+            return self._compute()
+        except Exception as exc:
+            self._error(f"step at t={current_time}: {exc}")
+            self.status = 1
+            return False
+
+    def _compute(self):
+        core = self._core
+        mode = self._mode
+        if mode == "rig":
+            names = ("Fz_in", "kappa_in", "alpha_in", "gamma", "vx", "p")
+        elif mode == "load":
+            names = ("vx", "vy", "omega", "gamma", "p", "Fz_in")
+        else:
+            names = ("vx", "vy", "omega", "gamma", "p", "z", "road_z")
+        values = [getattr(self, n) for n in names]
+        bad = [f"{n}={v!r}" for n, v in zip(names, values) if not math.isfinite(v)]
+        if not bad and not values[names.index("p")] > 0:
+            bad = [f"p={values[names.index('p')]!r} (the inflation pressure must be positive)"]
+        if bad:
+            self._error(f"input rejected: {', '.join(bad)}; outputs keep their last valid values")
+            self.status = 1
+            return False
+        if mode == "rig":
+            out = core.step_rig(*values)
+        elif mode == "load":
+            out = core.step_vehicle(*values[:5], fz=values[5])
+        else:
+            out = core.step_vehicle(*values[:5], height=values[5] - values[6])
+        if not all(math.isfinite(v) for v in out.values()):
+            self._error(f"the model returned non-finite outputs for {dict(zip(names, values))}; outputs held")
+            self.status = 1
+            return False
+        for k, v in out.items():
+            setattr(self, k, v)
+        self.status = 0
+        return True

@@ -1,0 +1,181 @@
+"""Build the tyre FMU (FMI 2.0 co-simulation, pythonfmu) from a .tir file.
+
+    python fmu/build.py FILE.tir -o tyre.fmu [--model steady|swift] [--side left|right]
+    mftyre fmu build FILE.tir -o tyre.fmu ...                   (the same, through the mftyre command line)
+
+    from build import build_fmu                                 (with fmu/ on sys.path)
+    build_fmu("tir_files/car_205_60R15_mf61.tir", "tyre.fmu", side="left")
+
+What goes into the FMU (``resources/``): the slave ``MFTyre.py`` and ``mftyre_fmu_core.py``; ``tyre.tir`` (the
+property file, byte for byte); ``functions/``: the model as serialised CasADi functions (any platform with
+CasADi) and, when a C compiler is available at build time, the same functions compiled to C for the build
+platform (``.so``); ``config.json`` (the build options, the start values, the function index); ``vendor/mftyre``
+(a copy of the mftyre package, used only when the host's Python has no mftyre). ``documentation/`` holds
+fmu/README.md. A built FMU is a build output: never commit it.
+"""
+from __future__ import annotations
+
+import argparse
+import hashlib
+import html
+import json
+import shutil
+import sys
+import tempfile
+import warnings
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+MODELS = ("steady", "swift")
+INPUT_MODES = ("vehicle", "rig")
+VERTICAL_INPUTS = ("load", "position")
+
+__all__ = ["build_fmu", "main", "swift_available"]
+
+
+class FMUBuildError(Exception):
+    """The FMU cannot be built as asked (the message says why and what to do)."""
+
+
+def swift_available() -> str | None:
+    """None when a usable SWIFT step API exists, else the reason it does not."""
+    try:
+        import swift  # noqa: F401
+    except ImportError as exc:
+        return f"the package 'swift' cannot be imported ({exc})"
+    # swift.SwiftTyre.step(state, inputs, dt) exists (work in progress); the slave does not drive it yet
+    return ("the FMU slave does not drive the SWIFT rigid-ring model yet (swift.SwiftTyre is not wired into "
+            "fmu/MFTyre.py)")
+
+
+def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, input_mode: str = "vehicle",
+              vertical_input: str = "load", compile_c: bool = True, quiet: bool = True) -> Path:
+    """Build the FMU for the property file ``tir`` at ``output`` (a .fmu path); returns the path.
+
+    ``model``: the default of the FMU's ``model`` parameter (only 'steady' is available now). ``side``: mounting
+    side (default: the file's TYRESIDE). ``input_mode`` / ``vertical_input``: defaults of the parameters of the
+    same names. ``compile_c``: also ship C libraries compiled for this platform (needs a C compiler here, not on
+    the machine that runs the FMU); without them, or on another platform, the FMU runs the CasADi functions.
+    """
+    import mftyre
+    from mftyre.errors import MFTyreError
+
+    sys.path.insert(0, str(HERE))
+    try:
+        from mftyre_fmu_core import OUTPUTS, export_functions  # noqa: F401
+    finally:
+        sys.path.remove(str(HERE))
+    try:
+        from pythonfmu.builder import FmuBuilder
+    except ImportError as exc:
+        raise FMUBuildError(f"building an FMU needs the package pythonfmu (pip install pythonfmu): {exc}") from None
+
+    tir, output = Path(tir), Path(output)
+    if model not in MODELS:
+        raise FMUBuildError(f"--model must be one of {', '.join(MODELS)}, got {model!r}")
+    if model == "swift":
+        reason = swift_available()
+        if reason:
+            raise FMUBuildError(f"--model swift is not available yet: {reason}. Build with --model steady.")
+    if input_mode not in INPUT_MODES:
+        raise FMUBuildError(f"input mode must be one of {', '.join(INPUT_MODES)}, got {input_mode!r}")
+    if vertical_input not in VERTICAL_INPUTS:
+        raise FMUBuildError(f"vertical input must be one of {', '.join(VERTICAL_INPUTS)}, got {vertical_input!r}")
+    if output.suffix.lower() != ".fmu":
+        raise FMUBuildError(f"the output file must end in .fmu, got {str(output)!r}")
+    if not tir.is_file():
+        raise FMUBuildError(f"no such property file: {str(tir)!r}")
+    try:
+        tyre = mftyre.load_tir(tir, side=side)
+    except MFTyreError as exc:
+        raise FMUBuildError(f"cannot use {tir}: {exc}") from None
+    prm = tyre.params
+
+    with tempfile.TemporaryDirectory(prefix="mftyre_fmu_") as tmp:
+        stage = Path(tmp) / "stage"
+        stage.mkdir()
+        shutil.copy2(HERE / "MFTyre.py", stage / "MFTyre.py")
+        shutil.copy2(HERE / "mftyre_fmu_core.py", stage / "mftyre_fmu_core.py")
+        tir_bytes = tir.read_bytes()
+        (stage / "tyre.tir").write_bytes(tir_bytes)
+        try:
+            index = export_functions(tyre, stage / "functions", compile_c=compile_c)
+        except MFTyreError as exc:  # no C compiler: ship the CasADi functions only
+            warnings.warn(f"shipping CasADi functions only (no compiled C): {exc}", stacklevel=2)
+            shutil.rmtree(stage / "functions", ignore_errors=True)
+            index = export_functions(tyre, stage / "functions", compile_c=False)
+        vendor = stage / "vendor" / "mftyre"
+        shutil.copytree(Path(mftyre.__file__).parent, vendor,
+                        ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.so"))
+
+        rl0, _ = tyre.loaded_radius(prm.FNOMIN, p=prm.INFLPRES)
+        re0 = float(tyre.evaluate(prm.FNOMIN, 0.0, 0.0, vx=prm.LONGVL, p=prm.INFLPRES).re)
+        config = {
+            "tir": "tyre.tir",
+            "tir_name": tir.name,
+            "tir_sha256": hashlib.sha256(tir_bytes).hexdigest(),
+            "fittyp": prm.fittyp,
+            "side": tyre.side,
+            "mftyre_version": mftyre.__version__,
+            "functions": index,
+            "parameters": {"tir_file": "", "model": model, "side": tyre.side, "input_mode": input_mode,
+                           "vertical_input": vertical_input, "evaluator": "auto"},
+            "inputs": {"vx": float(prm.LONGVL), "vy": 0.0, "omega": float(prm.LONGVL) / re0, "gamma": 0.0,
+                       "z": float(rl0), "road_z": 0.0, "Fz_in": float(prm.FNOMIN), "p": float(prm.INFLPRES),
+                       "kappa_in": 0.0, "alpha_in": 0.0},
+        }
+        (stage / "config.json").write_text(json.dumps(config, indent=1))
+        docs = Path(tmp) / "documentation"
+        docs.mkdir()
+        readme = (HERE / "README.md").read_text(encoding="utf-8")
+        (docs / "index.html").write_text(
+            "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>mftyre tyre FMU</title></head><body><pre>"
+            + html.escape(readme) + "</pre></body></html>", encoding="utf-8")
+        (docs / "README.md").write_text(readme, encoding="utf-8")
+
+        project = [stage / n for n in ("mftyre_fmu_core.py", "tyre.tir", "config.json", "functions", "vendor")]
+        output.parent.mkdir(parents=True, exist_ok=True)
+        built = Path(tmp) / "out"
+        built.mkdir()
+        fmu = FmuBuilder.build_FMU(stage / "MFTyre.py", dest=built, project_files=project,
+                                   documentation_folder=docs)
+        shutil.move(str(fmu), str(output))
+    if not quiet:
+        print(f"wrote {output}: {tir.name} (FITTYP {prm.fittyp}), mounted {tyre.side}, model {model}, "
+              f"evaluator {'compiled C + CasADi' if index['mf']['compiled'] else 'CasADi'}")
+    return output
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of ``build`` (shared by this script and ``mftyre fmu build``)."""
+    parser.add_argument("tir", metavar="FILE.tir", help="tyre property file to embed")
+    parser.add_argument("-o", "--output", required=True, metavar="TYRE.fmu", help="FMU file to write")
+    parser.add_argument("--model", choices=MODELS, default="steady",
+                        help="tyre model (default steady; swift: not available yet)")
+    parser.add_argument("--side", choices=("left", "right"), help="mounting side (default: the file's TYRESIDE)")
+    parser.add_argument("--input-mode", choices=INPUT_MODES, default="vehicle",
+                        help="default of the input_mode parameter (default vehicle)")
+    parser.add_argument("--vertical-input", choices=VERTICAL_INPUTS, default="load",
+                        help="default of the vertical_input parameter (default load)")
+    parser.add_argument("--no-compile", action="store_true",
+                        help="ship only the CasADi functions (no C libraries for this platform)")
+
+
+def run(args) -> int:
+    try:
+        build_fmu(args.tir, args.output, model=args.model, side=args.side, input_mode=args.input_mode,
+                  vertical_input=args.vertical_input, compile_c=not args.no_compile, quiet=False)
+    except FMUBuildError as exc:
+        print(f"mftyre fmu build: error: {exc}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="build.py", description="Build the mftyre tyre FMU (FMI 2.0 CS).")
+    add_arguments(parser)
+    return run(parser.parse_args(argv))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

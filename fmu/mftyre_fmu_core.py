@@ -1,0 +1,316 @@
+"""The computation behind the tyre FMU, free of any FMI machinery (so it can be tested and timed directly).
+
+    core = SteadyTyre(model, evaluator="auto", functions_dir=None)
+    out = core.step_vehicle(vx, vy, omega, gamma, p, fz=4000.0)            # load given
+    out = core.step_vehicle(vx, vy, omega, gamma, p, height=0.30)          # wheel-centre height above the road
+    out = core.step_rig(fz, kappa, alpha, gamma, vx, p)                    # slip-driven test rig
+    out["Fx"], out["My"], out["kappa"], ...                                # see OUTPUTS
+
+Axes and units: ISO-W (TYDEX W), SI. The x axis is the wheel heading projected on the road, y to the left, z up;
+the origin of the MF quantities is the contact point C. ``vx`` and ``vy`` are the velocity components of the wheel
+centre in these axes (the road is at rest).
+
+Kinematics (vehicle mode)
+-------------------------
+* Effective rolling radius Re(Fz, p, omega): the model's own (the MF ``re`` output at kappa = alpha = 0).
+* Longitudinal slip  kappa = (omega Re - vx) / max(|vx|, VX_MIN): the slip speed of the contact point is
+  Vsx = vx - omega Re, and kappa = -Vsx/|vx|; kappa > 0 (driving, wheel faster than the road) gives Fx > 0.
+* Slip angle  alpha = atan2(vy, |vx|): tan(alpha) = Vsy/|Vx| with Vsy = vy, the model's relation (Vsy = tan(alpha)
+  |Vx|). The wheel sliding to the left (vy > 0) gives alpha > 0 and, ISO-W, Fy < 0 (the road pushes back).
+* The MF is then evaluated with the given spin omega (no re-estimation), the .tir limits and its low-speed model
+  (below VXLOW the slips are faded out: the steady model has no standstill force; use SWIFT for that).
+
+Vertical (vehicle mode)
+-----------------------
+* ``fz`` given: used as the load (negative values mean no contact, Fz = 0).
+* ``height`` given (wheel-centre height above the road, along the road normal): the loaded radius, measured in
+  the wheel plane, is Rl = height / cos(gamma) and Fz = max(0, model.vertical_force(Rl, p, omega, Fx, Fy,
+  gamma)) while Rl < R_omega (the free radius at the spin; above it the wheel has lifted off: Fz = 0, also for
+  MF 6.2, whose camber term would otherwise give a load at any height). When the .tir couples Fz to Fx/Fy (Q_FCX, Q_FCY != 0) this is solved by fixed-point iteration.
+
+Wheel-centre loads
+------------------
+The wheel centre W lies in the wheel plane at distance Rl from C: C -> W = Rl (0, -sin(gamma), cos(gamma)) in
+ISO-W axes (the wheel plane is the x-z plane turned by gamma about x). The forces are the same at W; the moments
+about W are M_W = M_C + (C - W) x F:
+
+    Mx_W = Mx + Rl (Fy cos(gamma) + Fz sin(gamma))
+    My_W = My - Rl Fx cos(gamma)
+    Mz_W = Mz - Rl Fx sin(gamma)
+
+(components still in the ISO-W axes, not in wheel-carrier axes). E.g. a driving force Fx > 0 at the contact point
+gives My_W = -Rl Fx: the road turns the wheel backwards about its axle (the drive torque balances it).
+In load mode Rl is the model's loaded radius; in position mode the geometric one.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+from pathlib import Path
+
+#: Below this |vx| [m/s] the longitudinal slip is computed with VX_MIN in the denominator (finite at standstill;
+#: the model's low-speed fade-out, active below VXLOW, multiplies it by |vx|/VXLOW anyway).
+VX_MIN = 1e-3
+
+#: MF outputs taken from the model (names of :data:`mftyre.model.OUTPUT_UNITS`).
+MF_OUTPUTS = ("fx", "fy", "fz", "mx", "my", "mz", "omega", "re", "rho", "rl", "a", "b", "t", "mux", "muy")
+
+#: Outputs of the tyre: name -> (unit, description). The unit "1" means dimensionless.
+OUTPUTS = {
+    "Fx": ("N", "longitudinal force on the tyre (at the wheel centre, ISO-W axes)"),
+    "Fy": ("N", "lateral force on the tyre (at the wheel centre, ISO-W axes)"),
+    "Fz": ("N", "vertical force on the tyre, >= 0 (at the wheel centre, ISO-W axes)"),
+    "Mx": ("N.m", "moment about x at the wheel centre, ISO-W axes"),
+    "My": ("N.m", "moment about y at the wheel centre, ISO-W axes (-Rl Fx + rolling resistance)"),
+    "Mz": ("N.m", "moment about z at the wheel centre, ISO-W axes"),
+    "Mx_c": ("N.m", "overturning moment at the contact point (MF output)"),
+    "My_c": ("N.m", "rolling-resistance moment at the contact point (MF output)"),
+    "Mz_c": ("N.m", "self-aligning moment at the contact point (MF output)"),
+    "kappa": ("1", "longitudinal slip given to the MF (kinematic, or the rig input)"),
+    "alpha": ("rad", "slip angle given to the MF (kinematic, or the rig input)"),
+    "Vsx": ("m/s", "longitudinal slip speed of the contact point, -kappa |vx|"),
+    "Vsy": ("m/s", "lateral slip speed of the contact point, tan(alpha) |vx|"),
+    "omega_used": ("rad/s", "spin speed used (the input; in rig mode estimated from kappa and vx)"),
+    "rho": ("m", "vertical tyre deflection"),
+    "Rl": ("m", "loaded radius (wheel centre to contact point, in the wheel plane)"),
+    "Re": ("m", "effective rolling radius"),
+    "contact_length": ("m", "contact patch length 2a"),
+    "contact_width": ("m", "contact patch width 2b"),
+    "trail": ("m", "pneumatic trail"),
+    "mux": ("1", "longitudinal friction coefficient"),
+    "muy": ("1", "lateral friction coefficient"),
+}
+
+EVALUATORS = ("auto", "compiled", "casadi", "numpy")
+
+
+class TyreFMUError(Exception):
+    """A configuration of the tyre FMU that cannot be used (message says what to change)."""
+
+
+# --------------------------------------------------------------------------------------- CasADi functions
+def casadi_functions(model) -> dict:
+    """The CasADi functions the FMU evaluates, built from the model's one set of equations.
+
+    mf(fz, kappa, alpha, gamma, vx, p, omega) -> MF_OUTPUTS       (spin given)
+    rig(fz, kappa, alpha, gamma, vx, p) -> MF_OUTPUTS             (spin estimated from kappa and vx)
+    re(fz, gamma, vx, p, omega) -> re                             (effective rolling radius, kappa = alpha = 0)
+    vertical(rl, p, omega, fx, fy, gamma) -> (fz, r_omega)        (= MFModel.vertical_force, free radius)
+    """
+    import casadi as ca
+    from mftyre.backend import casadi_backend
+    from mftyre.formula import vertical
+
+    mf = model.casadi_function(inputs=("fz", "kappa", "alpha", "gamma", "vx", "p", "omega"), outputs=MF_OUTPUTS,
+                               name="mf")
+    rig = model.casadi_function(inputs=("fz", "kappa", "alpha", "gamma", "vx", "p"), outputs=MF_OUTPUTS,
+                                name="rig")
+    re = model.casadi_function(inputs=("fz", "gamma", "vx", "p", "omega"), outputs=("re",),
+                               fixed=dict(kappa=0.0, alpha=0.0), name="re")
+    # the vertical force exactly as MFModel.vertical_force (mirroring, unclipped pressure, bottoming)
+    be = casadi_backend()
+    prm = model.params
+    rl, p, omega, fx, fy, gamma = (ca.SX.sym(n) for n in ("rl", "p", "omega", "fx", "fy", "gamma"))
+    fy_m, gamma_m = (-fy, -gamma) if model.mirrored else (fy, gamma)
+    dpi = (p - prm.NOMPRES) / prm.NOMPRES
+    r_omega = vertical.free_radius(prm, omega, be)
+    if prm.version == "62":
+        fz = vertical.vertical_force_62(prm, rl, r_omega, omega, fx, fy_m, gamma_m, dpi, be)[0]
+    else:
+        fz = vertical.vertical_force_61(prm, r_omega - rl, r_omega, omega, fx, fy_m, dpi, be)
+    vert = ca.Function("vertical", [rl, p, omega, fx, fy, gamma], [fz, r_omega],
+                       ["rl", "p", "omega", "fx", "fy", "gamma"], ["fz_v", "r_omega"])
+    return {"mf": mf, "rig": rig, "re": re, "vertical": vert}
+
+
+def function_key(tir_text: str, side: str) -> str:
+    """Identifies the shipped functions: the .tir text, the side, and the versions of mftyre and CasADi."""
+    import casadi as ca
+    import mftyre
+
+    payload = json.dumps({"tir": tir_text, "side": side, "mftyre": mftyre.__version__, "casadi": ca.__version__})
+    return hashlib.sha256(payload.encode()).hexdigest()[:24]
+
+
+def export_functions(model, directory, *, compile_c: bool = True) -> dict:
+    """Write the functions to ``directory``: ``<name>.casadi`` (serialised, run on CasADi's virtual machine) and,
+    with ``compile_c``, ``<name>.so`` + ``.json`` compiled by :mod:`mftyre.compiled` (platform specific).
+    Returns {name: {"casadi": file, "compiled": file or None}} relative to ``directory``."""
+    from mftyre.compiled import compile_function
+
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    index = {}
+    for name, f in casadi_functions(model).items():
+        f.save(str(directory / f"{name}.casadi"))
+        entry = {"casadi": f"{name}.casadi", "compiled": None}
+        if compile_c:
+            lib = compile_function(f, f"{name}_{os.urandom(8).hex()}", directory, f.name_out())
+            final = directory / f"{name}.so"
+            os.replace(lib, final)
+            os.replace(lib.with_suffix(".json"), final.with_suffix(".json"))
+            entry["compiled"] = final.name
+        index[name] = entry
+    return index
+
+
+# --------------------------------------------------------------------------------------------- evaluators
+class _CasadiEval:
+    """A CasADi function on its virtual machine, floats in -> tuple of floats out."""
+
+    def __init__(self, function):
+        self.f = function
+        self.n_out = function.n_out()
+
+    def __call__(self, *values):
+        res = self.f.call(list(values))
+        return tuple(float(r) for r in res)
+
+
+class _NumpyEvaluators:
+    """The same four functions through MFModel.evaluate / vertical_force (the reference, slowest)."""
+
+    def __init__(self, model):
+        self.model = model
+
+    def mf(self, fz, kappa, alpha, gamma, vx, p, omega):
+        o = self.model.evaluate(fz, kappa, alpha, gamma, 0.0, vx, p, omega)
+        return tuple(float(o[k]) for k in MF_OUTPUTS)
+
+    def rig(self, fz, kappa, alpha, gamma, vx, p):
+        o = self.model.evaluate(fz, kappa, alpha, gamma, 0.0, vx, p)
+        return tuple(float(o[k]) for k in MF_OUTPUTS)
+
+    def re(self, fz, gamma, vx, p, omega):
+        return (float(self.model.evaluate(fz, 0.0, 0.0, gamma, 0.0, vx, p, omega).re),)
+
+    def vertical(self, rl, p, omega, fx, fy, gamma):
+        from mftyre.backend import NUMPY
+        from mftyre.formula.vertical import free_radius
+
+        fz = float(self.model.vertical_force(rl, p, omega, fx, fy, gamma))
+        return fz, float(free_radius(self.model.params, omega, NUMPY))
+
+
+def load_evaluators(model, evaluator="auto", functions_dir=None, index=None, log=None):
+    """(name of the path used, object with mf/rig/re/vertical callables).
+
+    ``compiled``: the shipped C libraries (``functions_dir``), else compiled now with the C compiler (cached);
+    ``casadi``: the shipped serialised functions, else built now from the model; ``numpy``: MFModel itself;
+    ``auto``: compiled, falling back to casadi."""
+    log = log or (lambda msg: None)
+    if evaluator not in EVALUATORS:
+        raise TyreFMUError(f"evaluator must be one of {', '.join(EVALUATORS)}; got {evaluator!r}")
+    if evaluator == "numpy":
+        return "numpy", _NumpyEvaluators(model)
+    names = ("mf", "rig", "re", "vertical")
+    errors = []
+    if evaluator in ("auto", "compiled"):
+        from mftyre.compiled import CompiledFunction
+
+        try:
+            if functions_dir is not None and index is not None and all(index[n]["compiled"] for n in names):
+                fns = {n: CompiledFunction(Path(functions_dir) / index[n]["compiled"]) for n in names}
+                return "compiled", _Bundle(fns)
+            errors.append("no shipped compiled functions for this tyre and side")
+        except Exception as exc:  # another platform, missing file...
+            errors.append(f"shipped compiled functions unusable: {exc}")
+        try:
+            from mftyre.compiled import cache_dir, compile_function
+
+            key = function_key(_tir_identity(model), model.side)
+            fns = {}
+            for n, f in casadi_functions(model).items():
+                lib = compile_function(f, f"fmu_{n}_{key}", cache_dir(), f.name_out())
+                fns[n] = CompiledFunction(lib)
+            return "compiled", _Bundle(fns)
+        except Exception as exc:
+            errors.append(f"compiling now failed: {exc}")
+        if evaluator == "compiled":
+            raise TyreFMUError("compiled evaluator unavailable: " + "; ".join(errors))
+        log("compiled evaluator unavailable (" + "; ".join(errors) + "); using CasADi's virtual machine")
+    import casadi as ca
+
+    try:
+        if functions_dir is not None and index is not None:
+            fns = {n: _CasadiEval(ca.Function.load(str(Path(functions_dir) / index[n]["casadi"]))) for n in names}
+            return "casadi", _Bundle(fns)
+    except Exception as exc:
+        log(f"shipped CasADi functions unusable ({exc}); building them from the model")
+    return "casadi", _Bundle({n: _CasadiEval(f) for n, f in casadi_functions(model).items()})
+
+
+def _tir_identity(model) -> str:
+    prm = model.params
+    return json.dumps({k: repr(prm[k]) for k in prm}, sort_keys=True)
+
+
+class _Bundle:
+    def __init__(self, fns):
+        self.mf, self.rig, self.re, self.vertical = fns["mf"], fns["rig"], fns["re"], fns["vertical"]
+
+
+# ------------------------------------------------------------------------------------------------- the tyre
+class SteadyTyre:
+    """The steady-state Magic Formula tyre with the FMU's kinematics, vertical model and wheel-centre loads."""
+
+    def __init__(self, model, evaluator="auto", functions_dir=None, index=None, log=None):
+        self.model = model
+        prm = model.params
+        self.path, self.fn = load_evaluators(model, evaluator, functions_dir, index, log)
+        self.fcoupled = bool(prm["Q_FCX"] != 0 or prm["Q_FCY"] != 0) if "Q_FCX" in prm else True
+        self.fnomin = float(prm.FNOMIN)
+
+    # --------------------------------------------------------------------------------------------- modes
+    def step_vehicle(self, vx, vy, omega, gamma, p, fz=None, height=None):
+        """Vehicle mode: wheel-centre velocity, spin, inclination, pressure, and either the load ``fz`` or the
+        wheel-centre ``height`` above the road. Returns a dict of :data:`OUTPUTS`."""
+        fn = self.fn
+        denom = max(abs(vx), VX_MIN)
+        alpha = math.atan2(vy, abs(vx))
+        if height is None:
+            load = max(fz, 0.0)
+            re = fn.re(load, gamma, vx, p, omega)[0]
+            kappa = (omega * re - vx) / denom
+            mf = fn.mf(load, kappa, alpha, gamma, vx, p, omega)
+            return self._outputs(mf, kappa, alpha, gamma, vx, rl_lever=None, rho=None)
+        rl = height / math.cos(gamma)
+        fx = fy = 0.0
+        for _ in range(30):
+            fz_v, r_omega = fn.vertical(rl, p, omega, fx, fy, gamma)
+            load = max(fz_v, 0.0) if rl < r_omega else 0.0  # lift-off at the free radius
+            re = fn.re(load, gamma, vx, p, omega)[0]
+            kappa = (omega * re - vx) / denom
+            mf = fn.mf(load, kappa, alpha, gamma, vx, p, omega)
+            if not self.fcoupled:
+                break
+            fz_check = max(fn.vertical(rl, p, omega, mf[0], mf[1], gamma)[0], 0.0) if rl < r_omega else 0.0
+            if abs(fz_check - load) <= 1e-11 * self.fnomin:
+                break
+            fx, fy = mf[0], mf[1]
+        return self._outputs(mf, kappa, alpha, gamma, vx, rl_lever=rl, rho=max(r_omega - rl, 0.0))
+
+    def step_rig(self, fz, kappa, alpha, gamma, vx, p):
+        """Slip-driven test rig: the MF at the given slips and load (spin estimated from kappa and vx)."""
+        mf = self.fn.rig(max(fz, 0.0), kappa, alpha, gamma, vx, p)
+        return self._outputs(mf, kappa, alpha, gamma, vx, rl_lever=None, rho=None)
+
+    # -------------------------------------------------------------------------------------------- helpers
+    @staticmethod
+    def _outputs(mf, kappa, alpha, gamma, vx, rl_lever, rho):
+        fx, fy, fz, mx, my, mz, omega, re, rho_mf, rl, a, b, t, mux, muy = mf
+        lever = rl if rl_lever is None else rl_lever
+        s, c = math.sin(gamma), math.cos(gamma)
+        return {
+            "Fx": fx, "Fy": fy, "Fz": fz,
+            "Mx": mx + lever * (fy * c + fz * s),
+            "My": my - lever * fx * c,
+            "Mz": mz - lever * fx * s,
+            "Mx_c": mx, "My_c": my, "Mz_c": mz,
+            "kappa": kappa, "alpha": alpha, "Vsx": -kappa * abs(vx), "Vsy": math.tan(alpha) * abs(vx),
+            "omega_used": omega,
+            "rho": rho_mf if rho is None else rho, "Rl": lever, "Re": re,
+            "contact_length": 2.0 * a, "contact_width": 2.0 * b, "trail": t, "mux": mux, "muy": muy,
+        }
