@@ -329,14 +329,3 @@ def test_100000_steps_no_drift_in_memory_or_time(fmus, tmp_path):
     # first and last 10% of the steps: no growth in time per step (margin for a shared machine) or memory
     assert times[-1] < 1.5 * times[0] + 20e-6
     assert rss[-1] - rss[0] < 8 << 20
-
-
-def test_notebook_06_runs():
-    nbformat = pytest.importorskip("nbformat")
-    nbclient = pytest.importorskip("nbclient")
-    path = ROOT / "notebooks" / "06_fmu.ipynb"
-    nb = nbformat.read(path, as_version=4)
-    nbclient.NotebookClient(nb, timeout=600, kernel_name="python3",
-                            resources={"metadata": {"path": str(path.parent)}}).execute()
-    text = "".join(o.get("text", "") for c in nb.cells if c.cell_type == "code" for o in c.outputs)
-    assert "fmpy validate: no problems" in text and "time in the air 0.000 s" in text

@@ -1,0 +1,82 @@
+"""``mftyre fit DATA -o out.tir [--start FILE.tir] [--report report.md] ...``: fit a .tir file to measurements.
+
+:func:`register` adds the ``fit`` sub-command to an argparse sub-parsers object; :func:`run` is its handler
+(``args -> exit status``). DATA is a TYDEX (``.tdx``) or CSV (``.csv``, canonical channel names in SI) file.
+"""
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+__all__ = ["register", "run"]
+
+
+def register(subparsers) -> None:
+    from .stages import STAGE_NAMES
+
+    p = subparsers.add_parser(
+        "fit", help="fit Magic Formula parameters to tyre measurements and write a .tir file",
+        description="Fit MF 6.1 parameters, stage by stage (pure Fx, pure Fy, Mz, combined, Mx, My, vertical, "
+                    "rolling radius), to TYDEX (.tdx) or CSV data; pressure terms when the data have several "
+                    "pressures. Writes the .tir file and optionally a Markdown report with plots.")
+    p.add_argument("data", help="measurement file: .tdx (TYDEX) or .csv (canonical channels, SI)")
+    p.add_argument("-o", "--output", required=True, help="the .tir file to write")
+    p.add_argument("--start", help="start parameters from this .tir file (default: neutral values and estimates "
+                                   "from the data)")
+    p.add_argument("--report", help="write a Markdown report (and PNG plots beside it) to this path")
+    p.add_argument("--stages", default=",".join(STAGE_NAMES),
+                   help=f"comma-separated stages to fit, in order (default: all: {','.join(STAGE_NAMES)})")
+    p.add_argument("--no-pressure", action="store_true", help="do not fit the inflation-pressure terms")
+    p.add_argument("--weighting", choices=("uniform", "load"), default="uniform",
+                   help="residual weighting: uniform, or 1/Fz (every load alike)")
+    p.add_argument("--overwrite", action="store_true", help="replace existing output files")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from ..errors import MFTyreError
+    from .core import fit_tir, load_data
+    from .stages import STAGE_NAMES
+
+    out = Path(args.output)
+    if out.exists() and not args.overwrite:
+        print(f"mftyre fit: {out} exists; use --overwrite to replace it", file=sys.stderr)
+        return 2
+    stages = [s.strip() for s in args.stages.split(",") if s.strip()]
+    unknown = [s for s in stages if s not in STAGE_NAMES]
+    if unknown:
+        print(f"mftyre fit: unknown stage(s) {', '.join(unknown)}; stages: {', '.join(STAGE_NAMES)}", file=sys.stderr)
+        return 2
+    t0 = time.perf_counter()
+
+    def progress(stage, label, nfev, cost):
+        if not args.quiet:
+            print(f"\r  [{time.perf_counter() - t0:6.1f} s] {stage:<15} {label:<30} {nfev:5d} evaluations, "
+                  f"cost {cost:.4g}", end="", file=sys.stderr, flush=True)
+
+    try:
+        data = load_data(args.data)
+        result = fit_tir(data, start=args.start, stages=stages, fit_pressure=not args.no_pressure,
+                         weighting=args.weighting, progress=progress)
+        result.write_tir(out, overwrite=args.overwrite)
+        if args.report:
+            result.save_report(args.report)
+    except (MFTyreError, OSError) as exc:
+        if not args.quiet:
+            print(file=sys.stderr)
+        print(f"mftyre fit: {exc}", file=sys.stderr)
+        return 1
+    if not args.quiet:
+        print(file=sys.stderr)
+    print(f"fitted {len(data)} points in {result.seconds:.1f} s; wrote {out}"
+          + (f" and {args.report}" if args.report else ""))
+    for name, st in result.stages.items():
+        print(f"  {name:<15} {st.n_points:6d} points  {len(st.fitted):3d} parameters  fit error "
+              f"{st.fit_error:7.3f} %")
+    if result.comparison is not None:
+        for _, row in result.comparison.iterrows():
+            print(f"  pressure comparison {row.stage:<8} lower {row.lower:.3f} %  upper {row.upper:.3f} %  "
+                  f"extended {row.extended:.3f} %  recovered {100 * row.recovered:.0f} %")
+    return 0

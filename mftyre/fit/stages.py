@@ -1,0 +1,193 @@
+"""The fitting stages: which data, which measured channel, which parameters, in the order test engineers
+use (pure Fx, pure Fy, Mz, combined Fx and Fy, combined Mz, Mx, My, vertical, effective rolling radius).
+
+Every parameter named here is a schema parameter (:data:`mftyre.params.PARAMETERS`) of the stage's
+``.tir`` section; :func:`stage_parameters` checks that. A parameter group is fitted only when the stage's
+data can determine it (``needs``):
+
+* ``loads``: two or more load levels (load-variation terms, dfz); ``loads3``: three or more (dfz^2,
+  exponents, curvature of the load dependency);
+* ``camber``: an inclination other than zero; ``pressure``: two or more pressures and ``fit_pressure``
+  (the dpi terms); ``pressure3``: three or more pressures (dpi^2 terms);
+* ``speeds`` / ``speeds3``: two / three speed levels; ``fx`` / ``fy``: a non-zero longitudinal / lateral force.
+
+Each stage is fitted in passes, as on the test bench: the base parameters on the data at zero camber and
+nominal pressure, then the pressure terms added with all pressures, then the camber terms with all data.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..data import TyreData, levels
+from ..params import PARAMETERS
+
+__all__ = ["Stage", "STAGES", "STAGE_NAMES", "conditions", "stage_parameters", "shape_violations"]
+
+_KAPPA_TOL = 0.005
+_ALPHA_TOL = math.radians(0.25)
+_CAMBER_TOL = math.radians(0.25)
+
+
+@dataclass(frozen=True)
+class Stage:
+    name: str
+    title: str
+    channel: str            # measured channel
+    output: str             # model output compared with it ("fz_from_rl": the vertical-force relation)
+    rows: str               # "pure_lateral", "pure_longitudinal", "combined", "free_rolling", "all_rl", ...
+    groups: tuple           # ((needs tuple, parameter names tuple), ...)
+
+
+def _g(needs, names):
+    return (tuple(needs.split()) if needs else (), tuple(names.split()))
+
+
+STAGES: dict[str, Stage] = {s.name: s for s in (
+    Stage("pure_fx", "Pure longitudinal force Fx0 (4.E9-4.E18)", "FX", "fx", "pure_longitudinal", (
+        _g("", "PCX1 PDX1 PEX1 PEX4 PKX1 PHX1 PVX1"),
+        _g("loads", "PDX2 PEX2 PKX2 PHX2 PVX2"), _g("loads3", "PEX3 PKX3"),
+        _g("camber", "PDX3"), _g("pressure", "PPX1 PPX3"), _g("pressure3", "PPX2 PPX4"))),
+    Stage("pure_fy", "Pure lateral force Fy0 (4.E19-4.E30)", "FY", "fy", "pure_lateral", (
+        _g("", "PCY1 PDY1 PEY1 PEY3 PKY1 PHY1 PVY1"),
+        _g("loads", "PDY2 PEY2 PKY2 PHY2 PVY2"), _g("loads3", "PKY4"),
+        _g("camber", "PDY3 PEY4 PEY5 PKY3 PKY5 PKY6 PVY3"), _g("camber loads", "PKY7 PVY4"),
+        _g("pressure", "PPY1 PPY3"), _g("pressure loads", "PPY2"), _g("pressure3", "PPY4"),
+        _g("pressure camber", "PPY5"))),
+    Stage("mz", "Pure aligning moment Mz0 (4.E31-4.E49)", "MZ", "mz", "pure_lateral", (
+        _g("", "QBZ1 QCZ1 QDZ1 QEZ1 QEZ4 QHZ1 QDZ6 QBZ9"),
+        _g("loads", "QBZ2 QDZ2 QEZ2 QHZ2 QDZ7"), _g("loads3", "QBZ3 QEZ3"),
+        _g("camber", "QBZ4 QBZ5 QDZ3 QDZ4 QEZ5 QHZ3 QDZ8 QDZ10"), _g("camber loads", "QHZ4 QDZ9 QDZ11"),
+        _g("pressure", "PPZ1"), _g("pressure camber", "PPZ2"))),
+    Stage("combined_fx", "Combined-slip Fx (4.E50-4.E57)", "FX", "fx", "combined", (
+        _g("", "RBX1 RBX2 RCX1 REX1 RHX1"), _g("loads", "REX2"), _g("camber", "RBX3"))),
+    Stage("combined_fy", "Combined-slip Fy (4.E58-4.E67)", "FY", "fy", "combined", (
+        _g("", "RBY1 RBY2 RBY3 RCY1 REY1 RHY1 RVY1 RVY4 RVY5 RVY6"), _g("loads", "REY2 RHY2 RVY2"),
+        _g("camber", "RBY4 RVY3"))),
+    Stage("mz_combined", "Combined-slip Mz: moment arm of Fx (paper A56)", "MZ", "mz", "combined", (
+        _g("", "SSZ1 SSZ2"), _g("camber", "SSZ3"), _g("camber loads", "SSZ4"))),
+    Stage("mx", "Overturning moment Mx (4.E69, MF-Tyre 6.1 form)", "MX", "mx", "slip", (
+        _g("fy", "QSX1 QSX3"), _g("camber", "QSX2"), _g("camber loads", "QSX10 QSX11"),
+        _g("pressure camber", "PPMX1"))),
+    Stage("my", "Rolling-resistance moment My (paper A48)", "MY", "my", "free_rolling", (
+        _g("", "QSY1"), _g("speeds", "QSY3"), _g("speeds3", "QSY4"), _g("loads", "QSY7"), _g("camber", "QSY5"),
+        _g("camber loads", "QSY6"), _g("pressure", "QSY8"))),
+    Stage("vertical", "Vertical load vs deflection and loaded radius (A3.3, paper (3)-(5))", "FZ", "fz_from_rl",
+          "all_rl", (
+              _g("", "VERTICAL_STIFFNESS Q_FZ2 Q_RE0"), _g("pressure", "PFZ1"), _g("speeds", "Q_V1 Q_V2"),
+              _g("fx", "Q_FCX"), _g("fy", "Q_FCY"))),
+    Stage("rolling_radius", "Effective rolling radius Re (paper (7))", "RE", "re", "free_rolling_re", (
+        _g("loads", "BREFF DREFF FREFF"),)),
+)}
+STAGE_NAMES: tuple[str, ...] = tuple(STAGES)
+
+
+def stage_rows(stage: Stage, data: TyreData) -> np.ndarray:
+    """Boolean mask of the rows a stage fits (by the slip values; the measured channel must be finite)."""
+    sl, sa = np.abs(data.array("SL")), np.abs(data.array("SA"))
+    pure_kappa, pure_alpha = sl <= _KAPPA_TOL, sa <= _ALPHA_TOL
+    kind = stage.rows
+    if kind == "pure_lateral":
+        mask = pure_kappa & ~pure_alpha
+    elif kind == "pure_longitudinal":
+        mask = pure_alpha & ~pure_kappa
+    elif kind == "combined":
+        mask = ~pure_alpha & ~pure_kappa
+    elif kind == "slip":
+        mask = ~(pure_alpha & pure_kappa)
+    elif kind in ("free_rolling", "free_rolling_re"):
+        mask = pure_alpha & pure_kappa
+    elif kind == "all_rl":
+        mask = np.ones(len(data), bool)
+        if not data.has("RL"):
+            return np.zeros(len(data), bool)
+        mask &= np.isfinite(data.array("RL"))
+    else:  # pragma: no cover - guards the table
+        raise ValueError(kind)
+    if stage.channel not in data:
+        return np.zeros(len(data), bool)
+    return mask & np.isfinite(data.array(stage.channel))
+
+
+def conditions(data: TyreData) -> dict:
+    """Number of load, pressure and speed levels, camber present, Fx/Fy present, of a data subset."""
+    if len(data) == 0:
+        return dict(loads=0, pressures=0, speeds=0, camber=False, fx=False, fy=False)
+    fz = data.array("FZ")
+    return dict(
+        loads=len(levels(fz, 0.05 * float(np.max(np.abs(fz))))[1]),
+        pressures=len(levels(data.array("P"), 0.02 * float(np.max(data.array("P"))))[1]),
+        speeds=len(levels(data.array("VX"), 0.5)[1]),
+        camber=bool(np.any(np.abs(data.array("IA")) > _CAMBER_TOL)),
+        fx=bool(data.has("FX") and np.nanmax(np.abs(data.array("FX"))) > 0.05 * float(np.max(fz))),
+        fy=bool(data.has("FY") and np.nanmax(np.abs(data.array("FY"))) > 0.05 * float(np.max(fz))),
+    )
+
+
+def _met(need: str, cond: dict, fit_pressure: bool) -> bool:
+    return {
+        "loads": cond["loads"] >= 2, "loads3": cond["loads"] >= 3, "camber": cond["camber"],
+        "pressure": fit_pressure and cond["pressures"] >= 2, "pressure3": fit_pressure and cond["pressures"] >= 3,
+        "speeds": cond["speeds"] >= 2, "speeds3": cond["speeds"] >= 3, "fx": cond["fx"], "fy": cond["fy"],
+    }[need]
+
+
+_REASONS = {"loads": "one load level only", "loads3": "fewer than three load levels", "camber": "no camber in the data",
+            "pressure": "one pressure only (or fit_pressure=False)", "pressure3": "fewer than three pressures "
+            "(or fit_pressure=False)", "speeds": "one speed only", "speeds3": "fewer than three speeds",
+            "fx": "no longitudinal force in the data", "fy": "no lateral force in the data"}
+
+
+def stage_parameters(stage: Stage, cond: dict, fit_pressure: bool):
+    """(fitted parameter names grouped by pass kind, {skipped name: reason}).
+
+    Pass kinds: "base" (no camber or pressure term), "pressure" (needs pressure, no camber), "camber" (the rest).
+    """
+    passes = {"base": [], "pressure": [], "camber": []}
+    skipped = {}
+    for needs, names in stage.groups:
+        for n in names:
+            if n not in PARAMETERS:  # pragma: no cover - guards the table
+                raise KeyError(f"stage {stage.name}: {n} is not a schema parameter")
+        unmet = [n for n in needs if not _met(n, cond, fit_pressure)]
+        if unmet:
+            skipped.update({n: _REASONS[unmet[0]] for n in names})
+            continue
+        kind = "camber" if "camber" in needs else ("pressure" if any(n.startswith("pressure") for n in needs)
+                                                    else "base")
+        passes[kind].extend(names)
+    return passes, skipped
+
+
+# ------------------------------------------------------------------------------------- shape checks
+def shape_violations(stage_name: str, prm, corners: dict) -> np.ndarray:
+    """Amounts by which the Magic Formula shape conditions C > 0, D > 0, E <= 1 (and positive slip
+    stiffness, trail and weighting slopes) are violated at the corners of the data range (``corners``:
+    arrays dfz, dpi, gamma); all zeros when they hold. The factors are those of the equations cited."""
+    dfz, dpi, g = corners["dfz"], corners["dpi"], corners["gamma"]
+    checks = []
+    if stage_name == "pure_fx":
+        mux = (prm.PDX1 + prm.PDX2 * dfz) * (1 + prm.PPX3 * dpi + prm.PPX4 * dpi**2) * (1 - prm.PDX3 * g**2)  # 4.E13
+        kxk = (prm.PKX1 + prm.PKX2 * dfz) * np.exp(prm.PKX3 * dfz) * (1 + prm.PPX1 * dpi + prm.PPX2 * dpi**2)  # 4.E15
+        ex = prm.PEX1 + prm.PEX2 * dfz + prm.PEX3 * dfz**2  # 4.E14
+        checks += [prm.PCX1, mux, kxk, 1 - ex * (1 + abs(prm.PEX4)), 1 - ex * (1 - abs(prm.PEX4))]
+    elif stage_name == "pure_fy":
+        muy = (prm.PDY1 + prm.PDY2 * dfz) * (1 + prm.PPY3 * dpi + prm.PPY4 * dpi**2) * (1 - prm.PDY3 * g**2)  # 4.E23
+        base = (prm.PEY1 + prm.PEY2 * dfz)  # 4.E24
+        for sgn in (-1.0, 1.0):
+            checks.append(1 - base * (1 + prm.PEY5 * g**2 - (prm.PEY3 + prm.PEY4 * g) * sgn))
+        checks += [prm.PCY1, muy, (prm.PKY2 + prm.PKY5 * g**2) * (1 + prm.PPY2 * dpi), 1 + prm.PPY1 * dpi]  # 4.E25
+    elif stage_name == "mz":
+        dt = (prm.QDZ1 + prm.QDZ2 * dfz) * (1 - prm.PPZ1 * dpi) * (1 + prm.QDZ3 * g + prm.QDZ4 * g**2)  # paper A60
+        bt = (prm.QBZ1 + prm.QBZ2 * dfz + prm.QBZ3 * dfz**2) * (1 + prm.QBZ4 * g + prm.QBZ5 * np.abs(g))  # paper A58
+        et = prm.QEZ1 + prm.QEZ2 * dfz + prm.QEZ3 * dfz**2  # 4.E44, the atan factor in [-1, 1]
+        amp = np.abs(prm.QEZ4 + prm.QEZ5 * g)
+        checks += [prm.QCZ1, dt, bt, 1 - et * (1 + amp), 1 - et * (1 - amp)]
+    elif stage_name == "combined_fx":
+        checks += [prm.RCX1, prm.RBX1 + prm.RBX3 * g**2, 1 - (prm.REX1 + prm.REX2 * dfz)]  # 4.E54-4.E56
+    elif stage_name == "combined_fy":
+        checks += [prm.RCY1, prm.RBY1 + prm.RBY4 * g**2, 1 - (prm.REY1 + prm.REY2 * dfz)]  # 4.E62-4.E64
+    values = np.concatenate([np.ravel(np.asarray(c, dtype=float)) for c in checks]) if checks else np.zeros(0)
+    return np.minimum(values, 0.0)

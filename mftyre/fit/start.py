@@ -1,0 +1,183 @@
+"""Start values: a neutral parameter set sized to the tyre, and first estimates from the data.
+
+:func:`start_parameters` builds the parameter set a fit starts from when no start ``.tir`` is given: every
+parameter at its schema default (:data:`mftyre.params.PARAMETERS`), the tyre's FNOMIN, NOMPRES, INFLPRES,
+LONGVL, UNLOADED_RADIUS, WIDTH from the data's constants (TYDEX ``FNOMIN``, ``NOMPRES``, ``RFREE``,
+``NOMWIDTH``, ``LONGVEL``) or estimated from the data (median load level, middle pressure level, median speed,
+loaded radius extrapolated to zero load), the validity ranges set to the data's ranges, and the vertical
+stiffness from the load-deflection data. :func:`estimate_stage` then replaces the leading coefficients of a
+stage by values read off the data: peak friction (D), slope at zero slip (K, hence B), shifts, trail.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..data import TyreData, levels
+from ..errors import DataError
+from ..params import TyreParameters
+
+__all__ = ["start_parameters", "estimate_stage"]
+
+
+def _level_centres(x, rel_tol):
+    x = np.asarray(x, dtype=float)
+    return levels(x, rel_tol * float(np.max(np.abs(x))))[1]
+
+
+def start_parameters(data: TyreData, fittyp: int = 61, **given) -> TyreParameters:
+    """A neutral MF 6.1 (or 6.2) parameter set for the tyre measured in ``data``; ``given`` overrides."""
+    c = data.constants
+    fz_levels = _level_centres(data.array("FZ"), 0.05)
+    p_levels = _level_centres(data.array("P"), 0.02)
+    values = dict(
+        FNOMIN=float(c.get("FNOMIN") or round(float(np.median(fz_levels)), -1)),
+        NOMPRES=float(c.get("NOMPRES") or p_levels[len(p_levels) // 2]),
+        LONGVL=float(c.get("LONGVEL") or np.median(data.array("VX"))),
+    )
+    if isinstance(c.get("NOMWIDTH"), float):
+        values["WIDTH"] = c["NOMWIDTH"]
+    r0 = c.get("RFREE")
+    if not isinstance(r0, float):
+        r0 = _free_radius_from_data(data)
+    values["UNLOADED_RADIUS"] = r0
+    values["INFLPRES"] = values["NOMPRES"]
+    values.update(_ranges(data))
+    cz = _vertical_stiffness(data, values["FNOMIN"], values["NOMPRES"])
+    if cz:
+        values["VERTICAL_STIFFNESS"] = cz
+    values.update({k.upper(): v for k, v in given.items()})
+    return TyreParameters.from_defaults(fittyp=fittyp, **values)
+
+
+def _free_radius_from_data(data: TyreData) -> float:
+    if data.has("RL"):
+        rl, fz = data.array("RL"), data.array("FZ")
+        ok = np.isfinite(rl)
+        low = ok & (fz <= np.quantile(fz[ok], 0.3))
+        if low.sum() >= 2 and np.ptp(fz[low]) > 0:
+            slope, intercept = np.polyfit(fz[low], rl[low], 1)
+            return float(intercept)
+    if data.has("RE"):
+        return float(np.nanmax(data.array("RE")) * 1.03)
+    raise DataError(f"{data.source}: the unloaded radius is unknown: no RFREE constant, no RL/RE channel; give "
+                    "UNLOADED_RADIUS (e.g. fit_tir(..., start=start_parameters(data, UNLOADED_RADIUS=0.31)))")
+
+
+def _ranges(data: TyreData) -> dict:
+    def span(x, pad, floor):
+        lo, hi = float(np.min(x)), float(np.max(x))
+        w = max(hi - lo, floor)
+        return lo - pad * w, hi + pad * w
+
+    kmin, kmax = span(data.array("SL"), 0.02, 0.1)
+    amin, amax = span(data.array("SA"), 0.02, 0.1)
+    gmin, gmax = span(data.array("IA"), 0.02, 0.1)
+    pmin, pmax = span(data.array("P"), 0.01, 0.1 * float(np.max(data.array("P"))))
+    fz = data.array("FZ")
+    return dict(KPUMIN=min(kmin, -0.05), KPUMAX=max(kmax, 0.05), ALPMIN=min(amin, -0.05), ALPMAX=max(amax, 0.05),
+                CAMMIN=min(gmin, -0.05), CAMMAX=max(gmax, 0.05), PRESMIN=pmin, PRESMAX=pmax,
+                FZMIN=0.0, FZMAX=float(1.1 * np.max(fz)))
+
+
+def _vertical_stiffness(data: TyreData, fz0: float, p0: float) -> float | None:
+    """Cz0: secant stiffness Fz/rho at the nominal load and pressure, from RHO (or RL)."""
+    if data.has("RHO"):
+        rho = data.array("RHO")
+    else:
+        return None
+    fz, p = data.array("FZ"), data.array("P")
+    ok = np.isfinite(rho) & (rho > 0) & (np.abs(p - p0) <= 0.02 * p0) & (np.abs(fz - fz0) <= 0.3 * fz0)
+    if ok.sum() < 2:
+        return None
+    return float(np.median(fz[ok] / rho[ok]))
+
+
+def _linear(x, y):
+    """(intercept, slope) of the least-squares line; slope 0 for a single distinct x."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    if x.size >= 2 and np.ptp(x) > 0:
+        slope, intercept = np.polyfit(x, y, 1)
+        return float(intercept), float(slope)
+    return float(np.mean(y)), 0.0
+
+
+def estimate_stage(stage_name: str, prm: TyreParameters, data: TyreData) -> dict:
+    """First estimates of a stage's leading parameters from its data (at zero camber, nominal pressure
+    where available); {} for stages that start from the neutral values."""
+    if len(data) == 0:
+        return {}
+    fz0, p0 = prm.FNOMIN * prm.LFZO, prm.NOMPRES
+    g, p = data.array("IA"), data.array("P")
+    ref = (np.abs(g) < math.radians(0.25)) & (np.abs(p - p0) <= 0.02 * p0)
+    if ref.sum() < 5:
+        ref = np.abs(g) < math.radians(0.25)
+    if ref.sum() < 5:
+        ref = np.ones(len(data), bool)
+    fz = data.array("FZ")[ref]
+    groups = levels(fz, 0.05 * float(np.max(fz)))[0]
+    if stage_name in ("pure_fx", "pure_fy"):
+        lateral = stage_name == "pure_fy"
+        slip = data.array("SA" if lateral else "SL")[ref]
+        force = data.array("FY" if lateral else "FX")[ref]
+        small = math.radians(2.0) if lateral else 0.02
+        dfz, mu, stiff, shift = [], [], [], []
+        for k in np.unique(groups):
+            sel = groups == k
+            fz_k = float(np.mean(fz[sel]))
+            dfz.append((fz_k - fz0) / fz0)
+            mu.append(float(np.max(np.abs(force[sel]))) / fz_k)
+            lin = sel & (np.abs(slip) <= small)
+            if lin.sum() >= 3:
+                intercept, slope = _linear(slip[lin], force[lin])
+            else:
+                intercept, slope = 0.0, (-1.0 if lateral else 1.0) * 15.0 * fz_k
+            stiff.append(slope)
+            shift.append(intercept / slope if slope else 0.0)
+        dfz, mu, stiff = np.array(dfz), np.array(mu), np.array(stiff)
+        d1, d2 = _linear(dfz, mu)
+        if lateral:
+            pky1, pky2 = _cornering_stiffness_fit(1.0 + dfz, stiff / fz0)
+            out = dict(PDY1=max(d1, 0.1), PKY1=pky1, PHY1=float(np.median(shift)), PCY1=1.3)
+            if len(dfz) >= 2:
+                out.update(PDY2=d2, PKY2=pky2)
+            return out
+        k1, k2 = _linear(dfz, stiff / (fz0 * (1.0 + dfz)))
+        out = dict(PDX1=max(d1, 0.1), PKX1=max(k1, 1.0), PHX1=float(np.median(shift)), PCX1=1.65)
+        if len(dfz) >= 2:
+            out.update(PDX2=d2, PKX2=k2)
+        return out
+    if stage_name == "mz":
+        sa, fy, mz = data.array("SA")[ref], data.array("FY")[ref], data.array("MZ")[ref]
+        r0 = prm.UNLOADED_RADIUS
+        dfz, q = [], []
+        for k in np.unique(groups):
+            sel = (groups == k) & (np.abs(sa) >= math.radians(0.5)) & (np.abs(sa) <= math.radians(2.5))
+            if sel.sum() < 2:
+                continue
+            fz_k = float(np.mean(fz[groups == k]))
+            trail = float(np.median(-mz[sel] / fy[sel]))
+            dfz.append((fz_k - fz0) / fz0)
+            q.append(trail * fz0 / (r0 * fz_k))  # Dt = (QDZ1 + QDZ2 dfz) Fz R0 / Fz0 (paper A60)
+        if not q:
+            return {}
+        q1, q2 = _linear(np.array(dfz), np.array(q))
+        out = dict(QDZ1=float(np.clip(q1, 0.01, 0.5)))
+        if len(q) >= 2:
+            out["QDZ2"] = q2
+        return out
+    return {}
+
+
+def _cornering_stiffness_fit(x, k_per_fz0):
+    """PKY1, PKY2 of K_ya/Fz0 = PKY1 sin(2 atan(x / PKY2)) (4.E25 with PKY4 = 2, no camber or pressure) by a
+    scan over PKY2 with PKY1 solved linearly; x = Fz/Fz0."""
+    best = (float("inf"), -15.0, 1.5)
+    for pky2 in np.linspace(0.4, 6.0, 113):
+        basis = np.sin(2.0 * np.arctan(x / pky2))
+        pky1 = float(basis @ k_per_fz0 / (basis @ basis))
+        err = float(np.sum((pky1 * basis - k_per_fz0) ** 2))
+        if err < best[0]:
+            best = (err, pky1, float(pky2))
+    return min(best[1], -0.5), best[2]

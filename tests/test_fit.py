@@ -1,0 +1,185 @@
+"""mftyre.fit: the fit-error measure, the stage rules, and the evidence of issue #4: from noisy trailer data
+generated from the sample .tir, a fit from generic start values reproduces the noise-free model on a check
+grid (within 1.5 % normalised RMS for Fx, Fy and 4 % for Mz), the pressure-extended fit recovers at least
+90 % of the room between the upper and lower bounds, and the written .tir reads back to the same model."""
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+import pytest
+
+import mftyre
+from mftyre.data import trailer_programme, write_tydex
+from mftyre.errors import DataError
+from mftyre.fit import STAGES, fit_tir, load_data, normalised_rms, start_parameters
+from mftyre.fit.command import register
+from mftyre.fit.stages import conditions, shape_violations, stage_parameters
+from mftyre.params import PARAMETERS
+
+from conftest import TIR_FILES
+
+SAMPLE = TIR_FILES / "car_205_60R15_mf61.tir"
+
+
+@pytest.fixture(scope="module")
+def truth():
+    return mftyre.load_tir(SAMPLE)
+
+
+@pytest.fixture(scope="module")
+def fitted(truth):
+    data = trailer_programme(truth, points=31, noise=1.0, seed=7)
+    return fit_tir(data)  # generic start: neutral parameters sized to the tyre, estimates from the data
+
+
+# ----------------------------------------------------------------------------------------- metric
+def test_normalised_rms_is_eq4_of_the_paper():
+    measured = np.array([3.0, -4.0, 12.0])
+    fitted = np.array([3.0, -5.0, 10.0])
+    # eq. (4): 100 sqrt(sum (A_MF - A_meas)^2 / sum A_meas^2) = 100 sqrt(5 / 169)
+    assert normalised_rms(fitted, measured) == pytest.approx(100 * math.sqrt(5 / 169))
+    assert normalised_rms(1.1 * measured, measured) == pytest.approx(10.0)
+    assert normalised_rms([1.0, np.nan], [2.0, 1.0]) == pytest.approx(50.0)
+
+
+# ------------------------------------------------------------------------------------------ stages
+_SECTION = {"pure_fx": "LONGITUDINAL_COEFFICIENTS", "pure_fy": "LATERAL_COEFFICIENTS", "mz": "ALIGNING_COEFFICIENTS",
+            "combined_fx": "LONGITUDINAL_COEFFICIENTS", "combined_fy": "LATERAL_COEFFICIENTS",
+            "mz_combined": "ALIGNING_COEFFICIENTS", "mx": "OVERTURNING_COEFFICIENTS", "my": "ROLLING_COEFFICIENTS",
+            "vertical": "VERTICAL", "rolling_radius": "VERTICAL"}
+
+
+def test_stage_parameters_are_schema_parameters_of_the_right_section():
+    for name, stage in STAGES.items():
+        for _, names in stage.groups:
+            for n in names:
+                assert PARAMETERS[n].section == _SECTION[name], (name, n)
+
+
+def test_only_what_the_data_determine_is_fitted():
+    one = dict(loads=1, pressures=1, speeds=1, camber=False, fx=False, fy=True)
+    groups, skipped = stage_parameters(STAGES["pure_fy"], one, fit_pressure=True)
+    fitted = groups["base"] + groups["pressure"] + groups["camber"]
+    assert set(fitted) == {"PCY1", "PDY1", "PEY1", "PEY3", "PKY1", "PHY1", "PVY1"}
+    assert skipped["PDY2"] == "one load level only" and skipped["PKY6"] == "no camber in the data"
+    assert "one pressure" in skipped["PPY1"]
+    full = dict(loads=3, pressures=3, speeds=1, camber=True, fx=False, fy=True)
+    groups, skipped = stage_parameters(STAGES["pure_fy"], full, fit_pressure=True)
+    assert {"PPY1", "PPY2", "PPY3", "PPY4"} <= set(groups["pressure"]) and "PPY5" in groups["camber"]
+    groups, skipped = stage_parameters(STAGES["pure_fy"], full, fit_pressure=False)
+    assert not groups["pressure"] and "PPY1" in skipped
+
+
+def test_shape_conditions(truth):
+    corners = dict(dfz=np.array([-0.5, 0.5]), dpi=np.array([-0.15, 0.15]), gamma=np.array([-0.05, 0.05]))
+    for name in ("pure_fx", "pure_fy", "mz", "combined_fx", "combined_fy"):
+        assert np.all(shape_violations(name, truth.params, corners) == 0.0), name
+    bad = truth.params.replace(PEY1=1.5, PEY2=0.0, PEY3=0.0, PEY4=0.0)  # E > 1
+    assert np.min(shape_violations("pure_fy", bad, corners)) < 0
+    # the D of the check is the friction coefficient the model computes (4.E23)
+    out = truth.evaluate(4000 * (1 + corners["dfz"]), 0.0, 0.05, corners["gamma"], p=2.2e5 * (1 + corners["dpi"]),
+                         limits=False)
+    muy = ((truth.params.PDY1 + truth.params.PDY2 * corners["dfz"]) * (1 + truth.params.PPY3 * corners["dpi"]
+           + truth.params.PPY4 * corners["dpi"] ** 2) * (1 - truth.params.PDY3 * corners["gamma"] ** 2))
+    np.testing.assert_allclose(out.muy, muy, rtol=1e-12)
+
+
+def test_start_parameters_from_the_data(truth):
+    data = trailer_programme(truth, loads=(0.5, 1.0, 1.5), pressures=(1.0,), cambers_deg=(0.0,), points=11)
+    data.constants.clear()  # no TYDEX constants: everything from the data
+    prm = start_parameters(data)
+    assert prm.FNOMIN == 4000.0 and prm.NOMPRES == 220000.0
+    assert prm.UNLOADED_RADIUS == pytest.approx(truth.params.UNLOADED_RADIUS, rel=0.01)
+    assert prm.VERTICAL_STIFFNESS == pytest.approx(truth.params.VERTICAL_STIFFNESS, rel=0.15)
+
+
+def test_noise_free_fit_from_the_true_tir_stays_there(truth):
+    data = trailer_programme(truth, loads=(0.7, 1.0, 1.3), pressures=(1.0,), cambers_deg=(0.0,), points=15)
+    res = fit_tir(data, start=SAMPLE, stages=("pure_fy", "mz"))
+    assert res.stages["pure_fy"].fit_error < 1e-4 and res.stages["mz"].fit_error < 1e-3
+    assert "one pressure" in res.stages["pure_fy"].skipped["PPY1"]
+    assert res.comparison is None
+
+
+# ----------------------------------------------------------------------------------------- evidence
+def _check_grid(model, truth):
+    fz0, p0 = 4000.0, 2.2e5
+    loads, press = np.array([0.5, 0.75, 1.0, 1.25, 1.5]) * fz0, np.array([0.85, 0.925, 1.0, 1.075, 1.15]) * p0
+    F, P, G, A = np.meshgrid(loads, press, np.radians([-3.0, 0.0, 3.0]), np.radians(np.linspace(-12, 12, 49)),
+                             indexing="ij")
+    a, b = model.evaluate(F, 0.0, A, G, p=P), truth.evaluate(F, 0.0, A, G, p=P)
+    F2, P2, K = np.meshgrid(loads, press, np.linspace(-0.25, 0.25, 49), indexing="ij")
+    c, d = model.evaluate(F2, K, 0.0, p=P2), truth.evaluate(F2, K, 0.0, p=P2)
+    return dict(fx=normalised_rms(c.fx, d.fx), fy=normalised_rms(a.fy, b.fy), mz=normalised_rms(a.mz, b.mz))
+
+
+def test_fit_reproduces_the_noise_free_check_grid(fitted, truth):
+    err = _check_grid(fitted.model, truth)
+    assert err["fx"] < 1.5 and err["fy"] < 1.5 and err["mz"] < 4.0, err
+    assert all(st.fitted for st in fitted.stages.values())
+
+
+def test_pressure_terms_recover_the_room_between_the_bounds(fitted):
+    table = fitted.comparison.set_index("stage")
+    assert list(table.index) == ["pure_fx", "pure_fy", "mz"]
+    assert np.all(table["lower"] < table["upper"])
+    assert np.all(table["recovered"] >= 0.9), table
+
+
+def test_written_tir_reads_back_to_the_same_model(fitted, tmp_path):
+    path = fitted.write_tir(tmp_path / "fitted.tir")
+    back = mftyre.load_tir(path)
+    alpha = np.linspace(-0.2, 0.2, 21)
+    a = fitted.model.evaluate(4000.0, 0.05, alpha, 0.02, p=2.0e5)
+    b = back.evaluate(4000.0, 0.05, alpha, 0.02, p=2.0e5)
+    for name in ("fx", "fy", "mz", "mx", "my", "rl", "re"):
+        np.testing.assert_allclose(b[name], a[name], rtol=1e-12, atol=1e-12)
+
+
+def test_report_has_the_tables_and_plots(fitted, tmp_path):
+    path = fitted.save_report(tmp_path / "rep" / "report.md")
+    text = path.read_text()
+    for needle in ("## Fit errors", "lower bound", "upper bound", "recovered", "| PKY1 |", "standard error",
+                   "![Pure lateral force"):
+        assert needle in text
+    pngs = sorted(p.name for p in path.parent.glob("*.png"))
+    assert "report_pure_fy.png" in pngs and len(pngs) == len(fitted.stages)
+    # each stage keeps its lmfit result with standard errors
+    res = fitted.stages["pure_fy"].result
+    assert res.params["PKY1"].stderr is not None and res.params["PKY1"].stderr > 0
+
+
+# ----------------------------------------------------------------------------------------- command
+def _parser():
+    parser = argparse.ArgumentParser(prog="mftyre")
+    register(parser.add_subparsers(dest="command"))
+    return parser
+
+
+def test_command_fits_and_writes(truth, tmp_path, capsys):
+    data = trailer_programme(truth, loads=(0.6, 1.0, 1.4), pressures=(1.0,), cambers_deg=(0.0,), points=11, noise=0.5,
+                             seed=2)
+    tdx = write_tydex(data, tmp_path / "d.tdx")
+    out = tmp_path / "out.tir"
+    args = _parser().parse_args(["fit", str(tdx), "-o", str(out), "--stages", "pure_fx,vertical", "--quiet",
+                                 "--report", str(tmp_path / "r.md")])
+    assert args.func(args) == 0
+    assert out.exists() and (tmp_path / "r.md").exists()
+    assert "pure_fx" in capsys.readouterr().out
+    assert mftyre.load_tir(out).params.PKX1 == pytest.approx(truth.params.PKX1, rel=0.1)
+    args = _parser().parse_args(["fit", str(tmp_path / "missing.csv"), "-o", str(tmp_path / "x.tir"), "--quiet"])
+    assert args.func(args) == 1
+    assert "missing.csv" in capsys.readouterr().err
+
+
+def test_load_data_rejects_unknown_formats(tmp_path):
+    with pytest.raises(DataError, match="unknown data format '.xls'"):
+        load_data(tmp_path / "a.xls")
+
+
+def test_conditions(truth):
+    data = trailer_programme(truth, loads=(0.5, 1.0), pressures=(1.0,), cambers_deg=(0.0,), points=11)
+    cond = conditions(data)
+    assert cond["pressures"] == 1 and not cond["camber"] and cond["fx"] and cond["fy"]
