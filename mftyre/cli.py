@@ -473,9 +473,11 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
     _add_check(sub)
     _add_eval(sub)
+    from .demo import register as register_demo
     from .fit.command import register as register_fit
     from .fmu_command import register as register_fmu
 
+    register_demo(sub)
     register_fit(sub)
     register_fmu(sub)
     return parser

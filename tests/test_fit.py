@@ -59,17 +59,31 @@ def test_stage_parameters_are_schema_parameters_of_the_right_section():
 
 
 def test_only_what_the_data_determine_is_fitted():
-    one = dict(loads=1, pressures=1, speeds=1, camber=False, fx=False, fy=True)
+    one = dict(loads=1, pressures=1, speeds=1, camber=False, camber_levels=0, fx=False, fy=True)
     groups, skipped = stage_parameters(STAGES["pure_fy"], one, fit_pressure=True)
     fitted = groups["base"] + groups["pressure"] + groups["camber"]
     assert set(fitted) == {"PCY1", "PDY1", "PEY1", "PEY3", "PKY1", "PHY1", "PVY1"}
     assert skipped["PDY2"] == "one load level only" and skipped["PKY6"] == "no camber in the data"
     assert "one pressure" in skipped["PPY1"]
-    full = dict(loads=3, pressures=3, speeds=1, camber=True, fx=False, fy=True)
+    full = dict(loads=3, pressures=3, speeds=1, camber=True, camber_levels=2, fx=False, fy=True)
     groups, skipped = stage_parameters(STAGES["pure_fy"], full, fit_pressure=True)
     assert {"PPY1", "PPY2", "PPY3", "PPY4"} <= set(groups["pressure"]) and "PPY5" in groups["camber"]
+    assert "PKY5" in groups["camber"]
     groups, skipped = stage_parameters(STAGES["pure_fy"], full, fit_pressure=False)
     assert not groups["pressure"] and "PPY1" in skipped
+
+
+def test_second_order_camber_terms_need_two_camber_magnitudes():
+    """With one |gamma| level (e.g. -3, 0, +3 deg) gamma|gamma| is proportional to gamma on the data: QDZ10 would
+    trade off against QDZ8 freely and ruin the model at other cambers; such terms are not fitted."""
+    one_level = dict(loads=3, pressures=3, speeds=1, camber=True, camber_levels=1, fx=False, fy=True)
+    groups, skipped = stage_parameters(STAGES["mz"], one_level, fit_pressure=True)
+    assert {"QDZ8", "QDZ9"} <= set(groups["camber"]) and "collinear" in skipped["QDZ10"] and "QDZ11" in skipped
+    groups, skipped = stage_parameters(STAGES["pure_fy"], one_level, fit_pressure=True)
+    assert "PKY3" in groups["camber"] and "PKY5" in skipped
+    two_levels = dict(one_level, camber_levels=2)
+    groups, _ = stage_parameters(STAGES["mz"], two_levels, fit_pressure=True)
+    assert {"QDZ10", "QDZ11"} <= set(groups["camber"])
 
 
 def test_shape_conditions(truth):

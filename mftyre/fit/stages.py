@@ -7,7 +7,10 @@ data can determine it (``needs``):
 
 * ``loads``: two or more load levels (load-variation terms, dfz); ``loads3``: three or more (dfz^2,
   exponents, curvature of the load dependency);
-* ``camber``: an inclination other than zero; ``pressure``: two or more pressures and ``fit_pressure``
+* ``camber``: an inclination other than zero; ``camber2``: two or more distinct non-zero |inclinations| (the
+  second-order camber terms in gamma|gamma| or gamma^2 whose first-order partner of the same parity, gamma or
+  |gamma|, would be indistinguishable from them with one |gamma| level); ``pressure``: two or more pressures and
+  ``fit_pressure``
   (the dpi terms); ``pressure3``: three or more pressures (dpi^2 terms);
 * ``speeds`` / ``speeds3``: two / three speed levels; ``fx`` / ``fy``: a non-zero longitudinal / lateral force.
 
@@ -53,13 +56,14 @@ STAGES: dict[str, Stage] = {s.name: s for s in (
     Stage("pure_fy", "Pure lateral force Fy0 (4.E19-4.E30)", "FY", "fy", "pure_lateral", (
         _g("", "PCY1 PDY1 PEY1 PEY3 PKY1 PHY1 PVY1"),
         _g("loads", "PDY2 PEY2 PKY2 PHY2 PVY2"), _g("loads3", "PKY4"),
-        _g("camber", "PDY3 PEY4 PEY5 PKY3 PKY5 PKY6 PVY3"), _g("camber loads", "PKY7 PVY4"),
+        _g("camber", "PDY3 PEY4 PEY5 PKY3 PKY6 PVY3"), _g("camber2", "PKY5"), _g("camber loads", "PKY7 PVY4"),
         _g("pressure", "PPY1 PPY3"), _g("pressure loads", "PPY2"), _g("pressure3", "PPY4"),
         _g("pressure camber", "PPY5"))),
     Stage("mz", "Pure aligning moment Mz0 (4.E31-4.E49)", "MZ", "mz", "pure_lateral", (
         _g("", "QBZ1 QCZ1 QDZ1 QEZ1 QEZ4 QHZ1 QDZ6 QBZ9"),
         _g("loads", "QBZ2 QDZ2 QEZ2 QHZ2 QDZ7"), _g("loads3", "QBZ3 QEZ3"),
-        _g("camber", "QBZ4 QBZ5 QDZ3 QDZ4 QEZ5 QHZ3 QDZ8 QDZ10"), _g("camber loads", "QHZ4 QDZ9 QDZ11"),
+        _g("camber", "QBZ4 QBZ5 QDZ3 QDZ4 QEZ5 QHZ3 QDZ8"), _g("camber2", "QDZ10"),
+        _g("camber loads", "QHZ4 QDZ9"), _g("camber2 loads", "QDZ11"),
         _g("pressure", "PPZ1"), _g("pressure camber", "PPZ2"))),
     Stage("combined_fx", "Combined-slip Fx (4.E50-4.E57)", "FX", "fx", "combined", (
         _g("", "RBX1 RBX2 RCX1 REX1 RHX1"), _g("loads", "REX2"), _g("camber", "RBX3"))),
@@ -114,27 +118,36 @@ def stage_rows(stage: Stage, data: TyreData) -> np.ndarray:
 def conditions(data: TyreData) -> dict:
     """Number of load, pressure and speed levels, camber present, Fx/Fy present, of a data subset."""
     if len(data) == 0:
-        return dict(loads=0, pressures=0, speeds=0, camber=False, fx=False, fy=False)
+        return dict(loads=0, pressures=0, speeds=0, camber=False, camber_levels=0, fx=False, fy=False)
     fz = data.array("FZ")
     return dict(
         loads=len(levels(fz, 0.05 * float(np.max(np.abs(fz))))[1]),
         pressures=len(levels(data.array("P"), 0.02 * float(np.max(data.array("P"))))[1]),
         speeds=len(levels(data.array("VX"), 0.5)[1]),
         camber=bool(np.any(np.abs(data.array("IA")) > _CAMBER_TOL)),
+        camber_levels=_nonzero_camber_levels(data.array("IA")),
         fx=bool(data.has("FX") and np.nanmax(np.abs(data.array("FX"))) > 0.05 * float(np.max(fz))),
         fy=bool(data.has("FY") and np.nanmax(np.abs(data.array("FY"))) > 0.05 * float(np.max(fz))),
     )
 
 
+def _nonzero_camber_levels(gamma) -> int:
+    magnitude = np.abs(np.asarray(gamma, dtype=float))
+    magnitude = magnitude[magnitude > _CAMBER_TOL]
+    return len(levels(magnitude, _CAMBER_TOL)[1]) if magnitude.size else 0
+
+
 def _met(need: str, cond: dict, fit_pressure: bool) -> bool:
     return {
         "loads": cond["loads"] >= 2, "loads3": cond["loads"] >= 3, "camber": cond["camber"],
+        "camber2": cond["camber_levels"] >= 2,
         "pressure": fit_pressure and cond["pressures"] >= 2, "pressure3": fit_pressure and cond["pressures"] >= 3,
         "speeds": cond["speeds"] >= 2, "speeds3": cond["speeds"] >= 3, "fx": cond["fx"], "fy": cond["fy"],
     }[need]
 
 
 _REASONS = {"loads": "one load level only", "loads3": "fewer than three load levels", "camber": "no camber in the data",
+            "camber2": "fewer than two non-zero camber magnitudes (collinear with the first-order camber term)",
             "pressure": "one pressure only (or fit_pressure=False)", "pressure3": "fewer than three pressures "
             "(or fit_pressure=False)", "speeds": "one speed only", "speeds3": "fewer than three speeds",
             "fx": "no longitudinal force in the data", "fy": "no lateral force in the data"}
@@ -155,7 +168,7 @@ def stage_parameters(stage: Stage, cond: dict, fit_pressure: bool):
         if unmet:
             skipped.update({n: _REASONS[unmet[0]] for n in names})
             continue
-        kind = "camber" if "camber" in needs else ("pressure" if any(n.startswith("pressure") for n in needs)
+        kind = "camber" if any(n.startswith("camber") for n in needs) else ("pressure" if any(n.startswith("pressure") for n in needs)
                                                     else "base")
         passes[kind].extend(names)
     return passes, skipped
