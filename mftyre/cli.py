@@ -240,7 +240,7 @@ Evaluate the steady-state Magic Formula of a .tir file on a grid of inputs (ISO-
 
 Each input option takes a single value, a comma list (4000,6000) or START:STOP:COUNT (COUNT equally spaced
 values, COUNT >= 2). Values may carry a unit: angles deg/rad, pressure bar/kPa/MPa/psi/Pa, load N/kN, speed
-m/s, km/h, mph, spin rad/s or rpm, kappa '%%', turn slip 1/m; a plain number is SI (p=220000 means Pa).
+m/s, km/h, mph, spin rad/s or rpm, kappa '%', turn slip 1/m; a plain number is SI (p=220000 means Pa).
 With several inputs swept the grid is every combination (outer product, in command-line order, the last
 option varying fastest); the table has one row per point: the swept inputs as given, then the outputs.
 An output that is also a swept input is shown as NAME_used (its value as used by the model, e.g. the

@@ -1,83 +1,251 @@
-"""mftyre eval: sweeps, units, table, CSV, plot and errors."""
+"""Tests of `mftyre eval` (mftyre.cli): same numbers as MFModel.evaluate, unit parsing, grid, CSV, plot, errors."""
+
 from __future__ import annotations
 
+import math
+import os
 import subprocess
 import sys
+import warnings
 
 import numpy as np
 import pandas as pd
 import pytest
 
 import mftyre
-from conftest import PROJECT, TIR_FILES
 from mftyre import cli
+from mftyre.model import OUTPUT_UNITS
 
-TIR = TIR_FILES / "car_205_60R15_mf61.tir"
+from conftest import PROJECT, TIR_FILES
 
-
-def test_eval_table_equals_model_evaluate(capsys, tmp_path):
-    csv = tmp_path / "out.csv"
-    assert cli.main(["eval", str(TIR), "--fz", "4kN", "--alpha", "-10deg:10deg:5", "--p", "1.8bar,2.6bar",
-                     "--csv", str(csv), "--outputs", "all", "-q"]) == 0
-    frame = pd.read_csv(csv)
-    assert len(frame) == 10  # outer product of the sweeps
-    model = mftyre.load_tir(TIR)
-    ref = model.evaluate(fz=4000.0, kappa=0.0, alpha=frame["alpha [rad]"].to_numpy(), p=frame["p [Pa]"].to_numpy())
-    np.testing.assert_allclose(frame["alpha [rad]"].unique(), np.radians(np.linspace(-10, 10, 5)), rtol=1e-15)
-    assert sorted(frame["p [Pa]"].unique()) == [1.8e5, 2.6e5]
-    for name in ("fx", "fy", "mz", "mx", "my", "rl", "kya"):
-        column = next(c for c in frame.columns if c.split(" [")[0] == name)
-        np.testing.assert_allclose(frame[column], ref[name], rtol=1e-12, atol=1e-9, err_msg=name)
+TIR61 = TIR_FILES / "car_205_60R15_mf61.tir"
+TIR62 = TIR_FILES / "car_205_60R15_mf62_swift.tir"
 
 
-def test_eval_units_and_negative_range_without_equals(capsys):
-    assert cli.main(["eval", str(TIR), "--fz", "4.5kN", "--alpha", "-0.1:0.1:3", "--vx", "72km/h",
-                     "--p", "32psi", "--gamma", "2deg", "--outputs", "fy"]) == 0
-    printed = capsys.readouterr().out
-    ref = mftyre.load_tir(TIR).evaluate(4500.0, 0.0, np.array([-0.1, 0.0, 0.1]), gamma=np.radians(2.0), vx=20.0,
-                                        p=32 * 6894.757293168361)
-    values = [float(line.split()[-1]) for line in printed.splitlines() if line.strip() and line.split()[0][0] in "-0"]
-    np.testing.assert_allclose(values[-3:], ref.fy, rtol=1e-5)
+def _model(path=TIR61, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", mftyre.params.MissingParameterWarning)
+        return mftyre.load_tir(path, **kw)
 
 
-def test_eval_plot_is_written_into_a_new_folder(tmp_path, capsys):
-    png = tmp_path / "new" / "fy.png"
-    assert cli.main(["eval", str(TIR), "--alpha", "-8deg:8deg:17", "--p", "1.8bar,2.2bar", "--plot", str(png),
-                     "-q"]) == 0
-    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 5000
+def _read_csv(path) -> pd.DataFrame:
+    return pd.read_csv(path)
 
 
-@pytest.mark.parametrize("args,needle", [
-    (["--alpha", "0:1"], "--alpha"),
-    (["--alpha", "0:1:1"], "COUNT"),
-    (["--p", "2.2furlong"], "unknown unit"),
-    (["--fz", "abc"], "--fz"),
-    (["--outputs", "fy,force"], "force"),
-    (["--alpha", "1deg,2"], "mixes"),
+def _close(a, b, tol=1e-12):
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    np.testing.assert_allclose(a, b, rtol=tol, atol=tol * max(1.0, float(np.max(np.abs(b)))))
+
+
+# --------------------------------------------------------------------------------------- same numbers
+@pytest.mark.parametrize("tir", [TIR61, TIR62], ids=["mf61", "mf62"])
+def test_eval_matches_model_evaluate(tir, tmp_path, capsys):
+    out_csv = tmp_path / "out.csv"
+    rc = cli.main(["eval", str(tir), "--fz", "4000", "--alpha", "-0.2:0.2:41", "--kappa", "-0.05,0,0.1",
+                   "--gamma", "0.03", "--csv", str(out_csv), "-q"])
+    assert rc == 0, capsys.readouterr().err
+    df = _read_csv(out_csv)
+    # grid: outer product in command-line order (alpha outer, kappa fastest)
+    alpha, kappa = np.meshgrid(np.linspace(-0.2, 0.2, 41), [-0.05, 0.0, 0.1], indexing="ij")
+    ref = _model(tir).evaluate(4000.0, kappa, alpha, gamma=0.03)
+    assert len(df) == 41 * 3
+    _close(df["alpha [rad]"], alpha.ravel())
+    _close(df["kappa [-]"], kappa.ravel(), tol=0)
+    for name, (unit, _) in OUTPUT_UNITS.items():
+        col = f"{name}_used [{unit}]" if name in ("alpha", "kappa") else f"{name} [{unit}]"
+        _close(df[col], np.ravel(ref[name]))
+
+
+def test_eval_modes_side_and_defaults(tmp_path, capsys):
+    """--side, --turn-slip, --no-limits, --alpha-star reach evaluate(); unset vx/p/omega use the model defaults."""
+    out_csv = tmp_path / "out.csv"
+    rc = cli.main(["eval", str(TIR61), "--alpha", "-8deg:8deg:9", "--phit", "0.1", "--fz", "9kN",
+                   "--side", "right", "--turn-slip", "--no-limits", "--alpha-star", "--turn-slip-form", "mfeval",
+                   "--csv", str(out_csv), "-q"])
+    assert rc == 0, capsys.readouterr().err
+    df = _read_csv(out_csv)
+    alpha = np.radians(np.linspace(-8, 8, 9))
+    ref = _model(side="right").evaluate(9000.0, 0.0, alpha, phit=0.1, turn_slip=True, limits=False,
+                                        alpha_star=True, turn_slip_form="mfeval")
+    for name in ("fx", "fy", "mz", "mx", "my", "rl", "re", "vx", "p", "omega"):
+        _close(df[f"{name} [{OUTPUT_UNITS[name][0]}]"], ref[name])
+
+
+def test_eval_prints_table_with_si_units(capsys):
+    rc = cli.main(["eval", str(TIR61), "--fz", "4000", "--alpha", "-0.2:0.2:5"])
+    captured = capsys.readouterr()
+    assert rc == 0, captured.err
+    lines = captured.out.splitlines()
+    header = next(line for line in lines if "fy [N]" in line)
+    for col in ("alpha [rad]", "fx [N]", "fy [N]", "mz [N m]", "mx [N m]", "my [N m]", "rl [m]"):
+        assert col in header
+    rows = lines[lines.index(header) + 1:]
+    assert len(rows) == 5
+    ref = _model().evaluate(4000.0, 0.0, np.linspace(-0.2, 0.2, 5))
+    fy_printed = [float(r.split()[2]) for r in rows]
+    np.testing.assert_allclose(fy_printed, ref.fy, rtol=1e-5)  # 6 significant digits
+
+
+# ------------------------------------------------------------------------------------------ parsing
+@pytest.mark.parametrize("name, text, expected", [
+    ("alpha", "-10deg:10deg:5", np.radians([-10, -5, 0, 5, 10])),
+    ("alpha", "0.1", [0.1]),
+    ("alpha", "0.1rad,2deg", [0.1, math.radians(2)]),
+    ("gamma", "3 deg", [math.radians(3)]),
+    ("p", "2.2bar", [2.2e5]),
+    ("p", "220kPa,250000Pa", [2.2e5, 2.5e5]),
+    ("p", "32psi", [32 * 4.4482216152605 / 0.0254**2]),
+    ("p", "220000", [2.2e5]),
+    ("fz", "4kN", [4000.0]),
+    ("fz", "2kN:6kN:3", [2000.0, 4000.0, 6000.0]),
+    ("fz", "4000N", [4000.0]),
+    ("vx", "36km/h", [10.0]),
+    ("vx", "20m/s", [20.0]),
+    ("kappa", "-10%:10%:3", [-0.1, 0.0, 0.1]),
+    ("kappa", "1e-2", [0.01]),
+    ("omega", "60rpm", [2 * math.pi]),
+    ("phit", "0.1/m", [0.1]),
 ])
-def test_eval_bad_option_exits_2_naming_it(args, needle, capsys):
-    assert cli.main(["eval", str(TIR), *args]) == 2
-    assert needle in capsys.readouterr().err
+def test_parse_sweep_units(name, text, expected):
+    sweep = cli.parse_sweep(name, text)
+    np.testing.assert_allclose(sweep.values, expected, rtol=1e-15, atol=1e-15)
 
 
-def test_eval_refuses_to_overwrite_the_tir(tmp_path, capsys):
-    copy = tmp_path / "tyre.tir"
-    copy.write_text(TIR.read_text())
-    before = copy.read_bytes()
-    assert cli.main(["eval", str(copy), "--alpha", "0:0.1:3", "--csv", str(copy)]) == 2
-    assert copy.read_bytes() == before
-    assert "input .tir" in capsys.readouterr().err
+def test_sweep_remembers_unit_for_plots():
+    s = cli.parse_sweep("alpha", "-10deg:10deg:21")
+    assert s.unit == "deg" and s.values.size == 21
+    assert s.label(s.values[-1]) == "alpha = 10 deg"
+    assert cli.parse_sweep("p", "1.8bar,2.2bar").unit == "bar"
+    assert cli.parse_sweep("p", "220000").unit == "Pa"
 
 
-def test_eval_missing_file_and_bad_pressure_exit_1(tmp_path, capsys):
-    assert cli.main(["eval", str(tmp_path / "absent.tir"), "--alpha", "0"]) == 1
-    assert "absent.tir" in capsys.readouterr().err
-    assert cli.main(["eval", str(TIR), "--p", "-1bar"]) == 1
+def test_grid_is_outer_product(tmp_path, capsys):
+    out_csv = tmp_path / "grid.csv"
+    rc = cli.main(["eval", str(TIR61), "--fz", "2kN,4kN,6kN", "--alpha", "-5deg:5deg:11", "--p", "1.8bar,2.6bar",
+                   "--outputs", "fy,p", "--csv", str(out_csv), "-q"])
+    assert rc == 0, capsys.readouterr().err
+    df = _read_csv(out_csv)
+    assert len(df) == 3 * 11 * 2
+    assert list(df.columns) == ["fz [N]", "alpha [rad]", "p [Pa]", "fy [N]", "p_used [Pa]"]
+    # every combination exactly once; last option fastest
+    assert len(df.drop_duplicates(["fz [N]", "alpha [rad]", "p [Pa]"])) == 66
+    assert list(df["p [Pa]"][:4]) == [1.8e5, 2.6e5, 1.8e5, 2.6e5]
+    assert set(df["fz [N]"]) == {2000.0, 4000.0, 6000.0}
+    # the pressure as used is saturated to the .tir range [PRESMIN, PRESMAX] (limits on by default)
+    prm = _model().params
+    assert df["p_used [Pa]"].min() == pytest.approx(max(1.8e5, prm.PRESMIN))
+    assert df["p_used [Pa]"].max() == pytest.approx(min(2.6e5, prm.PRESMAX))
+
+
+def test_negative_values_after_option(capsys):
+    """`--alpha -0.2:0.2:41` (a value starting with '-') is accepted without '='."""
+    assert cli.main(["eval", str(TIR61), "--alpha", "-0.2:0.2:3", "--gamma", "-2deg", "-q"]) == 0
+    assert cli.main(["eval", str(TIR61), "--alpha=-.1", "-q"]) == 0
+
+
+# ------------------------------------------------------------------------------------ csv and plot
+def test_csv_selected_outputs_roundtrip(tmp_path, capsys):
+    out_csv = tmp_path / "fy.csv"
+    out_csv.write_text("old content\n")  # overwriting an output file is fine
+    rc = cli.main(["eval", str(TIR61), "--alpha", "-0.1:0.1:7", "--fz", "4000", "--outputs", "fy,mz",
+                   "--csv", str(out_csv), "-q"])
+    assert rc == 0, capsys.readouterr().err
+    df = _read_csv(out_csv)
+    assert list(df.columns) == ["alpha [rad]", "fy [N]", "mz [N m]"]
+    ref = _model().evaluate(4000.0, 0.0, np.linspace(-0.1, 0.1, 7))
+    _close(df["fy [N]"], ref.fy)
+    _close(df["mz [N m]"], ref.mz)
+
+
+def test_plot_written(tmp_path, capsys):
+    png = tmp_path / "fy.png"
+    rc = cli.main(["eval", str(TIR61), "--fz", "3kN,5kN", "--alpha", "-10deg:10deg:21", "--outputs", "fy,mz",
+                   "--plot", str(png), "-q"])
+    assert rc == 0, capsys.readouterr().err
+    data = png.read_bytes()
+    assert len(data) > 1000 and data[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_outputs_go_into_new_folders(tmp_path, capsys):
+    png, csv = tmp_path / "new" / "fy.png", tmp_path / "other" / "fy.csv"
+    assert cli.main(["eval", str(TIR61), "--alpha", "-8deg:8deg:17", "--p", "1.8bar,2.2bar", "--plot", str(png),
+                     "--csv", str(csv), "-q"]) == 0, capsys.readouterr().err
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert len(_read_csv(csv)) == 34
+
+
+def test_plot_needs_a_sweep(tmp_path, capsys):
+    rc = cli.main(["eval", str(TIR61), "--alpha", "0.1", "--plot", str(tmp_path / "x.png")])
+    assert rc == 2
+    assert "--plot" in capsys.readouterr().err
+    assert not (tmp_path / "x.png").exists()
+
+
+@pytest.mark.parametrize("option", ["--csv", "--plot"])
+def test_refuses_to_overwrite_input_tir(tmp_path, capsys, option):
+    tir = tmp_path / "tyre.tir"
+    tir.write_bytes(TIR61.read_bytes())
+    before = tir.read_bytes()
+    rc = cli.main(["eval", str(tir), "--alpha", "-0.1:0.1:3", option, str(tir)])
+    assert rc == 2
+    assert option in capsys.readouterr().err
+    assert tir.read_bytes() == before
+
+
+# ------------------------------------------------------------------------------------------ errors
+@pytest.mark.parametrize("option, value, words", [
+    ("--alpha", "1:2", "START:STOP:COUNT"),
+    ("--alpha", "-1:1:1", "COUNT"),
+    ("--alpha", "-1:1:2.5", "COUNT"),
+    ("--alpha", "abc", "number"),
+    ("--alpha", "1,,2", "empty"),
+    ("--p", "2.2bars", "unknown unit"),
+    ("--p", "2.2,2.4bar", "unit on every value"),
+    ("--fz", "4kg", "unknown unit"),
+    ("--vx", "nan", "number"),
+    ("--outputs", "fy,foo", "foo"),
+])
+def test_bad_option_syntax_exit_2(capsys, option, value, words):
+    rc = cli.main(["eval", str(TIR61), option, value])
+    err = capsys.readouterr().err
+    assert rc == 2
+    assert f"argument {option}" in err and words in err
+    assert "Traceback" not in err
+
+
+def test_missing_file_exit_1(tmp_path, capsys):
+    missing = tmp_path / "nope.tir"
+    rc = cli.main(["eval", str(missing), "--alpha", "0.1"])
+    captured = capsys.readouterr()
+    assert rc == 1
+    assert "nope.tir" in captured.err and "not found" in captured.err
+    assert "Traceback" not in captured.err
+
+
+def test_model_input_error_exit_1(capsys):
+    rc = cli.main(["eval", str(TIR61), "--p=-2bar"])
+    assert rc == 1
     assert "pressure" in capsys.readouterr().err
 
 
-def test_python_m_mftyre_eval_subprocess():
-    run = subprocess.run([sys.executable, "-m", "mftyre", "eval", str(TIR), "--alpha", "-2deg:2deg:3",
-                          "--outputs", "fy,mz"], capture_output=True, text=True, cwd=PROJECT, timeout=120)
-    assert run.returncode == 0, run.stderr
-    assert "fy [N]" in run.stdout and "mz [N m]" in run.stdout
+def test_check_still_works(capsys):
+    assert cli.main(["check", str(TIR61), "-q"]) == 0
+    assert "checked 1 file" in capsys.readouterr().out
+
+
+# ------------------------------------------------------------------------------------- real process
+def test_python_dash_m(tmp_path):
+    out_csv = tmp_path / "out.csv"
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(PROJECT), os.environ.get("PYTHONPATH")])))
+    proc = subprocess.run([sys.executable, "-m", "mftyre", "eval", str(TIR61), "--fz", "4000",
+                           "--alpha", "-0.2:0.2:41", "--p", "2.2bar", "--csv", str(out_csv)],
+                          capture_output=True, text=True, env=env, cwd=tmp_path, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert "fy [N]" in proc.stdout
+    df = _read_csv(out_csv)
+    ref = _model().evaluate(4000.0, 0.0, np.linspace(-0.2, 0.2, 41), p=2.2e5)
+    _close(df["fy [N]"], ref.fy)
+
+    bad = subprocess.run([sys.executable, "-m", "mftyre", "eval", str(TIR61), "--alpha", "1:2:x"],
+                         capture_output=True, text=True, env=env, cwd=tmp_path, timeout=300)
+    assert bad.returncode == 2 and "argument --alpha" in bad.stderr and "Traceback" not in bad.stderr
