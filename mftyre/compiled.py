@@ -26,7 +26,7 @@ import numpy as np
 
 from .errors import MFTyreError
 
-__all__ = ["CompiledFunction", "compile_model", "compile_function", "cache_dir"]
+__all__ = ["CompiledFunction", "compile_model", "compile_function", "compile_c", "cache_dir"]
 
 _BATCH = 256  # points per call of the mapped (batch) function
 
@@ -35,7 +35,8 @@ def cache_dir() -> Path:
     return Path(os.environ.get("MFTYRE_CACHE", Path.home() / ".cache" / "mftyre"))
 
 
-def _compile_c(source: Path, library: Path) -> None:
+def compile_c(source: Path, library: Path) -> None:
+    """Compile the C file ``source`` into the shared library ``library`` (written atomically)."""
     compiler = os.environ.get("CC", "cc")
     if shutil.which(compiler) is None:
         raise MFTyreError(f"no C compiler found ({compiler!r}); install gcc or set CC to compile CasADi functions")
@@ -66,7 +67,7 @@ def compile_function(function, key: str, directory: Path | None = None, output_n
         gen.add(point)
         gen.add(batch)
         source = Path(gen.generate(str(Path(tmp)) + os.sep))
-        _compile_c(source, library)
+        compile_c(source, library)
     meta.write_text(json.dumps({"inputs": function.name_in(), "outputs": list(output_names or function.name_out()),
                                 "batch": _BATCH}))
     return library

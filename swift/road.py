@@ -1,0 +1,217 @@
+"""Road profiles for SWIFT: height w_r(x) [m] along the travelled distance x [m] (ISO-W: x forward, z up).
+
+Every road has a vectorised ``height(x, y=0.0)``; 2D profiles ignore ``y`` (the obstacle covers the whole tyre
+width), :class:`TwoTrack` varies across ``y`` for road camber (banking) input. Piecewise roads also list their
+``breakpoints`` (abscissae of kinks and jumps): the cam search in :mod:`swift.enveloping` evaluates them
+exactly, so a cleat edge is not smeared by the sampling grid. At a jump ``height`` returns the higher side
+(the value a cam resting on the edge touches).
+
+    >>> from swift.road import Cleat, Sine, Flat
+    >>> road = Flat() + Cleat(x0=1.0, length=0.05, height=0.01)      # roads add up
+    >>> road.height([0.9, 1.02, 1.2])
+    array([0.  , 0.01, 0.  ])
+
+Profiles: :class:`Flat`, :class:`Step` (up or down), :class:`Cleat` (rectangular), :class:`Trapezoid`,
+:class:`CircularBump`, :class:`Sine`, :class:`Sampled` (samples, or a CSV file via :meth:`Sampled.from_csv`),
+:class:`TwoTrack` (left/right profiles for banking), and sums of these.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from mftyre.errors import DataError, ModelInputError
+
+__all__ = ["Road", "Flat", "Step", "Cleat", "Trapezoid", "CircularBump", "Sine", "Sampled", "TwoTrack"]
+
+
+class Road:
+    """A road profile. Subclasses implement :meth:`_height` (2D) and may list ``breakpoints``."""
+
+    breakpoints: tuple = ()
+
+    def height(self, x, y=0.0):
+        """Road height [m] at the travelled distance ``x`` [m] (and lateral position ``y`` [m]), vectorised."""
+        x = np.asarray(x, dtype=float)
+        return self._height(x, np.asarray(y, dtype=float) + 0.0 * x)
+
+    def _height(self, x, y):
+        raise NotImplementedError
+
+    def height_range(self) -> tuple[float, float]:
+        """(lowest, highest) height of the profile; bounds the cam search window in :mod:`swift.enveloping`."""
+        raise NotImplementedError
+
+    def __add__(self, other: "Road") -> "Road":
+        return _Sum(self, other)
+
+
+def _positive(name, value):
+    if not value > 0:
+        raise ModelInputError(f"{name} must be positive, got {value!r}")
+    return float(value)
+
+
+class Flat(Road):
+    """Constant height ``z`` (default 0)."""
+
+    def __init__(self, z: float = 0.0):
+        self.z = float(z)
+
+    def _height(self, x, y):
+        return self.z + 0.0 * x
+
+    def height_range(self):
+        return self.z, self.z
+
+
+class Step(Road):
+    """Step of ``height`` (negative: step down) at ``x0``; 0 before."""
+
+    def __init__(self, x0: float, height: float):
+        self.x0, self.h = float(x0), float(height)
+        self.breakpoints = (self.x0,)
+
+    def _height(self, x, y):
+        after = x >= self.x0 if self.h > 0 else x > self.x0  # at x0 the higher side (module notes)
+        return np.where(after, self.h, 0.0)
+
+    def height_range(self):
+        return min(0.0, self.h), max(0.0, self.h)
+
+
+class Cleat(Road):
+    """Rectangular cleat (bar across the road) from ``x0`` to ``x0 + length`` of ``height``."""
+
+    def __init__(self, x0: float, length: float, height: float):
+        self.x0, self.length, self.h = float(x0), _positive("cleat length", length), float(height)
+        self.breakpoints = (self.x0, self.x0 + self.length)
+
+    def _height(self, x, y):
+        return np.where((x >= self.x0) & (x <= self.x0 + self.length), self.h, 0.0)
+
+    def height_range(self):
+        return min(0.0, self.h), max(0.0, self.h)
+
+
+class Trapezoid(Road):
+    """Trapezoidal bump: ramps of length ``ramp`` up to ``height``, a plateau of ``top_length``; starts at ``x0``."""
+
+    def __init__(self, x0: float, top_length: float, height: float, ramp: float):
+        self.x0, self.top, self.h = float(x0), float(top_length), float(height)
+        self.ramp = _positive("ramp length", ramp)
+        if self.top < 0:
+            raise ModelInputError(f"top_length must be >= 0, got {top_length!r}")
+        r, t = self.ramp, self.top
+        self.breakpoints = (self.x0, self.x0 + r, self.x0 + r + t, self.x0 + 2 * r + t)
+
+    def _height(self, x, y):
+        s = x - self.x0
+        r, t = self.ramp, self.top
+        return self.h * np.clip(np.minimum(s / r, (2 * r + t - s) / r), 0.0, 1.0)
+
+    def height_range(self):
+        return min(0.0, self.h), max(0.0, self.h)
+
+
+class CircularBump(Road):
+    """Circular-segment bump of chord ``length`` and ``height`` (its radius follows), starting at ``x0``."""
+
+    def __init__(self, x0: float, length: float, height: float):
+        self.x0, self.length, self.h = float(x0), _positive("bump length", length), _positive("bump height", height)
+        half = self.length / 2
+        if self.h > half:
+            raise ModelInputError(f"a circular bump is at most a half disc: height {height} > length/2 {half}")
+        self.radius = (half**2 + self.h**2) / (2 * self.h)  # chord-height relation of a circle
+        self.breakpoints = (self.x0, self.x0 + self.length)
+
+    def _height(self, x, y):
+        s = x - self.x0 - self.length / 2
+        inside = np.abs(s) <= self.length / 2
+        return np.where(inside, np.sqrt(np.maximum(self.radius**2 - s**2, 0.0)) - (self.radius - self.h), 0.0)
+
+    def height_range(self):
+        return 0.0, self.h
+
+
+class Sine(Road):
+    """A * sin(2 pi (x - x0) / wavelength), optionally only on ``x0 <= x <= x_end``."""
+
+    def __init__(self, amplitude: float, wavelength: float, x0: float = 0.0, x_end: float | None = None):
+        self.A, self.wavelength, self.x0 = float(amplitude), _positive("wavelength", wavelength), float(x0)
+        self.x_end = None if x_end is None else float(x_end)
+        self.breakpoints = (self.x0,) + (() if x_end is None else (self.x_end,))
+
+    def _height(self, x, y):
+        z = self.A * np.sin(2 * np.pi * (x - self.x0) / self.wavelength)
+        on = x >= self.x0 if self.x_end is None else (x >= self.x0) & (x <= self.x_end)
+        return np.where(on, z, 0.0)
+
+    def height_range(self):
+        return -abs(self.A), abs(self.A)
+
+
+class Sampled(Road):
+    """Measured or designed profile: heights ``z`` at increasing ``x``, linear in between, constant outside."""
+
+    def __init__(self, x, z):
+        x, z = np.asarray(x, dtype=float), np.asarray(z, dtype=float)
+        if x.ndim != 1 or x.shape != z.shape or x.size < 2:
+            raise DataError(f"sampled road needs 1-D x and z of equal length >= 2, got shapes {x.shape}, {z.shape}")
+        if np.any(np.diff(x) <= 0):
+            raise DataError("sampled road: x must be strictly increasing")
+        if not (np.isfinite(x).all() and np.isfinite(z).all()):
+            raise DataError("sampled road: x and z must be finite")
+        self.x, self.z = x, z
+        self.breakpoints = tuple(x)
+
+    @classmethod
+    def from_csv(cls, path, x_column: str = "x", z_column: str = "z", delimiter: str = ","):
+        """Read a profile from a CSV file with a header row naming ``x_column`` and ``z_column`` (metres)."""
+        path = Path(path)
+        try:
+            data = np.genfromtxt(path, delimiter=delimiter, names=True)
+        except OSError as exc:
+            raise DataError(f"{path}: cannot read road profile ({exc})") from exc
+        names = data.dtype.names or ()
+        missing = [c for c in (x_column, z_column) if c not in names]
+        if missing:
+            raise DataError(f"{path}: column(s) {missing} not found; columns are {list(names)}")
+        return cls(data[x_column], data[z_column])
+
+    def _height(self, x, y):
+        return np.interp(x, self.x, self.z)
+
+    def height_range(self):
+        return float(self.z.min()), float(self.z.max())
+
+
+class TwoTrack(Road):
+    """Left and right profiles at ``y = +spacing/2`` and ``-spacing/2`` (ISO-W: y left), linear in between and
+    constant beyond: a road with banking (road camber) for :func:`swift.enveloping.effective_road_3d`."""
+
+    def __init__(self, left: Road, right: Road, spacing: float):
+        self.left, self.right, self.spacing = left, right, _positive("track spacing", spacing)
+        self.breakpoints = tuple(sorted(set(left.breakpoints) | set(right.breakpoints)))
+
+    def _height(self, x, y):
+        t = np.clip(y / self.spacing + 0.5, 0.0, 1.0)  # 0 right, 1 left
+        return t * self.left.height(x) + (1 - t) * self.right.height(x)
+
+    def height_range(self):
+        lo = [self.left.height_range(), self.right.height_range()]
+        return min(r[0] for r in lo), max(r[1] for r in lo)
+
+
+class _Sum(Road):
+    def __init__(self, a: Road, b: Road):
+        self.a, self.b = a, b
+        self.breakpoints = tuple(sorted(set(a.breakpoints) | set(b.breakpoints)))
+
+    def _height(self, x, y):
+        return self.a._height(x, y) + self.b._height(x, y)
+
+    def height_range(self):
+        (a0, a1), (b0, b1) = self.a.height_range(), self.b.height_range()
+        return a0 + b0, a1 + b1

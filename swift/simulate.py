@@ -1,0 +1,405 @@
+"""Time integration of the rigid-ring tyre: a compiled fixed-step stepper (real time, FMU) and an adaptive
+SciPy reference, both from the equations of :mod:`swift.ring`.
+
+    import mftyre
+    from swift import SwiftTyre, StepInputs, Cleat
+    model = mftyre.load_tir("tir_files/car_205_60R15_mf62_swift.tir")
+    tyre = SwiftTyre(model, Cleat(x0=1.0, length=0.05, height=0.01), x_range=(0.0, 25.0))
+    u = StepInputs(vx=11.1, z=0.29, omega=11.1 / 0.305)           # axle height fixed, spin imposed
+    state = tyre.initial_state(u)                                  # static equilibrium on the road
+    state, out = tyre.step(state, u, 1e-3)                        # one step: state_next, outputs (dict)
+    res = tyre.run(2.0, u)                                         # 2 s, outputs every 1 ms (SimResult)
+    ref = tyre.run_adaptive(0.3, u)                                # scipy DOP853, tight tolerances
+
+Step API (for an FMU): ``state_next, outputs = step(state, inputs, dt)``.
+
+* ``state``: float array, :data:`swift.ring.STATE_NAMES`.
+* ``inputs``: :class:`StepInputs` - axle x position and speed ``x``, ``vx``; axle height ``z``, ``vz`` (mode
+  ``axle="height"``) or downward axle force ``load`` (``axle="load"``, with the axle mass of
+  :class:`swift.ring.RingConstants`); rim spin ``omega`` (``rim="speed"``) or drive/brake ``torque``
+  (``rim="torque"``); inflation pressure ``p``; rim lateral position/speed ``y``, ``vy``, camber ``gamma``, yaw
+  (heading relative to the x axis) ``psi``; road camber ``road_camber``. Imposed positions move with their
+  speeds inside the step (first-order hold).
+* The road: a :class:`swift.road.Road` or a precomputed :class:`swift.enveloping.CamTable` (the cam heights
+  along x: the effective-road sample; the tandem base follows the current load inside the step).
+* ``outputs``: :data:`swift.ring.OUTPUT_NAMES` - forces and moments of the tyre on the rim (wheel centre,
+  ISO-W), contact forces in the effective plane, deflection rho, lever arm rl, effective rolling radius re,
+  half contact length a, tandem base ls, effective height w and slope beta, transient slips, contact speed.
+
+Integration: classical Runge-Kutta (RK4), ``substeps`` per step, all in one compiled CasADi function (C, cached like
+:mod:`mftyre.compiled`); the cam heights come from a window of ``window`` samples of
+the cam-height table around the wheel, passed by pointer (no copy), so one compiled function serves any road.
+"""
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import json
+import os
+import tempfile
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from mftyre.compiled import compile_c, cache_dir  # the core's compiler call and cache folder
+from mftyre.errors import ModelInputError
+
+from .enveloping import Cams, CamTable
+from .ring import INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, RingConstants, ring_equations, tandem_base_now
+from .road import Road
+
+__all__ = ["StepInputs", "SwiftTyre", "SimResult"]
+
+_S = {n: i for i, n in enumerate(STATE_NAMES)}
+#: Steps per compiled call in :meth:`SwiftTyre.run`.
+BLOCK = 10
+
+
+@dataclass(frozen=True)
+class StepInputs:
+    """Inputs of one step (SI, ISO-W); fields not used by the chosen modes are ignored."""
+
+    x: float = 0.0
+    vx: float = 10.0
+    z: float = 0.0
+    vz: float = 0.0
+    load: float = 4000.0
+    omega: float = 0.0
+    torque: float = 0.0
+    p: float | None = None
+    y: float = 0.0
+    vy: float = 0.0
+    gamma: float = 0.0
+    psi: float = 0.0
+    road_camber: float = 0.0
+
+
+@dataclass
+class SimResult:
+    """Time histories: ``t``, ``states`` (n x len(STATE_NAMES)), ``outputs`` dict of arrays, wheel position
+    ``x`` (axle x)."""
+
+    t: np.ndarray
+    states: np.ndarray
+    outputs: dict
+
+    @property
+    def x(self):
+        return self.states[:, _S["xa"]]
+
+    def __getitem__(self, name):
+        return self.outputs[name] if name in self.outputs else self.states[:, _S[name]]
+
+
+class SwiftTyre:
+    """SWIFT tyre on a road: rigid ring + tandem-cam effective road + Magic Formula slip model.
+
+    ``axle``: "height" (imposed) or "load"; ``rim``: "speed" (imposed) or "torque"; ``x_range``: wheel
+    positions the cam-height table covers; ``table_dx`` its step; ``substeps`` RK4 steps per call of
+    :meth:`step`; ``window`` cam-height samples visible to one step (covers the tandem and the travel).
+    """
+
+    def __init__(self, model, road: Road | CamTable, *, axle: str = "height", rim: str = "speed",
+                 x_range=(0.0, 10.0), table_dx: float = 1e-3, substeps: int = 2, window: int = 1024,
+                 axle_mass: float = 30.0, rim_extra_inertia: float = 0.3, compiled: bool = True):
+        if axle not in ("height", "load") or rim not in ("speed", "torque"):
+            raise ModelInputError(f"axle must be 'height' or 'load', rim 'speed' or 'torque'; got {axle!r}, {rim!r}")
+        self.model, self.axle, self.rim = model, axle, rim
+        self.constants = RingConstants.from_model(model, axle_mass, rim_extra_inertia)
+        self.cams = Cams.from_params(model.params)
+        margin = window * table_dx
+        if isinstance(road, CamTable):
+            self.table = road
+        else:
+            self.table = CamTable.build(road, self.cams, x_range[0] - margin, x_range[1] + margin, table_dx)
+        if self.table.h.size < window:
+            raise ModelInputError(f"the cam-height table ({self.table.h.size} samples) is shorter than the window "
+                                  f"({window})")
+        self.window, self.substeps = int(window), int(substeps)
+        self._grid = np.ascontiguousarray(self.table.dx * np.arange(self.window))
+        self._h = np.ascontiguousarray(self.table.h, dtype=float)
+        self._rhs_window = self._rhs(self.window)
+        self._step_fn = self._build_step()
+        self._block_fn = self._build_block(self._step_fn)
+        self._compiled = _Compiled(self._step_fn, self._key("step")) if compiled else None
+        self._compiled_block = _Compiled(self._block_fn, self._key("block")) if compiled else None
+
+    # ------------------------------------------------------------------ equations
+    def _rhs(self, n_window):
+        """rhs(x, u, x0w, grid, hw) -> (dx, out): MX graph, so that the cam-height lookup stays a compiled
+        constant-time table access (an SX expansion would scan the whole window)."""
+        import casadi as ca
+
+        x = ca.MX.sym("x", len(STATE_NAMES))
+        u = ca.MX.sym("u", len(INPUT_NAMES))
+        x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", n_window), ca.MX.sym("hw", n_window)
+        lookup = ca.interpolant("cam", "linear", [n_window], 1, {"lookup_mode": ["exact"]})
+        xq = ca.MX.sym("xq")
+        hq = lookup(xq, grid, hw)
+        cam_fn = ca.Function("cam_height", [xq, grid, hw], [hq, ca.jacobian(hq, xq)])
+
+        # the physics as SX functions (compact C), the table lookups as MX calls between them
+        xs, us, hs = ca.SX.sym("x", len(STATE_NAMES)), ca.SX.sym("u", len(INPUT_NAMES)), ca.SX.sym("h", 5)
+        tandem = ca.Function("tandem", [xs, us, hs[0]], [tandem_base_now(self.model, xs, us, hs[0])])
+        dx_sx, out_sx = ring_equations(self.model, self.constants, xs, us, hs[0], hs[1], hs[2], hs[3], hs[4],
+                                       axle=self.axle, rim=self.rim)
+        physics = ca.Function("ring", [xs, us, hs], [dx_sx, out_sx])
+        xb = x[STATE_NAMES.index("xb")]
+        h_c, _ = cam_fn(xb - x0w, grid, hw)
+        ls = tandem(x, u, h_c)
+        hf, dhf = cam_fn(xb + ls / 2 - x0w, grid, hw)
+        hr, dhr = cam_fn(xb - ls / 2 - x0w, grid, hw)
+        dx, out = physics(x, u, ca.vertcat(hf, dhf, hr, dhr, ls))
+        return ca.Function("rhs", [x, u, x0w, grid, hw], [dx, out])
+
+    def _build_step(self):
+        import casadi as ca
+
+        rhs = self._rhs_window
+        x = ca.MX.sym("x", len(STATE_NAMES))
+        u = ca.MX.sym("u", len(INPUT_NAMES))
+        dt, x0w = ca.MX.sym("dt"), ca.MX.sym("x0w")
+        grid, hw = ca.MX.sym("grid", self.window), ca.MX.sym("hw", self.window)
+        h = dt / self.substeps
+        f = lambda s: rhs(s, u, x0w, grid, hw)[0]  # noqa: E731
+        xs = x
+        for _ in range(self.substeps):  # classical RK4
+            k1 = f(xs)
+            k2 = f(xs + h / 2 * k1)
+            k3 = f(xs + h / 2 * k2)
+            k4 = f(xs + h * k3)
+            xs = xs + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        out = rhs(xs, u, x0w, grid, hw)[1]
+        return ca.Function("swift_step", [x, u, dt, x0w, grid, hw], [xs, out],
+                           ["x", "u", "dt", "x0w", "grid", "hw"], ["x_next", "out"])
+
+    def _build_block(self, step):
+        """``BLOCK`` consecutive steps in one call (the run loop): inputs one column per step."""
+        import casadi as ca
+
+        x = ca.MX.sym("x", len(STATE_NAMES))
+        u = ca.MX.sym("u", len(INPUT_NAMES), BLOCK)
+        dt, x0w = ca.MX.sym("dt"), ca.MX.sym("x0w")
+        grid, hw = ca.MX.sym("grid", self.window), ca.MX.sym("hw", self.window)
+        states, outs, xs = [], [], x
+        for k in range(BLOCK):
+            xs, out = step(xs, u[:, k], dt, x0w, grid, hw)
+            states.append(xs)
+            outs.append(out)
+        return ca.Function("swift_block", [x, u, dt, x0w, grid, hw], [ca.horzcat(*states), ca.horzcat(*outs)],
+                           ["x", "u", "dt", "x0w", "grid", "hw"], ["states", "outs"])
+
+    def _key(self, kind):
+        prm = self.model.params
+        payload = {"p": {k: repr(prm[k]) for k in prm}, "side": self.model.side, "axle": self.axle,
+                   "rim": self.rim, "window": self.window, "substeps": self.substeps,
+                   "constants": repr(self.constants), "kind": kind, "block": BLOCK, "version": 5}
+        return "swift_" + hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
+
+    # ------------------------------------------------------------------ stepping
+    def _u(self, inputs: StepInputs):
+        p = self.model.params.INFLPRES if inputs.p is None else inputs.p
+        return np.array([inputs.vx, inputs.load, inputs.torque, p, inputs.y, inputs.vy, inputs.gamma, inputs.psi,
+                         inputs.road_camber], dtype=float)
+
+    def _impose(self, state, inputs: StepInputs):
+        state = np.array(state, dtype=float)
+        state[_S["xa"]] = inputs.x
+        if self.axle == "height":
+            state[_S["za"]], state[_S["vza"]] = inputs.z, inputs.vz
+        if self.rim == "speed":
+            state[_S["oma"]] = inputs.omega
+        return state
+
+    def _window_start(self, xb):
+        i0 = int(np.floor((xb - self.table.x0) / self.table.dx)) - self.window // 2
+        if i0 < 0 or i0 + self.window > self.table.h.size:
+            raise ModelInputError(f"wheel at x = {xb:.3f} m is outside the road table "
+                                  f"[{self.table.x0 + self.window // 2 * self.table.dx:.3f}, "
+                                  f"{self.table.x[-1] - self.window // 2 * self.table.dx:.3f}] m (x_range)")
+        return i0
+
+    def step(self, state, inputs: StepInputs, dt: float):
+        """One step of length ``dt``: (state_next, outputs dict). See the module notes for the API."""
+        state = self._impose(state, inputs)
+        i0 = self._window_start(state[_S["xb"]])
+        x0w = self.table.x0 + i0 * self.table.dx
+        if self._compiled is not None:
+            x_next, out = self._compiled((state, self._u(inputs), dt, x0w), self._grid, self._h, i0)
+        else:
+            res = self._step_fn(state, self._u(inputs), dt, x0w, self._grid, self._h[i0:i0 + self.window])
+            x_next, out = (np.asarray(r).ravel() for r in res)
+        return x_next, dict(zip(OUTPUT_NAMES, out))
+
+    def run(self, t_end: float, inputs, dt: float = 1e-3) -> SimResult:
+        """Fixed-step run from the static equilibrium. ``inputs``: a :class:`StepInputs` (constant speeds; the
+        imposed positions advance with them) or a callable ``t -> StepInputs``; outputs every ``dt``.
+        Runs ``BLOCK`` steps per compiled call (the same steps as :meth:`step`)."""
+        n_blocks = int(np.ceil(round(t_end / dt) / BLOCK))
+        n = n_blocks * BLOCK
+        get = inputs if callable(inputs) else _advancing(inputs)
+        state = self.initial_state(get(0.0))
+        states, outs = np.empty((n + 1, len(STATE_NAMES))), np.empty((n + 1, len(OUTPUT_NAMES)))
+        states[0], outs[0] = state, self.outputs(state, get(0.0))
+        u_const = None if callable(inputs) else np.tile(self._u(inputs)[:, None], BLOCK)
+        for b in range(n_blocks):
+            t0 = b * BLOCK * dt
+            if u_const is None:
+                steps = [get(t0 + k * dt) for k in range(BLOCK)]
+                u, first = np.column_stack([self._u(v) for v in steps]), steps[0]
+            else:
+                u, first = u_const, get(t0)
+            state = self._impose(state, first)
+            i0 = self._window_start(state[_S["xb"]])
+            x0w = self.table.x0 + i0 * self.table.dx
+            if self._compiled_block is not None:
+                xs, ys = self._compiled_block((state, u, dt, x0w), self._grid, self._h, i0)
+            else:
+                res = self._block_fn(state, u, dt, x0w, self._grid, self._h[i0:i0 + self.window])
+                xs, ys = (np.asarray(r) for r in res)
+            xs = xs.reshape(BLOCK, len(STATE_NAMES)) if xs.ndim == 1 else xs.T
+            ys = ys.reshape(BLOCK, len(OUTPUT_NAMES)) if ys.ndim == 1 else ys.T
+            states[1 + b * BLOCK:1 + (b + 1) * BLOCK], outs[1 + b * BLOCK:1 + (b + 1) * BLOCK] = xs, ys
+            state = xs[-1]
+        keep = int(round(t_end / dt)) + 1
+        return SimResult(dt * np.arange(keep), states[:keep], dict(zip(OUTPUT_NAMES, outs[:keep].T)))
+
+    def outputs(self, state, inputs: StepInputs) -> np.ndarray:
+        """Outputs at ``state`` (no time step), in the order of OUTPUT_NAMES."""
+        return np.array(list(self.step(state, inputs, 0.0)[1].values()))
+
+    # ------------------------------------------------------------------ reference and statics
+    def _rhs_args(self, state):
+        i0 = self._window_start(state[_S["xb"]])
+        return self.table.x0 + i0 * self.table.dx, self._grid, self._h[i0:i0 + self.window]
+
+    def derivative(self, state, inputs: StepInputs):
+        """State derivative (CasADi VM on the same right-hand side): for the reference run and checks."""
+        state = self._impose(state, inputs)
+        return np.asarray(self._rhs_window(state, self._u(inputs), *self._rhs_args(state))[0]).ravel()
+
+    def run_adaptive(self, t_end: float, inputs: StepInputs, dt: float = 1e-3, rtol: float = 1e-8,
+                     atol: float = 1e-10) -> SimResult:
+        """Accuracy reference: scipy ``solve_ivp`` (DOP853, tight tolerances) on the same right-hand side,
+        constant input speeds, outputs every ``dt``."""
+        from scipy.integrate import solve_ivp
+
+        u = self._u(inputs)
+        x0 = self.initial_state(inputs)
+        t_eval = dt * np.arange(int(round(t_end / dt)) + 1)
+        sol = solve_ivp(lambda t, s: np.asarray(self._rhs_window(s, u, *self._rhs_args(s))[0]).ravel(),
+                        (0.0, t_eval[-1]), x0, method="DOP853", t_eval=t_eval, rtol=rtol, atol=atol,
+                        first_step=1e-6, max_step=dt / 2)
+        if not sol.success:
+            raise ArithmeticError(f"adaptive reference failed: {sol.message}")
+        outs = np.array([np.asarray(self._rhs_window(s, u, *self._rhs_args(s))[1]).ravel() for s in sol.y.T])
+        return SimResult(sol.t, sol.y.T, dict(zip(OUTPUT_NAMES, outs.T)))
+
+    def jacobian(self, state, inputs: StepInputs):
+        """d(state derivative)/d(state) at ``state``: the linearised model (eigenvalues, stability)."""
+        import casadi as ca
+
+        state = self._impose(state, inputs)
+        xs = ca.MX.sym("x", len(STATE_NAMES))
+        d = self._rhs_window(xs, self._u(inputs), *self._rhs_args(state))[0]
+        return np.asarray(ca.Function("linearised", [xs], [ca.jacobian(d, xs)])(state))
+
+    def initial_state(self, inputs: StepInputs, iterations: int = 30) -> np.ndarray:
+        """Static equilibrium (steady rolling at the input speeds) at the axle position of ``inputs``: Newton
+        on the accelerations and patch rates, from the steady-state model's deflection."""
+        import casadi as ca
+
+        prm = self.model.params
+        c = self.constants
+        p = prm.INFLPRES if inputs.p is None else inputs.p
+        s = np.zeros(len(STATE_NAMES))
+        s[_S["xa"]] = s[_S["xb"]] = inputs.x
+        h = float(self.table(inputs.x))
+        if self.axle == "load":
+            fz = inputs.load - c.mb * prm.GRAVITY
+            rl, _ = self.model.loaded_radius(fz, p=p)
+            s[_S["za"]] = h + float(rl)
+        else:
+            s[_S["za"]], s[_S["vza"]] = inputs.z, inputs.vz
+            fz = float(self.model.vertical_force(min(inputs.z - h, prm.UNLOADED_RADIUS), p=p))
+        s[_S["zb"]] = s[_S["za"]] + max(fz, 0.0) / c.cbx
+        s[_S["vxb"]], s[_S["vyb"]] = inputs.vx, inputs.vy
+        s[_S["oma"]] = s[_S["omb"]] = inputs.omega
+        s[_S["yb"]] = inputs.y
+        s[_S["gb"]], s[_S["psb"]] = inputs.gamma, inputs.psi
+        unknown = [_S[n] for n in ("xb", "zb", "thw", "yb", "gb", "psb", "ux", "uy", "kappa", "alpha")]
+        eqs = [_S[n] for n in ("vxb", "vzb", "omb", "vyb", "wgb", "wpsb", "ux", "uy", "kappa", "alpha")]
+        if self.axle == "load":
+            unknown.append(_S["za"])
+            eqs.append(_S["vza"])
+        xs = ca.MX.sym("x", len(STATE_NAMES))
+        d = self._rhs_window(xs, self._u(inputs), *self._rhs_args(s))[0][eqs]
+        fun = ca.Function("eq", [xs], [d, ca.jacobian(d, xs)[:, unknown]])
+        for _ in range(iterations):
+            r, jac = (np.asarray(v) for v in fun(s))
+            r = r.ravel()
+            step = np.linalg.lstsq(jac, -r, rcond=None)[0]
+            s[unknown] += step
+            if np.max(np.abs(step)) < 1e-13:
+                break
+        return s
+
+
+def _advancing(inputs: StepInputs):
+    """Constant speeds: the imposed positions advance with them."""
+    def get(t):
+        return replace(inputs, x=inputs.x + inputs.vx * t, z=inputs.z + inputs.vz * t, y=inputs.y + inputs.vy * t)
+    return get
+
+
+def _compile_mx(function, key: str) -> Path:
+    """C code of the MX ``function`` as it is (no SX expansion: the table lookup stays constant-time),
+    compiled with the system compiler and cached in :func:`mftyre.compiled.cache_dir`."""
+    import casadi as ca
+
+    directory = cache_dir()
+    directory.mkdir(parents=True, exist_ok=True)
+    library = directory / f"{key[:40]}.so"
+    if library.exists():
+        return library
+    with tempfile.TemporaryDirectory(dir=directory) as tmp:
+        gen = ca.CodeGenerator(f"{key[:40]}.c", {"with_header": False})
+        gen.add(function)
+        compile_c(Path(gen.generate(str(Path(tmp)) + os.sep)), library)
+    return library
+
+
+class _Compiled:
+    """A compiled step/block function called through ctypes: arguments 0-3 are copied in, the cam-height grid
+    and window (arguments 4, 5) are passed by pointer into the whole table."""
+
+    def __init__(self, function, key):
+        self._lib = ctypes.CDLL(str(_compile_mx(function, key)))
+        fn, work = getattr(self._lib, function.name()), getattr(self._lib, f"{function.name()}_work")
+        ll = ctypes.c_longlong
+        sz = [ll() for _ in range(4)]
+        work.argtypes = [ctypes.POINTER(ll)] * 4
+        work(*(ctypes.byref(v) for v in sz))
+        sz_arg, sz_res, sz_iw, sz_w = (v.value for v in sz)
+        self._in = [np.zeros(function.nnz_in(i)) for i in range(4)]
+        self._res_buf = [np.zeros(function.nnz_out(i)) for i in range(2)]
+        self._shapes = [function.size_out(i) for i in range(2)]
+        self._arg = (ctypes.c_void_p * max(sz_arg, 6))(*[a.ctypes.data for a in self._in])
+        self._res = (ctypes.c_void_p * max(sz_res, 2))(*[r.ctypes.data for r in self._res_buf])
+        self._iw, self._w = (ll * max(sz_iw, 1))(), (ctypes.c_double * max(sz_w, 1))()
+        fn.argtypes = [ctypes.c_void_p] * 4 + [ctypes.c_int]
+        fn.restype = ctypes.c_int
+        self._fn = fn
+        self._args = (ctypes.addressof(self._arg), ctypes.addressof(self._res), ctypes.addressof(self._iw),
+                      ctypes.addressof(self._w), 0)
+
+    def __call__(self, values, grid, table, i0):
+        for buf, v in zip(self._in, values):
+            buf[:] = np.ravel(v, order="F")  # CasADi stores column-major
+        self._arg[4] = grid.ctypes.data
+        self._arg[5] = table.ctypes.data + 8 * i0
+        if self._fn(*self._args):
+            raise ArithmeticError("compiled SWIFT step reported an evaluation error")
+        return tuple(r.reshape(shape, order="F").copy().squeeze() if shape[1] > 1 else r.copy()
+                     for r, shape in zip(self._res_buf, self._shapes))
