@@ -239,7 +239,7 @@ class MFModel:
         with np.errstate(all="ignore"):
             if prm.version == "62":
                 return vertical.vertical_force_62(prm, a["rl"], r_omega, a["omega"], a["fx"], a["fy"], a["gamma"],
-                                                  dpi, NUMPY)[0]
+                                                  dpi, NUMPY)
             return vertical.vertical_force_61(prm, r_omega - a["rl"], r_omega, a["omega"], a["fx"], a["fy"], dpi,
                                               NUMPY)
 

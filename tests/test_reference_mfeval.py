@@ -109,7 +109,7 @@ def _check_vertical_equation(model, df, ours):
     fz_in = np.maximum(df["in_Fz"].to_numpy(), 0.0)
     assert np.all(np.isfinite(ours[["Rl", "rho", "Cz"]].to_numpy()))
     if prm.version == "62":
-        fz, _ = vertical.vertical_force_62(prm, ours["Rl"].to_numpy(), r_omega, omega, ours["Fx"].to_numpy(),
+        fz = vertical.vertical_force_62(prm, ours["Rl"].to_numpy(), r_omega, omega, ours["Fx"].to_numpy(),
                                            ours["Fy"].to_numpy(), gamma, dpi, NUMPY)
         # either the load is carried, or the tyre touches only with its cambered shoulder at zero free
         # deflection (Rl = R_omega) and already carries more: the contact limit (the MF 6.2 relation's only

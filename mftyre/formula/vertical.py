@@ -31,7 +31,7 @@ import numpy as np
 
 __all__ = [
     "free_radius", "vertical_stiffness", "rolling_radius_reduction", "spin_and_radius",
-    "vertical_force_61", "vertical_force_62", "deflection_61", "loaded_radius_62", "contact_patch",
+    "vertical_force_61", "vertical_force_62", "deflection_61", "deflection_62", "loaded_radius_62", "contact_patch",
 ]
 
 
@@ -111,23 +111,29 @@ def deflection_61(prm, fz, r_omega, omega, fx, fy, dpi, be):
     return be.where(x * R0 > rho_b, x_b, x) * R0
 
 
-def vertical_force_62(prm, rl, r_omega, omega, fx, fy, gamma, dpi, be):
-    """MF 6.2 Fz(Rl): returns (Fz, rho_z) at loaded radius ``rl``."""
-    R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
-    ratio = rl / r_omega
-    s_fygamma = (prm.Q_FYS1 + prm.Q_FYS2 * ratio + prm.Q_FYS3 * ratio**2) * gamma
+def deflection_62(prm, rl, r_omega, gamma, be):
+    """MF 6.2 vertical deflection at loaded radius ``rl``: free-rolling deflection plus the camber deflection
+    rho_zgamma (Q_CAM1-3, reference tread width (1.075 - 0.5 ASPECT_RATIO) WIDTH), at least 1e-12 m."""
     rho_free = be.fmax(r_omega - rl, 0.0)
-    tread_width = (1.075 - 0.5 * prm.ASPECT_RATIO) * prm.WIDTH  # reference tread width
-    if prm.Q_CAM1 == 0.0 and prm.Q_CAM2 == 0.0:
-        rho_camber = -prm.Q_CAM3 * rho_free * be.abs(gamma)
-    else:
+    rho = rho_free - prm.Q_CAM3 * rho_free * be.abs(gamma)
+    if prm.Q_CAM1 != 0.0 or prm.Q_CAM2 != 0.0:
+        tread_width = (1.075 - 0.5 * prm.ASPECT_RATIO) * prm.WIDTH
         growth = (prm.Q_CAM1 * rl + prm.Q_CAM2 * rl**2) / (prm.Q_CAM1 * r_omega + prm.Q_CAM2 * r_omega**2)
-        rho_camber = growth**2 * (tread_width / 8.0) * be.abs(be.tan(gamma)) - prm.Q_CAM3 * rho_free * be.abs(gamma)
-    rho = be.fmax(rho_free + rho_camber, 1e-12)
-    correction = (1.0 + prm.Q_V2 * (R0 / prm.LONGVL) * be.abs(omega) - (prm.Q_FCX * fx / Fz0) ** 2
-                  - ((rho / R0) ** prm.Q_FCY2 * prm.Q_FCY * (fy - s_fygamma) / Fz0) ** 2) * (1.0 + prm.PFZ1 * dpi)
-    fz = correction * (_q_fz1(prm) * (rho / R0) + prm.Q_FZ2 * (rho / R0) ** 2) * Fz0
-    return fz + _bottoming_force(prm, rl, be), rho
+        rho = rho + growth**2 * (tread_width / 8.0) * be.abs(be.tan(gamma))
+    return be.fmax(rho, 1e-12)
+
+
+def vertical_force_62(prm, rl, r_omega, omega, fx, fy, gamma, dpi, be):
+    """MF 6.2 Fz(Rl) at loaded radius ``rl`` (terms whose parameters are zero are skipped)."""
+    R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
+    x = deflection_62(prm, rl, r_omega, gamma, be) / R0
+    correction = 1.0 + prm.Q_V2 * (R0 / prm.LONGVL) * be.abs(omega) - (prm.Q_FCX * fx / Fz0) ** 2
+    if prm.Q_FCY != 0.0:  # side force, with the camber asymmetry S_Fygamma and the deflection dependency
+        ratio = rl / r_omega
+        s_fygamma = (prm.Q_FYS1 + prm.Q_FYS2 * ratio + prm.Q_FYS3 * ratio**2) * gamma
+        correction = correction - (x ** prm.Q_FCY2 * prm.Q_FCY * (fy - s_fygamma) / Fz0) ** 2
+    fz = correction * (1.0 + prm.PFZ1 * dpi) * (_q_fz1(prm) * x + prm.Q_FZ2 * x**2) * Fz0
+    return fz + _bottoming_force(prm, rl, be)
 
 
 def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
@@ -139,7 +145,7 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     def residual(rl, idx):
         sub = args if idx is None else [v[idx] for v in args]
         target = fz if idx is None else fz[idx]
-        return vertical_force_62(prm, rl, *sub, be)[0] - target
+        return vertical_force_62(prm, rl, *sub, be) - target
 
     r_omega = args[0]
     f_top = residual(r_omega, None)  # < 0 when the free tyre carries less than fz
@@ -162,7 +168,7 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     rl = be.solve_bracketed(residual, r_omega - rho_1, r_omega - rho_2, f_1, f_2, xtol=1e-15, widen=widen,
                             max_iter=200, unrolled=30)
     rl = be.where(contact, rl, r_omega)
-    return rl, vertical_force_62(prm, rl, *args, be)[1]
+    return rl, deflection_62(prm, rl, r_omega, args[4], be)
 
 
 def contact_patch(prm, fz, dpi, be):
