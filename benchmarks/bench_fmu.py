@@ -10,7 +10,12 @@ loads. Rows, each the time per step (best of --repeat) and its ratio to the base
 * the FMU through fmpy (``FMU2Slave``: fmi2SetReal, fmi2DoStep, fmi2GetReal), evaluators compiled and casadi,
   vertical input load and position.
 
-The FMU is built into a temporary folder first (its build time is printed).
+Swift mode (``--swift-tir``, default the SWIFT sample tyre; a 1 cm cleat every 5 m, axle height imposed, spin
+imposed, 1 ms communication steps), its own baseline: ``SwiftTyre.step`` called directly in a Python loop;
+then the FMU's computation (``mftyre_fmu_core.SwiftCore.advance``, which adds the input mapping and the MF at the
+contact patch for the extra outputs) and the FMU through fmpy.
+
+The FMUs are built into a temporary folder first (their build times are printed).
 """
 from __future__ import annotations
 
@@ -31,7 +36,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "fmu"))
 
 from build import build_fmu  # noqa: E402
-from mftyre_fmu_core import SteadyTyre  # noqa: E402
+from mftyre_fmu_core import SteadyTyre, SwiftCore  # noqa: E402
+
+SWIFT_ROAD = "+".join(f"cleat(x0={5.0 * k + 3.0}, length=0.05, height=0.01)" for k in range(5))
 
 
 def best(fn, repeat):
@@ -88,7 +95,9 @@ class FMUStepper:
         self.fmu.exitInitializationMode()
         self.position = params.get("vertical_input") == "position"
 
-    def runner(self, steps):
+    def runner(self, steps, swift=False):
+        if swift:
+            return self.swift_runner(steps)
         names = ("vx", "vy", "omega", "gamma", "z" if self.position else "Fz_in", "p")
         set_vr = [self.vr[k] for k in names]
         get_vr = [self.vr[k] for k in ("Fx", "Fy", "Fz", "Mx", "My", "Mz")]
@@ -107,9 +116,83 @@ class FMUStepper:
                 fmu.getReal(get_vr)
         return run
 
+    def swift_runner(self, steps):
+        set_vr = [self.vr[k] for k in ("vx", "vy", "omega", "gamma", "z", "p")]
+        get_vr = [self.vr[k] for k in ("Fx", "Fy", "Fz", "Mx", "My", "Mz")]
+        fmu, h = self.fmu, 1e-3
+
+        def run():
+            t = 0.0
+            for i in range(steps):
+                fmu.setReal(set_vr, list(swift_inputs(i)))
+                fmu.doStep(t, h)
+                t += h
+                fmu.getReal(get_vr)
+        return run
+
     def close(self):
         self.fmu.terminate()
         self.fmu.freeInstance()
+
+
+def swift_inputs(i):
+    """vx, vy, omega, gamma, z, p of step i (swift rows): 10 m/s with small variations."""
+    s = 1e-3 * i
+    return 10.0 + 0.2 * math.sin(s), 0.1 * math.sin(3 * s), (10.0 + 0.2 * math.sin(s)) / 0.305, 0.01, \
+        0.288 + 0.001 * math.sin(7 * s), 2.2e5
+
+
+def direct_swift_step(tyre, steps):
+    """SwiftTyre.step in a Python loop: the swift baseline (the inputs built as StepInputs each step)."""
+    from swift import StepInputs
+
+    def run():
+        vx, vy, omega, gamma, z, p = swift_inputs(0)
+        state = tyre.initial_state(StepInputs(x=0.0, vx=vx, z=z, omega=omega, p=p, vy=vy, gamma=gamma))
+        for i in range(steps):
+            vx, vy, omega, gamma, z, p = swift_inputs(i)
+            state, out = tyre.step(state, StepInputs(x=state[9], vx=vx, z=z, omega=omega, p=p, vy=vy, gamma=gamma),
+                                   1e-3)
+            (out["fx"], out["fy"], out["fz"], out["mx"], out["my"], out["mz"])
+    return run
+
+
+def direct_swift_core(core, steps):
+    names = ("vx", "vy", "omega", "gamma", "z", "p")
+
+    def run():
+        u = dict(zip(names, swift_inputs(0)), vz=0.0, road_z=0.0, Fz_in=0.0, torque=0.0)
+        core.initialise(u)
+        for i in range(steps):
+            u.update(zip(names, swift_inputs(i)))
+            core.advance(u, 1e-3)
+    return run
+
+
+def swift_rows(tir, tmp, steps, repeat):
+    from swift import Cleat, SwiftTyre
+    from swift.ring import STATE_NAMES
+
+    assert STATE_NAMES[9] == "xa"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = mftyre.load_tir(tir)
+        t0 = time.perf_counter()
+        path = build_fmu(tir, Path(tmp) / "tyre_swift.fmu", model="swift", vertical_input="position")
+        print(f"{Path(tir).name}: swift FMU built in {time.perf_counter() - t0:.1f} s")
+        road = Cleat(3.0, 0.05, 0.01)
+        for k in range(1, 5):
+            road = road + Cleat(5.0 * k + 3.0, 0.05, 0.01)
+        tyre = SwiftTyre(model, road, axle="height", rim="speed", x_range=(-1.0, 30.0))
+        core = SwiftCore(model, SWIFT_ROAD, vertical="position")
+    n = min(steps, 2500)  # 25 m: the road above
+    rows = [("swift direct: SwiftTyre.step in a Python loop", best(direct_swift_step(tyre, n), repeat) / n),
+            ("swift direct: FMU computation (SwiftCore.advance)", best(direct_swift_core(core, n), repeat) / n)]
+    stepper = FMUStepper(path, tmp, {"road": SWIFT_ROAD})
+    rows.append(("swift FMU via fmpy: set 6 + doStep + get 6, position", best(stepper.runner(n, swift=True),
+                                                                             repeat) / n))
+    stepper.close()
+    return rows
 
 
 def main(argv=None):
@@ -117,6 +200,8 @@ def main(argv=None):
     ap.add_argument("--tir", default=str(ROOT / "tir_files" / "car_205_60R15_mf61.tir"))
     ap.add_argument("--steps", type=int, default=20_000)
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--swift-tir", default=str(ROOT / "tir_files" / "car_205_60R15_mf62_swift.tir"))
+    ap.add_argument("--no-swift", action="store_true", help="skip the swift-mode rows")
     args = ap.parse_args(argv)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -139,11 +224,15 @@ def main(argv=None):
             rows.append((f"FMU via fmpy: set 6 + doStep + get 6, {ev}, {vertical}",
                          best(stepper.runner(n), args.repeat) / n))
             stepper.close()
-    base = rows[0][1]
-    width = max(len(r[0]) for r in rows)
-    print(f"{'':{width}}  {'us/step':>9}  {'vs NumPy':>9}")
-    for name, t in rows:
-        print(f"{name:{width}}  {t * 1e6:9.1f}  {t / base:9.3f}")
+        srows = [] if args.no_swift else swift_rows(args.swift_tir, tmp, steps, args.repeat)
+    width = max(len(r[0]) for r in rows + srows)
+    for table, label in ((rows, "vs NumPy"), (srows, "vs step")):
+        if not table:
+            continue
+        base = table[0][1]
+        print(f"\n{'':{width}}  {'us/step':>9}  {label:>9}")
+        for name, t in table:
+            print(f"{name:{width}}  {t * 1e6:9.1f}  {t / base:9.3f}")
 
 
 if __name__ == "__main__":

@@ -9,12 +9,16 @@ when the host's Python has none installed).
 FMI behaviour
 -------------
 * Parameters are read when initialisation ends; the outputs are computed then from the inputs' current values,
-  so they are valid right after fmi2ExitInitializationMode, and after every fmi2DoStep (the steady model has no
-  state: the outputs are those of the inputs at the end of the step, whatever the step size).
+  so they are valid right after fmi2ExitInitializationMode, and after every fmi2DoStep. model=steady has no
+  state: the outputs are those of the inputs at the end of the step, whatever the step size. model=swift holds
+  the state of the rigid-ring tyre (``mftyre_fmu_core.SwiftCore`` around ``swift.SwiftTyre``): it starts in
+  static equilibrium at the initial inputs and is advanced over each communication step (any step size; split
+  into internal steps of at most ``max_step``).
 * No Python exception ever leaves this class (pythonfmu would turn it into fmi2Fatal). Problems are logged with
   status fmi2Error (category logStatusError) and reported through the FMI status: an unusable configuration (bad
-  parameter, unreadable .tir) or a non-finite input makes fmi2DoStep return fmi2Discard and leaves the outputs at
-  their last valid values; the ``status`` output says why (0 ok, 1 input rejected, 2 configuration error).
+  parameter, unreadable .tir, bad road) or a non-finite input makes fmi2DoStep return fmi2Discard and leaves the
+  outputs (and the swift state) at their last valid values; the ``status`` output says why (0 ok, 1 input or
+  step rejected, 2 configuration error).
 * fmi2Reset returns the instance to the state after instantiation (pythonfmu re-creates the object).
 """
 import json
@@ -30,7 +34,8 @@ from pythonfmu.enums import Fmi2Status
 # Units of the variables (FMI unit names) and their SI base-unit exponents for <UnitDefinitions>.
 _UNIT_BASES = {
     "N": dict(kg=1, m=1, s=-2), "N.m": dict(kg=1, m=2, s=-2), "m": dict(m=1), "m/s": dict(m=1, s=-1),
-    "rad": dict(rad=1), "rad/s": dict(rad=1, s=-1), "Pa": dict(kg=1, m=-1, s=-2),
+    "rad": dict(rad=1), "rad/s": dict(rad=1, s=-1), "Pa": dict(kg=1, m=-1, s=-2), "s": dict(s=1),
+    "kg": dict(kg=1),
 }
 
 _INPUTS = {  # name -> (unit, description); start values come from config.json
@@ -40,27 +45,39 @@ _INPUTS = {  # name -> (unit, description); start values come from config.json
     "gamma": ("rad", "inclination (camber) angle, ISO-W"),
     "z": ("m", "vehicle mode, vertical_input=position: wheel-centre height (same reference as road_z)"),
     "road_z": ("m", "vehicle mode, vertical_input=position: road height under the wheel"),
-    "Fz_in": ("N", "vertical load (vertical_input=load, and rig mode)"),
+    "vz": ("m/s", "swift, vertical_input=position: wheel-centre vertical speed (z moves with it inside the step)"),
+    "Fz_in": ("N", "vertical load (vertical_input=load, and rig mode; swift: downward force on the axle)"),
     "p": ("Pa", "inflation pressure (may change during the run)"),
     "kappa_in": ("1", "rig mode: longitudinal slip"),
     "alpha_in": ("rad", "rig mode: slip angle (ISO-W)"),
+    "torque": ("N.m", "swift, rim=torque: drive (+) or brake (-) torque on the rim about its axle"),
 }
 
 _PARAMETERS = {  # name -> description; start values come from config.json
     "tir_file": "property file: empty = the .tir embedded in the FMU (resources/tyre.tir), else a path",
-    "model": "tyre model: steady (Magic Formula, no states) or swift (rigid ring; not available yet)",
+    "model": "tyre model: steady (Magic Formula, no states) or swift (rigid ring with tandem-cam enveloping)",
     "side": "side the tyre is mounted on: left or right (mirrors the lateral behaviour)",
     "input_mode": "vehicle (wheel-centre velocities, spin, vertical position or load) or rig (kappa, alpha, Fz)",
     "vertical_input": "vehicle mode: load (Fz_in is the load) or position (Fz from z - road_z)",
     "evaluator": "auto (compiled C, else CasADi VM), compiled, casadi or numpy (reference, slow)",
+    "road": "swift: road profile, e.g. cleat(x0=2, length=0.05, height=0.01); empty = flat (see documentation)",
+    "rim": "swift: speed (the omega input is imposed) or torque (the torque input drives the rim)",
+}
+
+_REAL_PARAMETERS = {  # name -> (unit, default, description)
+    "x_start": ("m", 0.0, "swift: wheel-centre position on the road profile at the start"),
+    "max_step": ("s", 1e-3, "swift: longest internal step (a communication step is split into equal steps)"),
+    "axle_mass": ("kg", 30.0, "swift, vertical_input=load: mass of the axle the Fz_in input pushes down"),
 }
 
 
 class MFTyre(Fmi2Slave):
-    """Magic Formula 6.1/6.2 tyre (mftyre): forces and moments at the wheel centre, slips, radii, contact patch."""
+    """Magic Formula 6.1/6.2 tyre (mftyre), steady or SWIFT rigid ring: forces and moments at the wheel centre,
+    slips, radii, contact patch."""
 
     author = "mftyre developers"
-    description = ("Magic Formula 6.1/6.2 steady-state tyre from a .tir file (mftyre), ISO-W axes, SI units. "
+    description = ("Magic Formula 6.1/6.2 tyre from a .tir file (mftyre): steady state, or the SWIFT rigid ring "
+                   "with tandem-cam enveloping (model=swift); ISO-W axes, SI units. "
                    "Needs Python with numpy and casadi (see documentation).")
     version = "0.1.0"
 
@@ -74,6 +91,8 @@ class MFTyre(Fmi2Slave):
         params = cfg.get("parameters", {})
         for name in _PARAMETERS:
             setattr(self, name, str(params.get(name, "")))
+        for name, (_, default, _) in _REAL_PARAMETERS.items():
+            setattr(self, name, float(params.get(name, default)))
         from mftyre_fmu_core import OUTPUTS
 
         self._output_units = {k: v[0] for k, v in OUTPUTS.items()}
@@ -83,10 +102,14 @@ class MFTyre(Fmi2Slave):
         self._core = None
         self._mode = None
         self._problem = None  # configuration error message, once found
+        self._x_road = 0.0  # steady mode: x_start + integral of vx
 
         for name, description in _PARAMETERS.items():
             self.register_variable(String(name, causality=Fmi2Causality.parameter,
                                           variability=Fmi2Variability.fixed, description=description))
+        for name, (unit, _, description) in _REAL_PARAMETERS.items():
+            self.register_variable(Real(name, causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed,
+                                        description=description))
         for name, (unit, description) in _INPUTS.items():
             self.register_variable(Real(name, causality=Fmi2Causality.input, variability=Fmi2Variability.continuous,
                                         description=description))
@@ -104,6 +127,7 @@ class MFTyre(Fmi2Slave):
         root = super().to_xml(model_options)
         units = dict(self._output_units)
         units.update({k: v[0] for k, v in _INPUTS.items()})
+        units.update({k: v[0] for k, v in _REAL_PARAMETERS.items()})
         units = {k: u for k, u in units.items() if u != "1"}
         defs = Element("UnitDefinitions")
         for unit in sorted(set(units.values())):
@@ -139,8 +163,14 @@ class MFTyre(Fmi2Slave):
     # -------------------------------------------------------------------------------------------------- set-up
     def exit_initialization_mode(self):
         try:
-            self._setup()
-            self._compute()
+            import warnings
+
+            with warnings.catch_warnings(record=True) as caught:  # model warnings go to the FMI log
+                warnings.simplefilter("always")
+                self._setup()
+                self._compute()
+            for w in caught:
+                self.log(f"{w.category.__name__}: {w.message}", Fmi2Status.warning)
         except Exception as exc:  # never let an exception reach pythonfmu (fmi2Fatal)
             self._fail(f"initialisation failed: {exc}\n{traceback.format_exc(limit=3)}")
 
@@ -153,10 +183,7 @@ class MFTyre(Fmi2Slave):
         cfg = self._config
         self._problem = None
         model_name = self.model.strip().lower()
-        if model_name == "swift":
-            raise ValueError("parameter model='swift': the SWIFT rigid-ring model is not available in this version "
-                             "of the tyre FMU; use model='steady'")
-        if model_name != "steady":
+        if model_name not in ("steady", "swift"):
             raise ValueError(f"parameter model must be 'steady' or 'swift', got {self.model!r}")
         mode = self.input_mode.strip().lower()
         if mode not in ("vehicle", "rig"):
@@ -167,10 +194,17 @@ class MFTyre(Fmi2Slave):
         side = self.side.strip().lower() or None
         if side not in (None, "left", "right"):
             raise ValueError(f"parameter side must be 'left' or 'right', got {self.side!r}")
+        rim = self.rim.strip().lower() or "speed"
+        if model_name == "swift":
+            if mode == "rig":
+                raise ValueError("parameter input_mode='rig' is for model='steady' only: the SWIFT model needs the "
+                                 "wheel-centre motion (input_mode='vehicle')")
+            if rim not in ("speed", "torque"):
+                raise ValueError(f"parameter rim must be 'speed' or 'torque', got {self.rim!r}")
         resources = self.resources or "."
-        self._import_mftyre(resources)
+        self._import_mftyre(resources, swift=model_name == "swift")
         import mftyre
-        from mftyre_fmu_core import SteadyTyre
+        from mftyre_fmu_core import SteadyTyre, SwiftCore
 
         tir = self.tir_file.strip()
         embedded = not tir
@@ -181,21 +215,35 @@ class MFTyre(Fmi2Slave):
         shipped = embedded and model.side == cfg.get("side")
         functions_dir = os.path.join(resources, "functions") if shipped else None
         index = cfg.get("functions") if shipped else None
-        self._core = SteadyTyre(model, self.evaluator.strip().lower() or "auto", functions_dir, index,
-                                log=lambda m: self.log(m, Fmi2Status.warning))
-        self._mode = "rig" if mode == "rig" else vertical
+        evaluator = self.evaluator.strip().lower() or "auto"
+        warn = lambda m: self.log(m, Fmi2Status.warning)  # noqa: E731
+        self._x_road = float(self.x_start)
+        if model_name == "swift":
+            self._core = SwiftCore(model, self.road, vertical=vertical, rim=rim, x_start=float(self.x_start),
+                                   max_step=float(self.max_step), axle_mass=float(self.axle_mass),
+                                   evaluator=evaluator, functions_dir=functions_dir, index=index, log=warn,
+                                   base_dir=os.getcwd())
+            self._mode = "swift"
+            detail = (f"model swift (rim {rim}, road {self.road.strip() or 'flat'}), vertical_input {vertical}, "
+                      f"step {self._core.path}, evaluator {self._core.mf_path}")
+        else:
+            self._core = SteadyTyre(model, evaluator, functions_dir, index, log=warn)
+            self._mode = "rig" if mode == "rig" else vertical
+            detail = (f"input_mode {mode}{'' if mode == 'rig' else ', vertical_input ' + vertical}, "
+                      f"evaluator {self._core.path}")
         self.log(f"{cfg.get('tir_name', os.path.basename(path)) if embedded else path}: FITTYP "
-                 f"{model.params.fittyp}, mounted {model.side}, input_mode {mode}"
-                 f"{'' if mode == 'rig' else ', vertical_input ' + vertical}, evaluator {self._core.path}",
-                 Fmi2Status.ok)
+                 f"{model.params.fittyp}, mounted {model.side}, {detail}", Fmi2Status.ok)
 
     @staticmethod
-    def _import_mftyre(resources):
-        try:
-            import mftyre  # noqa: F401  (the host's installed package)
-        except ImportError:
-            sys.path.append(os.path.join(resources, "vendor"))
-            import mftyre  # noqa: F401
+    def _import_mftyre(resources, swift=False):
+        vendor = os.path.join(resources, "vendor")
+        for name in ("mftyre",) + (("swift",) if swift else ()):
+            try:
+                __import__(name)  # the host's installed package
+            except ImportError:
+                if vendor not in sys.path:
+                    sys.path.append(vendor)
+                __import__(name)
 
     # ------------------------------------------------------------------------------------------------- stepping
     def do_step(self, current_time, step_size):
@@ -203,15 +251,18 @@ class MFTyre(Fmi2Slave):
             if self._problem is not None or self._core is None:
                 self._error("the tyre is not usable: " + (self._problem or "initialisation did not complete"))
                 return False
-            return self._compute()
+            return self._compute(step_size)
         except Exception as exc:
             self._error(f"step at t={current_time}: {exc}")
             self.status = 1
             return False
 
-    def _compute(self):
+    def _compute(self, step_size=None):
+        """Outputs from the current inputs: at initialisation (step_size None) or after a step of step_size."""
         core = self._core
         mode = self._mode
+        if mode == "swift":
+            return self._compute_swift(step_size)
         if mode == "rig":
             names = ("Fz_in", "kappa_in", "alpha_in", "gamma", "vx", "p")
         elif mode == "load":
@@ -234,6 +285,38 @@ class MFTyre(Fmi2Slave):
             out = core.step_vehicle(*values[:5], height=values[5] - values[6])
         if not all(math.isfinite(v) for v in out.values()):
             self._error(f"the model returned non-finite outputs for {dict(zip(names, values))}; outputs held")
+            self.status = 1
+            return False
+        if step_size is not None:
+            self._x_road += self.vx * step_size
+        out["Fz_c"] = out["Fz"]
+        out["road_w"] = self.road_z if mode == "position" else 0.0
+        out["road_slope"] = 0.0
+        out["x_road"] = self._x_road
+        for k, v in out.items():
+            setattr(self, k, v)
+        self.status = 0
+        return True
+
+    _SWIFT_INPUTS = ("vx", "vy", "omega", "gamma", "z", "vz", "road_z", "Fz_in", "torque", "p")
+
+    def _compute_swift(self, step_size):
+        u = {n: getattr(self, n) for n in self._SWIFT_INPUTS}
+        bad = [f"{n}={v!r}" for n, v in u.items() if not math.isfinite(v)]
+        if not bad and not u["p"] > 0:
+            bad = [f"p={u['p']!r} (the inflation pressure must be positive)"]
+        if not bad and step_size is not None and not step_size >= 0:
+            bad = [f"communication step size {step_size!r}"]
+        if bad:
+            self._error(f"input rejected: {', '.join(bad)}; outputs and state keep their last valid values")
+            self.status = 1
+            return False
+        try:
+            out = self._core.initialise(u) if step_size is None else self._core.advance(u, step_size)
+        except Exception as exc:
+            if step_size is None:
+                raise
+            self._error(f"SWIFT step rejected ({exc}); outputs and state keep their last valid values")
             self.status = 1
             return False
         for k, v in out.items():

@@ -9,8 +9,9 @@
 What goes into the FMU (``resources/``): the slave ``MFTyre.py`` and ``mftyre_fmu_core.py``; ``tyre.tir`` (the
 property file, byte for byte); ``functions/``: the model as serialised CasADi functions (any platform with
 CasADi) and, when a C compiler is available at build time, the same functions compiled to C for the build
-platform (``.so``); ``config.json`` (the build options, the start values, the function index); ``vendor/mftyre``
-(a copy of the mftyre package, used only when the host's Python has no mftyre). ``documentation/`` holds
+platform (``.so``; with ``--model swift`` also the compiled SWIFT step, ``functions/swift``); ``config.json`` (the
+build options, the start values, the function index); ``vendor/`` (copies of the packages mftyre and swift, used
+only when the host's Python has none). ``documentation/`` holds
 fmu/README.md. A built FMU is a build output: never commit it.
 """
 from __future__ import annotations
@@ -37,22 +38,28 @@ class FMUBuildError(Exception):
     """The FMU cannot be built as asked (the message says why and what to do)."""
 
 
-def swift_available() -> str | None:
-    """None when a usable SWIFT step API exists, else the reason it does not."""
+def swift_available(model=None) -> str | None:
+    """None when the SWIFT model can be built (for the MFModel ``model``, if given), else the reason it cannot."""
     try:
-        import swift  # noqa: F401
+        import swift
+        from swift.simulate import SwiftTyre  # noqa: F401  (the step API the slave drives)
     except ImportError as exc:
         return f"the package 'swift' cannot be imported ({exc})"
-    # swift.SwiftTyre.step(state, inputs, dt) exists (work in progress); the slave does not drive it yet
-    return ("the FMU slave does not drive the SWIFT rigid-ring model yet (swift.SwiftTyre is not wired into "
-            "fmu/MFTyre.py)")
+    if model is not None:
+        try:
+            swift.RingConstants.from_model(model)
+            swift.Cams.from_params(model.params)
+        except Exception as exc:
+            return f"the property file has no usable SWIFT parameters ({exc})"
+    return None
 
 
 def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, input_mode: str = "vehicle",
               vertical_input: str = "load", compile_c: bool = True, quiet: bool = True) -> Path:
     """Build the FMU for the property file ``tir`` at ``output`` (a .fmu path); returns the path.
 
-    ``model``: the default of the FMU's ``model`` parameter (only 'steady' is available now). ``side``: mounting
+    ``model``: the default of the FMU's ``model`` parameter ('steady' or 'swift'; 'swift' needs the SWIFT
+    parameters of the .tir, checked here). ``side``: mounting
     side (default: the file's TYRESIDE). ``input_mode`` / ``vertical_input``: defaults of the parameters of the
     same names. ``compile_c``: also ship C libraries compiled for this platform (needs a C compiler here, not on
     the machine that runs the FMU); without them, or on another platform, the FMU runs the CasADi functions.
@@ -62,7 +69,7 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
 
     sys.path.insert(0, str(HERE))
     try:
-        from mftyre_fmu_core import OUTPUTS, export_functions  # noqa: F401
+        from mftyre_fmu_core import export_functions, export_swift_libraries
     finally:
         sys.path.remove(str(HERE))
     try:
@@ -73,10 +80,6 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
     tir, output = Path(tir), Path(output)
     if model not in MODELS:
         raise FMUBuildError(f"--model must be one of {', '.join(MODELS)}, got {model!r}")
-    if model == "swift":
-        reason = swift_available()
-        if reason:
-            raise FMUBuildError(f"--model swift is not available yet: {reason}. Build with --model steady.")
     if input_mode not in INPUT_MODES:
         raise FMUBuildError(f"input mode must be one of {', '.join(INPUT_MODES)}, got {input_mode!r}")
     if vertical_input not in VERTICAL_INPUTS:
@@ -90,6 +93,12 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
     except MFTyreError as exc:
         raise FMUBuildError(f"cannot use {tir}: {exc}") from None
     prm = tyre.params
+    if model == "swift":
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            reason = swift_available(tyre)
+        if reason:
+            raise FMUBuildError(f"--model swift is not available for {tir.name}: {reason}. Build with --model steady.")
 
     with tempfile.TemporaryDirectory(prefix="mftyre_fmu_") as tmp:
         stage = Path(tmp) / "stage"
@@ -104,9 +113,21 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
             warnings.warn(f"shipping CasADi functions only (no compiled C): {exc}", stacklevel=2)
             shutil.rmtree(stage / "functions", ignore_errors=True)
             index = export_functions(tyre, stage / "functions", compile_c=False)
+        if model == "swift" and index["mf"]["compiled"]:  # the compiled SWIFT step for this platform
+            try:
+                index["swift"] = export_swift_libraries(tyre, stage / "functions" / "swift")
+            except Exception as exc:
+                warnings.warn(f"not shipping a compiled SWIFT step: {exc}", stacklevel=2)
         vendor = stage / "vendor" / "mftyre"
         shutil.copytree(Path(mftyre.__file__).parent, vendor,
                         ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.so"))
+        try:
+            import swift
+        except ImportError:
+            swift = None
+        if swift is not None:  # the SWIFT model (model=swift), also used when the host's Python has none
+            shutil.copytree(Path(swift.__file__).parent, stage / "vendor" / "swift",
+                            ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.so"))
 
         rl0, _ = tyre.loaded_radius(prm.FNOMIN, p=prm.INFLPRES)
         re0 = float(tyre.evaluate(prm.FNOMIN, 0.0, 0.0, vx=prm.LONGVL, p=prm.INFLPRES).re)
@@ -119,10 +140,11 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
             "mftyre_version": mftyre.__version__,
             "functions": index,
             "parameters": {"tir_file": "", "model": model, "side": tyre.side, "input_mode": input_mode,
-                           "vertical_input": vertical_input, "evaluator": "auto"},
+                           "vertical_input": vertical_input, "evaluator": "auto", "road": "", "rim": "speed",
+                           "x_start": 0.0, "max_step": 1e-3, "axle_mass": 30.0},
             "inputs": {"vx": float(prm.LONGVL), "vy": 0.0, "omega": float(prm.LONGVL) / re0, "gamma": 0.0,
                        "z": float(rl0), "road_z": 0.0, "Fz_in": float(prm.FNOMIN), "p": float(prm.INFLPRES),
-                       "kappa_in": 0.0, "alpha_in": 0.0},
+                       "kappa_in": 0.0, "alpha_in": 0.0, "vz": 0.0, "torque": 0.0},
         }
         (stage / "config.json").write_text(json.dumps(config, indent=1))
         docs = Path(tmp) / "documentation"
@@ -151,7 +173,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("tir", metavar="FILE.tir", help="tyre property file to embed")
     parser.add_argument("-o", "--output", required=True, metavar="TYRE.fmu", help="FMU file to write")
     parser.add_argument("--model", choices=MODELS, default="steady",
-                        help="tyre model (default steady; swift: not available yet)")
+                        help="default of the model parameter: steady (Magic Formula) or swift (rigid ring, needs "
+                             "the SWIFT parameters in the .tir; default steady)")
     parser.add_argument("--side", choices=("left", "right"), help="mounting side (default: the file's TYRESIDE)")
     parser.add_argument("--input-mode", choices=INPUT_MODES, default="vehicle",
                         help="default of the input_mode parameter (default vehicle)")

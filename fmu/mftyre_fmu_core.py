@@ -6,6 +6,10 @@
     out = core.step_rig(fz, kappa, alpha, gamma, vx, p)                    # slip-driven test rig
     out["Fx"], out["My"], out["kappa"], ...                                # see OUTPUTS
 
+    core = SwiftCore(model, road="cleat(x0=2, length=0.05, height=0.01)", vertical="position")   # SWIFT
+    out = core.initialise(inputs)        # static equilibrium; inputs: dict of the FMU inputs by name
+    out = core.advance(inputs, h)        # one communication step (see SwiftCore)
+
 Axes and units: ISO-W (TYDEX W), SI. The x axis is the wheel heading projected on the road, y to the left, z up;
 the origin of the MF quantities is the contact point C. ``vx`` and ``vy`` are the velocity components of the wheel
 centre in these axes (the road is at rest).
@@ -81,6 +85,11 @@ OUTPUTS = {
     "trail": ("m", "pneumatic trail"),
     "mux": ("1", "longitudinal friction coefficient"),
     "muy": ("1", "lateral friction coefficient"),
+    "Fz_c": ("N", "normal contact force (swift: normal to the effective road plane; steady: = Fz)"),
+    "road_w": ("m", "effective road height under the wheel (swift: tandem cams + road_z; steady: road_z, or 0 "
+                    "with vertical_input=load)"),
+    "road_slope": ("rad", "effective forward road slope beta_y (swift; 0 in steady mode)"),
+    "x_road": ("m", "wheel-centre position along the road profile: x_start + integral of vx dt"),
 }
 
 EVALUATORS = ("auto", "compiled", "casadi", "numpy")
@@ -117,7 +126,7 @@ def casadi_functions(model) -> dict:
     dpi = (p - prm.NOMPRES) / prm.NOMPRES
     r_omega = vertical.free_radius(prm, omega, be)
     if prm.version == "62":
-        fz = vertical.vertical_force_62(prm, rl, r_omega, omega, fx, fy_m, gamma_m, dpi, be)[0]
+        fz = vertical.vertical_force_62(prm, rl, r_omega, omega, fx, fy_m, gamma_m, dpi, be)
     else:
         fz = vertical.vertical_force_61(prm, r_omega - rl, r_omega, omega, fx, fy_m, dpi, be)
     vert = ca.Function("vertical", [rl, p, omega, fx, fy, gamma], [fz, r_omega],
@@ -313,4 +322,312 @@ class SteadyTyre:
             "omega_used": omega,
             "rho": rho_mf if rho is None else rho, "Rl": lever, "Re": re,
             "contact_length": 2.0 * a, "contact_width": 2.0 * b, "trail": t, "mux": mux, "muy": muy,
+        }
+
+
+# ------------------------------------------------------------------------------------------ SWIFT (rigid ring)
+#: Cam-height table of the SWIFT road: grid step [m] (nodes at multiples of it) and samples seen by one step.
+SWIFT_TABLE_DX = 1e-3
+SWIFT_WINDOW = 1024
+#: Largest wheel travel [m] within one internal SWIFT step (the cam-height window is fixed over a step).
+SWIFT_MAX_TRAVEL = 0.2
+
+_ROAD_ARGS = {  # name in the road parameter -> (swift.road class name, argument names)
+    "step": ("Step", ("x0", "height")),
+    "cleat": ("Cleat", ("x0", "length", "height")),
+    "trapezoid": ("Trapezoid", ("x0", "top_length", "height", "ramp")),
+    "bump": ("CircularBump", ("x0", "length", "height")),
+    "sine": ("Sine", ("amplitude", "wavelength", "x0", "x_end")),
+    "csv": ("Sampled.from_csv", ("path", "x_column", "z_column", "delimiter")),
+    "points": ("Sampled", ("xz",)),
+}
+
+
+def parse_road(spec: str, base_dir=None):
+    """The road profile of the ``road`` parameter as a :class:`swift.road.Road`, or None for a flat road.
+
+    Grammar: an empty string (flat road), or a sum (``+``) of obstacles written like Python calls with numbers,
+    positional or by keyword (metres)::
+
+        cleat(x0=2.0, length=0.05, height=0.01)       step(x0, height)       trapezoid(x0, top_length, height, ramp)
+        bump(x0, length, height)                       sine(amplitude, wavelength, x0, x_end)   (x_end required)
+        points([[x, z], [x, z], ...])                  csv("profile.csv")    (columns x, z; relative to base_dir)
+
+    Outside the obstacles the profile is 0; the ``road_z`` input is added to it. Nothing is evaluated as Python.
+    """
+    import ast
+
+    import swift.road as sroad
+
+    spec = (spec or "").strip()
+    if spec in ("", "flat", "flat()"):
+        return None
+    try:
+        tree = ast.parse(spec, mode="eval").body
+    except SyntaxError as exc:
+        raise TyreFMUError(f"road {spec!r}: not a sum of obstacles like cleat(x0=2, length=0.05, height=0.01) "
+                           f"({exc.msg})") from None
+
+    def number(node, what):
+        try:
+            value = ast.literal_eval(node)
+        except ValueError:
+            raise TyreFMUError(f"road {spec!r}: {what} must be a literal") from None
+        return value
+
+    def term(node):
+        if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Add):
+            return term(node.left) + term(node.right)
+        if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in _ROAD_ARGS):
+            raise TyreFMUError(f"road {spec!r}: each term must be one of {', '.join(n + '(...)' for n in _ROAD_ARGS)}")
+        name = node.func.id
+        cls, names = _ROAD_ARGS[name]
+        if len(node.args) > len(names):
+            raise TyreFMUError(f"road {spec!r}: {name} takes at most {len(names)} arguments ({', '.join(names)})")
+        kwargs = {n: number(a, f"{name} argument {n}") for n, a in zip(names, node.args)}
+        for kw in node.keywords:
+            if kw.arg not in names:
+                raise TyreFMUError(f"road {spec!r}: {name} has no argument {kw.arg!r} (arguments: {', '.join(names)})")
+            kwargs[kw.arg] = number(kw.value, f"{name} argument {kw.arg}")
+        if name == "sine" and "x_end" not in kwargs:
+            raise TyreFMUError(f"road {spec!r}: sine needs x_end (the road must be constant beyond its obstacles)")
+        if name == "csv":
+            path = Path(str(kwargs.pop("path", "")))
+            if base_dir is not None and not path.is_absolute():
+                path = Path(base_dir) / path
+            return sroad.Sampled.from_csv(path, **{k: str(v) for k, v in kwargs.items()})
+        if name == "points":
+            xz = kwargs.get("xz")
+            try:
+                arr = [(float(a), float(b)) for a, b in xz]
+            except (TypeError, ValueError):
+                raise TyreFMUError(f"road {spec!r}: points needs a list of [x, z] pairs") from None
+            return sroad.Sampled([a for a, _ in arr], [b for _, b in arr])
+        missing = [n for n in names if n not in kwargs and not (name == "sine" and n == "x0")]
+        if missing:
+            raise TyreFMUError(f"road {spec!r}: {name} needs {', '.join(missing)}")
+        try:
+            return getattr(sroad, cls)(**{k: float(v) for k, v in kwargs.items()})
+        except (TypeError, ValueError) as exc:
+            raise TyreFMUError(f"road {spec!r}: {name}: {exc}") from None
+
+    return term(tree)
+
+
+def _platform() -> str:
+    import platform
+    import sys
+
+    return f"{sys.platform}-{platform.machine()}-py{sys.version_info[0]}.{sys.version_info[1]}"
+
+
+def export_swift_libraries(model, directory) -> dict:
+    """Compile the SWIFT step of ``model`` for the FMU's configurations (axle height/load x rim speed/torque,
+    default axle mass) and copy the libraries to ``directory``: shipped in the FMU so that swift mode needs no C
+    compiler on the build platform. Returns {"platform": ..., "files": [names]}."""
+    import shutil
+
+    from swift import Flat, SwiftTyre
+
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    names = []
+    for axle in ("height", "load"):
+        for rim in ("speed", "torque"):
+            tyre = SwiftTyre(model, Flat(), axle=axle, rim=rim, x_range=(0.0, 1.0), table_dx=SWIFT_TABLE_DX,
+                             window=SWIFT_WINDOW, compiled=True)
+            for lib in (tyre._compiled._lib, tyre._compiled_block._lib):
+                src = Path(lib._name)
+                shutil.copy2(src, directory / src.name)
+                names.append(src.name)
+    return {"platform": _platform(), "files": names}
+
+
+def install_swift_libraries(directory, entry) -> int:
+    """Copy shipped SWIFT libraries (see :func:`export_swift_libraries`) into mftyre's compile cache, where
+    :class:`swift.SwiftTyre` finds them, when built for this platform and not there yet; returns how many."""
+    import shutil
+
+    from mftyre.compiled import cache_dir
+
+    if not entry or entry.get("platform") != _platform():
+        return 0
+    cache = cache_dir()
+    cache.mkdir(parents=True, exist_ok=True)
+    n = 0
+    for name in entry.get("files", ()):
+        target = cache / name
+        if not target.exists() and (Path(directory) / name).is_file():
+            tmp = cache / f".{name}.{os.getpid()}.tmp"
+            shutil.copy2(Path(directory) / name, tmp)
+            os.replace(tmp, target)
+            n += 1
+    return n
+
+
+class SwiftCore:
+    """The SWIFT rigid-ring tyre (:class:`swift.SwiftTyre`) with the FMU's inputs, state and outputs.
+
+        core = SwiftCore(model, road="cleat(x0=2, length=0.05, height=0.01)", vertical="position")
+        out = core.initialise(inputs)        # static equilibrium; inputs: dict of the FMU inputs
+        out = core.advance(inputs, h)        # one communication step of length h (any h >= 0)
+
+    Mapping (see fmu/README.md): ``vertical`` "position" -> axle height imposed (``z - road_z``, moving with
+    ``vz`` inside the step), "load" -> ``Fz_in`` pushes the axle (mass ``axle_mass``) down; ``rim`` "speed" ->
+    spin ``omega`` imposed, "torque" -> drive torque ``torque`` on the rim. The road is the profile ``road``
+    (:func:`parse_road`) plus the input ``road_z``. The communication step is split into
+    ceil(h / max_step) equal steps of :meth:`swift.SwiftTyre.step` (also short enough that the wheel travels at most
+    SWIFT_MAX_TRAVEL per step). Inputs are held over the step (zero-order hold) except the axle height in
+    position mode (first-order hold with ``vz``) and the positions x, y, which advance with vx, vy.
+
+    State frames (exact, no approximation): vertical positions are kept relative to ``road_z`` (a change of
+    ``road_z`` moves the stored belt/axle heights by the opposite amount), the lateral position relative to the rim
+    (the rim's y is 0 at every step start), and where the road is constant (beyond its first and last
+    obstacles, flat roads everywhere) the wheel's x is moved back into the cam-height table, which keeps the
+    table short and the run unbounded in distance.
+    """
+
+    def __init__(self, model, road="", *, vertical="load", rim="speed", x_start=0.0, max_step=1e-3,
+                 axle_mass=30.0, evaluator="auto", functions_dir=None, index=None, log=None, base_dir=None):
+        import numpy as np
+        from swift import Cams, SwiftTyre
+        from swift.ring import STATE_NAMES
+
+        log = log or (lambda msg: None)
+        if vertical not in ("load", "position"):
+            raise TyreFMUError(f"vertical_input must be load or position, got {vertical!r}")
+        if rim not in ("speed", "torque"):
+            raise TyreFMUError(f"rim must be speed or torque, got {rim!r}")
+        for name, value in (("max_step", max_step), ("axle_mass", axle_mass)):
+            if not (math.isfinite(value) and value > 0):
+                raise TyreFMUError(f"{name} must be positive, got {value!r}")
+        if not math.isfinite(x_start):
+            raise TyreFMUError(f"x_start must be finite, got {x_start!r}")
+        self.model, self.vertical, self.rim = model, vertical, rim
+        self.max_step = float(max_step)
+        self.road = parse_road(road, base_dir)
+        self.S = {n: i for i, n in enumerate(STATE_NAMES)}
+        cams = Cams.from_params(model.params)
+        dx, span = SWIFT_TABLE_DX, SWIFT_WINDOW * SWIFT_TABLE_DX
+        bps = self.road.breakpoints if self.road is not None else ()
+        reach = cams.ae + 2 * dx  # beyond, the cam height is constant (the road is)
+        lo, hi = (min(bps) - reach, max(bps) + reach) if bps else (float(x_start), float(x_start))
+        # wheel positions where the whole step window lies on the constant part: the wheel is moved back to them
+        self._x_lo, self._x_hi = lo - span, hi + span
+        x_range = (math.floor(self._x_lo / dx) * dx, math.ceil(self._x_hi / dx) * dx)  # nodes on multiples of dx
+        from swift import Flat
+
+        road_obj = self.road if self.road is not None else Flat()
+        if functions_dir is not None and index is not None and index.get("swift"):
+            try:
+                install_swift_libraries(Path(functions_dir) / "swift", index["swift"])
+            except Exception as exc:  # read-only cache...: compiled now instead
+                log(f"shipped SWIFT libraries not installed: {exc}")
+        kwargs = dict(axle="height" if vertical == "position" else "load", rim=rim, x_range=x_range, table_dx=dx,
+                      window=SWIFT_WINDOW, axle_mass=float(axle_mass))
+        self.path = "casadi"
+        if evaluator in ("auto", "compiled"):
+            try:
+                self.tyre = SwiftTyre(model, road_obj, compiled=True, **kwargs)
+                self.path = "compiled"
+            except Exception as exc:  # no C compiler...
+                if evaluator == "compiled":
+                    raise TyreFMUError(f"compiled SWIFT step unavailable: {exc}") from None
+                log(f"compiled SWIFT step unavailable ({exc}); using CasADi's virtual machine (slow)")
+        if self.path == "casadi":
+            self.tyre = SwiftTyre(model, road_obj, compiled=False, **kwargs)
+        # the MF at the contact-patch state gives the outputs the ring does not report (Mx_c, My_c, b, trail, mu)
+        self.mf_path, self.fn = load_evaluators(model, "casadi" if evaluator == "numpy" else evaluator,
+                                                functions_dir, index, log)
+        self._np = np
+        self.x_offset = 0.0  # road x = state x + x_offset
+        self.road_z = 0.0  # vertical positions in the state are relative to this road height
+        self.state = None
+        self.x_start = float(x_start)
+
+    # ------------------------------------------------------------------------------------------------ frames
+    def _recentre_x(self, state):
+        xb = state[self.S["xb"]]
+        shift = xb - self._x_hi if xb > self._x_hi else xb - self._x_lo if xb < self._x_lo else 0.0
+        if shift:
+            state[self.S["xa"]] -= shift
+            state[self.S["xb"]] -= shift
+            self.x_offset += shift
+
+    def _set_road_z(self, state, road_z):
+        d = road_z - self.road_z
+        if d:
+            state[self.S["zb"]] -= d
+            state[self.S["za"]] -= d
+            self.road_z = road_z
+
+    def _inputs(self, u, state, dz=0.0):
+        from swift import StepInputs
+
+        return StepInputs(x=float(state[self.S["xa"]]), vx=u["vx"], z=u["z"] - self.road_z + dz, vz=u["vz"],
+                          load=u["Fz_in"], omega=u["omega"], torque=u["torque"], p=u["p"], y=0.0, vy=u["vy"],
+                          gamma=u["gamma"], psi=0.0, road_camber=0.0)
+
+    # ------------------------------------------------------------------------------------------------ stepping
+    def initialise(self, u):
+        """Static equilibrium (steady rolling at the inputs) at x_start; returns the outputs."""
+        np = self._np
+        self.road_z = u["road_z"]
+        x_local = min(max(self.x_start, self._x_lo), self._x_hi)
+        self.x_offset = self.x_start - x_local
+        state = np.zeros(len(self.S))
+        state[self.S["xa"]] = x_local
+        state = self.tyre.initial_state(self._inputs(u, state))
+        state, out = self.tyre.step(state, self._inputs(u, state), 0.0)
+        if not (np.all(np.isfinite(state)) and all(math.isfinite(v) for v in out.values())):
+            raise TyreFMUError("no static equilibrium found for the initial inputs")
+        self.state = state
+        return self._outputs(state, out, u)
+
+    def advance(self, u, h):
+        """Advance over a communication step of length ``h`` with the inputs ``u``; returns the outputs. On an
+        error the state is left as it was (the exception says why)."""
+        np = self._np
+        S = self.S
+        saved = (self.x_offset, self.road_z)
+        state = self.state.copy()
+        try:
+            self._set_road_z(state, u["road_z"])
+            n = max(1, math.ceil(h / self.max_step - 1e-9), math.ceil(abs(u["vx"]) * h / SWIFT_MAX_TRAVEL))
+            dt = h / n
+            out = None
+            for k in range(n):
+                self._recentre_x(state)
+                state, out = self.tyre.step(state, self._inputs(u, state, u["vz"] * k * dt), dt)
+                state[S["yb"]] -= u["vy"] * dt  # the rim moved by vy dt: keep its y at 0
+            if h <= 0 or out is None:
+                state, out = self.tyre.step(state, self._inputs(u, state), 0.0)
+            self._recentre_x(state)
+            if not (np.all(np.isfinite(state)) and all(math.isfinite(v) for v in out.values())):
+                raise ArithmeticError("the SWIFT state became non-finite (step too long for the tyre's "
+                                      "frequencies? lower max_step)")
+        except Exception:
+            self.x_offset, self.road_z = saved
+            raise
+        self.state = state
+        return self._outputs(state, out, u)
+
+    def _outputs(self, state, o, u):
+        S = self.S
+        fzc = float(o["fz_c"])
+        kappa, alpha, vcx = float(o["kappa"]), float(o["alpha"]), float(o["vcx"])
+        mf = self.fn.mf(max(fzc, 1e-3), kappa, alpha, u["gamma"], vcx, u["p"], float(state[S["omb"]]))
+        _, _, _, mx_c, my_c, _, _, _, _, _, _, b, t, mux, muy = mf
+        beta = float(o["beta"])
+        return {
+            "Fx": float(o["fx"]), "Fy": float(o["fy"]), "Fz": float(o["fz"]),
+            "Mx": float(o["mx"]), "My": float(o["my"]), "Mz": float(o["mz"]),
+            "Mx_c": mx_c, "My_c": my_c, "Mz_c": float(o["mz_c"]),
+            "kappa": kappa, "alpha": alpha, "Vsx": -kappa * abs(vcx), "Vsy": math.tan(alpha) * abs(vcx),
+            "omega_used": float(state[S["oma"]]),
+            "rho": float(o["rho"]), "Rl": (float(state[S["za"]]) - float(o["w"])) * math.cos(beta),
+            "Re": float(o["re"]), "contact_length": 2.0 * float(o["a"]), "contact_width": 2.0 * b, "trail": t,
+            "mux": mux, "muy": muy,
+            "road_w": float(o["w"]) + self.road_z, "road_slope": beta,
+            "x_road": float(state[S["xa"]]) + self.x_offset, "Fz_c": fzc,
         }

@@ -48,7 +48,8 @@ def register(subparsers) -> argparse.ArgumentParser:
     build.add_argument("tir", metavar="FILE.tir", help="tyre property file to embed")
     build.add_argument("-o", "--output", required=True, metavar="TYRE.fmu", help="FMU file to write")
     build.add_argument("--model", choices=("steady", "swift"), default="steady",
-                       help="tyre model (default steady; swift: not available yet)")
+                       help="default of the FMU's model parameter: steady (Magic Formula) or swift (rigid ring "
+                            "with enveloping; needs the SWIFT parameters in the .tir); default steady")
     build.add_argument("--side", choices=("left", "right"), help="mounting side (default: the file's TYRESIDE)")
     build.add_argument("--input-mode", choices=("vehicle", "rig"), default="vehicle",
                        help="default of the FMU's input_mode parameter (default vehicle)")

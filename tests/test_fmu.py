@@ -97,7 +97,8 @@ class Slave:
 
 
 OUT = ("Fx", "Fy", "Fz", "Mx", "My", "Mz", "Mx_c", "My_c", "Mz_c", "kappa", "alpha", "Vsx", "Vsy", "omega_used",
-       "rho", "Rl", "Re", "contact_length", "contact_width", "trail", "mux", "muy")
+       "rho", "Rl", "Re", "contact_length", "contact_width", "trail", "mux", "muy", "Fz_c", "road_w", "road_slope",
+       "x_road")
 
 
 def _compare_with_evaluate(model, out, gamma, vx, p, omega, *, rig=False, rl=None):
@@ -132,15 +133,13 @@ def test_model_description_validates(fmus):
     assert units["Fx"] == "N" and units["Mz"] == "N.m" and units["p"] == "Pa" and units["omega"] == "rad/s"
     causality = {v.name: v.causality for v in md.modelVariables}
     assert {n for n, c in causality.items() if c == "parameter"} == {
-        "tir_file", "model", "side", "input_mode", "vertical_input", "evaluator"}
+        "tir_file", "model", "side", "input_mode", "vertical_input", "evaluator", "road", "rim", "x_start",
+        "max_step", "axle_mass"}
     assert len(md.initialUnknowns) == len(md.outputs) == len(OUT) + 1
 
 
 def test_cli_errors(tmp_path, capsys):
     assert fmu_sources().is_dir()
-    assert _build([TIR61, "-o", tmp_path / "s.fmu", "--model", "swift"]) == 1
-    assert "swift is not available yet" in capsys.readouterr().err
-    assert not (tmp_path / "s.fmu").exists()
     assert _build([tmp_path / "missing.tir", "-o", tmp_path / "m.fmu"]) == 1
     assert "no such property file" in capsys.readouterr().err
     assert _build([TIR61, "-o", tmp_path / "tyre.zip"]) == 1
@@ -150,7 +149,7 @@ def test_vehicle_load_mode_equals_evaluate(fmus, tmp_path):
     model = mftyre.load_tir(TIR61)
     fmu = Slave(fmus["61"], tmp_path)
     rng = np.random.default_rng(7)
-    t = 0.0
+    t = x_road = 0.0
     for i in range(60):
         vx = rng.uniform(-30, 30) if i % 7 else rng.uniform(-1.5, 1.5)  # some points in the low-speed range
         vy = rng.uniform(-3, 3)
@@ -162,8 +161,10 @@ def test_vehicle_load_mode_equals_evaluate(fmus, tmp_path):
         h = rng.choice([1e-4, 1e-3, 0.013])  # varying communication step
         fmu.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
         t += h
+        x_road += vx * h
         out = fmu.get(*OUT)
-        assert out["Fz"] == max(fz, 0.0)
+        assert out["Fz"] == max(fz, 0.0) == out["Fz_c"]
+        assert out["x_road"] == pytest.approx(x_road, rel=1e-12) and out["road_w"] == out["road_slope"] == 0.0
         _compare_with_evaluate(model, out, gamma, vx, p, omega)
         # the slips, written out: kappa = (omega Re - vx)/|vx|, tan(alpha) = vy/|vx|
         assert out["kappa"] == pytest.approx((omega * out["Re"] - vx) / max(abs(vx), 1e-3), rel=1e-12, abs=1e-12)
@@ -264,7 +265,7 @@ def test_errors_reported_through_status_and_log(fmus, tmp_path):
     assert fmu.status() == 0
     fmu.close()
 
-    for params, text in (({"side": "up"}, "side must be"), ({"model": "swift"}, "not available"),
+    for params, text in (({"side": "up"}, "side must be"), ({"model": "rigid"}, "model must be"),
                          ({"tir_file": str(tmp_path / "none.tir")}, "no such file"),
                          ({"evaluator": "fast"}, "evaluator must be")):
         fmu = Slave(fmus["61"], tmp_path, start=params)  # initialisation completes; the error is logged

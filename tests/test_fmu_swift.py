@@ -1,0 +1,292 @@
+"""The tyre FMU in swift mode (model=swift: the SWIFT rigid ring, fmu/mftyre_fmu_core.SwiftCore), run with fmpy.
+
+Evidence used: ``swift.SwiftTyre.step`` driven directly with ``StepInputs`` built here from the FMU's documented
+input mapping (same road, same table grid: agreement ~1e-9), ``MFModel.evaluate`` at the contact-patch state for
+the outputs the ring does not report, splitting of communication steps (a 2 ms step = two 1 ms steps), RK4
+convergence for step sizes that are not multiples, FMI call sequences (reset, rejected inputs, bad parameters),
+fmpy's validator, and time/memory over a long run.
+"""
+from __future__ import annotations
+
+import math
+import time
+import warnings
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pythonfmu")
+fmpy = pytest.importorskip("fmpy")
+
+import mftyre  # noqa: E402
+from swift import Cleat, Flat, StepInputs, SwiftTyre  # noqa: E402
+from swift.ring import STATE_NAMES  # noqa: E402
+
+from test_fmu import TIR61, TIR62, Slave, _build, _rss_bytes  # noqa: E402
+
+S = {n: i for i, n in enumerate(STATE_NAMES)}
+CLEAT = "cleat(x0=1.0, length=0.05, height=0.01)"
+# FMU output -> SwiftTyre.step output (the documented mapping; Rl, Vsx, Vsy and the MF extras checked apart)
+MAPPED = {"Fx": "fx", "Fy": "fy", "Fz": "fz", "Mx": "mx", "My": "my", "Mz": "mz", "Mz_c": "mz_c", "Fz_c": "fz_c",
+          "kappa": "kappa", "alpha": "alpha", "rho": "rho", "Re": "re", "road_slope": "beta"}
+OUT = ("Fx", "Fy", "Fz", "Mx", "My", "Mz", "Mx_c", "My_c", "Mz_c", "kappa", "alpha", "Vsx", "Vsy", "omega_used",
+       "rho", "Rl", "Re", "contact_length", "contact_width", "trail", "mux", "muy", "Fz_c", "road_w", "road_slope",
+       "x_road")
+
+
+@pytest.fixture(scope="module")
+def model():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return mftyre.load_tir(TIR62)
+
+
+@pytest.fixture(scope="module")
+def swift_fmu(tmp_path_factory):
+    path = tmp_path_factory.mktemp("fmu_swift") / "tyre_swift.fmu"
+    assert _build([TIR62, "-o", path, "--model", "swift", "--vertical-input", "position"]) == 0
+    return path
+
+
+def _scale(model, name):
+    prm = model.params
+    F, L = prm.FNOMIN, prm.UNLOADED_RADIUS
+    if name.startswith("F"):
+        return F
+    if name.startswith("M"):
+        return F * L
+    return {"kappa": 1.0, "alpha": 1.0, "road_slope": 1.0, "omega_used": 100.0}.get(name, L)
+
+
+def _assert_close(model, fmu_out, ref_out, names, rel=1e-9, where="", same=False):
+    """FMU outputs against SwiftTyre outputs (MAPPED names), or against FMU outputs (same=True)."""
+    for name in names:
+        key = name if same else MAPPED[name]
+        assert fmu_out[name] == pytest.approx(float(ref_out[key]), abs=rel * _scale(model, name)), f"{name} {where}"
+
+
+def _check_mf_extras(model, out, ref_out, ref_state, gamma, p):
+    """Mx_c, My_c, contact width, trail, mu: the MF at the contact-patch state of the reference."""
+    mf = model.evaluate(max(float(ref_out["fz_c"]), 1e-3), float(ref_out["kappa"]), float(ref_out["alpha"]), gamma,
+                        0.0, float(ref_out["vcx"]), p, float(ref_state[S["omb"]]))
+    for name, key, factor in (("Mx_c", "mx", 1), ("My_c", "my", 1), ("Mz_c", "mz", 1), ("contact_width", "b", 2),
+                              ("trail", "t", 1), ("mux", "mux", 1), ("muy", "muy", 1)):
+        assert out[name] == pytest.approx(factor * float(mf[key]), rel=1e-8, abs=1e-9 * _scale(model, name)), name
+
+
+def test_swift_fmu_validates_and_describes(swift_fmu):
+    from fmpy.validation import validate_fmu
+
+    assert validate_fmu(str(swift_fmu)) == []
+    md = fmpy.read_model_description(swift_fmu)
+    start = {v.name: v.start for v in md.modelVariables}
+    assert start["model"] == "swift" and start["vertical_input"] == "position" and start["rim"] == "speed"
+    units = {v.name: v.unit for v in md.modelVariables}
+    assert units["torque"] == "N.m" and units["max_step"] == "s" and units["axle_mass"] == "kg"
+
+
+def test_cli_swift_needs_swift_parameters(tmp_path, capsys):
+    text = TIR61.read_text(encoding="latin-1").splitlines()
+    text = [("FREQ_LONG = 0.0" if ln.startswith("FREQ_LONG") else ln) for ln in text]  # no ring frequency
+    (tmp_path / "noring.tir").write_text("\n".join(text), encoding="latin-1")
+    assert _build([tmp_path / "noring.tir", "-o", tmp_path / "s.fmu", "--model", "swift"]) == 1
+    assert "no usable SWIFT parameters" in capsys.readouterr().err
+    assert not (tmp_path / "s.fmu").exists()
+
+
+def test_position_mode_over_cleat_equals_swift_step(model, swift_fmu, tmp_path):
+    """Axle height imposed (moving with vz), spin imposed, lateral speed and camber, over a cleat and far past it
+    (where the FMU moves the wheel back into its road table): the FMU = SwiftTyre.step on the same inputs."""
+    vx, vy, omega, gamma, p, z0, vz = 10.0, 0.3, 10.0 / 0.305, 0.02, 2.3e5, 0.288, 0.004
+    fmu = Slave(swift_fmu, tmp_path, start={"road": CLEAT, "vx": vx, "vy": vy, "omega": omega, "gamma": gamma,
+                                           "p": p, "z": z0, "vz": vz, "road_z": 0.0})
+    assert fmu.status() == 0, fmu.messages
+    ref = SwiftTyre(model, Cleat(x0=1.0, length=0.05, height=0.01), axle="height", rim="speed",
+                    x_range=(-2.0, 8.0))
+
+    def u(t):
+        return StepInputs(x=vx * t, vx=vx, z=z0 + vz * t, vz=vz, omega=omega, p=p, y=vy * t, vy=vy, gamma=gamma)
+
+    state = ref.initial_state(u(0.0))
+    state, r = ref.step(state, u(0.0), 0.0)
+    out = fmu.get(*OUT)
+    _assert_close(model, out, r, MAPPED, where="after initialisation")
+    h, n = 1e-3, 600  # 6 m: over the cleat at 1 m and beyond 2.6 m, where the FMU re-bases x
+    fz_max = 0.0
+    for k in range(n):
+        fmu.set(z=z0 + vz * k * h)
+        fmu.fmu.doStep(k * h, h)
+        state, r = ref.step(state, u(k * h), h)
+        out = fmu.get(*OUT)
+        _assert_close(model, out, r, MAPPED, where=f"step {k}")
+        fz_max = max(fz_max, out["Fz"])
+        if k % 50 == 0:
+            _check_mf_extras(model, out, r, state, gamma, p)
+        assert out["road_w"] == pytest.approx(float(r["w"]), abs=1e-12)
+        assert out["x_road"] == pytest.approx(vx * (k + 1) * h, abs=1e-9)
+        assert out["Rl"] == pytest.approx((z0 + vz * (k + 1) * h - r["w"]) * math.cos(r["beta"]), abs=1e-9)
+        assert out["contact_length"] == pytest.approx(2 * float(r["a"]), abs=1e-12)
+        assert out["Vsx"] == pytest.approx(-out["kappa"] * abs(r["vcx"]), abs=1e-12)
+    assert fz_max > 1.3 * out["Fz"]  # the cleat was felt
+    assert fmu.status() == 0
+    fmu.close()
+
+
+def test_load_mode_torque_and_road_height_equal_swift_step(model, swift_fmu, tmp_path):
+    """Axle load (axle mass), drive torque, the road lifted by road_z: = SwiftTyre on Flat(road_z)."""
+    vx, load, torque, p, road_z = 15.0, 3800.0, 150.0, 2.1e5, 0.05
+    start = {"vertical_input": "load", "rim": "torque", "axle_mass": 25.0, "vx": vx, "Fz_in": load,
+             "torque": torque, "omega": vx / 0.305, "p": p, "road_z": road_z, "x_start": 3.0}
+    fmu = Slave(swift_fmu, tmp_path, start=start)
+    assert fmu.status() == 0, fmu.messages
+    ref = SwiftTyre(model, Flat(road_z), axle="load", rim="torque", axle_mass=25.0, x_range=(2.0, 8.0))
+    u = lambda t: StepInputs(x=3.0 + vx * t, vx=vx, load=load, torque=torque, omega=vx / 0.305, p=p)  # noqa: E731
+    state = ref.initial_state(u(0.0))
+    state, r = ref.step(state, u(0.0), 0.0)
+    _assert_close(model, fmu.get(*OUT), r, MAPPED, where="after initialisation")
+    h = 2e-3
+    for k in range(150):
+        fmu.fmu.doStep(k * h, h)
+        for j in range(2):  # the FMU splits 2 ms into two 1 ms steps
+            state, r = ref.step(state, u(k * h + j * h / 2), h / 2)
+        out = fmu.get(*OUT)
+        _assert_close(model, out, r, MAPPED, where=f"step {k}")
+        assert out["omega_used"] == pytest.approx(state[S["oma"]], rel=1e-12)
+        assert out["road_w"] == pytest.approx(road_z, abs=1e-12)
+        assert out["Rl"] == pytest.approx((state[S["za"]] - r["w"]) * math.cos(r["beta"]), abs=1e-9)
+    assert out["Fx"] > 0 and out["omega_used"] > vx / 0.305  # driven: spins up, pushes forwards
+    fmu.close()
+
+
+def _run(fmu, steps, inputs=lambda t: {}):
+    t, rows = 0.0, []
+    for h in steps:
+        fmu.set(**inputs(t))
+        fmu.fmu.doStep(t, h)
+        t += h
+        rows.append((t, fmu.get(*OUT)))
+    return rows
+
+
+def test_varying_communication_steps(swift_fmu, tmp_path, model):
+    """Steps that are multiples of max_step give the same internal steps (equal to 1e-9); other sizes converge
+    (RK4) to the same history."""
+    start = {"road": CLEAT, "vx": 12.0, "omega": 12.0 / 0.305, "z": 0.288, "vertical_input": "position"}
+    base = _run(Slave(swift_fmu, tmp_path, start=start), [1e-3] * 300)
+    at = {round(t, 9): o for t, o in base}
+    rng = np.random.default_rng(5)
+    mixed = _run(Slave(swift_fmu, tmp_path, start=start), list(rng.choice([1e-3, 2e-3, 4e-3], 120)))
+    n = 0
+    for t, o in mixed:
+        if round(t, 9) in at:
+            _assert_close(model, o, at[round(t, 9)], OUT, where=f"t={t}", same=True)
+            n += 1
+    assert n > 50
+    # steps of 0.7 ms and 1.3 ms (split into 2 of 0.65 ms) against 1 ms: the same history within the RK4 error
+    odd = _run(Slave(swift_fmu, tmp_path, start=start), [7e-4, 1.3e-3] * 150)
+    fz_range = max(o["Fz"] for _, o in base) - min(o["Fz"] for _, o in base)
+    t_odd = np.array([t for t, _ in odd])
+    for name in ("Fx", "Fz", "My"):
+        y_odd = np.interp([t for t, _ in base], t_odd, [o[name] for _, o in odd])
+        dev = np.max(np.abs(y_odd - [o[name] for _, o in base])[50:])  # after the first 50 ms
+        assert dev < 0.03 * fz_range, name
+    assert abs(odd[-1][1]["Fz"] - base[-1][1]["Fz"]) < 1e-4 * fz_range  # settled after the cleat
+
+
+def test_reset_and_reinitialise(swift_fmu, tmp_path):
+    start = {"road": CLEAT, "vx": 10.0, "omega": 10.0 / 0.305, "z": 0.29}
+    fmu = Slave(swift_fmu, tmp_path, start=start)
+    first = fmu.get(*OUT)
+    run1 = _run(fmu, [1e-3] * 150)
+    fmu.fmu.reset()
+    fmu.initialise(start)
+    assert fmu.get(*OUT) == first
+    run2 = _run(fmu, [1e-3] * 150)
+    assert [o for _, o in run2] == [o for _, o in run1]
+    # a rejected step leaves the state as it was: the run continues as if it had not been tried
+    fmu.fmu.reset()
+    fmu.initialise(start)
+    from fmpy.fmi1 import FMICallException
+
+    head = _run(fmu, [1e-3] * 50)
+    fmu.set(vx=float("nan"))
+    with pytest.raises(FMICallException, match="discard"):
+        fmu.fmu.doStep(0.05, 1e-3)
+    assert fmu.status() == 1 and fmu.get(*OUT) == head[-1][1]
+    assert "input rejected" in fmu.messages[-1][1]
+    fmu.set(vx=10.0)
+    rest = _run(fmu, [1e-3] * 100)
+    assert [o for _, o in head + rest] == [o for _, o in run1]
+    assert fmu.status() == 0
+    fmu.close()
+
+
+@pytest.mark.parametrize("params, text", [
+    ({"road": "cleat(x0=1.0)"}, "cleat needs length, height"),
+    ({"road": "__import__('os').system('true')"}, "each term must be one of"),
+    ({"road": "sine(amplitude=0.01, wavelength=1.0)"}, "sine needs x_end"),
+    ({"road": "csv('missing_profile.csv')"}, "cannot read road profile"),
+    ({"rim": "free"}, "rim must be"),
+    ({"input_mode": "rig"}, "for model='steady' only"),
+    ({"max_step": -1.0}, "max_step must be positive"),
+])
+def test_configuration_errors(swift_fmu, tmp_path, params, text):
+    from fmpy.fmi1 import FMICallException
+
+    fmu = Slave(swift_fmu, tmp_path, start=params)
+    assert fmu.status() == 2
+    assert any(status == 3 and text in msg for status, msg in fmu.messages), fmu.messages
+    with pytest.raises(FMICallException, match="discard"):
+        fmu.fmu.doStep(0.0, 1e-3)
+    fmu.close()
+
+
+def test_sampled_profiles(swift_fmu, tmp_path, model):
+    """A CSV profile and the same points inline give the same run; a sum of obstacles is accepted."""
+    xs = np.linspace(0.0, 3.0, 61)
+    zs = 0.008 * np.sin(np.pi * xs / 3.0) ** 2
+    csv = tmp_path / "profile.csv"
+    np.savetxt(csv, np.column_stack([xs, zs]), delimiter=",", header="x,z", comments="")
+    inline = "points([" + ", ".join(f"[{float(a)!r}, {float(b)!r}]" for a, b in zip(xs, zs)) + "])"
+    runs = []
+    for road in (f"csv({str(csv)!r})", inline):
+        fmu = Slave(swift_fmu, tmp_path, start={"road": road, "vx": 20.0, "omega": 20.0 / 0.305, "z": 0.288,
+                                               "x_start": -0.5})
+        assert fmu.status() == 0, fmu.messages
+        runs.append(_run(fmu, [1e-3] * 200))
+        fmu.close()
+    assert [o for _, o in runs[0]] == [o for _, o in runs[1]]
+    assert max(o["road_w"] for _, o in runs[0]) > 0.005
+    fmu = Slave(swift_fmu, tmp_path, start={"road": "step(x0=1, height=0.01) + bump(2.0, 0.2, 0.01)"})
+    assert fmu.status() == 0, fmu.messages
+    fmu.close()
+
+
+def test_long_run_no_drift_in_memory_or_time(swift_fmu, tmp_path):
+    """100,000 steps of 1 ms (2 km at 20 m/s: the road table stays small), varying inputs, road height and cleat."""
+    fmu = Slave(swift_fmu, tmp_path, start={"road": "cleat(x0=2.0, length=0.05, height=0.01)", "vx": 20.0,
+                                           "omega": 20.0 / 0.305, "z": 0.29})
+    n, blocks = 100_000, 10
+    set_vr = [fmu.vr[k] for k in ("vx", "vy", "omega", "gamma", "z", "vz", "road_z", "p")]
+    get_vr = [fmu.vr[k] for k in ("Fx", "Fy", "Fz", "Mx", "My", "Mz", "x_road")]
+    real_set, real_get, do_step = fmu.fmu.setReal, fmu.fmu.getReal, fmu.fmu.doStep
+    times, rss = [], []
+    t, h = 0.0, 1e-3
+    for b in range(blocks):
+        t0 = time.perf_counter()
+        for i in range(n // blocks):
+            s = h * (b * (n // blocks) + i)
+            real_set(set_vr, [20.0 + math.sin(s), 0.3 * math.sin(3 * s), (20.0 + math.sin(s)) / 0.305, 0.01,
+                              0.29 + 0.003 * math.sin(7 * s), 0.021 * math.cos(7 * s), 0.002 * math.sin(0.5 * s),
+                              2.2e5])
+            do_step(t, h)
+            t += h
+            out = real_get(get_vr)
+        times.append((time.perf_counter() - t0) / (n // blocks))
+        rss.append(_rss_bytes())
+    assert fmu.status() == 0 and all(math.isfinite(v) for v in out)
+    assert out[-1] > 1900.0  # x_road: ~2 km travelled
+    fmu.close()
+    print(f"swift: time per step {[round(x * 1e6, 1) for x in times]} us; RSS {[r >> 20 for r in rss]} MiB")
+    assert times[-1] < 1.5 * times[0] + 20e-6
+    assert rss[-1] - rss[0] < 8 << 20
