@@ -198,7 +198,7 @@ class SwiftTyre:
         return "swift_" + hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
     # ------------------------------------------------------------------ stepping
-    def _u(self, inputs: StepInputs):
+    def _u(self, inputs: StepInputs):  # the order of the ring's input vector (_U_Y: the lateral position)
         p = self.model.params.INFLPRES if inputs.p is None else inputs.p
         return np.array([inputs.vx, inputs.load, inputs.torque, p, inputs.y, inputs.vy, inputs.gamma, inputs.psi,
                          inputs.road_camber], dtype=float)
@@ -248,8 +248,9 @@ class SwiftTyre:
             if u_const is None:
                 steps = [get(t0 + k * dt) for k in range(BLOCK)]
                 u, first = np.column_stack([self._u(v) for v in steps]), steps[0]
-            else:
-                u, first = u_const, get(t0)
+            else:  # constant speeds: only the imposed lateral position advances within the block
+                u, first = u_const.copy(), get(t0)
+                u[_U_Y] = inputs.y + inputs.vy * (t0 + dt * np.arange(BLOCK))
             state = self._impose(state, first)
             i0 = self._window_start(state[_S["xb"]])
             x0w = self.table.x0 + i0 * self.table.dx
@@ -344,6 +345,9 @@ class SwiftTyre:
             if np.max(np.abs(step)) < 1e-13:
                 break
         return s
+
+
+_U_Y = 4  # index of the lateral position y in the input vector of :meth:`SwiftTyre._u`
 
 
 def _advancing(inputs: StepInputs):

@@ -144,3 +144,16 @@ def test_braking_torque_reaches_magic_formula_force(model):
     assert my == pytest.approx(-torque, rel=2e-3)  # rim in equilibrium: sidewall moment = brake torque
     ref = model.evaluate(fz, res["kappa"][-1], 0.0, vx=V, omega=res["omb"][-1])
     assert fx == pytest.approx(float(ref.fx), rel=5e-3) and fx < 0
+
+
+def test_run_with_constant_inputs_advances_the_lateral_position():
+    """run() with constant speeds equals step() with the imposed positions advanced by hand (vy != 0)."""
+    model = mftyre.load_tir(TIR_FILES / "car_205_60R15_mf62_swift.tir")
+    tyre = SwiftTyre(model, Flat(0.0), x_range=(0.0, 40.0))
+    u = StepInputs(x=1.0, vx=10.0, z=0.29, omega=10.0 / 0.3, vy=0.5)
+    run = tyre.run(0.1, u)
+    state = tyre.initial_state(u)
+    for k in range(100):
+        state, out = tyre.step(state, StepInputs(x=1.0 + 10.0 * k * 1e-3, vx=10.0, z=0.29, omega=10.0 / 0.3, vy=0.5,
+                                                 y=0.5 * k * 1e-3), 1e-3)
+    assert run.outputs["fy"][-1] == pytest.approx(out["fy"], rel=1e-9)
