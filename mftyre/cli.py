@@ -475,10 +475,12 @@ def build_parser() -> argparse.ArgumentParser:
     _add_eval(sub)
     from .demo import register as register_demo
     from .fit.command import register as register_fit
+    from .gaps.command import register as register_gaps
     from .fmu_command import register as register_fmu
 
     register_demo(sub)
     register_fit(sub)
+    register_gaps(sub)
     register_fmu(sub)
     return parser
 

@@ -15,6 +15,10 @@ def test_demo_writes_everything_and_fits_within_target(tmp_path):
     assert result["check_error"]["MZ"] < 4.0
     assert mftyre.load_tir(result["fitted"]).params.fittyp == 61
     assert any("check grid" in line for line in lines)
+    gaps = result["gaps"]
+    assert gaps.effect_names == ["pressure_cornering_stiffness"]
+    assert gaps.error_after["FY"] < 0.5 * gaps.error_before["FY"]
+    assert (tmp_path / "out" / "gaps" / "report.md").exists() and result["improved"].exists()
 
 
 def test_demo_command_is_registered(capsys):

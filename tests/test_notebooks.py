@@ -20,6 +20,7 @@ pytest.importorskip("ipykernel")
 
 NOTEBOOKS = sorted((PROJECT / "notebooks").glob("*.ipynb"))
 EXPECTED = {"02_fitting.ipynb": ("check grid", "fitted.tir"),
+            "04_gap_finder.ipynb": ("ACCEPTED", "shrink"),
             "06_fmu.ipynb": ("fmpy validate: no problems", "time in the air 0.000 s")}
 
 

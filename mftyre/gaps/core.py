@@ -1,0 +1,373 @@
+"""The gap-finder workflow: fair start, locate, name, add, show (see :mod:`mftyre.gaps`)."""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+from scipy import stats
+
+from ..data import TyreData
+from ..fit.core import load_data
+from ..fit.metrics import normalised_rms
+from ..fit.stages import _REASONS as _STAGE_REASONS  # the stages' own wording
+from ..fit.stages import STAGES, conditions
+from ..model import MFModel, load_tir
+from ..tir import write_tir
+from .catalogue import CATALOGUE, PARAM_STAGE, Effect, effect_state, parameter_needs
+from .locate import locate
+from .refit import FAIR_STAGES, _at_neutral, active_parameters, standard_errors, _stage_data, needs_met, refit, refit_stages
+from .residuals import Evaluator, holdout_mask, noise_levels
+
+__all__ = ["find_gaps", "GapReport", "AddedEffect", "Candidate"]
+
+
+@dataclass
+class Candidate:
+    """One effect tried in one round."""
+
+    name: str
+    parameters: list
+    chi2_train_before: float
+    chi2_train_after: float
+    chi2_test_before: float
+    chi2_test_after: float
+    n_train: int
+    n_test: int
+    f_statistic: float
+    p_value: float
+    score: float              # held-out chi2 decrease minus k ln(n_test) (a BIC-type penalty)
+    held_out_gain: float      # relative decrease of the held-out chi2 on the effect's channels
+    significant: bool
+    values: dict = field(default_factory=dict)
+    stderr: dict = field(default_factory=dict)
+    note: str = ""
+
+    def to_dict(self) -> dict:
+        return dict(self.__dict__)
+
+
+@dataclass
+class AddedEffect:
+    name: str
+    description: str
+    parameters: dict          # name -> {"value", "stderr", "meaning"}
+    held_out_gain: float
+    held_out_gain_by_channel: dict
+    p_value: float
+    score: float
+    round: int
+    note: str = ""
+
+    def to_dict(self) -> dict:
+        return dict(name=self.name, description=self.description,
+                    parameters=[dict(name=k, **v) for k, v in self.parameters.items()],
+                    held_out_gain=self.held_out_gain, held_out_gain_by_channel=self.held_out_gain_by_channel,
+                    p_value=self.p_value, score=self.score, round=self.round, note=self.note)
+
+
+class GapReport:
+    """The outcome of :func:`find_gaps`.
+
+    ``model_given``, ``model_start`` (after the fair start), ``model`` (improved); ``effects_added``
+    (:class:`AddedEffect` list); ``findings_before`` / ``findings_after`` (:class:`mftyre.gaps.Finding` lists, on the
+    training data); ``error_given`` / ``error_before`` / ``error_after``: channel -> normalised RMS [%] on the held-out
+    data (given model, fair start, improved); ``noise``: channel -> (sigma, method); ``rounds``: per round the
+    candidates tried; ``untestable``: effect -> reason; ``message``: the verdict in one sentence.
+    ``to_dict()``/``to_json(path)``, ``markdown()``, ``save(report_dir)`` (Markdown + PNG), ``write_tir(path)``.
+    """
+
+    def __init__(self, **kw):
+        self.__dict__.update(kw)
+
+    @property
+    def effect_names(self) -> list:
+        return [e.name for e in self.effects_added]
+
+    def shrink(self) -> dict:
+        """Channel -> relative decrease of the held-out error, (before - after) / before."""
+        return {c: (self.error_before[c] - self.error_after[c]) / self.error_before[c]
+                for c in self.error_before if self.error_before[c] > 0}
+
+    def to_dict(self) -> dict:
+        return dict(
+            message=self.message,
+            effects_added=[e.to_dict() for e in self.effects_added],
+            error_given=self.error_given, error_before=self.error_before, error_after=self.error_after,
+            error_train_before=self.error_train_before, error_train_after=self.error_train_after,
+            findings=[f.to_dict() for f in self.findings_before],
+            findings_after=[f.to_dict() for f in self.findings_after],
+            noise={c: dict(sigma=s, method=m) for c, (s, m) in self.noise.items()},
+            rounds=[[c.to_dict() for c in r] for r in self.rounds],
+            untestable=self.untestable, data=self.data_summary, seconds=self.seconds,
+        )
+
+    def to_json(self, path=None) -> str:
+        import json
+
+        text = json.dumps(_jsonable(self.to_dict()), indent=2)
+        if path is not None:
+            Path(path).write_text(text, encoding="utf-8")
+        return text
+
+    def markdown(self, plot_names: dict | None = None) -> str:
+        from .report import markdown_report
+
+        return markdown_report(self, plot_names)
+
+    def save(self, directory) -> Path:
+        from .report import save_report
+
+        return save_report(self, directory)
+
+    def write_tir(self, path, *, overwrite: bool = False) -> Path:
+        return write_tir(self.model.params, path, overwrite=overwrite)
+
+    def __repr__(self):
+        return f"GapReport(effects_added={self.effect_names}, error_before={_round(self.error_before)}, " \
+               f"error_after={_round(self.error_after)})"
+
+
+def _round(d):
+    return {k: round(v, 3) for k, v in d.items()}
+
+
+def _jsonable(x):
+    if isinstance(x, dict):
+        return {str(k): _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, (np.floating, float)):
+        return None if not math.isfinite(float(x)) else float(x)
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    if isinstance(x, np.bool_):
+        return bool(x)
+    return x
+
+
+def _errors(ev: Evaluator, prm) -> dict:
+    pred = ev.predict(prm)
+    return {c: normalised_rms(pred[c], ev.measured[c]) for c in pred}
+
+
+def _chi2(ev: Evaluator, prm, sigma, channels) -> float:
+    res = ev.residuals(prm, channels)
+    return float(sum(np.sum(np.where(np.isfinite(r), r, 1e3 * sigma[c][0]) ** 2) / sigma[c][0] ** 2
+                     for c, r in res.items()))
+
+
+def _identifiable(effect: Effect, prm, data: TyreData, turn_slip: bool):
+    """(parameters the data determine, {parameter: reason})."""
+    keep, why = [], {}
+    for n in effect.parameters:
+        stage = PARAM_STAGE.get(n)
+        sub = _stage_data(stage, data) if stage in STAGES else data
+        cond = conditions(sub)
+        ts = turn_slip and bool(np.any(sub.array("PHIT") != 0))
+        needs = tuple(parameter_needs(n)) + tuple(effect.needs)
+        if len(sub) == 0:
+            why[n] = f"no data for the {stage} stage"
+        elif needs_met(needs, cond, ts):
+            keep.append(n)
+        else:
+            missing = [x for x in needs if not needs_met((x,), cond, ts)]
+            why[n] = "; ".join(_REASONS.get(x, "needs " + x) for x in missing)
+    # the switches must be determinable, or the effect cannot be switched on
+    if not any(n in keep for n in effect.neutral):
+        return [], why
+    return keep, why
+
+
+_REASONS = dict(_STAGE_REASONS, turn_slip="no turn slip in the data")
+
+
+def _matches(effect: Effect, findings) -> bool:
+    for f in findings:
+        if f.channel in effect.channels and any(v in effect.variables for v in f.variables):
+            return True
+    return False
+
+
+def _summary(data: TyreData) -> dict:
+    c = conditions(data)
+    return dict(points=len(data), source=data.source, tyre=data.tyre, loads=c["loads"], pressures=c["pressures"],
+                speeds=c["speeds"], camber=c["camber"], turn_slip=bool(np.any(data.array("PHIT") != 0)))
+
+
+def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float = 1e-3,
+              max_effects: int = 5, channels=None, effects=None, turn_slip: bool | None = None,
+              max_nfev: int | None = None, progress=None) -> GapReport:
+    """Find where ``model`` and the measurements ``data`` disagree, name the missing effects, add them.
+
+    ``data``: :class:`mftyre.data.TyreData` or a ``.tdx``/``.csv`` path; ``model``: :class:`mftyre.MFModel`,
+    parameters or a ``.tir`` path. ``holdout``: fraction of the sweeps held out (whole sweeps); ``seed``: which;
+    ``alpha``: family-wise significance level of the residual tests and of the candidate tests; ``max_effects``:
+    at most this many effects are added; ``channels``: restrict to these channels (default all measured);
+    ``effects``: restrict the candidates to these catalogue names; ``turn_slip``: evaluate with turn slip
+    (default: when the data have turn slip); ``max_nfev``: evaluations per refit; ``progress``: callable(text).
+    """
+    t0 = time.perf_counter()
+    say = progress or (lambda text: None)
+    data = load_data(data)
+    if isinstance(model, (str, Path)):
+        model = load_tir(model)
+    if not isinstance(model, MFModel):
+        model = MFModel(model)
+    given = model.params
+    ts = bool(np.any(data.array("PHIT") != 0)) if turn_slip is None else bool(turn_slip)
+    test_mask = holdout_mask(data, holdout, seed)
+    train, test = data.select(~test_mask), data.select(test_mask)
+    if len(test) == 0:
+        test = train
+    ev_train = Evaluator(train, channels, ts)
+    ev_test = Evaluator(test, ev_train.channels, ts)
+    ev_all = Evaluator(data, ev_train.channels, ts)
+    say(f"{len(train)} training points, {len(test)} held-out points (whole sweeps); channels "
+        f"{' '.join(ev_train.channels)}")
+
+    # 1. fair start
+    error_given = _errors(ev_test, given)
+    active = active_parameters(given, ts)        # what the given model has switched on, fixed from here
+    prm, _ = refit_stages(given, train, turn_slip=ts, channels=ev_train.channels, max_nfev=max_nfev, progress=say,
+                          active=active)
+    start = prm
+    res_train = ev_train.residuals(prm)
+    sigma = noise_levels(ev_train, res_train)
+    say("noise: " + ", ".join(f"{c} {s:.3g}" for c, (s, _) in sigma.items()))
+
+    # 2. locate
+    findings = locate(ev_train, res_train, sigma, alpha)
+    findings_before = findings
+    say(f"{len(findings)} significant findings" + (f"; strongest: {findings[0].text}" if findings else ""))
+
+    # 3-4. name and add
+    pool = [CATALOGUE[n] for n in (effects or CATALOGUE)]
+    untestable = {}
+    candidates = {}
+    for e in pool:
+        state = effect_state(e, given)
+        if state == "unavailable":
+            continue
+        if state == "active":
+            # partly switched on: the switches still at their neutral values are the candidate
+            off = [n for n in e.neutral if _at_neutral(given[n], e.neutral[n])]
+            if not off:
+                continue
+            e = replace(e, parameters=tuple(off), neutral={n: e.neutral[n] for n in off})
+        keep, why = _identifiable(e, given, train, ts)
+        if not keep:
+            untestable[e.name] = "; ".join(f"{k}: {v}" for k, v in why.items()) or "not determinable"
+            continue
+        candidates[e.name] = (e, keep, why)
+    rounds, added, candidates_all = [], [], {}
+
+    def polish(new, e, names):
+        """Refit from the current model: the stages of the effect's parameters and of its channels, with the
+        new parameters active; kept when it lowers the training chi-square."""
+        stages = [st for st in FAIR_STAGES if st in {PARAM_STAGE.get(k) for k in names}
+                  or STAGES[st].channel in e.channels]
+        polished, _ = refit_stages(new, train, stages, turn_slip=ts, channels=ev_train.channels,
+                                   max_nfev=max_nfev, extra=tuple(names), active=active)
+        if _chi2(ev_train, polished, sigma, ev_train.channels) <= _chi2(ev_train, new, sigma, ev_train.channels):
+            return polished
+        return new
+
+    def score(e, keep, why, new, rr, m, extra_note=""):
+        """Training F test and held-out score of a candidate model ``new`` against the current ``prm``."""
+        ch = [c for c in e.channels if c in ev_train.channels]
+        k = len(keep)
+        c_tr0, c_tr1 = _chi2(ev_train, prm, sigma, ch), _chi2(ev_train, new, sigma, ch)
+        c_te0, c_te1 = _chi2(ev_test, prm, sigma, ch), _chi2(ev_test, new, sigma, ch)
+        n_tr = int(sum(ev_train.measured[c].size for c in ch))
+        n_te = int(sum(n_test_rows[c] for c in ch))
+        denom = max(c_tr1 / max(n_tr - k, 1), 1.0)
+        fstat = max(c_tr0 - c_tr1, 0.0) / k / denom
+        p = float(stats.f.sf(fstat, k, max(n_tr - k, 1)))
+        sc = (c_te0 - c_te1) - k * math.log(max(n_te, 2))
+        gain = (c_te0 - c_te1) / c_te0 if c_te0 > 0 else 0.0
+        sig = p < alpha / m and sc > 0
+        note = "; ".join([f"{k2} not freed ({v})" for k2, v in why.items()] + ([extra_note] if extra_note else []))
+        return (Candidate(e.name, list(keep), c_tr0, c_tr1, c_te0, c_te1, n_tr, n_te, fstat, p, sc, gain, sig,
+                          {k: float(new[k]) for k in keep}, rr.stderr, note), new, rr)
+    n_test_rows = {c: ev_test.measured[c].size for c in ev_test.channels}
+    while findings and len(added) < max_effects:
+        tried = [(e, keep, why) for e, keep, why in candidates.values() if _matches(e, findings)]
+        if not tried:
+            say("no catalogue effect matches the findings")
+            break
+        results = []
+        for i, (e, keep, why) in enumerate(tried):
+            if not any(c in ev_train.channels for c in e.channels):
+                continue
+            say(f"round {len(rounds) + 1}: candidate {i + 1}/{len(tried)} {e.name} ({' '.join(keep)})")
+            startv = {k: e.start.get(k, e.neutral.get(k, float(prm[k]))) for k in keep}
+            new, rr = refit(prm, ev_train, keep, [c for c in e.channels if c in ev_train.channels], sigma,
+                            start=startv, max_nfev=max_nfev)
+            results.append(score(e, keep, why, new, rr, len(tried)))
+        if results and not any(r[0].significant for r in results):
+            # the fair start may have bent other parameters towards the missing effect: retry the strongest
+            # candidates with their stages refitted around them (the same test, the same held-out data)
+            results.sort(key=lambda t: -t[0].score)
+            deep = []
+            for cand, new, rr in results[:6]:
+                e = candidates[cand.name][0]
+                say(f"round {len(rounds) + 1}: {e.name} with its stages refitted")
+                new = polish(new, e, cand.parameters)
+                deep.append(score(e, cand.parameters, candidates[cand.name][2], new, rr, len(tried),
+                                  "scored with its stages refitted"))
+            results = deep + results[6:]
+        results.sort(key=lambda t: -t[0].score)
+        rounds.append([r[0] for r in results])
+        best = next((r for r in results if r[0].significant), None)
+        if best is None:
+            say("no candidate is significant on the held-out data")
+            break
+        cand, new, rr = best
+        e = candidates[cand.name][0]
+        before_err = _errors(ev_test, prm)
+        if "stages refitted" not in cand.note:
+            new = polish(new, e, cand.parameters)
+        se = standard_errors(new, ev_train, cand.parameters, e.channels, sigma)
+        prm = new
+        after_err = _errors(ev_test, prm)
+        by_ch = {c: (before_err[c] - after_err[c]) / before_err[c] for c in e.channels
+                 if c in before_err and before_err[c] > 0}
+        added.append(AddedEffect(e.name, e.description,
+                                 {k: dict(value=float(prm[k]), stderr=se.get(k),
+                                          meaning=e.parameter_descriptions()[k]) for k in cand.parameters},
+                                 cand.held_out_gain, by_ch, cand.p_value, cand.score, len(rounds), cand.note))
+        say(f"added {e.name}: held-out chi2 {cand.chi2_test_before:.0f} -> {cand.chi2_test_after:.0f}")
+        candidates_all[e.name] = e
+        active |= set(cand.parameters)
+        del candidates[e.name]
+        findings = locate(ev_train, ev_train.residuals(prm), sigma, alpha)
+    if added:
+        # final values and standard errors of every added parameter, jointly at the final model
+        names = [k for a in added for k in a.parameters]
+        chans = sorted({c for a in added for c in candidates_all[a.name].channels if c in ev_train.channels})
+        se = standard_errors(prm, ev_train, names, chans, sigma)
+        for a in added:
+            for k in a.parameters:
+                a.parameters[k].update(value=float(prm[k]), stderr=se.get(k))
+    findings_after = locate(ev_train, ev_train.residuals(prm), sigma, alpha)
+    if not findings_before:
+        message = ("the model already explains the data: no residual structure beyond measurement noise; "
+                   "nothing added")
+    elif not added:
+        message = "residual structure found, but no catalogue effect explains it significantly on held-out data; " \
+                  "nothing added"
+    else:
+        message = f"added {len(added)} effect(s): {', '.join(a.name for a in added)}" + (
+            "; remaining structure: " + findings_after[0].text if findings_after else
+            "; no significant residual structure remains")
+    say(message)
+    return GapReport(
+        model_given=MFModel(given), model_start=MFModel(start), model=MFModel(prm), effects_added=added,
+        findings_before=findings_before, findings_after=findings_after, error_given=error_given,
+        error_before=_errors(ev_test, start), error_after=_errors(ev_test, prm),
+        error_train_before=_errors(ev_train, start), error_train_after=_errors(ev_train, prm),
+        noise=sigma, rounds=rounds, untestable=untestable, message=message, data=data, test_mask=test_mask,
+        evaluator=ev_all, data_summary=_summary(data), seconds=time.perf_counter() - t0, turn_slip=ts)

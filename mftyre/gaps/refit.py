@@ -1,0 +1,248 @@
+"""Refit a given parameter subset on given channels and data, with the fitting machinery of :mod:`mftyre.fit`.
+
+:func:`refit` is the one least-squares step of the gap finder: lmfit's trust-region reflective method
+(``scipy.optimize.least_squares``) as in :mod:`mftyre.fit.core`, the parameter bounds :data:`mftyre.fit.BOUNDS`,
+and the Magic Formula shape conditions of :func:`mftyre.fit.stages.shape_violations` as penalty residuals at the
+corners of the data's load, pressure and camber range. Unlike a fitting stage it may span several channels at
+once (an effect on Fy also moves Mz and Mx) and weighs each channel's residual by its measurement-noise level
+(sigma), so that the cost is a chi-square and differences of costs are likelihood-ratio statistics; without
+sigma each channel is normalised by its RMS as in the fit.
+
+:func:`refit_stages` is the "fair start": stage by stage (rows and channel of :data:`mftyre.fit.STAGES`), the
+parameters that are active in the model (base parameters, and those of every effect that is switched on) and
+that the stage's data can determine (the stage groups' ``needs``) are refitted.
+"""
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+import lmfit
+import numpy as np
+
+from ..data import TyreData
+from ..fit.core import BOUNDS
+from ..fit.stages import STAGES, _met, conditions, shape_violations, stage_rows  # _met: the stages' own rule
+from ..model import MFModel
+from ..params import PARAMETERS
+from .catalogue import BASE, CATALOGUE, PARAM_STAGE, TURN_SLIP_BASE, effect_state, parameter_needs
+from .residuals import Evaluator
+
+__all__ = ["refit", "RefitResult", "refit_stages", "stage_names", "needs_met", "active_parameters", "standard_errors", "FAIR_STAGES"]
+
+#: Stages the fair start refits, in order (the effective rolling radius is not mapped).
+FAIR_STAGES = ("pure_fx", "pure_fy", "mz", "combined_fx", "combined_fy", "mz_combined", "mx", "my", "vertical")
+
+
+@dataclass
+class RefitResult:
+    names: list
+    values: dict
+    stderr: dict
+    chi2_before: float
+    chi2_after: float
+    n: int
+    nfev: int
+    success: bool
+
+
+def _corners(data: TyreData, prm) -> dict:
+    fz, p, g = data.array("FZ"), data.array("P"), data.array("IA")
+    fz0 = prm.FNOMIN * prm.LFZO
+    grid = np.array(np.meshgrid([fz.min(), fz.max()], [p.min(), p.max()], [g.min(), 0.0, g.max()])).reshape(3, -1)
+    return dict(dfz=(grid[0] - fz0) / fz0, dpi=(grid[1] - prm.NOMPRES) / prm.NOMPRES, gamma=grid[2])
+
+
+def refit(params, ev: Evaluator, names, channels=None, sigma: dict | None = None, *, start: dict | None = None,
+          max_nfev: int | None = None):
+    """Least-squares refit of ``names`` (others fixed) on the channels of ``ev``; returns (parameters, result).
+
+    ``sigma``: channel -> noise standard deviation (residuals weighted by 1/sigma; chi-square costs), default the
+    RMS of the measured channel. ``start``: start values for some of the names (default: their current values).
+    """
+    prm = params.params if isinstance(params, MFModel) else params
+    names = list(names)
+    channels = [c for c in (channels or ev.channels) if c in ev.channels]
+    scale = {c: (sigma[c][0] if isinstance(sigma[c], tuple) else sigma[c]) if sigma and c in sigma
+             else (float(np.sqrt(np.mean(ev.measured[c] ** 2))) or 1.0) for c in channels}
+    if start:
+        prm = prm.replace(**{k: v for k, v in start.items() if k in names})
+    n = int(sum(ev.measured[c].size for c in channels))
+
+    def resid_vec(trial):
+        res = ev.residuals(trial, channels)
+        r = np.concatenate([res[c] / scale[c] for c in channels]) if channels else np.zeros(0)
+        return np.where(np.isfinite(r), r, 1e3)
+
+    r0 = resid_vec(prm)
+    chi2_before = float(np.sum(r0**2))
+    if not names or n == 0:
+        return prm, RefitResult(names, {}, {}, chi2_before, chi2_before, n, 0, True)
+    stage_set = sorted({PARAM_STAGE.get(k) for k in names} & set(STAGES))
+    corners = _corners(ev.data, prm)
+    penalty = 10.0 * math.sqrt(max(n, 1)) * max(1.0, float(np.sqrt(np.mean(r0**2))))
+    lp = lmfit.Parameters()
+    for k in names:
+        lo, hi = BOUNDS.get(k, (-np.inf, np.inf))
+        v = float(prm[k])
+        lp.add(k, value=min(max(v, lo), hi), min=lo, max=hi)
+
+    def residual(p):
+        trial = prm.replace(**{k: p[k].value for k in names})
+        r = resid_vec(trial)
+        pen = [penalty * shape_violations(s, trial, corners) for s in stage_set]
+        return np.concatenate([r, *pen]) if pen else r
+
+    nfev = max_nfev or 40 * (len(names) + 1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        out = lmfit.Minimizer(residual, lp).minimize(method="least_squares", max_nfev=nfev, x_scale="jac",
+                                                     ftol=1e-8, xtol=1e-8)
+    values = {k: float(out.params[k].value) for k in names}
+    new = prm.replace(**values)
+    chi2_after = float(np.sum(resid_vec(new) ** 2))
+    if chi2_after > chi2_before:  # never worse than the start (a failed or stopped search)
+        new, chi2_after = prm, chi2_before
+        values = {k: float(prm[k]) for k in names}
+    stderr = {k: (float(out.params[k].stderr) if out.params[k].stderr is not None
+                  and np.isfinite(out.params[k].stderr) else None) for k in names}
+    return new, RefitResult(names, values, stderr, chi2_before, chi2_after, n, int(out.nfev), bool(out.success))
+
+
+def standard_errors(params, ev: Evaluator, names, channels, sigma: dict) -> dict:
+    """Standard errors of ``names`` at their current values: sqrt(diag((J^T J)^-1) chi2/(n - k)) from the
+    central-difference Jacobian J of the noise-weighted residuals (as lmfit scales its covariance)."""
+    prm = params.params if isinstance(params, MFModel) else params
+    channels = [c for c in channels if c in ev.channels]
+    scale = {c: sigma[c][0] if isinstance(sigma[c], tuple) else sigma[c] for c in channels}
+
+    def vec(p):
+        res = ev.residuals(p, channels)
+        return np.concatenate([res[c] / scale[c] for c in channels])
+
+    r0 = vec(prm)
+    cols = []
+    for k in names:
+        v = float(prm[k])
+        h = 1e-5 * max(abs(v), 1e-2)
+        cols.append((vec(prm.replace(**{k: v + h})) - vec(prm.replace(**{k: v - h}))) / (2 * h))
+    jac = np.stack(cols, axis=1)
+    ok = np.all(np.isfinite(jac), axis=1) & np.isfinite(r0)
+    jac, r0 = jac[ok], r0[ok]
+    dof = max(r0.size - len(names), 1)
+    try:
+        cov = np.linalg.inv(jac.T @ jac) * float(np.sum(r0**2)) / dof
+    except np.linalg.LinAlgError:
+        return {k: None for k in names}
+    return {k: (float(math.sqrt(cov[i, i])) if cov[i, i] > 0 else None) for i, k in enumerate(names)}
+
+
+def needs_met(needs, cond: dict, turn_slip: bool) -> bool:
+    """Whether data with the :func:`mftyre.fit.stages.conditions` ``cond`` determine a parameter with ``needs``."""
+    return all(turn_slip if n == "turn_slip" else _met(n, cond, True) for n in needs)
+
+
+def _stage_data(stage_name: str, data: TyreData) -> TyreData:
+    """The rows the gap finder refits a stage on: wider than the fitting stage's (:func:`stage_rows`), since the
+    gap finder starts from a complete model: every row whose channel the stage's functions shape."""
+    stage = STAGES[stage_name]
+    if stage_name == "vertical":
+        rows = np.isfinite(data.array("FZ"))
+        rl = data.array("RL") if data.has("RL") else (data.array("RHO") if data.has("RHO") else None)
+        rows = rows & np.isfinite(rl) if rl is not None else np.zeros(len(data), bool)
+    elif stage_name in _OTHER_PURE:
+        # the combined-slip functions also shape the pure-slip sweeps of the other direction: Fy at alpha = 0
+        # under kappa (kappa-induced side force, RVY*), Fx at kappa = 0 under alpha, Mz via s Fx
+        other = np.abs(data.array(_OTHER_PURE[stage_name][0])) > _OTHER_PURE[stage_name][1]
+        rows = (stage_rows(stage, data) | other) & np.isfinite(data.array(stage.channel)) \
+            if stage.channel in data else np.zeros(len(data), bool)
+    elif stage_name in _ZERO_OTHER:
+        # the pure-slip stage on every row without the other slip: free rolling included (camber thrust,
+        # residual torque, shifts at zero slip)
+        ch, tol = _ZERO_OTHER[stage_name]
+        rows = (np.abs(data.array(ch)) <= tol) & np.isfinite(data.array(stage.channel)) \
+            if stage.channel in data else np.zeros(len(data), bool)
+    elif stage_name in ("mx", "my"):
+        rows = np.isfinite(data.array(stage.channel)) if stage.channel in data else np.zeros(len(data), bool)
+    else:
+        rows = stage_rows(stage, data)
+    return data.select(rows)
+
+
+_ZERO_OTHER = {"pure_fx": ("SA", math.radians(0.25)), "pure_fy": ("SL", 0.005), "mz": ("SL", 0.005)}
+
+
+_OTHER_PURE = {"combined_fx": ("SA", math.radians(0.25)), "combined_fy": ("SL", 0.005),
+               "mz_combined": ("SL", 0.005)}
+
+
+def _is_active(name: str, prm, turn_slip: bool) -> bool:
+    if name in BASE:
+        return True
+    if name in TURN_SLIP_BASE:
+        return turn_slip
+    for e in CATALOGUE.values():
+        if name not in e.parameters:
+            continue
+        if name in e.neutral:          # a switch: active when away from its neutral value
+            if not _at_neutral(prm[name], e.neutral[name]):
+                return True
+        elif effect_state(e, prm) == "active":   # a shape factor of an effect that is switched on
+            return True
+    return False
+
+
+def _at_neutral(value, neutral) -> bool:
+    return abs(float(value) - neutral) <= 1e-12 * max(1.0, abs(neutral))
+
+
+def active_parameters(prm, turn_slip: bool = False) -> set:
+    """The parameters active in a parameter set: base parameters, switches away from their neutral values and the
+    shape factors of effects that are switched on."""
+    return {n for n in PARAM_STAGE if n in PARAMETERS and prm.version in PARAMETERS[n].versions
+            and _is_active(n, prm, turn_slip)}
+
+
+def stage_names(stage_name: str, prm, sub: TyreData, turn_slip: bool, extra=(), active=None) -> list:
+    """Active parameters of a stage that its data determine (``active``: the active set, default that of
+    ``prm``; ``extra``: parameters to add to it)."""
+    cond = conditions(sub)
+    ts = turn_slip and bool(np.any(sub.array("PHIT") != 0))
+    out = []
+    for n, st in PARAM_STAGE.items():
+        if st != stage_name or prm.version not in _versions(n):
+            continue
+        needs = parameter_needs(n)
+        act = _is_active(n, prm, turn_slip) if active is None else (n in active or n in BASE)
+        if (act or n in extra) and needs_met(needs, cond, ts):
+            out.append(n)
+    return out
+
+
+def _versions(n):
+    return PARAMETERS[n].versions
+
+
+def refit_stages(params, data: TyreData, stages=FAIR_STAGES, *, turn_slip: bool = False, channels=None,
+                 max_nfev: int | None = None, progress=None, extra=(), active=None):
+    """Fair start: refit the active parameters stage by stage; returns (parameters, {stage: RefitResult})."""
+    prm = params.params if isinstance(params, MFModel) else params
+    results = {}
+    for name in stages:
+        stage = STAGES[name]
+        if channels is not None and stage.channel not in channels:
+            continue
+        sub = _stage_data(name, data)
+        if len(sub) < 10:
+            continue
+        names = stage_names(name, prm, sub, turn_slip, extra, active)
+        if not names or len(sub) <= len(names):
+            continue
+        ev = Evaluator(sub, channels=[stage.channel], turn_slip=turn_slip)
+        if stage.channel not in ev.channels:
+            continue
+        if progress:
+            progress(f"fair start: {name}: {len(names)} parameters on {len(sub)} points")
+        prm, results[name] = refit(prm, ev, names, max_nfev=max_nfev)
+    return prm, results

@@ -1,0 +1,191 @@
+"""The gap report: Markdown (verdict, data, noise, held-out errors before/after, findings before and after, the
+effects added with values and standard errors, the candidates of every round, effects that could not be tested)
+and PNG plots: held-out errors per channel, and residual maps (cell means with 95 % confidence intervals over the
+slip or deflection cells, one line per level of the finding's variable) before and after."""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .locate import cell_table
+from .residuals import UNITS
+
+__all__ = ["markdown_report", "save_report", "plot_errors", "plot_residual_maps"]
+
+
+def _f(v, fmt="{:.3g}"):
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "-"
+    return fmt.format(v)
+
+
+def markdown_report(rep, plot_names: dict | None = None) -> str:
+    plot_names = plot_names or {}
+    s = rep.data_summary
+    lines = ["# Gap finder report", "", f"**{rep.message[0].upper() + rep.message[1:]}.**", "",
+             f"Data: `{s['source']}` ({s['tyre'] or 'tyre'}), {s['points']} points; {s['loads']} loads, "
+             f"{s['pressures']} pressures, {s['speeds']} speeds, camber {'yes' if s['camber'] else 'no'}, turn slip "
+             f"{'yes' if s['turn_slip'] else 'no'}. Held out: {int(rep.test_mask.sum())} points (whole sweeps). "
+             f"Run time {rep.seconds:.1f} s.", "",
+             "## Fit error on held-out sweeps", "",
+             "Normalised RMS error, Schmeitz et al. (2005) eq. (4), 100 sqrt(sum (model - measured)^2 / sum "
+             "measured^2) %, on the held-out sweeps: the model as given, after the fair start (its active parameters "
+             "refitted) and with the effects added. The noise floor is the error pure measurement noise would give.", "",
+             "| channel | given [%] | before [%] | after [%] | shrink | noise floor [%] | noise sigma |",
+             "| --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    shrink = rep.shrink()
+    floor = noise_floor(rep)
+    for c in rep.error_before:
+        lines.append(f"| {c} | {_f(rep.error_given[c], '{:.3f}')} | {_f(rep.error_before[c], '{:.3f}')} | "
+                     f"{_f(rep.error_after[c], '{:.3f}')} | {_f(100 * shrink.get(c, float('nan')), '{:.0f} %')} | "
+                     f"{_f(floor.get(c), '{:.3f}')} | {rep.noise[c][0]:.3g} {UNITS[c]} ({rep.noise[c][1]}) |")
+    lines.append("")
+    if "errors" in plot_names:
+        lines += [f"![held-out errors]({plot_names['errors']})", ""]
+    lines += ["## Effects added", ""]
+    if not rep.effects_added:
+        lines += ["None." + (" The model explains the data: nothing to add." if not rep.findings_before else ""), ""]
+    for a in rep.effects_added:
+        gains = ", ".join(f"{c} {100 * g:.0f} %" for c, g in a.held_out_gain_by_channel.items())
+        lines += [f"### {a.name}", "", f"{a.description}. Round {a.round}; held-out chi-square decrease "
+                  f"{100 * a.held_out_gain:.0f} %; held-out error decrease {gains}; F-test p = {a.p_value:.2g}; "
+                  f"score {a.score:.0f}." + (f" {a.note}." if a.note else ""), "",
+                  "| parameter | value | standard error | meaning |", "| --- | ---: | ---: | --- |"]
+        for k, v in a.parameters.items():
+            lines.append(f"| {k} | {v['value']:.6g} | {_f(v['stderr'], '{:.3g}')} | {v['meaning']} |")
+        lines.append("")
+    for title, findings in (("Findings before (after the fair start)", rep.findings_before),
+                            ("Findings after", rep.findings_after)):
+        lines += [f"## {title}", ""]
+        if not findings:
+            lines += ["No residual structure beyond measurement noise (every test at the Bonferroni-corrected "
+                      "level).", ""]
+        for i, f in enumerate(findings[:12], 1):
+            lines.append(f"{i}. {f.text}")
+        if len(findings) > 12:
+            lines.append(f"... and {len(findings) - 12} more.")
+        lines.append("")
+    if "maps" in plot_names:
+        lines += ["Residual maps: mean residual per slip (or deflection) cell with its 95 % confidence interval, one "
+                  "line per level of the finding's variable; before (left) and after (right).", "",
+                  f"![residual maps before and after]({plot_names['maps']})", ""]
+    lines += ["## Candidates tried", "",
+              "Per round, each candidate's parameters refitted alone on the training sweeps; F = training chi-square "
+              "decrease per parameter over the residual variance; score = held-out chi-square decrease - k ln(n).", ""]
+    for i, rnd in enumerate(rep.rounds, 1):
+        lines += [f"Round {i}:", "", "| effect | parameters | F | p | held-out gain | score | accepted |",
+                  "| --- | --- | ---: | ---: | ---: | ---: | --- |"]
+        best = next((c.name for c in rnd if c.significant), None)
+        for c in rnd:
+            lines.append(f"| {c.name} | {' '.join(c.parameters)} | {c.f_statistic:.3g} | {c.p_value:.2g} | "
+                         f"{100 * c.held_out_gain:.1f} % | {c.score:.0f} | {'yes' if c.name == best else ''} |")
+        lines.append("")
+    if rep.untestable:
+        lines += ["## Effects the data cannot test", ""]
+        for k, v in rep.untestable.items():
+            lines.append(f"- {k}: {v}")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def noise_floor(rep) -> dict:
+    """Channel -> the normalised RMS error [%] that the noise alone gives on the held-out data."""
+    ev = rep.evaluator
+    out = {}
+    for c in rep.error_before:
+        rows = ev.rows[c] & rep.test_mask
+        meas = ev.data.array(c)[rows]
+        if meas.size:
+            out[c] = 100.0 * rep.noise[c][0] / math.sqrt(float(np.mean(meas**2)))
+    return out
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def plot_errors(rep, path) -> Path:
+    plt = _plt()
+    chans = list(rep.error_before)
+    x = np.arange(len(chans))
+    fig, ax = plt.subplots(figsize=(5.5, 2.8), dpi=80)
+    ax.bar(x - 0.2, [rep.error_before[c] for c in chans], 0.4, label="before")
+    ax.bar(x + 0.2, [rep.error_after[c] for c in chans], 0.4, label="after")
+    floor = noise_floor(rep)
+    ax.plot(x, [floor.get(c, np.nan) for c in chans], "k_", ms=18, label="noise floor")
+    ax.set_xticks(x, chans)
+    ax.set_ylabel("held-out error [%]")
+    ax.legend(fontsize=7)
+    ax.set_title("normalised RMS error on held-out sweeps", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return Path(path)
+
+
+def _map_targets(rep, limit=3):
+    """(channel, variable) pairs to map: the strongest single-variable findings before, one per channel."""
+    out = []
+    for f in rep.findings_before:
+        if len(f.variables) != 1 or any(c == f.channel for c, _ in out):
+            continue
+        out.append((f.channel, f.variables[0]))
+        if len(out) == limit:
+            break
+    return out
+
+
+def plot_residual_maps(rep, path) -> Path | None:
+    """Residual cell means (95 % CI) before and after, for the strongest findings."""
+    targets = _map_targets(rep)
+    if not targets:
+        return None
+    plt = _plt()
+    ev = rep.evaluator
+    res_before, res_after = ev.residuals(rep.model_start), ev.residuals(rep.model)
+    fig, axes = plt.subplots(len(targets), 2, figsize=(8, 2.3 * len(targets)), dpi=80, squeeze=False)
+    for i, (c, var) in enumerate(targets):
+        lims = []
+        for j, (res, title) in enumerate(((res_before, "before"), (res_after, "after"))):
+            ax = axes[i, j]
+            xs, labels, table = cell_table(ev, c, res[c], var)
+            for level, (m, h) in table.items():
+                ax.errorbar(xs, m, yerr=h, marker=".", ms=3, lw=0.8, capsize=1.5, label=str(level))
+            ax.axhline(0.0, color="k", lw=0.6)
+            ax.set_xticks(xs, labels, rotation=90, fontsize=5)
+            ax.set_ylabel(f"{c} residual [{UNITS[c]}]", fontsize=7)
+            ax.set_xlabel("deflection bin" if c == "FZ" else "slip cell: a = slip-angle bin, k = slip-ratio bin "
+                          "(1 small, 2 medium, 3 large)", fontsize=6)
+            ax.set_title(f"{c} by {var}, {title}", fontsize=8)
+            lims.append(ax.get_ylim())
+            if j == 0:
+                ax.legend(fontsize=6)
+        lo, hi = min(a for a, _ in lims), max(b for _, b in lims)
+        for j in range(2):
+            axes[i, j].set_ylim(lo, hi)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return Path(path)
+
+
+def save_report(rep, directory) -> Path:
+    """Write ``report.md``, ``errors.png``, ``residual_maps_before_after.png`` and ``gaps.json`` into
+    ``directory``; returns the Markdown path."""
+    d = Path(directory)
+    d.mkdir(parents=True, exist_ok=True)
+    names = {"errors": plot_errors(rep, d / "errors.png").name}
+    maps = plot_residual_maps(rep, d / "residual_maps_before_after.png")
+    if maps is not None:
+        names["maps"] = maps.name
+    md = d / "report.md"
+    md.write_text(markdown_report(rep, names), encoding="utf-8")
+    rep.to_json(d / "gaps.json")
+    return md

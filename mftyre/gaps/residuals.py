@@ -1,0 +1,186 @@
+"""Residuals of a model on measured data, per channel; the measurement-noise estimate; held-out sweeps.
+
+Channels: FX FY MZ MX MY (model outputs at the measured Fz, kappa, alpha, gamma, phit, Vx, p, as the fitting
+stages predict them) and FZ: the vertical force from the measured loaded radius, speed, Fx, Fy and camber (the
+``vertical`` stage's relation). Where RL is absent and RHO present, RL = R_omega - RHO (free radius of the
+model at the measured spin, or at Vx/R0 without OMEGA). A channel is used where it is measured (finite).
+
+Noise (:func:`noise_levels`): the standard deviation of the measurement noise per channel, from the residual
+differences between *repeated* points (same sweep, same nominal slip, camber, speed, pressure and turn slip, load
+within 1 % of the largest, e.g. the out-and-back halves of a trailer sweep): the pooled within-group variance, which the model and any
+smooth missing effect cancel from. Channels without enough repeats use neighbouring points instead: the
+second difference d_i = r_i - (r_{i-1} + r_{i+1})/2 along each sweep, var(d) = 1.5 sigma^2 for white noise.
+
+Held-out data (:func:`holdout_mask`): whole sweeps, every k-th sweep of each kind of test (``TEST`` when present,
+else pure lateral / pure longitudinal / combined / free rolling / other from the slip values), so every kind of
+test and the whole operating range are represented in both parts.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..data import TyreData, split_sweeps
+from ..formula.vertical import free_radius
+from ..backend import NUMPY
+from ..model import MFModel
+
+__all__ = ["CHANNELS", "UNITS", "Evaluator", "noise_levels", "holdout_mask", "test_kind"]
+
+#: Channels the gap finder maps, in report order.
+CHANNELS = ("FX", "FY", "MZ", "MX", "MY", "FZ")
+UNITS = {"FX": "N", "FY": "N", "FZ": "N", "MX": "N m", "MY": "N m", "MZ": "N m"}
+_OUT = {"FX": "fx", "FY": "fy", "MZ": "mz", "MX": "mx", "MY": "my"}
+_KAPPA_TOL, _ALPHA_TOL = 0.005, math.radians(0.25)
+
+
+class Evaluator:
+    """Predictions and residuals of parameter sets on one data set (inputs converted once).
+
+    ``channels``: the channels to use (default: every one of :data:`CHANNELS` measured); ``turn_slip``: evaluate
+    with turn slip (default: when the data have turn slip)."""
+
+    def __init__(self, data: TyreData, channels=None, turn_slip: bool | None = None):
+        self.data = data
+        self.inputs = data.inputs()
+        self.turn_slip = bool(np.any(self.inputs["phit"] != 0)) if turn_slip is None else bool(turn_slip)
+        avail = [c for c in CHANNELS if self._measured(c) is not None]
+        self.channels = tuple(c for c in (channels or CHANNELS) if c in avail)
+        self.measured, self.rows = {}, {}
+        for c in self.channels:
+            m = self._measured(c)
+            ok = np.isfinite(m)
+            if c == "FZ":
+                ok &= self._rl_or_rho_finite()
+            self.rows[c] = ok
+            self.measured[c] = m[ok]
+
+    def _measured(self, c):
+        d = self.data
+        if c == "FZ":
+            return d.array("FZ") if (d.has("RL") or d.has("RHO")) else None
+        return d.array(c) if d.has(c) else None
+
+    def _rl_or_rho_finite(self):
+        d = self.data
+        if d.has("RL"):
+            return np.isfinite(d.array("RL"))
+        return np.isfinite(d.array("RHO"))
+
+    def _chan(self, name):
+        return np.nan_to_num(self.data.array(name)) if name in self.data else np.zeros(len(self.data))
+
+    def vertical(self, model: MFModel) -> np.ndarray:
+        """Fz from the loaded radius (all rows)."""
+        d, prm = self.data, model.params
+        if d.has("OMEGA"):
+            omega = self._chan("OMEGA")
+        else:
+            omega = self.inputs["vx"] / (0.97 * prm.UNLOADED_RADIUS)
+        if d.has("RL"):
+            rl = d.array("RL")
+        else:
+            rl = free_radius(prm, omega, NUMPY) - d.array("RHO")
+        return model.vertical_force(np.nan_to_num(rl, nan=prm.UNLOADED_RADIUS), p=self.inputs["p"], omega=omega,
+                                    fx=self._chan("FX"), fy=self._chan("FY"), gamma=self.inputs["gamma"])
+
+    def predict(self, params, channels=None) -> dict:
+        """Channel -> model values at the channel's rows."""
+        model = params if isinstance(params, MFModel) else MFModel(params)
+        channels = self.channels if channels is None else [c for c in channels if c in self.channels]
+        out = {}
+        force = [c for c in channels if c != "FZ"]
+        if force:
+            res = model.evaluate(**self.inputs, turn_slip=self.turn_slip)
+            for c in force:
+                out[c] = np.asarray(res[_OUT[c]], float)[self.rows[c]]
+        if "FZ" in channels:
+            out["FZ"] = np.asarray(self.vertical(model), float)[self.rows["FZ"]]
+        return out
+
+    def residuals(self, params, channels=None) -> dict:
+        """Channel -> model - measured at the channel's rows."""
+        pred = self.predict(params, channels)
+        return {c: pred[c] - self.measured[c] for c in pred}
+
+    def frame_rows(self, c):
+        """Row indices (into ``data``) of channel ``c``."""
+        return np.flatnonzero(self.rows[c])
+
+
+def _sweeps(data: TyreData) -> np.ndarray:
+    if "SWEEP" in data:
+        return data.frame["SWEEP"].to_numpy()
+    return split_sweeps(data).frame["SWEEP"].to_numpy()
+
+
+def noise_levels(ev: Evaluator, residuals: dict, min_dof: int = 20) -> dict:
+    """Channel -> (sigma, method): measurement-noise standard deviation from repeats or neighbours."""
+    d = ev.data
+    sweep = _sweeps(d)
+    fz_step = 0.01 * float(np.max(np.abs(d.array("FZ")))) or 1.0   # the load is recorded with noise
+    key_cols = [np.round(d.array(c) / s).astype(np.int64) for c, s in
+                (("SA", 1e-5), ("SL", 1e-5), ("IA", 1e-5), ("VX", 1e-3), ("P", 1.0), ("PHIT", 1e-6), ("FZ", fz_step))]
+    out = {}
+    for c, r in residuals.items():
+        idx = ev.frame_rows(c)
+        keys = np.stack([sweep[idx]] + [k[idx] for k in key_cols], axis=1)
+        _, group = np.unique(keys, axis=0, return_inverse=True)
+        group = np.ravel(group)
+        counts = np.bincount(group)
+        means = np.bincount(group, weights=r) / counts
+        dev = r - means[group]
+        dof = int(np.sum(counts[counts > 1] - 1))
+        if dof >= min_dof:
+            sq = dev[counts[group] > 1] ** 2
+            var = float(np.sum(sq)) / dof
+            # one pass of 5-sigma clipping (a spike in one half of a pair would dominate)
+            keep = sq <= 25.0 * var
+            var = float(np.sum(sq[keep])) / max(dof - int(np.sum(~keep)), 1)
+            out[c] = (math.sqrt(max(var, 0.0)), f"repeated points ({dof} dof)")
+            continue
+        sw = sweep[idx]
+        same = (sw[1:-1] == sw[:-2]) & (sw[1:-1] == sw[2:])
+        d2 = r[1:-1] - 0.5 * (r[:-2] + r[2:])
+        d2 = d2[same]
+        if d2.size >= 5:
+            var = float(np.mean(d2**2)) / 1.5
+            keep = d2**2 <= 25 * 1.5 * var
+            var = float(np.mean(d2[keep] ** 2)) / 1.5
+            out[c] = (math.sqrt(var), f"neighbouring points ({d2.size} second differences)")
+        else:
+            out[c] = (float(np.std(r)) or 1.0, "residual spread (no repeats or neighbours)")
+        if out[c][0] <= 0:
+            out[c] = (1e-9, out[c][1])
+    return out
+
+
+def test_kind(data: TyreData) -> np.ndarray:
+    """The kind of test of every row: the TEST column, else from the slip values."""
+    if "TEST" in data:
+        return data.frame["TEST"].astype(str).to_numpy()
+    sa, sl = np.abs(data.array("SA")) > _ALPHA_TOL, np.abs(data.array("SL")) > _KAPPA_TOL
+    kind = np.where(sa & sl, "combined", np.where(sa, "pure_lateral", np.where(sl, "pure_longitudinal",
+                                                                                "free_rolling")))
+    return kind
+
+
+def holdout_mask(data: TyreData, fraction: float = 0.25, seed: int = 0) -> np.ndarray:
+    """Boolean mask of the held-out rows: whole sweeps, systematically every 1/fraction-th sweep of each kind of
+    test (starting at an offset drawn with ``seed``); kinds with fewer than three sweeps are not held out."""
+    sweep = _sweeps(data)
+    kind = test_kind(data)
+    rng = np.random.default_rng(seed)
+    mask = np.zeros(len(data), bool)
+    if fraction <= 0:
+        return mask
+    step = max(int(round(1.0 / fraction)), 2)
+    for k in sorted(set(kind)):
+        sweeps = list(dict.fromkeys(sweep[kind == k]))   # in data order
+        if len(sweeps) < 3:
+            continue
+        offset = int(rng.integers(0, min(step, len(sweeps))))
+        chosen = sweeps[offset::step]
+        mask |= (kind == k) & np.isin(sweep, chosen)
+    return mask
