@@ -23,16 +23,11 @@ import numpy as np  # noqa: E402
 import mftyre  # noqa: E402
 from mftyre.compiled import compile_model  # noqa: E402
 
+from timing import best_time  # noqa: E402  (benchmarks/timing.py)
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def best(fn, repeat):
-    t = float("inf")
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        t = min(t, time.perf_counter() - t0)
-    return t
 
 
 def main(argv=None):
@@ -54,9 +49,9 @@ def main(argv=None):
             t_compile = time.perf_counter() - t0
             point = (prm.FNOMIN, 0.02, 0.05, 0.01, 0.0, 20.0, prm.NOMPRES)
             reps = 5000
-            t_np = best(lambda: [model.evaluate(*point[:5], vx=point[5], p=point[6]) for _ in range(200)], 3) / 200
-            t_vm = best(lambda: [f(*point) for _ in range(reps)], 3) / reps
-            t_c = best(lambda: [compiled(*point) for _ in range(reps)], 3) / reps
+            t_np = best_time(lambda: [model.evaluate(*point[:5], vx=point[5], p=point[6]) for _ in range(200)], 3) / 200
+            t_vm = best_time(lambda: [f(*point) for _ in range(reps)], 3) / reps
+            t_c = best_time(lambda: [compiled(*point) for _ in range(reps)], 3) / reps
 
             n = args.n
             rng = np.random.default_rng(0)
@@ -64,9 +59,9 @@ def main(argv=None):
                  rng.uniform(-0.05, 0.05, n), np.zeros(n), rng.uniform(5, 35, n), rng.uniform(0.8, 1.2, n) * prm.NOMPRES]
             fmap = f.map(n)
             xrow = [v[None, :] for v in x]
-            b_np = best(lambda: model.evaluate(*x[:5], vx=x[5], p=x[6]), args.repeat)
-            b_vm = best(lambda: fmap(*xrow), max(1, args.repeat // 2))
-            b_c = best(lambda: compiled.batch(*x), args.repeat)
+            b_np = best_time(lambda: model.evaluate(*x[:5], vx=x[5], p=x[6]), args.repeat)
+            b_vm = best_time(lambda: fmap(*xrow), max(1, args.repeat // 2))
+            b_c = best_time(lambda: compiled.batch(*x), args.repeat)
         print(f"\n{Path(path).name} (FITTYP {prm.fittyp}); compile (uncached): {t_compile:.2f} s")
         print(f"{'':28}{'single point [us]':>18}{'ratio':>8}{'batch [us/pt]':>16}{'ratio':>8}")
         for label, t1, tb in (("NumPy evaluate (baseline)", t_np, b_np), ("CasADi SX virtual machine", t_vm, b_vm),

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import time
 import tracemalloc
 import warnings
 from pathlib import Path
@@ -26,6 +25,8 @@ import math  # noqa: E402  (baseline only)
 import numpy as np  # noqa: E402
 
 import mftyre  # noqa: E402
+
+from timing import best_time  # noqa: E402  (benchmarks/timing.py)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -42,13 +43,6 @@ def baseline_scalar(alpha, fz):
     return D * math.sin(C * math.atan(ba - E * (ba - math.atan(ba))))
 
 
-def best_time(fn, repeat):
-    best = float("inf")
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def inputs(model, n, seed=0):

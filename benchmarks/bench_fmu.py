@@ -32,6 +32,8 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import mftyre  # noqa: E402
 
+from timing import best_time  # noqa: E402  (benchmarks/timing.py)
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "fmu"))
 
@@ -41,13 +43,6 @@ from mftyre_fmu_core import SteadyTyre, SwiftCore  # noqa: E402
 SWIFT_ROAD = "+".join(f"cleat(x0={5.0 * k + 3.0}, length=0.05, height=0.01)" for k in range(5))
 
 
-def best(fn, repeat):
-    t = float("inf")
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        t = min(t, time.perf_counter() - t0)
-    return t
 
 
 def inputs(i):
@@ -186,10 +181,10 @@ def swift_rows(tir, tmp, steps, repeat):
         tyre = SwiftTyre(model, road, axle="height", rim="speed", x_range=(-1.0, 30.0))
         core = SwiftCore(model, SWIFT_ROAD, vertical="position")
     n = min(steps, 2500)  # 25 m: the road above
-    rows = [("swift direct: SwiftTyre.step in a Python loop", best(direct_swift_step(tyre, n), repeat) / n),
-            ("swift direct: FMU computation (SwiftCore.advance)", best(direct_swift_core(core, n), repeat) / n)]
+    rows = [("swift direct: SwiftTyre.step in a Python loop", best_time(direct_swift_step(tyre, n), repeat) / n),
+            ("swift direct: FMU computation (SwiftCore.advance)", best_time(direct_swift_core(core, n), repeat) / n)]
     stepper = FMUStepper(path, tmp, {"road": SWIFT_ROAD})
-    rows.append(("swift FMU via fmpy: set 6 + doStep + get 6, position", best(stepper.runner(n, swift=True),
+    rows.append(("swift FMU via fmpy: set 6 + doStep + get 6, position", best_time(stepper.runner(n, swift=True),
                                                                              repeat) / n))
     stepper.close()
     return rows
@@ -212,17 +207,17 @@ def main(argv=None):
         path = build_fmu(args.tir, Path(tmp) / "tyre.fmu")
         print(f"{Path(args.tir).name}: FMU built in {time.perf_counter() - t0:.1f} s; {steps} steps per row, "
               f"best of {args.repeat}")
-        rows = [("direct: MFModel.evaluate (NumPy), one point", best(direct_numpy(model, max(steps // 20, 200)),
+        rows = [("direct: MFModel.evaluate (NumPy), one point", best_time(direct_numpy(model, max(steps // 20, 200)),
                                                                   args.repeat) / max(steps // 20, 200))]
         for ev in ("compiled", "casadi"):
             core = SteadyTyre(model, ev)
             n = steps if ev == "compiled" else steps // 5
-            rows.append((f"direct: FMU computation in Python, {ev}", best(direct_core(core, n), args.repeat) / n))
+            rows.append((f"direct: FMU computation in Python, {ev}", best_time(direct_core(core, n), args.repeat) / n))
         for ev, vertical in (("compiled", "load"), ("compiled", "position"), ("casadi", "load")):
             stepper = FMUStepper(path, tmp, {"evaluator": ev, "vertical_input": vertical})
             n = steps if ev == "compiled" else steps // 5
             rows.append((f"FMU via fmpy: set 6 + doStep + get 6, {ev}, {vertical}",
-                         best(stepper.runner(n), args.repeat) / n))
+                         best_time(stepper.runner(n), args.repeat) / n))
             stepper.close()
         srows = [] if args.no_swift else swift_rows(args.swift_tir, tmp, steps, args.repeat)
     width = max(len(r[0]) for r in rows + srows)

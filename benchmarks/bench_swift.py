@@ -22,16 +22,11 @@ import numpy as np  # noqa: E402
 import mftyre  # noqa: E402
 from swift import Cleat, StepInputs, SwiftTyre  # noqa: E402
 
+from timing import best_time  # noqa: E402  (benchmarks/timing.py)
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def best(fn, repeat):
-    t = float("inf")
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        t = min(t, time.perf_counter() - t0)
-    return t
 
 
 def main(argv=None):
@@ -48,17 +43,17 @@ def main(argv=None):
     tyre = SwiftTyre(model, Cleat(1.0, 0.05, 0.01), axle="height", rim="speed", x_range=(0.0, 24.0))
     t_build = time.perf_counter() - t0
     u = StepInputs(x=0.0, vx=V, z=float(rl), omega=V / 0.3044)
-    t_init = best(lambda: tyre.initial_state(u), args.repeat)
-    t_run = best(lambda: tyre.run(t_end, u, dt), args.repeat)
+    t_init = best_time(lambda: tyre.initial_state(u), args.repeat)
+    t_run = best_time(lambda: tyre.run(t_end, u, dt), args.repeat)
 
     def step_loop():
         s = tyre.initial_state(u)
         for k in range(int(t_end / dt)):
             s, _ = tyre.step(s, StepInputs(x=V * k * dt, vx=V, z=float(rl), omega=V / 0.3044), dt)
 
-    t_step = best(step_loop, max(1, args.repeat // 2))
+    t_step = best_time(step_loop, max(1, args.repeat // 2))
     vm = SwiftTyre(model, Cleat(1.0, 0.05, 0.01), axle="height", rim="speed", x_range=(0.0, 24.0), compiled=False)
-    t_vm = best(lambda: vm.run(0.1, u, dt), 1) * (t_end / 0.1)
+    t_vm = best_time(lambda: vm.run(0.1, u, dt), 1) * (t_end / 0.1)
     print(f"SWIFT cleat run, {t_end:.0f} s simulated, output every {dt * 1e3:.0f} ms, RK4 with "
           f"{tyre.substeps} substeps ({dt / tyre.substeps * 1e3:.2f} ms), one core")
     print(f"  build + compile (cached after the first time): {t_build:.2f} s; static initialisation "

@@ -30,7 +30,7 @@ from .metrics import normalised_rms
 from .stages import STAGE_NAMES, STAGES, Stage, conditions, shape_violations, stage_parameters, stage_rows
 from .start import estimate_stage, start_parameters
 
-__all__ = ["fit_tir", "FitResult", "StageResult", "load_data", "COMPARED_STAGES", "BOUNDS"]
+__all__ = ["fit_tir", "FitResult", "StageResult", "load_data", "COMPARED_STAGES", "BOUNDS", "bounded_parameters"]
 
 #: Bounds (min, max) of fitted parameters; parameters not listed are free.
 BOUNDS: dict[str, tuple[float, float]] = {
@@ -147,6 +147,15 @@ def _corners(data: TyreData, prm) -> dict:
     return dict(dfz=(grid[0] - fz0) / fz0, dpi=(grid[1] - prm.NOMPRES) / prm.NOMPRES, gamma=grid[2])
 
 
+def bounded_parameters(prm, names) -> lmfit.Parameters:
+    """lmfit parameters ``names`` started at their values in ``prm``, clipped into :data:`BOUNDS`."""
+    params = lmfit.Parameters()
+    for n in names:
+        lo, hi = BOUNDS.get(n, (-np.inf, np.inf))
+        params.add(n, value=min(max(float(prm[n]), lo), hi), min=lo, max=hi)
+    return params
+
+
 def _fit_pass(stage, prm, side, data, names, weighting, progress, label, max_nfev):
     """One least-squares pass over ``data`` varying ``names``; returns (new parameters, lmfit result)."""
     measured = data.array(stage.channel)
@@ -155,11 +164,7 @@ def _fit_pass(stage, prm, side, data, names, weighting, progress, label, max_nfe
     weights = prm.FNOMIN / data.array("FZ") if weighting == "load" else np.ones(len(data))
     corners = _corners(data, prm)
     penalty = 10.0 * math.sqrt(len(data))
-    params = lmfit.Parameters()
-    for n in names:
-        lo, hi = BOUNDS.get(n, (-np.inf, np.inf))
-        v = float(prm[n])
-        params.add(n, value=min(max(v, lo), hi), min=lo, max=hi)
+    params = bounded_parameters(prm, names)
 
     def residual(p):
         trial = prm.replace(**{n: p[n].value for n in names})

@@ -22,7 +22,7 @@ import lmfit
 import numpy as np
 
 from ..data import TyreData
-from ..fit.core import BOUNDS
+from ..fit.core import bounded_parameters
 from ..fit.stages import STAGES, _met, conditions, shape_violations, stage_rows  # _met: the stages' own rule
 from ..model import MFModel
 from ..params import PARAMETERS
@@ -82,11 +82,7 @@ def refit(params, ev: Evaluator, names, channels=None, sigma: dict | None = None
     stage_set = sorted({PARAM_STAGE.get(k) for k in names} & set(STAGES))
     corners = _corners(ev.data, prm)
     penalty = 10.0 * math.sqrt(max(n, 1)) * max(1.0, float(np.sqrt(np.mean(r0**2))))
-    lp = lmfit.Parameters()
-    for k in names:
-        lo, hi = BOUNDS.get(k, (-np.inf, np.inf))
-        v = float(prm[k])
-        lp.add(k, value=min(max(v, lo), hi), min=lo, max=hi)
+    lp = bounded_parameters(prm, names)
 
     def residual(p):
         trial = prm.replace(**{k: p[k].value for k in names})
