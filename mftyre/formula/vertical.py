@@ -150,14 +150,17 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     r_omega = args[0]
     f_top = residual(r_omega, None)  # < 0 when the free tyre carries less than fz
     contact = f_top < 0
-    # first point: the MF 6.1 relation without the side-force term (a lower bound of the deflection
-    # without camber); second point: the linear extrapolation of the load from zero deflection through
-    # the first point, an upper bound since Fz/rho grows with rho; widen if that still fails to bracket
-    rho_1 = deflection_61(prm, fz, r_omega, omega, fx, 0.0 * fy, dpi, be)
+    # first point: the deflection of the MF 6.1 relation without the side-force term, less the camber
+    # deflection (a lower bound without camber); second point: the linear extrapolation of the load from zero
+    # deflection through the first point, an upper bound since Fz/rho grows with rho, moved 0.5 % further;
+    # widen if that still fails to bracket
+    rho_61 = deflection_61(prm, fz, r_omega, omega, fx, 0.0 * fy, dpi, be)
+    camber_share = rho_61 - deflection_62(prm, r_omega - rho_61, r_omega, args[4], be)
+    rho_1 = be.fmax(rho_61 + camber_share / (1.0 - prm.Q_CAM3 * be.abs(args[4])), 0.1 * rho_61)
     f_1 = residual(r_omega - rho_1, None)
     load_1 = f_1 + fz
     ratio = be.where(load_1 > 0, fz / be.where(load_1 > 0, load_1, 1.0), 2.0)
-    rho_2 = rho_1 * be.clip(ratio, 0.25, 4.0) * be.where(ratio > 1, 1.02, 0.98) + 1e-9
+    rho_2 = rho_1 * be.clip(ratio, 0.25, 4.0) * be.where(ratio > 1, 1.005, 0.995) + 1e-9
     f_2 = residual(r_omega - rho_2, None)
 
     def widen(rl_1, rl_2, f_2, idx):  # more deflection while the load is short, less while it is exceeded
