@@ -64,6 +64,11 @@ class NumpyBackend:
         return np.zeros_like(x, dtype=float)
 
     @staticmethod
+    def broadcast(*values):
+        """The values as float arrays of one common shape, at least 1-D (writable copies)."""
+        return [np.atleast_1d(np.array(v, dtype=float)) for v in np.broadcast_arrays(*values)]
+
+    @staticmethod
     def fixed_point(step, x0, tol, max_iter=100, unrolled=None):
         """Iterate ``x = step(x)`` until every element changes by at most ``tol``.
 
@@ -198,6 +203,11 @@ class CasadiBackend:
 
     def zeros_like(self, x):
         return 0 * x
+
+    @staticmethod
+    def broadcast(*values):
+        """Symbols broadcast themselves: unchanged."""
+        return list(values)
 
     def fixed_point(self, step, x0, tol, max_iter=100, unrolled=8):
         """``unrolled`` iterations of ``x = step(x)`` (the contraction rate must make that enough)."""

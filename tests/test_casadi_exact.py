@@ -163,3 +163,36 @@ def test_compiled_model_matches_and_is_cached(tmp_path):
                                    err_msg=name)
     assert model.with_params(LMUY=0.9).evaluate(4000.0, 0.0, 0.1).fy == pytest.approx(
         other(4000.0, 0.0, 0.1, 0.0, 0.0, model.params.LONGVL, model.params.INFLPRES)[1], rel=1e-11)
+
+
+@pytest.mark.parametrize("tir", ["car_205_60R15_mf61.tir", "car_205_60R15_mf62_swift.tir"])
+def test_symbolic_parameters_match_with_params_and_differences(tir):
+    """.tir parameters as symbols: same values as the NumPy model with those values; exact sensitivities."""
+    model = mftyre.load_tir(TIR_FILES / tir)
+    prm = model.params
+    names = ("LMUY", "PKY1", "VERTICAL_STIFFNESS", "PFZ1", "QDZ1")
+    f = model.casadi_function(("fz", "kappa", "alpha", "p"), ("fy", "mz", "rl"), parameters=names)
+    point = (4500.0, 0.03, 0.06, 2.0e5)
+    values = [prm[n] * 1.1 for n in names]
+    changed = model.with_params(**dict(zip(names, values))).evaluate(*point[:3], p=point[3])
+    for out, name in zip(f(*point, *values), ("fy", "mz", "rl")):
+        assert float(out) == pytest.approx(float(changed[name]), rel=1e-12), name
+    jac = f.jacobian()
+    blocks = jac(*point, *values, *f(*point, *values))
+    n_in = 4 + len(names)
+    for j, name in enumerate(names):
+        h = 1e-6 * abs(values[j])
+        plus = model.with_params(**{**dict(zip(names, values)), name: values[j] + h}).evaluate(*point[:3], p=point[3])
+        minus = model.with_params(**{**dict(zip(names, values)), name: values[j] - h}).evaluate(*point[:3], p=point[3])
+        for i, out in enumerate(("fy", "mz", "rl")):
+            fd = (float(plus[out]) - float(minus[out])) / (2 * h)
+            exact = float(blocks[i * n_in + 4 + j])
+            assert exact == pytest.approx(fd, rel=1e-5, abs=1e-9 * abs(float(changed[out])) / abs(values[j])), (out, name)
+
+
+def test_structural_parameters_cannot_be_symbolic():
+    from mftyre.errors import ModelInputError
+
+    model = mftyre.load_tir(TIR_FILES / "car_205_60R15_mf61.tir")
+    with pytest.raises(ModelInputError, match="form of the equations"):
+        model.casadi_function(parameters=("QSX1",))

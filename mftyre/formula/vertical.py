@@ -27,7 +27,6 @@ is R_omega: the contact is about to be lost.
 """
 from __future__ import annotations
 
-import numpy as np
 
 __all__ = [
     "free_radius", "vertical_stiffness", "rolling_radius_reduction", "spin_and_radius",
@@ -75,9 +74,9 @@ def spin_and_radius(prm, s, omega_in, omega_given, be):
     return omega, r_omega, r_omega - reduction
 
 
-def _q_fz1(prm):
+def _q_fz1(prm, be):
     """Q_FZ1 from the nominal stiffness, paper (4)."""
-    return np.sqrt((prm.VERTICAL_STIFFNESS * prm.UNLOADED_RADIUS / prm.FNOMIN) ** 2 - 4.0 * prm.Q_FZ2)
+    return be.sqrt((prm.VERTICAL_STIFFNESS * prm.UNLOADED_RADIUS / prm.FNOMIN) ** 2 - 4.0 * prm.Q_FZ2)
 
 
 def _bottoming_force(prm, rl, be):
@@ -90,7 +89,7 @@ def vertical_force_61(prm, rho, r_omega, omega, fx, fy, dpi, be):
     x = rho / R0
     correction = (1.0 + prm.Q_V2 * (R0 / prm.LONGVL) * be.abs(omega) - (prm.Q_FCX * fx / Fz0) ** 2
                   - (prm.Q_FCY * fy / Fz0) ** 2) * (1.0 + prm.PFZ1 * dpi)
-    return correction * (_q_fz1(prm) * x + prm.Q_FZ2 * x**2) * Fz0 + _bottoming_force(prm, r_omega - rho, be)
+    return correction * (_q_fz1(prm, be) * x + prm.Q_FZ2 * x**2) * Fz0 + _bottoming_force(prm, r_omega - rho, be)
 
 
 def deflection_61(prm, fz, r_omega, omega, fx, fy, dpi, be):
@@ -98,7 +97,7 @@ def deflection_61(prm, fz, r_omega, omega, fx, fy, dpi, be):
     R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
     correction = (1.0 + prm.Q_V2 * (R0 / prm.LONGVL) * be.abs(omega) - (prm.Q_FCX * fx / Fz0) ** 2
                   - (prm.Q_FCY * fy / Fz0) ** 2) * (1.0 + prm.PFZ1 * dpi)
-    A, B = prm.Q_FZ2 * correction * Fz0, _q_fz1(prm) * correction * Fz0
+    A, B = prm.Q_FZ2 * correction * Fz0, _q_fz1(prm, be) * correction * Fz0
 
     def root(a, b, c):  # positive root of a x^2 + b x = c, cancellation free
         return 2.0 * c / (b + be.sqrt(b**2 + 4.0 * a * c))
@@ -132,15 +131,14 @@ def vertical_force_62(prm, rl, r_omega, omega, fx, fy, gamma, dpi, be):
         ratio = rl / r_omega
         s_fygamma = (prm.Q_FYS1 + prm.Q_FYS2 * ratio + prm.Q_FYS3 * ratio**2) * gamma
         correction = correction - (x ** prm.Q_FCY2 * prm.Q_FCY * (fy - s_fygamma) / Fz0) ** 2
-    fz = correction * (1.0 + prm.PFZ1 * dpi) * (_q_fz1(prm) * x + prm.Q_FZ2 * x**2) * Fz0
+    fz = correction * (1.0 + prm.PFZ1 * dpi) * (_q_fz1(prm, be) * x + prm.Q_FZ2 * x**2) * Fz0
     return fz + _bottoming_force(prm, rl, be)
 
 
 def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     """Inverse of :func:`vertical_force_62`: (Rl, rho_z) carrying ``fz``, see the module notes."""
     args = (r_omega, omega, fx, fy, gamma, dpi)
-    if be.name == "numpy":
-        fz, *args = (np.atleast_1d(v) for v in np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (fz, *args))))
+    fz, *args = be.broadcast(fz, *args)  # the residual below evaluates subsets of the elements
 
     def residual(rl, idx):
         sub = args if idx is None else [v[idx] for v in args]
@@ -183,7 +181,7 @@ def contact_patch(prm, fz, dpi, be):
     if prm.version == "52":
         q_a1, q_a2 = prm.Q_A1, prm.Q_A2
         if q_a1 == 0.0 and q_a2 == 0.0:  # MF-Tyre 5.2 default from the stiffness ratio
-            y = np.log10(R0 * prm.VERTICAL_STIFFNESS / Fz0)
+            y = be.log10(R0 * prm.VERTICAL_STIFFNESS / Fz0)
             q_a1 = -0.0388 * y**3 + 0.2509 * y**2 - 0.6283 * y + 0.6279
             q_a2 = 1.693 * q_a1**2
         a = R0 * (q_a2 * fz / Fz0 + q_a1 * be.sqrt(fz / Fz0))
