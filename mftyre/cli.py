@@ -365,7 +365,7 @@ def _eval_grid(args, swept: list[str], prm) -> tuple[dict, tuple[int, ...]]:
     return inputs, shape
 
 
-def _eval_frame(args, out, swept: list[str], shape, outputs) -> "pd.DataFrame":
+def _eval_frame(args, out, swept: list[str], shape, outputs):
     """Swept inputs as given, then the outputs; column names 'name [SI unit]'."""
     import pandas as pd
 

@@ -12,7 +12,7 @@ import pytest
 
 from mftyre import cli
 from mftyre.errors import TirError
-from mftyre.params import PARAMETERS, MissingParameterWarning, TyreParameters
+from mftyre.params import MissingParameterWarning, TyreParameters
 from mftyre.tir import check_tir, parse_tir, read_tir, write_tir
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared"

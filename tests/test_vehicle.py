@@ -5,7 +5,6 @@ against a continuation of the steady-state curve on the NumPy path with finite d
 """
 from __future__ import annotations
 
-import math
 
 import numpy as np
 import pytest
