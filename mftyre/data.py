@@ -294,11 +294,15 @@ def _check_required(frame, path, where):
     if missing:
         raise DataError(f"{path}: missing channel(s) {', '.join(missing)} (required: {', '.join(REQUIRED)}; give "
                         f"a column map, or `defaults=` for a constant)")
+    _check_finite(frame, lambda row: f"{path}: {where(row)}")
+
+
+def _check_finite(frame, locate):
+    """DataError at the first NaN of a required channel; ``locate(row)`` says where that row is in the file."""
     for ch in (*REQUIRED, *(c for c in _ZERO_DEFAULT if c in frame.columns)):
         nan = np.isnan(frame[ch].to_numpy(float))
         if nan.any():
-            row = int(np.flatnonzero(nan)[0])
-            raise DataError(f"{path}: {where(row)}: channel {ch}: NaN in a required channel")
+            raise DataError(f"{locate(int(np.flatnonzero(nan)[0]))}: channel {ch}: NaN in a required channel")
 
 
 # ---------------------------------------------------------------------------------------------- TYDEX
@@ -406,11 +410,7 @@ def read_tydex(path, *, defaults: dict | None = None) -> TyreData:
     if missing:
         raise DataError(f"{path}: missing channel(s) {', '.join(missing)}: neither a measurement channel "
                         f"({', '.join(_TYDEX_NAMES[c][0] for c in missing)}) nor a constant")
-    for ch in (*REQUIRED, *(c for c in _ZERO_DEFAULT if c in frame.columns)):
-        nan = np.isnan(frame[ch].to_numpy(float))
-        if nan.any():
-            i = int(np.flatnonzero(nan)[0])
-            raise DataError(f"{path}:{row_lines[i]}: channel {ch}: NaN in a required channel")
+    _check_finite(frame, lambda row: f"{path}:{row_lines[row]}")
     tyre = str(header.get("MEASID", ("", "", ""))[0] or path.stem)
     consts = {k: v[0] for k, v in {**header, **constants}.items()}
     return TyreData(frame, tyre=tyre, source=str(path), units=units, constants=consts)
