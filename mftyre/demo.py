@@ -27,10 +27,7 @@ BUNDLED_TIR = Path(__file__).resolve().parents[1] / "tir_files" / "car_205_60R15
 
 def run_demo(out_dir="out", tir=BUNDLED_TIR, *, seed: int = 1, echo=print) -> dict:
     """Run the demonstration; returns the paths written and the key figures."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     import mftyre
     from mftyre.data import read_tydex, trailer_programme, write_tydex
@@ -46,7 +43,8 @@ def run_demo(out_dir="out", tir=BUNDLED_TIR, *, seed: int = 1, echo=print) -> di
     alpha = np.radians(np.linspace(-12.0, 12.0, 97))
     pressures = np.array([0.8, 1.0, 1.2]) * prm.NOMPRES
     res = truth.evaluate(prm.FNOMIN, 0.0, alpha[None, :], p=pressures[:, None])
-    fig, (ax_fy, ax_mz) = plt.subplots(2, 1, figsize=(6, 6), dpi=90, sharex=True)
+    fig = Figure(figsize=(6, 6), dpi=90)
+    ax_fy, ax_mz = fig.subplots(2, 1, sharex=True)
     for p, fy, mz in zip(pressures, res.fy, res.mz):
         ax_fy.plot(np.degrees(alpha), fy, label=f"{p / 1e5:.2f} bar")
         ax_mz.plot(np.degrees(alpha), mz)
@@ -58,7 +56,6 @@ def run_demo(out_dir="out", tir=BUNDLED_TIR, *, seed: int = 1, echo=print) -> di
     fig.tight_layout()
     characteristics = out / "characteristics.png"
     fig.savefig(characteristics)
-    plt.close(fig)
     for p, fy, kya in zip(pressures, res.fy, res.kya[:, 0]):
         echo(f"    {p / 1e5:.2f} bar: peak |Fy| {np.max(np.abs(fy)):7.0f} N, cornering stiffness {kya:8.0f} N/rad")
     echo(f"    wrote {characteristics}")

@@ -96,10 +96,7 @@ def markdown_report(result, plot_names: dict | None = None) -> str:
 
 def plot_stage(result, name: str, path) -> Path | None:
     """Measured vs fitted (zero camber, nominal pressure, one colour per load) and residuals of all points."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure  # no pyplot: the caller's backend and figures are left alone
 
     st, stage = result.stages[name], STAGES[name]
     if not st.fitted:
@@ -114,7 +111,8 @@ def plot_stage(result, name: str, path) -> Path | None:
     ref = (np.abs(data.array("IA")) < math.radians(0.25)) & (np.abs(data.array("P") - p0) <= 0.02 * p0)
     if ref.sum() == 0:
         ref = np.ones(len(data), bool)
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.4), dpi=80)
+    fig = Figure(figsize=(9, 3.4), dpi=80)
+    ax1, ax2 = fig.subplots(1, 2)
     fz = data.array("FZ")
     lab, cen = levels(fz[ref], 0.05 * float(np.max(fz)))
     for k, c in enumerate(cen):
@@ -134,7 +132,6 @@ def plot_stage(result, name: str, path) -> Path | None:
     fig.suptitle(st.title, fontsize=10)
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)
     return Path(path)
 
 

@@ -102,20 +102,18 @@ def noise_floor(rep) -> dict:
     return out
 
 
-def _plt():
-    import matplotlib
+def _figure(**kw):
+    """A figure drawn and saved without pyplot: no global backend or state is touched (notebooks keep theirs)."""
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    return Figure(**kw)
 
 
 def plot_errors(rep, path) -> Path:
-    plt = _plt()
     chans = list(rep.error_before)
     x = np.arange(len(chans))
-    fig, ax = plt.subplots(figsize=(5.5, 2.8), dpi=80)
+    fig = _figure(figsize=(5.5, 2.8), dpi=80)
+    ax = fig.subplots()
     ax.bar(x - 0.2, [rep.error_before[c] for c in chans], 0.4, label="before")
     ax.bar(x + 0.2, [rep.error_after[c] for c in chans], 0.4, label="after")
     floor = noise_floor(rep)
@@ -126,7 +124,6 @@ def plot_errors(rep, path) -> Path:
     ax.set_title("normalised RMS error on held-out sweeps", fontsize=9)
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)
     return Path(path)
 
 
@@ -147,10 +144,10 @@ def plot_residual_maps(rep, path) -> Path | None:
     targets = _map_targets(rep)
     if not targets:
         return None
-    plt = _plt()
     ev = rep.evaluator
     res_before, res_after = ev.residuals(rep.model_start), ev.residuals(rep.model)
-    fig, axes = plt.subplots(len(targets), 2, figsize=(8, 2.3 * len(targets)), dpi=80, squeeze=False)
+    fig = _figure(figsize=(8, 2.3 * len(targets)), dpi=80)
+    axes = fig.subplots(len(targets), 2, squeeze=False)
     for i, (c, var) in enumerate(targets):
         lims = []
         for j, (res, title) in enumerate(((res_before, "before"), (res_after, "after"))):
@@ -172,7 +169,6 @@ def plot_residual_maps(rep, path) -> Path | None:
             axes[i, j].set_ylim(lo, hi)
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)
     return Path(path)
 
 
