@@ -153,7 +153,11 @@ def test_written_tir_reads_back_to_the_same_model(fitted, tmp_path):
 
 
 def test_report_has_the_tables_and_plots(fitted, tmp_path):
+    import matplotlib
+
+    backend = matplotlib.get_backend()
     path = fitted.save_report(tmp_path / "rep" / "report.md")
+    assert matplotlib.get_backend() == backend  # the caller's (e.g. a notebook's) plotting is left alone
     text = path.read_text()
     for needle in ("## Fit errors", "lower bound", "upper bound", "recovered", "| PKY1 |", "standard error",
                    "![Pure lateral force"):
