@@ -152,6 +152,15 @@ def test_written_tir_reads_back_to_the_same_model(fitted, tmp_path):
         np.testing.assert_allclose(b[name], a[name], rtol=1e-12, atol=1e-12)
 
 
+def test_kappa_induced_side_force_is_identified(truth, fitted):
+    """Fy at alpha = 0 under longitudinal slip is the kappa-induced side force SVyk (4.E66), largest there and
+    about a tenth of it at the combined-slip angles of the programme: the pure-kappa sweeps must be fitted too."""
+    kappa = np.linspace(-0.3, 0.3, 61)
+    for fz in (2000.0, 4000.0, 6000.0):
+        true, fit = truth.evaluate(fz, kappa, 0.0), fitted.model.evaluate(fz, kappa, 0.0)
+        assert normalised_rms(fit.fy, true.fy) < 10.0, fz
+
+
 def test_report_has_the_tables_and_plots(fitted, tmp_path):
     import matplotlib
 

@@ -67,7 +67,7 @@ STAGES: dict[str, Stage] = {s.name: s for s in (
         _g("pressure", "PPZ1"), _g("pressure camber", "PPZ2"))),
     Stage("combined_fx", "Combined-slip Fx (4.E50-4.E57)", "FX", "fx", "combined", (
         _g("", "RBX1 RBX2 RCX1 REX1 RHX1"), _g("loads", "REX2"), _g("camber", "RBX3"))),
-    Stage("combined_fy", "Combined-slip Fy (4.E58-4.E67)", "FY", "fy", "combined", (
+    Stage("combined_fy", "Combined-slip Fy (4.E58-4.E67)", "FY", "fy", "with_kappa", (
         _g("", "RBY1 RBY2 RBY3 RCY1 REY1 RHY1 RVY1 RVY4 RVY5 RVY6"), _g("loads", "REY2 RHY2 RVY2"),
         _g("camber", "RBY4 RVY3"))),
     Stage("mz_combined", "Combined-slip Mz: moment arm of Fx (paper A56)", "MZ", "mz", "combined", (
@@ -99,6 +99,8 @@ def stage_rows(stage: Stage, data: TyreData) -> np.ndarray:
         mask = pure_alpha & ~pure_kappa
     elif kind == "combined":
         mask = ~pure_alpha & ~pure_kappa
+    elif kind == "with_kappa":  # kappa-induced Fy (SVyk) is largest at alpha = 0: pure-kappa rows too
+        mask = ~pure_kappa
     elif kind == "slip":
         mask = ~(pure_alpha & pure_kappa)
     elif kind in ("free_rolling", "free_rolling_re"):

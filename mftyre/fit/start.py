@@ -167,6 +167,16 @@ def estimate_stage(stage_name: str, prm: TyreParameters, data: TyreData) -> dict
         if len(q) >= 2:
             out["QDZ2"] = q2
         return out
+    if stage_name == "combined_fy":
+        # kappa-induced side force (4.E66, 4.E67): typical shape values, the amplitude from the data at alpha = 0
+        sl, sa, fy = data.array("SL"), data.array("SA"), data.array("FY")
+        zero = np.abs(sa) <= math.radians(0.25)
+        if zero.sum() >= 5:
+            amplitude = float(np.percentile(np.abs(fy[zero] - np.median(fy[zero & (np.abs(sl) < 0.01)]))
+                                            if np.any(zero & (np.abs(sl) < 0.01)) else np.abs(fy[zero]), 90))
+            rvy1 = amplitude / (prm.PDY1 * float(np.mean(data.array("FZ")[zero])))
+            return dict(RVY1=float(np.clip(rvy1, 0.0, 0.2)), RVY4=20.0, RVY5=1.9, RVY6=10.0)
+        return {}
     return {}
 
 
