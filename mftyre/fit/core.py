@@ -244,6 +244,11 @@ def _fit_stages(data, prm, side, stages, fit_pressure, generic, weighting, progr
             raise ValueError(f"unknown stage {name!r}; stages are {', '.join(STAGE_NAMES)}")
         prm, results[name] = _fit_stage(STAGES[name], prm, side, data, fit_pressure, generic, weighting, progress,
                                         max_nfev)
+        if name == "mz_combined" and results[name].fitted and "mz" in results and results["mz"].fitted:
+            # the pure-Mz stage ran with the moment arm s = 0 and took the moment s Fx (paper A56) of the small
+            # Fx at zero slip into the trail and residual torque; refit it now that s is known
+            prm, results["mz"] = _fit_stage(STAGES["mz"], prm, side, data, fit_pressure, False, weighting, progress,
+                                            max_nfev)
     return prm, results
 
 
