@@ -70,7 +70,7 @@ STAGES: dict[str, Stage] = {s.name: s for s in (
     Stage("combined_fy", "Combined-slip Fy (4.E58-4.E67)", "FY", "fy", "with_kappa", (
         _g("", "RBY1 RBY2 RBY3 RCY1 REY1 RHY1 RVY1 RVY4 RVY5 RVY6"), _g("loads", "REY2 RHY2 RVY2"),
         _g("camber", "RBY4 RVY3"))),
-    Stage("mz_combined", "Combined-slip Mz: moment arm of Fx (paper A56)", "MZ", "mz", "combined", (
+    Stage("mz_combined", "Combined-slip Mz: moment arm of Fx (paper A56)", "MZ", "mz", "slip", (
         _g("", "SSZ1 SSZ2"), _g("camber", "SSZ3"), _g("camber loads", "SSZ4"))),
     Stage("mx", "Overturning moment Mx (4.E69, MF-Tyre 6.1 form)", "MX", "mx", "slip", (
         _g("fy", "QSX1 QSX3"), _g("camber", "QSX2"), _g("camber loads", "QSX10 QSX11"),
