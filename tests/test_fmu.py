@@ -313,16 +313,24 @@ def test_100000_steps_no_drift_in_memory_or_time(fmus, tmp_path):
     real_set, real_get, do_step = fmu.fmu.setReal, fmu.fmu.getReal, fmu.fmu.doStep
     times, rss = [], []
     t, h = 0.0, 1e-4
+    # each block is timed as ten chunks and keeps its fastest: a load spike on a shared machine slows some
+    # chunks, a real drift slows all of them
+    chunk = n // blocks // 10
     for b in range(blocks):
+        chunk_times = []
         t0 = time.perf_counter()
         for i in range(n // blocks):
+            if i and i % chunk == 0:
+                chunk_times.append(time.perf_counter() - t0)
+                t0 = time.perf_counter()
             s = 1e-3 * (b * (n // blocks) + i)
             real_set(set_vr, [20.0 + math.sin(s), 0.5 * math.sin(3 * s), 68.0 + 2 * math.cos(s), 0.01,
                               0.29 + 0.003 * math.sin(7 * s), 2.2e5])
             do_step(t, h)
             t += h
             real_get(get_vr)
-        times.append((time.perf_counter() - t0) / (n // blocks))
+        chunk_times.append(time.perf_counter() - t0)
+        times.append(min(chunk_times) / chunk)
         rss.append(_rss_bytes())
     assert fmu.status() == 0
     fmu.close()

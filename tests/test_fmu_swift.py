@@ -272,9 +272,16 @@ def test_long_run_no_drift_in_memory_or_time(swift_fmu, tmp_path):
     real_set, real_get, do_step = fmu.fmu.setReal, fmu.fmu.getReal, fmu.fmu.doStep
     times, rss = [], []
     t, h = 0.0, 1e-3
+    # each block is timed as ten chunks and keeps its fastest: a load spike on a shared machine slows some
+    # chunks, a real drift slows all of them
+    chunk = n // blocks // 10
     for b in range(blocks):
+        chunk_times = []
         t0 = time.perf_counter()
         for i in range(n // blocks):
+            if i and i % chunk == 0:
+                chunk_times.append(time.perf_counter() - t0)
+                t0 = time.perf_counter()
             s = h * (b * (n // blocks) + i)
             real_set(set_vr, [20.0 + math.sin(s), 0.3 * math.sin(3 * s), (20.0 + math.sin(s)) / 0.305, 0.01,
                               0.29 + 0.003 * math.sin(7 * s), 0.021 * math.cos(7 * s), 0.002 * math.sin(0.5 * s),
@@ -282,7 +289,8 @@ def test_long_run_no_drift_in_memory_or_time(swift_fmu, tmp_path):
             do_step(t, h)
             t += h
             out = real_get(get_vr)
-        times.append((time.perf_counter() - t0) / (n // blocks))
+        chunk_times.append(time.perf_counter() - t0)
+        times.append(min(chunk_times) / chunk)
         rss.append(_rss_bytes())
     assert fmu.status() == 0 and all(math.isfinite(v) for v in out)
     assert out[-1] > 1900.0  # x_road: ~2 km travelled
