@@ -303,35 +303,44 @@ def _rss_bytes():
         return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 
 
-def test_100000_steps_no_drift_in_memory_or_time(fmus, tmp_path):
+def run_long(fmu, set_names, get_names, inputs_at, h, n=100_000, blocks=10):
+    """``n`` co-simulation steps of ``h`` with the inputs ``inputs_at(k)`` of step k; per block of n/blocks steps
+    the time per step and the memory afterwards, and the last outputs. Each block is timed as ten chunks and
+    keeps its fastest: a load spike on a shared machine slows some chunks, a real drift slows all of them."""
     import time
 
-    fmu = Slave(fmus["62r"], tmp_path, start={"vertical_input": "position"})
-    n, blocks = 100_000, 10
-    set_vr = [fmu.vr[k] for k in ("vx", "vy", "omega", "gamma", "z", "p")]
-    get_vr = [fmu.vr[k] for k in ("Fx", "Fy", "Fz", "Mx", "My", "Mz")]
+    set_vr, get_vr = [fmu.vr[k] for k in set_names], [fmu.vr[k] for k in get_names]
     real_set, real_get, do_step = fmu.fmu.setReal, fmu.fmu.getReal, fmu.fmu.doStep
-    times, rss = [], []
-    t, h = 0.0, 1e-4
-    # each block is timed as ten chunks and keeps its fastest: a load spike on a shared machine slows some
-    # chunks, a real drift slows all of them
-    chunk = n // blocks // 10
+    times, rss, out, t = [], [], None, 0.0
+    per_block = n // blocks
+    chunk = per_block // 10
     for b in range(blocks):
         chunk_times = []
         t0 = time.perf_counter()
-        for i in range(n // blocks):
+        for i in range(per_block):
             if i and i % chunk == 0:
                 chunk_times.append(time.perf_counter() - t0)
                 t0 = time.perf_counter()
-            s = 1e-3 * (b * (n // blocks) + i)
-            real_set(set_vr, [20.0 + math.sin(s), 0.5 * math.sin(3 * s), 68.0 + 2 * math.cos(s), 0.01,
-                              0.29 + 0.003 * math.sin(7 * s), 2.2e5])
+            real_set(set_vr, inputs_at(b * per_block + i))
             do_step(t, h)
             t += h
-            real_get(get_vr)
+            out = real_get(get_vr)
         chunk_times.append(time.perf_counter() - t0)
         times.append(min(chunk_times) / chunk)
         rss.append(_rss_bytes())
+    return times, rss, out
+
+
+def test_100000_steps_no_drift_in_memory_or_time(fmus, tmp_path):
+    fmu = Slave(fmus["62r"], tmp_path, start={"vertical_input": "position"})
+
+    def inputs_at(k):
+        s = 1e-3 * k
+        return [20.0 + math.sin(s), 0.5 * math.sin(3 * s), 68.0 + 2 * math.cos(s), 0.01,
+                0.29 + 0.003 * math.sin(7 * s), 2.2e5]
+
+    times, rss, _ = run_long(fmu, ("vx", "vy", "omega", "gamma", "z", "p"), ("Fx", "Fy", "Fz", "Mx", "My", "Mz"),
+                             inputs_at, 1e-4)
     assert fmu.status() == 0
     fmu.close()
     print(f"time per step {[round(x * 1e6, 1) for x in times]} us; RSS {[r >> 20 for r in rss]} MiB")

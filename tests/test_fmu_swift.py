@@ -9,7 +9,6 @@ fmpy's validator, and time/memory over a long run.
 from __future__ import annotations
 
 import math
-import time
 import warnings
 
 import numpy as np
@@ -22,7 +21,7 @@ import mftyre  # noqa: E402
 from swift import Cleat, Flat, StepInputs, SwiftTyre  # noqa: E402
 from swift.ring import STATE_NAMES  # noqa: E402
 
-from test_fmu import TIR61, TIR62, Slave, _build, _rss_bytes  # noqa: E402
+from test_fmu import TIR61, TIR62, Slave, _build, run_long  # noqa: E402
 
 S = {n: i for i, n in enumerate(STATE_NAMES)}
 CLEAT = "cleat(x0=1.0, length=0.05, height=0.01)"
@@ -266,32 +265,15 @@ def test_long_run_no_drift_in_memory_or_time(swift_fmu, tmp_path):
     """100,000 steps of 1 ms (2 km at 20 m/s: the road table stays small), varying inputs, road height and cleat."""
     fmu = Slave(swift_fmu, tmp_path, start={"road": "cleat(x0=2.0, length=0.05, height=0.01)", "vx": 20.0,
                                            "omega": 20.0 / 0.305, "z": 0.29})
-    n, blocks = 100_000, 10
-    set_vr = [fmu.vr[k] for k in ("vx", "vy", "omega", "gamma", "z", "vz", "road_z", "p")]
-    get_vr = [fmu.vr[k] for k in ("Fx", "Fy", "Fz", "Mx", "My", "Mz", "x_road")]
-    real_set, real_get, do_step = fmu.fmu.setReal, fmu.fmu.getReal, fmu.fmu.doStep
-    times, rss = [], []
-    t, h = 0.0, 1e-3
-    # each block is timed as ten chunks and keeps its fastest: a load spike on a shared machine slows some
-    # chunks, a real drift slows all of them
-    chunk = n // blocks // 10
-    for b in range(blocks):
-        chunk_times = []
-        t0 = time.perf_counter()
-        for i in range(n // blocks):
-            if i and i % chunk == 0:
-                chunk_times.append(time.perf_counter() - t0)
-                t0 = time.perf_counter()
-            s = h * (b * (n // blocks) + i)
-            real_set(set_vr, [20.0 + math.sin(s), 0.3 * math.sin(3 * s), (20.0 + math.sin(s)) / 0.305, 0.01,
-                              0.29 + 0.003 * math.sin(7 * s), 0.021 * math.cos(7 * s), 0.002 * math.sin(0.5 * s),
-                              2.2e5])
-            do_step(t, h)
-            t += h
-            out = real_get(get_vr)
-        chunk_times.append(time.perf_counter() - t0)
-        times.append(min(chunk_times) / chunk)
-        rss.append(_rss_bytes())
+    h = 1e-3
+
+    def inputs_at(k):
+        s = h * k
+        return [20.0 + math.sin(s), 0.3 * math.sin(3 * s), (20.0 + math.sin(s)) / 0.305, 0.01,
+                0.29 + 0.003 * math.sin(7 * s), 0.021 * math.cos(7 * s), 0.002 * math.sin(0.5 * s), 2.2e5]
+
+    times, rss, out = run_long(fmu, ("vx", "vy", "omega", "gamma", "z", "vz", "road_z", "p"),
+                               ("Fx", "Fy", "Fz", "Mx", "My", "Mz", "x_road"), inputs_at, h)
     assert fmu.status() == 0 and all(math.isfinite(v) for v in out)
     assert out[-1] > 1900.0  # x_road: ~2 km travelled
     fmu.close()
