@@ -24,27 +24,19 @@ class NumpyBackend:
 
     name = "numpy"
     pi = np.pi
-    eps = np.finfo(float).eps
-
     sin = staticmethod(np.sin)
     cos = staticmethod(np.cos)
     tan = staticmethod(np.tan)
     atan = staticmethod(np.arctan)
-    atan2 = staticmethod(np.arctan2)
     acos = staticmethod(np.arccos)
     sqrt = staticmethod(np.sqrt)
     exp = staticmethod(np.exp)
-    log = staticmethod(np.log)
     log10 = staticmethod(np.log10)
     abs = staticmethod(np.abs)
     sign = staticmethod(np.sign)
     fmin = staticmethod(np.minimum)
     fmax = staticmethod(np.maximum)
-    power = staticmethod(np.power)
     logical_and = staticmethod(np.logical_and)
-    logical_or = staticmethod(np.logical_or)
-    logical_not = staticmethod(np.logical_not)
-    isnan = staticmethod(np.isnan)
 
     @staticmethod
     def where(cond, a, b):
@@ -160,17 +152,15 @@ class CasadiBackend:
 
     name = "casadi"
     pi = np.pi
-    eps = np.finfo(float).eps
-
     def __init__(self, smooth: float | None = None):
         import casadi as ca
 
         self.ca = ca
         self.smooth = smooth
         self.sin, self.cos, self.tan = ca.sin, ca.cos, ca.tan
-        self.atan, self.atan2, self.acos = ca.atan, ca.atan2, ca.acos
-        self.sqrt, self.exp, self.log = ca.sqrt, ca.exp, ca.log
-        self.logical_and, self.logical_or, self.logical_not = ca.logic_and, ca.logic_or, ca.logic_not
+        self.atan, self.acos = ca.atan, ca.acos
+        self.sqrt, self.exp = ca.sqrt, ca.exp
+        self.logical_and = ca.logic_and
         if smooth is None:
             self.abs, self.sign = ca.fabs, ca.sign
             self.fmin, self.fmax = ca.fmin, ca.fmax
@@ -185,12 +175,6 @@ class CasadiBackend:
 
     def log10(self, x):
         return self.ca.log(x) / np.log(10.0)
-
-    def power(self, x, y):
-        return self.ca.power(x, y)
-
-    def isnan(self, x):
-        return x != x
 
     def where(self, cond, a, b):
         return self.ca.if_else(cond, a, b)

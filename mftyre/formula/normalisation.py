@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
-__all__ = ["condition_inputs"]
+__all__ = ["condition_inputs", "smooth_low_speed"]
 
 
 def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> SimpleNamespace:
