@@ -1,0 +1,16 @@
+"""A tyre on soft soil beside the Magic Formula on hard ground.
+
+* :mod:`~mftyre.soil.soils`: soil property sets (Bekker n, k_c, k_phi; Mohr-Coulomb c, phi; Janosi-Hanamoto K)
+  as data, built-in (``soils.csv``, with sources) or from a user CSV file;
+* :mod:`~mftyre.soil.equations`: the semi-empirical flexible-tyre-on-soil model (Bekker, Janosi-Hanamoto, Wong),
+  backend-neutral, sharing the .tir's vertical relation and contact patch;
+* :class:`SoftSoilTyre`: NumPy evaluation, the towed (free-rolling) slip, a CasADi function;
+* :class:`Ground`: one interface for a vehicle model: hard ground (Magic Formula), soft soil, or a blend.
+"""
+from .soils import Soil, builtin_soils, read_soils, soil
+from .model import SinkageError, SoftSoilTyre, SoilOutputs
+from .equations import OUTPUTS
+from .ground import Ground, GroundForces
+
+__all__ = ["Soil", "builtin_soils", "read_soils", "soil", "SoftSoilTyre", "SoilOutputs", "SinkageError", "OUTPUTS",
+           "Ground", "GroundForces"]

@@ -1,0 +1,165 @@
+"""SoftSoilTyre: a .tir tyre on a soil, evaluated with the equations of :mod:`mftyre.soil.equations`.
+
+    >>> from mftyre.soil import SoftSoilTyre
+    >>> tyre = SoftSoilTyre("tir_files/agri_460_85R34_mf61.tir", "sandy_loam")
+    >>> out = tyre.evaluate(fz=25e3, slip=np.linspace(0, 0.5, 26), p=1.2e5)
+    >>> out.drawbar_pull, out.sinkage, out.to_frame()
+
+Slip i = 1 - V / (omega Re), Re the hard-ground effective rolling radius (= kappa / (1 + kappa) of the Magic
+Formula); see :class:`mftyre.soil.Ground` for the switch between hard ground, soft soil and a blend.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..backend import NUMPY
+from ..errors import ModelInputError
+from ..model import MFModel, load_tir
+from .equations import OUTPUTS, soft_soil
+from .soils import Soil, soil as named_soil
+
+__all__ = ["SoftSoilTyre", "SoilOutputs", "SinkageError"]
+
+_INPUTS = ("fz", "slip", "alpha", "p", "vx")
+_CHUNK = 16384
+
+
+class SinkageError(ModelInputError):
+    """The tyre would sink so deep that the soil reaches the axle: outside the model (and the vehicle is stuck)."""
+
+
+class SoilOutputs:
+    """Every output of one soft-soil evaluation as named NumPy arrays (see :data:`OUTPUTS`)."""
+
+    __slots__ = tuple(OUTPUTS)
+
+    def __init__(self, **values):
+        for name in OUTPUTS:
+            setattr(self, name, values[name])
+
+    def __getitem__(self, name):
+        if name not in OUTPUTS:
+            raise KeyError(f"no output {name!r}; outputs are {', '.join(OUTPUTS)}")
+        return getattr(self, name)
+
+    def keys(self):
+        return tuple(OUTPUTS)
+
+    def to_frame(self):
+        """A pandas DataFrame, one row per operating point, one column per output (SI)."""
+        import pandas as pd
+
+        shape = np.shape(self.sinkage)
+        return pd.DataFrame({k: np.ravel(np.broadcast_to(getattr(self, k), shape)) for k in OUTPUTS})
+
+    def __repr__(self):
+        return f"SoilOutputs(shape={np.shape(self.sinkage)})"
+
+
+class SoftSoilTyre:
+    """A tyre (a :class:`~mftyre.model.MFModel` or a .tir path) on a soil (a :class:`Soil` or a built-in name)."""
+
+    def __init__(self, tyre, soil):
+        self.tyre = tyre if isinstance(tyre, MFModel) else load_tir(tyre)
+        self.soil = soil if isinstance(soil, Soil) else named_soil(soil)
+
+    @property
+    def params(self):
+        return self.tyre.params
+
+    def evaluate(self, fz, slip, alpha=0.0, p=None, vx=None) -> SoilOutputs:
+        """All outputs at the operating points; inputs broadcast like NumPy.
+
+        fz [N] > 0, slip i [-] < 1 (1 - V/(omega Re)), alpha [rad], p [Pa] > 0 (default INFLPRES), vx [m/s]
+        (default LONGVL). Raises :class:`ModelInputError` on invalid inputs and :class:`SinkageError` where the
+        soil would reach the axle.
+        """
+        prm = self.params
+        values = dict(fz=fz, slip=slip, alpha=alpha, p=prm.INFLPRES if p is None else p,
+                      vx=prm.LONGVL if vx is None else vx)
+        arrays = {}
+        for name, value in values.items():
+            try:
+                arrays[name] = np.asarray(value, dtype=float)
+            except (TypeError, ValueError):
+                raise ModelInputError(f"{name} must be numeric, got {value!r}") from None
+        try:
+            arrays = dict(zip(arrays, np.broadcast_arrays(*arrays.values())))
+        except ValueError:
+            shapes = ", ".join(f"{k}{np.shape(v)}" for k, v in arrays.items())
+            raise ModelInputError(f"inputs do not broadcast to one shape: {shapes}") from None
+        _check(arrays)
+        shape = arrays["fz"].shape
+        flat = {k: np.ravel(v) for k, v in arrays.items()}
+        size = flat["fz"].size
+        out = {k: np.empty(size) for k in OUTPUTS}
+        for start in range(0, size, _CHUNK):  # chunks keep the temporaries in the CPU cache
+            part = slice(start, min(start + _CHUNK, size))
+            with np.errstate(all="ignore"):
+                values = soft_soil(prm, self.soil, *(flat[k][part] for k in _INPUTS), NUMPY)
+            for k, v in values.items():
+                out[k][part] = v
+        self._check_sinkage(out, flat)
+        return SoilOutputs(**{k: v.reshape(shape) for k, v in out.items()})
+
+    def free_rolling_slip(self, fz, alpha=0.0, p=None):
+        """Slip i of a towed wheel (zero driving torque): 1 - r_t / Re (see :mod:`mftyre.soil.equations`);
+        negative in the rigid mode (the wheel turns slower than on hard ground), 0 in the flexible mode."""
+        out = self.evaluate(fz, 0.0, alpha, p, vx=1.0)
+        return 1.0 - out.rolling_radius * out.omega  # omega = 1 / Re at slip 0 and V = 1 m/s
+
+    def casadi_function(self, inputs=("fz", "slip", "alpha", "p"), outputs=tuple(OUTPUTS), *, fixed=None,
+                        name="soft_soil"):
+        """A ``casadi.Function`` of the same equations (SX). ``inputs``: any of fz slip alpha p vx, symbolic
+        in the order given; the others take ``fixed`` values or their defaults (alpha 0, p INFLPRES, vx LONGVL;
+        fz and slip must be given). The rigid/flexible switch is an ``if_else`` (a step in contact length and
+        traction where p_i + p_c crosses p_cr); elsewhere the outputs are smooth. No sinkage check is made:
+        evaluate with :meth:`evaluate` to be told when the soil reaches the axle."""
+        import casadi as ca
+        from ..backend import casadi_backend
+
+        unknown = [k for k in (*inputs, *(fixed or {})) if k not in _INPUTS]
+        if unknown:
+            raise ModelInputError(f"unknown input(s) {unknown}; inputs are {', '.join(_INPUTS)}")
+        bad = [k for k in outputs if k not in OUTPUTS]
+        if bad:
+            raise ModelInputError(f"unknown output(s) {bad}; outputs are {', '.join(OUTPUTS)}")
+        prm = self.params
+        values = dict(alpha=0.0, p=prm.INFLPRES, vx=prm.LONGVL)
+        values.update(fixed or {})
+        symbols = {k: ca.SX.sym(k) for k in inputs}
+        values.update(symbols)
+        missing = [k for k in ("fz", "slip") if k not in values]
+        if missing:
+            raise ModelInputError(f"input(s) {missing} must be symbolic or given in `fixed`")
+        # the constant inputs become SX too, so every output is an expression
+        args = [ca.SX(values[k]) if not isinstance(values[k], ca.SX) else values[k] for k in _INPUTS]
+        out = soft_soil(prm, self.soil, *args, casadi_backend())
+        names = [f"{k}_out" if k in inputs else k for k in outputs]
+        return ca.Function(name, [symbols[k] for k in inputs], [ca.SX(out[k]) for k in outputs], list(inputs), names)
+
+    def _check_sinkage(self, out, flat):
+        too_deep = ~(out["sinkage"] + out["deflection"] < self.params.UNLOADED_RADIUS)
+        if np.any(too_deep):
+            i = int(np.argmax(too_deep))
+            raise SinkageError(
+                f"soil {self.soil.name!r}: at fz = {flat['fz'][i]:g} N, p = {flat['p'][i]:g} Pa the sinkage "
+                f"{out['sinkage'][i]:.3g} m plus deflection {out['deflection'][i]:.3g} m reaches the axle "
+                f"(UNLOADED_RADIUS {self.params.UNLOADED_RADIUS:g} m) at {int(too_deep.sum())} point(s), first at "
+                f"index {i}: the wheel is buried; expected a smaller load, a lower pressure or a firmer soil")
+
+    def __repr__(self):
+        return f"SoftSoilTyre({self.tyre!r}, soil={self.soil.name!r})"
+
+
+def _check(arrays):
+    """Typed errors for inputs outside the model's domain."""
+    rules = (("fz", lambda v: v > 0, "positive (in N)"), ("slip", lambda v: v < 1, "below 1 (i = 1 - V/(omega Re))"),
+             ("alpha", lambda v: np.abs(v) < np.pi / 2, "within (-90, 90) deg (in rad)"),
+             ("p", lambda v: v > 0, "positive (in Pa)"), ("vx", lambda v: v >= 0, ">= 0 (in m/s)"))
+    for name, ok, expected in rules:
+        value = np.asarray(arrays[name])
+        good = ok(value) & np.isfinite(value)
+        if not np.all(good):
+            bad = np.ravel(value)[np.argmin(np.ravel(good))] if value.ndim else value
+            raise ModelInputError(f"{name} must be finite and {expected}; got {float(bad)!r}")
