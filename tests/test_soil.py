@@ -1,0 +1,366 @@
+"""The soft-soil tyre model (mftyre.soil): seed 003's worked numbers, analytic limits, physical trends, CasADi,
+the ground switch and bad input."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from conftest import TIR_FILES
+from mftyre.backend import NUMPY
+from mftyre.errors import DataError, ModelInputError
+from mftyre.model import load_tir
+from mftyre.soil import Ground, SinkageError, Soil, SoftSoilTyre, builtin_soils, read_soils, soil
+from mftyre.soil.equations import compaction_resistance, critical_pressure, rigid_wheel_sinkage
+
+AGRI = TIR_FILES / "agri_460_85R34_mf61.tir"
+AGRI_SMALL = TIR_FILES / "agri_420_85R24_mf61.tir"
+CAR = TIR_FILES / "car_205_60R15_mf61.tir"
+PADDY = soil("paddy_soil")
+# seed 003's flotation tyre (29x12.50-15): diameter and width
+SEED_D, SEED_B = 0.73, 0.305
+
+
+# ------------------------------------------------------------------------------------------------ seed 003
+def test_seed003_rigid_wheel_sinkage_at_3_5_kN():
+    """Seed 003, eq. 2: z = 0.125 m at W = 3.5 kN (D 0.73 m, b 0.305 m, n 0.4, k_c 1.87 kN/m^1.4, k_phi 96.08
+    kN/m^2.4). The exponent is printed as 2/(2n-1) in the seed (an extraction garble: with n = 0.4 that is -10 and
+    gives z = 1.6e8 m); Bekker's original rigid-wheel formula has 2/(2n+1) and gives 0.1230 m, which the seed
+    rounds to 0.125 m (1.6 % apart)."""
+    z = rigid_wheel_sinkage(PADDY, 3.5e3, SEED_D, SEED_B, NUMPY)
+    assert z == pytest.approx(0.1230, abs=5e-4)
+    assert z == pytest.approx(0.125, rel=0.02)
+    # the seed's geometric contact length (its eq. 3) with its rounded z = 0.125 m is 0.55 m; ours with 0.123 m
+    r = SEED_D / 2
+    assert 2 * math.sqrt(r**2 - (r - z) ** 2) == pytest.approx(0.55, rel=0.01)
+
+
+def test_seed003_critical_pressure_at_5_kN():
+    """Seed 003, eq. 1 quotes p_cr = 29.65 kPa at W = 5 kN. Not reproduced: Wong's critical pressure
+    p_cr = (k_c/b + k_phi)^(1/(2n+1)) [3W / ((3-n) b sqrt(D))]^(2n/(2n+1)) = k z_r^n, the pressure under the
+    rigid wheel, is 51.8 kPa with these constants. Dropping b from the second bracket (dimensionally wrong: the
+    result is then not in Pa) gives 30.6 kPa, within 3 % of the seed's number, so the seed most likely lost that b;
+    its printed exponents (n/(2n+1) on the first bracket) give 6.5 kPa. The seed's conclusion holds either way:
+    the tyre's 68.95 kPa inflation pressure exceeds p_cr, so it behaves as a rigid wheel."""
+    n, k = PADDY.n, PADDY.modulus(SEED_B) / 1e3  # kN/m^(n+2)
+    p_cr = critical_pressure(PADDY, 5e3, SEED_D, SEED_B, NUMPY)
+    assert p_cr == pytest.approx(51.8e3, rel=2e-3)
+    z5 = rigid_wheel_sinkage(PADDY, 5e3, SEED_D, SEED_B, NUMPY)
+    assert p_cr == pytest.approx(PADDY.modulus(SEED_B) * z5**n, rel=1e-12)
+    without_b = k ** (1 / (2 * n + 1)) * (3 * 5.0 / ((3 - n) * math.sqrt(SEED_D))) ** (2 * n / (2 * n + 1))
+    assert without_b == pytest.approx(29.65, rel=0.035)
+    assert 68.95e3 > p_cr
+
+
+def test_seed003_sinkage_grows_with_load_against_fe():
+    """Seed 003's FE sinkages (Drucker-Prager paddy soil, 29x12.50-15 at 10 psi, rigid mode per the seed):
+    1.5/2.8/3.6/4.8/5.6 kN -> 48/62/102/148/180 mm. Bekker's rigid wheel with the seed's constants gives
+    48/96/127/175/207 mm: the same growth with load and the same value at 1.5 kN, but 15-55 % deeper at 2.8-5.6 kN
+    (worst at 2.8 kN, where the FE curve has a kink). FE with Drucker-Prager soil is not Bekker: agreement within a
+    factor 1.6 is what this test holds, and the growth z ~ W^(2/(2n+1)) = W^1.11."""
+    loads = np.array([1.5, 2.8, 3.6, 4.8, 5.6]) * 1e3
+    fe = np.array([48, 62, 102, 148, 180]) * 1e-3
+    z = rigid_wheel_sinkage(PADDY, loads, SEED_D, SEED_B, NUMPY)
+    assert np.all(np.diff(z) > 0)
+    assert z[0] == pytest.approx(fe[0], rel=0.02)
+    ratio = z / fe
+    assert np.all((ratio > 1 / 1.6) & (ratio < 1.6)), ratio
+    assert np.log(z[-1] / z[0]) / np.log(loads[-1] / loads[0]) == pytest.approx(2 / (2 * PADDY.n + 1), rel=1e-9)
+
+
+# ------------------------------------------------------------------------------------------ analytic checks
+def _tread_slip(out, vx):
+    return 1.0 - vx / (out.omega * out.rolling_radius)
+
+
+@pytest.mark.parametrize("soil_name, p", [("sandy_loam", 1.2e5), ("paddy_soil", 1.6e5)])
+def test_thrust_equals_janosi_hanamoto_closed_form_for_uniform_strength(soil_name, p):
+    """With phi = 0 the shear strength is c everywhere and the thrust is Wong's closed form
+    H = sign(i) c b L [1 - K/(|i| L)(1 - exp(-|i| L / K))], in the flexible (sandy loam) and the rigid (paddy) mode."""
+    base = soil(soil_name)
+    cohesive = Soil("cohesive", base.n, base.k_c, base.k_phi, 5e3, 0.0, base.K)
+    tyre = SoftSoilTyre(AGRI, cohesive)
+    slip = np.array([-0.3, 0.02, 0.1, 0.3, 0.7])
+    out = tyre.evaluate(fz=20e3, slip=slip, p=p, vx=2.0)
+    i, L, b = _tread_slip(out, 2.0), out.contact_length, out.contact_width
+    u = np.abs(i) * L / cohesive.K  # braking (i < 0): the same shear backwards
+    closed = np.sign(i) * cohesive.c * b * L * (1 - (1 - np.exp(-u)) / u)
+    np.testing.assert_allclose(out.gross_traction, closed, rtol=1e-8)
+    assert set(out.flexible) == ({1.0} if soil_name == "sandy_loam" else {0.0})
+
+
+@pytest.mark.parametrize("soil_name, p", [("sandy_loam", 1.2e5), ("paddy_soil", 1.6e5), ("dry_sand", 1.0e5)])
+def test_thrust_and_lateral_force_against_adaptive_quadrature(soil_name, p):
+    """The Gauss sums against scipy's adaptive quadrature of the same integrand, rebuilt from the documented
+    equations and the outputs (sinkage, deflection, contact length): tau = (c + sigma tan phi)(1 - exp(-j/K))
+    along (j_x, j_y), sigma = k (r (cos theta - cos theta_e))^n on the arc and k z^n on the flat part."""
+    s = soil(soil_name)
+    tyre = SoftSoilTyre(AGRI, s)
+    prm = tyre.params
+    r = prm.UNLOADED_RADIUS * prm.Q_RE0
+    for slip, alpha in ((0.15, 0.0), (0.4, 0.05), (-0.2, -0.1)):
+        out = tyre.evaluate(fz=25e3, slip=slip, alpha=alpha, p=p, vx=2.0)
+        z, delta, L, b = (float(out[k]) for k in ("sinkage", "deflection", "contact_length", "contact_width"))
+        i = float(_tread_slip(out, 2.0))
+        k = s.modulus(b)
+        cos_f, cos_e = (r - delta) / r, (r - delta - z) / r
+        arc = r * (math.sqrt(1 - cos_e**2) - math.sqrt(1 - cos_f**2))
+
+        def sigma(x):
+            if x >= arc:
+                return k * z**s.n
+            sin_t = math.sqrt(1 - cos_e**2) - x / r
+            return k * max(r * (math.sqrt(1 - sin_t**2) - cos_e), 0.0) ** s.n
+
+        def tau(x, component):
+            jx, jy = i * x, (1 - i) * math.tan(alpha) * x
+            j = math.hypot(jx, jy)
+            return (s.c + sigma(x) * math.tan(s.phi)) * (1 - math.exp(-j / s.K)) * (jx, jy)[component] / j
+
+        h = b * sum(quad(tau, lo, hi, args=(0,), epsabs=1e-10, limit=200)[0] for lo, hi in ((0, arc), (arc, L)))
+        fy = -b * sum(quad(tau, lo, hi, args=(1,), epsabs=1e-10, limit=200)[0] for lo, hi in ((0, arc), (arc, L)))
+        assert float(out.gross_traction) == pytest.approx(h, rel=2e-4)
+        if alpha:
+            assert float(out.fy) == pytest.approx(fy, rel=2e-4)
+            assert np.sign(float(out.fy)) == -np.sign(alpha)  # ISO-W: Fy opposes the slip angle
+
+
+def test_rigid_wheel_limit_matches_bekker_closed_forms():
+    """A tyre far stiffer than the soil (p_g >> p_cr) is a rigid wheel: its sinkage is Bekker's rigid-wheel
+    sinkage, its compaction resistance Bekker's closed form in W,
+    R_c = (3W/sqrt(D))^((2n+2)/(2n+1)) / [(3-n)^((2n+2)/(2n+1)) (n+1) (k_c + b k_phi)^(1/(2n+1))],
+    and the vertical reaction of the front arc, b int k (r(cos theta - cos theta_e))^n dx, carries the load to
+    within Bekker's approximation (7-10 % here: his formula replaces the circle by a parabola and expands
+    (z - x^2/D)^n to first order)."""
+    tyre = SoftSoilTyre(load_tir(AGRI).with_params(INFLPRES=2.4e5), "paddy_soil")
+    prm, s = tyre.params, tyre.soil
+    W = np.array([5e3, 10e3, 15e3])
+    out = tyre.evaluate(fz=W, slip=0.1)
+    assert np.all(out.flexible == 0) and np.all(out.deflection == 0)
+    D, b, n = 2 * prm.UNLOADED_RADIUS * prm.Q_RE0, prm.WIDTH, s.n
+    e = (2 * n + 2) / (2 * n + 1)
+    bekker = (3 * W / np.sqrt(D)) ** e / ((3 - n) ** e * (n + 1) * (s.k_c + b * s.k_phi) ** (1 / (2 * n + 1)))
+    np.testing.assert_allclose(out.motion_resistance, bekker, rtol=1e-10)
+    np.testing.assert_allclose(out.sinkage, rigid_wheel_sinkage(s, W, D, b, NUMPY), rtol=1e-12)
+    np.testing.assert_allclose(out.ground_pressure, out.critical_pressure, rtol=1e-12)
+    r = D / 2
+    for w, z, L in zip(W, out.sinkage, out.contact_length):
+        carried = b * quad(lambda x: s.modulus(b) * (np.sqrt(r**2 - x**2) - (r - z)) ** n, 0, L)[0]
+        assert carried == pytest.approx(w, rel=0.12)
+
+
+# ---------------------------------------------------------------------------------------------- trends
+def test_lower_pressure_less_sinkage_and_resistance_once_flexible():
+    """Seed 001 (driven FE tyre) and Wong: once the tyre flattens, lower pressure -> larger footprint -> lower
+    ground pressure -> less sinkage and less compaction resistance; at the same slip more drawbar pull."""
+    for tir in (AGRI, AGRI_SMALL):
+        for name in ("sandy_loam", "clayey_soil"):
+            tyre = SoftSoilTyre(tir, name)
+            p = np.array([1.0e5, 1.2e5, 1.4e5, 1.6e5])
+            out = tyre.evaluate(fz=0.8 * tyre.params.FNOMIN, slip=0.15, p=p)
+            assert np.all(out.flexible == 1), (tir.name, name)
+            for key in ("sinkage", "motion_resistance", "ground_pressure"):
+                assert np.all(np.diff(out[key]) > 0), (tir.name, name, key)
+            assert np.all(np.diff(out.deflection) < 0)
+
+
+def test_rigid_mode_is_independent_of_pressure():
+    """Above the critical pressure the tyre is a rigid wheel: pressure no longer changes sinkage or resistance."""
+    tyre = SoftSoilTyre(AGRI, "paddy_soil")
+    out = tyre.evaluate(fz=30e3, slip=0.2, p=np.array([1.0e5, 1.6e5, 2.4e5]))
+    assert np.all(out.flexible == 0)
+    assert np.ptp(out.sinkage) == 0 and np.ptp(out.motion_resistance) == 0
+
+
+def test_drawbar_pull_rises_with_slip_to_a_saturating_maximum():
+    """DP(i) rises monotonically, concave, and saturates at the Mohr-Coulomb limit less the resistance,
+    b int (c + sigma tan phi) dx - R_c, less the K/(iL) shortfall of the Janosi-Hanamoto integral. (That limit
+    exceeds c A + W tan(phi) by the front arc's normal stress, which the model does not add to the load balance;
+    see the module notes.)"""
+    tyre = SoftSoilTyre(AGRI, "sandy_loam")
+    slip = np.linspace(0.0, 0.95, 96)
+    out = tyre.evaluate(fz=25e3, slip=slip, p=1.2e5)
+    dp = out.drawbar_pull
+    assert dp[0] < 0 < dp[5]                        # self-propelled point at a small positive slip
+    assert np.all(np.diff(dp) > 0) and np.all(np.diff(dp, 2) < 0)
+    gain_late = dp[-1] - dp[60]                      # i 0.6 -> 0.95
+    gain_early = dp[60] - dp[0]                      # i 0 -> 0.6
+    assert gain_late < 0.1 * gain_early
+    s = tyre.soil
+    rigid_plastic = SoftSoilTyre(AGRI, Soil("stiff", s.n, s.k_c, s.k_phi, s.c, s.phi, 1e-9))  # K -> 0: tau = tau_max
+    limit = float(rigid_plastic.evaluate(fz=25e3, slip=0.5, p=1.2e5).drawbar_pull)
+    assert 0.9 * limit < dp[-1] < limit
+    assert np.nanargmax(out.efficiency) < 30           # efficiency peaks at a moderate slip
+    assert np.all(np.diff(out.sinkage) == 0)           # no slip sinkage in this model (documented)
+
+
+def test_sinkage_grows_with_load():
+    """Sinkage and compaction resistance grow with load, in the flexible mode (sandy loam) and in the rigid mode
+    (paddy soil: z ~ W^(2/(2n+1)))."""
+    out = SoftSoilTyre(AGRI, "sandy_loam").evaluate(fz=np.linspace(10e3, 40e3, 13), slip=0.1, p=1.2e5)
+    assert np.all(out.flexible == 1)
+    assert np.all(np.diff(out.sinkage) > 0) and np.all(np.diff(out.motion_resistance) > 0)
+    out = SoftSoilTyre(AGRI, "paddy_soil").evaluate(fz=np.linspace(5e3, 40e3, 15), slip=0.1, p=1.2e5)
+    assert np.all(out.flexible == 0)
+    assert np.all(np.diff(out.sinkage) > 0) and np.all(np.diff(out.motion_resistance) > 0)
+
+
+def test_towed_wheel_on_soft_soil_turns_slower_than_on_hard_ground():
+    """Seed 001: a towed car tyre (242 kPa) on soft soil turns slower than on the rigid road. The model: a towed
+    wheel (zero torque) turns at V / r_t; in the rigid mode r_t is the free radius, larger than the hard-ground
+    rolling radius Re, so it turns slower (by 1 - Re / r). In the flexible mode the model's towed wheel turns as on
+    hard ground (the model has no slip sinkage or bulldozing that would brake it; stated, not hidden)."""
+    car = load_tir(CAR)
+    hard = car.evaluate(fz=5e3, kappa=0.0, alpha=0.0, vx=10 / 3.6, p=2.42e5)
+    soft = SoftSoilTyre(car, "heavy_clay_wet")
+    slip = soft.free_rolling_slip(5e3, p=2.42e5)
+    towed = soft.evaluate(fz=5e3, slip=slip, p=2.42e5, vx=10 / 3.6)
+    assert float(towed.flexible) == 0.0
+    assert abs(float(towed.torque)) < 1e-9 * 5e3
+    assert float(towed.omega) < float(hard.omega)
+    assert float(towed.omega) == pytest.approx(10 / 3.6 / (car.params.UNLOADED_RADIUS * car.params.Q_RE0), rel=1e-12)
+    flexible = SoftSoilTyre(AGRI, "sandy_loam")
+    assert float(flexible.free_rolling_slip(20e3, p=1.2e5)) == pytest.approx(0.0, abs=1e-15)
+
+
+# ---------------------------------------------------------------------------------------------- casadi
+def _points(rng, size):
+    return dict(fz=rng.uniform(5e3, 40e3, size), slip=rng.uniform(-0.5, 0.9, size),
+                alpha=rng.uniform(-0.2, 0.2, size), p=rng.uniform(0.8e5, 2.4e5, size))
+
+
+@pytest.mark.parametrize("soil_name", ["sandy_loam", "paddy_soil", "dry_sand"])
+def test_casadi_matches_numpy(soil_name):
+    tyre = SoftSoilTyre(AGRI, soil_name)
+    f = tyre.casadi_function(inputs=("fz", "slip", "alpha", "p"))
+    pts = _points(np.random.default_rng(1), 40)
+    out = tyre.evaluate(**pts)
+    got = f.map(40)(*(pts[k][None, :] for k in ("fz", "slip", "alpha", "p")))
+    names = f.name_out()
+    for k, value in zip(names, got):
+        key = k[:-4] if k.endswith("_out") else k
+        np.testing.assert_allclose(np.ravel(value.full()), np.ravel(out[key]), rtol=1e-11, atol=1e-9, err_msg=key)
+
+
+def test_casadi_derivatives_match_finite_differences():
+    """d(drawbar pull, Fy, sinkage)/d(fz, slip, alpha, p) from CasADi against central differences of the NumPy
+    model, at points inside one mode (away from the rigid/flexible switch)."""
+    import casadi as ca
+
+    tyre = SoftSoilTyre(AGRI, "sandy_loam")
+    f = tyre.casadi_function(inputs=("fz", "slip", "alpha", "p"), outputs=("drawbar_pull", "fy", "sinkage"))
+    x = ca.SX.sym("x", 4)
+    jac = ca.Function("dfdx", [x], [ca.jacobian(ca.vertcat(*f(x[0], x[1], x[2], x[3])), x)])
+    steps = np.array([1.0, 1e-6, 1e-6, 1.0])
+    for point in ([20e3, 0.15, 0.05, 1.2e5], [30e3, 0.4, -0.1, 1.6e5]):
+        analytic = jac(point).full()
+        for col in range(4):
+            hi, lo = np.array(point, float), np.array(point, float)
+            hi[col] += steps[col]
+            lo[col] -= steps[col]
+            o_hi, o_lo = (tyre.evaluate(*v) for v in (hi, lo))
+            fd = [(o_hi[k] - o_lo[k]) / (2 * steps[col]) for k in ("drawbar_pull", "fy", "sinkage")]
+            np.testing.assert_allclose(analytic[:, col], np.ravel(fd), rtol=1e-5, atol=1e-7 * np.abs(analytic).max())
+
+
+# ---------------------------------------------------------------------------------------------- ground
+def test_ground_switch_hard_soft_blend():
+    model = load_tir(AGRI)
+    args = dict(fz=25e3, kappa=np.array([0.05, 0.2]), alpha=0.03, vx=2.0, p=1.2e5)
+    hard = model.evaluate(**args)
+    soft = SoftSoilTyre(model, "sandy_loam").evaluate(fz=25e3, slip=args["kappa"] / (1 + args["kappa"]),
+                                                      alpha=0.03, vx=2.0, p=1.2e5)
+    on_hard = Ground(model).forces(**args)
+    on_soil = Ground(model, "sandy_loam").forces(**args)
+    half = Ground(model, "sandy_loam", blend=0.5).forces(**args)
+    np.testing.assert_array_equal(on_hard.fx, hard.fx)
+    np.testing.assert_array_equal(on_hard.sinkage, 0.0)
+    np.testing.assert_allclose(on_soil.fx, soft.drawbar_pull, rtol=1e-14)
+    np.testing.assert_allclose(on_soil.fy, soft.fy, rtol=1e-14)
+    np.testing.assert_allclose(half.fx, 0.5 * (hard.fx + soft.drawbar_pull), rtol=1e-14)
+    np.testing.assert_allclose(half.sinkage, 0.5 * soft.sinkage, rtol=1e-14)
+    # the soil slip and the MF slip describe the same wheel spin (to the centrifugal growth of Re in the MF,
+    # Q_V1 at 2 m/s, which the soil model, using the radius at rest, leaves out)
+    np.testing.assert_allclose(soft.omega, hard.omega, rtol=1e-3)
+    with pytest.raises(ModelInputError, match="blend must be in"):
+        Ground(model, "sandy_loam", blend=1.5)
+    with pytest.raises(ModelInputError, match="needs a soil"):
+        Ground(model, blend=0.3)
+
+
+# ------------------------------------------------------------------------------------------- soil table
+def test_builtin_soils_have_sources_and_si_units():
+    table = builtin_soils()
+    assert {"paddy_soil", "dry_sand", "sandy_loam", "clayey_soil", "heavy_clay"} <= set(table)
+    for s in table.values():
+        assert s.source, s.name
+    paddy = table["paddy_soil"]
+    assert (paddy.n, paddy.k_c, paddy.k_phi, paddy.c, paddy.K) == (0.4, 1870.0, 96080.0, 6250.0, 0.065)
+    assert math.degrees(paddy.phi) == pytest.approx(30.2)
+
+
+def test_user_soil_file(tmp_path):
+    path = tmp_path / "mine.csv"
+    path.write_text("# my field\nname,n,k_c,k_phi,c,phi,K\nfield_7,0.8,10,800,3.5,25,0.02\n")
+    s = soil("field_7", path)
+    assert (s.k_c, s.k_phi, s.c, s.K) == (10e3, 800e3, 3.5e3, 0.02)
+    assert SoftSoilTyre(AGRI, s).evaluate(fz=20e3, slip=0.1).drawbar_pull > 0
+
+
+# ------------------------------------------------------------------------------------------------ errors
+def test_unknown_soil_is_a_typed_error():
+    with pytest.raises(ModelInputError, match=r"unknown soil 'moon_dust'.*paddy_soil"):
+        soil("moon_dust")
+    with pytest.raises(ModelInputError, match="unknown soil"):
+        SoftSoilTyre(AGRI, "moon_dust")
+
+
+@pytest.mark.parametrize("row, message", [
+    ("bad,0.8,-10,800,3.5,25,0.02", r"mine.csv:3: column k_c of soil 'bad' must be a finite number >= 0"),
+    ("bad,0.8,10,800,x,25,0.02", r"mine.csv:3: column c: cannot read 'x'"),
+    ("bad,0,10,800,3.5,25,0.02", r"mine.csv:3: soil 'bad': n must be positive"),
+    ("bad,0.8,10,800,3.5,95,0.02", r"mine.csv:3: soil 'bad': phi must be in \[0, 90\)"),
+    ("bad,0.8,10,800", r"mine.csv:3: 4 fields, the header has 7"),
+])
+def test_bad_soil_file_names_file_line_and_column(tmp_path, row, message):
+    path = tmp_path / "mine.csv"
+    path.write_text(f"# comment\nname,n,k_c,k_phi,c,phi,K\n{row}\n")
+    with pytest.raises(DataError, match=message):
+        read_soils(path)
+
+
+def test_negative_constants_rejected_in_code_too():
+    with pytest.raises(ModelInputError, match="K must be positive"):
+        Soil("x", 0.8, 1e3, 1e5, 1e3, 0.3, -0.01)
+    with pytest.raises(ModelInputError, match="k_phi must be >= 0"):
+        Soil("x", 0.8, 1e3, -1e5, 1e3, 0.3, 0.01)
+
+
+def test_sinkage_beyond_the_radius_is_a_typed_error():
+    tyre = SoftSoilTyre(CAR, "paddy_soil")
+    tyre.evaluate(fz=4e3, slip=0.1)  # deep but possible
+    with pytest.raises(SinkageError, match=r"fz = 8000 N.*reaches the axle.*index 1"):
+        tyre.evaluate(fz=[4e3, 8e3, 9e3], slip=0.1)
+    assert issubclass(SinkageError, ModelInputError)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(fz=-1.0, slip=0.1), "fz must be finite and positive"),
+    (dict(fz=1e4, slip=1.0), "slip must be finite and below 1"),
+    (dict(fz=1e4, slip=0.1, p=0.0), "p must be finite and positive"),
+    (dict(fz=np.nan, slip=0.1), "fz must be finite"),
+    (dict(fz=[1e4, 2e4], slip=[0.1, 0.2, 0.3]), "do not broadcast"),
+])
+def test_bad_operating_points(kwargs, message):
+    with pytest.raises(ModelInputError, match=message):
+        SoftSoilTyre(AGRI, "sandy_loam").evaluate(**kwargs)
+
+
+def test_compaction_resistance_is_the_rut_work():
+    """R_c = b int_0^z k z'^n dz' (the work per unit travel of pressing the rut), by quadrature."""
+    s = soil("clayey_soil")
+    z, b = 0.07, 0.4
+    work = b * quad(lambda d: s.modulus(b) * d**s.n, 0, z)[0]
+    assert compaction_resistance(s, z, b, NUMPY) == pytest.approx(work, rel=1e-10)
