@@ -1,0 +1,57 @@
+"""`mftyre soil`: table, CSV, plot, units, --overwrite and errors."""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from conftest import TIR_FILES
+from mftyre.cli import main
+from mftyre.soil import SoftSoilTyre
+
+AGRI = str(TIR_FILES / "agri_460_85R34_mf61.tir")
+
+
+def test_table_csv_and_plot_match_the_model(tmp_path, capsys):
+    csv, png = tmp_path / "dp.csv", tmp_path / "dp.png"
+    rc = main(["soil", AGRI, "--soil", "sandy_loam", "--fz", "25kN", "--slip", "0%:60%:7", "--p", "1bar,1.6bar",
+               "--csv", str(csv), "--plot", str(png)])
+    assert rc == 0
+    printed = capsys.readouterr().out
+    assert "sandy_loam" in printed and "drawbar_pull [N]" in printed and "fz = 25000 N" in printed
+    frame = pd.read_csv(csv)
+    assert len(frame) == 14 and "efficiency [-]" in frame.columns
+    slip, p = np.meshgrid(np.linspace(0, 0.6, 7), [1e5, 1.6e5], indexing="ij")
+    expected = SoftSoilTyre(AGRI, "sandy_loam").evaluate(fz=25e3, slip=slip, p=p)
+    np.testing.assert_allclose(frame["drawbar_pull [N]"], expected.drawbar_pull.ravel(), rtol=1e-12)
+    np.testing.assert_allclose(frame["p [Pa]"], p.ravel())
+    assert png.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_existing_output_needs_overwrite(tmp_path, capsys):
+    csv = tmp_path / "out.csv"
+    csv.write_text("keep me")
+    assert main(["soil", AGRI, "--soil", "dry_sand", "--csv", str(csv)]) == 2
+    assert "pass --overwrite" in capsys.readouterr().err and csv.read_text() == "keep me"
+    assert main(["soil", AGRI, "--soil", "dry_sand", "--csv", str(csv), "--overwrite", "-q"]) == 0
+    assert "sinkage [m]" in csv.read_text()
+
+
+def test_user_soil_file(tmp_path, capsys):
+    soils = tmp_path / "soils.csv"
+    soils.write_text("name,n,k_c,k_phi,c,phi,K\nfield_7,0.8,10,800,3.5,25,0.02\n")
+    assert main(["soil", AGRI, "--soil", "field_7", "--soil-file", str(soils), "--slip", "20%"]) == 0
+    assert "field_7" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv, rc, message", [
+    (["--soil", "moon_dust"], 1, "unknown soil 'moon_dust'"),
+    (["--soil", "sandy_loam", "--slip", "120%"], 1, "slip must be finite and below 1"),
+    (["--soil", "sandy_loam", "--p", "1 furlong"], 2, "unknown unit 'furlong'"),
+    (["--soil", "sandy_loam", "--plot", "x.png"], 2, "nothing to plot"),
+    (["--soil", "sandy_loam", "--outputs", "grip"], 2, "unknown output(s) 'grip'"),
+])
+def test_errors(argv, rc, message, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["soil", AGRI, *argv]) == rc
+    assert message in capsys.readouterr().err
