@@ -1,7 +1,7 @@
 """Throughput of the soft-soil model (SoftSoilTyre.evaluate, every output) beside MFModel.evaluate of the same
 operating points on hard ground, measured in the same run.
 
-    python benchmarks/bench_soil.py [--tir FILE.tir] [--soil NAME] [--sizes 10000,100000] [--repeat 3]
+    python benchmarks/bench_soil.py [--tir FILE.tir] [--soil NAME] [--sizes 10000,100000] [--repeat 3] [--load-max 1.5]
 
 Target: 1e5 operating points in under a second. The points are random loads, slips, slip angles and pressures
 over the tyre's range (soil slip i and MF kappa = i / (1 - i) describe the same wheel spin). Timings are the best
@@ -31,6 +31,8 @@ def main() -> None:
     parser.add_argument("--soil", default="sandy_loam")
     parser.add_argument("--sizes", default="10000,100000")
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--load-max", type=float, default=1.5,
+                        help="largest load as a multiple of FNOMIN (lower it for soils the tyre sinks into)")
     args = parser.parse_args()
     tyre = SoftSoilTyre(args.tir, args.soil)
     prm = tyre.params
@@ -38,7 +40,7 @@ def main() -> None:
     print(f"{'points':>8} {'soil [s]':>9} {'MF [s]':>8} {'soil/MF':>8} {'soil us/pt':>11} {'< 1 s for 1e5':>14}")
     for n in (int(s) for s in args.sizes.split(",")):
         rng = np.random.default_rng(0)
-        fz = rng.uniform(0.2, 1.5, n) * prm.FNOMIN
+        fz = rng.uniform(0.2, args.load_max, n) * prm.FNOMIN
         slip = rng.uniform(-0.3, 0.8, n)
         alpha = rng.uniform(-0.15, 0.15, n)
         p = rng.uniform(1.0e5, 1.6e5, n)
