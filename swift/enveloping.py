@@ -34,8 +34,10 @@ exact), plus every road breakpoint inside the window evaluated exactly, so flat 
 sampling error.
 
 Quasi-static tyre (:func:`quasi_static`): the MF vertical spring Fz(rho, p) normal to the effective plane,
-rho = R_Omega - d with d the normal distance from the wheel centre to the plane, free rolling (in-plane force
-F'_x = 0), so the wheel-centre forces are Fx = -F'_z sin(beta_y), Fz = F'_z cos(beta_y) (NOTES sec. 3.5).
+rho = R_Omega - d with d the normal distance from the wheel centre to the plane, the tandem centred at the foot
+of that normal, x_c = x + d sin(beta_y) (the forward shift of the contact point, as in :mod:`swift.ring`), free
+rolling (in-plane force F'_x = 0), so the wheel-centre forces are Fx = -F'_z sin(beta_y), Fz = F'_z cos(beta_y)
+(NOTES sec. 3.5). ``QuasiStatic.road`` holds the effective road at the contact centres.
 """
 from __future__ import annotations
 
@@ -227,13 +229,13 @@ class QuasiStatic:
 
 
 def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mode: str = "fixed_axle",
-                 dx: float = 5e-4, iterations: int = 8) -> QuasiStatic:
+                 dx: float = 5e-4, iterations: int = 12) -> QuasiStatic:
     """The tyre rolling slowly over ``road`` at wheel positions ``x``.
 
     ``mode="fixed_axle"``: axle height fixed where the flat road at the height of ``x[0]`` carries ``fz0``;
     ``mode="constant_load"``: the vertical wheel-centre force stays ``fz0`` and the axle follows.
-    The tandem base depends on the load and the load on the effective road: the pair is solved by fixed-point
-    iteration (``iterations``; the change of l_s per pass is far below the cam-height resolution after 4).
+    The tandem base and the contact centre depend on the load and the load on the effective road: solved
+    together by ``iterations`` passes (substitution on l_s, Newton on the centre).
     """
     if mode not in ("fixed_axle", "constant_load"):
         raise ModelInputError(f"mode must be 'fixed_axle' or 'constant_load', got {mode!r}")
@@ -246,17 +248,23 @@ def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mo
     r_omega = float(vertical.free_radius(prm, 0.0, NUMPY))
     z_axle = float(road.height(x.flat[0])) + float(rl0)
     fzn = np.full(x.shape, float(fz0))
-    for _ in range(iterations):
+    xc = x.copy()
+    for _ in range(iterations):  # contact centre (foot of the normal) and tandem base at the load, together
         ls = tandem_base(prm, fzn, dpi)
-        eff = effective_road(road, x, ls, cams, dx=dx)
+        eff = effective_road(road, xc, ls, cams, dx=dx)
         cosb = np.cos(eff.beta)
         if mode == "fixed_axle":
-            d = (z_axle - eff.w) * cosb  # normal distance wheel centre - effective plane
+            d = (z_axle - eff.w) / cosb  # normal distance wheel centre - effective plane
             fzn = np.maximum(model.vertical_force(np.minimum(d, r_omega), p=p), 0.0)
             dz = np.zeros_like(x)
         else:
             fzn = fz0 / cosb  # vertical component fz0, free rolling
-            rl, _ = model.loaded_radius(fzn, p=p)
-            dz = eff.w + rl / cosb - z_axle
-    rho = r_omega - (z_axle + dz - eff.w) * cosb
+            d, _ = model.loaded_radius(fzn, p=p)
+            dz = eff.w + d / cosb - z_axle
+        # Newton step on x_c = x + d sin(beta) (plain substitution barely contracts over short obstacles), with
+        # dw/dx ~ tan(beta) for the derivative of d along x
+        sinb, dbeta = np.sin(eff.beta), eff.curvature
+        slope = (-np.tan(eff.beta) / cosb + d * np.tan(eff.beta) * dbeta) * (mode == "fixed_axle")
+        xc = xc - (xc - x - d * sinb) / (1.0 - slope * sinb - d * cosb * dbeta)
+    rho = r_omega - d
     return QuasiStatic(x, -fzn * np.sin(eff.beta), fzn * cosb, fzn, dz, rho, ls, eff)

@@ -46,14 +46,21 @@ from mftyre.compiled import compile_c, cache_dir  # the core's compiler call and
 from mftyre.errors import ModelInputError
 
 from .enveloping import Cams, CamTable
-from .ring import INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, RingConstants, ring_equations, tandem_base_now
+from .ring import CONTACT_PASSES, INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, RingConstants, contact_geometry, \
+    contact_start, ring_equations
 from .road import Road
 
 __all__ = ["StepInputs", "SwiftTyre", "SimResult"]
 
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
+#: The compiled functions' cache key includes the equations' source, so an edit never reuses an old library.
+_SOURCE_HASH = hashlib.sha256(b"".join(Path(__file__).with_name(n).read_bytes()
+                                       for n in ("ring.py", "simulate.py"))).hexdigest()
 #: Steps per compiled call in :meth:`SwiftTyre.run`.
 BLOCK = 10
+#: Distance [m] the cam lookups may reach beyond the belt centre: half the tandem base plus the forward shift of
+#: the contact centre (0.1 m each would need a 2a of 0.24 m and a slope of 20 deg).
+TANDEM_REACH = 0.25
 
 
 @dataclass(frozen=True)
@@ -127,31 +134,42 @@ class SwiftTyre:
 
     # ------------------------------------------------------------------ equations
     def _rhs(self, n_window):
-        """rhs(x, u, x0w, grid, hw) -> (dx, out): MX graph, so that the cam-height lookup stays a compiled
-        constant-time table access (an SX expansion would scan the whole window)."""
+        """rhs(x, u, x0w, grid, hw, h) -> (dx, out): MX graph, so that the cam-height lookups stay compiled
+        constant-time table accesses (an SX expansion would scan the whole window). ``h``: the integration step
+        that bounds the relaxation rate (0: the exact model)."""
         import casadi as ca
 
         x = ca.MX.sym("x", len(STATE_NAMES))
         u = ca.MX.sym("u", len(INPUT_NAMES))
-        x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", n_window), ca.MX.sym("hw", n_window)
+        x0w, grid, hw, h = ca.MX.sym("x0w"), ca.MX.sym("grid", n_window), ca.MX.sym("hw", n_window), ca.MX.sym("h")
         lookup = ca.interpolant("cam", "linear", [n_window], 1, {"lookup_mode": ["exact"]})
         xq = ca.MX.sym("xq")
         hq = lookup(xq, grid, hw)
         cam_fn = ca.Function("cam_height", [xq, grid, hw], [hq, ca.jacobian(hq, xq)])
 
         # the physics as SX functions (compact C), the table lookups as MX calls between them
-        xs, us, hs = ca.SX.sym("x", len(STATE_NAMES)), ca.SX.sym("u", len(INPUT_NAMES)), ca.SX.sym("h", 5)
-        tandem = ca.Function("tandem", [xs, us, hs[0]], [tandem_base_now(self.model, xs, us, hs[0])])
-        dx_sx, out_sx = ring_equations(self.model, self.constants, xs, us, hs[0], hs[1], hs[2], hs[3], hs[4],
-                                       axle=self.axle, rim=self.rim)
-        physics = ca.Function("ring", [xs, us, hs], [dx_sx, out_sx])
-        xb = x[STATE_NAMES.index("xb")]
-        h_c, _ = cam_fn(xb - x0w, grid, hw)
-        ls = tandem(x, u, h_c)
-        hf, dhf = cam_fn(xb + ls / 2 - x0w, grid, hw)
-        hr, dhr = cam_fn(xb - ls / 2 - x0w, grid, hw)
-        dx, out = physics(x, u, ca.vertcat(hf, dhf, hr, dhr, ls))
-        return ca.Function("rhs", [x, u, x0w, grid, hw], [dx, out])
+        m, c = self.model, self.constants
+        xs, us, hs = ca.SX.sym("x", len(STATE_NAMES)), ca.SX.sym("u", len(INPUT_NAMES)), ca.SX.sym("h", 6)
+        hstep = ca.SX.sym("hstep")
+        start = ca.Function("contact_start", [xs, us, hs[0]], [ca.vertcat(*contact_start(m, c, xs, us, hs[0]))])
+        geometry = ca.Function("contact_geometry", [xs, us, hs],
+                               [ca.vertcat(*contact_geometry(m, c, xs, us, *(hs[i] for i in range(6))))])
+        dx_sx, out_sx = ring_equations(m, c, xs, us, *(hs[i] for i in range(6)), axle=self.axle, rim=self.rim,
+                                       h=hstep)
+        physics = ca.Function("ring", [xs, us, hs, hstep], [dx_sx, out_sx])
+
+        def cam(xc):
+            return cam_fn(xc - x0w, grid, hw)
+
+        first = start(x, u, cam(x[_S["xb"]])[0])
+        xc, ls = first[0], first[1]
+        for _ in range(CONTACT_PASSES):  # contact centre and tandem base at the current load, solved together
+            (hf, dhf), (hr, dhr) = cam(xc + ls / 2), cam(xc - ls / 2)
+            nxt = geometry(x, u, ca.vertcat(hf, dhf, hr, dhr, ls, xc))
+            xc, ls = nxt[0], nxt[1]
+        (hf, dhf), (hr, dhr) = cam(xc + ls / 2), cam(xc - ls / 2)
+        dx, out = physics(x, u, ca.vertcat(hf, dhf, hr, dhr, ls, xc), h)
+        return ca.Function("rhs", [x, u, x0w, grid, hw, h], [dx, out])
 
     def _build_step(self):
         import casadi as ca
@@ -162,7 +180,7 @@ class SwiftTyre:
         dt, x0w = ca.MX.sym("dt"), ca.MX.sym("x0w")
         grid, hw = ca.MX.sym("grid", self.window), ca.MX.sym("hw", self.window)
         h = dt / self.substeps
-        f = lambda s: rhs(s, u, x0w, grid, hw)[0]  # noqa: E731
+        f = lambda s: rhs(s, u, x0w, grid, hw, h)[0]  # noqa: E731
         xs = x
         for _ in range(self.substeps):  # classical RK4
             k1 = f(xs)
@@ -170,7 +188,7 @@ class SwiftTyre:
             k3 = f(xs + h / 2 * k2)
             k4 = f(xs + h * k3)
             xs = xs + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        out = rhs(xs, u, x0w, grid, hw)[1]
+        out = rhs(xs, u, x0w, grid, hw, h)[1]
         return ca.Function("swift_step", [x, u, dt, x0w, grid, hw], [xs, out],
                            ["x", "u", "dt", "x0w", "grid", "hw"], ["x_next", "out"])
 
@@ -190,11 +208,20 @@ class SwiftTyre:
         return ca.Function("swift_block", [x, u, dt, x0w, grid, hw], [ca.horzcat(*states), ca.horzcat(*outs)],
                            ["x", "u", "dt", "x0w", "grid", "hw"], ["states", "outs"])
 
+    @property
+    def step_function(self):
+        """The CasADi step ``swift_step(x, u, dt, x0w, grid, hw) -> (x_next, out)`` that :meth:`step` runs
+        (compiled): state and inputs in the order of STATE_NAMES / INPUT_NAMES, the cam-height window ``hw`` of
+        ``window`` samples on the local grid ``grid`` (= table.dx * arange(window)) starting at x = ``x0w``.
+        For code generation (FMU)."""
+        return self._step_fn
+
     def _key(self, kind):
         prm = self.model.params
         payload = {"p": {k: repr(prm[k]) for k in prm}, "side": self.model.side, "axle": self.axle,
                    "rim": self.rim, "window": self.window, "substeps": self.substeps,
-                   "constants": repr(self.constants), "kind": kind, "block": BLOCK, "version": 5}
+                   "constants": repr(self.constants), "kind": kind, "block": BLOCK, "passes": CONTACT_PASSES,
+                   "equations": _SOURCE_HASH}
         return "swift_" + hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
     # ------------------------------------------------------------------ stepping
@@ -220,17 +247,27 @@ class SwiftTyre:
                                   f"{self.table.x[-1] - self.window // 2 * self.table.dx:.3f}] m (x_range)")
         return i0
 
-    def step(self, state, inputs: StepInputs, dt: float):
-        """One step of length ``dt``: (state_next, outputs dict). See the module notes for the API."""
-        state = self._impose(state, inputs)
+    def _reach(self):
+        """Largest wheel travel [m] one compiled call may cover: the window half-width less ``TANDEM_REACH``."""
+        return self.window // 2 * self.table.dx - TANDEM_REACH
+
+    def _call_step(self, state, u, dt):
         i0 = self._window_start(state[_S["xb"]])
         x0w = self.table.x0 + i0 * self.table.dx
         if self._compiled is not None:
-            x_next, out = self._compiled((state, self._u(inputs), dt, x0w), self._grid, self._h, i0)
-        else:
-            res = self._step_fn(state, self._u(inputs), dt, x0w, self._grid, self._h[i0:i0 + self.window])
-            x_next, out = (np.asarray(r).ravel() for r in res)
-        return x_next, dict(zip(OUTPUT_NAMES, out))
+            return self._compiled((state, u, dt, x0w), self._grid, self._h, i0)
+        res = self._step_fn(state, u, dt, x0w, self._grid, self._h[i0:i0 + self.window])
+        return tuple(np.asarray(r).ravel() for r in res)
+
+    def step(self, state, inputs: StepInputs, dt: float):
+        """One step of length ``dt``: (state_next, outputs dict). See the module notes for the API. A step over
+        which the wheel would travel further than the cam-height window reaches is split into equal parts."""
+        state = self._impose(state, inputs)
+        u = self._u(inputs)
+        n = max(1, int(np.ceil(abs(inputs.vx) * dt / self._reach())))
+        for _ in range(n):
+            state, out = self._call_step(state, u, dt / n)
+        return state, dict(zip(OUTPUT_NAMES, out))
 
     def run(self, t_end: float, inputs, dt: float = 1e-3) -> SimResult:
         """Fixed-step run from the static equilibrium. ``inputs``: a :class:`StepInputs` (constant speeds; the
@@ -252,6 +289,11 @@ class SwiftTyre:
                 u, first = u_const.copy(), get(t0)
                 u[_U_Y] = inputs.y + inputs.vy * (t0 + dt * np.arange(BLOCK))
             state = self._impose(state, first)
+            if max(abs(u[0])) * BLOCK * dt > self._reach():  # beyond the window in one call: single steps
+                for k in range(BLOCK):
+                    state, ys = self.step(state, get(t0 + k * dt), dt)
+                    states[1 + b * BLOCK + k], outs[1 + b * BLOCK + k] = state, np.fromiter(ys.values(), float)
+                continue
             i0 = self._window_start(state[_S["xb"]])
             x0w = self.table.x0 + i0 * self.table.dx
             if self._compiled_block is not None:
@@ -273,7 +315,7 @@ class SwiftTyre:
     # ------------------------------------------------------------------ reference and statics
     def _rhs_args(self, state):
         i0 = self._window_start(state[_S["xb"]])
-        return self.table.x0 + i0 * self.table.dx, self._grid, self._h[i0:i0 + self.window]
+        return self.table.x0 + i0 * self.table.dx, self._grid, self._h[i0:i0 + self.window], 0.0
 
     def derivative(self, state, inputs: StepInputs):
         """State derivative (CasADi VM on the same right-hand side): for the reference run and checks."""
@@ -329,8 +371,8 @@ class SwiftTyre:
         s[_S["oma"]] = s[_S["omb"]] = inputs.omega
         s[_S["yb"]] = inputs.y
         s[_S["gb"]], s[_S["psb"]] = inputs.gamma, inputs.psi
-        unknown = [_S[n] for n in ("xb", "zb", "thw", "yb", "gb", "psb", "ux", "uy", "kappa", "alpha")]
-        eqs = [_S[n] for n in ("vxb", "vzb", "omb", "vyb", "wgb", "wpsb", "ux", "uy", "kappa", "alpha")]
+        unknown = [_S[n] for n in ("xb", "zb", "thw", "yb", "gb", "psb", "ux", "uy", "kappa", "alpha", "psr")]
+        eqs = [_S[n] for n in ("vxb", "vzb", "omb", "vyb", "wgb", "wpsb", "ux", "uy", "kappa", "alpha", "psr")]
         if self.axle == "load":
             unknown.append(_S["za"])
             eqs.append(_S["vza"])
