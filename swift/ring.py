@@ -60,7 +60,7 @@ Contact (normal to the effective plane):
     yaw is [chosen]), evaluated at speed max(|V_cx|, VXLOW): the steady-state low-speed reduction is not
     applied again on top of the transient slips (they already vanish properly at standstill, so the tyre keeps
     its static grip), and the forces keep the sign of the slips in both directions of travel (reversing);
-    M'_z follows the direction of travel and M'_y the spin direction (smooth signs).
+    M'_z follows the direction of travel and M'_y the spin direction (signs linear through standstill).
     alpha_MF = alpha' + s_v ((psi_b - psi_a) + psi_r): the slip comes from the belt and patch heading, and the
     static twist Mz/C_psi, which the steady-state Magic Formula already contains (it was measured against the rim
     heading), is added back [chosen], so that the steady state equals the Magic Formula while belt yaw dynamics
@@ -282,8 +282,9 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
     fzc = be.where(contact, be.fmax(f_r + damp * c_rz * rho_r_dot, 0.0), 0.0)
 
     # slip model: MF at the transient slips, belt camber, no second low-speed reduction
-    s_v = vcx / be.sqrt(vcx**2 + (0.1 * prm.VXLOW) ** 2)  # direction of travel, smooth through standstill
-    s_o = s["omb"] / be.sqrt(s["omb"] ** 2 + (0.1 * prm.VXLOW / prm.UNLOADED_RADIUS) ** 2)  # spin direction
+    # direction of travel and of spin: +-1, linear through standstill (below 0.1 VXLOW)
+    s_v = be.fmin(be.fmax(vcx / (0.1 * prm.VXLOW), -1.0), 1.0)
+    s_o = be.fmin(be.fmax(s["omb"] * prm.UNLOADED_RADIUS / (0.1 * prm.VXLOW), -1.0), 1.0)
     alpha_mf = s["alpha"] + s_v * (s["psb"] - v["psi"] + s["psr"])
     mf = model.casadi_function(inputs=("fz", "kappa", "alpha", "gamma", "vx", "p", "omega"),
                                outputs=("fx", "fy", "mz", "mx", "my", "re", "a", "cx", "cy"))
