@@ -131,6 +131,7 @@ class SwiftTyre:
         self._block_fn = self._build_block(self._step_fn)
         self._compiled = _Compiled(self._step_fn, self._key("step")) if compiled else None
         self._compiled_block = _Compiled(self._block_fn, self._key("block")) if compiled else None
+        self._equilibrium = None  # static equations for initial_state, built on first use
 
     # ------------------------------------------------------------------ equations
     def _rhs(self, n_window):
@@ -376,11 +377,15 @@ class SwiftTyre:
         if self.axle == "load":
             unknown.append(_S["za"])
             eqs.append(_S["vza"])
-        xs = ca.MX.sym("x", len(STATE_NAMES))
-        d = self._rhs_window(xs, self._u(inputs), *self._rhs_args(s))[0][eqs]
-        fun = ca.Function("eq", [xs], [d, ca.jacobian(d, xs)[:, unknown]])
+        if self._equilibrium is None:  # built once: the static equations and their Jacobian in the unknowns
+            xs, us = ca.MX.sym("x", len(STATE_NAMES)), ca.MX.sym("u", len(INPUT_NAMES))
+            x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", self.window), ca.MX.sym("hw", self.window)
+            d = self._rhs_window(xs, us, x0w, grid, hw, 0.0)[0][eqs]
+            self._equilibrium = ca.Function("equilibrium", [xs, us, x0w, grid, hw],
+                                            [d, ca.jacobian(d, xs)[:, unknown]])
+        u, window = self._u(inputs), self._rhs_args(s)[:3]
         for _ in range(iterations):
-            r, jac = (np.asarray(v) for v in fun(s))
+            r, jac = (np.asarray(v) for v in self._equilibrium(s, u, *window))
             r = r.ravel()
             step = np.linalg.lstsq(jac, -r, rcond=None)[0]
             s[unknown] += step
