@@ -27,8 +27,12 @@ Step API (for an FMU): ``state_next, outputs = step(state, inputs, dt)``.
   half contact length a, tandem base ls, effective height w and slope beta, transient slips, contact speed.
 
 Integration: classical Runge-Kutta (RK4), ``substeps`` per step, all in one compiled CasADi function (C, cached like
-:mod:`mftyre.compiled`); the cam heights come from a window of ``window`` samples of
-the cam-height table around the wheel, passed by pointer (no copy), so one compiled function serves any road.
+:mod:`mftyre.compiled`, keyed by the parameters and the equations' source); the cam heights come from a window of
+``window`` samples of the cam-height table around the wheel, passed by pointer (no copy), so one compiled function
+serves any road. The window must cover the wheel's travel in one compiled call plus ``TANDEM_REACH``: a longer
+:meth:`SwiftTyre.step` is split into equal parts, and :meth:`SwiftTyre.run` steps singly where a block of
+``BLOCK`` steps would travel too far, so results do not depend on speed, step size or start position.
+``SwiftTyre.step_function`` is the CasADi step itself, for code generation (FMU).
 """
 from __future__ import annotations
 
