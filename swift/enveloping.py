@@ -136,19 +136,36 @@ def cam_height(road: Road, x, cams: Cams, *, y=0.0, dx: float = 5e-4):
 @dataclass(frozen=True)
 class CamTable:
     """Cam heights h on the uniform grid ``x0 + i dx`` (load independent: computed once per road and cam shape),
-    linearly interpolated; the road input of the rigid-ring simulation (:mod:`swift.simulate`)."""
+    linearly interpolated; the road input of the rigid-ring simulation (:mod:`swift.simulate`).
+
+    For roads that vary across y (``Road.varies_with_y``) the table holds the multi-track cams: ``h`` is the mean
+    cam height of ``n_width`` tracks spread over y in [-half_width, half_width] and ``camber`` the least-squares
+    slope of the track heights over y, so that the tandem's mean height, slope and road camber
+    beta_x = atan((camber_f + camber_r)/2) (:func:`effective_road_3d`, with the slope of the mean heights) come from
+    two interpolations; 2D roads have ``camber`` = 0."""
 
     x0: float
     dx: float
     h: np.ndarray
+    camber: np.ndarray | None = None
 
     @classmethod
-    def build(cls, road: Road, cams: Cams, x_start: float, x_end: float, dx: float = 1e-3, y: float = 0.0):
+    def build(cls, road: Road, cams: Cams, x_start: float, x_end: float, dx: float = 1e-3, y: float = 0.0,
+              half_width: float | None = None):
+        """Table from ``x_start`` to ``x_end``; ``half_width`` [m] (3D roads: the tracks' half spread, normally the
+        contact half width b at the nominal load) is required when ``road.varies_with_y``."""
         if not x_end > x_start:
             raise ModelInputError(f"x_end ({x_end}) must exceed x_start ({x_start})")
         n = int(np.ceil((x_end - x_start) / dx)) + 1
         grid = x_start + dx * np.arange(n)
-        return cls(float(x_start), float(dx), cam_height(road, grid, cams, y=y, dx=min(dx, 5e-4)))
+        if not road.varies_with_y:
+            return cls(float(x_start), float(dx), cam_height(road, grid, cams, y=y, dx=min(dx, 5e-4)), np.zeros(n))
+        if half_width is None or not half_width > 0 or cams.n_width < 2:
+            raise ModelInputError("a road that varies across y needs half_width > 0 and ELLIPS_NWIDTH >= 2 tracks")
+        ys = y + np.linspace(-half_width, half_width, cams.n_width)
+        h = np.array([cam_height(road, grid, cams, y=yj, dx=min(dx, 5e-4)) for yj in ys])
+        yc = ys - ys.mean()
+        return cls(float(x_start), float(dx), h.mean(axis=0), np.tensordot(yc, h, axes=1) / np.sum(yc**2))
 
     @property
     def x(self):

@@ -33,8 +33,9 @@ Residual springs in series so that the static stiffness of ring + residual is th
     residual damping k_r = (DAMP_RESIDUAL + DAMP_VLOW max(0, 1 - |V|/VXLOW)) f_d c_r [chosen: stiffness
     proportional, DAMP_VLOW faded in linearly below VXLOW]
 Effective road, five inputs (Pacejka 2012 sec. 10.1.4; NOTES sec. 3): from the tandem cam heights h_f, h_r at
-x_c +- l_s/2 the height w = (h_f + h_r)/2, forward slope beta_y = atan((h_f - h_r)/l_s), road camber (input
-``road_camber``), effective curvature kappa_e = d beta_y/dx = cos^2(beta_y) (h_f' - h_r')/l_s, and
+x_c +- l_s/2 the height w = (h_f + h_r)/2, forward slope beta_y = atan((h_f - h_r)/l_s), road camber beta_x
+(ELLIPS_NWIDTH tracks over the contact width at nominal load: atan of the least-squares slope of the track
+heights, :class:`swift.enveloping.CamTable`, plus the input ``road_camber``), effective curvature kappa_e = d beta_y/dx = cos^2(beta_y) (h_f' - h_r')/l_s, and
     * the forward shift of the contact point: the tandem is centred at the foot of the normal from the belt centre
       to the effective plane, x_c = x_b + r_c sin(beta_y), r_c = (z_b - w)/cos(beta_y) [chosen: NOTES sec. 3.5];
     * the effective curvature is an output; the effective rolling radius variation it drives in MF-Swift
@@ -65,8 +66,8 @@ Contact (normal to the effective plane):
     static twist Mz/C_psi, which the steady-state Magic Formula already contains (it was measured against the rim
     heading), is added back [chosen], so that the steady state equals the Magic Formula while belt yaw dynamics
     and YAW_STIFFNESS act on the transient forces.
-    Forces on the belt (global): F_x = F'_x cos(beta_y) - F'_z sin(beta_y), F_z = F'_x sin(beta_y) +
-    F'_z cos(beta_y); moments -r_c F'_x + M'_y about y, r_c F'_y + M'_x about x, M'_z about z.
+    Forces on the belt (global): F_x = F'_x cos(beta_y) - F'_z sin(beta_y) cos(beta_x), F_z = (F'_x sin(beta_y) +
+    F'_z cos(beta_y)) cos(beta_x) + F'_y sin(beta_x), F_y = F'_y cos(beta_x) - F'_z sin(beta_x); moments -r_c F'_x + M'_y about y, r_c F'_y + M'_x about x, M'_z about z.
 Equations of motion (NOTES sec. 4.3, gyroscopic terms from dH/dt = M with H = I_by Omega (-psi, 1, gamma)):
     m_b xddot_b = -c_bx (x_b - x_a) - k_bx (xdot_b - xdot_a) + F_x
     m_b zddot_b = -c_bz (z_b - z_a) - k_bz (zdot_b - zdot_a) + F_z + m_b GRAVITY
@@ -79,8 +80,7 @@ Equations of motion (NOTES sec. 4.3, gyroscopic terms from dH/dt = M with H = I_
     rim "torque":  I_a Omegadot_a = T + c_bth theta_w + k_bth (Omega_b - Omega_a)
 Not modelled (open in the literature, NOTES sec. 9): Q_BVX/Q_BVT (load and speed influence on the sidewall
 stiffness: no published formula; a non-zero value gives a warning), rotating-damper coupling terms, turn slip from
-the belt yaw rate, ENV_C1/ENV_C2, the multi-track (ELLIPS_NWIDTH) road in the dynamic model (road camber enters
-as the input ``road_camber``; :func:`swift.enveloping.effective_road_3d` gives it for a 3D road).
+the belt yaw rate, ENV_C1/ENV_C2.
 """
 from __future__ import annotations
 
@@ -102,7 +102,7 @@ INPUT_NAMES = ("vx", "load", "torque", "p", "y", "vy", "gamma", "psi", "road_cam
 OUTPUT_NAMES = ("fx", "fy", "fz", "mx", "my", "mz",            # forces and moments of the tyre on the rim
                 "fx_c", "fy_c", "fz_c", "mz_c",                # contact forces in the effective plane
                 "rho", "rl", "re", "a", "ls", "w", "beta",     # deflection, radii, patch, effective road
-                "kappa", "alpha", "vcx", "curvature", "x_c")
+                "kappa", "alpha", "vcx", "curvature", "x_c", "beta_x")
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
 #: Passes of the (contact centre, tandem base) solution: Newton on the centre, substitution on l_s.
 CONTACT_PASSES = 4
@@ -246,12 +246,13 @@ def contact_geometry(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x
 
 
 def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c=None, *, axle: str, rim: str,
-                   h=0.0):
+                   h=0.0, road_camber=0.0):
     """State derivative and outputs (CasADi vectors) of the ring at ``state`` (STATE_NAMES) and inputs ``u``
     (INPUT_NAMES), with the front/rear cam heights ``hf``, ``hr`` and their slopes along x at the cam positions
     x_c +- ``ls``/2 (``x_c``: the contact centre, reported only). ``axle``: "height" (imposed, z_a and its rate
     from the state, held by the stepper) or "load"; ``rim``: "speed" (imposed spin) or "torque"; ``h``: the
-    integration step (limits the relaxation rate, module notes; 0 = the exact model)."""
+    integration step (limits the relaxation rate, module notes; 0 = the exact model); ``road_camber``: the
+    multi-track road camber beta_x of a 3D road [rad] (added to the input ``road_camber``)."""
     import casadi as ca
     from mftyre.backend import casadi_backend
 
@@ -286,10 +287,11 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
     s_v = be.fmin(be.fmax(vcx / (0.1 * prm.VXLOW), -1.0), 1.0)
     s_o = be.fmin(be.fmax(s["omb"] * prm.UNLOADED_RADIUS / (0.1 * prm.VXLOW), -1.0), 1.0)
     alpha_mf = s["alpha"] + s_v * (s["psb"] - v["psi"] + s["psr"])
+    beta_x = road_camber + v["road_camber"]
     mf = model.casadi_function(inputs=("fz", "kappa", "alpha", "gamma", "vx", "p", "omega"),
                                outputs=("fx", "fy", "mz", "mx", "my", "re", "a", "cx", "cy"))
     fxc, fyc, mzc, mxc, myc, re, a, cx, cy = mf(be.fmax(fzc, _FZ_FLOOR), s["kappa"], alpha_mf,
-                                                 v["gamma"] - v["road_camber"], be.fmax(be.abs(vcx), prm.VXLOW),
+                                                 v["gamma"] - beta_x, be.fmax(be.abs(vcx), prm.VXLOW),
                                                  v["p"], s["omb"])
     mzc, myc = mzc * s_v, myc * s_o
 
@@ -306,8 +308,9 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
     kappa_dot = be.where(contact, (-(vsx + uxdot) - be.abs(vcx) * s["kappa"]) / sigma_c, -s["kappa"] / AIR_TIME)
     alpha_dot = be.where(contact, (vcy - be.abs(vcx) * s["alpha"]) / sigma_c, -s["alpha"] / AIR_TIME)
 
-    # forces on the belt, global axes; bottoming straight on the rim
-    fx_b, fz_b = fxc * cb - fzc * sb, fxc * sb + fzc * cb
+    # forces on the belt, global axes (plane tilted by beta_y forward, beta_x sideways); bottoming on the rim
+    cx_, sx_ = be.cos(beta_x), be.sin(beta_x)
+    fx_b, fz_b, fy_b = fxc * cb - fzc * sb * cx_, (fxc * sb + fzc * cb) * cx_ + fyc * sx_, fyc * cx_ - fzc * sx_
     fwx = cbx * (s["xb"] - s["xa"]) + kbx * (s["vxb"] - v["vx"])
     fwz = cbx * (s["zb"] - s["za"]) + kbx * (s["vzb"] - s["vza"])
     fwy = cby * (s["yb"] - v["y"]) + kby * (s["vyb"] - v["vy"])
@@ -325,13 +328,13 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
         "za": s["vza"],
         "vza": (-v["load"] + fwz + f_bottom * cb) / rc.axle_mass if axle == "load" else 0.0 * s["vza"],
         "xa": v["vx"], "ux": uxdot, "kappa": kappa_dot,
-        "yb": s["vyb"], "vyb": (-fwy + fyc) / rc.mb,
+        "yb": s["vyb"], "vyb": (-fwy + fy_b) / rc.mb,
         "gb": s["wgb"], "wgb": (-mwx + r_c * fyc + mxc + rc.iby * s["omb"] * s["wpsb"]) / rc.ibx,
         "psb": s["wpsb"], "wpsb": (-mwz + mzc - rc.iby * s["omb"] * s["wgb"]) / rc.ibx,
         "uy": uydot, "alpha": alpha_dot, "psr": psrdot,
     }
     out = dict(fx=fwx - f_bottom * sb, fy=fwy, fz=fwz + f_bottom * cb, mx=mwx, my=mwy, mz=mwz, fx_c=fxc,
                fy_c=fyc, fz_c=fzc, mz_c=mzc, rho=r_omega - r_a, rl=r_c, re=re, a=a, ls=ls, w=w, beta=beta,
-               kappa=s["kappa"], alpha=alpha_mf, vcx=vcx, curvature=curvature,
+               kappa=s["kappa"], alpha=alpha_mf, vcx=vcx, curvature=curvature, beta_x=beta_x,
                x_c=s["xb"] + r_c * sb if x_c is None else x_c)
     return ca.vertcat(*(d[n] for n in STATE_NAMES)), ca.vertcat(*(out[n] for n in OUTPUT_NAMES))

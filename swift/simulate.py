@@ -47,7 +47,9 @@ from pathlib import Path
 import numpy as np
 
 from mftyre.compiled import compile_c, cache_dir  # the core's compiler call and cache folder
+from mftyre.backend import NUMPY
 from mftyre.errors import ModelInputError
+from mftyre.formula import vertical
 
 from .enveloping import Cams, CamTable
 from .ring import CONTACT_PASSES, INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, RingConstants, contact_geometry, \
@@ -123,13 +125,16 @@ class SwiftTyre:
         if isinstance(road, CamTable):
             self.table = road
         else:
-            self.table = CamTable.build(road, self.cams, x_range[0] - margin, x_range[1] + margin, table_dx)
+            _, b = vertical.contact_patch(model.params, model.params.FNOMIN, 0.0, NUMPY)  # tracks over 2b [chosen]
+            self.table = CamTable.build(road, self.cams, x_range[0] - margin, x_range[1] + margin, table_dx,
+                                        half_width=float(b))
         if self.table.h.size < window:
             raise ModelInputError(f"the cam-height table ({self.table.h.size} samples) is shorter than the window "
                                   f"({window})")
         self.window, self.substeps = int(window), int(substeps)
         self._grid = np.ascontiguousarray(self.table.dx * np.arange(self.window))
-        self._h = np.ascontiguousarray(self.table.h, dtype=float)
+        camber = np.zeros(self.table.h.size) if self.table.camber is None else self.table.camber
+        self._h = np.ascontiguousarray(np.column_stack([self.table.h, camber]).ravel(), dtype=float)  # interleaved
         self._rhs_window = self._rhs(self.window)
         self._step_fn = self._build_step()
         self._block_fn = self._build_block(self._step_fn)
@@ -146,34 +151,36 @@ class SwiftTyre:
 
         x = ca.MX.sym("x", len(STATE_NAMES))
         u = ca.MX.sym("u", len(INPUT_NAMES))
-        x0w, grid, hw, h = ca.MX.sym("x0w"), ca.MX.sym("grid", n_window), ca.MX.sym("hw", n_window), ca.MX.sym("h")
-        lookup = ca.interpolant("cam", "linear", [n_window], 1, {"lookup_mode": ["exact"]})
+        x0w, grid, h = ca.MX.sym("x0w"), ca.MX.sym("grid", n_window), ca.MX.sym("h")
+        hw = ca.MX.sym("hw", 2 * n_window)  # cam height and road-camber slope, interleaved
+        lookup = ca.interpolant("cam", "linear", [n_window], 2, {"lookup_mode": ["exact"]})
         xq = ca.MX.sym("xq")
         hq = lookup(xq, grid, hw)
         cam_fn = ca.Function("cam_height", [xq, grid, hw], [hq, ca.jacobian(hq, xq)])
 
         # the physics as SX functions (compact C), the table lookups as MX calls between them
         m, c = self.model, self.constants
-        xs, us, hs = ca.SX.sym("x", len(STATE_NAMES)), ca.SX.sym("u", len(INPUT_NAMES)), ca.SX.sym("h", 6)
+        xs, us, hs = ca.SX.sym("x", len(STATE_NAMES)), ca.SX.sym("u", len(INPUT_NAMES)), ca.SX.sym("h", 7)
         hstep = ca.SX.sym("hstep")
         start = ca.Function("contact_start", [xs, us, hs[0]], [ca.vertcat(*contact_start(m, c, xs, us, hs[0]))])
-        geometry = ca.Function("contact_geometry", [xs, us, hs],
+        geometry = ca.Function("contact_geometry", [xs, us, hs[:6]],
                                [ca.vertcat(*contact_geometry(m, c, xs, us, *(hs[i] for i in range(6))))])
         dx_sx, out_sx = ring_equations(m, c, xs, us, *(hs[i] for i in range(6)), axle=self.axle, rim=self.rim,
-                                       h=hstep)
+                                       h=hstep, road_camber=ca.atan(hs[6]))
         physics = ca.Function("ring", [xs, us, hs, hstep], [dx_sx, out_sx])
 
-        def cam(xc):
-            return cam_fn(xc - x0w, grid, hw)
+        def cam(xc):  # (height, its slope along x, road-camber slope) at xc
+            value, slope = cam_fn(xc - x0w, grid, hw)
+            return value[0], slope[0], value[1]
 
         first = start(x, u, cam(x[_S["xb"]])[0])
         xc, ls = first[0], first[1]
         for _ in range(CONTACT_PASSES):  # contact centre and tandem base at the current load, solved together
-            (hf, dhf), (hr, dhr) = cam(xc + ls / 2), cam(xc - ls / 2)
+            (hf, dhf, _), (hr, dhr, _) = cam(xc + ls / 2), cam(xc - ls / 2)
             nxt = geometry(x, u, ca.vertcat(hf, dhf, hr, dhr, ls, xc))
             xc, ls = nxt[0], nxt[1]
-        (hf, dhf), (hr, dhr) = cam(xc + ls / 2), cam(xc - ls / 2)
-        dx, out = physics(x, u, ca.vertcat(hf, dhf, hr, dhr, ls, xc), h)
+        (hf, dhf, cf), (hr, dhr, cr) = cam(xc + ls / 2), cam(xc - ls / 2)
+        dx, out = physics(x, u, ca.vertcat(hf, dhf, hr, dhr, ls, xc, (cf + cr) / 2), h)
         return ca.Function("rhs", [x, u, x0w, grid, hw, h], [dx, out])
 
     def _build_step(self):
@@ -183,7 +190,7 @@ class SwiftTyre:
         x = ca.MX.sym("x", len(STATE_NAMES))
         u = ca.MX.sym("u", len(INPUT_NAMES))
         dt, x0w = ca.MX.sym("dt"), ca.MX.sym("x0w")
-        grid, hw = ca.MX.sym("grid", self.window), ca.MX.sym("hw", self.window)
+        grid, hw = ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
         h = dt / self.substeps
         f = lambda s: rhs(s, u, x0w, grid, hw, h)[0]  # noqa: E731
         xs = x
@@ -204,7 +211,7 @@ class SwiftTyre:
         x = ca.MX.sym("x", len(STATE_NAMES))
         u = ca.MX.sym("u", len(INPUT_NAMES), BLOCK)
         dt, x0w = ca.MX.sym("dt"), ca.MX.sym("x0w")
-        grid, hw = ca.MX.sym("grid", self.window), ca.MX.sym("hw", self.window)
+        grid, hw = ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
         states, outs, xs = [], [], x
         for k in range(BLOCK):
             xs, out = step(xs, u[:, k], dt, x0w, grid, hw)
@@ -216,8 +223,8 @@ class SwiftTyre:
     @property
     def step_function(self):
         """The CasADi step ``swift_step(x, u, dt, x0w, grid, hw) -> (x_next, out)`` that :meth:`step` runs
-        (compiled): state and inputs in the order of STATE_NAMES / INPUT_NAMES, the cam-height window ``hw`` of
-        ``window`` samples on the local grid ``grid`` (= table.dx * arange(window)) starting at x = ``x0w``.
+        (compiled): state and inputs in the order of STATE_NAMES / INPUT_NAMES, the window ``hw`` of ``window``
+        samples of (cam height, road-camber slope) pairs, interleaved (:class:`swift.enveloping.CamTable`), on the local grid ``grid`` (= table.dx * arange(window)) starting at x = ``x0w``.
         For code generation (FMU)."""
         return self._step_fn
 
@@ -261,7 +268,7 @@ class SwiftTyre:
         x0w = self.table.x0 + i0 * self.table.dx
         if self._compiled is not None:
             return self._compiled((state, u, dt, x0w), self._grid, self._h, i0)
-        res = self._step_fn(state, u, dt, x0w, self._grid, self._h[i0:i0 + self.window])
+        res = self._step_fn(state, u, dt, x0w, self._grid, self._h[2 * i0:2 * (i0 + self.window)])
         return tuple(np.asarray(r).ravel() for r in res)
 
     def step(self, state, inputs: StepInputs, dt: float):
@@ -304,7 +311,7 @@ class SwiftTyre:
             if self._compiled_block is not None:
                 xs, ys = self._compiled_block((state, u, dt, x0w), self._grid, self._h, i0)
             else:
-                res = self._block_fn(state, u, dt, x0w, self._grid, self._h[i0:i0 + self.window])
+                res = self._block_fn(state, u, dt, x0w, self._grid, self._h[2 * i0:2 * (i0 + self.window)])
                 xs, ys = (np.asarray(r) for r in res)
             xs = xs.reshape(BLOCK, len(STATE_NAMES)) if xs.ndim == 1 else xs.T
             ys = ys.reshape(BLOCK, len(OUTPUT_NAMES)) if ys.ndim == 1 else ys.T
@@ -320,7 +327,7 @@ class SwiftTyre:
     # ------------------------------------------------------------------ reference and statics
     def _rhs_args(self, state):
         i0 = self._window_start(state[_S["xb"]])
-        return self.table.x0 + i0 * self.table.dx, self._grid, self._h[i0:i0 + self.window], 0.0
+        return self.table.x0 + i0 * self.table.dx, self._grid, self._h[2 * i0:2 * (i0 + self.window)], 0.0
 
     def derivative(self, state, inputs: StepInputs):
         """State derivative (CasADi VM on the same right-hand side): for the reference run and checks."""
@@ -383,7 +390,7 @@ class SwiftTyre:
             eqs.append(_S["vza"])
         if self._equilibrium is None:  # built once: the static equations and their Jacobian in the unknowns
             xs, us = ca.MX.sym("x", len(STATE_NAMES)), ca.MX.sym("u", len(INPUT_NAMES))
-            x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", self.window), ca.MX.sym("hw", self.window)
+            x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
             d = self._rhs_window(xs, us, x0w, grid, hw, 0.0)[0][eqs]
             self._equilibrium = ca.Function("equilibrium", [xs, us, x0w, grid, hw],
                                             [d, ca.jacobian(d, xs)[:, unknown]])
@@ -453,7 +460,7 @@ class _Compiled:
         for buf, v in zip(self._in, values):
             buf[:] = np.ravel(v, order="F")  # CasADi stores column-major
         self._arg[4] = grid.ctypes.data
-        self._arg[5] = table.ctypes.data + 8 * i0
+        self._arg[5] = table.ctypes.data + 16 * i0  # two interleaved columns
         if self._fn(*self._args):
             raise ArithmeticError("compiled SWIFT step reported an evaluation error")
         return tuple(r.reshape(shape, order="F").copy().squeeze() if shape[1] > 1 else r.copy()

@@ -202,3 +202,28 @@ def test_unmodelled_sidewall_parameters_warn(model):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         RingConstants.from_model(_with(model, Q_BVX=0.0, Q_BVT=0.0))
+
+
+def test_multi_track_road_camber_in_the_ring(model):
+    """ELLIPS_NWIDTH tracks in the dynamic model (old: one track at y = 0): over a cleat under the left half only,
+    the ring's road camber equals the offline multi-track tandem (effective_road_3d at the ring's contact centre
+    and tandem base); on a uniformly banked road the normal force tilts and the MF sees the camber relative to
+    the road, so the lateral force is the in-plane MF side force less F'_z sin(beta_x)."""
+    from swift import TwoTrack, effective_road_3d
+
+    _, b = vertical.contact_patch(model.params, model.params.FNOMIN, 0.0, NUMPY)
+    road = TwoTrack(Flat(0.0) + Cleat(1.0, 0.05, 0.01), Flat(0.0), 0.2)
+    tyre = SwiftTyre(model, road, axle="load", x_range=(0.0, 2.5))
+    V = 5.0
+    res = tyre.run(0.4, StepInputs(x=0.3, vx=V, load=4000.0, omega=V / 0.3044))
+    ref = effective_road_3d(road, res["x_c"], res["ls"], float(b), tyre.cams)
+    assert np.max(np.abs(ref.beta_x)) > 0.03
+    assert np.max(np.abs(res["beta_x"] - ref.beta_x)) < 2e-4
+    bank = np.arctan(0.05)
+    tyre = SwiftTyre(model, TwoTrack(Flat(0.01), Flat(0.0), 0.2), axle="load", x_range=(0.0, 2.5))
+    res = tyre.run(0.3, StepInputs(x=0.5, vx=V, load=4000.0, omega=V / 0.3044))
+    assert res["beta_x"][-1] == pytest.approx(bank, abs=1e-9)
+    fz_c, fy_c = res["fz_c"][-1], res["fy_c"][-1]
+    mf = model.evaluate(fz_c, res["kappa"][-1], res["alpha"][-1], gamma=-bank, vx=V, omega=res["omb"][-1])
+    assert fy_c == pytest.approx(float(mf.fy), rel=1e-6)
+    assert res["fy"][-1] == pytest.approx(fy_c * np.cos(bank) - fz_c * np.sin(bank), rel=1e-3, abs=1.0)
