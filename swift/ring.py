@@ -104,8 +104,8 @@ OUTPUT_NAMES = ("fx", "fy", "fz", "mx", "my", "mz",            # forces and mome
                 "rho", "rl", "re", "a", "ls", "w", "beta",     # deflection, radii, patch, effective road
                 "kappa", "alpha", "vcx", "curvature", "x_c", "beta_x")
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
-#: Passes of the (contact centre, tandem base) solution: Newton on the centre, substitution on l_s.
-CONTACT_PASSES = 4
+#: Newton passes of the (contact centre, tandem base) solution (quadratic convergence from the start estimate).
+CONTACT_PASSES = 3
 #: Time constant [s] with which the transient slips relax to zero while the tyre is off the road.
 AIR_TIME = 5e-3
 #: Load floor [N] of the slip model and contact length: keeps derivatives finite off the road (sqrt(Fz) at 0).
@@ -223,10 +223,11 @@ def contact_start(model, rc: RingConstants, state, u, h_c):
 
 
 def contact_geometry(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c):
-    """One pass of the contact fixed point from the cam heights ``hf``, ``hr`` (slopes ``dhf``, ``dhr``) at
-    ``x_c`` +- ``ls``/2: (x_c, l_s) with x_c by a Newton step on x_c = x_b + r_c sin(beta_y) (over short
-    obstacles the plain substitution barely contracts: d(r_c sin beta)/dx_c reaches -1) and l_s at the residual
-    spring load."""
+    """One Newton pass of the contact solution from the cam heights ``hf``, ``hr`` (slopes ``dhf``, ``dhr``) at
+    ``x_c`` +- ``ls``/2: (x_c, l_s) solving x_c = x_b + r_c sin(beta_y) (foot of the normal) and
+    l_s = ELLIPS_SHIFT 2a(F_r(R_Omega - r_c)) together (plain substitution barely contracts over short obstacles:
+    d(r_c sin beta)/dx_c reaches -1)."""
+    import casadi as ca
     from mftyre.backend import casadi_backend
 
     be = casadi_backend()
@@ -234,15 +235,17 @@ def contact_geometry(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x
     s = {n: state[i] for i, n in enumerate(STATE_NAMES)}
     dpi = (u[INPUT_NAMES.index("p")] - prm.NOMPRES) / prm.NOMPRES
     f_c, _ = _pressure_factors(prm, dpi, be)
-    _, beta, r_c = _plane(hf, hr, ls, s["zb"], be)
-    cb, sb = be.cos(beta), be.sin(beta)
-    dbeta = cb**2 * (dhf - dhr) / ls
-    dr_c = -(dhf + dhr) / 2 / cb + r_c * sb / cb * dbeta
-    shift = r_c * sb
-    residual = x_c - s["xb"] - shift
-    x_next = x_c - residual / (1.0 - dr_c * sb - r_c * cb * dbeta)
-    f_r, _ = residual_vertical(prm, vertical.free_radius(prm, s["omb"], be) - r_c, s["omb"], dpi, rc.cbx * f_c, be)
-    return x_next, _tandem_base(prm, f_r, dpi, be)
+    r_omega = vertical.free_radius(prm, s["omb"], be)
+    xc_, ls_, hf_, hr_ = (ca.SX.sym(n) for n in ("xc", "ls", "hf", "hr"))
+    _, beta, r_c = _plane(hf_, hr_, ls_, s["zb"], be)
+    f_r, _ = residual_vertical(prm, r_omega - r_c, s["omb"], dpi, rc.cbx * f_c, be)
+    res = ca.vertcat(xc_ - s["xb"] - r_c * be.sin(beta), ls_ - _tandem_base(prm, f_r, dpi, be))
+    # chain rule through the cam heights: d(hf)/d(x_c, l_s) = dhf (1, 1/2), d(hr)/d(x_c, l_s) = dhr (1, -1/2)
+    jac = (ca.jacobian(res, ca.vertcat(xc_, ls_)) + ca.jacobian(res, hf_) @ ca.horzcat(dhf, dhf / 2)
+           + ca.jacobian(res, hr_) @ ca.horzcat(dhr, -dhr / 2))
+    res, jac = ca.substitute([res, jac], [xc_, ls_, hf_, hr_], [x_c, ls, hf, hr])
+    step = ca.solve(jac, res)
+    return x_c - step[0], be.fmax(ls - step[1], 1e-6)
 
 
 def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c=None, *, axle: str, rim: str,
