@@ -141,6 +141,9 @@ class SwiftTyre:
         self._compiled = _Compiled(self._step_fn, self._key("step")) if compiled else None
         self._compiled_block = _Compiled(self._block_fn, self._key("block")) if compiled else None
         self._equilibrium = None  # static equations for initial_state, built on first use
+        for compiled_fn in (self._compiled, self._compiled_block):
+            if compiled_fn is not None:
+                compiled_fn.bind(self._grid, self._h)
 
     # ------------------------------------------------------------------ equations
     def _rhs(self, n_window):
@@ -267,7 +270,7 @@ class SwiftTyre:
         i0 = self._window_start(state[_S["xb"]])
         x0w = self.table.x0 + i0 * self.table.dx
         if self._compiled is not None:
-            return self._compiled((state, u, dt, x0w), self._grid, self._h, i0)
+            return self._compiled((state, u, dt, x0w), i0)
         res = self._step_fn(state, u, dt, x0w, self._grid, self._h[2 * i0:2 * (i0 + self.window)])
         return tuple(np.asarray(r).ravel() for r in res)
 
@@ -309,7 +312,7 @@ class SwiftTyre:
             i0 = self._window_start(state[_S["xb"]])
             x0w = self.table.x0 + i0 * self.table.dx
             if self._compiled_block is not None:
-                xs, ys = self._compiled_block((state, u, dt, x0w), self._grid, self._h, i0)
+                xs, ys = self._compiled_block((state, u, dt, x0w), i0)
             else:
                 res = self._block_fn(state, u, dt, x0w, self._grid, self._h[2 * i0:2 * (i0 + self.window)])
                 xs, ys = (np.asarray(r) for r in res)
@@ -434,7 +437,7 @@ def _compile_mx(function, key: str) -> Path:
 
 class _Compiled:
     """A compiled step/block function called through ctypes: arguments 0-3 are copied in, the cam-height grid
-    and window (arguments 4, 5) are passed by pointer into the whole table."""
+    and window (arguments 4, 5) are passed by pointer into the whole table (:meth:`bind`)."""
 
     def __init__(self, function, key):
         self._lib = ctypes.CDLL(str(_compile_mx(function, key)))
@@ -456,11 +459,16 @@ class _Compiled:
         self._args = (ctypes.addressof(self._arg), ctypes.addressof(self._res), ctypes.addressof(self._iw),
                       ctypes.addressof(self._w), 0)
 
-    def __call__(self, values, grid, table, i0):
-        for buf, v in zip(self._in, values):
-            buf[:] = np.ravel(v, order="F")  # CasADi stores column-major
+    def bind(self, grid, table):
+        """Point arguments 4 and 5 at the local grid and the whole (interleaved) cam table, once: both arrays must
+        stay alive and unmoved while this function is used (the tyre holds them)."""
         self._arg[4] = grid.ctypes.data
-        self._arg[5] = table.ctypes.data + 16 * i0  # two interleaved columns
+        self._table = table.ctypes.data
+
+    def __call__(self, values, i0):
+        for buf, v in zip(self._in, values):
+            buf[:] = v if np.ndim(v) < 2 else np.ravel(v, order="F")  # CasADi stores column-major
+        self._arg[5] = self._table + 16 * i0  # two interleaved columns per sample
         if self._fn(*self._args):
             raise ArithmeticError("compiled SWIFT step reported an evaluation error")
         return tuple(r.reshape(shape, order="F").copy().squeeze() if shape[1] > 1 else r.copy()
