@@ -8,7 +8,9 @@ ISO-W axes (x forward, y left, z up), small angles, forward rolling = positive s
 
 State (``STATE_NAMES``): belt x_b, z_b, y_b [m], velocities; wind-up theta_w = theta_b - theta_a; belt and rim
 spin Omega_b, Omega_a; axle z_a, its velocity, axle x_a; belt camber gamma_b and yaw psi_b with rates; residual
-(patch) deflections u_x, u_y, residual yaw psi_r; transient slips kappa', alpha'.
+(patch) deflections u_x, u_y, residual yaw psi_r; transient slips kappa', alpha'; the contact solution of the
+last step, x_c - x_b and l_s (memory, not integrated: the stepper starts its Newton pass there and stores the new
+solution after each step; the exact right-hand side solves from scratch).
 
 Sidewall (rim -> belt) [chosen from the parameter comments "undamped frequency / dimensionless damping of the
 ... mode", NOTES sec. 4.2], pressure-aware through this project's own parameters SWIFT_PSTIFF, SWIFT_PDAMP
@@ -35,7 +37,8 @@ Residual springs in series so that the static stiffness of ring + residual is th
 Effective road, five inputs (Pacejka 2012 sec. 10.1.4; NOTES sec. 3): from the tandem cam heights h_f, h_r at
 x_c +- l_s/2 the height w = (h_f + h_r)/2, forward slope beta_y = atan((h_f - h_r)/l_s), road camber beta_x
 (ELLIPS_NWIDTH tracks over the contact width at nominal load: atan of the least-squares slope of the track
-heights, :class:`swift.enveloping.CamTable`, plus the input ``road_camber``), effective curvature kappa_e = d beta_y/dx = cos^2(beta_y) (h_f' - h_r')/l_s, and
+heights, :class:`swift.enveloping.CamTable`, plus the input ``road_camber``), effective curvature
+kappa_e = d beta_y/dx = cos^2(beta_y) (h_f' - h_r')/l_s, and
     * the forward shift of the contact point: the tandem is centred at the foot of the normal from the belt centre
       to the effective plane, x_c = x_b + r_c sin(beta_y), r_c = (z_b - w)/cos(beta_y) [chosen: NOTES sec. 3.5];
     * the effective curvature is an output; the effective rolling radius variation it drives in MF-Swift
@@ -67,7 +70,8 @@ Contact (normal to the effective plane):
     heading), is added back [chosen], so that the steady state equals the Magic Formula while belt yaw dynamics
     and YAW_STIFFNESS act on the transient forces.
     Forces on the belt (global): F_x = F'_x cos(beta_y) - F'_z sin(beta_y) cos(beta_x), F_z = (F'_x sin(beta_y) +
-    F'_z cos(beta_y)) cos(beta_x) + F'_y sin(beta_x), F_y = F'_y cos(beta_x) - F'_z sin(beta_x); moments -r_c F'_x + M'_y about y, r_c F'_y + M'_x about x, M'_z about z.
+    F'_z cos(beta_y)) cos(beta_x) + F'_y sin(beta_x), F_y = F'_y cos(beta_x) - F'_z sin(beta_x); moments
+    -r_c F'_x + M'_y about y, r_c F'_y + M'_x about x, M'_z about z.
 Equations of motion (NOTES sec. 4.3, gyroscopic terms from dH/dt = M with H = I_by Omega (-psi, 1, gamma)):
     m_b xddot_b = -c_bx (x_b - x_a) - k_bx (xdot_b - xdot_a) + F_x
     m_b zddot_b = -c_bz (z_b - z_a) - k_bz (zdot_b - zdot_a) + F_z + m_b GRAVITY
@@ -96,7 +100,7 @@ __all__ = ["RingConstants", "STATE_NAMES", "INPUT_NAMES", "OUTPUT_NAMES", "CONTA
            "residual_vertical", "contact_start", "contact_geometry", "ring_equations"]
 
 STATE_NAMES = ("xb", "vxb", "zb", "vzb", "thw", "omb", "oma", "za", "vza", "xa",
-               "ux", "kappa", "yb", "vyb", "gb", "wgb", "psb", "wpsb", "uy", "alpha", "psr")
+               "ux", "kappa", "yb", "vyb", "gb", "wgb", "psb", "wpsb", "uy", "alpha", "psr", "xcs", "lsm")
 #: Inputs of one step. x/z/omega of the axle enter through the state (imposed parts are set by the stepper).
 INPUT_NAMES = ("vx", "load", "torque", "p", "y", "vy", "gamma", "psi", "road_camber")
 OUTPUT_NAMES = ("fx", "fy", "fz", "mx", "my", "mz",            # forces and moments of the tyre on the rim
@@ -334,7 +338,7 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
         "yb": s["vyb"], "vyb": (-fwy + fy_b) / rc.mb,
         "gb": s["wgb"], "wgb": (-mwx + r_c * fyc + mxc + rc.iby * s["omb"] * s["wpsb"]) / rc.ibx,
         "psb": s["wpsb"], "wpsb": (-mwz + mzc - rc.iby * s["omb"] * s["wgb"]) / rc.ibx,
-        "uy": uydot, "alpha": alpha_dot, "psr": psrdot,
+        "uy": uydot, "alpha": alpha_dot, "psr": psrdot, "xcs": 0.0 * s["xcs"], "lsm": 0.0 * s["lsm"],
     }
     out = dict(fx=fwx - f_bottom * sb, fy=fwy, fz=fwz + f_bottom * cb, mx=mwx, my=mwy, mz=mwz, fx_c=fxc,
                fy_c=fyc, fz_c=fzc, mz_c=mzc, rho=r_omega - r_a, rl=r_c, re=re, a=a, ls=ls, w=w, beta=beta,

@@ -67,6 +67,8 @@ BLOCK = 10
 #: Distance [m] the cam lookups may reach beyond the belt centre: half the tandem base plus the forward shift of
 #: the contact centre (0.1 m each would need a 2a of 0.24 m and a slope of 20 deg).
 TANDEM_REACH = 0.25
+#: Newton passes of the contact solution in the stepper, from the solution of the previous step.
+WARM_PASSES = 2
 
 
 @dataclass(frozen=True)
@@ -136,6 +138,7 @@ class SwiftTyre:
         camber = np.zeros(self.table.h.size) if self.table.camber is None else self.table.camber
         self._h = np.ascontiguousarray(np.column_stack([self.table.h, camber]).ravel(), dtype=float)  # interleaved
         self._rhs_window = self._rhs(self.window)
+        self._rhs_warm = self._rhs(self.window, warm=True)
         self._step_fn = self._build_step()
         self._block_fn = self._build_block(self._step_fn)
         self._compiled = _Compiled(self._step_fn, self._key("step")) if compiled else None
@@ -146,10 +149,11 @@ class SwiftTyre:
                 compiled_fn.bind(self._grid, self._h)
 
     # ------------------------------------------------------------------ equations
-    def _rhs(self, n_window):
+    def _rhs(self, n_window, warm=False):
         """rhs(x, u, x0w, grid, hw, h) -> (dx, out): MX graph, so that the cam-height lookups stay compiled
         constant-time table accesses (an SX expansion would scan the whole window). ``h``: the integration step
-        that bounds the relaxation rate (0: the exact model)."""
+        that bounds the relaxation rate (0: the exact model). The contact solution: ``CONTACT_PASSES`` Newton
+        passes from an estimate, or (``warm``, the stepper) ``WARM_PASSES`` from the solution stored in the state."""
         import casadi as ca
 
         x = ca.MX.sym("x", len(STATE_NAMES))
@@ -176,9 +180,12 @@ class SwiftTyre:
             value, slope = cam_fn(xc - x0w, grid, hw)
             return value[0], slope[0], value[1]
 
-        first = start(x, u, cam(x[_S["xb"]])[0])
-        xc, ls = first[0], first[1]
-        for _ in range(CONTACT_PASSES):  # contact centre and tandem base at the current load, solved together
+        if warm:
+            xc, ls, passes = x[_S["xb"]] + x[_S["xcs"]], x[_S["lsm"]], WARM_PASSES
+        else:
+            first = start(x, u, cam(x[_S["xb"]])[0])
+            xc, ls, passes = first[0], first[1], CONTACT_PASSES
+        for _ in range(passes):  # contact centre and tandem base at the current load, solved together
             (hf, dhf, _), (hr, dhr, _) = cam(xc + ls / 2), cam(xc - ls / 2)
             nxt = geometry(x, u, ca.vertcat(hf, dhf, hr, dhr, ls, xc))
             xc, ls = nxt[0], nxt[1]
@@ -189,7 +196,7 @@ class SwiftTyre:
     def _build_step(self):
         import casadi as ca
 
-        rhs = self._rhs_window
+        rhs = self._rhs_warm
         x = ca.MX.sym("x", len(STATE_NAMES))
         u = ca.MX.sym("u", len(INPUT_NAMES))
         dt, x0w = ca.MX.sym("dt"), ca.MX.sym("x0w")
@@ -204,6 +211,8 @@ class SwiftTyre:
             k4 = f(xs + h * k3)
             xs = xs + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         out = rhs(xs, u, x0w, grid, hw, h)[1]
+        memory = ca.vertcat(out[OUTPUT_NAMES.index("x_c")] - xs[_S["xb"]], out[OUTPUT_NAMES.index("ls")])
+        xs = ca.vertcat(xs[:_S["xcs"]], memory, xs[_S["lsm"] + 1:])  # the contact solution for the next step
         return ca.Function("swift_step", [x, u, dt, x0w, grid, hw], [xs, out],
                            ["x", "u", "dt", "x0w", "grid", "hw"], ["x_next", "out"])
 
@@ -227,15 +236,18 @@ class SwiftTyre:
     def step_function(self):
         """The CasADi step ``swift_step(x, u, dt, x0w, grid, hw) -> (x_next, out)`` that :meth:`step` runs
         (compiled): state and inputs in the order of STATE_NAMES / INPUT_NAMES, the window ``hw`` of ``window``
-        samples of (cam height, road-camber slope) pairs, interleaved (:class:`swift.enveloping.CamTable`), on the local grid ``grid`` (= table.dx * arange(window)) starting at x = ``x0w``.
-        For code generation (FMU)."""
+        samples of (cam height, road-camber slope) pairs, interleaved (:class:`swift.enveloping.CamTable`), on
+        the local grid ``grid`` (= table.dx * arange(window)) starting at x = ``x0w``. The state's ``xcs``,
+        ``lsm`` entries carry the contact solution from step to step (:meth:`initial_state` sets them; l_s must be
+        positive). For code generation (FMU)."""
         return self._step_fn
 
     def _key(self, kind):
         prm = self.model.params
         payload = {"p": {k: repr(prm[k]) for k in prm}, "side": self.model.side, "axle": self.axle,
                    "rim": self.rim, "window": self.window, "substeps": self.substeps,
-                   "constants": repr(self.constants), "kind": kind, "block": BLOCK, "passes": CONTACT_PASSES,
+                   "constants": repr(self.constants), "kind": kind, "block": BLOCK,
+                   "passes": (CONTACT_PASSES, WARM_PASSES),
                    "equations": _SOURCE_HASH}
         return "swift_" + hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
@@ -252,7 +264,15 @@ class SwiftTyre:
             state[_S["za"]], state[_S["vza"]] = inputs.z, inputs.vz
         if self.rim == "speed":
             state[_S["oma"]] = inputs.omega
+        if not state[_S["lsm"]] > 0:  # no contact solution stored yet (a state built by hand): solve it afresh
+            self._store_contact(state, self._u(inputs))
         return state
+
+    def _store_contact(self, state, u):
+        """Write the converged contact solution (x_c - x_b, l_s) of ``state`` into its memory entries."""
+        out = np.asarray(self._rhs_window(state, u, *self._rhs_args(state))[1]).ravel()
+        state[_S["xcs"]] = out[OUTPUT_NAMES.index("x_c")] - state[_S["xb"]]
+        state[_S["lsm"]] = out[OUTPUT_NAMES.index("ls")]
 
     def _window_start(self, xb):
         i0 = int(np.floor((xb - self.table.x0) / self.table.dx)) - self.window // 2
@@ -405,6 +425,7 @@ class SwiftTyre:
             s[unknown] += step
             if np.max(np.abs(step)) < 1e-13:
                 break
+        self._store_contact(s, u)
         return s
 
 
