@@ -385,7 +385,8 @@ class SwiftTyre:
 
     def initial_state(self, inputs: StepInputs, iterations: int = 30) -> np.ndarray:
         """Static equilibrium (steady rolling at the input speeds) at the axle position of ``inputs``: Newton
-        on the accelerations and patch rates, from the steady-state model's deflection."""
+        on the accelerations and patch rates, from the steady-state model's deflection. With ``rim="torque"`` the
+        spin is an unknown too (``inputs.omega`` its first guess): the rim torque balances the input torque."""
         import casadi as ca
 
         prm = self.model.params
@@ -411,6 +412,9 @@ class SwiftTyre:
         if self.axle == "load":
             unknown.append(_S["za"])
             eqs.append(_S["vza"])
+        if self.rim == "torque":  # the spin follows the torque: rim at rest relative to the belt, torques balanced
+            unknown += [_S["oma"], _S["omb"]]
+            eqs += [_S["oma"], _S["thw"]]
         if self._equilibrium is None:  # built once: the static equations and their Jacobian in the unknowns
             xs, us = ca.MX.sym("x", len(STATE_NAMES)), ca.MX.sym("u", len(INPUT_NAMES))
             x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
