@@ -39,6 +39,7 @@ from __future__ import annotations
 import ctypes
 import hashlib
 import json
+import math
 import os
 import tempfile
 from dataclasses import dataclass, replace
@@ -275,13 +276,14 @@ class SwiftTyre:
         state[_S["lsm"]] = out[OUTPUT_NAMES.index("ls")]
 
     def _window_start(self, xb):
-        i0 = int(np.floor((xb - self.table.x0) / self.table.dx)) - self.window // 2
+        i0 = math.floor((xb - self.table.x0) / self.table.dx) - self.window // 2
         if i0 < 0 or i0 + self.window > self.table.h.size:
             raise ModelInputError(f"wheel at x = {xb:.3f} m is outside the road table "
                                   f"[{self.table.x0 + self.window // 2 * self.table.dx:.3f}, "
                                   f"{self.table.x[-1] - self.window // 2 * self.table.dx:.3f}] m (x_range)")
         return i0
 
+    @property
     def _reach(self):
         """Largest wheel travel [m] one compiled call may cover: the window half-width less ``TANDEM_REACH``."""
         return self.window // 2 * self.table.dx - TANDEM_REACH
@@ -299,7 +301,7 @@ class SwiftTyre:
         which the wheel would travel further than the cam-height window reaches is split into equal parts."""
         state = self._impose(state, inputs)
         u = self._u(inputs)
-        n = max(1, int(np.ceil(abs(inputs.vx) * dt / self._reach())))
+        n = max(1, math.ceil(abs(inputs.vx) * dt / self._reach))
         for _ in range(n):
             state, out = self._call_step(state, u, dt / n)
         return state, dict(zip(OUTPUT_NAMES, out))
@@ -324,7 +326,7 @@ class SwiftTyre:
                 u, first = u_const.copy(), get(t0)
                 u[_U_Y] = inputs.y + inputs.vy * (t0 + dt * np.arange(BLOCK))
             state = self._impose(state, first)
-            if max(abs(u[0])) * BLOCK * dt > self._reach():  # beyond the window in one call: single steps
+            if max(abs(u[0])) * BLOCK * dt > self._reach:  # beyond the window in one call: single steps
                 for k in range(BLOCK):
                     state, ys = self.step(state, get(t0 + k * dt), dt)
                     states[1 + b * BLOCK + k], outs[1 + b * BLOCK + k] = state, np.fromiter(ys.values(), float)
@@ -475,6 +477,7 @@ class _Compiled:
         self._in = [np.zeros(function.nnz_in(i)) for i in range(4)]
         self._res_buf = [np.zeros(function.nnz_out(i)) for i in range(2)]
         self._shapes = [function.size_out(i) for i in range(2)]
+        self._matrix_in = [function.size_in(i)[1] > 1 for i in range(4)]
         self._arg = (ctypes.c_void_p * max(sz_arg, 6))(*[a.ctypes.data for a in self._in])
         self._res = (ctypes.c_void_p * max(sz_res, 2))(*[r.ctypes.data for r in self._res_buf])
         self._iw, self._w = (ll * max(sz_iw, 1))(), (ctypes.c_double * max(sz_w, 1))()
@@ -491,8 +494,8 @@ class _Compiled:
         self._table = table.ctypes.data
 
     def __call__(self, values, i0):
-        for buf, v in zip(self._in, values):
-            buf[:] = v if np.ndim(v) < 2 else np.ravel(v, order="F")  # CasADi stores column-major
+        for buf, v, matrix in zip(self._in, values, self._matrix_in):
+            buf[:] = np.ravel(v, order="F") if matrix else v  # CasADi stores column-major
         self._arg[5] = self._table + 16 * i0  # two interleaved columns per sample
         if self._fn(*self._args):
             raise ArithmeticError("compiled SWIFT step reported an evaluation error")
