@@ -62,7 +62,8 @@ def main(argv=None):
     for name, t in (("run(): compiled, 10 steps per call", t_run), ("step() loop: compiled, FMU-style", t_step),
                     ("run(): CasADi VM, not compiled", t_vm)):
         print(f"{name:44s} {t * 1e3:10.1f} {t_end / t:17.1f} {t / t_run:20.2f}")
-    print(f"target: real-time factor >= 50 for run(): {'met' if t_end / t_run >= 50 else 'NOT met'}")
+    for name, t in (("run()", t_run), ("step() loop", t_step)):
+        print(f"target: real-time factor >= 100 for {name}: {'met' if t_end / t >= 100 else 'NOT met'}")
     return np.array([t_run, t_step, t_vm])
 
 

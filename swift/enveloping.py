@@ -34,8 +34,10 @@ exact), plus every road breakpoint inside the window evaluated exactly, so flat 
 sampling error.
 
 Quasi-static tyre (:func:`quasi_static`): the MF vertical spring Fz(rho, p) normal to the effective plane,
-rho = R_Omega - d with d the normal distance from the wheel centre to the plane, free rolling (in-plane force
-F'_x = 0), so the wheel-centre forces are Fx = -F'_z sin(beta_y), Fz = F'_z cos(beta_y) (NOTES sec. 3.5).
+rho = R_Omega - d with d the normal distance from the wheel centre to the plane, the tandem centred at the foot
+of that normal, x_c = x + d sin(beta_y) (the forward shift of the contact point, as in :mod:`swift.ring`), free
+rolling (in-plane force F'_x = 0), so the wheel-centre forces are Fx = -F'_z sin(beta_y), Fz = F'_z cos(beta_y)
+(NOTES sec. 3.5). ``QuasiStatic.road`` holds the effective road at the contact centres.
 """
 from __future__ import annotations
 
@@ -134,19 +136,36 @@ def cam_height(road: Road, x, cams: Cams, *, y=0.0, dx: float = 5e-4):
 @dataclass(frozen=True)
 class CamTable:
     """Cam heights h on the uniform grid ``x0 + i dx`` (load independent: computed once per road and cam shape),
-    linearly interpolated; the road input of the rigid-ring simulation (:mod:`swift.simulate`)."""
+    linearly interpolated; the road input of the rigid-ring simulation (:mod:`swift.simulate`).
+
+    For roads that vary across y (``Road.varies_with_y``) the table holds the multi-track cams: ``h`` is the mean
+    cam height of ``n_width`` tracks spread over y in [-half_width, half_width] and ``camber`` the least-squares
+    slope of the track heights over y, so that the tandem's mean height, slope and road camber
+    beta_x = atan((camber_f + camber_r)/2) (:func:`effective_road_3d`, with the slope of the mean heights) come from
+    two interpolations; 2D roads have ``camber`` = 0."""
 
     x0: float
     dx: float
     h: np.ndarray
+    camber: np.ndarray | None = None
 
     @classmethod
-    def build(cls, road: Road, cams: Cams, x_start: float, x_end: float, dx: float = 1e-3, y: float = 0.0):
+    def build(cls, road: Road, cams: Cams, x_start: float, x_end: float, dx: float = 1e-3, y: float = 0.0,
+              half_width: float | None = None):
+        """Table from ``x_start`` to ``x_end``; ``half_width`` [m] (3D roads: the tracks' half spread, normally the
+        contact half width b at the nominal load) is required when ``road.varies_with_y``."""
         if not x_end > x_start:
             raise ModelInputError(f"x_end ({x_end}) must exceed x_start ({x_start})")
         n = int(np.ceil((x_end - x_start) / dx)) + 1
         grid = x_start + dx * np.arange(n)
-        return cls(float(x_start), float(dx), cam_height(road, grid, cams, y=y, dx=min(dx, 5e-4)))
+        if not road.varies_with_y:
+            return cls(float(x_start), float(dx), cam_height(road, grid, cams, y=y, dx=min(dx, 5e-4)), np.zeros(n))
+        if half_width is None or not half_width > 0 or cams.n_width < 2:
+            raise ModelInputError("a road that varies across y needs half_width > 0 and ELLIPS_NWIDTH >= 2 tracks")
+        ys = y + np.linspace(-half_width, half_width, cams.n_width)
+        h = np.array([cam_height(road, grid, cams, y=yj, dx=min(dx, 5e-4)) for yj in ys])
+        yc = ys - ys.mean()
+        return cls(float(x_start), float(dx), h.mean(axis=0), np.tensordot(yc, h, axes=1) / np.sum(yc**2))
 
     @property
     def x(self):
@@ -227,13 +246,13 @@ class QuasiStatic:
 
 
 def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mode: str = "fixed_axle",
-                 dx: float = 5e-4, iterations: int = 8) -> QuasiStatic:
+                 dx: float = 5e-4, iterations: int = 12) -> QuasiStatic:
     """The tyre rolling slowly over ``road`` at wheel positions ``x``.
 
     ``mode="fixed_axle"``: axle height fixed where the flat road at the height of ``x[0]`` carries ``fz0``;
     ``mode="constant_load"``: the vertical wheel-centre force stays ``fz0`` and the axle follows.
-    The tandem base depends on the load and the load on the effective road: the pair is solved by fixed-point
-    iteration (``iterations``; the change of l_s per pass is far below the cam-height resolution after 4).
+    The tandem base and the contact centre depend on the load and the load on the effective road: solved
+    together by ``iterations`` passes (substitution on l_s, Newton on the centre).
     """
     if mode not in ("fixed_axle", "constant_load"):
         raise ModelInputError(f"mode must be 'fixed_axle' or 'constant_load', got {mode!r}")
@@ -246,17 +265,23 @@ def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mo
     r_omega = float(vertical.free_radius(prm, 0.0, NUMPY))
     z_axle = float(road.height(x.flat[0])) + float(rl0)
     fzn = np.full(x.shape, float(fz0))
-    for _ in range(iterations):
+    xc = x.copy()
+    for _ in range(iterations):  # contact centre (foot of the normal) and tandem base at the load, together
         ls = tandem_base(prm, fzn, dpi)
-        eff = effective_road(road, x, ls, cams, dx=dx)
+        eff = effective_road(road, xc, ls, cams, dx=dx)
         cosb = np.cos(eff.beta)
         if mode == "fixed_axle":
-            d = (z_axle - eff.w) * cosb  # normal distance wheel centre - effective plane
+            d = (z_axle - eff.w) / cosb  # normal distance wheel centre - effective plane
             fzn = np.maximum(model.vertical_force(np.minimum(d, r_omega), p=p), 0.0)
             dz = np.zeros_like(x)
         else:
             fzn = fz0 / cosb  # vertical component fz0, free rolling
-            rl, _ = model.loaded_radius(fzn, p=p)
-            dz = eff.w + rl / cosb - z_axle
-    rho = r_omega - (z_axle + dz - eff.w) * cosb
+            d, _ = model.loaded_radius(fzn, p=p)
+            dz = eff.w + d / cosb - z_axle
+        # Newton step on x_c = x + d sin(beta) (plain substitution barely contracts over short obstacles), with
+        # dw/dx ~ tan(beta) for the derivative of d along x
+        sinb, dbeta = np.sin(eff.beta), eff.curvature
+        slope = (-np.tan(eff.beta) / cosb + d * np.tan(eff.beta) * dbeta) * (mode == "fixed_axle")
+        xc = xc - (xc - x - d * sinb) / (1.0 - slope * sinb - d * cosb * dbeta)
+    rho = r_omega - d
     return QuasiStatic(x, -fzn * np.sin(eff.beta), fzn * cosb, fzn, dz, rho, ls, eff)

@@ -8,49 +8,83 @@ ISO-W axes (x forward, y left, z up), small angles, forward rolling = positive s
 
 State (``STATE_NAMES``): belt x_b, z_b, y_b [m], velocities; wind-up theta_w = theta_b - theta_a; belt and rim
 spin Omega_b, Omega_a; axle z_a, its velocity, axle x_a; belt camber gamma_b and yaw psi_b with rates; residual
-(patch) deflections u_x, u_y; transient slips kappa', alpha'.
+(patch) deflections u_x, u_y, residual yaw psi_r; transient slips kappa', alpha'; the contact solution of the
+last step, x_c - x_b and l_s (memory, not integrated: the stepper starts its Newton pass there and stores the new
+solution after each step; the exact right-hand side solves from scratch).
 
 Sidewall (rim -> belt) [chosen from the parameter comments "undamped frequency / dimensionless damping of the
-... mode", NOTES sec. 4.2]:
-    c_bx = c_bz = m_b (2 pi FREQ_LONG)^2,  c_by = m_b (2 pi FREQ_LAT)^2,  c_bg = c_bpsi = I_bx (2 pi FREQ_YAW)^2,
-    c_bth = I_by (2 pi FREQ_WINDUP)^2,     k_b = 2 DAMP_* sqrt(c_b M)
+... mode", NOTES sec. 4.2], pressure-aware through this project's own parameters SWIFT_PSTIFF, SWIFT_PDAMP
+(0 = no pressure effect; dpi = (p - NOMPRES)/NOMPRES):
+    c_bx = c_bz = m_b (2 pi FREQ_LONG)^2 f_c,  c_by = m_b (2 pi FREQ_LAT)^2 f_c,
+    c_bg = c_bpsi = I_bx (2 pi FREQ_YAW)^2 f_c,  c_bth = I_by (2 pi FREQ_WINDUP)^2 f_c,   f_c = 1 + SWIFT_PSTIFF dpi
+    k_b = 2 DAMP_* f_d sqrt(c_b M),  residual time constant (DAMP_RESIDUAL + low-speed part) f_d,
+    f_d = 1 + SWIFT_PDAMP dpi
 Residual springs in series so that the static stiffness of ring + residual is the steady-state model's:
-    vertical  rho_MF(F) = rho_r(F) + F / c_bz: the residual characteristic F_r(rho_r) is the inverse of
-              rho_MF(F) - F/c_bz, with rho_MF the MF 6.1 load-deflection relation (A3.3, pressure and speed
-              terms; = MF 6.2 at zero camber and side force) [chosen], solved by 6 Newton steps from F = 0
-              (monotone from below: rho_MF is concave in F)
+    vertical  rho_MF(F) = rho_r + F / c_bz with F(rho) = A rho + B rho^2 the MF 6.1 load-deflection relation
+              without bottoming (A3.3 with its speed and pressure factors; = MF 6.2 at zero camber and side
+              force): the total deflection t = rho_r + F/c_bz solves B t^2 + (A - c_bz) t + c_bz rho_r = 0, taken
+              in closed form at its smaller root, t = 2 c_bz rho_r / ((c_bz - A) + sqrt((c_bz - A)^2 - 4 B c_bz
+              rho_r)): exact, monotone while the tyre is softer than the sidewall [chosen]
+    bottoming (vertical.py): the rim pushes on the road directly, BOTTOM_STIFF (RIM_RADIUS + BOTTOM_OFFST - d_a)
+              with d_a the rim-centre distance to the effective plane; it acts on the rim, not through the
+              sidewall (so the static Fz(rho) is the MF relation including bottoming) [chosen]
     1/C_x = 1/c_bx + r_c^2/c_bth + 1/c_rx,  1/C_y = 1/c_by + r_c^2/c_bg + 1/c_ry   (C_x, C_y of paper (17),
               (18) at the current load and pressure; lever terms dropped, with a warning, where they would make
               a residual stiffness non-positive [chosen guard])
-    residual damping k_r = (DAMP_RESIDUAL + DAMP_VLOW max(0, 1 - |V|/VXLOW)) c_r [chosen: stiffness
+    1/C_psi = 1/c_bpsi + 1/c_rpsi,  C_psi = YAW_STIFFNESS (1 + PCMZ1 dpi)   (NOTES sec. 2.6, 4.2)
+    residual damping k_r = (DAMP_RESIDUAL + DAMP_VLOW max(0, 1 - |V|/VXLOW)) f_d c_r [chosen: stiffness
     proportional, DAMP_VLOW faded in linearly below VXLOW]
-Contact (effective plane through the tandem midpoint, slope beta_y; road camber beta_x an input):
-    rho_r = R_Omega - (z_b - w) cos(beta_y)   (normal distance from the belt centre, contact below the belt
-              centre [chosen]); r_c = R_Omega - rho_r lever arm of the contact forces [chosen]
-    F'_z = max(0, F_r(rho_r) + k_rz d(rho_r)/dt)   (no pull)
+Effective road, five inputs (Pacejka 2012 sec. 10.1.4; NOTES sec. 3): from the tandem cam heights h_f, h_r at
+x_c +- l_s/2 the height w = (h_f + h_r)/2, forward slope beta_y = atan((h_f - h_r)/l_s), road camber beta_x
+(ELLIPS_NWIDTH tracks over the contact width at nominal load: atan of the least-squares slope of the track
+heights, :class:`swift.enveloping.CamTable`, plus the input ``road_camber``), effective curvature
+kappa_e = d beta_y/dx = cos^2(beta_y) (h_f' - h_r')/l_s, and
+    * the forward shift of the contact point: the tandem is centred at the foot of the normal from the belt centre
+      to the effective plane, x_c = x_b + r_c sin(beta_y), r_c = (z_b - w)/cos(beta_y) [chosen: NOTES sec. 3.5];
+    * the effective curvature is an output; the effective rolling radius variation it drives in MF-Swift
+      (Pacejka sec. 10.1.4) has no published relation we could read, and the geometric one (the foot of the
+      normal moves along the road at V_cx + r_c kappa_e xdot_b) is not a slip: the tread slips against the fixed
+      road, not against the moving effective plane. So the slip stays V_cx - Omega_b R_e [open, NOTES sec. 9.4];
+    * the tandem base l_s = ELLIPS_SHIFT 2a(F_r) at the current (static part of the) contact load F_r, solved
+      together with x_c by ``CONTACT_PASSES`` fixed-point passes [published l_s = p_ls 2a, Zegelaar eq. 4.15].
+Contact (normal to the effective plane):
+    rho_r = R_Omega - r_c,  F'_z = max(0, F_r(rho_r) + k_rz d(rho_r)/dt)   (no pull)
     V_cx = xdot_b cos(beta_y) + zdot_b sin(beta_y),  V_sx = V_cx - Omega_b R_e   (R_e of paper (7))
-    massless patch:  c_rx u_x + k_rx udot_x = F'_x = MF_x(kappa', alpha', ...), likewise y
+    massless patch:  c_rx u_x + k_rx udot_x = F'_x,  c_ry u_y + k_ry udot_y = F'_y,  c_rpsi psi_r + k_rpsi
+    psidot_r = M'_z
     sigma_c dkappa'/dt + |V_cx| kappa' = -(V_sx + udot_x)
-    sigma_c dalpha'/dt + |V_cx| alpha' = ydot_b + r_c gammadot_b + udot_y - V_cx psi_a   (mftyre's alpha sign)
-    with sigma_c = a (half contact length) [chosen, NOTES sec. 4.4].
-    The slip model gets the rim camber and heading, not the belt's: the steady-state Magic Formula was measured
-    against the rim angles, so feeding back the static yaw/camber deflection would count that compliance twice
-    [chosen]. Hence YAW_STIFFNESS (yaw residual) has no effect and is not used; Mz acts on the belt directly.
-    Forces on the belt (global): F_x = F'_x cos(beta_y) - F'_z sin(beta_y), F_z = F'_x sin(beta_y) +
-    F'_z cos(beta_y); moments -r_c F'_x + My about y, r_c F_y + Mx about x, Mz about z.
+    sigma_c dalpha'/dt + |V_cx| alpha' = ydot_b + r_c gammadot_b + udot_y - V_cx (psi_b + psi_r)
+    sigma_c = max(a, |V_cx| h) with a the half contact length [chosen, NOTES sec. 4.4] and h the integration
+    step (``h`` argument, 0 for the exact model): |V_cx|/sigma_c never exceeds 1/h, so contact loss (a -> 0)
+    cannot make the explicit stepper unstable. Off the road (rho_r <= 0) the slips relax to zero with
+    ``AIR_TIME``.
+    Slip model: the Magic Formula (MF 6.1/6.2, the .tir's own) at F'_z, kappa', alpha_MF and the rim camber
+    gamma_a - road camber (the belt camber would count the static camber compliance, which the measured MF
+    contains, twice: Mz off by 1 % at 3 % slip; without a slip state for camber it cannot be compensated as the
+    yaw is [chosen]), evaluated at speed max(|V_cx|, VXLOW): the steady-state low-speed reduction is not
+    applied again on top of the transient slips (they already vanish properly at standstill, so the tyre keeps
+    its static grip), and the forces keep the sign of the slips in both directions of travel (reversing);
+    M'_z follows the direction of travel and M'_y the spin direction (signs linear through standstill).
+    alpha_MF = alpha' + s_v ((psi_b - psi_a) + psi_r): the slip comes from the belt and patch heading, and the
+    static twist Mz/C_psi, which the steady-state Magic Formula already contains (it was measured against the rim
+    heading), is added back [chosen], so that the steady state equals the Magic Formula while belt yaw dynamics
+    and YAW_STIFFNESS act on the transient forces.
+    Forces on the belt (global): F_x = F'_x cos(beta_y) - F'_z sin(beta_y) cos(beta_x), F_z = (F'_x sin(beta_y) +
+    F'_z cos(beta_y)) cos(beta_x) + F'_y sin(beta_x), F_y = F'_y cos(beta_x) - F'_z sin(beta_x); moments
+    -r_c F'_x + M'_y about y, r_c F'_y + M'_x about x, M'_z about z.
 Equations of motion (NOTES sec. 4.3, gyroscopic terms from dH/dt = M with H = I_by Omega (-psi, 1, gamma)):
     m_b xddot_b = -c_bx (x_b - x_a) - k_bx (xdot_b - xdot_a) + F_x
     m_b zddot_b = -c_bz (z_b - z_a) - k_bz (zdot_b - zdot_a) + F_z + m_b GRAVITY
-    I_by Omegadot_b = -c_bth theta_w - k_bth (Omega_b - Omega_a) - r_c F'_x + My
+    I_by Omegadot_b = -c_bth theta_w - k_bth (Omega_b - Omega_a) - r_c F'_x + M'_y
     m_b yddot_b = -c_by (y_b - y_a) - k_by (ydot_b - ydot_a) + F_y
-    I_bx gammaddot_b = -c_bg (gamma_b - gamma_a) - k_bg gammadot_b + r_c F_y + Mx + I_by Omega_b psidot_b
-    I_bx psiddot_b = -c_bpsi (psi_b - psi_a) - k_bpsi psidot_b + Mz - I_by Omega_b gammadot_b
-    axle "load":   m_a zddot_a = -F_load + F_wz  (F_wz = c_bz (z_b - z_a) + k_bz (zdot_b - zdot_a); gravity acts
-                   on the belt only, F_load is everything else pushing the rim down)
+    I_bx gammaddot_b = -c_bg (gamma_b - gamma_a) - k_bg gammadot_b + r_c F_y + M'_x + I_by Omega_b psidot_b
+    I_bx psiddot_b = -c_bpsi (psi_b - psi_a) - k_bpsi psidot_b + M'_z - I_by Omega_b gammadot_b
+    axle "load":   m_a zddot_a = -F_load + F_wz + F_bottom cos(beta_y)  (F_wz = c_bz (z_b - z_a) + k_bz (zdot_b -
+                   zdot_a); gravity acts on the belt only, F_load is everything else pushing the rim down)
     rim "torque":  I_a Omegadot_a = T + c_bth theta_w + k_bth (Omega_b - Omega_a)
 Not modelled (open in the literature, NOTES sec. 9): Q_BVX/Q_BVT (load and speed influence on the sidewall
-stiffness), rotating-damper coupling terms, the effective-rolling-radius change with road curvature, turn slip
-from the belt yaw rate, ENV_C1/ENV_C2.
+stiffness: no published formula; a non-zero value gives a warning), rotating-damper coupling terms, turn slip from
+the belt yaw rate, ENV_C1/ENV_C2.
 """
 from __future__ import annotations
 
@@ -62,25 +96,30 @@ import numpy as np
 from mftyre.errors import ModelInputError
 from mftyre.formula import vertical
 
-__all__ = ["RingConstants", "STATE_NAMES", "INPUT_NAMES", "OUTPUT_NAMES", "ring_equations", "tandem_base_now"]
+__all__ = ["RingConstants", "STATE_NAMES", "INPUT_NAMES", "OUTPUT_NAMES", "CONTACT_PASSES", "AIR_TIME",
+           "residual_vertical", "contact_start", "contact_geometry", "ring_equations"]
 
 STATE_NAMES = ("xb", "vxb", "zb", "vzb", "thw", "omb", "oma", "za", "vza", "xa",
-               "ux", "kappa", "yb", "vyb", "gb", "wgb", "psb", "wpsb", "uy", "alpha")
+               "ux", "kappa", "yb", "vyb", "gb", "wgb", "psb", "wpsb", "uy", "alpha", "psr", "xcs", "lsm")
 #: Inputs of one step. x/z/omega of the axle enter through the state (imposed parts are set by the stepper).
 INPUT_NAMES = ("vx", "load", "torque", "p", "y", "vy", "gamma", "psi", "road_camber")
 OUTPUT_NAMES = ("fx", "fy", "fz", "mx", "my", "mz",            # forces and moments of the tyre on the rim
                 "fx_c", "fy_c", "fz_c", "mz_c",                # contact forces in the effective plane
                 "rho", "rl", "re", "a", "ls", "w", "beta",     # deflection, radii, patch, effective road
-                "kappa", "alpha", "vcx")
+                "kappa", "alpha", "vcx", "curvature", "x_c", "beta_x")
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
-_NEWTON_STEPS = 6
+#: Newton passes of the (contact centre, tandem base) solution (quadratic convergence from the start estimate).
+CONTACT_PASSES = 3
+#: Time constant [s] with which the transient slips relax to zero while the tyre is off the road.
+AIR_TIME = 5e-3
 #: Load floor [N] of the slip model and contact length: keeps derivatives finite off the road (sqrt(Fz) at 0).
 _FZ_FLOOR = 1e-3
 
 
 @dataclass(frozen=True)
 class RingConstants:
-    """Sidewall constants from [INERTIA]/[STRUCTURAL] and the options of the rim and axle bodies."""
+    """Sidewall constants from [INERTIA]/[STRUCTURAL] (at nominal pressure) and the options of the rim and axle
+    bodies."""
 
     mb: float
     ibx: float
@@ -108,6 +147,11 @@ class RingConstants:
         if bad:
             raise ModelInputError(f"the rigid ring needs positive {', '.join(bad)} ([INERTIA]/[STRUCTURAL] of "
                                   f"the .tir file)")
+        for name in ("Q_BVX", "Q_BVT"):
+            if name in prm and prm[name] != 0:
+                warnings.warn(f"{name} = {prm[name]} (load and speed influence on the in-plane sidewall stiffness) "
+                              f"is not modelled: no published formula; the sidewall stiffness follows FREQ_* only",
+                              stacklevel=2)
         mb, ibx, iby = prm.BELT_MASS, prm.BELT_IXX, prm.BELT_IYY
         w = {k: 2 * np.pi * prm[f"FREQ_{k}"] for k in ("LONG", "LAT", "YAW", "WINDUP")}
         cbx, cby, cbg, cbth = mb * w["LONG"] ** 2, mb * w["LAT"] ** 2, ibx * w["YAW"] ** 2, iby * w["WINDUP"] ** 2
@@ -124,6 +168,9 @@ class RingConstants:
         if not (1 / out.cx - 1 / cbx > 0).all() or not (1 / out.cy - 1 / cby > 0).all():
             raise ModelInputError("LONGITUDINAL/LATERAL_STIFFNESS exceed the sidewall stiffness from FREQ_*: "
                                   "no positive residual stiffness exists")
+        if not 1 / prm.YAW_STIFFNESS - 1 / cbg > 0:
+            raise ModelInputError(f"YAW_STIFFNESS = {prm.YAW_STIFFNESS} exceeds the sidewall yaw stiffness "
+                                  f"{cbg:.0f} N m/rad from FREQ_YAW and BELT_IXX: no positive residual yaw stiffness")
         if not prm.DAMP_RESIDUAL > 0:
             raise ModelInputError("DAMP_RESIDUAL must be positive: the massless contact patch needs residual "
                                   "damping")
@@ -132,44 +179,87 @@ class RingConstants:
                    float(prm.IYY - prm.BELT_IYY + rim_extra_inertia))
 
 
-def _residual_vertical(prm, rc: RingConstants, rho_r, r_omega, omega, dpi, be):
-    """(F_r, dF_r/drho_r): inverse of rho_MF(F) - F/c_bz = rho_r by Newton from F = 0 (module notes)."""
-    import casadi as ca
-
-    F, ro, om, dp = (ca.SX.sym(n) for n in ("F", "r_omega", "omega", "dpi"))
-    g = vertical.deflection_61(prm, F, ro, om, 0.0, 0.0, dp, be) - F / rc.cbx
-    fun = ca.Function("residual", [F, ro, om, dp], [g, ca.jacobian(g, F)])
-    target = be.fmax(rho_r, 0.0)
-    f = 0.0 * rho_r
-    for _ in range(_NEWTON_STEPS):
-        gv, dgv = fun(f, r_omega, omega, dpi)
-        f = f - (gv - target) / dgv
-    _, dgv = fun(f, r_omega, omega, dpi)
-    inside = rho_r > 0
-    return be.where(inside, f, 0.0), be.where(inside, 1.0 / dgv, 0.0)
+def _pressure_factors(prm, dpi, be):
+    """(f_c, f_d): sidewall stiffness and damping factors at pressure (module notes; 1 at SWIFT_P* = 0)."""
+    return 1.0 + prm.SWIFT_PSTIFF * dpi, 1.0 + prm.SWIFT_PDAMP * dpi
 
 
-def tandem_base_now(model, state, u, h_c):
-    """l_s for the current state: ELLIPS_SHIFT 2a at the load of the static tyre whose deflection is the rim-to-cam
-    distance at the contact centre (cam height ``h_c``) [chosen: one explicit pass of the l_s-load loop]."""
+def residual_vertical(prm, rho_r, omega, dpi, cbz, be):
+    """(F_r, dF_r/drho_r): the vertical residual spring, the series complement of the sidewall c_bz in the MF 6.1
+    load-deflection relation without bottoming (closed form, module notes); negative for rho_r < 0."""
+    R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
+    q_fz1 = np.sqrt((prm.VERTICAL_STIFFNESS * R0 / Fz0) ** 2 - 4.0 * prm.Q_FZ2)  # paper (4)
+    factor = (1.0 + prm.Q_V2 * (R0 / prm.LONGVL) * be.abs(omega)) * (1.0 + prm.PFZ1 * dpi) * Fz0  # A3.3
+    A, B = factor * q_fz1 / R0, factor * prm.Q_FZ2 / R0**2
+    soft = cbz - A
+    disc = be.fmax(soft**2 - 4.0 * B * cbz * rho_r, 1e-6 * soft**2)
+    t = 2.0 * cbz * rho_r / (soft + be.sqrt(disc))  # total deflection rho_r + F/c_bz
+    k_t = A + 2.0 * B * t  # tangent stiffness of the MF relation
+    return cbz * (t - rho_r), cbz * k_t / (cbz - k_t)
+
+
+def _plane(hf, hr, ls, zb, be):
+    """(w, beta_y, r_c): effective height and slope of the tandem, distance from a centre at height zb to the
+    plane with the tandem centred at the foot of the normal."""
+    w = (hf + hr) / 2
+    beta = be.atan((hf - hr) / ls)
+    return w, beta, (zb - w) / be.cos(beta)
+
+
+def _tandem_base(prm, fz, dpi, be):
+    a, _ = vertical.contact_patch(prm, be.fmax(fz, _FZ_FLOOR), dpi, be)
+    return be.fmax(prm.ELLIPS_SHIFT * 2.0 * a, 1e-6)
+
+
+def contact_start(model, rc: RingConstants, state, u, h_c):
+    """(x_c, l_s) to start the contact passes: centre under the belt, l_s at the load of the residual spring with
+    the cam height ``h_c`` under the belt centre."""
     from mftyre.backend import casadi_backend
 
     be = casadi_backend()
     prm = model.params
     s = {n: state[i] for i, n in enumerate(STATE_NAMES)}
     dpi = (u[INPUT_NAMES.index("p")] - prm.NOMPRES) / prm.NOMPRES
+    f_c, _ = _pressure_factors(prm, dpi, be)
+    rho_r = vertical.free_radius(prm, s["omb"], be) - (s["zb"] - h_c)
+    f_r, _ = residual_vertical(prm, rho_r, s["omb"], dpi, rc.cbx * f_c, be)
+    return s["xb"], _tandem_base(prm, f_r, dpi, be)
+
+
+def contact_geometry(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c):
+    """One Newton pass of the contact solution from the cam heights ``hf``, ``hr`` (slopes ``dhf``, ``dhr``) at
+    ``x_c`` +- ``ls``/2: (x_c, l_s) solving x_c = x_b + r_c sin(beta_y) (foot of the normal) and
+    l_s = ELLIPS_SHIFT 2a(F_r(R_Omega - r_c)) together (plain substitution barely contracts over short obstacles:
+    d(r_c sin beta)/dx_c reaches -1)."""
+    import casadi as ca
+    from mftyre.backend import casadi_backend
+
+    be = casadi_backend()
+    prm = model.params
+    s = {n: state[i] for i, n in enumerate(STATE_NAMES)}
+    dpi = (u[INPUT_NAMES.index("p")] - prm.NOMPRES) / prm.NOMPRES
+    f_c, _ = _pressure_factors(prm, dpi, be)
     r_omega = vertical.free_radius(prm, s["omb"], be)
-    fz_est = be.fmax(vertical.vertical_force_61(prm, be.fmax(r_omega - (s["za"] - h_c), 0.0), r_omega, s["omb"],
-                                                0.0, 0.0, dpi, be), 0.0)
-    a_est, _ = vertical.contact_patch(prm, be.fmax(fz_est, _FZ_FLOOR), dpi, be)
-    return be.fmax(prm.ELLIPS_SHIFT * 2.0 * a_est, 1e-6)
+    xc_, ls_, hf_, hr_ = (ca.SX.sym(n) for n in ("xc", "ls", "hf", "hr"))
+    _, beta, r_c = _plane(hf_, hr_, ls_, s["zb"], be)
+    f_r, _ = residual_vertical(prm, r_omega - r_c, s["omb"], dpi, rc.cbx * f_c, be)
+    res = ca.vertcat(xc_ - s["xb"] - r_c * be.sin(beta), ls_ - _tandem_base(prm, f_r, dpi, be))
+    # chain rule through the cam heights: d(hf)/d(x_c, l_s) = dhf (1, 1/2), d(hr)/d(x_c, l_s) = dhr (1, -1/2)
+    jac = (ca.jacobian(res, ca.vertcat(xc_, ls_)) + ca.jacobian(res, hf_) @ ca.horzcat(dhf, dhf / 2)
+           + ca.jacobian(res, hr_) @ ca.horzcat(dhr, -dhr / 2))
+    res, jac = ca.substitute([res, jac], [xc_, ls_, hf_, hr_], [x_c, ls, hf, hr])
+    step = ca.solve(jac, res)
+    return x_c - step[0], be.fmax(ls - step[1], 1e-6)
 
 
-def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, *, axle: str, rim: str):
+def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c=None, *, axle: str, rim: str,
+                   h=0.0, road_camber=0.0):
     """State derivative and outputs (CasADi vectors) of the ring at ``state`` (STATE_NAMES) and inputs ``u``
     (INPUT_NAMES), with the front/rear cam heights ``hf``, ``hr`` and their slopes along x at the cam positions
-    x_b +- ``ls``/2. ``axle``: "height" (imposed, z_a and its rate from the state, held by the stepper) or
-    "load"; ``rim``: "speed" (imposed spin) or "torque"."""
+    x_c +- ``ls``/2 (``x_c``: the contact centre, reported only). ``axle``: "height" (imposed, z_a and its rate
+    from the state, held by the stepper) or "load"; ``rim``: "speed" (imposed spin) or "torque"; ``h``: the
+    integration step (limits the relaxation rate, module notes; 0 = the exact model); ``road_camber``: the
+    multi-track road camber beta_x of a 3D road [rad] (added to the input ``road_camber``)."""
     import casadi as ca
     from mftyre.backend import casadi_backend
 
@@ -178,60 +268,80 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, *, 
     s = {n: state[i] for i, n in enumerate(STATE_NAMES)}
     v = {n: u[i] for i, n in enumerate(INPUT_NAMES)}
     dpi = (v["p"] - prm.NOMPRES) / prm.NOMPRES
+    f_c, f_d = _pressure_factors(prm, dpi, be)
+    cbx, cby, cbg, cbth = rc.cbx * f_c, rc.cby * f_c, rc.cbg * f_c, rc.cbth * f_c
+    g = be.sqrt(f_c) * f_d
+    kbx, kby, kbg, kbth = rc.kbx * g, rc.kby * g, rc.kbg * g, rc.kbth * g
     r_omega = vertical.free_radius(prm, s["omb"], be)
-    w, dw = (hf + hr) / 2, (dhf + dhr) / 2
-    beta = be.atan((hf - hr) / ls)
+
+    # effective road: height, slope, curvature; contact point at the foot of the normal
+    w, beta, r_c = _plane(hf, hr, ls, s["zb"], be)
+    dw = (dhf + dhr) / 2
     cb, sb = be.cos(beta), be.sin(beta)
+    curvature = cb**2 * (dhf - dhr) / ls
 
     # vertical residual element, normal to the effective plane
-    rho_r = r_omega - (s["zb"] - w) * cb
-    rc_lever = r_omega - rho_r
+    rho_r = r_omega - r_c
+    contact = rho_r > 0
     vcx = s["vxb"] * cb + s["vzb"] * sb
-    damp = prm.DAMP_RESIDUAL + prm.DAMP_VLOW * be.fmax(0.0, 1.0 - be.abs(vcx) / prm.VXLOW)
-    f_r, c_rz = _residual_vertical(prm, rc, rho_r, r_omega, s["omb"], dpi, be)
-    rho_r_dot = -(s["vzb"] - dw * s["vxb"]) * cb
-    fzc = be.where(rho_r > 0, be.fmax(f_r + damp * c_rz * rho_r_dot, 0.0), 0.0)
+    damp = (prm.DAMP_RESIDUAL + prm.DAMP_VLOW * be.fmax(0.0, 1.0 - be.abs(vcx) / prm.VXLOW)) * f_d
+    f_r, c_rz = residual_vertical(prm, rho_r, s["omb"], dpi, cbx, be)
+    rho_r_dot = -(s["vzb"] - dw * s["vxb"]) / cb
+    fzc = be.where(contact, be.fmax(f_r + damp * c_rz * rho_r_dot, 0.0), 0.0)
 
+    # slip model: MF at the transient slips, belt camber, no second low-speed reduction
+    # direction of travel and of spin: +-1, linear through standstill (below 0.1 VXLOW)
+    s_v = be.fmin(be.fmax(vcx / (0.1 * prm.VXLOW), -1.0), 1.0)
+    s_o = be.fmin(be.fmax(s["omb"] * prm.UNLOADED_RADIUS / (0.1 * prm.VXLOW), -1.0), 1.0)
+    alpha_mf = s["alpha"] + s_v * (s["psb"] - v["psi"] + s["psr"])
+    beta_x = road_camber + v["road_camber"]
     mf = model.casadi_function(inputs=("fz", "kappa", "alpha", "gamma", "vx", "p", "omega"),
                                outputs=("fx", "fy", "mz", "mx", "my", "re", "a", "cx", "cy"))
-    gamma = v["gamma"] - v["road_camber"]
-    fxc, fyc, mzc, mxc, myc, re, a, cx, cy = mf(be.fmax(fzc, _FZ_FLOOR), s["kappa"], s["alpha"], gamma, vcx, v["p"], s["omb"])
+    fxc, fyc, mzc, mxc, myc, re, a, cx, cy = mf(be.fmax(fzc, _FZ_FLOOR), s["kappa"], alpha_mf,
+                                                 v["gamma"] - beta_x, be.fmax(be.abs(vcx), prm.VXLOW),
+                                                 v["p"], s["omb"])
+    mzc, myc = mzc * s_v, myc * s_o
 
     # residual springs in series with sidewall (+ rotation lever): 1/C = 1/c_b (+ r^2/c_rot) + 1/c_r
-    crx = 1.0 / (1.0 / cx - 1.0 / rc.cbx - (rc_lever**2 / rc.cbth if rc.lever_x else 0.0))
-    cry = 1.0 / (1.0 / cy - 1.0 / rc.cby - (rc_lever**2 / rc.cbg if rc.lever_y else 0.0))
+    crx = 1.0 / (1.0 / cx - 1.0 / cbx - (r_c**2 / cbth if rc.lever_x else 0.0))
+    cry = 1.0 / (1.0 / cy - 1.0 / cby - (r_c**2 / cbg if rc.lever_y else 0.0))
+    crpsi = 1.0 / (1.0 / (prm.YAW_STIFFNESS * (1.0 + prm.PCMZ1 * dpi)) - 1.0 / cbg)
     uxdot = (fxc - crx * s["ux"]) / (damp * crx)
     uydot = (fyc - cry * s["uy"]) / (damp * cry)
-    sigma_c = be.fmax(a, 1e-3)
+    psrdot = (mzc - crpsi * s["psr"]) / (damp * crpsi)
+    sigma_c = be.fmax(a, be.abs(vcx) * h + 1e-4)
     vsx = vcx - s["omb"] * re
-    kappa_dot = (-(vsx + uxdot) - be.abs(vcx) * s["kappa"]) / sigma_c
-    vcy = s["vyb"] + rc_lever * s["wgb"] + uydot - vcx * v["psi"]
-    alpha_dot = (vcy - be.abs(vcx) * s["alpha"]) / sigma_c
+    vcy = s["vyb"] + r_c * s["wgb"] + uydot - vcx * (s["psb"] + s["psr"])
+    kappa_dot = be.where(contact, (-(vsx + uxdot) - be.abs(vcx) * s["kappa"]) / sigma_c, -s["kappa"] / AIR_TIME)
+    alpha_dot = be.where(contact, (vcy - be.abs(vcx) * s["alpha"]) / sigma_c, -s["alpha"] / AIR_TIME)
 
-    # forces on the belt, global axes
-    fx_b, fz_b = fxc * cb - fzc * sb, fxc * sb + fzc * cb
-    fwx = rc.cbx * (s["xb"] - s["xa"]) + rc.kbx * (s["vxb"] - v["vx"])
-    fwz = rc.cbx * (s["zb"] - s["za"]) + rc.kbx * (s["vzb"] - s["vza"])
-    fwy = rc.cby * (s["yb"] - v["y"]) + rc.kby * (s["vyb"] - v["vy"])
-    mwy = rc.cbth * s["thw"] + rc.kbth * (s["omb"] - s["oma"])
-    mwx = rc.cbg * (s["gb"] - v["gamma"]) + rc.kbg * s["wgb"]
-    mwz = rc.cbg * (s["psb"] - v["psi"]) + rc.kbg * s["wpsb"]
+    # forces on the belt, global axes (plane tilted by beta_y forward, beta_x sideways); bottoming on the rim
+    cx_, sx_ = be.cos(beta_x), be.sin(beta_x)
+    fx_b, fz_b, fy_b = fxc * cb - fzc * sb * cx_, (fxc * sb + fzc * cb) * cx_ + fyc * sx_, fyc * cx_ - fzc * sx_
+    fwx = cbx * (s["xb"] - s["xa"]) + kbx * (s["vxb"] - v["vx"])
+    fwz = cbx * (s["zb"] - s["za"]) + kbx * (s["vzb"] - s["vza"])
+    fwy = cby * (s["yb"] - v["y"]) + kby * (s["vyb"] - v["vy"])
+    mwy = cbth * s["thw"] + kbth * (s["omb"] - s["oma"])
+    mwx = cbg * (s["gb"] - v["gamma"]) + kbg * s["wgb"]
+    mwz = cbg * (s["psb"] - v["psi"]) + kbg * s["wpsb"]
+    r_a = (s["za"] - w) / cb  # rim centre to the effective plane
+    f_bottom = prm.BOTTOM_STIFF * be.fmax(prm.RIM_RADIUS + prm.BOTTOM_OFFST - r_a, 0.0)
 
     d = {
         "xb": s["vxb"], "vxb": (-fwx + fx_b) / rc.mb,
         "zb": s["vzb"], "vzb": (-fwz + fz_b) / rc.mb + prm.GRAVITY,
-        "thw": s["omb"] - s["oma"], "omb": (-mwy - rc_lever * fxc + myc) / rc.iby,
+        "thw": s["omb"] - s["oma"], "omb": (-mwy - r_c * fxc + myc) / rc.iby,
         "oma": (v["torque"] + mwy) / rc.rim_inertia if rim == "torque" else 0.0 * s["oma"],
-        "za": s["vza"], "vza": (-v["load"] + fwz) / rc.axle_mass if axle == "load" else 0.0 * s["vza"],
+        "za": s["vza"],
+        "vza": (-v["load"] + fwz + f_bottom * cb) / rc.axle_mass if axle == "load" else 0.0 * s["vza"],
         "xa": v["vx"], "ux": uxdot, "kappa": kappa_dot,
-        "yb": s["vyb"], "vyb": (-fwy + fyc) / rc.mb,
-        "gb": s["wgb"], "wgb": (-mwx + rc_lever * fyc + mxc + rc.iby * s["omb"] * s["wpsb"]) / rc.ibx,
+        "yb": s["vyb"], "vyb": (-fwy + fy_b) / rc.mb,
+        "gb": s["wgb"], "wgb": (-mwx + r_c * fyc + mxc + rc.iby * s["omb"] * s["wpsb"]) / rc.ibx,
         "psb": s["wpsb"], "wpsb": (-mwz + mzc - rc.iby * s["omb"] * s["wgb"]) / rc.ibx,
-        "uy": uydot, "alpha": alpha_dot,
+        "uy": uydot, "alpha": alpha_dot, "psr": psrdot, "xcs": 0.0 * s["xcs"], "lsm": 0.0 * s["lsm"],
     }
-    rho = r_omega - (s["za"] - w) * cb
-    out = dict(fx=fwx, fy=fwy, fz=fwz, mx=mwx, my=mwy, mz=mwz, fx_c=fxc, fy_c=fyc, fz_c=fzc, mz_c=mzc,
-               rho=rho, rl=rc_lever, re=re, a=a, ls=ls, w=w, beta=beta, kappa=s["kappa"], alpha=s["alpha"],
-               vcx=vcx)
+    out = dict(fx=fwx - f_bottom * sb, fy=fwy, fz=fwz + f_bottom * cb, mx=mwx, my=mwy, mz=mwz, fx_c=fxc,
+               fy_c=fyc, fz_c=fzc, mz_c=mzc, rho=r_omega - r_a, rl=r_c, re=re, a=a, ls=ls, w=w, beta=beta,
+               kappa=s["kappa"], alpha=alpha_mf, vcx=vcx, curvature=curvature, beta_x=beta_x,
+               x_c=s["xb"] + r_c * sb if x_c is None else x_c)
     return ca.vertcat(*(d[n] for n in STATE_NAMES)), ca.vertcat(*(out[n] for n in OUTPUT_NAMES))
-

@@ -30,6 +30,8 @@ class Road:
     """A road profile. Subclasses implement :meth:`_height` (2D) and may list ``breakpoints``."""
 
     breakpoints: tuple = ()
+    #: True for roads whose height changes across y (road camber for the multi-track cams); 2D profiles: False.
+    varies_with_y: bool = False
 
     def height(self, x, y=0.0):
         """Road height [m] at the travelled distance ``x`` [m] (and lateral position ``y`` [m]), vectorised."""
@@ -191,6 +193,8 @@ class TwoTrack(Road):
     """Left and right profiles at ``y = +spacing/2`` and ``-spacing/2`` (ISO-W: y left), linear in between and
     constant beyond: a road with banking (road camber) for :func:`swift.enveloping.effective_road_3d`."""
 
+    varies_with_y = True
+
     def __init__(self, left: Road, right: Road, spacing: float):
         self.left, self.right, self.spacing = left, right, _positive("track spacing", spacing)
         self.breakpoints = tuple(sorted(set(left.breakpoints) | set(right.breakpoints)))
@@ -207,6 +211,7 @@ class TwoTrack(Road):
 class _Sum(Road):
     def __init__(self, a: Road, b: Road):
         self.a, self.b = a, b
+        self.varies_with_y = a.varies_with_y or b.varies_with_y
         self.breakpoints = tuple(sorted(set(a.breakpoints) | set(b.breakpoints)))
 
     def _height(self, x, y):

@@ -27,14 +27,19 @@ Step API (for an FMU): ``state_next, outputs = step(state, inputs, dt)``.
   half contact length a, tandem base ls, effective height w and slope beta, transient slips, contact speed.
 
 Integration: classical Runge-Kutta (RK4), ``substeps`` per step, all in one compiled CasADi function (C, cached like
-:mod:`mftyre.compiled`); the cam heights come from a window of ``window`` samples of
-the cam-height table around the wheel, passed by pointer (no copy), so one compiled function serves any road.
+:mod:`mftyre.compiled`, keyed by the parameters and the equations' source); the cam heights come from a window of
+``window`` samples of the cam-height table around the wheel, passed by pointer (no copy), so one compiled function
+serves any road. The window must cover the wheel's travel in one compiled call plus ``TANDEM_REACH``: a longer
+:meth:`SwiftTyre.step` is split into equal parts, and :meth:`SwiftTyre.run` steps singly where a block of
+``BLOCK`` steps would travel too far, so results do not depend on speed, step size or start position.
+``SwiftTyre.step_function`` is the CasADi step itself, for code generation (FMU).
 """
 from __future__ import annotations
 
 import ctypes
 import hashlib
 import json
+import math
 import os
 import tempfile
 from dataclasses import dataclass, replace
@@ -43,17 +48,28 @@ from pathlib import Path
 import numpy as np
 
 from mftyre.compiled import compile_c, cache_dir  # the core's compiler call and cache folder
+from mftyre.backend import NUMPY
 from mftyre.errors import ModelInputError
+from mftyre.formula import vertical
 
 from .enveloping import Cams, CamTable
-from .ring import INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, RingConstants, ring_equations, tandem_base_now
+from .ring import CONTACT_PASSES, INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, RingConstants, contact_geometry, \
+    contact_start, ring_equations
 from .road import Road
 
 __all__ = ["StepInputs", "SwiftTyre", "SimResult"]
 
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
+#: The compiled functions' cache key includes the equations' source, so an edit never reuses an old library.
+_SOURCE_HASH = hashlib.sha256(b"".join(Path(__file__).with_name(n).read_bytes()
+                                       for n in ("ring.py", "simulate.py"))).hexdigest()
 #: Steps per compiled call in :meth:`SwiftTyre.run`.
 BLOCK = 10
+#: Distance [m] the cam lookups may reach beyond the belt centre: half the tandem base plus the forward shift of
+#: the contact centre (0.1 m each would need a 2a of 0.24 m and a slope of 20 deg).
+TANDEM_REACH = 0.25
+#: Newton passes of the contact solution in the stepper, from the solution of the previous step.
+WARM_PASSES = 2
 
 
 @dataclass(frozen=True)
@@ -112,57 +128,82 @@ class SwiftTyre:
         if isinstance(road, CamTable):
             self.table = road
         else:
-            self.table = CamTable.build(road, self.cams, x_range[0] - margin, x_range[1] + margin, table_dx)
+            _, b = vertical.contact_patch(model.params, model.params.FNOMIN, 0.0, NUMPY)  # tracks over 2b [chosen]
+            self.table = CamTable.build(road, self.cams, x_range[0] - margin, x_range[1] + margin, table_dx,
+                                        half_width=float(b))
         if self.table.h.size < window:
             raise ModelInputError(f"the cam-height table ({self.table.h.size} samples) is shorter than the window "
                                   f"({window})")
         self.window, self.substeps = int(window), int(substeps)
         self._grid = np.ascontiguousarray(self.table.dx * np.arange(self.window))
-        self._h = np.ascontiguousarray(self.table.h, dtype=float)
+        camber = np.zeros(self.table.h.size) if self.table.camber is None else self.table.camber
+        self._h = np.ascontiguousarray(np.column_stack([self.table.h, camber]).ravel(), dtype=float)  # interleaved
         self._rhs_window = self._rhs(self.window)
+        self._rhs_warm = self._rhs(self.window, warm=True)
         self._step_fn = self._build_step()
         self._block_fn = self._build_block(self._step_fn)
         self._compiled = _Compiled(self._step_fn, self._key("step")) if compiled else None
         self._compiled_block = _Compiled(self._block_fn, self._key("block")) if compiled else None
+        self._equilibrium = None  # static equations for initial_state, built on first use
+        for compiled_fn in (self._compiled, self._compiled_block):
+            if compiled_fn is not None:
+                compiled_fn.bind(self._grid, self._h)
 
     # ------------------------------------------------------------------ equations
-    def _rhs(self, n_window):
-        """rhs(x, u, x0w, grid, hw) -> (dx, out): MX graph, so that the cam-height lookup stays a compiled
-        constant-time table access (an SX expansion would scan the whole window)."""
+    def _rhs(self, n_window, warm=False):
+        """rhs(x, u, x0w, grid, hw, h) -> (dx, out): MX graph, so that the cam-height lookups stay compiled
+        constant-time table accesses (an SX expansion would scan the whole window). ``h``: the integration step
+        that bounds the relaxation rate (0: the exact model). The contact solution: ``CONTACT_PASSES`` Newton
+        passes from an estimate, or (``warm``, the stepper) ``WARM_PASSES`` from the solution stored in the state."""
         import casadi as ca
 
         x = ca.MX.sym("x", len(STATE_NAMES))
         u = ca.MX.sym("u", len(INPUT_NAMES))
-        x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", n_window), ca.MX.sym("hw", n_window)
-        lookup = ca.interpolant("cam", "linear", [n_window], 1, {"lookup_mode": ["exact"]})
+        x0w, grid, h = ca.MX.sym("x0w"), ca.MX.sym("grid", n_window), ca.MX.sym("h")
+        hw = ca.MX.sym("hw", 2 * n_window)  # cam height and road-camber slope, interleaved
+        lookup = ca.interpolant("cam", "linear", [n_window], 2, {"lookup_mode": ["exact"]})
         xq = ca.MX.sym("xq")
         hq = lookup(xq, grid, hw)
         cam_fn = ca.Function("cam_height", [xq, grid, hw], [hq, ca.jacobian(hq, xq)])
 
         # the physics as SX functions (compact C), the table lookups as MX calls between them
-        xs, us, hs = ca.SX.sym("x", len(STATE_NAMES)), ca.SX.sym("u", len(INPUT_NAMES)), ca.SX.sym("h", 5)
-        tandem = ca.Function("tandem", [xs, us, hs[0]], [tandem_base_now(self.model, xs, us, hs[0])])
-        dx_sx, out_sx = ring_equations(self.model, self.constants, xs, us, hs[0], hs[1], hs[2], hs[3], hs[4],
-                                       axle=self.axle, rim=self.rim)
-        physics = ca.Function("ring", [xs, us, hs], [dx_sx, out_sx])
-        xb = x[STATE_NAMES.index("xb")]
-        h_c, _ = cam_fn(xb - x0w, grid, hw)
-        ls = tandem(x, u, h_c)
-        hf, dhf = cam_fn(xb + ls / 2 - x0w, grid, hw)
-        hr, dhr = cam_fn(xb - ls / 2 - x0w, grid, hw)
-        dx, out = physics(x, u, ca.vertcat(hf, dhf, hr, dhr, ls))
-        return ca.Function("rhs", [x, u, x0w, grid, hw], [dx, out])
+        m, c = self.model, self.constants
+        xs, us, hs = ca.SX.sym("x", len(STATE_NAMES)), ca.SX.sym("u", len(INPUT_NAMES)), ca.SX.sym("h", 7)
+        hstep = ca.SX.sym("hstep")
+        start = ca.Function("contact_start", [xs, us, hs[0]], [ca.vertcat(*contact_start(m, c, xs, us, hs[0]))])
+        geometry = ca.Function("contact_geometry", [xs, us, hs[:6]],
+                               [ca.vertcat(*contact_geometry(m, c, xs, us, *(hs[i] for i in range(6))))])
+        dx_sx, out_sx = ring_equations(m, c, xs, us, *(hs[i] for i in range(6)), axle=self.axle, rim=self.rim,
+                                       h=hstep, road_camber=ca.atan(hs[6]))
+        physics = ca.Function("ring", [xs, us, hs, hstep], [dx_sx, out_sx])
+
+        def cam(xc):  # (height, its slope along x, road-camber slope) at xc
+            value, slope = cam_fn(xc - x0w, grid, hw)
+            return value[0], slope[0], value[1]
+
+        if warm:
+            xc, ls, passes = x[_S["xb"]] + x[_S["xcs"]], x[_S["lsm"]], WARM_PASSES
+        else:
+            first = start(x, u, cam(x[_S["xb"]])[0])
+            xc, ls, passes = first[0], first[1], CONTACT_PASSES
+        for _ in range(passes):  # contact centre and tandem base at the current load, solved together
+            (hf, dhf, _), (hr, dhr, _) = cam(xc + ls / 2), cam(xc - ls / 2)
+            nxt = geometry(x, u, ca.vertcat(hf, dhf, hr, dhr, ls, xc))
+            xc, ls = nxt[0], nxt[1]
+        (hf, dhf, cf), (hr, dhr, cr) = cam(xc + ls / 2), cam(xc - ls / 2)
+        dx, out = physics(x, u, ca.vertcat(hf, dhf, hr, dhr, ls, xc, (cf + cr) / 2), h)
+        return ca.Function("rhs", [x, u, x0w, grid, hw, h], [dx, out])
 
     def _build_step(self):
         import casadi as ca
 
-        rhs = self._rhs_window
+        rhs = self._rhs_warm
         x = ca.MX.sym("x", len(STATE_NAMES))
         u = ca.MX.sym("u", len(INPUT_NAMES))
         dt, x0w = ca.MX.sym("dt"), ca.MX.sym("x0w")
-        grid, hw = ca.MX.sym("grid", self.window), ca.MX.sym("hw", self.window)
+        grid, hw = ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
         h = dt / self.substeps
-        f = lambda s: rhs(s, u, x0w, grid, hw)[0]  # noqa: E731
+        f = lambda s: rhs(s, u, x0w, grid, hw, h)[0]  # noqa: E731
         xs = x
         for _ in range(self.substeps):  # classical RK4
             k1 = f(xs)
@@ -170,7 +211,9 @@ class SwiftTyre:
             k3 = f(xs + h / 2 * k2)
             k4 = f(xs + h * k3)
             xs = xs + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        out = rhs(xs, u, x0w, grid, hw)[1]
+        out = rhs(xs, u, x0w, grid, hw, h)[1]
+        memory = ca.vertcat(out[OUTPUT_NAMES.index("x_c")] - xs[_S["xb"]], out[OUTPUT_NAMES.index("ls")])
+        xs = ca.vertcat(xs[:_S["xcs"]], memory, xs[_S["lsm"] + 1:])  # the contact solution for the next step
         return ca.Function("swift_step", [x, u, dt, x0w, grid, hw], [xs, out],
                            ["x", "u", "dt", "x0w", "grid", "hw"], ["x_next", "out"])
 
@@ -181,7 +224,7 @@ class SwiftTyre:
         x = ca.MX.sym("x", len(STATE_NAMES))
         u = ca.MX.sym("u", len(INPUT_NAMES), BLOCK)
         dt, x0w = ca.MX.sym("dt"), ca.MX.sym("x0w")
-        grid, hw = ca.MX.sym("grid", self.window), ca.MX.sym("hw", self.window)
+        grid, hw = ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
         states, outs, xs = [], [], x
         for k in range(BLOCK):
             xs, out = step(xs, u[:, k], dt, x0w, grid, hw)
@@ -190,11 +233,23 @@ class SwiftTyre:
         return ca.Function("swift_block", [x, u, dt, x0w, grid, hw], [ca.horzcat(*states), ca.horzcat(*outs)],
                            ["x", "u", "dt", "x0w", "grid", "hw"], ["states", "outs"])
 
+    @property
+    def step_function(self):
+        """The CasADi step ``swift_step(x, u, dt, x0w, grid, hw) -> (x_next, out)`` that :meth:`step` runs
+        (compiled): state and inputs in the order of STATE_NAMES / INPUT_NAMES, the window ``hw`` of ``window``
+        samples of (cam height, road-camber slope) pairs, interleaved (:class:`swift.enveloping.CamTable`), on
+        the local grid ``grid`` (= table.dx * arange(window)) starting at x = ``x0w``. The state's ``xcs``,
+        ``lsm`` entries carry the contact solution from step to step (:meth:`initial_state` sets them; l_s must be
+        positive). For code generation (FMU)."""
+        return self._step_fn
+
     def _key(self, kind):
         prm = self.model.params
         payload = {"p": {k: repr(prm[k]) for k in prm}, "side": self.model.side, "axle": self.axle,
                    "rim": self.rim, "window": self.window, "substeps": self.substeps,
-                   "constants": repr(self.constants), "kind": kind, "block": BLOCK, "version": 5}
+                   "constants": repr(self.constants), "kind": kind, "block": BLOCK,
+                   "passes": (CONTACT_PASSES, WARM_PASSES),
+                   "equations": _SOURCE_HASH}
         return "swift_" + hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
     # ------------------------------------------------------------------ stepping
@@ -210,27 +265,46 @@ class SwiftTyre:
             state[_S["za"]], state[_S["vza"]] = inputs.z, inputs.vz
         if self.rim == "speed":
             state[_S["oma"]] = inputs.omega
+        if not state[_S["lsm"]] > 0:  # no contact solution stored yet (a state built by hand): solve it afresh
+            self._store_contact(state, self._u(inputs))
         return state
 
+    def _store_contact(self, state, u):
+        """Write the converged contact solution (x_c - x_b, l_s) of ``state`` into its memory entries."""
+        out = np.asarray(self._rhs_window(state, u, *self._rhs_args(state))[1]).ravel()
+        state[_S["xcs"]] = out[OUTPUT_NAMES.index("x_c")] - state[_S["xb"]]
+        state[_S["lsm"]] = out[OUTPUT_NAMES.index("ls")]
+
     def _window_start(self, xb):
-        i0 = int(np.floor((xb - self.table.x0) / self.table.dx)) - self.window // 2
+        i0 = math.floor((xb - self.table.x0) / self.table.dx) - self.window // 2
         if i0 < 0 or i0 + self.window > self.table.h.size:
             raise ModelInputError(f"wheel at x = {xb:.3f} m is outside the road table "
                                   f"[{self.table.x0 + self.window // 2 * self.table.dx:.3f}, "
                                   f"{self.table.x[-1] - self.window // 2 * self.table.dx:.3f}] m (x_range)")
         return i0
 
-    def step(self, state, inputs: StepInputs, dt: float):
-        """One step of length ``dt``: (state_next, outputs dict). See the module notes for the API."""
-        state = self._impose(state, inputs)
+    @property
+    def _reach(self):
+        """Largest wheel travel [m] one compiled call may cover: the window half-width less ``TANDEM_REACH``."""
+        return self.window // 2 * self.table.dx - TANDEM_REACH
+
+    def _call_step(self, state, u, dt):
         i0 = self._window_start(state[_S["xb"]])
         x0w = self.table.x0 + i0 * self.table.dx
         if self._compiled is not None:
-            x_next, out = self._compiled((state, self._u(inputs), dt, x0w), self._grid, self._h, i0)
-        else:
-            res = self._step_fn(state, self._u(inputs), dt, x0w, self._grid, self._h[i0:i0 + self.window])
-            x_next, out = (np.asarray(r).ravel() for r in res)
-        return x_next, dict(zip(OUTPUT_NAMES, out))
+            return self._compiled((state, u, dt, x0w), i0)
+        res = self._step_fn(state, u, dt, x0w, self._grid, self._h[2 * i0:2 * (i0 + self.window)])
+        return tuple(np.asarray(r).ravel() for r in res)
+
+    def step(self, state, inputs: StepInputs, dt: float):
+        """One step of length ``dt``: (state_next, outputs dict). See the module notes for the API. A step over
+        which the wheel would travel further than the cam-height window reaches is split into equal parts."""
+        state = self._impose(state, inputs)
+        u = self._u(inputs)
+        n = max(1, math.ceil(abs(inputs.vx) * dt / self._reach))
+        for _ in range(n):
+            state, out = self._call_step(state, u, dt / n)
+        return state, dict(zip(OUTPUT_NAMES, out))
 
     def run(self, t_end: float, inputs, dt: float = 1e-3) -> SimResult:
         """Fixed-step run from the static equilibrium. ``inputs``: a :class:`StepInputs` (constant speeds; the
@@ -252,12 +326,17 @@ class SwiftTyre:
                 u, first = u_const.copy(), get(t0)
                 u[_U_Y] = inputs.y + inputs.vy * (t0 + dt * np.arange(BLOCK))
             state = self._impose(state, first)
+            if max(abs(u[0])) * BLOCK * dt > self._reach:  # beyond the window in one call: single steps
+                for k in range(BLOCK):
+                    state, ys = self.step(state, get(t0 + k * dt), dt)
+                    states[1 + b * BLOCK + k], outs[1 + b * BLOCK + k] = state, np.fromiter(ys.values(), float)
+                continue
             i0 = self._window_start(state[_S["xb"]])
             x0w = self.table.x0 + i0 * self.table.dx
             if self._compiled_block is not None:
-                xs, ys = self._compiled_block((state, u, dt, x0w), self._grid, self._h, i0)
+                xs, ys = self._compiled_block((state, u, dt, x0w), i0)
             else:
-                res = self._block_fn(state, u, dt, x0w, self._grid, self._h[i0:i0 + self.window])
+                res = self._block_fn(state, u, dt, x0w, self._grid, self._h[2 * i0:2 * (i0 + self.window)])
                 xs, ys = (np.asarray(r) for r in res)
             xs = xs.reshape(BLOCK, len(STATE_NAMES)) if xs.ndim == 1 else xs.T
             ys = ys.reshape(BLOCK, len(OUTPUT_NAMES)) if ys.ndim == 1 else ys.T
@@ -273,7 +352,7 @@ class SwiftTyre:
     # ------------------------------------------------------------------ reference and statics
     def _rhs_args(self, state):
         i0 = self._window_start(state[_S["xb"]])
-        return self.table.x0 + i0 * self.table.dx, self._grid, self._h[i0:i0 + self.window]
+        return self.table.x0 + i0 * self.table.dx, self._grid, self._h[2 * i0:2 * (i0 + self.window)], 0.0
 
     def derivative(self, state, inputs: StepInputs):
         """State derivative (CasADi VM on the same right-hand side): for the reference run and checks."""
@@ -308,7 +387,8 @@ class SwiftTyre:
 
     def initial_state(self, inputs: StepInputs, iterations: int = 30) -> np.ndarray:
         """Static equilibrium (steady rolling at the input speeds) at the axle position of ``inputs``: Newton
-        on the accelerations and patch rates, from the steady-state model's deflection."""
+        on the accelerations and patch rates, from the steady-state model's deflection. With ``rim="torque"`` the
+        spin is an unknown too (``inputs.omega`` its first guess): the rim torque balances the input torque."""
         import casadi as ca
 
         prm = self.model.params
@@ -329,21 +409,29 @@ class SwiftTyre:
         s[_S["oma"]] = s[_S["omb"]] = inputs.omega
         s[_S["yb"]] = inputs.y
         s[_S["gb"]], s[_S["psb"]] = inputs.gamma, inputs.psi
-        unknown = [_S[n] for n in ("xb", "zb", "thw", "yb", "gb", "psb", "ux", "uy", "kappa", "alpha")]
-        eqs = [_S[n] for n in ("vxb", "vzb", "omb", "vyb", "wgb", "wpsb", "ux", "uy", "kappa", "alpha")]
+        unknown = [_S[n] for n in ("xb", "zb", "thw", "yb", "gb", "psb", "ux", "uy", "kappa", "alpha", "psr")]
+        eqs = [_S[n] for n in ("vxb", "vzb", "omb", "vyb", "wgb", "wpsb", "ux", "uy", "kappa", "alpha", "psr")]
         if self.axle == "load":
             unknown.append(_S["za"])
             eqs.append(_S["vza"])
-        xs = ca.MX.sym("x", len(STATE_NAMES))
-        d = self._rhs_window(xs, self._u(inputs), *self._rhs_args(s))[0][eqs]
-        fun = ca.Function("eq", [xs], [d, ca.jacobian(d, xs)[:, unknown]])
+        if self.rim == "torque":  # the spin follows the torque: rim at rest relative to the belt, torques balanced
+            unknown += [_S["oma"], _S["omb"]]
+            eqs += [_S["oma"], _S["thw"]]
+        if self._equilibrium is None:  # built once: the static equations and their Jacobian in the unknowns
+            xs, us = ca.MX.sym("x", len(STATE_NAMES)), ca.MX.sym("u", len(INPUT_NAMES))
+            x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
+            d = self._rhs_window(xs, us, x0w, grid, hw, 0.0)[0][eqs]
+            self._equilibrium = ca.Function("equilibrium", [xs, us, x0w, grid, hw],
+                                            [d, ca.jacobian(d, xs)[:, unknown]])
+        u, window = self._u(inputs), self._rhs_args(s)[:3]
         for _ in range(iterations):
-            r, jac = (np.asarray(v) for v in fun(s))
+            r, jac = (np.asarray(v) for v in self._equilibrium(s, u, *window))
             r = r.ravel()
             step = np.linalg.lstsq(jac, -r, rcond=None)[0]
             s[unknown] += step
             if np.max(np.abs(step)) < 1e-13:
                 break
+        self._store_contact(s, u)
         return s
 
 
@@ -376,7 +464,7 @@ def _compile_mx(function, key: str) -> Path:
 
 class _Compiled:
     """A compiled step/block function called through ctypes: arguments 0-3 are copied in, the cam-height grid
-    and window (arguments 4, 5) are passed by pointer into the whole table."""
+    and window (arguments 4, 5) are passed by pointer into the whole table (:meth:`bind`)."""
 
     def __init__(self, function, key):
         self._lib = ctypes.CDLL(str(_compile_mx(function, key)))
@@ -389,6 +477,7 @@ class _Compiled:
         self._in = [np.zeros(function.nnz_in(i)) for i in range(4)]
         self._res_buf = [np.zeros(function.nnz_out(i)) for i in range(2)]
         self._shapes = [function.size_out(i) for i in range(2)]
+        self._matrix_in = [function.size_in(i)[1] > 1 for i in range(4)]
         self._arg = (ctypes.c_void_p * max(sz_arg, 6))(*[a.ctypes.data for a in self._in])
         self._res = (ctypes.c_void_p * max(sz_res, 2))(*[r.ctypes.data for r in self._res_buf])
         self._iw, self._w = (ll * max(sz_iw, 1))(), (ctypes.c_double * max(sz_w, 1))()
@@ -398,11 +487,16 @@ class _Compiled:
         self._args = (ctypes.addressof(self._arg), ctypes.addressof(self._res), ctypes.addressof(self._iw),
                       ctypes.addressof(self._w), 0)
 
-    def __call__(self, values, grid, table, i0):
-        for buf, v in zip(self._in, values):
-            buf[:] = np.ravel(v, order="F")  # CasADi stores column-major
+    def bind(self, grid, table):
+        """Point arguments 4 and 5 at the local grid and the whole (interleaved) cam table, once: both arrays must
+        stay alive and unmoved while this function is used (the tyre holds them)."""
         self._arg[4] = grid.ctypes.data
-        self._arg[5] = table.ctypes.data + 8 * i0
+        self._table = table.ctypes.data
+
+    def __call__(self, values, i0):
+        for buf, v, matrix in zip(self._in, values, self._matrix_in):
+            buf[:] = np.ravel(v, order="F") if matrix else v  # CasADi stores column-major
+        self._arg[5] = self._table + 16 * i0  # two interleaved columns per sample
         if self._fn(*self._args):
             raise ArithmeticError("compiled SWIFT step reported an evaluation error")
         return tuple(r.reshape(shape, order="F").copy().squeeze() if shape[1] > 1 else r.copy()
