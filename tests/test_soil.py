@@ -13,7 +13,8 @@ from mftyre.backend import NUMPY
 from mftyre.errors import DataError, ModelInputError
 from mftyre.model import load_tir
 from mftyre.soil import Ground, SinkageError, Soil, SoftSoilTyre, builtin_soils, read_soils, soil
-from mftyre.soil.equations import compaction_resistance, critical_pressure, rigid_wheel_sinkage
+from mftyre.soil.equations import (bulldozing_coefficients, compaction_resistance, critical_pressure,
+                                   rigid_wheel_sinkage)
 
 AGRI = TIR_FILES / "agri_460_85R34_mf61.tir"
 AGRI_SMALL = TIR_FILES / "agri_420_85R24_mf61.tir"
@@ -329,16 +330,25 @@ def test_casadi_matches_numpy(tir, soil_name):
 
 def test_casadi_derivatives_match_finite_differences():
     """d(drawbar pull, Fy, sinkage)/d(fz, slip, alpha, p) from CasADi against central differences of the NumPy
-    model, at points inside one mode (away from the rigid/flexible switch)."""
+    model, in the flexible mode (sandy loam) and in the rigid mode (paddy soil; these were NaN before: the
+    derivative of sqrt(1 - cos^2 theta_f) at zero deflection)."""
     import casadi as ca
 
-    tyre = SoftSoilTyre(AGRI, "sandy_loam")
+    for name, points in (("sandy_loam", ([20e3, 0.15, 0.05, 1.2e5], [30e3, 0.4, -0.1, 1.6e5])),
+                         ("paddy_soil", ([15e3, 0.2, 0.05, 1.6e5],))):
+        _check_derivatives(SoftSoilTyre(AGRI, name), points)
+
+
+def _check_derivatives(tyre, points):
+    import casadi as ca
+
     f = tyre.casadi_function(inputs=("fz", "slip", "alpha", "p"), outputs=("drawbar_pull", "fy", "sinkage"))
     x = ca.SX.sym("x", 4)
     jac = ca.Function("dfdx", [x], [ca.jacobian(ca.vertcat(*f(x[0], x[1], x[2], x[3])), x)])
     steps = np.array([1.0, 1e-6, 1e-6, 1.0])
-    for point in ([20e3, 0.15, 0.05, 1.2e5], [30e3, 0.4, -0.1, 1.6e5]):
+    for point in points:
         analytic = jac(point).full()
+        assert np.all(np.isfinite(analytic))
         for col in range(4):
             hi, lo = np.array(point, float), np.array(point, float)
             hi[col] += steps[col]
@@ -447,3 +457,140 @@ def test_compaction_resistance_is_the_rut_work():
     z, b = 0.07, 0.4
     work = b * quad(lambda d: s.modulus(b) * d**s.n, 0, z)[0]
     assert compaction_resistance(s, z, b, NUMPY) == pytest.approx(work, rel=1e-10)
+
+
+# ------------------------------------------------------------------------------ rigid/flexible switch: continuity
+def _switch_sweep(size):
+    """The 420/85 R24 on clayey soil at 0.8 FNOMIN crosses p_cr near 1.6 bar: pressures across the switch band."""
+    tyre = SoftSoilTyre(AGRI_SMALL, "clayey_soil")
+    return tyre, 0.8 * tyre.params.FNOMIN, np.linspace(1.3e5, 2.2e5, size)
+
+
+def test_switch_is_continuous_in_pressure():
+    """Wong's switch is a step (rigid: no flat part, width WIDTH; flexible: flat part 2a, deflection rho):
+    before the blend the contact length jumped by about 0.2 m and the traction by kN between two pressures
+    1 Pa apart. Now every output is continuous: over a fine pressure sweep through the band the largest change
+    between neighbours is of the order of the mean change (no step), and the band is crossed (w from 1 to 0)."""
+    tyre, fz, p = _switch_sweep(4001)
+    out = tyre.evaluate(fz=fz, slip=0.15, alpha=0.02, p=p)
+    assert out.flexible[0] == 1.0 and out.flexible[-1] == 0.0
+    assert np.all(np.diff(out.flexible) <= 0)
+    for key in ("contact_length", "contact_width", "sinkage", "deflection", "gross_traction", "drawbar_pull",
+                "torque", "fy", "motion_resistance", "rolling_radius", "ground_pressure"):
+        steps = np.abs(np.diff(out[key]))
+        mean = abs(out[key][-1] - out[key][0]) / (p.size - 1) + 1e-12 * np.abs(out[key]).max()
+        assert steps.max() < 60 * mean, (key, steps.max(), mean)
+    # at the band's edges the blend meets Wong's modes exactly: just outside them w is exactly 0 or 1
+    ratio = (out.critical_pressure - out.carcass_pressure - p) / out.critical_pressure  # 1 - p_g / p_cr
+    assert np.all(out.flexible[ratio >= 0.05] == 1.0) and np.all(out.flexible[ratio <= -0.05] == 0.0)
+    inside = np.abs(ratio) < 0.045
+    assert np.all((out.flexible[inside] > 0) & (out.flexible[inside] < 1))
+
+
+def test_casadi_derivatives_finite_and_right_across_the_switch():
+    """d(outputs)/dp from CasADi at pressures in and at the edges of the switch band: finite and equal to central
+    differences of the NumPy model (the blend is C1, so even at the band's edges the one-sided slopes agree)."""
+    import casadi as ca
+
+    tyre, fz, _ = _switch_sweep(2)
+    keys = ("contact_length", "drawbar_pull", "torque", "sinkage")
+    f = tyre.casadi_function(inputs=("p",), outputs=keys, fixed=dict(fz=fz, slip=0.15, alpha=0.02))
+    x = ca.SX.sym("p")
+    jac = ca.Function("d", [x], [ca.jacobian(ca.vertcat(*f(x)), x)])
+    # the band edges: p_g / p_cr = 1 +- 0.05, located on the NumPy model by bisection of the flexible fraction
+    p = np.linspace(1.3e5, 2.2e5, 20001)
+    w = tyre.evaluate(fz=fz, slip=0.15, alpha=0.02, p=p).flexible
+    edges = [p[np.argmax(w < 1)], p[np.argmax(w == 0)]]
+    for point in (edges[0], 0.5 * (edges[0] + edges[1]), edges[1], 0.3 * edges[0] + 0.7 * edges[1]):
+        analytic = np.ravel(jac(point).full())
+        assert np.all(np.isfinite(analytic))
+        h = 0.5
+        hi, lo = (tyre.evaluate(fz=fz, slip=0.15, alpha=0.02, p=point + d) for d in (h, -h))
+        fd = np.array([(hi[k] - lo[k]) / (2 * h) for k in keys], dtype=float).ravel()
+        np.testing.assert_allclose(analytic, fd, rtol=2e-3, atol=1e-6 * np.abs(fd).max() + 1e-12)
+        assert np.any(analytic != 0)
+
+
+# ------------------------------------------------------------------------------------- optional effects
+def test_neutral_effect_parameters_give_identical_outputs():
+    """slip_sinkage 0 and a bulldozing depth the rut never reaches change nothing, bit for bit."""
+    slip = np.linspace(-0.3, 0.8, 12)
+    base = SoftSoilTyre(AGRI, "paddy_soil").evaluate(fz=20e3, slip=slip, alpha=0.03, p=1.2e5)
+    for kwargs in (dict(slip_sinkage=0.0), dict(bulldozing_depth=math.inf), dict(bulldozing_depth=0.8)):
+        out = SoftSoilTyre(AGRI, "paddy_soil", **kwargs).evaluate(fz=20e3, slip=slip, alpha=0.03, p=1.2e5)
+        for key in out.keys():
+            np.testing.assert_array_equal(out[key], base[key], err_msg=f"{kwargs} {key}")
+    assert np.all(base.bulldozing_resistance == 0)
+
+
+def test_slip_sinkage_follows_lyasko_and_deepens_the_rut():
+    """s_j = 1: z(i) = z(0) (1 + i)/(1 - 0.5 i) for driving slip (Lyasko), none for braking; the compaction
+    resistance grows as z^(n+1); the load-bearing ground pressure does not change; s_j = 0.5 is the square root."""
+    slip = np.array([-0.3, 0.0, 0.1, 0.3, 0.6])
+    kw = dict(fz=25e3, slip=slip, p=1.2e5)
+    static = SoftSoilTyre(AGRI, "sandy_loam").evaluate(**kw)
+    lyasko = SoftSoilTyre(AGRI, "sandy_loam", slip_sinkage=1.0).evaluate(**kw)
+    half = SoftSoilTyre(AGRI, "sandy_loam", slip_sinkage=0.5).evaluate(**kw)
+    factor = np.where(slip > 0, (1 + slip) / (1 - 0.5 * slip), 1.0)
+    np.testing.assert_allclose(lyasko.sinkage / static.sinkage, factor, rtol=1e-12)
+    np.testing.assert_allclose(half.sinkage / static.sinkage, np.sqrt(factor), rtol=1e-12)
+    n = soil("sandy_loam").n
+    np.testing.assert_allclose(lyasko.motion_resistance / static.motion_resistance, factor ** (n + 1), rtol=1e-12)
+    np.testing.assert_allclose(lyasko.ground_pressure, static.ground_pressure, rtol=1e-14)
+    assert np.all(np.diff(lyasko.sinkage[1:]) > 0)
+    assert np.all(lyasko.contact_length[2:] > static.contact_length[2:])
+    assert lyasko.drawbar_pull[-1] < static.drawbar_pull[-1]   # the deeper rut costs pull at high slip
+
+
+def test_bearing_capacity_coefficients_against_textbook_values():
+    """At phi = 30 deg the textbook factors are N_c = 30.14 (Prandtl), N_q = 18.40, N_gamma = 15.67 (Meyerhof):
+    K_pc = (N_c - tan phi) cos^2 phi = 22.17, K_pgamma = (2 N_gamma / tan phi + 1) cos^2 phi = 41.46; at phi = 0
+    the limits pi + 2 and 1, and the formula is continuous there."""
+    k_pc, k_pg = bulldozing_coefficients(math.radians(30.0))
+    assert k_pc == pytest.approx((30.14 - math.tan(math.radians(30))) * 0.75, rel=2e-4)
+    assert k_pg == pytest.approx((2 * 15.67 / math.tan(math.radians(30)) + 1) * 0.75, rel=2e-4)
+    assert bulldozing_coefficients(0.0) == (math.pi + 2, 1.0)
+    np.testing.assert_allclose(bulldozing_coefficients(1e-7), (math.pi + 2, 1.0), rtol=1e-5)
+
+
+def test_bulldozing_resistance_beyond_the_threshold_depth():
+    """Bekker's R_b = b (0.67 c z_b K_pc + 0.5 gamma z_b^2 K_pgamma) on the rut depth z_b beyond z_bd: zero while
+    the rut is shallower, continuous at the threshold, growing with depth; it adds to the motion resistance and
+    takes from the drawbar pull, and leaves the torque alone (it acts through the axle). Checked for a purely
+    cohesive soil (phi = 0: K_pc = pi + 2, K_pgamma = 1) by hand."""
+    clay = Soil("clay", 0.5, 13.19e3, 692.15e3, 4.14e3, 0.0, 0.025, gamma=16e3)
+    loads = np.linspace(10e3, 40e3, 31)
+    base = SoftSoilTyre(AGRI, clay).evaluate(fz=loads, slip=0.2, p=1.2e5)
+    z_bd = float(np.median(base.sinkage))
+    out = SoftSoilTyre(AGRI, clay, bulldozing_depth=z_bd).evaluate(fz=loads, slip=0.2, p=1.2e5)
+    wedge = np.maximum(base.sinkage - z_bd, 0)
+    hand = base.contact_width * (0.67 * clay.c * wedge * (math.pi + 2) + 0.5 * clay.gamma * wedge**2)
+    np.testing.assert_allclose(out.bulldozing_resistance, hand, rtol=1e-12)
+    assert np.all(out.bulldozing_resistance[base.sinkage <= z_bd] == 0)
+    assert np.all(np.diff(out.bulldozing_resistance[base.sinkage > z_bd]) > 0)
+    np.testing.assert_allclose(out.motion_resistance - base.motion_resistance, hand, rtol=1e-12)
+    np.testing.assert_allclose(base.drawbar_pull - out.drawbar_pull, hand, rtol=1e-9, atol=1e-9)
+    np.testing.assert_array_equal(out.torque, base.torque)
+
+
+def test_effect_parameters_bad_input():
+    with pytest.raises(ModelInputError, match="needs the unit weight gamma of soil 'sandy_loam'"):
+        SoftSoilTyre(AGRI, "sandy_loam", bulldozing_depth=0.05)
+    with pytest.raises(ModelInputError, match="slip_sinkage must be a number >= 0"):
+        SoftSoilTyre(AGRI, "sandy_loam", slip_sinkage=-1.0)
+    with pytest.raises(ModelInputError, match="gamma"):
+        Soil("x", 0.8, 1e3, 1e5, 1e3, 0.3, 0.01, gamma=-5.0)
+    assert soil("paddy_soil").gamma == pytest.approx(1240 * 9.81, rel=1e-3)   # seed 003, Table 3
+
+
+def test_casadi_matches_numpy_with_effects():
+    tyre = SoftSoilTyre(AGRI, "paddy_soil", slip_sinkage=1.0, bulldozing_depth=0.05)
+    f = tyre.casadi_function(inputs=("fz", "slip", "alpha", "p"))
+    pts = _points(np.random.default_rng(3), 30)
+    pts["fz"] = pts["fz"] / 4
+    out = tyre.evaluate(**pts)
+    got = f.map(30)(*(pts[k][None, :] for k in ("fz", "slip", "alpha", "p")))
+    assert np.any(out.bulldozing_resistance > 0)
+    for name, value in zip(f.name_out(), got):
+        key = name[:-4] if name.endswith("_out") else name
+        np.testing.assert_allclose(np.ravel(value.full()), np.ravel(out[key]), rtol=1e-11, atol=1e-9, err_msg=key)

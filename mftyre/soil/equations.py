@@ -36,8 +36,10 @@ The model, one line per equation:
                                    |p_g / p_cr - 1| < SWITCH_BAND the geometry is blended with the flexible
                                    fraction w = s(t), t = (1 + SWITCH_BAND - p_g / p_cr) / (2 SWITCH_BAND)
                                    clipped to [0, 1], s(t) = t^2 (3 - 2 t) (C1): b = WIDTH + w (2 b_h - WIDTH),
-                                   z_0 = z_r + w (z_f - z_r), delta = w rho_h, a = w a_h, r_f = r - w (r - Re);
-                                   outside the band the modes are exactly Wong's
+                                   z_0 = z_r + w (z_f - z_r), delta = w^2 rho_h, a = w a_h, r_f = r - w (r - Re)
+                                   (delta goes with w^2 so that the front of the flat part, r sin theta_f =
+                                   sqrt(delta (2 r - delta)), moves with finite slope; linear in w it would grow
+                                   like sqrt(w)); outside the band the modes are exactly Wong's
   slip sinkage (option)            z = z_0 [(1 + i+) / (1 - 0.5 i+)]^s_j, i+ = max(i, 0): s_j = 0 none (the
                                    default), s_j = 1 Lyasko's driven-wheel form [L]; the extra rut is dug, not
                                    compressed: the normal stresses keep the static pressure-sinkage relation
@@ -209,13 +211,14 @@ def soft_soil(prm, soil, fz, slip, alpha, p, vx, be, effects=SoilEffects()):
     k = soil.modulus(width)
     z_f = (p_g / soil.modulus(2.0 * b_h)) ** (1.0 / n)
     z_0 = z_r + w * (z_f - z_r)                                           # static sinkage
-    delta, a = w * rho_h, w * a_h
+    delta, a = w * w * rho_h, w * a_h
     r_f = r - w * (r - r_e)                                               # tread speed on the flat part: omega r_f
     drive_slip = be.fmax(slip, 0.0)
     z = z_0 * ((1.0 + drive_slip) / (1.0 - 0.5 * drive_slip)) ** effects.slip_sinkage   # [L]
     cos_f = (r - delta) / r
     cos_e = cos_f - z / r
-    sin_f, sin_e = be.sqrt(1.0 - cos_f * cos_f), be.sqrt(be.fmax(1.0 - cos_e * cos_e, 0.0))
+    sin_f = w * be.sqrt(rho_h * (2.0 * r - delta)) / r                  # sqrt(1 - cos_f^2), smooth at w = 0
+    sin_e = be.sqrt(be.fmax(1.0 - cos_e * cos_e, 0.0))
     arc = r * (sin_e - sin_f)                                             # horizontal extent of the front arc
     slip_arc = 1.0 - (1.0 - slip) * r_e / r                               # 1 - V / (omega r)
     slip_flat = 1.0 - (1.0 - slip) * r_e / r_f                            # 1 - V / (omega r_f)
