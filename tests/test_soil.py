@@ -602,3 +602,39 @@ def test_casadi_matches_numpy_with_effects():
     for name, value in zip(f.name_out(), got):
         key = name[:-4] if name.endswith("_out") else name
         np.testing.assert_allclose(np.ravel(value.full()), np.ravel(out[key]), rtol=1e-11, atol=1e-9, err_msg=key)
+
+
+# ------------------------------------------------------------------------------- agricultural .tir files
+@pytest.mark.parametrize("tir", [AGRI, AGRI_SMALL], ids=lambda p: p.name)
+def test_agricultural_header_names_exactly_the_placeholders(tir):
+    """The force coefficients of the agricultural files are a car tyre's: the header must say plainly which
+    sections and parameters those are. Its 'PLACEHOLDER SECTIONS' and 'PLACEHOLDER PARAMETERS' lists must equal
+    the sections whose every value is tagged [CAR] and the [CAR]-tagged parameters of the other sections, and the
+    separator line of each placeholder section says so too."""
+    import re
+
+    lines = tir.read_text().splitlines()
+    section, values, tagged = None, {}, {}
+    for line in lines:
+        if line.startswith("["):
+            section = line.strip()
+        match = re.match(r"^([A-Z_0-9]+)\s*=", line)
+        if match:
+            values.setdefault(section, []).append(match.group(1))
+            if "[CAR]" in line:
+                tagged.setdefault(section, []).append(match.group(1))
+    whole = {s for s in values if tagged.get(s) == values[s]}
+    partly = {s: set(names) for s, names in tagged.items() if s not in whole}
+    header = "\n".join(line for line in lines if line.startswith("!"))
+    listed = header.split("! PLACEHOLDER SECTIONS (every value [CAR]):")[1].split("! PLACEHOLDER PARAMETERS")[0]
+    assert set(re.findall(r"\[[A-Z_]+\]", listed)) == whole
+    params = header.split("! PLACEHOLDER PARAMETERS in otherwise estimated sections:")[1].split("\n!\n")[0]
+    for s, names in partly.items():
+        block = params.split(s)[1].split("[")[0]
+        assert set(re.findall(r"[A-Z][A-Z_0-9]+", block)) >= names, s
+    assert {"[LONGITUDINAL_COEFFICIENTS]", "[LATERAL_COEFFICIENTS]", "[ALIGNING_COEFFICIENTS]"} <= whole
+    for i, line in enumerate(lines[:-1]):
+        if lines[i + 1].strip() in whole:
+            assert line.startswith("$") and "PLACEHOLDER" in line, lines[i + 1]
+    # the file still loads and checks clean (the marks are comments)
+    assert load_tir(tir).params.FNOMIN > 2e4
