@@ -79,11 +79,18 @@ Towed wheel (T = 0, solved by :meth:`mftyre.soil.SoftSoilTyre.towed`): in the ri
 zero, the wheel turns at V / r, slower than V / Re on hard ground (slip 1 - r / Re < 0). In the flexible mode the
 arc, running at omega r > omega Re, would drive the wheel if the flat part did not skid: zero torque needs
 r H_a = -(r - delta) H_f, so the flat part skids (i < 0) and the towed wheel turns slower than on hard ground,
-the more so the longer the front arc (deeper sinkage, higher pressure) against the flat part.
+the more so the longer the front arc (deeper sinkage, higher pressure) against the flat part. A consequence to
+know: measured against the hard-ground Re the self-propelled point (DP = 0) lies at a small negative slip too
+(about -0.6 % for the 460/85 R34 at 25 kN, 1.2 bar on sandy loam), because the arc's shear displacement carries
+over to the flat part; and the size of the skid scales with r - Re, i.e. with the .tir's BREFF, DREFF, FREFF.
+Seed 001's towed FE wheel slows down until it stops turning (soil piled ahead of it); this steady model has no
+soil flow ahead of the wheel and gives a steady skid of a few per cent instead.
 
 Simplifications (each a documented choice, not a hidden one): the load is carried by the flat part in the
 flexible mode (Wong) and by the rigid-wheel formula in the rigid mode (the arc's vertical reaction in the flexible
-mode is not added); shear acts along the horizontal projection of the contact; the soil does not rebound behind
+mode is not added); the flat part has the .tir's length 2 a and follows the front arc in the shear integral, but
+for the moments it is taken centred under the axle (the undeformed circle reaches the flat's level at
+r sin theta_f > a: the bulge between is not modelled); shear acts along the horizontal projection of the contact; the soil does not rebound behind
 the bottom; no sidewall (lateral soil wedge) reaction: the lateral force is shear only; speed enters through
 omega and the power only (the soil is rate-independent). The integrals are Gauss-Legendre sums (8 nodes on the
 arc, 16 on the flat part).
