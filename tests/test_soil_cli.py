@@ -55,3 +55,27 @@ def test_errors(argv, rc, message, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert main(["soil", AGRI, *argv]) == rc
     assert message in capsys.readouterr().err
+
+
+def test_towed_and_effect_options(tmp_path, capsys):
+    """--towed solves zero torque over the sweep (slip printed), --slip-sinkage/--bulldozing-depth reach the
+    model, and a towed run with --slip is refused."""
+    csv = tmp_path / "towed.csv"
+    assert main(["soil", AGRI, "--soil", "sandy_loam", "--fz", "20kN", "--p", "1bar,1.6bar", "--vx", "2",
+                 "--towed", "--csv", str(csv)]) == 0
+    assert "towed (zero driving torque)" in capsys.readouterr().out
+    frame = pd.read_csv(csv)
+    expected = SoftSoilTyre(AGRI, "sandy_loam").towed(20e3, p=np.array([1e5, 1.6e5]), vx=2.0)
+    np.testing.assert_allclose(frame["slip [-]"], expected.slip, rtol=1e-12)
+    assert np.all(frame["slip [-]"] < 0) and np.all(np.abs(frame["torque [N m]"]) < 1e-3)
+    csv2 = tmp_path / "fx.csv"
+    assert main(["soil", AGRI, "--soil", "paddy_soil", "--fz", "8kN", "--slip", "0.3", "--slip-sinkage", "1",
+                 "--bulldozing-depth", "0.02", "--csv", str(csv2), "-q"]) == 0
+    expected = SoftSoilTyre(AGRI, "paddy_soil", slip_sinkage=1, bulldozing_depth=0.02).evaluate(fz=8e3, slip=0.3)
+    frame = pd.read_csv(csv2)
+    assert float(frame["bulldozing_resistance [N]"][0]) == pytest.approx(float(expected.bulldozing_resistance))
+    assert float(expected.bulldozing_resistance) > 0
+    assert main(["soil", AGRI, "--soil", "sandy_loam", "--towed", "--slip", "0.1"]) == 2
+    assert "drop --slip" in capsys.readouterr().err
+    assert main(["soil", AGRI, "--soil", "sandy_loam", "--bulldozing-depth", "0.05"]) == 1
+    assert "needs the unit weight gamma" in capsys.readouterr().err

@@ -4,7 +4,8 @@
   as data, built-in (``soils.csv``, with sources) or from a user CSV file;
 * :mod:`~mftyre.soil.equations`: the semi-empirical flexible-tyre-on-soil model (Bekker, Janosi-Hanamoto, Wong),
   backend-neutral, sharing the .tir's vertical relation and contact patch;
-* :class:`SoftSoilTyre`: NumPy evaluation, the towed (free-rolling) slip, a CasADi function;
+* :class:`SoftSoilTyre`: NumPy evaluation, the towed wheel (zero-torque slip solved), the slip-sinkage and
+  bulldozing options, a CasADi function;
 * :class:`Ground`: one interface for a vehicle model: hard ground (Magic Formula), soft soil, or a blend.
 """
 from .soils import Soil, builtin_soils, read_soils, soil

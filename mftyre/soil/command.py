@@ -84,6 +84,14 @@ swept input with the most values (or --x). Existing output files need --overwrit
     for name, (_, text) in _SWEEPS.items():
         group.add_argument(f"--{name}", dest=name, type=_sweep_type(name), action=_SweepAction, metavar="SPEC",
                            help=text)
+    effects = p.add_argument_group("options of the model (absent at their defaults)")
+    effects.add_argument("--slip-sinkage", type=float, default=0.0, metavar="S",
+                         help="slip-sinkage exponent s_j: sinkage x [(1+i)/(1-0.5i)]^s_j (1 = Lyasko; default 0)")
+    effects.add_argument("--bulldozing-depth", type=float, default=math.inf, metavar="M",
+                         help="rut depth [m] beyond which Bekker's bulldozing resistance acts (needs the soil's "
+                              "gamma; default: none)")
+    effects.add_argument("--towed", action="store_true",
+                         help="solve the towed wheel (zero driving torque) instead of taking --slip")
     out = p.add_argument_group("output")
     out.add_argument("--outputs", type=_outputs_type, metavar="NAMES",
                      help=f"comma list of outputs, or 'all' (default table/plot: {','.join(_DEFAULT_OUTPUTS)})")
@@ -113,24 +121,32 @@ def run(args) -> int:
         parser.error("argument --plot: it is also the --csv file; choose two different files")
     if args.plot is not None and not swept:
         parser.error("argument --plot: nothing to plot; sweep at least one input (e.g. --slip 0%:60%:31)")
+    if args.towed and args.slip is not None:
+        parser.error("argument --towed: the towed wheel's slip is solved, not given; drop --slip")
     if args.x is not None and args.x not in swept:
         parser.error(f"argument --x: {args.x!r} is not swept; swept inputs: {', '.join(swept) or 'none'}")
     try:
         from .model import SoftSoilTyre
         from .soils import soil
 
-        tyre = SoftSoilTyre(args.file, soil(args.soil, args.soil_file))
+        tyre = SoftSoilTyre(args.file, soil(args.soil, args.soil_file), slip_sinkage=args.slip_sinkage,
+                            bulldozing_depth=args.bulldozing_depth)
         prm = tyre.params
         defaults = dict(fz=prm.FNOMIN, slip=0.15, alpha=0.0, p=prm.INFLPRES, vx=prm.LONGVL)
         grids = dict(zip(swept, np.meshgrid(*(getattr(args, n).values for n in swept), indexing="ij")))
         shape = tuple(getattr(args, n).values.size for n in swept)
         inputs = {n: grids[n] if n in grids else (float(getattr(args, n).values[0]) if getattr(args, n) is not None
                                                   else defaults[n]) for n in _SWEEPS}
-        out = tyre.evaluate(**inputs)
-        columns = args.outputs or _DEFAULT_OUTPUTS
+        if args.towed:
+            out = tyre.towed(**{n: v for n, v in inputs.items() if n != "slip"})
+        else:
+            out = tyre.evaluate(**inputs)
+        columns = args.outputs or (("slip", "omega", *_DEFAULT_OUTPUTS) if args.towed else _DEFAULT_OUTPUTS)
         if not args.quiet:
             fixed = [f"{n} = {inputs[n]:g} {'' if n == 'slip' else _unit(n)}".rstrip() for n in _SWEEPS
-                     if n not in swept]
+                     if n not in swept and not (args.towed and n == "slip")]
+            if args.towed:
+                fixed.append("towed (zero driving torque)")
             print(f"# {args.file} on {tyre.soil.name} ({tyre.soil.source}); {max(1, math.prod(shape))} point(s)")
             print("# " + "; ".join(fixed))
             print(_frame(args, out, swept, shape, columns, OUTPUTS).to_string(

@@ -10,12 +10,15 @@ Formula); see :class:`mftyre.soil.Ground` for the switch between hard ground, so
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..backend import NUMPY
 from ..errors import ModelInputError
+from ..formula import vertical
 from ..model import MFModel, load_tir
-from .equations import OUTPUTS, soft_soil
+from .equations import OUTPUTS, SoilEffects, soft_soil
 from .soils import Soil, soil as named_soil
 
 __all__ = ["SoftSoilTyre", "SoilOutputs", "SinkageError"]
@@ -57,11 +60,25 @@ class SoilOutputs:
 
 
 class SoftSoilTyre:
-    """A tyre (a :class:`~mftyre.model.MFModel` or a .tir path) on a soil (a :class:`Soil` or a built-in name)."""
+    """A tyre (a :class:`~mftyre.model.MFModel` or a .tir path) on a soil (a :class:`Soil` or a built-in name).
 
-    def __init__(self, tyre, soil):
+    Optional effects (see :mod:`mftyre.soil.equations`), absent at their defaults: ``slip_sinkage`` s_j >= 0
+    (Lyasko's slip-sinkage factor [(1 + i)/(1 - 0.5 i)]^s_j, 1 = Lyasko) and ``bulldozing_depth`` z_bd >= 0 [m]
+    (Bekker's bulldozing resistance on the rut depth beyond z_bd; needs the soil's unit weight gamma).
+    """
+
+    def __init__(self, tyre, soil, *, slip_sinkage=0.0, bulldozing_depth=math.inf):
         self.tyre = tyre if isinstance(tyre, MFModel) else load_tir(tyre)
         self.soil = soil if isinstance(soil, Soil) else named_soil(soil)
+        for name, value in (("slip_sinkage", slip_sinkage), ("bulldozing_depth", bulldozing_depth)):
+            if not (isinstance(value, (int, float)) and value >= 0):
+                raise ModelInputError(f"{name} must be a number >= 0, got {value!r}")
+        if not math.isfinite(slip_sinkage):
+            raise ModelInputError(f"slip_sinkage must be finite, got {slip_sinkage!r}")
+        if math.isfinite(bulldozing_depth) and math.isnan(self.soil.gamma):
+            raise ModelInputError(f"bulldozing_depth = {bulldozing_depth!r} m needs the unit weight gamma of soil "
+                                  f"{self.soil.name!r} (column gamma of the soil file, kN/m^3); it is unknown")
+        self.effects = SoilEffects(float(slip_sinkage), float(bulldozing_depth))
 
     @property
     def params(self):
@@ -96,24 +113,60 @@ class SoftSoilTyre:
         for start in range(0, size, _CHUNK):  # chunks keep the temporaries in the CPU cache
             part = slice(start, min(start + _CHUNK, size))
             with np.errstate(all="ignore"):
-                values = soft_soil(prm, self.soil, *(flat[k][part] for k in _INPUTS), NUMPY)
+                values = soft_soil(prm, self.soil, *(flat[k][part] for k in _INPUTS), NUMPY, self.effects)
             for k, v in values.items():
                 out[k][part] = v
         self._check_sinkage(out, flat)
         return SoilOutputs(**{k: v.reshape(shape) for k, v in out.items()})
 
-    def free_rolling_slip(self, fz, alpha=0.0, p=None):
-        """Slip i of a towed wheel (zero driving torque): 1 - r_t / Re (see :mod:`mftyre.soil.equations`);
-        negative in the rigid mode (the wheel turns slower than on hard ground), 0 in the flexible mode."""
-        out = self.evaluate(fz, 0.0, alpha, p, vx=1.0)
-        return 1.0 - out.rolling_radius * out.omega  # omega = 1 / Re at slip 0 and V = 1 m/s
+    def towed(self, fz, alpha=0.0, p=None, vx=None, *, tol=1e-9) -> SoilOutputs:
+        """All outputs of the towed wheel (zero driving torque) at the operating points; its slip is ``.slip``.
+
+        The torque T(i) = r H_arc + (r - delta) H_flat rises with the slip i; the zero is bracketed by
+        i = 1 - r / Re (the arc's tread slip is zero, the flat part skids: T <= 0) and i = 0 (both treads at or
+        ahead of the ground: T >= 0) and found by the Illinois variant of regula falsi, vectorised, to
+        |T| <= tol x Fz x r (or a bracket narrower than 1e-15). In the rigid mode the root is i = 1 - r / Re (the
+        wheel turns at V / r); in the flexible mode the flat part skids against the arc (see
+        :mod:`mftyre.soil.equations`): the towed wheel turns slower than on hard ground, V / Re.
+        """
+        prm = self.params
+        values = dict(fz=fz, alpha=alpha, p=prm.INFLPRES if p is None else p, vx=prm.LONGVL if vx is None else vx)
+        try:
+            args = dict(zip(values, np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in values.values()))))
+        except (TypeError, ValueError):
+            raise ModelInputError(f"towed: inputs must be numeric and broadcast to one shape, got {values!r}") from None
+        if not np.all(args["vx"] > 0):
+            raise ModelInputError("towed: vx must be > 0 (the slip of a wheel standing still is undefined)")
+        probe = self.evaluate(slip=0.0, **args)                 # checks the inputs; omega = V / Re
+        r = float(vertical.free_radius(prm, 0.0, NUMPY))
+        lo, hi = 1.0 - r * probe.omega / args["vx"], np.zeros(probe.omega.shape)
+        t_lo, t_hi = self.evaluate(slip=lo, **args).torque, probe.torque
+        scale = tol * args["fz"] * r
+        low_root = np.abs(t_lo) <= scale
+        slip, torque = np.where(low_root, lo, hi), np.where(low_root, t_lo, t_hi)
+        side = np.zeros(slip.shape)                             # Illinois: +1 the low end moved last, -1 the high
+        for _ in range(100):
+            active = (np.abs(torque) > scale) & (hi - lo > 1e-15)
+            if not np.any(active):
+                break
+            with np.errstate(all="ignore"):
+                guess = np.where(t_hi != t_lo, hi - t_hi * (hi - lo) / (t_hi - t_lo), 0.5 * (lo + hi))
+            guess = np.where(active & (guess > lo) & (guess < hi), guess, np.where(active, 0.5 * (lo + hi), slip))
+            t_guess = self.evaluate(slip=guess, **args).torque
+            below, above = active & (t_guess < 0), active & (t_guess >= 0)
+            t_hi = np.where(above, t_guess, np.where(below & (side > 0), 0.5 * t_hi, t_hi))
+            t_lo = np.where(below, t_guess, np.where(above & (side < 0), 0.5 * t_lo, t_lo))
+            lo, hi = np.where(below, guess, lo), np.where(above, guess, hi)
+            side = np.where(below, 1.0, np.where(above, -1.0, side))
+            slip, torque = np.where(active, guess, slip), np.where(active, t_guess, torque)
+        return self.evaluate(slip=slip, **args)
 
     def casadi_function(self, inputs=("fz", "slip", "alpha", "p"), outputs=tuple(OUTPUTS), *, fixed=None,
                         name="soft_soil"):
         """A ``casadi.Function`` of the same equations (SX). ``inputs``: any of fz slip alpha p vx, symbolic
         in the order given; the others take ``fixed`` values or their defaults (alpha 0, p INFLPRES, vx LONGVL;
-        fz and slip must be given). The rigid/flexible switch is an ``if_else`` (a step in contact length and
-        traction where p_i + p_c crosses p_cr); elsewhere the outputs are smooth. No sinkage check is made:
+        fz and slip must be given). The rigid/flexible switch is blended over a narrow band of p_g / p_cr
+        (continuously differentiable; see :mod:`mftyre.soil.equations`). No sinkage check is made:
         evaluate with :meth:`evaluate` to be told when the soil reaches the axle."""
         import casadi as ca
         from ..backend import casadi_backend
@@ -134,7 +187,7 @@ class SoftSoilTyre:
             raise ModelInputError(f"input(s) {missing} must be symbolic or given in `fixed`")
         # the constant inputs become SX too, so every output is an expression
         args = [ca.SX(values[k]) if not isinstance(values[k], ca.SX) else values[k] for k in _INPUTS]
-        out = soft_soil(prm, self.soil, *args, casadi_backend())
+        out = soft_soil(prm, self.soil, *args, casadi_backend(), self.effects)
         names = [f"{k}_out" if k in inputs else k for k in outputs]
         return ca.Function(name, [symbols[k] for k in inputs], [ca.SX(out[k]) for k in outputs], list(inputs), names)
 

@@ -3,7 +3,7 @@ Janosi-Hanamoto shear deformation modulus K, in SI units.
 
 The built-in sets live in ``soils.csv`` beside this module (units, values and the source of every row in its
 header). A user file has the same columns (``name,n,k_c,k_phi,c,phi,K`` in kN/m^(n+1), kN/m^(n+2), kPa, deg, m;
-``source`` and ``K_source`` optional; ``#`` lines are comments):
+``source``, ``K_source`` and ``gamma`` [kN/m^3] optional, an empty gamma meaning unknown; ``#`` lines are comments):
 
     >>> from mftyre.soil import soil, read_soils
     >>> soil("paddy_soil").k_phi          # N/m^(n+2)
@@ -33,7 +33,8 @@ class Soil:
 
     Pressure-sinkage (Bekker): p = (k_c / b + k_phi) z^n, b the smaller side of the loaded area.
     Shear strength (Mohr-Coulomb): tau_max = c + sigma tan(phi); shear stress (Janosi-Hanamoto):
-    tau = tau_max (1 - exp(-j / K)), j the shear displacement.
+    tau = tau_max (1 - exp(-j / K)), j the shear displacement. Unit weight gamma [N/m^3] (NaN: unknown), used
+    only by the bulldozing option.
     """
 
     name: str
@@ -44,8 +45,13 @@ class Soil:
     phi: float
     K: float
     source: str = ""
+    gamma: float = math.nan
 
     def __post_init__(self):
+        if not (isinstance(self.gamma, (int, float)) and (math.isnan(self.gamma) or
+                                                          (math.isfinite(self.gamma) and self.gamma > 0))):
+            raise ModelInputError(f"soil {self.name!r}: gamma (unit weight) must be a positive number in N/m^3 "
+                                  f"or NaN (unknown), got {self.gamma!r}")
         for field, low in (("n", 0.0), ("k_c", 0.0), ("k_phi", 0.0), ("c", 0.0), ("phi", 0.0), ("K", 0.0)):
             value = getattr(self, field)
             if not (isinstance(value, (int, float)) and math.isfinite(value)):
@@ -108,6 +114,12 @@ def read_soils(path) -> dict[str, Soil]:
                                 f"got {record[column]!r}")
             values[column] = value * _TO_SI.get(column, 1.0)
         values["phi"] = math.radians(values["phi"])
+        gamma_text = record.get("gamma", "")
+        if gamma_text:
+            try:
+                values["gamma"] = float(gamma_text) * 1e3
+            except ValueError:
+                raise DataError(f"{where}: column gamma: cannot read {gamma_text!r} as a number") from None
         source = "; K: ".join(s for s in (record.get("source", ""), record.get("K_source", "")) if s)
         try:
             soils[name] = Soil(name=name, source=source, **values)
