@@ -198,16 +198,17 @@ def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_sta
         directional = False
     else:
         raise NativeBuildError(f"--model must be one of {', '.join(MODELS)}, got {kind!r}")
-    x, u, q = (ca.SX.sym(n, f.out.size1_in(i)) for i, n in enumerate(("x", "u", "q")))
-    y = f.out(x, u, q)
-    jac = ca.jacobian(y, u).sparsity()
-    deps = [[i for i in range(jac.size2()) if jac.has_nz(j, i)] for j in range(jac.size1())]
     functions = [f.init, f.step, f.out]
     if directional:
+        x, u, q = (ca.SX.sym(n, f.out.size1_in(i)) for i, n in enumerate(("x", "u", "q")))
+        y = f.out(x, u, q)
+        jac = ca.jacobian(y, u).sparsity()
+        deps = [[i for i in range(jac.size2()) if jac.has_nz(j, i)] for j in range(jac.size1())]
         du = ca.SX.sym("du", u.numel())
         functions.append(ca.Function("tyre_dout", [x, u, q, du], [ca.jtimes(y, u, du)], ["x", "u", "q", "du"],
                                      ["dy"]))
-    functions += list(getattr(f, "extra_functions", ()))
+    else:
+        deps = f.output_dependencies
     return SimpleNamespace(
         functions=functions, state_names=f.state_names, glue=glue, config_extra=extra, directional=directional,
         input_names=f.input_names, input_starts=f.input_starts,
