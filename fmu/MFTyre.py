@@ -124,7 +124,9 @@ class MFTyre(Fmi2Slave):
     # ------------------------------------------------------------------------------------------ model description
     def to_xml(self, model_options=dict()):
         """pythonfmu's description plus units and the InitialUnknowns that FMI 2.0 requires for the outputs."""
-        root = super().to_xml(model_options)
+        options = dict(model_options)
+        options.update(canGetAndSetFMUstate=True, canSerializeFMUstate=True)  # the whole state: _get_fmu_state
+        root = super().to_xml(options)
         units = dict(self._output_units)
         units.update({k: v[0] for k, v in _INPUTS.items()})
         units.update({k: v[0] for k, v in _REAL_PARAMETERS.items()})
@@ -171,8 +173,9 @@ class MFTyre(Fmi2Slave):
                 self._compute()
             for w in caught:
                 self.log(f"{w.category.__name__}: {w.message}", Fmi2Status.warning)
-        except Exception as exc:  # never let an exception reach pythonfmu (fmi2Fatal)
+        except Exception as exc:  # logged with its cause; pythonfmu turns the exception into fmi2Error
             self._fail(f"initialisation failed: {exc}\n{traceback.format_exc(limit=3)}")
+            raise RuntimeError(f"initialisation failed: {exc}") from None
 
     def _fail(self, message):
         self._problem = message
@@ -245,11 +248,40 @@ class MFTyre(Fmi2Slave):
                     sys.path.append(vendor)
                 __import__(name)
 
+    # ---------------------------------------------------------------------------------------------- FMU state
+    def _get_fmu_state(self):
+        """The whole state: the FMI variables, and the tyre's internal state (SWIFT ring, road frames, x_road)."""
+        state = {"variables": super()._get_fmu_state(), "x_road": self._x_road, "problem": self._problem}
+        core = self._core
+        if core is not None and getattr(core, "state", None) is not None:
+            state["swift"] = {"state": [float(v) for v in core.state], "x_offset": core.x_offset,
+                              "road_z": core.road_z}
+        return state
+
+    def _set_fmu_state(self, state):
+        if not isinstance(state, dict) or "variables" not in state:
+            raise ValueError("not a state of this FMU")
+        if "swift" in state and (self._core is None or not hasattr(self._core, "x_offset")):
+            raise ValueError("a SWIFT state cannot be restored into an instance that is not initialised as SWIFT")
+        super()._set_fmu_state(state["variables"])
+        self._x_road, self._problem = state["x_road"], state["problem"]
+        if "swift" in state:
+            import numpy as np
+
+            sw = state["swift"]
+            self._core.state = np.array(sw["state"], dtype=float)
+            self._core.x_offset, self._core.road_z = sw["x_offset"], sw["road_z"]
+
     # ------------------------------------------------------------------------------------------------- stepping
     def do_step(self, current_time, step_size):
         try:
             if self._problem is not None or self._core is None:
                 self._error("the tyre is not usable: " + (self._problem or "initialisation did not complete"))
+                return False
+            if not (math.isfinite(step_size) and step_size > 0):
+                self._error(f"step at t={current_time}: step size {step_size!r} rejected (must be positive and "
+                            "finite); outputs and state keep their last valid values")
+                self.status = 1
                 return False
             return self._compute(step_size)
         except Exception as exc:

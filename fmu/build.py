@@ -34,7 +34,7 @@ VERTICAL_INPUTS = ("load", "position")
 __all__ = ["build_fmu", "main", "swift_available"]
 
 
-class FMUBuildError(Exception):
+class FMUBuildError(ValueError):
     """The FMU cannot be built as asked (the message says why and what to do)."""
 
 

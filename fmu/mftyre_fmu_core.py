@@ -512,6 +512,8 @@ class SwiftCore:
         bps = self.road.breakpoints if self.road is not None else ()
         reach = cams.ae + 2 * dx  # beyond, the cam height is constant (the road is)
         lo, hi = (min(bps) - reach, max(bps) + reach) if bps else (float(x_start), float(x_start))
+        # the table reaches back to the start: the wheel is never moved towards the obstacles at initialisation
+        lo, hi = min(lo, float(x_start)), max(hi, float(x_start))
         # wheel positions where the whole step window lies on the constant part: the wheel is moved back to them
         self._x_lo, self._x_hi = lo - span, hi + span
         x_range = (math.floor(self._x_lo / dx) * dx, math.ceil(self._x_hi / dx) * dx)  # nodes on multiples of dx

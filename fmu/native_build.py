@@ -23,6 +23,8 @@ from pathlib import Path
 from types import SimpleNamespace
 from xml.sax.saxutils import escape
 
+from mftyre.errors import MFTyreError
+
 HERE = Path(__file__).resolve().parent
 C_DIR = HERE / "native"
 MODELS = ("steady", "transient", "swift")
@@ -34,7 +36,7 @@ _UNIT_BASES = {
 }
 
 
-class NativeBuildError(Exception):
+class NativeBuildError(MFTyreError):
     """The native FMU cannot be built (the message says why)."""
 
 

@@ -1,5 +1,6 @@
-"""``mftyre fmu build FILE.tir -o tyre.fmu [--model steady|swift] [--side left|right]``: the tyre as an FMI 2.0
-co-simulation FMU (pythonfmu). The slave and the build logic live in ``fmu/`` beside the package (see
+"""``mftyre fmu build FILE.tir -o tyre.fmu [--model steady|transient|swift] [--backend native|pythonfmu]``: the
+tyre as an FMI 2.0 co-simulation FMU. The builders live in ``fmu/`` beside the package (``native_build.py``: C
+generated from the equations + the C wrapper in ``fmu/native``; ``build.py``: the pythonfmu slave; see
 fmu/README.md); this module only wires them into the command line:
 
     from mftyre.fmu_command import register
@@ -11,6 +12,8 @@ import argparse
 import importlib.util
 import sys
 from pathlib import Path
+
+from .errors import MFTyreError
 
 __all__ = ["register", "run", "fmu_sources"]
 
@@ -73,6 +76,8 @@ def register(subparsers) -> argparse.ArgumentParser:
     build.add_argument("--vertical", choices=("position", "load"), default="position",
                        help="native steady/transient: the vertical input is the wheel-centre height z (position, "
                             "default) or the load Fz_in")
+    build.add_argument("--input-mode", choices=("vehicle", "rig"), default="vehicle",
+                       help="pythonfmu: default of the FMU's input_mode parameter (rig: slips and load as inputs)")
     build.add_argument("--backend", choices=("native", "pythonfmu"), default="native",
                        help="native (compiled C, default) or pythonfmu (Python slave)")
     build.add_argument("--overwrite", action="store_true", help="replace an existing output file")
@@ -95,10 +100,8 @@ def run(args) -> int:
             raise ValueError("--model transient is only available with --backend native")
         module = _load_module("build")
         return module.run(argparse.Namespace(tir=args.tir, output=args.output, model=args.model, side=args.side,
-                                             input_mode="vehicle", vertical_input="load", no_compile=False,
-                                             road=args.road, x_start=args.x_start))
-    except Exception as exc:  # the builders' own errors: a message, no traceback
-        if not type(exc).__name__.endswith(("BuildError", "Error")) and not isinstance(exc, OSError):
-            raise
+                                             input_mode=args.input_mode, vertical_input=args.vertical,
+                                             no_compile=False))
+    except (MFTyreError, OSError, ValueError) as exc:  # the builders' errors: a message, no traceback
         print(f"mftyre fmu build: error: {exc}", file=sys.stderr)
         return 1
