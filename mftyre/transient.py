@@ -19,7 +19,9 @@ Kinematics (both models)
   Vsx = vx - omega Re, Vsy = vy.
 Steady
   kappa = -Vsx / max(|vx|, VX_MIN), alpha = atan2(Vsy, |vx|) and the MF with its own low-speed fade-out below
-  VXLOW (no force at standstill).
+  VXLOW (no force at standstill). The MF's slip is signed with the travel direction (kappa_MF = -Vsx / Vx:
+  Fx(-Vx, -kappa) = Fx(Vx, kappa)), so reversing the MF gets -kappa (both models; output ``kappa`` as given to
+  the MF).
 Transient [Pacejka 2012 sec. 7.2 and 8.5 (contact-point deflections u, v with relaxation lengths
 sigma_kappa, sigma_alpha); relaxation lengths the MF's ``sigmax``/``sigmay`` (PTX*, PTY*) at the current load]
   du/dt = -Vsx - |vx| u / sigma_kappa                (7.9 with the contact deflection u)
@@ -218,6 +220,9 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
         ref = be.fmax(speed, prm.VXLOW)
         x0 = ca.vertcat(-vsx * sigx / ref, vsy * sigy / ref)
 
+    # the MF's longitudinal slip is -Vsx / Vx with the signed speed (Fx(-Vx, -kappa) = Fx(Vx, kappa)), the
+    # lateral one uses |Vx|: reversing, kappa changes sign so that a locked wheel still brakes the motion
+    kappa = be.where(vx_mf >= 0, kappa, -kappa)
     fx, fy, mx, my, mz, _, rho, rl_mf, a, t, mux, muy = mf(fz, kappa, alpha, gamma, vx_mf, p, omega, lmux, lmuy)
     rl = rl_geo if vertical == "position" else rl_mf
     cg, sg = be.cos(gamma), be.sin(gamma)

@@ -464,3 +464,36 @@ def test_source_fmu_compiles_in_clean_folder_with_identical_outputs(fmus, tmp_pa
     rebuilt = fmpy.simulate_fmu(str(clean), stop_time=0.1, output_interval=1e-3, start_values=start)
     for name in ("Fx", "Fy", "Fz", "Mz", "u_x", "u_y"):
         np.testing.assert_allclose(rebuilt[name], ref[name], rtol=1e-12, atol=1e-9)
+
+
+def test_libcosim_runs_four_tyres_of_each_model(fmus):
+    """A second, independent importer (OSP libcosim via libcosimpy): four instances of each model together give
+    the outputs fmpy gives for the same inputs."""
+    pytest.importorskip("libcosimpy")
+    from fmpy import read_model_description
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    log_output_level(CosimLogLevel.ERROR)
+    ex = CosimExecution.from_step_size(step_size=1_000_000)  # 1 ms in ns
+    obs = CosimObserver.create_last_value()
+    ex.add_observer(observer=obs)
+    runs = []
+    for kind, path in fmus.items():
+        vr = {v.name: v.valueReference for v in read_model_description(path).modelVariables}
+        for i in range(4):
+            start = {"vx": 8.0 + 2.0 * i, "omega": (8.0 + 2.0 * i) / RE0 * 1.02}
+            if kind == "swift":
+                start["x_start"] = 2.0 + 0.2 * i
+            idx = ex.add_local_slave(local_slave=CosimLocalSlave(fmu_path=str(path), instance_name=f"{kind}{i}"))
+            for name, value in start.items():
+                assert ex.real_initial_value(slave_index=idx, variable_reference=vr[name], value=value)
+            runs.append((kind, path, idx, vr, start))
+    assert ex.simulate_until(target_time=200_000_000)  # 0.2 s
+    for kind, path, idx, vr, start in runs:
+        got = obs.last_real_values(slave_index=idx, variable_references=[vr["Fx"], vr["Fz"], vr["My"]])
+        ref = fmpy.simulate_fmu(str(path), stop_time=0.2, output_interval=1e-3, start_values=start)
+        for value, name in zip(got, ("Fx", "Fz", "My")):
+            assert value == pytest.approx(ref[name][-1], rel=1e-12, abs=1e-9), (kind, idx, name)
