@@ -1,7 +1,7 @@
 """``mftyre fmu build FILE.tir -o tyre.fmu [--model steady|transient|swift] [--backend native|pythonfmu]``: the
-tyre as an FMI 2.0 co-simulation FMU. The builders live in ``fmu/`` beside the package (``native_build.py``: C
-generated from the equations + the C wrapper in ``fmu/native``; ``build.py``: the pythonfmu slave; see
-fmu/README.md); this module only wires them into the command line:
+tyre as an FMI 2.0 co-simulation FMU. The builders live in :mod:`mftyre.fmu` (``native_build``: C generated
+from the equations + the C wrapper in ``mftyre/fmu/native``; ``build``: the pythonfmu slave; see
+mftyre/fmu/README.md); this module only wires them into the command line:
 
     from mftyre.fmu_command import register
     register(subparsers)          # adds the 'fmu' command with its 'build' subcommand; handler: run(args)
@@ -9,7 +9,7 @@ fmu/README.md); this module only wires them into the command line:
 from __future__ import annotations
 
 import argparse
-import importlib.util
+import importlib.resources
 import sys
 from pathlib import Path
 
@@ -18,40 +18,16 @@ from .errors import MFTyreError
 __all__ = ["register", "run", "fmu_sources"]
 
 
-def fmu_sources() -> Path:
-    """The folder with the FMU sources (``fmu/`` next to the mftyre package in a source checkout)."""
-    return Path(__file__).resolve().parent.parent / "fmu"
-
-
-def _load_build_module():
-    path = fmu_sources() / "build.py"
-    if not path.is_file():
-        raise FileNotFoundError(
-            f"the FMU sources are not installed (expected {path}); build FMUs from a source checkout of mftyre "
-            "(pip install -e .)")
-    spec = importlib.util.spec_from_file_location("mftyre_fmu_build", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-def _load_module(name: str):
-    path = fmu_sources() / f"{name}.py"
-    if not path.is_file():
-        raise FileNotFoundError(
-            f"the FMU sources are not installed (expected {path}); build FMUs from a source checkout of mftyre "
-            "(pip install -e .)")
-    spec = importlib.util.spec_from_file_location(f"mftyre_fmu_{name}", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def fmu_sources():
+    """The FMU sources shipped in the package (``mftyre/fmu``: builders, C wrapper, README) as a resource."""
+    return importlib.resources.files("mftyre.fmu")
 
 
 def register(subparsers) -> argparse.ArgumentParser:
     """Add the ``fmu`` command (subcommand ``build``) to an argparse subparsers object."""
     fmu = subparsers.add_parser(
         "fmu", help="package the tyre as an FMI 2.0 co-simulation FMU",
-        description="Package the tyre as an FMI 2.0 co-simulation FMU. See fmu/README.md for the FMU's "
+        description="Package the tyre as an FMI 2.0 co-simulation FMU. See mftyre/fmu/README.md for the FMU's "
                     "variables.")
     sub = fmu.add_subparsers(dest="fmu_command", metavar="SUBCOMMAND")
     sub.required = True
@@ -89,8 +65,9 @@ def run(args) -> int:
     """Handler of ``mftyre fmu build``: returns the exit status (1 with a message on stderr on failure)."""
     try:
         if args.backend == "native":
-            module = _load_module("native_build")
-            module.build_native_fmu(args.tir, args.output, model=args.model, side=args.side,
+            from .fmu.native_build import build_native_fmu
+
+            build_native_fmu(args.tir, args.output, model=args.model, side=args.side,
                                     vertical=args.vertical, road=args.road, x_start=args.x_start,
                                     overwrite=args.overwrite, quiet=False)
             return 0
@@ -98,10 +75,11 @@ def run(args) -> int:
             raise FileExistsError(f"{args.output} exists; use --overwrite to replace it")
         if args.model == "transient":
             raise ValueError("--model transient is only available with --backend native")
-        module = _load_module("build")
-        return module.run(argparse.Namespace(tir=args.tir, output=args.output, model=args.model, side=args.side,
+        from .fmu import build
+
+        return build.run(argparse.Namespace(tir=args.tir, output=args.output, model=args.model, side=args.side,
                                              input_mode=args.input_mode, vertical_input=args.vertical,
                                              no_compile=False))
-    except (MFTyreError, OSError, ValueError) as exc:  # the builders' errors: a message, no traceback
+    except (MFTyreError, OSError, ValueError, ImportError) as exc:  # the builders' errors: a message, no traceback
         print(f"mftyre fmu build: error: {exc}", file=sys.stderr)
         return 1
