@@ -230,7 +230,8 @@ _EXPRESSION_ARGS = {  # name in a road expression -> (class, argument names)
 def parse_road(spec, base_dir=None) -> Road:
     """A road from text: a CSV file (columns x, z in metres; relative to ``base_dir``) or a sum of obstacles
     written like calls with literal numbers, e.g. ``cleat(x0=3.0, length=0.05, height=0.01) + step(10, 0.02)``
-    (``flat``, ``step``, ``cleat``, ``trapezoid``, ``bump``, ``sine``; sine needs ``x_end``). Empty: flat.
+    (``flat``, ``step``, ``cleat``, ``trapezoid``, ``bump``, ``sine``; sine needs ``x_end``; ``csv("file.csv")``,
+    ``points([[x, z], ...])``). Empty: flat.
     Nothing is evaluated as Python; errors (:class:`ModelInputError`) name the term and what was expected."""
     import ast
 
@@ -262,11 +263,25 @@ def parse_road(spec, base_dir=None) -> Road:
     def term(node):
         if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Add):
             return term(node.left) + term(node.right)
-        if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
-                and node.func.id in _EXPRESSION_ARGS):
-            raise ModelInputError(f"road {text!r}: each term must be one of "
-                                  f"{', '.join(n + '(...)' for n in _EXPRESSION_ARGS)}")
+        names_all = (*_EXPRESSION_ARGS, "csv", "points")
+        if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in names_all):
+            raise ModelInputError(f"road {text!r}: each term must be one of {', '.join(n + '(...)' for n in names_all)}")
         name = node.func.id
+        if name in ("csv", "points"):
+            if len(node.args) != 1 or node.keywords:
+                raise ModelInputError(f"road {text!r}: {name} takes one argument")
+            try:
+                value = ast.literal_eval(node.args[0])
+            except ValueError:
+                raise ModelInputError(f"road {text!r}: the argument of {name} must be a literal") from None
+            if name == "csv":
+                path = Path(str(value))
+                return Sampled.from_csv(path if base_dir is None or path.is_absolute() else Path(base_dir) / path)
+            try:
+                pairs = [(float(a), float(b)) for a, b in value]
+            except (TypeError, ValueError):
+                raise ModelInputError(f"road {text!r}: points needs a list of [x, z] pairs") from None
+            return Sampled([a for a, _ in pairs], [b for _, b in pairs])
         cls, names = _EXPRESSION_ARGS[name]
         if len(node.args) > len(names):
             raise ModelInputError(f"road {text!r}: {name} takes at most {len(names)} arguments ({', '.join(names)})")

@@ -497,3 +497,27 @@ def test_libcosim_runs_four_tyres_of_each_model(fmus):
         ref = fmpy.simulate_fmu(str(path), stop_time=0.2, output_interval=1e-3, start_values=start)
         for value, name in zip(got, ("Fx", "Fz", "My")):
             assert value == pytest.approx(ref[name][-1], rel=1e-12, abs=1e-9), (kind, idx, name)
+
+
+@pytest.mark.parametrize("args, text", [
+    (["--model", "swift", "--road", "cleat(x0=1.0)"], "cleat needs length, height"),
+    (["--model", "swift", "--road", "__import__('os').system('true')"], "each term must be one of"),
+    (["--model", "swift", "--road", "missing_profile.csv"], "not found"),
+    (["--model", "steady", "--road", "cleat(x0=1, length=0.05, height=0.01)"], "only used by --model swift"),
+])
+def test_build_errors_name_the_cause(tmp_path, capsys, args, text):
+    out = tmp_path / "t.fmu"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert _build([TIR62, "-o", out, *args]) == 1
+    assert text in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_existing_output_needs_overwrite(fmus, tmp_path, capsys):
+    out = tmp_path / "t.fmu"
+    out.write_bytes(b"keep")
+    assert _build([TIR61, "-o", out]) == 1
+    assert "--overwrite" in capsys.readouterr().err and out.read_bytes() == b"keep"
+    assert _build([TIR61, "-o", out, "--overwrite"]) == 0
+    assert zipfile.is_zipfile(out)

@@ -332,86 +332,20 @@ SWIFT_WINDOW = 1024
 #: Largest wheel travel [m] within one internal SWIFT step (the cam-height window is fixed over a step).
 SWIFT_MAX_TRAVEL = 0.2
 
-_ROAD_ARGS = {  # name in the road parameter -> (swift.road class name, argument names)
-    "step": ("Step", ("x0", "height")),
-    "cleat": ("Cleat", ("x0", "length", "height")),
-    "trapezoid": ("Trapezoid", ("x0", "top_length", "height", "ramp")),
-    "bump": ("CircularBump", ("x0", "length", "height")),
-    "sine": ("Sine", ("amplitude", "wavelength", "x0", "x_end")),
-    "csv": ("Sampled.from_csv", ("path", "x_column", "z_column", "delimiter")),
-    "points": ("Sampled", ("xz",)),
-}
 
+def parse_road(spec, base_dir=None):
+    """The road of the ``road`` parameter (:func:`swift.road.parse_road`: a sum of obstacles like
+    ``cleat(x0=2, length=0.05, height=0.01)``, ``csv("profile.csv")`` relative to ``base_dir``,
+    ``points([[x, z], ...])``); None for a flat road. Errors become :class:`TyreFMUError`."""
+    from mftyre.errors import MFTyreError
+    from swift.road import Flat
+    from swift.road import parse_road as parse
 
-def parse_road(spec: str, base_dir=None):
-    """The road profile of the ``road`` parameter as a :class:`swift.road.Road`, or None for a flat road.
-
-    Grammar: an empty string (flat road), or a sum (``+``) of obstacles written like Python calls with numbers,
-    positional or by keyword (metres)::
-
-        cleat(x0=2.0, length=0.05, height=0.01)       step(x0, height)       trapezoid(x0, top_length, height, ramp)
-        bump(x0, length, height)                       sine(amplitude, wavelength, x0, x_end)   (x_end required)
-        points([[x, z], [x, z], ...])                  csv("profile.csv")    (columns x, z; relative to base_dir)
-
-    Outside the obstacles the profile is 0; the ``road_z`` input is added to it. Nothing is evaluated as Python.
-    """
-    import ast
-
-    import swift.road as sroad
-
-    spec = (spec or "").strip()
-    if spec in ("", "flat", "flat()"):
-        return None
     try:
-        tree = ast.parse(spec, mode="eval").body
-    except SyntaxError as exc:
-        raise TyreFMUError(f"road {spec!r}: not a sum of obstacles like cleat(x0=2, length=0.05, height=0.01) "
-                           f"({exc.msg})") from None
-
-    def number(node, what):
-        try:
-            value = ast.literal_eval(node)
-        except ValueError:
-            raise TyreFMUError(f"road {spec!r}: {what} must be a literal") from None
-        return value
-
-    def term(node):
-        if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Add):
-            return term(node.left) + term(node.right)
-        if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in _ROAD_ARGS):
-            raise TyreFMUError(f"road {spec!r}: each term must be one of {', '.join(n + '(...)' for n in _ROAD_ARGS)}")
-        name = node.func.id
-        cls, names = _ROAD_ARGS[name]
-        if len(node.args) > len(names):
-            raise TyreFMUError(f"road {spec!r}: {name} takes at most {len(names)} arguments ({', '.join(names)})")
-        kwargs = {n: number(a, f"{name} argument {n}") for n, a in zip(names, node.args)}
-        for kw in node.keywords:
-            if kw.arg not in names:
-                raise TyreFMUError(f"road {spec!r}: {name} has no argument {kw.arg!r} (arguments: {', '.join(names)})")
-            kwargs[kw.arg] = number(kw.value, f"{name} argument {kw.arg}")
-        if name == "sine" and "x_end" not in kwargs:
-            raise TyreFMUError(f"road {spec!r}: sine needs x_end (the road must be constant beyond its obstacles)")
-        if name == "csv":
-            path = Path(str(kwargs.pop("path", "")))
-            if base_dir is not None and not path.is_absolute():
-                path = Path(base_dir) / path
-            return sroad.Sampled.from_csv(path, **{k: str(v) for k, v in kwargs.items()})
-        if name == "points":
-            xz = kwargs.get("xz")
-            try:
-                arr = [(float(a), float(b)) for a, b in xz]
-            except (TypeError, ValueError):
-                raise TyreFMUError(f"road {spec!r}: points needs a list of [x, z] pairs") from None
-            return sroad.Sampled([a for a, _ in arr], [b for _, b in arr])
-        missing = [n for n in names if n not in kwargs and not (name == "sine" and n == "x0")]
-        if missing:
-            raise TyreFMUError(f"road {spec!r}: {name} needs {', '.join(missing)}")
-        try:
-            return getattr(sroad, cls)(**{k: float(v) for k, v in kwargs.items()})
-        except (TypeError, ValueError) as exc:
-            raise TyreFMUError(f"road {spec!r}: {name}: {exc}") from None
-
-    return term(tree)
+        road = parse(spec, base_dir)
+    except MFTyreError as exc:
+        raise TyreFMUError(str(exc)) from None
+    return None if isinstance(road, Flat) and road.z == 0 else road
 
 
 def _platform() -> str:
