@@ -14,11 +14,14 @@ FMI behaviour
   the state of the rigid-ring tyre (``mftyre_fmu_core.SwiftCore`` around ``swift.SwiftTyre``): it starts in
   static equilibrium at the initial inputs and is advanced over each communication step (any step size; split
   into internal steps of at most ``max_step``).
-* No Python exception ever leaves this class (pythonfmu would turn it into fmi2Fatal). Problems are logged with
-  status fmi2Error (category logStatusError) and reported through the FMI status: an unusable configuration (bad
-  parameter, unreadable .tir, bad road) or a non-finite input makes fmi2DoStep return fmi2Discard and leaves the
-  outputs (and the swift state) at their last valid values; the ``status`` output says why (0 ok, 1 input or
-  step rejected, 2 configuration error).
+* A failed initialisation (bad parameter, unreadable .tir, bad road) is logged with status fmi2Error (category
+  logStatusError) and raised, so fmi2ExitInitializationMode fails (pythonfmu answers fmi2Fatal for an exception,
+  its only failure status there) instead of claiming OK. During stepping no exception leaves this class: a
+  non-finite input, p <= 0 or a step size that is not positive and finite makes fmi2DoStep return fmi2Discard and
+  leaves the outputs (and the swift state) at their last valid values; the ``status`` output says why (0 ok, 1
+  input or step rejected).
+* fmi2GetFMUstate/fmi2SetFMUstate/serialise hold the whole state: the variables, x_road and the SWIFT ring state
+  with its road frames (``_get_fmu_state``).
 * fmi2Reset returns the instance to the state after instantiation (pythonfmu re-creates the object).
 """
 import json
