@@ -521,3 +521,21 @@ def test_existing_output_needs_overwrite(fmus, tmp_path, capsys):
     assert "--overwrite" in capsys.readouterr().err and out.read_bytes() == b"keep"
     assert _build([TIR61, "-o", out, "--overwrite"]) == 0
     assert zipfile.is_zipfile(out)
+
+
+def test_state_of_another_fmu_is_refused(fmus, tmp_path):
+    """An FMU state (or its bytes) belongs to the FMU that made it: another .tir or model is refused."""
+    from fmpy.fmi1 import FMICallException
+
+    other = tmp_path / "steady62.fmu"
+    assert _build([TIR62, "-o", other]) == 0
+    a = Slave(fmus["steady"], tmp_path, "a").initialise()
+    b = Slave(other, tmp_path, "b").initialise()
+    blob = a.fmu.serializeFMUstate(a.fmu.getFMUstate())
+    with pytest.raises(FMICallException):
+        b.fmu.deSerializeFMUstate(blob)
+    with pytest.raises(FMICallException):
+        b.fmu.setFMUstate(a.fmu.getFMUstate())  # same layout, another .tir
+    assert any("not a state of this FMU" in m for _, m in b.messages)
+    a.close()
+    b.close()

@@ -26,6 +26,7 @@ typedef enum { PHASE_INSTANTIATED, PHASE_INIT, PHASE_STEP, PHASE_TERMINATED, PHA
 typedef struct {
     unsigned magic;
     unsigned size;
+    char guid[sizeof(TYRE_GUID)]; /* a state of this FMU only (same model, same .tir) */
     int phase;
     int outputs_valid; /* y belongs to the current (x, u) */
     double time;
@@ -61,6 +62,7 @@ static void reset_values(Instance *inst) {
     memset(&inst->s, 0, sizeof inst->s);
     inst->s.magic = STATE_MAGIC;
     inst->s.size = (unsigned)sizeof(TyreState);
+    memcpy(inst->s.guid, TYRE_GUID, sizeof(TYRE_GUID));
     inst->s.phase = PHASE_INSTANTIATED;
     for (int i = 0; i < TYRE_NQ; i++) inst->s.q[i] = TYRE_Q_START[i];
     for (int i = 0; i < TYRE_NU; i++) inst->s.u[i] = TYRE_U_START[i];
@@ -318,7 +320,10 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     return fmi2OK;
 }
 
-static int valid_state(const TyreState *s) { return s && s->magic == STATE_MAGIC && s->size == sizeof(TyreState); }
+static int valid_state(const TyreState *s) {
+    return s && s->magic == STATE_MAGIC && s->size == sizeof(TyreState) &&
+           memcmp(s->guid, TYRE_GUID, sizeof(TYRE_GUID)) == 0;
+}
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
     CHECK_INSTANCE(c, "fmi2SetFMUstate")
@@ -386,6 +391,10 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
                                         const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
     double du[ARR(TYRE_NU)] = {0}, dy[ARR(TYRE_NY)];
     CHECK_INSTANCE(c, "fmi2GetDirectionalDerivative")
+    if ((nKnown > 0 && (!vKnown_ref || !dvKnown)) || (nUnknown > 0 && (!vUnknown_ref || !dvUnknown))) {
+        LOG_ERROR(inst, "fmi2GetDirectionalDerivative: null argument");
+        return fmi2Error;
+    }
     if (!TYRE_HAS_DD) {
         LOG_ERROR(inst, "fmi2GetDirectionalDerivative: not provided by this model");
         return fmi2Error;
