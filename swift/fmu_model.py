@@ -134,7 +134,7 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
     tyre = SwiftTyre(model, road, axle="height", rim="speed", x_range=(math.floor(lo / dx) * dx,
                      math.ceil(hi / dx) * dx), table_dx=dx, window=WINDOW, substeps=SUBSTEPS, compiled=False)
     c = tyre.constants
-    rhs, step1 = tyre._rhs_window, tyre._step_fn
+    rhs, step1 = tyre.rhs_function, tyre.step_function
     nx = len(STATE_NAMES)
     x, u, q = ca.MX.sym("x", nx), ca.MX.sym("u", len(INPUTS)), ca.MX.sym("q", len(PARAMETERS))
     x0w, grid, hw, dt = ca.MX.sym("x0w"), ca.MX.sym("grid", WINDOW), ca.MX.sym("hw", WINDOW), ca.MX.sym("dt")

@@ -539,3 +539,26 @@ def test_state_of_another_fmu_is_refused(fmus, tmp_path):
     assert any("not a state of this FMU" in m for _, m in b.messages)
     a.close()
     b.close()
+
+
+def test_calls_out_of_order_are_errors_not_crashes(fmus, tmp_path):
+    from fmpy.fmi1 import FMICallException
+
+    s = Slave(fmus["swift"], tmp_path)
+    with pytest.raises(FMICallException):
+        s.fmu.doStep(0.0, 1e-3)  # before initialisation
+    with pytest.raises(FMICallException):
+        s.fmu.setReal([10_000], [1.0])  # unknown value reference
+    with pytest.raises(FMICallException):
+        s.fmu.getInteger([0])  # no Integer variables
+    s.initialise(**_swift_start(0.0))
+    with pytest.raises(FMICallException):
+        s.fmu.setReal([s.vr["x_start"]], [1.0])  # a fixed parameter after initialisation
+    with pytest.raises(FMICallException):  # swift provides no directional derivatives
+        s.fmu.getDirectionalDerivative([s.vr["Fz"]], [s.vr["vx"]], [1.0])
+    s.step()
+    s.fmu.terminate()
+    with pytest.raises(FMICallException):
+        s.fmu.doStep(s.t, 1e-3)  # after fmi2Terminate
+    assert all(st == 3 for st, _ in s.messages)
+    s.fmu.freeInstance()
