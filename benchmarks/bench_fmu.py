@@ -79,7 +79,8 @@ int main(int argc, char **argv) {
         double t0 = now();
         for (int k = 0; k < steps; k++) {
             for (int i = 0; i < n; i++) {
-                double t = k * 1e-3, u[3] = {10.0 + i, 0.3 * sin(5.0 * t), (10.0 + i) / 0.305 * (1.0 + 0.02 * sin(3.0 * t))};
+                double t = k * 1e-3, v = 10.0 + i;
+                double u[3] = {v, 0.3 * sin(5.0 * t), v / 0.305 * (1.0 + 0.02 * sin(3.0 * t))};
                 if (fmi2SetReal(c[i], in, 3, u) || fmi2DoStep(c[i], t, 1e-3, fmi2True) || fmi2GetReal(c[i], out, 2, y))
                     return 5;
                 sink += y[0];

@@ -265,7 +265,8 @@ def parse_road(spec, base_dir=None) -> Road:
             return term(node.left) + term(node.right)
         names_all = (*_EXPRESSION_ARGS, "csv", "points")
         if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in names_all):
-            raise ModelInputError(f"road {text!r}: each term must be one of {', '.join(n + '(...)' for n in names_all)}")
+            raise ModelInputError(f"road {text!r}: each term must be one of "
+                                  f"{', '.join(n + '(...)' for n in names_all)}")
         name = node.func.id
         if name in ("csv", "points"):
             if len(node.args) != 1 or node.keywords:

@@ -434,7 +434,8 @@ def test_c_host_runs_four_instances_of_each_model(fmus, tmp_path):
     src = tmp_path / "host.c"
     src.write_text(C_HOST)
     exe = tmp_path / "host"
-    subprocess.run(["cc", "-O2", "-I", str(Path(fmpy.__file__).parent / "c-code"), str(src), "-o", str(exe), "-ldl", "-lm"],
+    headers = Path(fmpy.__file__).parent / "c-code"
+    subprocess.run(["cc", "-O2", "-I", str(headers), str(src), "-o", str(exe), "-ldl", "-lm"],
                    check=True)
     args = []
     for kind, path in fmus.items():
