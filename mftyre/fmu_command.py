@@ -54,6 +54,8 @@ def register(subparsers) -> argparse.ArgumentParser:
                             "default) or the load Fz_in")
     build.add_argument("--input-mode", choices=("vehicle", "rig"), default="vehicle",
                        help="pythonfmu: default of the FMU's input_mode parameter (rig: slips and load as inputs)")
+    build.add_argument("--turn-slip", action="store_true",
+                       help="native steady/transient: the MF with turn slip, from the input yaw_rate")
     build.add_argument("--backend", choices=("native", "pythonfmu"), default="native",
                        help="native (compiled C, default) or pythonfmu (Python slave)")
     build.add_argument("--overwrite", action="store_true", help="replace an existing output file")
@@ -69,12 +71,13 @@ def run(args) -> int:
 
             build_native_fmu(args.tir, args.output, model=args.model, side=args.side,
                                     vertical=args.vertical, road=args.road, x_start=args.x_start,
+                                    turn_slip=args.turn_slip,
                                     overwrite=args.overwrite, quiet=False)
             return 0
         if Path(args.output).exists() and not args.overwrite:
             raise FileExistsError(f"{args.output} exists; use --overwrite to replace it")
-        if args.model == "transient":
-            raise ValueError("--model transient is only available with --backend native")
+        if args.model == "transient" or args.turn_slip:
+            raise ValueError("--model transient and --turn-slip are only available with --backend native")
         from .fmu import build
 
         return build.run(argparse.Namespace(tir=args.tir, output=args.output, model=args.model, side=args.side,

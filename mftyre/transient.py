@@ -43,6 +43,8 @@ Vertical
   not included (a warning says so when the .tir has it). ``load``: the input ``Fz_in`` (negative = 0).
 Wheel-centre loads: M_W = M_C + (C - W) x F with C -> W = Rl (0, -sin g, cos g):
   Mx_W = Mx + Rl (Fy cos g + Fz sin g),  My_W = My - Rl Fx cos g,  Mz_W = Mz - Rl Fx sin g.
+Turn slip (option ``turn_slip``): input ``yaw_rate``, phit = -yaw_rate / max(Vc, VXLOW) (Pacejka (4.75)), the
+MF with its turn-slip equations; the turn slip acts without lag also in the transient model [chosen].
 Road camber: the MF gets the inclination relative to the road, gamma - road_camber. Friction: ``mu_scale``
 multiplies LMUX and LMUY of the .tir.
 """
@@ -95,7 +97,7 @@ OUTPUTS = {
 PARAMETERS = {"tau_vlow": ("s", "transient: low-speed damping time constant of the contact deflections (module notes)")}
 
 
-def input_table(vertical: str) -> dict:
+def input_table(vertical: str, turn_slip: bool = False) -> dict:
     """Inputs: name -> (unit, start, description), in the order of the input vector."""
     common = {
         "vx": ("m/s", 10.0, "wheel-centre velocity along ISO-W x (wheel heading projected on the road)"),
@@ -111,6 +113,9 @@ def input_table(vertical: str) -> dict:
                        "road_z": ("m", 0.0, "road height under the wheel, ISO-W z")})
     else:
         common["Fz_in"] = ("N", 4000.0, "vertical load on the tyre (negative = no contact)")
+    if turn_slip:
+        common["yaw_rate"] = ("rad/s", 0.0, "yaw velocity of the wheel about ISO-W z (vehicle yaw rate + steer rate); "
+                                            "turn slip phit = -yaw_rate / max(Vc, VXLOW)")
     return common
 
 
@@ -141,8 +146,9 @@ class WheelFunctions:
 
 
 def wheel_functions(model, kind: str = "steady", vertical: str = "position",
-                    tau_vlow: float | None = None) -> WheelFunctions:
-    """CasADi functions of the ``kind`` ("steady" or "transient") tyre with the ``vertical`` input mode."""
+                    tau_vlow: float | None = None, turn_slip: bool = False) -> WheelFunctions:
+    """CasADi functions of the ``kind`` ("steady" or "transient") tyre with the ``vertical`` input mode;
+    ``turn_slip``: the MF with turn slip (input ``yaw_rate``, module notes)."""
     import casadi as ca
 
     from .backend import casadi_backend
@@ -157,7 +163,7 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
     if vertical == "position" and (prm["Q_FCX"] != 0 or prm["Q_FCY"] != 0):
         warnings.warn("Q_FCX/Q_FCY (Fx/Fy influence on the vertical stiffness) are not included in the wheel "
                       "model's vertical force", stacklevel=2)
-    table = input_table(vertical)
+    table = input_table(vertical, turn_slip)
     starts = [prm.INFLPRES if n == "p" else s for n, (_, s, _) in table.items()]
     u = ca.SX.sym("u", len(table))
     U = {n: u[i] for i, n in enumerate(table)}
@@ -168,9 +174,10 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
     x = ca.SX.sym("x", nx)
     h = ca.SX.sym("h")
 
-    mf_in = ("fz", "kappa", "alpha", "gamma", "vx", "p", "omega")
+    mf_in = ("fz", "kappa", "alpha", "gamma", "phit", "vx", "p", "omega")
     mf_out = ("fx", "fy", "mx", "my", "mz", "re", "rho", "rl", "a", "t", "mux", "muy")
-    mf = model.casadi_function(inputs=mf_in, outputs=mf_out, parameters=("LMUX", "LMUY"), name="mf")
+    mf = model.casadi_function(inputs=mf_in, outputs=mf_out, parameters=("LMUX", "LMUY"), turn_slip=turn_slip,
+                               name="mf")
     free = model.casadi_function(inputs=("fz", "gamma", "vx", "p", "omega"),
                                  outputs=("re", "sigmax", "sigmay"), fixed=dict(kappa=0.0, alpha=0.0),
                                  parameters=("LMUX", "LMUY"), name="free_rolling")
@@ -223,7 +230,10 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
     # the MF's longitudinal slip is -Vsx / Vx with the signed speed (Fx(-Vx, -kappa) = Fx(Vx, kappa)), the
     # lateral one uses |Vx|: reversing, kappa changes sign so that a locked wheel still brakes the motion
     kappa = be.where(vx_mf >= 0, kappa, -kappa)
-    fx, fy, mx, my, mz, _, rho, rl_mf, a, t, mux, muy = mf(fz, kappa, alpha, gamma, vx_mf, p, omega, lmux, lmuy)
+    # turn slip (4.75): psi_dot = -phit Vc', Vc' = max(Vc, VXLOW); not relaxed in the transient model [chosen]
+    phit = -U["yaw_rate"] / be.fmax(be.sqrt(vx**2 + vy**2), prm.VXLOW) if turn_slip else 0.0 * vx
+    fx, fy, mx, my, mz, _, rho, rl_mf, a, t, mux, muy = mf(fz, kappa, alpha, gamma, phit, vx_mf, p, omega, lmux,
+                                                           lmuy)
     rl = rl_geo if vertical == "position" else rl_mf
     cg, sg = be.cos(gamma), be.sin(gamma)
     y = {"Fx": fx, "Fy": fy, "Fz": fz,
@@ -249,8 +259,9 @@ class WheelTyre:
     ``set_inputs(**values)``, ``initialise()``, ``step(h)``, ``outputs()`` (dict), ``state`` (array; get/set).
     Inputs are held over a step; a rejected step (StepError) leaves state and outputs as they were."""
 
-    def __init__(self, model, kind: str = "steady", vertical: str = "position", tau_vlow: float | None = None):
-        self.functions = f = wheel_functions(model, kind, vertical, tau_vlow)
+    def __init__(self, model, kind: str = "steady", vertical: str = "position", tau_vlow: float | None = None,
+                 turn_slip: bool = False):
+        self.functions = f = wheel_functions(model, kind, vertical, tau_vlow, turn_slip)
         self.u = np.array(f.input_starts, dtype=float)
         self.q = np.array(f.parameter_starts, dtype=float)
         self.state = np.zeros(len(f.state_names))

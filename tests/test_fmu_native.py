@@ -563,3 +563,29 @@ def test_calls_out_of_order_are_errors_not_crashes(fmus, tmp_path):
         s.fmu.doStep(s.t, 1e-3)  # after fmi2Terminate
     assert all(st == 3 for st, _ in s.messages)
     s.fmu.freeInstance()
+
+
+def test_turn_slip_from_the_yaw_rate(models, tmp_path):
+    """--turn-slip: the yaw_rate input gives the MF's turn slip phit = -yaw_rate / Vc; the native FMU equals
+    MFModel.evaluate with that phit (steady) and the Python twin (transient)."""
+    path = tmp_path / "ts.fmu"
+    assert _build([TIR61, "-o", path, "--model", "steady", "--turn-slip", "--vertical", "load"]) == 0
+    vx, yaw_rate, fz = 15.0, 0.8, 4500.0
+    s = Slave(path, tmp_path).initialise(vx=vx, omega=vx / RE0, Fz_in=fz, yaw_rate=yaw_rate)
+    out = s.get("Fx", "Fy", "Mz_c", "kappa")
+    ref = models["61"].evaluate(fz, out["kappa"], 0.0, 0.0, -yaw_rate / vx, vx, omega=vx / RE0, turn_slip=True)
+    assert out["Fy"] == pytest.approx(float(ref.fy), rel=1e-9) and abs(out["Fy"]) > 50.0
+    assert out["Mz_c"] == pytest.approx(float(ref.mz), rel=1e-9, abs=1e-9)
+    s.set(yaw_rate=0.0)
+    assert abs(s.get("Fy")["Fy"] - out["Fy"]) > 50.0  # the yaw rate matters
+    s.close()
+    py = WheelTyre(models["61"], "transient", vertical="load", turn_slip=True)
+    assert "yaw_rate" in py.functions.input_names
+
+
+def test_turn_slip_needs_native_steady_or_transient(tmp_path, capsys):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert _build([TIR62, "-o", tmp_path / "a.fmu", "--model", "swift", "--turn-slip"]) == 1
+    assert "--turn-slip is available for --model steady and transient" in capsys.readouterr().err
+    assert _build([TIR61, "-o", tmp_path / "b.fmu", "--turn-slip", "--backend", "pythonfmu"]) == 1

@@ -182,7 +182,8 @@ def generate_sources(spec, sources: Path, guid: str) -> list[str]:
     return ["fmi2_tyre.c", spec.glue, "tyre_model.c"]
 
 
-def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_start: float = 0.0):
+def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_start: float = 0.0,
+               turn_slip: bool = False):
     """What the FMU is made of: the CasADi functions (:mod:`mftyre.transient` for steady/transient,
     :mod:`swift.fmu_model` for swift), its variables and the glue file that calls them."""
     import casadi as ca
@@ -190,10 +191,13 @@ def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_sta
     if kind in ("steady", "transient"):
         from mftyre.transient import OUTPUTS, PARAMETERS, input_table, wheel_functions
 
-        f = wheel_functions(model, kind, vertical)
-        inputs, outputs, params, glue, extra = input_table(vertical), OUTPUTS, PARAMETERS, "glue_wheel.c", ""
+        f = wheel_functions(model, kind, vertical, turn_slip=turn_slip)
+        inputs, outputs, params, glue, extra = input_table(vertical, turn_slip), OUTPUTS, PARAMETERS, "glue_wheel.c", ""
         directional = True
     elif kind == "swift":
+        if turn_slip:
+            raise NativeBuildError("--turn-slip is available for --model steady and transient (the SWIFT ring has no "
+                                   "turn slip)")
         from swift.fmu_model import OUTPUTS, PARAMETERS, INPUTS, swift_functions
 
         f = swift_functions(model, road, x_start=x_start)
@@ -225,7 +229,8 @@ def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_sta
 
 
 def build_native_fmu(tir, output, *, model: str = "steady", side: str | None = None, vertical: str = "position",
-                     road=None, x_start: float = 0.0, overwrite: bool = False, quiet: bool = True) -> Path:
+                     road=None, x_start: float = 0.0, turn_slip: bool = False, overwrite: bool = False,
+                     quiet: bool = True) -> Path:
     """Build the native FMU of ``tir`` at ``output``; returns the path. ``road``: swift only, a
     :class:`swift.road.Road`, a road expression or a CSV file with columns x, z."""
     import mftyre
@@ -244,12 +249,12 @@ def build_native_fmu(tir, output, *, model: str = "steady", side: str | None = N
         raise NativeBuildError("--road is only used by --model swift")
     try:
         tyre = mftyre.load_tir(tir, side=side)
-        spec = model_spec(tyre, model, vertical=vertical, road=road, x_start=x_start)
+        spec = model_spec(tyre, model, vertical=vertical, road=road, x_start=x_start, turn_slip=turn_slip)
     except MFTyreError as exc:
         raise NativeBuildError(f"cannot build the {model} FMU from {tir}: {exc}") from None
     model_id = f"mftyre_{model}"
     tir_bytes = tir.read_bytes()
-    digest = hashlib.sha256(tir_bytes + repr((model, tyre.side, vertical, spec.fingerprint,
+    digest = hashlib.sha256(tir_bytes + repr((model, tyre.side, vertical, turn_slip, spec.fingerprint,
                                               mftyre.__version__)).encode()).hexdigest()
     guid = "{" + str(uuid.UUID(digest[:32])) + "}"
     with tempfile.TemporaryDirectory(prefix="mftyre_native_") as tmp:
