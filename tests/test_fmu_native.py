@@ -589,3 +589,17 @@ def test_turn_slip_needs_native_steady_or_transient(tmp_path, capsys):
         assert _build([TIR62, "-o", tmp_path / "a.fmu", "--model", "swift", "--turn-slip"]) == 1
     assert "--turn-slip is available for --model steady and transient" in capsys.readouterr().err
     assert _build([TIR61, "-o", tmp_path / "b.fmu", "--turn-slip", "--backend", "pythonfmu"]) == 1
+
+
+@pytest.mark.parametrize("kind", ["transient", "swift"])
+def test_outputs_in_initialisation_mode_are_those_of_the_initial_state(fmus, tmp_path, kind):
+    start = _swift_start(1.0) if kind == "swift" else dict(vx=20.0, omega=20.0 / RE0 * 0.95, vy=0.4)
+    s = Slave(fmus[kind], tmp_path)
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.enterInitializationMode()
+    s.set(**start)
+    during = s.get()
+    s.fmu.exitInitializationMode()
+    assert s.get() == during
+    assert abs(during["Fx"]) > 100.0
+    s.close()

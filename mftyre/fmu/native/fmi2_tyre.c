@@ -89,16 +89,26 @@ static int check_values(Instance *inst, char *msg, size_t n) {
     return glue_validate(inst->s.q, inst->s.u, msg, n) == 0;
 }
 
-/* y = out(x, u) unless y is already current; on failure the old outputs are kept. */
+/* y = out(x, u) unless y is already current; on failure the old outputs are kept. In initialisation mode x is
+ * the initial state the current parameters and inputs give. */
 static fmi2Status update_outputs(Instance *inst, const char *caller) {
     char msg[512];
-    double y[ARR(TYRE_NY)];
+    double y[ARR(TYRE_NY)], x0[ARR(TYRE_NX)];
+    const double *x = inst->s.x;
     if (inst->s.outputs_valid || inst->s.phase == PHASE_INSTANTIATED) return fmi2OK;
     if (!check_values(inst, msg, sizeof msg)) {
         LOG_DISCARD(inst, "%s: %s; outputs held at their last values", caller, msg);
         return fmi2Discard;
     }
-    if (glue_out(inst->work, inst->s.x, inst->s.u, inst->s.q, y) != 0 || !all_finite(y, TYRE_NY)) {
+    if (inst->s.phase == PHASE_INIT) {
+        msg[0] = 0;
+        if (glue_init(inst->work, inst->s.u, inst->s.q, x0, msg, sizeof msg) != 0) {
+            LOG_DISCARD(inst, "%s: %s", caller, msg[0] ? msg : "no initial state at these inputs");
+            return fmi2Discard;
+        }
+        x = x0;
+    }
+    if (glue_out(inst->work, x, inst->s.u, inst->s.q, y) != 0 || !all_finite(y, TYRE_NY)) {
         LOG_DISCARD(inst, "%s: the tyre outputs are not finite at these inputs; outputs held", caller);
         return fmi2Discard;
     }
@@ -216,6 +226,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
         LOG_ERROR(inst, "initialisation failed: %s", msg);
         return fmi2Error;
     }
+    msg[0] = 0;
     if (glue_init(inst->work, inst->s.u, inst->s.q, x, msg, sizeof msg) != 0 || !all_finite(x, TYRE_NX)) {
         inst->s.phase = PHASE_ERROR;
         LOG_ERROR(inst, "initialisation failed: %s", msg[0] ? msg : "the initial state is not finite");
@@ -399,7 +410,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
         LOG_ERROR(inst, "fmi2GetDirectionalDerivative: not provided by this model");
         return fmi2Error;
     }
-    if (inst->s.phase != PHASE_STEP && inst->s.phase != PHASE_INIT) {
+    if (inst->s.phase != PHASE_STEP) {
         LOG_ERROR(inst, "fmi2GetDirectionalDerivative: only after initialisation");
         return fmi2Error;
     }
