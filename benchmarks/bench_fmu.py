@@ -5,7 +5,7 @@
 One step = set vx, vy, omega (varying), fmi2DoStep(1 ms), get Fx, Fz. Rows:
 
 * C host (a small C program compiled here, dlopen of the native binary, no Python): time per step of one
-  instance and of four instances of each model (the best 500-step chunk of the run: the timing rule of
+  instance and of four instances of each model (the best chunk of 500 fmi2DoStep calls: the timing rule of
   benchmarks/timing.py applied inside the C host), against the targets steady <= 2 us, transient <= 3 us,
   swift <= 30 us; four SWIFT tyres as a real-time factor (1 ms / time of the four steps, target >= 20);
 * through fmpy (Python host): native and pythonfmu FMUs of steady and swift, with the ratio pythonfmu / native;
@@ -55,7 +55,7 @@ static long rss_kb(void) {
     return rss * (sysconf(_SC_PAGESIZE) / 1024);
 }
 
-#define CHUNK 500 /* steps per timed chunk */
+#define CHUNK 500 /* fmi2DoStep calls per timed chunk (all instances) */
 /* argv: lib guid n_instances steps repeat memory_steps vr_vx vr_vy vr_omega vr_Fx vr_Fz */
 int main(int argc, char **argv) {
     if (argc < 12) return 1;
@@ -85,8 +85,8 @@ int main(int argc, char **argv) {
                     return 5;
                 sink += y[0];
             }
-            if ((k + 1) % CHUNK == 0) { /* best chunk: the least disturbed by other work on a shared machine */
-                double dt = (now() - t0) / CHUNK;
+            if ((k + 1) % (CHUNK / n) == 0) { /* best chunk: the least disturbed by other work on a shared machine */
+                double dt = (now() - t0) / (CHUNK / n);
                 if (dt < best) best = dt;
                 t0 = now();
             }
