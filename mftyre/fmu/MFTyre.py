@@ -1,6 +1,6 @@
 """FMI 2.0 co-simulation slave of the mftyre Magic Formula tyre (pythonfmu).
 
-Built by ``mftyre fmu build FILE.tir -o tyre.fmu`` (see fmu/build.py and fmu/README.md); not meant to be run
+Built by ``mftyre fmu build FILE.tir -o tyre.fmu --backend pythonfmu`` (see build.py and README.md here); not meant to be run
 directly. The FMU's resources hold this script, ``mftyre_fmu_core.py`` (the computation), ``config.json`` (what
 was built), ``tyre.tir`` (the embedded property file), ``functions/`` (the model as serialised CasADi functions
 and, for the build platform, compiled C libraries) and ``vendor/mftyre`` (a copy of the mftyre package used

@@ -12,7 +12,7 @@ CasADi) and, when a C compiler is available at build time, the same functions co
 platform (``.so``; with ``--model swift`` also the compiled SWIFT step, ``functions/swift``); ``config.json`` (the
 build options, the start values, the function index); ``vendor/`` (copies of the packages mftyre and swift, used
 only when the host's Python has none). ``documentation/`` holds
-fmu/README.md. A built FMU is a build output: never commit it.
+README.md here. A built FMU is a build output: never commit it.
 """
 from __future__ import annotations
 

@@ -1,4 +1,8 @@
-"""The computation behind the tyre FMU, free of any FMI machinery (so it can be tested and timed directly).
+"""The computation behind the pythonfmu tyre FMU (``--backend pythonfmu``), free of any FMI machinery.
+
+The native FMU (the default) does not use this module: its models are :mod:`mftyre.transient` (steady,
+transient) and :mod:`swift.fmu_model` (SWIFT), Python classes and CasADi functions beside the equations. The
+classes here (rig mode, SWIFT load/torque modes, evaluator choices) remain for the pythonfmu slave only.
 
     core = SteadyTyre(model, evaluator="auto", functions_dir=None)
     out = core.step_vehicle(vx, vy, omega, gamma, p, fz=4000.0)            # load given
@@ -406,7 +410,7 @@ class SwiftCore:
         out = core.initialise(inputs)        # static equilibrium; inputs: dict of the FMU inputs
         out = core.advance(inputs, h)        # one communication step of length h (any h >= 0)
 
-    Mapping (see fmu/README.md): ``vertical`` "position" -> axle height imposed (``z - road_z``, moving with
+    Mapping (see README.md here): ``vertical`` "position" -> axle height imposed (``z - road_z``, moving with
     ``vz`` inside the step), "load" -> ``Fz_in`` pushes the axle (mass ``axle_mass``) down; ``rim`` "speed" ->
     spin ``omega`` imposed, "torque" -> drive torque ``torque`` on the rim. The road is the profile ``road``
     (:func:`parse_road`) plus the input ``road_z``. The communication step is split into
