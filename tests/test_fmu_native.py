@@ -165,6 +165,11 @@ def _braking(t):
     return dict(vx=vx, omega=vx * (1.0 - 0.15 * min(t / 0.3, 1.0)) / RE0, vy=0.0, z=0.29)
 
 
+def _to_standstill(t):  # through VXLOW (low-speed damping, slip sign at rest) to rest
+    vx = max(3.0 - 4.0 * t, 0.0)
+    return dict(vx=vx, omega=0.9 * vx / RE0, vy=0.05 * math.sin(8.0 * t), z=0.29)
+
+
 def _slalom(t):
     return dict(vx=20.0, omega=20.0 / RE0, vy=1.5 * math.sin(2 * math.pi * 1.5 * t), gamma=0.02 * math.sin(
         2 * math.pi * 1.5 * t), z=0.29 + 0.005 * math.sin(2 * math.pi * 3 * t))
@@ -181,7 +186,7 @@ def _assert_close(py, nat, units, where):
 
 
 @pytest.mark.parametrize("kind", ["steady", "transient"])
-@pytest.mark.parametrize("scenario", [_braking, _slalom])
+@pytest.mark.parametrize("scenario", [_braking, _slalom, _to_standstill])
 def test_native_equals_python_wheel(fmus, models, tmp_path, kind, scenario):
     nat = Slave(fmus[kind], tmp_path).initialise(**scenario(0.0))
     units = {v.name: v.unit or "1" for v in nat.md.modelVariables}
