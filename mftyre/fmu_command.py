@@ -52,8 +52,9 @@ def register(subparsers) -> argparse.ArgumentParser:
     build.add_argument("--vertical", choices=("position", "load"), default="position",
                        help="native steady/transient: the vertical input is the wheel-centre height z (position, "
                             "default) or the load Fz_in")
-    build.add_argument("--input-mode", choices=("vehicle", "rig"), default="vehicle",
-                       help="pythonfmu: default of the FMU's input_mode parameter (rig: slips and load as inputs)")
+    build.add_argument("--input-mode", choices=("vehicle", "rig"),
+                       help="pythonfmu: default of the FMU's input_mode parameter (rig: slips and load as inputs; "
+                            "default vehicle)")
     build.add_argument("--turn-slip", action="store_true",
                        help="native steady/transient: the MF with turn slip, from the input yaw_rate")
     build.add_argument("--backend", choices=("native", "pythonfmu"), default="native",
@@ -67,6 +68,10 @@ def run(args) -> int:
     """Handler of ``mftyre fmu build``: returns the exit status (1 with a message on stderr on failure)."""
     try:
         if args.backend == "native":
+            if args.input_mode is not None:
+                raise ValueError("--input-mode is an option of --backend pythonfmu")
+            if args.model == "swift" and args.vertical == "load":
+                raise ValueError("the native swift FMU takes the wheel-centre height (--vertical position)")
             from .fmu.native_build import build_native_fmu
 
             build_native_fmu(args.tir, args.output, model=args.model, side=args.side,
@@ -78,10 +83,13 @@ def run(args) -> int:
             raise FileExistsError(f"{args.output} exists; use --overwrite to replace it")
         if args.model == "transient" or args.turn_slip:
             raise ValueError("--model transient and --turn-slip are only available with --backend native")
+        if args.road is not None or args.x_start != 0.0:
+            raise ValueError("with --backend pythonfmu the road and x_start are FMU parameters set at run time "
+                             "(road, x_start), not build options")
         from .fmu import build
 
         return build.run(argparse.Namespace(tir=args.tir, output=args.output, model=args.model, side=args.side,
-                                             input_mode=args.input_mode, vertical_input=args.vertical,
+                                             input_mode=args.input_mode or "vehicle", vertical_input=args.vertical,
                                              no_compile=False))
     except (MFTyreError, OSError, ValueError, ImportError) as exc:  # the builders' errors: a message, no traceback
         print(f"mftyre fmu build: error: {exc}", file=sys.stderr)

@@ -608,3 +608,13 @@ def test_outputs_in_initialisation_mode_are_those_of_the_initial_state(fmus, tmp
     assert s.get() == during
     assert abs(during["Fx"]) > 100.0
     s.close()
+
+
+@pytest.mark.parametrize("args, text", [
+    (["--input-mode", "rig"], "--input-mode is an option of --backend pythonfmu"),
+    (["--model", "swift", "--vertical", "load"], "takes the wheel-centre height"),
+    (["--backend", "pythonfmu", "--road", "cleat(x0=1, length=0.05, height=0.01)"], "set at run time"),
+])
+def test_options_of_the_other_backend_are_refused(tmp_path, capsys, args, text):
+    assert _build([TIR62, "-o", tmp_path / "x.fmu", *args]) == 1
+    assert text in capsys.readouterr().err
