@@ -1,234 +1,224 @@
-"""Time per co-simulation step of the tyre FMU against a direct Python call of the same model, side by side.
+"""Time per 1 ms co-simulation step of the tyre FMUs, native (compiled C) beside pythonfmu, in one run.
 
-    python benchmarks/bench_fmu.py [--tir FILE.tir] [--steps 20000] [--repeat 3]
+    python benchmarks/bench_fmu.py [--steps 20000] [--repeat 3] [--memory-steps 1000000]
 
-One step = set the six vehicle inputs (vx, vy, omega, gamma, Fz_in or z, p), do the step, get the six wheel-centre
-loads. Rows, each the time per step (best of --repeat) and its ratio to the baseline, the direct NumPy call:
+One step = set vx, vy, omega (varying), fmi2DoStep(1 ms), get Fx, Fz. Rows:
 
-* ``MFModel.evaluate`` (NumPy), one point, slips computed in Python: the baseline;
-* the FMU's computation called directly in Python (``mftyre_fmu_core.SteadyTyre``), compiled C and CasADi VM;
-* the FMU through fmpy (``FMU2Slave``: fmi2SetReal, fmi2DoStep, fmi2GetReal), evaluators compiled and casadi,
-  vertical input load and position.
+* C host (a small C program compiled here, dlopen of the native binary, no Python): time per step of one
+  instance and of four instances of each model (the best chunk of 500 fmi2DoStep calls: the timing rule of
+  benchmarks/timing.py applied inside the C host), against the targets steady <= 2 us, transient <= 3 us,
+  swift <= 30 us; four SWIFT tyres as a real-time factor (1 ms / time of the four steps, target >= 20);
+* through fmpy (Python host): native and pythonfmu FMUs of steady and swift, with the ratio pythonfmu / native;
+* memory: resident set size of the C host before and after --memory-steps steps of each native model.
 
-Swift mode (``--swift-tir``, default the SWIFT sample tyre; a 1 cm cleat every 5 m, axle height imposed, spin
-imposed, 1 ms communication steps), its own baseline: ``SwiftTyre.step`` called directly in a Python loop;
-then the FMU's computation (``mftyre_fmu_core.SwiftCore.advance``, which adds the input mapping and the MF at the
-contact patch for the extra outputs) and the FMU through fmpy.
-
-The FMUs are built into a temporary folder first (their build times are printed).
+The FMUs are built into a temporary folder first. Timing rule: benchmarks/timing.py (best of --repeat).
 """
 from __future__ import annotations
 
 import argparse
 import math
 import os
+import subprocess
 import sys
 import tempfile
-import time
 import warnings
 from pathlib import Path
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-import mftyre  # noqa: E402
-
 from timing import best_time  # noqa: E402  (benchmarks/timing.py)
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "fmu"))
+sys.path.insert(0, str(ROOT))
+TIR61 = ROOT / "tir_files" / "car_205_60R15_mf61.tir"
+TIR62 = ROOT / "tir_files" / "car_205_60R15_mf62_swift.tir"
+ROAD = "cleat(x0=3.0, length=0.05, height=0.01) + cleat(x0=8.0, length=0.05, height=0.01)"
+TARGET_US = {"steady": 2.0, "transient": 3.0, "swift": 30.0}
 
-from build import build_fmu  # noqa: E402
-from mftyre_fmu_core import SteadyTyre, SwiftCore  # noqa: E402
+HOST = r"""
+#include <dlfcn.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+#include <unistd.h>
+#include "fmi2Functions.h"
 
-SWIFT_ROAD = "+".join(f"cleat(x0={5.0 * k + 3.0}, length=0.05, height=0.01)" for k in range(5))
+static void logger(fmi2ComponentEnvironment e, fmi2String n, fmi2Status s, fmi2String c, fmi2String f, ...) {
+    (void)e; (void)n; (void)c;
+    if (s >= fmi2Error) fprintf(stderr, "%s\n", f);
+}
+static double now(void) { struct timespec t; clock_gettime(CLOCK_MONOTONIC, &t); return t.tv_sec + 1e-9 * t.tv_nsec; }
+static long rss_kb(void) {
+    long pages = 0, rss = 0; FILE *f = fopen("/proc/self/statm", "r");
+    if (f) { if (fscanf(f, "%ld %ld", &pages, &rss) != 2) rss = 0; fclose(f); }
+    return rss * (sysconf(_SC_PAGESIZE) / 1024);
+}
 
-
-
-
-def inputs(i):
-    s = 1e-3 * i
-    return 20.0 + math.sin(s), 0.4 * math.sin(3 * s), 68.0 + 2.0 * math.cos(s), 0.01, 4000.0 + 500 * math.sin(7 * s), 2.2e5
-
-
-def direct_numpy(model, steps):
-    re = 0.30
-
-    def run():
-        nonlocal re
-        for i in range(steps):
-            vx, vy, omega, gamma, fz, p = inputs(i)
-            kappa = (omega * re - vx) / abs(vx)
-            o = model.evaluate(fz, kappa, math.atan2(vy, abs(vx)), gamma, 0.0, vx, p, omega)
-            re = float(o.re)
-            (float(o.fx), float(o.fy), float(o.fz), float(o.mx), float(o.my), float(o.mz))
-    return run
-
-
-def direct_core(core, steps):
-    def run():
-        for i in range(steps):
-            vx, vy, omega, gamma, fz, p = inputs(i)
-            core.step_vehicle(vx, vy, omega, gamma, p, fz=fz)
-    return run
-
-
-class FMUStepper:
-    def __init__(self, path, tmp, params):
-        from fmpy import extract, read_model_description
-        from fmpy.fmi2 import FMU2Slave
-
-        md = read_model_description(path)
-        self.vr = {v.name: v.valueReference for v in md.modelVariables}
-        unz = extract(path, unzipdir=tempfile.mkdtemp(dir=tmp))
-        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unz, modelIdentifier=md.coSimulation.modelIdentifier,
-                             instanceName="tyre")
-        self.fmu.instantiate()
-        self.fmu.setupExperiment(startTime=0.0)
-        self.fmu.enterInitializationMode()
-        for k, v in params.items():
-            self.fmu.setString([self.vr[k]], [v])
-        self.fmu.exitInitializationMode()
-        self.position = params.get("vertical_input") == "position"
-
-    def runner(self, steps, swift=False):
-        if swift:
-            return self.swift_runner(steps)
-        names = ("vx", "vy", "omega", "gamma", "z" if self.position else "Fz_in", "p")
-        set_vr = [self.vr[k] for k in names]
-        get_vr = [self.vr[k] for k in ("Fx", "Fy", "Fz", "Mx", "My", "Mz")]
-        fmu = self.fmu
-        h = 1e-3
-
-        def run():
-            t = 0.0
-            for i in range(steps):
-                values = list(inputs(i))
-                if self.position:
-                    values[4] = 0.29 + 0.003 * math.sin(7e-3 * i)
-                fmu.setReal(set_vr, values)
-                fmu.doStep(t, h)
-                t += h
-                fmu.getReal(get_vr)
-        return run
-
-    def swift_runner(self, steps):
-        set_vr = [self.vr[k] for k in ("vx", "vy", "omega", "gamma", "z", "p")]
-        get_vr = [self.vr[k] for k in ("Fx", "Fy", "Fz", "Mx", "My", "Mz")]
-        fmu, h = self.fmu, 1e-3
-
-        def run():
-            t = 0.0
-            for i in range(steps):
-                fmu.setReal(set_vr, list(swift_inputs(i)))
-                fmu.doStep(t, h)
-                t += h
-                fmu.getReal(get_vr)
-        return run
-
-    def close(self):
-        self.fmu.terminate()
-        self.fmu.freeInstance()
+#define CHUNK 500 /* fmi2DoStep calls per timed chunk (all instances) */
+/* argv: lib guid n_instances steps repeat memory_steps vr_vx vr_vy vr_omega vr_Fx vr_Fz */
+int main(int argc, char **argv) {
+    if (argc < 12) return 1;
+    void *lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
+    if (!lib) { fprintf(stderr, "%s\n", dlerror()); return 2; }
+#define SYM(name) name##TYPE *name = (name##TYPE *)dlsym(lib, #name); if (!name) return 3;
+    SYM(fmi2Instantiate) SYM(fmi2SetupExperiment) SYM(fmi2EnterInitializationMode)
+    SYM(fmi2ExitInitializationMode) SYM(fmi2SetReal) SYM(fmi2GetReal) SYM(fmi2DoStep) SYM(fmi2FreeInstance)
+    fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
+    int n = atoi(argv[3]), steps = atoi(argv[4]), repeat = atoi(argv[5]);
+    long memsteps = atol(argv[6]);
+    fmi2ValueReference in[3] = {atoi(argv[7]), atoi(argv[8]), atoi(argv[9])}, out[2] = {atoi(argv[10]), atoi(argv[11])};
+    double best = 1e30, y[2], sink = 0;
+    fmi2Component c[16];
+    for (int r = 0; r < repeat; r++) {
+        for (int i = 0; i < n; i++) {
+            c[i] = fmi2Instantiate("t", fmi2CoSimulation, argv[2], "", &cb, fmi2False, fmi2False);
+            if (!c[i] || fmi2SetupExperiment(c[i], 0, 0, 0, 0, 0) || fmi2EnterInitializationMode(c[i]) ||
+                fmi2ExitInitializationMode(c[i])) return 4;
+        }
+        double t0 = now();
+        for (int k = 0; k < steps; k++) {
+            for (int i = 0; i < n; i++) {
+                double t = k * 1e-3, v = 10.0 + i;
+                double u[3] = {v, 0.3 * sin(5.0 * t), v / 0.305 * (1.0 + 0.02 * sin(3.0 * t))};
+                if (fmi2SetReal(c[i], in, 3, u) || fmi2DoStep(c[i], t, 1e-3, fmi2True) || fmi2GetReal(c[i], out, 2, y))
+                    return 5;
+                sink += y[0];
+            }
+            if ((k + 1) % (CHUNK / n) == 0) { /* best chunk: the least disturbed by other work on a shared machine */
+                double dt = (now() - t0) / (CHUNK / n);
+                if (dt < best) best = dt;
+                t0 = now();
+            }
+        }
+        for (int i = 0; i < n; i++) fmi2FreeInstance(c[i]);
+    }
+    long rss[4] = {0, 0, 0, 0};
+    if (memsteps > 0) {
+        fmi2Component m = fmi2Instantiate("m", fmi2CoSimulation, argv[2], "", &cb, fmi2False, fmi2False);
+        if (!m || fmi2SetupExperiment(m, 0, 0, 0, 0, 0) || fmi2EnterInitializationMode(m) ||
+            fmi2ExitInitializationMode(m)) return 6;
+        for (long k = 0; k < memsteps; k++) {
+            double t = k * 1e-3, u[3] = {10.0, 0.3 * sin(5.0 * t), 10.0 / 0.305};
+            if (k == memsteps / 10) rss[0] = rss_kb();
+            if (k == memsteps * 4 / 10) rss[1] = rss_kb();
+            if (k == memsteps * 7 / 10) rss[2] = rss_kb();
+            if (fmi2SetReal(m, in, 3, u) || fmi2DoStep(m, t, 1e-3, fmi2True) || fmi2GetReal(m, out, 2, y)) return 7;
+        }
+        rss[3] = rss_kb();
+        fmi2FreeInstance(m);
+    }
+    printf("%.9g %ld,%ld,%ld,%ld %g\n", best, rss[0], rss[1], rss[2], rss[3], sink);
+    return 0;
+}
+"""
 
 
-def swift_inputs(i):
-    """vx, vy, omega, gamma, z, p of step i (swift rows): 10 m/s with small variations."""
-    s = 1e-3 * i
-    return 10.0 + 0.2 * math.sin(s), 0.1 * math.sin(3 * s), (10.0 + 0.2 * math.sin(s)) / 0.305, 0.01, \
-        0.288 + 0.001 * math.sin(7 * s), 2.2e5
+def build_all(tmp: Path) -> dict:
+    import time
 
+    from mftyre.fmu.build import build_fmu
+    from mftyre.fmu.native_build import build_native_fmu
 
-def direct_swift_step(tyre, steps):
-    """SwiftTyre.step in a Python loop: the swift baseline (the inputs built as StepInputs each step)."""
-    from swift import StepInputs
-
-    def run():
-        vx, vy, omega, gamma, z, p = swift_inputs(0)
-        state = tyre.initial_state(StepInputs(x=0.0, vx=vx, z=z, omega=omega, p=p, vy=vy, gamma=gamma))
-        for i in range(steps):
-            vx, vy, omega, gamma, z, p = swift_inputs(i)
-            state, out = tyre.step(state, StepInputs(x=state[9], vx=vx, z=z, omega=omega, p=p, vy=vy, gamma=gamma),
-                                   1e-3)
-            (out["fx"], out["fy"], out["fz"], out["mx"], out["my"], out["mz"])
-    return run
-
-
-def direct_swift_core(core, steps):
-    names = ("vx", "vy", "omega", "gamma", "z", "p")
-
-    def run():
-        u = dict(zip(names, swift_inputs(0)), vz=0.0, road_z=0.0, Fz_in=0.0, torque=0.0)
-        core.initialise(u)
-        for i in range(steps):
-            u.update(zip(names, swift_inputs(i)))
-            core.advance(u, 1e-3)
-    return run
-
-
-def swift_rows(tir, tmp, steps, repeat):
-    from swift import Cleat, SwiftTyre
-    from swift.ring import STATE_NAMES
-
-    assert STATE_NAMES[9] == "xa"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        model = mftyre.load_tir(tir)
+    paths = {}
+    for backend, kind, tir, kwargs in (("native", "steady", TIR61, {}), ("native", "transient", TIR61, {}),
+                                       ("native", "swift", TIR62, {"road": ROAD}),
+                                       ("pythonfmu", "steady", TIR61, {}), ("pythonfmu", "swift", TIR62, {})):
+        out = tmp / f"{backend}_{kind}.fmu"
         t0 = time.perf_counter()
-        path = build_fmu(tir, Path(tmp) / "tyre_swift.fmu", model="swift", vertical_input="position")
-        print(f"{Path(tir).name}: swift FMU built in {time.perf_counter() - t0:.1f} s")
-        road = Cleat(3.0, 0.05, 0.01)
-        for k in range(1, 5):
-            road = road + Cleat(5.0 * k + 3.0, 0.05, 0.01)
-        tyre = SwiftTyre(model, road, axle="height", rim="speed", x_range=(-1.0, 30.0))
-        core = SwiftCore(model, SWIFT_ROAD, vertical="position")
-    n = min(steps, 2500)  # 25 m: the road above
-    rows = [("swift direct: SwiftTyre.step in a Python loop", best_time(direct_swift_step(tyre, n), repeat) / n),
-            ("swift direct: FMU computation (SwiftCore.advance)", best_time(direct_swift_core(core, n), repeat) / n)]
-    stepper = FMUStepper(path, tmp, {"road": SWIFT_ROAD})
-    rows.append(("swift FMU via fmpy: set 6 + doStep + get 6, position", best_time(stepper.runner(n, swift=True),
-                                                                             repeat) / n))
-    stepper.close()
-    return rows
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            if backend == "native":
+                build_native_fmu(tir, out, model=kind, **kwargs)
+            else:
+                build_fmu(tir, out, model=kind, vertical_input="position")
+        print(f"built {backend:9s} {kind:9s} in {time.perf_counter() - t0:5.1f} s")
+        paths[backend, kind] = out
+    return paths
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--tir", default=str(ROOT / "tir_files" / "car_205_60R15_mf61.tir"))
-    ap.add_argument("--steps", type=int, default=20_000)
-    ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--swift-tir", default=str(ROOT / "tir_files" / "car_205_60R15_mf62_swift.tir"))
-    ap.add_argument("--no-swift", action="store_true", help="skip the swift-mode rows")
-    args = ap.parse_args(argv)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        model = mftyre.load_tir(args.tir)
-    steps = args.steps
-    with tempfile.TemporaryDirectory() as tmp:
-        t0 = time.perf_counter()
-        path = build_fmu(args.tir, Path(tmp) / "tyre.fmu")
-        print(f"{Path(args.tir).name}: FMU built in {time.perf_counter() - t0:.1f} s; {steps} steps per row, "
-              f"best of {args.repeat}")
-        rows = [("direct: MFModel.evaluate (NumPy), one point", best_time(direct_numpy(model, max(steps // 20, 200)),
-                                                                  args.repeat) / max(steps // 20, 200))]
-        for ev in ("compiled", "casadi"):
-            core = SteadyTyre(model, ev)
-            n = steps if ev == "compiled" else steps // 5
-            rows.append((f"direct: FMU computation in Python, {ev}", best_time(direct_core(core, n), args.repeat) / n))
-        for ev, vertical in (("compiled", "load"), ("compiled", "position"), ("casadi", "load")):
-            stepper = FMUStepper(path, tmp, {"evaluator": ev, "vertical_input": vertical})
-            n = steps if ev == "compiled" else steps // 5
-            rows.append((f"FMU via fmpy: set 6 + doStep + get 6, {ev}, {vertical}",
-                         best_time(stepper.runner(n), args.repeat) / n))
-            stepper.close()
-        srows = [] if args.no_swift else swift_rows(args.swift_tir, tmp, steps, args.repeat)
-    width = max(len(r[0]) for r in rows + srows)
-    for table, label in ((rows, "vs NumPy"), (srows, "vs step")):
-        if not table:
-            continue
-        base = table[0][1]
-        print(f"\n{'':{width}}  {'us/step':>9}  {label:>9}")
-        for name, t in table:
-            print(f"{name:{width}}  {t * 1e6:9.1f}  {t / base:9.3f}")
+def c_host(tmp: Path, path: Path, n: int, steps: int, repeat: int, memory_steps: int):
+    import fmpy
+    from fmpy import extract, read_model_description
+
+    exe = tmp / "host"
+    if not exe.exists():
+        (tmp / "host.c").write_text(HOST)
+        subprocess.run(["cc", "-O2", "-I", str(Path(fmpy.__file__).parent / "c-code"), str(tmp / "host.c"), "-o",
+                        str(exe), "-ldl", "-lm"], check=True)
+    md = read_model_description(path)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    d = Path(extract(path, unzipdir=str(tmp / f"x_{path.stem}_{n}")))
+    lib = d / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"
+    args = [str(exe), str(lib), md.guid, str(n), str(steps), str(repeat), str(memory_steps)] + [
+        str(vr[k]) for k in ("vx", "vy", "omega", "Fx", "Fz")]
+    res = subprocess.run(args, capture_output=True, text=True, check=True)
+    best, rss, _ = res.stdout.split()
+    return float(best), rss
+
+
+def fmpy_per_step(path: Path, tmp: Path, steps: int, repeat: int) -> float:
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    md = read_model_description(path)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    d = extract(path, unzipdir=str(tmp / f"f_{path.stem}"))
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier,
+                    instanceName="bench")
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    vin, vout = [vr["vx"], vr["vy"], vr["omega"]], [vr["Fx"], vr["Fz"]]
+    state = {"t": 0.0}
+
+    def run():
+        t = state["t"]
+        for k in range(steps):
+            fmu.setReal(vin, [10.0, 0.3 * math.sin(5 * t), 10.0 / 0.305])
+            fmu.doStep(t, 1e-3)
+            fmu.getReal(vout)
+            t += 1e-3
+        state["t"] = t
+
+    per = best_time(run, repeat) / steps
+    fmu.terminate()
+    fmu.freeInstance()
+    return per
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=20000, help="steps per timed run in the C host")
+    parser.add_argument("--fmpy-steps", type=int, default=2000, help="steps per timed run through fmpy")
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--memory-steps", type=int, default=1_000_000)
+    args = parser.parse_args(argv)
+    with tempfile.TemporaryDirectory(prefix="bench_fmu_") as t:
+        tmp = Path(t)
+        paths = build_all(tmp)
+        print("\nC host (dlopen, no Python), 1 ms steps; time per step per tyre")
+        print(f"{'model':10s} {'1 tyre':>9s} {'4 tyres':>9s} {'target':>7s}         RSS [kB] after 10/40/70/100 % "
+              f"of {args.memory_steps} steps")
+        for kind in ("steady", "transient", "swift"):
+            one, rss = c_host(tmp, paths["native", kind], 1, args.steps, args.repeat, args.memory_steps)
+            four, _ = c_host(tmp, paths["native", kind], 4, args.steps // 4, args.repeat, 0)
+            ok = "ok" if one * 1e6 <= TARGET_US[kind] else "MISSED"
+            print(f"{kind:10s} {one * 1e6:7.2f}us {four / 4 * 1e6:7.2f}us {TARGET_US[kind]:5.0f}us {ok:6s}  {rss}")
+            if kind == "swift":
+                print(f"four SWIFT tyres: {four * 1e6:.1f} us per 1 ms step = {1e-3 / four:.1f}x faster than real "
+                      f"time (target >= 20x)")
+        print("\nthrough fmpy (Python host): fmi2SetReal + fmi2DoStep + fmi2GetReal per 1 ms step")
+        for kind in ("steady", "swift"):
+            nat = fmpy_per_step(paths["native", kind], tmp, args.fmpy_steps, args.repeat)
+            pyf = fmpy_per_step(paths["pythonfmu", kind], tmp, max(args.fmpy_steps // 10, 100), args.repeat)
+            print(f"{kind:10s} native {nat * 1e6:8.1f} us   pythonfmu {pyf * 1e6:8.1f} us   pythonfmu / native "
+                  f"{pyf / nat:6.1f}x")
+        nat = fmpy_per_step(paths["native", "transient"], tmp, args.fmpy_steps, args.repeat)
+        print(f"{'transient':10s} native {nat * 1e6:8.1f} us   (no pythonfmu transient model)")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

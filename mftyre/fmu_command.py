@@ -1,6 +1,7 @@
-"""``mftyre fmu build FILE.tir -o tyre.fmu [--model steady|swift] [--side left|right]``: the tyre as an FMI 2.0
-co-simulation FMU (pythonfmu). The slave and the build logic live in ``fmu/`` beside the package (see
-fmu/README.md); this module only wires them into the command line:
+"""``mftyre fmu build FILE.tir -o tyre.fmu [--model steady|transient|swift] [--backend native|pythonfmu]``: the
+tyre as an FMI 2.0 co-simulation FMU. The builders live in :mod:`mftyre.fmu` (``native_build``: C generated
+from the equations + the C wrapper in ``mftyre/fmu/native``; ``build``: the pythonfmu slave; see
+mftyre/fmu/README.md); this module only wires them into the command line:
 
     from mftyre.fmu_command import register
     register(subparsers)          # adds the 'fmu' command with its 'build' subcommand; handler: run(args)
@@ -8,55 +9,57 @@ fmu/README.md); this module only wires them into the command line:
 from __future__ import annotations
 
 import argparse
-import importlib.util
+import importlib.resources
 import sys
 from pathlib import Path
+
+from .errors import MFTyreError
 
 __all__ = ["register", "run", "fmu_sources"]
 
 
-def fmu_sources() -> Path:
-    """The folder with the FMU sources (``fmu/`` next to the mftyre package in a source checkout)."""
-    return Path(__file__).resolve().parent.parent / "fmu"
-
-
-def _load_build_module():
-    path = fmu_sources() / "build.py"
-    if not path.is_file():
-        raise FileNotFoundError(
-            f"the FMU sources are not installed (expected {path}); build FMUs from a source checkout of mftyre "
-            "(pip install -e .)")
-    spec = importlib.util.spec_from_file_location("mftyre_fmu_build", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def fmu_sources():
+    """The FMU sources shipped in the package (``mftyre/fmu``: builders, C wrapper, README) as a resource."""
+    return importlib.resources.files("mftyre.fmu")
 
 
 def register(subparsers) -> argparse.ArgumentParser:
     """Add the ``fmu`` command (subcommand ``build``) to an argparse subparsers object."""
     fmu = subparsers.add_parser(
         "fmu", help="package the tyre as an FMI 2.0 co-simulation FMU",
-        description="Package the tyre as an FMI 2.0 co-simulation FMU (pythonfmu). See fmu/README.md for the "
-                    "FMU's variables and what a simulator needs to run it.")
+        description="Package the tyre as an FMI 2.0 co-simulation FMU. See mftyre/fmu/README.md for the FMU's "
+                    "variables.")
     sub = fmu.add_subparsers(dest="fmu_command", metavar="SUBCOMMAND")
     sub.required = True
     build = sub.add_parser(
         "build", help="build an FMU from a .tir file",
-        description="Build an FMI 2.0 co-simulation FMU embedding a .tir file. The FMU runs in a Python with "
-                    "numpy and casadi; C libraries compiled here are shipped for this platform.",
-        epilog="example: mftyre fmu build tir_files/car_205_60R15_mf61.tir -o out/tyre.fmu --side left")
+        description="Build an FMI 2.0 co-simulation FMU embedding a .tir file. Default backend native: C code "
+                    "generated from the model's equations, compiled here with the system C compiler and shipped "
+                    "as sources too; runs without Python. Backend pythonfmu: a Python slave (needs numpy and "
+                    "casadi in the simulator's Python).",
+        epilog="example: mftyre fmu build tir_files/car_205_60R15_mf61.tir -o out/tyre.fmu --model transient")
     build.add_argument("tir", metavar="FILE.tir", help="tyre property file to embed")
     build.add_argument("-o", "--output", required=True, metavar="TYRE.fmu", help="FMU file to write")
-    build.add_argument("--model", choices=("steady", "swift"), default="steady",
-                       help="default of the FMU's model parameter: steady (Magic Formula) or swift (rigid ring "
-                            "with enveloping; needs the SWIFT parameters in the .tir); default steady")
+    build.add_argument("--model", choices=("steady", "transient", "swift"), default="steady",
+                       help="steady (Magic Formula), transient (MF behind relaxed contact deflections) or swift "
+                            "(rigid ring with tandem-cam enveloping; needs the SWIFT parameters); default steady")
     build.add_argument("--side", choices=("left", "right"), help="mounting side (default: the file's TYRESIDE)")
-    build.add_argument("--input-mode", choices=("vehicle", "rig"), default="vehicle",
-                       help="default of the FMU's input_mode parameter (default vehicle)")
-    build.add_argument("--vertical-input", choices=("load", "position"), default="load",
-                       help="default of the FMU's vertical_input parameter (default load)")
-    build.add_argument("--no-compile", action="store_true",
-                       help="ship only the CasADi functions (no C libraries for this platform)")
+    build.add_argument("--road", metavar="ROAD",
+                       help="swift: road profile built into the FMU, a CSV file with columns x, z [m] or an "
+                            "expression like 'cleat(x0=3, length=0.05, height=0.01)'; default flat")
+    build.add_argument("--x-start", type=float, default=0.0, metavar="M",
+                       help="swift: default wheel-centre position on the road at the start (parameter x_start)")
+    build.add_argument("--vertical", choices=("position", "load"), default="position",
+                       help="native steady/transient: the vertical input is the wheel-centre height z (position, "
+                            "default) or the load Fz_in")
+    build.add_argument("--input-mode", choices=("vehicle", "rig"),
+                       help="pythonfmu: default of the FMU's input_mode parameter (rig: slips and load as inputs; "
+                            "default vehicle)")
+    build.add_argument("--turn-slip", action="store_true",
+                       help="native steady/transient: the MF with turn slip, from the input yaw_rate")
+    build.add_argument("--backend", choices=("native", "pythonfmu"), default="native",
+                       help="native (compiled C, default) or pythonfmu (Python slave)")
+    build.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     build.set_defaults(func=run)
     return fmu
 
@@ -64,8 +67,30 @@ def register(subparsers) -> argparse.ArgumentParser:
 def run(args) -> int:
     """Handler of ``mftyre fmu build``: returns the exit status (1 with a message on stderr on failure)."""
     try:
-        module = _load_build_module()
-    except FileNotFoundError as exc:
+        if args.backend == "native":
+            if args.input_mode is not None:
+                raise ValueError("--input-mode is an option of --backend pythonfmu")
+            if args.model == "swift" and args.vertical == "load":
+                raise ValueError("the native swift FMU takes the wheel-centre height (--vertical position)")
+            from .fmu.native_build import build_native_fmu
+
+            build_native_fmu(args.tir, args.output, model=args.model, side=args.side,
+                                    vertical=args.vertical, road=args.road, x_start=args.x_start,
+                                    turn_slip=args.turn_slip,
+                                    overwrite=args.overwrite, quiet=False)
+            return 0
+        if Path(args.output).exists() and not args.overwrite:
+            raise FileExistsError(f"{args.output} exists; use --overwrite to replace it")
+        if args.model == "transient" or args.turn_slip:
+            raise ValueError("--model transient and --turn-slip are only available with --backend native")
+        if args.road is not None or args.x_start != 0.0:
+            raise ValueError("with --backend pythonfmu the road and x_start are FMU parameters set at run time "
+                             "(road, x_start), not build options")
+        from .fmu import build
+
+        return build.run(argparse.Namespace(tir=args.tir, output=args.output, model=args.model, side=args.side,
+                                             input_mode=args.input_mode or "vehicle", vertical_input=args.vertical,
+                                             no_compile=False))
+    except (MFTyreError, OSError, ValueError, ImportError) as exc:  # the builders' errors: a message, no traceback
         print(f"mftyre fmu build: error: {exc}", file=sys.stderr)
         return 1
-    return module.run(args)

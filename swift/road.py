@@ -23,7 +23,7 @@ import numpy as np
 
 from mftyre.errors import DataError, ModelInputError
 
-__all__ = ["Road", "Flat", "Step", "Cleat", "Trapezoid", "CircularBump", "Sine", "Sampled", "TwoTrack"]
+__all__ = ["Road", "Flat", "Step", "Cleat", "Trapezoid", "CircularBump", "Sine", "Sampled", "TwoTrack", "parse_road"]
 
 
 class Road:
@@ -220,3 +220,87 @@ class _Sum(Road):
     def height_range(self):
         (a0, a1), (b0, b1) = self.a.height_range(), self.b.height_range()
         return a0 + b0, a1 + b1
+
+
+_EXPRESSION_ARGS = {  # name in a road expression -> (class, argument names)
+    "flat": (Flat, ("z",)),
+    "step": (Step, ("x0", "height")),
+    "cleat": (Cleat, ("x0", "length", "height")),
+    "trapezoid": (Trapezoid, ("x0", "top_length", "height", "ramp")),
+    "bump": (CircularBump, ("x0", "length", "height")),
+    "sine": (Sine, ("amplitude", "wavelength", "x0", "x_end")),
+}
+
+
+def parse_road(spec, base_dir=None) -> Road:
+    """A road from text: a CSV file (columns x, z in metres; relative to ``base_dir``) or a sum of obstacles
+    written like calls with literal numbers, e.g. ``cleat(x0=3.0, length=0.05, height=0.01) + step(10, 0.02)``
+    (``flat``, ``step``, ``cleat``, ``trapezoid``, ``bump``, ``sine``; sine needs ``x_end``; ``csv("file.csv")``,
+    ``points([[x, z], ...])``). Empty: flat.
+    Nothing is evaluated as Python; errors (:class:`ModelInputError`) name the term and what was expected."""
+    import ast
+
+    if isinstance(spec, Road):
+        return spec
+    text = "" if spec is None else str(spec).strip()
+    if text == "":
+        return Flat()
+    path = Path(text) if base_dir is None or Path(text).is_absolute() else Path(base_dir) / text
+    if text.lower().endswith(".csv"):
+        if not path.is_file():
+            raise DataError(f"road file {str(path)!r} not found")
+        return Sampled.from_csv(path)
+    try:
+        tree = ast.parse(text, mode="eval").body
+    except SyntaxError as exc:
+        raise ModelInputError(f"road {text!r}: not a CSV file nor a sum of obstacles like "
+                              f"cleat(x0=3, length=0.05, height=0.01) ({exc.msg})") from None
+
+    def literal(node, what):
+        try:
+            value = ast.literal_eval(node)
+        except ValueError:
+            value = None
+        if not isinstance(value, (int, float)) or isinstance(value, bool):
+            raise ModelInputError(f"road {text!r}: {what} must be a number")
+        return float(value)
+
+    def term(node):
+        if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Add):
+            return term(node.left) + term(node.right)
+        names_all = (*_EXPRESSION_ARGS, "csv", "points")
+        if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in names_all):
+            raise ModelInputError(f"road {text!r}: each term must be one of "
+                                  f"{', '.join(n + '(...)' for n in names_all)}")
+        name = node.func.id
+        if name in ("csv", "points"):
+            if len(node.args) != 1 or node.keywords:
+                raise ModelInputError(f"road {text!r}: {name} takes one argument")
+            try:
+                value = ast.literal_eval(node.args[0])
+            except ValueError:
+                raise ModelInputError(f"road {text!r}: the argument of {name} must be a literal") from None
+            if name == "csv":
+                path = Path(str(value))
+                return Sampled.from_csv(path if base_dir is None or path.is_absolute() else Path(base_dir) / path)
+            try:
+                pairs = [(float(a), float(b)) for a, b in value]
+            except (TypeError, ValueError):
+                raise ModelInputError(f"road {text!r}: points needs a list of [x, z] pairs") from None
+            return Sampled([a for a, _ in pairs], [b for _, b in pairs])
+        cls, names = _EXPRESSION_ARGS[name]
+        if len(node.args) > len(names):
+            raise ModelInputError(f"road {text!r}: {name} takes at most {len(names)} arguments ({', '.join(names)})")
+        kwargs = {n: literal(a, f"{name} argument {n}") for n, a in zip(names, node.args)}
+        for kw in node.keywords:
+            if kw.arg not in names:
+                raise ModelInputError(f"road {text!r}: {name} has no argument {kw.arg!r} ({', '.join(names)})")
+            kwargs[kw.arg] = literal(kw.value, f"{name} argument {kw.arg}")
+        if name == "sine" and "x_end" not in kwargs:
+            raise ModelInputError(f"road {text!r}: sine needs x_end (the road must be constant beyond its obstacles)")
+        missing = [n for n in names if n not in kwargs and not (name in ("sine", "flat") and n in ("x0", "z"))]
+        if missing:
+            raise ModelInputError(f"road {text!r}: {name} needs {', '.join(missing)}")
+        return cls(**kwargs)
+
+    return term(tree)

@@ -1,4 +1,4 @@
-"""The tyre FMU (fmu/, `mftyre fmu build`): built into tmp paths, run with fmpy.
+"""The pythonfmu tyre FMU (mftyre/fmu, `mftyre fmu build --backend pythonfmu`): built into tmp paths, run with fmpy.
 
 Evidence used: MFModel.evaluate / vertical_force on the slips, load and radius the FMU reports (1e-9), the
 kinematic slip definitions and their signs written out independently, fmpy's model-description validation, and
@@ -29,7 +29,7 @@ FORCES = ("Fx", "Fy", "Fz")
 def _build(args):
     parser = argparse.ArgumentParser(prog="mftyre")
     register(parser.add_subparsers(dest="command"))
-    ns = parser.parse_args(["fmu", "build", *map(str, args)])
+    ns = parser.parse_args(["fmu", "build", "--backend", "pythonfmu", *map(str, args)])
     return ns.func(ns)
 
 
@@ -37,15 +37,15 @@ def _build(args):
 def fmus(tmp_path_factory):
     out = tmp_path_factory.mktemp("fmu")
     paths = {"61": out / "tyre61.fmu", "62r": out / "tyre62_right.fmu"}
-    assert _build([TIR61, "-o", paths["61"]]) == 0
-    assert _build([TIR62, "-o", paths["62r"], "--side", "right", "--vertical-input", "position"]) == 0
+    assert _build([TIR61, "-o", paths["61"], "--vertical", "load"]) == 0
+    assert _build([TIR62, "-o", paths["62r"], "--side", "right", "--vertical", "position"]) == 0
     return paths
 
 
 class Slave:
     """An FMU instance driven call by call (fmpy FMU2Slave), with its log messages collected."""
 
-    def __init__(self, path, tmp_path, start=None):
+    def __init__(self, path, tmp_path, start=None, initialise=True):
         from fmpy import extract, read_model_description
         from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
                                fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
@@ -70,7 +70,8 @@ class Slave:
         self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.unzipped,
                              modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName="tyre")
         self.fmu.instantiate(callbacks=callbacks, loggingOn=True)
-        self.initialise(start)
+        if initialise:
+            self.initialise(start)
 
     def initialise(self, start=None):
         self.fmu.setupExperiment(startTime=0.0)
@@ -265,15 +266,30 @@ def test_errors_reported_through_status_and_log(fmus, tmp_path):
     assert fmu.status() == 0
     fmu.close()
 
+    # a failed initialisation is reported as a failure, never as OK (pythonfmu maps the exception to fmi2Fatal,
+    # its only failure status for fmi2ExitInitializationMode), with the cause in the log
     for params, text in (({"side": "up"}, "side must be"), ({"model": "rigid"}, "model must be"),
                          ({"tir_file": str(tmp_path / "none.tir")}, "no such file"),
                          ({"evaluator": "fast"}, "evaluator must be")):
-        fmu = Slave(fmus["61"], tmp_path, start=params)  # initialisation completes; the error is logged
-        assert fmu.status() == 2
+        fmu = Slave(fmus["61"], tmp_path, initialise=False)
+        with pytest.raises(FMICallException) as exc:
+            fmu.initialise(params)
+        assert exc.value.status >= 3 and "fmi2ExitInitializationMode" in str(exc.value)
         assert any(status == 3 and text in msg for status, msg in fmu.messages), fmu.messages
+
+
+def test_step_sizes_checked_and_state_restored(fmus, tmp_path):
+    """Zero, negative or NaN step sizes are discarded with a message; the FMU state is the whole state."""
+    from fmpy.fmi1 import FMICallException
+
+    fmu = Slave(fmus["62r"], tmp_path, start={"vertical_input": "position"})
+    fmu.fmu.doStep(0.0, 1e-3)
+    held = fmu.get(*OUT)
+    for h in (0.0, -1e-3, float("nan")):
         with pytest.raises(FMICallException, match="discard"):
-            fmu.fmu.doStep(0.0, 0.01)
-        fmu.close()
+            fmu.fmu.doStep(1e-3, h)
+        assert fmu.get(*OUT) == held and "step size" in fmu.messages[-1][1]
+    fmu.close()
 
 
 def test_other_tir_and_evaluators(fmus, tmp_path):

@@ -1,9 +1,9 @@
 """Build the tyre FMU (FMI 2.0 co-simulation, pythonfmu) from a .tir file.
 
-    python fmu/build.py FILE.tir -o tyre.fmu [--model steady|swift] [--side left|right]
+    python -m mftyre.fmu.build FILE.tir -o tyre.fmu [--model steady|swift] [--side left|right]
     mftyre fmu build FILE.tir -o tyre.fmu ...                   (the same, through the mftyre command line)
 
-    from build import build_fmu                                 (with fmu/ on sys.path)
+    from mftyre.fmu.build import build_fmu
     build_fmu("tir_files/car_205_60R15_mf61.tir", "tyre.fmu", side="left")
 
 What goes into the FMU (``resources/``): the slave ``MFTyre.py`` and ``mftyre_fmu_core.py``; ``tyre.tir`` (the
@@ -12,7 +12,7 @@ CasADi) and, when a C compiler is available at build time, the same functions co
 platform (``.so``; with ``--model swift`` also the compiled SWIFT step, ``functions/swift``); ``config.json`` (the
 build options, the start values, the function index); ``vendor/`` (copies of the packages mftyre and swift, used
 only when the host's Python has none). ``documentation/`` holds
-fmu/README.md. A built FMU is a build output: never commit it.
+README.md here. A built FMU is a build output: never commit it.
 """
 from __future__ import annotations
 
@@ -34,7 +34,7 @@ VERTICAL_INPUTS = ("load", "position")
 __all__ = ["build_fmu", "main", "swift_available"]
 
 
-class FMUBuildError(Exception):
+class FMUBuildError(ValueError):
     """The FMU cannot be built as asked (the message says why and what to do)."""
 
 
@@ -120,7 +120,7 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
                 warnings.warn(f"not shipping a compiled SWIFT step: {exc}", stacklevel=2)
         vendor = stage / "vendor" / "mftyre"
         shutil.copytree(Path(mftyre.__file__).parent, vendor,
-                        ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.so"))
+                        ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.so", "fmu"))
         try:
             import swift
         except ImportError:

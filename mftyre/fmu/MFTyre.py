@@ -1,6 +1,6 @@
 """FMI 2.0 co-simulation slave of the mftyre Magic Formula tyre (pythonfmu).
 
-Built by ``mftyre fmu build FILE.tir -o tyre.fmu`` (see fmu/build.py and fmu/README.md); not meant to be run
+Built by ``mftyre fmu build FILE.tir -o tyre.fmu --backend pythonfmu`` (see build.py and README.md here); not meant to be run
 directly. The FMU's resources hold this script, ``mftyre_fmu_core.py`` (the computation), ``config.json`` (what
 was built), ``tyre.tir`` (the embedded property file), ``functions/`` (the model as serialised CasADi functions
 and, for the build platform, compiled C libraries) and ``vendor/mftyre`` (a copy of the mftyre package used
@@ -14,11 +14,14 @@ FMI behaviour
   the state of the rigid-ring tyre (``mftyre_fmu_core.SwiftCore`` around ``swift.SwiftTyre``): it starts in
   static equilibrium at the initial inputs and is advanced over each communication step (any step size; split
   into internal steps of at most ``max_step``).
-* No Python exception ever leaves this class (pythonfmu would turn it into fmi2Fatal). Problems are logged with
-  status fmi2Error (category logStatusError) and reported through the FMI status: an unusable configuration (bad
-  parameter, unreadable .tir, bad road) or a non-finite input makes fmi2DoStep return fmi2Discard and leaves the
-  outputs (and the swift state) at their last valid values; the ``status`` output says why (0 ok, 1 input or
-  step rejected, 2 configuration error).
+* A failed initialisation (bad parameter, unreadable .tir, bad road) is logged with status fmi2Error (category
+  logStatusError) and raised, so fmi2ExitInitializationMode fails (pythonfmu answers fmi2Fatal for an exception,
+  its only failure status there) instead of claiming OK. During stepping no exception leaves this class: a
+  non-finite input, p <= 0 or a step size that is not positive and finite makes fmi2DoStep return fmi2Discard and
+  leaves the outputs (and the swift state) at their last valid values; the ``status`` output says why (0 ok, 1
+  input or step rejected).
+* fmi2GetFMUstate/fmi2SetFMUstate/serialise hold the whole state: the variables, x_road and the SWIFT ring state
+  with its road frames (``_get_fmu_state``).
 * fmi2Reset returns the instance to the state after instantiation (pythonfmu re-creates the object).
 """
 import json
@@ -124,7 +127,9 @@ class MFTyre(Fmi2Slave):
     # ------------------------------------------------------------------------------------------ model description
     def to_xml(self, model_options=dict()):
         """pythonfmu's description plus units and the InitialUnknowns that FMI 2.0 requires for the outputs."""
-        root = super().to_xml(model_options)
+        options = dict(model_options)
+        options.update(canGetAndSetFMUstate=True, canSerializeFMUstate=True)  # the whole state: _get_fmu_state
+        root = super().to_xml(options)
         units = dict(self._output_units)
         units.update({k: v[0] for k, v in _INPUTS.items()})
         units.update({k: v[0] for k, v in _REAL_PARAMETERS.items()})
@@ -171,8 +176,9 @@ class MFTyre(Fmi2Slave):
                 self._compute()
             for w in caught:
                 self.log(f"{w.category.__name__}: {w.message}", Fmi2Status.warning)
-        except Exception as exc:  # never let an exception reach pythonfmu (fmi2Fatal)
+        except Exception as exc:  # logged with its cause; pythonfmu turns the exception into fmi2Error
             self._fail(f"initialisation failed: {exc}\n{traceback.format_exc(limit=3)}")
+            raise RuntimeError(f"initialisation failed: {exc}") from None
 
     def _fail(self, message):
         self._problem = message
@@ -245,11 +251,40 @@ class MFTyre(Fmi2Slave):
                     sys.path.append(vendor)
                 __import__(name)
 
+    # ---------------------------------------------------------------------------------------------- FMU state
+    def _get_fmu_state(self):
+        """The whole state: the FMI variables, and the tyre's internal state (SWIFT ring, road frames, x_road)."""
+        state = {"variables": super()._get_fmu_state(), "x_road": self._x_road, "problem": self._problem}
+        core = self._core
+        if core is not None and getattr(core, "state", None) is not None:
+            state["swift"] = {"state": [float(v) for v in core.state], "x_offset": core.x_offset,
+                              "road_z": core.road_z}
+        return state
+
+    def _set_fmu_state(self, state):
+        if not isinstance(state, dict) or "variables" not in state:
+            raise ValueError("not a state of this FMU")
+        if "swift" in state and (self._core is None or not hasattr(self._core, "x_offset")):
+            raise ValueError("a SWIFT state cannot be restored into an instance that is not initialised as SWIFT")
+        super()._set_fmu_state(state["variables"])
+        self._x_road, self._problem = state["x_road"], state["problem"]
+        if "swift" in state:
+            import numpy as np
+
+            sw = state["swift"]
+            self._core.state = np.array(sw["state"], dtype=float)
+            self._core.x_offset, self._core.road_z = sw["x_offset"], sw["road_z"]
+
     # ------------------------------------------------------------------------------------------------- stepping
     def do_step(self, current_time, step_size):
         try:
             if self._problem is not None or self._core is None:
                 self._error("the tyre is not usable: " + (self._problem or "initialisation did not complete"))
+                return False
+            if not (math.isfinite(step_size) and step_size > 0):
+                self._error(f"step at t={current_time}: step size {step_size!r} rejected (must be positive and "
+                            "finite); outputs and state keep their last valid values")
+                self.status = 1
                 return False
             return self._compute(step_size)
         except Exception as exc:

@@ -1,4 +1,8 @@
-"""The computation behind the tyre FMU, free of any FMI machinery (so it can be tested and timed directly).
+"""The computation behind the pythonfmu tyre FMU (``--backend pythonfmu``), free of any FMI machinery.
+
+The native FMU (the default) does not use this module: its models are :mod:`mftyre.transient` (steady,
+transient) and :mod:`swift.fmu_model` (SWIFT), Python classes and CasADi functions beside the equations. The
+classes here (rig mode, SWIFT load/torque modes, evaluator choices) remain for the pythonfmu slave only.
 
     core = SteadyTyre(model, evaluator="auto", functions_dir=None)
     out = core.step_vehicle(vx, vy, omega, gamma, p, fz=4000.0)            # load given
@@ -332,86 +336,20 @@ SWIFT_WINDOW = 1024
 #: Largest wheel travel [m] within one internal SWIFT step (the cam-height window is fixed over a step).
 SWIFT_MAX_TRAVEL = 0.2
 
-_ROAD_ARGS = {  # name in the road parameter -> (swift.road class name, argument names)
-    "step": ("Step", ("x0", "height")),
-    "cleat": ("Cleat", ("x0", "length", "height")),
-    "trapezoid": ("Trapezoid", ("x0", "top_length", "height", "ramp")),
-    "bump": ("CircularBump", ("x0", "length", "height")),
-    "sine": ("Sine", ("amplitude", "wavelength", "x0", "x_end")),
-    "csv": ("Sampled.from_csv", ("path", "x_column", "z_column", "delimiter")),
-    "points": ("Sampled", ("xz",)),
-}
 
+def parse_road(spec, base_dir=None):
+    """The road of the ``road`` parameter (:func:`swift.road.parse_road`: a sum of obstacles like
+    ``cleat(x0=2, length=0.05, height=0.01)``, ``csv("profile.csv")`` relative to ``base_dir``,
+    ``points([[x, z], ...])``); None for a flat road. Errors become :class:`TyreFMUError`."""
+    from mftyre.errors import MFTyreError
+    from swift.road import Flat
+    from swift.road import parse_road as parse
 
-def parse_road(spec: str, base_dir=None):
-    """The road profile of the ``road`` parameter as a :class:`swift.road.Road`, or None for a flat road.
-
-    Grammar: an empty string (flat road), or a sum (``+``) of obstacles written like Python calls with numbers,
-    positional or by keyword (metres)::
-
-        cleat(x0=2.0, length=0.05, height=0.01)       step(x0, height)       trapezoid(x0, top_length, height, ramp)
-        bump(x0, length, height)                       sine(amplitude, wavelength, x0, x_end)   (x_end required)
-        points([[x, z], [x, z], ...])                  csv("profile.csv")    (columns x, z; relative to base_dir)
-
-    Outside the obstacles the profile is 0; the ``road_z`` input is added to it. Nothing is evaluated as Python.
-    """
-    import ast
-
-    import swift.road as sroad
-
-    spec = (spec or "").strip()
-    if spec in ("", "flat", "flat()"):
-        return None
     try:
-        tree = ast.parse(spec, mode="eval").body
-    except SyntaxError as exc:
-        raise TyreFMUError(f"road {spec!r}: not a sum of obstacles like cleat(x0=2, length=0.05, height=0.01) "
-                           f"({exc.msg})") from None
-
-    def number(node, what):
-        try:
-            value = ast.literal_eval(node)
-        except ValueError:
-            raise TyreFMUError(f"road {spec!r}: {what} must be a literal") from None
-        return value
-
-    def term(node):
-        if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Add):
-            return term(node.left) + term(node.right)
-        if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in _ROAD_ARGS):
-            raise TyreFMUError(f"road {spec!r}: each term must be one of {', '.join(n + '(...)' for n in _ROAD_ARGS)}")
-        name = node.func.id
-        cls, names = _ROAD_ARGS[name]
-        if len(node.args) > len(names):
-            raise TyreFMUError(f"road {spec!r}: {name} takes at most {len(names)} arguments ({', '.join(names)})")
-        kwargs = {n: number(a, f"{name} argument {n}") for n, a in zip(names, node.args)}
-        for kw in node.keywords:
-            if kw.arg not in names:
-                raise TyreFMUError(f"road {spec!r}: {name} has no argument {kw.arg!r} (arguments: {', '.join(names)})")
-            kwargs[kw.arg] = number(kw.value, f"{name} argument {kw.arg}")
-        if name == "sine" and "x_end" not in kwargs:
-            raise TyreFMUError(f"road {spec!r}: sine needs x_end (the road must be constant beyond its obstacles)")
-        if name == "csv":
-            path = Path(str(kwargs.pop("path", "")))
-            if base_dir is not None and not path.is_absolute():
-                path = Path(base_dir) / path
-            return sroad.Sampled.from_csv(path, **{k: str(v) for k, v in kwargs.items()})
-        if name == "points":
-            xz = kwargs.get("xz")
-            try:
-                arr = [(float(a), float(b)) for a, b in xz]
-            except (TypeError, ValueError):
-                raise TyreFMUError(f"road {spec!r}: points needs a list of [x, z] pairs") from None
-            return sroad.Sampled([a for a, _ in arr], [b for _, b in arr])
-        missing = [n for n in names if n not in kwargs and not (name == "sine" and n == "x0")]
-        if missing:
-            raise TyreFMUError(f"road {spec!r}: {name} needs {', '.join(missing)}")
-        try:
-            return getattr(sroad, cls)(**{k: float(v) for k, v in kwargs.items()})
-        except (TypeError, ValueError) as exc:
-            raise TyreFMUError(f"road {spec!r}: {name}: {exc}") from None
-
-    return term(tree)
+        road = parse(spec, base_dir)
+    except MFTyreError as exc:
+        raise TyreFMUError(str(exc)) from None
+    return None if isinstance(road, Flat) and road.z == 0 else road
 
 
 def _platform() -> str:
@@ -472,7 +410,7 @@ class SwiftCore:
         out = core.initialise(inputs)        # static equilibrium; inputs: dict of the FMU inputs
         out = core.advance(inputs, h)        # one communication step of length h (any h >= 0)
 
-    Mapping (see fmu/README.md): ``vertical`` "position" -> axle height imposed (``z - road_z``, moving with
+    Mapping (see README.md here): ``vertical`` "position" -> axle height imposed (``z - road_z``, moving with
     ``vz`` inside the step), "load" -> ``Fz_in`` pushes the axle (mass ``axle_mass``) down; ``rim`` "speed" ->
     spin ``omega`` imposed, "torque" -> drive torque ``torque`` on the rim. The road is the profile ``road``
     (:func:`parse_road`) plus the input ``road_z``. The communication step is split into
@@ -512,6 +450,8 @@ class SwiftCore:
         bps = self.road.breakpoints if self.road is not None else ()
         reach = cams.ae + 2 * dx  # beyond, the cam height is constant (the road is)
         lo, hi = (min(bps) - reach, max(bps) + reach) if bps else (float(x_start), float(x_start))
+        # the table reaches back to the start: the wheel is never moved towards the obstacles at initialisation
+        lo, hi = min(lo, float(x_start)), max(hi, float(x_start))
         # wheel positions where the whole step window lies on the constant part: the wheel is moved back to them
         self._x_lo, self._x_hi = lo - span, hi + span
         x_range = (math.floor(self._x_lo / dx) * dx, math.ceil(self._x_hi / dx) * dx)  # nodes on multiples of dx

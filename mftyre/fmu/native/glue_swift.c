@@ -1,0 +1,140 @@
+/* SWIFT tyre (swift.fmu_model): the rigid ring stepped over the road table built into tyre_config.h, with the
+ * functions CasADi generated in tyre_model.c (swift_init, swift_substep, swift_out). Mirrors
+ * swift.fmu_model.SwiftWheel line by line: window placement, imposed axle height and spin, step splitting. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "tyre_config.h"
+#include "tyre_glue.h"
+#include "tyre_model.h"
+
+#define NFUN 3
+typedef int (*WorkFn)(casadi_int *, casadi_int *, casadi_int *, casadi_int *);
+
+struct GlueWork {
+    const double **arg;
+    double **res;
+    casadi_int *iw;
+    double *w;
+};
+
+GlueWork *glue_alloc(void) {
+    WorkFn work[NFUN] = {swift_init_work, swift_substep_work, swift_out_work};
+    casadi_int narg = 8, nres = 4, niw = 1, nw = 1;
+    GlueWork *g = (GlueWork *)calloc(1, sizeof(GlueWork));
+    if (!g) return NULL;
+    for (int i = 0; i < NFUN; i++) {
+        casadi_int a, r, iw, w;
+        work[i](&a, &r, &iw, &w);
+        if (a > narg) narg = a;
+        if (r > nres) nres = r;
+        if (iw > niw) niw = iw;
+        if (w > nw) nw = w;
+    }
+    g->arg = (const double **)calloc((size_t)narg, sizeof(double *));
+    g->res = (double **)calloc((size_t)nres, sizeof(double *));
+    g->iw = (casadi_int *)calloc((size_t)niw, sizeof(casadi_int));
+    g->w = (double *)calloc((size_t)nw, sizeof(double));
+    if (!g->arg || !g->res || !g->iw || !g->w) {
+        glue_free(g);
+        return NULL;
+    }
+    return g;
+}
+
+void glue_free(GlueWork *g) {
+    if (!g) return;
+    free(g->arg);
+    free(g->res);
+    free(g->iw);
+    free(g->w);
+    free(g);
+}
+
+/* first sample of the window around xb, clamped to the table (its ends are constant road) */
+static long window_start(double xb) {
+    double i0 = floor((xb - ROAD_X0) / ROAD_DX) - ROAD_WINDOW / 2;
+    if (!(i0 > 0)) return 0;
+    if (i0 > ROAD_N - ROAD_WINDOW) return ROAD_N - ROAD_WINDOW;
+    return (long)i0;
+}
+
+int glue_validate(const double *q, const double *u, char *msg, size_t n) {
+    if (!(u[TYRE_U_P] > 0.0)) {
+        snprintf(msg, n, "input p (inflation pressure) must be positive, got %g Pa", u[TYRE_U_P]);
+        return 1;
+    }
+    if (!(q[TYRE_Q_MAX_STEP] > 0.0)) {
+        snprintf(msg, n, "parameter max_step must be positive, got %g s", q[TYRE_Q_MAX_STEP]);
+        return 1;
+    }
+    return 0;
+}
+
+int glue_init(GlueWork *g, const double *u, const double *q, double *x, char *msg, size_t n) {
+    long i0 = window_start(q[TYRE_Q_X_START]);
+    double x0w = ROAD_X0 + i0 * ROAD_DX;
+    g->arg[0] = u;
+    g->arg[1] = q;
+    g->arg[2] = &x0w;
+    g->arg[3] = ROAD_GRID;
+    g->arg[4] = ROAD_H + i0;
+    g->res[0] = x;
+    if (swift_init(g->arg, g->res, g->iw, g->w, 0)) {
+        snprintf(msg, n, "the static equilibrium could not be evaluated");
+        return 1;
+    }
+    for (int i = 0; i < TYRE_NX; i++)
+        if (!isfinite(x[i])) {
+            snprintf(msg, n, "no static equilibrium found at the initial inputs (z = %g m, x_start = %g m)",
+                     u[TYRE_U_Z], q[TYRE_Q_X_START]);
+            return 1;
+        }
+    return 0;
+}
+
+int glue_step(GlueWork *g, double *x, const double *u, const double *q, double h) {
+    double x_next[TYRE_NX];
+    double n1 = ceil(h / q[TYRE_Q_MAX_STEP] - 1e-9), n2 = ceil(fabs(u[TYRE_U_VX]) * h / SWIFT_MAX_TRAVEL);
+    double nd = n1 > n2 ? n1 : n2;
+    long n;
+    if (!(nd < 1e7)) return 1; /* a step that would need more than 1e7 internal steps is refused */
+    n = nd < 1 ? 1 : (long)nd;
+    x[S_ZA] = u[TYRE_U_Z];
+    x[S_VZA] = u[TYRE_U_VZ];
+    x[S_OMA] = u[TYRE_U_OMEGA];
+    for (long k = 0; k < n; k++) {
+        double dt = h / (double)n;
+        long i0 = window_start(x[S_XB]);
+        double x0w = ROAD_X0 + i0 * ROAD_DX;
+        g->arg[0] = x;
+        g->arg[1] = u;
+        g->arg[2] = &dt;
+        g->arg[3] = &x0w;
+        g->arg[4] = ROAD_GRID;
+        g->arg[5] = ROAD_H + i0;
+        g->res[0] = x_next;
+        if (swift_substep(g->arg, g->res, g->iw, g->w, 0)) return 1;
+        for (int i = 0; i < TYRE_NX; i++) x[i] = x_next[i];
+    }
+    return 0;
+}
+
+int glue_out(GlueWork *g, const double *x, const double *u, const double *q, double *y) {
+    long i0 = window_start(x[S_XB]);
+    double x0w = ROAD_X0 + i0 * ROAD_DX;
+    (void)q;
+    g->arg[0] = x;
+    g->arg[1] = u;
+    g->arg[2] = &x0w;
+    g->arg[3] = ROAD_GRID;
+    g->arg[4] = ROAD_H + i0;
+    g->res[0] = y;
+    return swift_out(g->arg, g->res, g->iw, g->w, 0);
+}
+
+int glue_dout(GlueWork *g, const double *x, const double *u, const double *q, const double *du, double *dy) {
+    (void)g, (void)x, (void)u, (void)q, (void)du, (void)dy;
+    return 1; /* not provided (providesDirectionalDerivative = false) */
+}

@@ -1,0 +1,296 @@
+"""The tyre on a wheel, as a vehicle simulator drives it: steady Magic Formula, or the Magic Formula behind
+first-order relaxation of the contact-point deflections (transient). One set of state equations, as CasADi
+functions, evaluated here in Python and generated as C for the native FMU (:mod:`fmu.native`).
+
+    import mftyre
+    from mftyre.transient import WheelTyre
+    tyre = WheelTyre(mftyre.load_tir("tir_files/car_205_60R15_mf61.tir"), "transient")
+    tyre.set_inputs(vx=20.0, omega=20.0 / 0.3, z=0.29)
+    tyre.initialise()
+    for _ in range(1000):
+        tyre.step(1e-3)
+    tyre.outputs()["Fx"]
+
+Axes and units: ISO-W (TYDEX W), SI. x is the wheel heading projected on the road, y to the left, z up; the MF
+quantities act at the contact point C. ``vx``, ``vy``: wheel-centre velocity in these axes (road at rest).
+
+Kinematics (both models)
+  Re = the MF effective rolling radius at kappa = alpha = 0; slip speeds of the contact point
+  Vsx = vx - omega Re, Vsy = vy.
+Steady
+  kappa = -Vsx / max(|vx|, VX_MIN), alpha = atan2(Vsy, |vx|) and the MF with its own low-speed fade-out below
+  VXLOW (no force at standstill). The MF's slip is signed with the travel direction (kappa_MF = -Vsx / Vx:
+  Fx(-Vx, -kappa) = Fx(Vx, kappa)), so reversing the MF gets -kappa (both models; output ``kappa`` as given to
+  the MF).
+Transient [Pacejka 2012 sec. 7.2 and 8.5 (contact-point deflections u, v with relaxation lengths
+sigma_kappa, sigma_alpha); relaxation lengths the MF's ``sigmax``/``sigmay`` (PTX*, PTY*) at the current load]
+  du/dt = -Vsx - |vx| u / sigma_kappa                (7.9 with the contact deflection u)
+  dv/dt =  Vsy - |vx| v / sigma_alpha                (mftyre's alpha sign: tan(alpha) = Vsy / |vx|)
+  kappa' = (u + tau du/dt) / sigma_kappa,  alpha' = atan((v + tau dv/dt) / sigma_alpha)
+  F = MF(kappa', alpha', ...) evaluated at the speed max(|vx|, VXLOW) (the slip fade-out of the steady MF is
+  replaced by the deflections: at standstill du/dt = -Vsx, the tyre is a spring C = C_kappa / sigma_kappa).
+  tau = tau_vlow (1 + cos(pi |vx| / VXLOW)) / 2 below VXLOW, 0 above [chosen]: low-speed damping of the
+  deflections (a damper tau C in parallel with the tyre spring), so a parked car on a slope comes to rest
+  on the tyre spring without oscillating and without creep (at vx = 0 the deflections only integrate the slip
+  speed). Default tau_vlow = 2 sqrt(m / C) with m = FNOMIN / g and C = C_kappa / sigma_kappa at FNOMIN: about
+  critical damping for a quarter car at the nominal load [chosen].
+  Integration: held inputs over a step make the deflection equations linear with constant coefficients; they
+  are integrated exactly (exponential), so any step size is stable and a steady state is step-size independent.
+  Initial state: the steady-state deflections u = -Vsx sigma / max(|vx|, VXLOW), v = Vsy sigma / max(|vx|, VXLOW).
+Vertical
+  ``position``: Fz = max(0, MF vertical force at the loaded radius Rl = (z - road_z) / cos(gamma - road_camber))
+  while Rl < R_omega (else lifted off, Fz = 0); Fx/Fy influence on the vertical stiffness (Q_FCX, Q_FCY) is
+  not included (a warning says so when the .tir has it). ``load``: the input ``Fz_in`` (negative = 0).
+Wheel-centre loads: M_W = M_C + (C - W) x F with C -> W = Rl (0, -sin g, cos g):
+  Mx_W = Mx + Rl (Fy cos g + Fz sin g),  My_W = My - Rl Fx cos g,  Mz_W = Mz - Rl Fx sin g.
+Turn slip (option ``turn_slip``): input ``yaw_rate``, phit = -yaw_rate / max(Vc, VXLOW) (Pacejka (4.75)), the
+MF with its turn-slip equations; the turn slip acts without lag also in the transient model [chosen].
+Road camber: the MF gets the inclination relative to the road, gamma - road_camber. Friction: ``mu_scale``
+multiplies LMUX and LMUY of the .tir.
+"""
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import ModelInputError
+
+__all__ = ["WheelFunctions", "wheel_functions", "WheelTyre", "KINDS", "VERTICAL_MODES", "VX_MIN",
+           "input_table", "OUTPUTS", "PARAMETERS", "default_tau_vlow"]
+
+KINDS = ("steady", "transient")
+VERTICAL_MODES = ("position", "load")
+#: Below this |vx| [m/s] the steady kinematic slip uses VX_MIN in the denominator (finite at standstill).
+VX_MIN = 1e-3
+#: Floor of the relaxation lengths [m] (they vanish with the load).
+SIGMA_MIN = 1e-4
+
+#: Outputs: name -> (unit, description). Forces/moments at the wheel centre, ISO-W axes.
+OUTPUTS = {
+    "Fx": ("N", "longitudinal force on the tyre at the wheel centre, ISO-W x (wheel heading on the road)"),
+    "Fy": ("N", "lateral force on the tyre at the wheel centre, ISO-W y (to the left)"),
+    "Fz": ("N", "vertical force on the tyre at the wheel centre, ISO-W z (up), >= 0"),
+    "Mx": ("N.m", "moment about ISO-W x at the wheel centre"),
+    "My": ("N.m", "moment about ISO-W y at the wheel centre (-Rl Fx + rolling resistance)"),
+    "Mz": ("N.m", "moment about ISO-W z at the wheel centre"),
+    "Mx_c": ("N.m", "overturning moment at the contact point (MF)"),
+    "My_c": ("N.m", "rolling-resistance moment at the contact point (MF)"),
+    "Mz_c": ("N.m", "self-aligning moment at the contact point (MF)"),
+    "kappa": ("1", "longitudinal slip given to the MF (transient: kappa')"),
+    "alpha": ("rad", "slip angle given to the MF (transient: alpha')"),
+    "Rl": ("m", "loaded radius (wheel centre to contact point, in the wheel plane)"),
+    "Re": ("m", "effective rolling radius"),
+    "rho": ("m", "vertical tyre deflection"),
+    "contact_length": ("m", "contact patch length 2a"),
+    "trail": ("m", "pneumatic trail"),
+    "mux": ("1", "longitudinal friction coefficient"),
+    "muy": ("1", "lateral friction coefficient"),
+    "u_x": ("m", "longitudinal contact-point deflection (transient; 0 for steady)"),
+    "u_y": ("m", "lateral contact-point deflection (transient; 0 for steady)"),
+}
+
+
+#: Parameters: name -> (unit, description).
+PARAMETERS = {"tau_vlow": ("s", "transient: low-speed damping time constant of the contact deflections (module notes)")}
+
+
+def input_table(vertical: str, turn_slip: bool = False) -> dict:
+    """Inputs: name -> (unit, start, description), in the order of the input vector."""
+    common = {
+        "vx": ("m/s", 10.0, "wheel-centre velocity along ISO-W x (wheel heading projected on the road)"),
+        "vy": ("m/s", 0.0, "wheel-centre velocity along ISO-W y (to the left)"),
+        "omega": ("rad/s", 10.0 / 0.3, "wheel spin speed about the axle (positive rolling forwards)"),
+        "gamma": ("rad", 0.0, "inclination (camber) of the wheel plane about ISO-W x"),
+        "road_camber": ("rad", 0.0, "road camber (banking) about ISO-W x; the MF gets gamma - road_camber"),
+        "p": ("Pa", float("nan"), "inflation pressure (start: the .tir INFLPRES)"),
+        "mu_scale": ("1", 1.0, "friction scaling: multiplies LMUX and LMUY of the .tir"),
+    }
+    if vertical == "position":
+        common.update({"z": ("m", 0.3, "wheel-centre height, ISO-W z (same datum as road_z)"),
+                       "road_z": ("m", 0.0, "road height under the wheel, ISO-W z")})
+    else:
+        common["Fz_in"] = ("N", 4000.0, "vertical load on the tyre (negative = no contact)")
+    if turn_slip:
+        common["yaw_rate"] = ("rad/s", 0.0, "yaw velocity of the wheel about ISO-W z (vehicle yaw rate + steer rate); "
+                                            "turn slip phit = -yaw_rate / max(Vc, VXLOW)")
+    return common
+
+
+def default_tau_vlow(model) -> float:
+    """2 sqrt(m / C), m = FNOMIN / g, C = C_kappa / sigma_kappa at FNOMIN (module notes)."""
+    prm = model.params
+    o = model.evaluate(prm.FNOMIN, 0.0, 0.0, 0.0, 0.0, max(prm.VXLOW, 1.0))
+    c = float(o.kxk) / max(float(o.sigmax), SIGMA_MIN)
+    return 2.0 * math.sqrt(prm.FNOMIN / 9.81 / c)
+
+
+@dataclass(frozen=True)
+class WheelFunctions:
+    """The state equations as CasADi functions (x: state, u: inputs, q: parameters, all column vectors):
+    ``init(u, q) -> x``, ``step(x, u, q, h) -> x_next`` (inputs held over h), ``out(x, u, q) -> y``."""
+
+    kind: str
+    vertical: str
+    init: object
+    step: object
+    out: object
+    state_names: tuple
+    input_names: tuple
+    parameter_names: tuple
+    output_names: tuple
+    parameter_starts: tuple
+    input_starts: tuple
+
+
+def wheel_functions(model, kind: str = "steady", vertical: str = "position",
+                    tau_vlow: float | None = None, turn_slip: bool = False) -> WheelFunctions:
+    """CasADi functions of the ``kind`` ("steady" or "transient") tyre with the ``vertical`` input mode;
+    ``turn_slip``: the MF with turn slip (input ``yaw_rate``, module notes)."""
+    import casadi as ca
+
+    from .backend import casadi_backend
+    from .formula import vertical as vert
+
+    if kind not in KINDS:
+        raise ModelInputError(f"model must be one of {', '.join(KINDS)}; got {kind!r}")
+    if vertical not in VERTICAL_MODES:
+        raise ModelInputError(f"vertical input must be one of {', '.join(VERTICAL_MODES)}; got {vertical!r}")
+    prm = model.params
+    be = casadi_backend()
+    if vertical == "position" and (prm["Q_FCX"] != 0 or prm["Q_FCY"] != 0):
+        warnings.warn("Q_FCX/Q_FCY (Fx/Fy influence on the vertical stiffness) are not included in the wheel "
+                      "model's vertical force", stacklevel=2)
+    table = input_table(vertical, turn_slip)
+    starts = [prm.INFLPRES if n == "p" else s for n, (_, s, _) in table.items()]
+    u = ca.SX.sym("u", len(table))
+    U = {n: u[i] for i, n in enumerate(table)}
+    q_names = ("tau_vlow",) if kind == "transient" else ()
+    q_starts = ((default_tau_vlow(model) if tau_vlow is None else float(tau_vlow)),) if kind == "transient" else ()
+    q = ca.SX.sym("q", len(q_names))
+    nx = 2 if kind == "transient" else 0
+    x = ca.SX.sym("x", nx)
+    h = ca.SX.sym("h")
+
+    mf_in = ("fz", "kappa", "alpha", "gamma", "phit", "vx", "p", "omega")
+    mf_out = ("fx", "fy", "mx", "my", "mz", "re", "rho", "rl", "a", "t", "mux", "muy")
+    mf = model.casadi_function(inputs=mf_in, outputs=mf_out, parameters=("LMUX", "LMUY"), turn_slip=turn_slip,
+                               name="mf")
+    free = model.casadi_function(inputs=("fz", "gamma", "vx", "p", "omega"),
+                                 outputs=("re", "sigmax", "sigmay"), fixed=dict(kappa=0.0, alpha=0.0),
+                                 parameters=("LMUX", "LMUY"), name="free_rolling")
+    vx, vy, omega, p = U["vx"], U["vy"], U["omega"], U["p"]
+    gamma = U["gamma"] - U["road_camber"]
+    lmux, lmuy = prm.LMUX * U["mu_scale"], prm.LMUY * U["mu_scale"]
+
+    # vertical load
+    if vertical == "position":
+        rl_geo = (U["z"] - U["road_z"]) / be.cos(gamma)
+        ro, dpi = vert.free_radius(prm, omega, be), (p - prm.NOMPRES) / prm.NOMPRES
+        gm = -gamma if model.mirrored else gamma
+        if prm.version == "62":
+            fz_v = vert.vertical_force_62(prm, rl_geo, ro, omega, 0.0, 0.0, gm, dpi, be)
+        else:
+            fz_v = vert.vertical_force_61(prm, ro - rl_geo, ro, omega, 0.0, 0.0, dpi, be)
+        fz = be.where(rl_geo < ro, be.fmax(fz_v, 0.0), 0.0)
+    else:
+        fz = be.fmax(U["Fz_in"], 0.0)
+    re, sigx, sigy = free(fz, gamma, vx, p, omega, lmux, lmuy)
+    vsx, vsy = vx - omega * re, vy
+
+    if kind == "steady":
+        kappa = -vsx / be.fmax(be.abs(vx), VX_MIN)
+        alpha = ca.atan2(vsy, be.abs(vx))
+        vx_mf = vx
+        ux = uy = 0.0 * vx
+        x0 = ca.SX(0, 1)
+        x_next = ca.SX(0, 1)
+    else:
+        sigx, sigy = be.fmax(sigx, SIGMA_MIN), be.fmax(sigy, SIGMA_MIN)
+        ux, uy = x[0], x[1]
+        speed = be.abs(vx)
+        dux = -vsx - speed * ux / sigx                                       # (7.9), contact deflection u
+        duy = vsy - speed * uy / sigy
+        fade = be.where(speed < prm.VXLOW, 0.5 * (1.0 + be.cos(be.pi * speed / prm.VXLOW)), 0.0)
+        tau = q[0] * fade
+        kappa = (ux + tau * dux) / sigx
+        alpha = be.atan((uy + tau * duy) / sigy)
+        vx_mf = be.where(vx >= 0, be.fmax(vx, prm.VXLOW), be.fmin(vx, -prm.VXLOW))
+        # exact solution over h of du/dt = -lam u + f (lam, f held): u e^{-lam h} + f (1 - e^{-lam h}) / lam
+        def relax(dev, lam, forcing):
+            lh = lam * h
+            gain = be.where(lh > 1e-8, (1.0 - be.exp(-lh)) / be.fmax(lam, 1e-300), h * (1.0 - lh / 2))
+            return dev * be.exp(-lh) + forcing * gain
+        x_next = ca.vertcat(relax(ux, speed / sigx, -vsx), relax(uy, speed / sigy, vsy))
+        ref = be.fmax(speed, prm.VXLOW)
+        x0 = ca.vertcat(-vsx * sigx / ref, vsy * sigy / ref)
+
+    # the MF's longitudinal slip is -Vsx / Vx with the signed speed (Fx(-Vx, -kappa) = Fx(Vx, kappa)), the
+    # lateral one uses |Vx|: reversing, kappa changes sign so that a locked wheel still brakes the motion
+    kappa = be.where(vx_mf >= 0, kappa, -kappa)
+    # turn slip (4.75): psi_dot = -phit Vc', Vc' = max(Vc, VXLOW); not relaxed in the transient model [chosen]
+    phit = -U["yaw_rate"] / be.fmax(be.sqrt(vx**2 + vy**2), prm.VXLOW) if turn_slip else 0.0 * vx
+    fx, fy, mx, my, mz, _, rho, rl_mf, a, t, mux, muy = mf(fz, kappa, alpha, gamma, phit, vx_mf, p, omega, lmux,
+                                                           lmuy)
+    rl = rl_geo if vertical == "position" else rl_mf
+    cg, sg = be.cos(gamma), be.sin(gamma)
+    y = {"Fx": fx, "Fy": fy, "Fz": fz,
+         "Mx": mx + rl * (fy * cg + fz * sg), "My": my - rl * fx * cg, "Mz": mz - rl * fx * sg,
+         "Mx_c": mx, "My_c": my, "Mz_c": mz, "kappa": kappa, "alpha": alpha, "Rl": rl, "Re": re,
+         "rho": rho if vertical == "load" else be.where(fz > 0, vert.free_radius(prm, omega, be) - rl_geo, 0.0),
+         "contact_length": 2.0 * a, "trail": t, "mux": mux, "muy": muy, "u_x": ux, "u_y": uy}
+    y_vec = ca.vertcat(*(y[n] for n in OUTPUTS))
+    init = ca.Function("tyre_init", [u, q], [x0], ["u", "q"], ["x0"])
+    step = ca.Function("tyre_step", [x, u, q, h], [x_next], ["x", "u", "q", "h"], ["x_next"])
+    out = ca.Function("tyre_out", [x, u, q], [y_vec], ["x", "u", "q"], ["y"])
+    return WheelFunctions(kind, vertical, init, step, out, ("u_x", "u_y")[:nx], tuple(table), q_names,
+                          tuple(OUTPUTS), q_starts, tuple(starts))
+
+
+class StepError(ModelInputError):
+    """A step or input the tyre cannot take (non-finite input, step size not positive and finite)."""
+
+
+class WheelTyre:
+    """The steady or transient tyre in Python: the same CasADi functions the native FMU runs as C.
+
+    ``set_inputs(**values)``, ``initialise()``, ``step(h)``, ``outputs()`` (dict), ``state`` (array; get/set).
+    Inputs are held over a step; a rejected step (StepError) leaves state and outputs as they were."""
+
+    def __init__(self, model, kind: str = "steady", vertical: str = "position", tau_vlow: float | None = None,
+                 turn_slip: bool = False):
+        self.functions = f = wheel_functions(model, kind, vertical, tau_vlow, turn_slip)
+        self.u = np.array(f.input_starts, dtype=float)
+        self.q = np.array(f.parameter_starts, dtype=float)
+        self.state = np.zeros(len(f.state_names))
+
+    def set_inputs(self, **values):
+        names = self.functions.input_names
+        for k, v in values.items():
+            if k not in names:
+                raise ModelInputError(f"unknown input {k!r}; inputs are {', '.join(names)}")
+            if not math.isfinite(v):
+                raise StepError(f"input {k} must be finite, got {v!r}")
+            self.u[names.index(k)] = v
+
+    def set_parameters(self, **values):
+        names = self.functions.parameter_names
+        for k, v in values.items():
+            if k not in names:
+                raise ModelInputError(f"unknown parameter {k!r}; parameters are {', '.join(names) or 'none'}")
+            self.q[names.index(k)] = v
+
+    def initialise(self):
+        self.state = np.asarray(self.functions.init(self.u, self.q), dtype=float).ravel()
+
+    def step(self, h: float):
+        if not (math.isfinite(h) and h > 0):
+            raise StepError(f"step size must be positive and finite, got {h!r}")
+        if self.state.size:
+            self.state = np.asarray(self.functions.step(self.state, self.u, self.q, h), dtype=float).ravel()
+
+    def outputs(self) -> dict:
+        y = np.asarray(self.functions.out(self.state, self.u, self.q), dtype=float).ravel()
+        return dict(zip(self.functions.output_names, y))

@@ -1,0 +1,249 @@
+"""The SWIFT tyre on a wheel, driven the way a vehicle simulator drives it (and the native FMU runs it): the
+rigid ring of :mod:`swift.ring` stepped by :class:`swift.simulate.SwiftTyre`'s RK4 step over a road table.
+
+    import mftyre
+    from swift.fmu_model import SwiftWheel
+    wheel = SwiftWheel(mftyre.load_tir("tir_files/car_205_60R15_mf62_swift.tir"),
+                       "cleat(x0=3.0, length=0.05, height=0.01)")
+    wheel.set_inputs(vx=10.0, omega=10.0 / 0.305, z=0.29)
+    wheel.set_parameters(x_start=0.0)
+    wheel.initialise()
+    wheel.step(1e-3); wheel.outputs()["Fz"]
+
+Modes: axle height imposed (input ``z``, wheel-centre height above the road datum, moving with ``vz`` within a
+step), spin imposed (``omega``). The wheel starts at ``x_start`` on the road (x_road = x_start + integral of
+vx dt: obstacles are met where they are, whatever the start) in static equilibrium (the Newton iteration of
+:meth:`swift.simulate.SwiftTyre.initial_state`, 30 steps). A step of length h is split into
+n = max(ceil(h / max_step), ceil(|vx| h / MAX_TRAVEL)) equal RK4 steps (``SUBSTEPS``); before each the cam-height window
+(``WINDOW`` samples of the table, step ``TABLE_DX``) is placed around the belt, clamped to the table, whose
+ends are constant road (the table spans the obstacles plus the cam reach plus a window on each side), so any
+distance can be driven. The rim's lateral position is the frame origin (the belt's y is moved back by vy dt
+after each step). The same functions are generated as C for the native FMU; this class evaluates them with
+CasADi, so both give the same numbers.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mftyre.errors import ModelInputError
+
+from .enveloping import Cams
+from .ring import INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES
+from .road import parse_road
+
+__all__ = ["SwiftWheel", "swift_functions", "INPUTS", "OUTPUTS", "PARAMETERS", "TABLE_DX", "WINDOW"]
+
+TABLE_DX = 1e-3
+WINDOW = 1024
+#: Largest wheel travel [m] within one RK4 step (the cam-height window is fixed over a step).
+MAX_TRAVEL = 0.2
+NEWTON_STEPS = 30
+#: RK4 steps per internal step of max_step: one, so max_step is the RK4 step. The default max_step = 1 ms keeps
+#: Fz over a 10 mm cleat at 10 m/s within 1.7 % of its swing from a 0.25 ms solution; max_step = 0.5 ms gives
+#: swift.SwiftTyre's default accuracy (two RK4 steps per ms: 0.9 %) at twice the cost.
+SUBSTEPS = 1
+
+INPUTS = {  # name -> (unit, start, description)
+    "vx": ("m/s", 10.0, "wheel-centre velocity along ISO-W x (wheel heading projected on the road)"),
+    "vy": ("m/s", 0.0, "wheel-centre velocity along ISO-W y (to the left)"),
+    "omega": ("rad/s", 10.0 / 0.3, "rim spin speed (imposed; positive rolling forwards)"),
+    "gamma": ("rad", 0.0, "rim inclination (camber) about ISO-W x"),
+    "z": ("m", 0.29, "wheel-centre height above the road datum, ISO-W z (imposed)"),
+    "vz": ("m/s", 0.0, "wheel-centre vertical velocity (z moves with it within a step)"),
+    "p": ("Pa", float("nan"), "inflation pressure (start: the .tir INFLPRES)"),
+}
+PARAMETERS = {
+    "x_start": ("m", "wheel-centre position on the road profile at the start"),
+    "max_step": ("s", "longest internal RK4 step"),
+}
+OUTPUTS = {  # name -> (unit, description, ring output or state)
+    "Fx": ("N", "force on the rim along ISO-W x, at the wheel centre"),
+    "Fy": ("N", "force on the rim along ISO-W y, at the wheel centre"),
+    "Fz": ("N", "force on the rim along ISO-W z (up), at the wheel centre"),
+    "Mx": ("N.m", "moment on the rim about ISO-W x"),
+    "My": ("N.m", "moment on the rim about ISO-W y (about the axle)"),
+    "Mz": ("N.m", "moment on the rim about ISO-W z"),
+    "Fx_c": ("N", "longitudinal contact force in the effective road plane"),
+    "Fy_c": ("N", "lateral contact force"),
+    "Fz_c": ("N", "normal contact force (normal to the effective road plane)"),
+    "Mz_c": ("N.m", "self-aligning moment of the contact patch"),
+    "kappa": ("1", "transient longitudinal slip of the contact patch"),
+    "alpha": ("rad", "transient slip angle of the contact patch"),
+    "rho": ("m", "tyre deflection normal to the effective road"),
+    "Rl": ("m", "lever arm of the contact forces (belt centre to contact point)"),
+    "Re": ("m", "effective rolling radius"),
+    "contact_length": ("m", "contact patch length 2a"),
+    "road_w": ("m", "effective road height (tandem cams)"),
+    "road_slope": ("rad", "effective forward road slope beta_y (> 0 rising ahead)"),
+    "x_road": ("m", "wheel-centre position on the road: x_start + integral of vx dt"),
+}
+_RING = {"Fx": "fx", "Fy": "fy", "Fz": "fz", "Mx": "mx", "My": "my", "Mz": "mz", "Fx_c": "fx_c", "Fy_c": "fy_c",
+         "Fz_c": "fz_c", "Mz_c": "mz_c", "kappa": "kappa", "alpha": "alpha", "rho": "rho", "Rl": "rl", "Re": "re",
+         "road_w": "w", "road_slope": "beta"}
+_S = {n: i for i, n in enumerate(STATE_NAMES)}
+
+
+@dataclass(frozen=True)
+class SwiftFunctions:
+    """CasADi functions (window arguments ``x0w``, ``grid``, ``hw``: the table window, see module notes):
+    ``init(u, q, x0w, grid, hw) -> x``, ``step(x, u, dt, x0w, grid, hw) -> x_next`` (one RK4 step),
+    ``out(x, u, q) -> y`` is not windowed: ``outw(x, u, x0w, grid, hw) -> y``."""
+
+    init: object
+    step: object
+    out: object
+    table_x0: float
+    table_dx: float
+    table_h: np.ndarray
+    grid: np.ndarray
+    state_names: tuple
+    input_names: tuple
+    parameter_names: tuple
+    output_names: tuple
+    parameter_starts: tuple
+    input_starts: tuple
+    output_dependencies: list
+    config_extra: str
+
+    def window_start(self, xb: float) -> int:
+        """First table sample of the window around the belt at ``xb``, clamped to the table."""
+        i0 = math.floor((xb - self.table_x0) / self.table_dx) - WINDOW // 2
+        return min(max(i0, 0), self.table_h.size - WINDOW)
+
+
+def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions:
+    """The functions of the SWIFT wheel of ``model`` on ``road`` (a :class:`swift.road.Road`, an expression or a
+    CSV file, see :func:`swift.road.parse_road`); ``x_start``: default start position."""
+    import casadi as ca
+
+    from mftyre.backend import casadi_backend
+    from mftyre.formula import vertical as vert
+
+    from .simulate import SwiftTyre
+
+    road = parse_road(road)
+    prm = model.params
+    cams = Cams.from_params(prm)
+    dx = TABLE_DX
+    bps = tuple(road.breakpoints)
+    reach = cams.ae + 2 * dx
+    lo, hi = (min(bps) - reach, max(bps) + reach) if bps else (0.0, 1.0)
+    tyre = SwiftTyre(model, road, axle="height", rim="speed", x_range=(math.floor(lo / dx) * dx,
+                     math.ceil(hi / dx) * dx), table_dx=dx, window=WINDOW, substeps=SUBSTEPS, compiled=False)
+    c = tyre.constants
+    rhs, step1 = tyre.rhs_function, tyre.step_function
+    nx = len(STATE_NAMES)
+    x, u, q = ca.MX.sym("x", nx), ca.MX.sym("u", len(INPUTS)), ca.MX.sym("q", len(PARAMETERS))
+    x0w, grid, hw, dt = ca.MX.sym("x0w"), ca.MX.sym("grid", WINDOW), ca.MX.sym("hw", WINDOW), ca.MX.sym("dt")
+    U = {n: u[i] for i, n in enumerate(INPUTS)}
+    ring_u = {"vx": U["vx"], "load": 0, "torque": 0, "p": U["p"], "y": 0, "vy": U["vy"], "gamma": U["gamma"],
+              "psi": 0, "road_camber": 0}
+    uring = ca.vertcat(*(ring_u[n] for n in INPUT_NAMES))
+
+    # one RK4 step, then the rim's lateral position back to the frame origin
+    xn = step1(x, uring, dt, x0w, grid, hw)[0]
+    xn = ca.vertcat(xn[:_S["yb"]], xn[_S["yb"]] - U["vy"] * dt, xn[_S["yb"] + 1:])
+    step = ca.Function("swift_substep", [x, u, dt, x0w, grid, hw], [xn], ["x", "u", "dt", "x0w", "grid", "hw"],
+                       ["x_next"])
+    ring_out = dict(zip(OUTPUT_NAMES, ca.vertsplit(rhs(x, uring, x0w, grid, hw)[1])))
+    y = [2 * ring_out["a"] if n == "contact_length" else x[_S["xa"]] if n == "x_road" else ring_out[_RING[n]]
+         for n in OUTPUTS]
+    outw = ca.Function("swift_out", [x, u, x0w, grid, hw], [ca.vertcat(*y)], ["x", "u", "x0w", "grid", "hw"], ["y"])
+
+    # static equilibrium (as SwiftTyre.initial_state, axle height imposed): guess, then NEWTON_STEPS steps
+    be = casadi_backend()
+    lookup = ca.interpolant("cam", "linear", [WINDOW], 1, {"lookup_mode": ["exact"]})
+    xs = q[0]
+    h_c = lookup(xs - x0w, grid, hw)
+    ro0 = vert.free_radius(prm, 0.0, be)
+    dpi = (U["p"] - prm.NOMPRES) / prm.NOMPRES
+    rl0 = be.fmin(U["z"] - h_c, prm.UNLOADED_RADIUS)
+    fz0 = (vert.vertical_force_62(prm, rl0, ro0, 0.0, 0.0, 0.0, 0.0, dpi, be) if prm.version == "62"
+           else vert.vertical_force_61(prm, ro0 - rl0, ro0, 0.0, 0.0, 0.0, dpi, be))
+    guess = {n: 0 for n in STATE_NAMES}
+    guess.update(xa=xs, xb=xs, za=U["z"], vza=U["vz"], zb=U["z"] + be.fmax(fz0, 0.0) / c.cbx, vxb=U["vx"],
+                 vyb=U["vy"], oma=U["omega"], omb=U["omega"], gb=U["gamma"])
+    unknown = [_S[n] for n in ("xb", "zb", "thw", "yb", "gb", "psb", "ux", "uy", "kappa", "alpha")]
+    eqs = [_S[n] for n in ("vxb", "vzb", "omb", "vyb", "wgb", "wpsb", "ux", "uy", "kappa", "alpha")]
+    s = ca.MX.sym("s", nx)
+    r = rhs(s, uring, x0w, grid, hw)[0][eqs]
+    delta = ca.solve(ca.jacobian(r, s)[:, unknown], -r, "qr")
+    parts = ca.vertsplit(s)
+    for k, i in enumerate(unknown):
+        parts[i] = parts[i] + delta[k]
+    newton = ca.Function("swift_newton", [s, u, x0w, grid, hw], [ca.vertcat(*parts)])
+    xi = ca.vertcat(*(guess[n] for n in STATE_NAMES))
+    for _ in range(NEWTON_STEPS):
+        xi = newton(xi, u, x0w, grid, hw)
+    init = ca.Function("swift_init", [u, q, x0w, grid, hw], [xi], ["u", "q", "x0w", "grid", "hw"], ["x0"])
+
+    # direct feedthrough of the inputs to the outputs (structural)
+    jac = ca.jacobian(outw(x, u, x0w, grid, hw), u).sparsity()
+    deps = [[i for i in range(jac.size2()) if jac.has_nz(j, i)] for j in range(jac.size1())]
+    table = tyre.table
+    h = np.ascontiguousarray(table.h, dtype=float)
+    grid_v = np.ascontiguousarray(table.dx * np.arange(WINDOW))
+    extra = (f"#define ROAD_N {h.size}\n#define ROAD_WINDOW {WINDOW}\n#define ROAD_X0 {table.x0!r}\n"
+             f"#define ROAD_DX {table.dx!r}\n#define SWIFT_MAX_TRAVEL {MAX_TRAVEL!r}\n"
+             + "".join(f"#define S_{n.upper()} {i}\n" for i, n in enumerate(STATE_NAMES))
+             + "static const double ROAD_H[ROAD_N] = {" + ",".join(repr(float(v)) for v in h) + "};\n"
+             + "static const double ROAD_GRID[ROAD_WINDOW] = {" + ",".join(repr(float(v)) for v in grid_v) + "};\n")
+    starts = tuple(prm.INFLPRES if n == "p" else v[1] for n, v in INPUTS.items())
+    return SwiftFunctions(init, step, outw, float(table.x0), float(table.dx), h, grid_v, STATE_NAMES,
+                          tuple(INPUTS), tuple(PARAMETERS), tuple(OUTPUTS), (float(x_start), 1e-3), starts, deps,
+                          extra)
+
+
+class SwiftWheel:
+    """The SWIFT wheel in Python (module notes): ``set_inputs``, ``set_parameters``, ``initialise``, ``step``,
+    ``outputs``, ``state``. The same functions and the same window placement as the native FMU."""
+
+    def __init__(self, model, road=None, *, x_start: float = 0.0):
+        self.functions = f = swift_functions(model, road, x_start=x_start)
+        self.u = np.array(f.input_starts, dtype=float)
+        self.q = np.array(f.parameter_starts, dtype=float)
+        self.state = np.zeros(len(STATE_NAMES))
+
+    def set_inputs(self, **values):
+        for k, v in values.items():
+            if k not in INPUTS:
+                raise ModelInputError(f"unknown input {k!r}; inputs are {', '.join(INPUTS)}")
+            if not math.isfinite(v):
+                raise ModelInputError(f"input {k} must be finite, got {v!r}")
+            self.u[self.functions.input_names.index(k)] = v
+
+    def set_parameters(self, **values):
+        for k, v in values.items():
+            if k not in PARAMETERS:
+                raise ModelInputError(f"unknown parameter {k!r}; parameters are {', '.join(PARAMETERS)}")
+            self.q[self.functions.parameter_names.index(k)] = v
+
+    def _window(self, xb):
+        f = self.functions
+        i0 = f.window_start(xb)
+        return f.table_x0 + i0 * f.table_dx, f.grid, f.table_h[i0:i0 + WINDOW]
+
+    def initialise(self):
+        x = np.asarray(self.functions.init(self.u, self.q, *self._window(self.q[0])), dtype=float).ravel()
+        if not np.all(np.isfinite(x)):
+            raise ModelInputError("no static equilibrium found at the initial inputs")
+        self.state = x
+
+    def step(self, h: float):
+        if not (math.isfinite(h) and h > 0):
+            raise ModelInputError(f"step size must be positive and finite, got {h!r}")
+        U = dict(zip(self.functions.input_names, self.u))
+        x = self.state.copy()
+        x[_S["za"]], x[_S["vza"]], x[_S["oma"]] = U["z"], U["vz"], U["omega"]
+        n = max(1, math.ceil(h / self.q[1] - 1e-9), math.ceil(abs(U["vx"]) * h / MAX_TRAVEL))
+        for _ in range(n):
+            x = np.asarray(self.functions.step(x, self.u, h / n, *self._window(x[_S["xb"]])), dtype=float).ravel()
+        self.state = x
+
+    def outputs(self) -> dict:
+        y = np.asarray(self.functions.out(self.state, self.u, *self._window(self.state[_S["xb"]])),
+                       dtype=float).ravel()
+        return dict(zip(self.functions.output_names, y))

@@ -1,0 +1,620 @@
+"""The native FMI 2.0 co-simulation FMU (`mftyre fmu build`, default backend): steady, transient and SWIFT tyres
+as compiled C, checked through fmpy, a C host of our own, and against the Python implementations."""
+from __future__ import annotations
+
+import argparse
+import math
+import shutil
+import subprocess
+import warnings
+import zipfile
+from ctypes import byref
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+fmpy = pytest.importorskip("fmpy")
+
+import mftyre  # noqa: E402
+from mftyre.fmu_command import register  # noqa: E402
+from mftyre.transient import WheelTyre  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+TIR61 = ROOT / "tir_files" / "car_205_60R15_mf61.tir"
+TIR62 = ROOT / "tir_files" / "car_205_60R15_mf62_swift.tir"
+CLEAT = "cleat(x0=3.0, length=0.05, height=0.01)"
+RE0 = 0.305
+pytestmark = pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler (cc) to build native FMUs")
+
+
+def _build(args):
+    parser = argparse.ArgumentParser(prog="mftyre")
+    register(parser.add_subparsers(dest="command"))
+    ns = parser.parse_args(["fmu", "build", *map(str, args)])
+    return ns.func(ns)
+
+
+@pytest.fixture(scope="module")
+def fmus(tmp_path_factory):
+    out = tmp_path_factory.mktemp("native")
+    paths = {m: out / f"{m}.fmu" for m in ("steady", "transient", "swift")}
+    assert _build([TIR61, "-o", paths["steady"]]) == 0
+    assert _build([TIR61, "-o", paths["transient"], "--model", "transient"]) == 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert _build([TIR62, "-o", paths["swift"], "--model", "swift", "--road", CLEAT]) == 0
+    return paths
+
+
+@pytest.fixture(scope="module")
+def models():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return {"61": mftyre.load_tir(TIR61), "62": mftyre.load_tir(TIR62)}
+
+
+@pytest.fixture(scope="module")
+def swift_wheel(models):
+    from swift.fmu_model import SwiftWheel
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return SwiftWheel(models["62"], CLEAT)
+
+
+class Slave:
+    """One FMU instance driven call by call through fmpy, its log messages collected."""
+
+    def __init__(self, path, tmp_path, name="tyre"):
+        from fmpy import extract, read_model_description
+        from fmpy.fmi1 import calloc, free
+        from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+        from fmpy.logging import addLoggerProxy
+
+        self.md = read_model_description(path)
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.outputs = [v.name for v in self.md.modelVariables if v.causality == "output"]
+        self.unzipped = extract(path, unzipdir=str(tmp_path / f"unz_{name}_{id(self)}"))
+        self.messages = []
+
+        def logger(env, inst, status, category, message):
+            self.messages.append((status, message.decode()))
+
+        cb = fmi2CallbackFunctions()
+        cb.logger = fmi2CallbackLoggerTYPE(logger)
+        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        addLoggerProxy(byref(cb))
+        self._cb = cb
+        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.unzipped,
+                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+        self.fmu.instantiate(callbacks=cb, loggingOn=True)
+        self.t = 0.0
+
+    def initialise(self, **start):
+        self.fmu.setupExperiment(startTime=0.0)
+        self.fmu.enterInitializationMode()
+        self.set(**start)
+        self.fmu.exitInitializationMode()
+        return self
+
+    def set(self, **values):
+        if values:
+            self.fmu.setReal([self.vr[k] for k in values], [float(v) for v in values.values()])
+
+    def get(self, *names):
+        names = names or self.outputs
+        return dict(zip(names, self.fmu.getReal([self.vr[n] for n in names])))
+
+    def step(self, h=1e-3):
+        self.fmu.doStep(self.t, h)
+        self.t += h
+
+    def close(self):
+        self.fmu.terminate()
+        self.fmu.freeInstance()
+
+
+def _swift_start(x_start):
+    return dict(vx=10.0, omega=10.0 / RE0, z=0.29, x_start=x_start)
+
+
+# ---------------------------------------------------------------------------------------------- description
+def test_validate_and_describe(fmus):
+    from fmpy import read_model_description
+    from fmpy.validation import validate_fmu
+
+    for kind, path in fmus.items():
+        assert validate_fmu(str(path)) == [], kind
+        md = read_model_description(path)
+        cs = md.coSimulation
+        assert cs.canGetAndSetFMUstate and cs.canSerializeFMUstate
+        assert cs.providesDirectionalDerivative == (kind != "swift")
+        names = {v.name: v for v in md.modelVariables}
+        assert names["Fx"].unit == "N" and names["vx"].unit == "m/s" and "ISO-W" in names["Fx"].description
+        with zipfile.ZipFile(path) as zf:
+            files = zf.namelist()
+        assert f"binaries/linux64/mftyre_{kind}.so" in files
+        assert {"sources/buildDescription.xml", "sources/fmi2_tyre.c", "sources/tyre_model.c"} <= set(files)
+        assert not any(f.endswith(".py") for f in files)  # no Python at run time
+        deps = {u.variable.name: {d.name for d in (u.dependencies or [])} for u in md.outputs}
+        if kind == "swift":  # belt forces through the sidewall: rim speed inputs act directly, the height not
+            assert "vx" in deps["Fx"] and "z" not in deps["Fz"] and deps["x_road"] == set()
+        else:
+            assert {"z", "road_z", "p"} <= deps["Fz"] and "vy" not in deps["Fz"]
+            assert "vy" in deps["Fy"]  # transient: through the low-speed damping of the deflection
+            assert deps["u_y"] == set()  # transient: a state, no direct dependency
+
+
+def test_fmpy_simulate_each_model(fmus):
+    starts = {"steady": dict(vx=20.0, omega=20.0 / RE0, vy=0.3), "transient": dict(vx=20.0, omega=20.0 / RE0, vy=0.3),
+              "swift": _swift_start(2.0)}
+    for kind, path in fmus.items():
+        res = fmpy.simulate_fmu(str(path), stop_time=0.2, output_interval=1e-3, start_values=starts[kind])
+        assert len(res) == 201
+        for name in ("Fx", "Fy", "Fz", "My"):
+            assert np.all(np.isfinite(res[name])), (kind, name)
+        assert 2000 < res["Fz"][-1] < 8000
+
+
+# ----------------------------------------------------------------------------------------- Python = native
+def _braking(t):
+    vx = 30.0 - 6.0 * t
+    return dict(vx=vx, omega=vx * (1.0 - 0.15 * min(t / 0.3, 1.0)) / RE0, vy=0.0, z=0.29)
+
+
+def _to_standstill(t):  # through VXLOW (low-speed damping, slip sign at rest) to rest
+    vx = max(3.0 - 4.0 * t, 0.0)
+    return dict(vx=vx, omega=0.9 * vx / RE0, vy=0.05 * math.sin(8.0 * t), z=0.29)
+
+
+def _slalom(t):
+    return dict(vx=20.0, omega=20.0 / RE0, vy=1.5 * math.sin(2 * math.pi * 1.5 * t), gamma=0.02 * math.sin(
+        2 * math.pi * 1.5 * t), z=0.29 + 0.005 * math.sin(2 * math.pi * 3 * t))
+
+
+#: Floors of the 1e-9 relative comparison, by unit: FNOMIN-sized forces, FNOMIN R0 moments, R0 lengths.
+SCALE = {"N": 4000.0, "N.m": 4000.0 * 0.3, "m": 0.3, "rad": 1.0, "1": 1.0}
+
+
+def _assert_close(py, nat, units, where):
+    for k, v in py.items():
+        floor = 1e-9 * SCALE[units[k]]
+        assert abs(nat[k] - v) <= 1e-9 * abs(v) + floor, f"{where}: {k} native {nat[k]!r} python {v!r}"
+
+
+@pytest.mark.parametrize("kind", ["steady", "transient"])
+@pytest.mark.parametrize("scenario", [_braking, _slalom, _to_standstill])
+def test_native_equals_python_wheel(fmus, models, tmp_path, kind, scenario):
+    nat = Slave(fmus[kind], tmp_path).initialise(**scenario(0.0))
+    units = {v.name: v.unit or "1" for v in nat.md.modelVariables}
+    py = WheelTyre(models["61"], kind)
+    py.set_inputs(**scenario(0.0))
+    py.initialise()
+    _assert_close(py.outputs(), nat.get(), units, "t=0")
+    for k in range(1, 1001):
+        u = scenario(k * 1e-3)
+        nat.set(**u)
+        nat.step()
+        py.set_inputs(**u)
+        py.step(1e-3)
+        if k % 50 == 0:
+            _assert_close(py.outputs(), nat.get(), units, f"step {k}")
+    nat.close()
+
+
+@pytest.mark.parametrize("before", [0.5, 5.0])
+def test_native_equals_python_swift_cleat(fmus, swift_wheel, tmp_path, before):
+    start = _swift_start(3.0 - before)
+    nat = Slave(fmus["swift"], tmp_path).initialise(**start)
+    units = {v.name: v.unit or "1" for v in nat.md.modelVariables}
+    swift_wheel.set_inputs(**{k: v for k, v in start.items() if k != "x_start"})
+    swift_wheel.set_parameters(x_start=start["x_start"])
+    swift_wheel.initialise()
+    n = int(round((before + 0.3) / 10.0 / 1e-3))
+    fz_nat = []
+    for k in range(1, n + 1):
+        nat.step()
+        swift_wheel.step(1e-3)
+        out = nat.get()
+        fz_nat.append(out["Fz"])
+        if k % 25 == 0 or k == n:
+            _assert_close(swift_wheel.outputs(), out, units, f"step {k}")
+    # the cleat is met where it is: the load peaks after travelling `before` (+ the tyre's own lag)
+    t_peak = (int(np.argmax(fz_nat)) + 1) * 1e-3
+    assert before / 10.0 < t_peak < before / 10.0 + 0.015
+    assert max(fz_nat) > fz_nat[0] + 1000.0
+    nat.close()
+
+
+def test_swift_meets_cleat_where_it_is_for_any_start(fmus):
+    """x_start 0, -2.6 and 1.0 m at 10 m/s: the hits are (3.0 - x_start)/10 s apart, x_road agrees."""
+    peaks, where = [], []
+    for xs in (0.0, -2.6, 1.0):
+        res = fmpy.simulate_fmu(str(fmus["swift"]), stop_time=0.7, output_interval=1e-3,
+                                start_values=_swift_start(xs))
+        i = int(np.argmax(res["Fz"]))
+        peaks.append(res["time"][i])
+        where.append(res["x_road"][i])
+        assert res["x_road"][0] == pytest.approx(xs, abs=1e-12)
+    assert peaks[1] - peaks[0] == pytest.approx(0.26, abs=1.5e-3)
+    assert peaks[0] - peaks[2] == pytest.approx(0.10, abs=1.5e-3)
+    assert np.ptp(where) < 0.015 and 3.0 < where[0] < 3.15
+
+
+# ------------------------------------------------------------------------------------------------ state
+@pytest.mark.parametrize("kind", ["steady", "transient", "swift"])
+def test_replay_after_restore_and_serialise(fmus, tmp_path, kind):
+    start = _swift_start(2.5) if kind == "swift" else _slalom(0.0)
+    a = Slave(fmus[kind], tmp_path, "a").initialise(**start)
+    inputs = (lambda t: dict(vx=10.0 + t, vy=0.2 * math.sin(20 * t))) if kind == "swift" else _slalom
+    for k in range(50):
+        a.set(**inputs(k * 1e-3))
+        a.step()
+    state = a.fmu.getFMUstate()
+    blob = a.fmu.serializeFMUstate(state)
+    t0, first = a.t, []
+    for k in range(50, 150):
+        a.set(**inputs(k * 1e-3))
+        a.step()
+        first.append(a.get())
+    a.fmu.setFMUstate(state)
+    a.t = t0
+    for k in range(50, 150):
+        a.set(**inputs(k * 1e-3))
+        a.step()
+        assert a.get() == first[k - 50]  # bit for bit
+    # a second instance restored from the serialised bytes continues the same way
+    b = Slave(fmus[kind], tmp_path, "b").initialise(**start)
+    restored = b.fmu.deSerializeFMUstate(blob)
+    b.fmu.setFMUstate(restored)
+    b.t = t0
+    for k in range(50, 150):
+        b.set(**inputs(k * 1e-3))
+        b.step()
+    for name, v in first[-1].items():
+        assert abs(b.get(name)[name] - v) <= 1e-12 * max(1.0, abs(v))
+    a.fmu.freeFMUstate(state)
+    b.fmu.freeFMUstate(restored)
+    a.close()
+    b.close()
+
+
+# ------------------------------------------------------------------------------------------------ errors
+@pytest.mark.parametrize("kind,start,text", [
+    ("steady", dict(p=-1.0), "input p"),
+    ("transient", dict(tau_vlow=float("nan")), "parameter tau_vlow"),
+    ("transient", dict(tau_vlow=-0.1), "tau_vlow must be >= 0"),
+    ("swift", dict(max_step=0.0), "max_step"),
+    ("swift", dict(z=float("inf")), "input z"),
+])
+def test_failed_initialisation_is_an_error(fmus, tmp_path, kind, start, text):
+    from fmpy.fmi1 import FMICallException
+
+    s = Slave(fmus[kind], tmp_path)
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.enterInitializationMode()
+    s.set(**start)
+    with pytest.raises(FMICallException) as exc:
+        s.fmu.exitInitializationMode()
+    assert exc.value.status == 3  # fmi2Error
+    assert any(status == 3 and text in msg for status, msg in s.messages), s.messages
+    with pytest.raises(FMICallException):
+        s.fmu.doStep(0.0, 1e-3)  # the instance stays in the error state
+    s.fmu.reset()  # and can be reset and used again
+    s.initialise()
+    s.step()
+    s.fmu.freeInstance()
+
+
+def test_wrong_guid_is_refused(fmus, tmp_path):
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    md = read_model_description(fmus["steady"])
+    fmu = FMU2Slave(guid="{00000000-0000-0000-0000-000000000000}", unzipDirectory=extract(
+        fmus["steady"], unzipdir=str(tmp_path / "g")), modelIdentifier=md.coSimulation.modelIdentifier,
+        instanceName="x")
+    with pytest.raises(Exception):
+        fmu.instantiate()
+
+
+@pytest.mark.parametrize("kind", ["steady", "transient", "swift"])
+def test_bad_steps_and_inputs_are_discarded_with_outputs_held(fmus, tmp_path, kind):
+    from fmpy.fmi1 import FMICallException
+
+    s = Slave(fmus[kind], tmp_path).initialise(**(_swift_start(0.0) if kind == "swift" else {}))
+    s.step()
+    held = s.get()
+    for h in (0.0, -1e-3, float("nan"), float("inf")):
+        with pytest.raises(FMICallException) as exc:
+            s.fmu.doStep(s.t, h)
+        assert exc.value.status == 2  # fmi2Discard
+        assert s.get() == held
+    assert any("step size" in m for _, m in s.messages)
+    s.set(vx=float("nan"))
+    with pytest.raises(FMICallException) as exc:
+        s.fmu.doStep(s.t, 1e-3)
+    assert exc.value.status == 2 and any("input vx is not finite" in m for _, m in s.messages)
+    s.set(vx=10.0)
+    s.step()  # recovers with valid inputs
+    assert all(math.isfinite(v) for v in s.get().values())
+    s.close()
+
+
+def test_directional_derivatives_equal_finite_differences(fmus, tmp_path):
+    for kind in ("steady", "transient"):
+        s = Slave(fmus[kind], tmp_path).initialise(vx=15.0, omega=15.0 / RE0 * 1.03, vy=0.4, z=0.288)
+        s.step()
+        outs = ["Fx", "Fy", "Fz", "Mz", "My"]
+        for name, dv in (("vx", 1e-4), ("vy", 1e-5), ("z", 1e-7), ("omega", 1e-4)):
+            vr_out = [s.vr[o] for o in outs]
+            dd = s.fmu.getDirectionalDerivative(vr_out, [s.vr[name]], [1.0])
+            base = s.get(name)[name]
+            s.set(**{name: base + dv})
+            up = s.fmu.getReal(vr_out)
+            s.set(**{name: base - dv})
+            down = s.fmu.getReal(vr_out)
+            s.set(**{name: base})
+            for o, d, a, b in zip(outs, dd, up, down):
+                fd = (a - b) / (2 * dv)
+                assert d == pytest.approx(fd, rel=1e-4, abs=1e-3 * 4000 / (1 if name != "z" else 1e-3)), (kind, o, name)
+        s.close()
+
+
+# ------------------------------------------------------------------------------------------ C host, sources
+C_HOST = r"""
+#include <dlfcn.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "fmi2Functions.h"
+
+static void logger(fmi2ComponentEnvironment e, fmi2String n, fmi2Status s, fmi2String c, fmi2String f, ...) {
+    (void)e; (void)n; (void)s; (void)c; (void)f;
+}
+
+#define N 4
+#define STEPS 10000
+/* argv: per model: library guid vr_vx vr_omega vr_Fx vr_Fz vr_vy */
+static int run_model(char **a) {
+    void *lib = dlopen(a[0], RTLD_NOW | RTLD_LOCAL);
+    if (!lib) { printf("dlopen %s\n", dlerror()); return 1; }
+#define SYM(name) name##TYPE *name = (name##TYPE *)dlsym(lib, #name); if (!name) return 2;
+    SYM(fmi2Instantiate) SYM(fmi2SetupExperiment) SYM(fmi2EnterInitializationMode)
+    SYM(fmi2ExitInitializationMode) SYM(fmi2SetReal) SYM(fmi2GetReal) SYM(fmi2DoStep) SYM(fmi2FreeInstance)
+    SYM(fmi2Terminate)
+    fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
+    fmi2ValueReference vx = atoi(a[2]), om = atoi(a[3]), fx = atoi(a[4]), fz = atoi(a[5]), vy = atoi(a[6]);
+    double last[N + 1][2];
+    for (int pass = 0; pass < 2; pass++) {  /* pass 0: four together; pass 1: instance 2 alone */
+        fmi2Component c[N];
+        int lo = pass ? 2 : 0, hi = pass ? 3 : N;
+        for (int i = lo; i < hi; i++) {
+            char name[16]; sprintf(name, "tyre%d", i);
+            c[i] = fmi2Instantiate(name, fmi2CoSimulation, a[1], "", &cb, fmi2False, fmi2False);
+            if (!c[i]) return 3;
+            double u[2] = {10.0 + 3.0 * i, (10.0 + 3.0 * i) / 0.305};
+            fmi2ValueReference vr[2] = {vx, om};
+            if (fmi2SetupExperiment(c[i], fmi2False, 0, 0, fmi2False, 0) || fmi2EnterInitializationMode(c[i]) ||
+                fmi2SetReal(c[i], vr, 2, u) || fmi2ExitInitializationMode(c[i])) return 4;
+        }
+        for (int k = 0; k < STEPS; k++)
+            for (int i = lo; i < hi; i++) {
+                double t = k * 1e-3, v = 0.3 * (i + 1) * sin(6.0 * t);
+                if (fmi2SetReal(c[i], &vy, 1, &v) || fmi2DoStep(c[i], t, 1e-3, fmi2True)) return 5;
+            }
+        for (int i = lo; i < hi; i++) {
+            fmi2ValueReference vr[2] = {fx, fz};
+            if (fmi2GetReal(c[i], vr, 2, last[pass ? N : i])) return 6;
+            if (!isfinite(last[pass ? N : i][0]) || !isfinite(last[pass ? N : i][1])) return 7;
+            fmi2Terminate(c[i]);
+            fmi2FreeInstance(c[i]);
+        }
+    }
+    if (memcmp(last[2], last[N], sizeof last[N]) != 0) { printf("instance 2 depends on the others\n"); return 8; }
+    for (int i = 1; i < N; i++)
+        if (last[i][0] == last[0][0]) { printf("instances %d and 0 identical\n", i); return 9; }
+    printf("%s ok Fx %g %g %g %g\n", a[0], last[0][0], last[1][0], last[2][0], last[3][0]);
+    return 0;
+}
+
+int main(int argc, char **argv) {
+    for (int i = 1; i + 6 < argc; i += 7) {
+        int rc = run_model(argv + i);
+        if (rc) { printf("model %s failed: %d\n", argv[i], rc); return rc; }
+    }
+    return 0;
+}
+"""
+
+
+def test_c_host_runs_four_instances_of_each_model(fmus, tmp_path):
+    from fmpy import extract, read_model_description
+
+    src = tmp_path / "host.c"
+    src.write_text(C_HOST)
+    exe = tmp_path / "host"
+    headers = Path(fmpy.__file__).parent / "c-code"
+    subprocess.run(["cc", "-O2", "-I", str(headers), str(src), "-o", str(exe), "-ldl", "-lm"],
+                   check=True)
+    args = []
+    for kind, path in fmus.items():
+        md = read_model_description(path)
+        vr = {v.name: v.valueReference for v in md.modelVariables}
+        d = extract(path, unzipdir=str(tmp_path / kind))
+        lib = Path(d) / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"
+        args += [str(lib), md.guid] + [str(vr[n]) for n in ("vx", "omega", "Fx", "Fz", "vy")]
+    res = subprocess.run([str(exe), *args], capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert res.stdout.count(" ok ") == 3
+
+
+def test_source_fmu_compiles_in_clean_folder_with_identical_outputs(fmus, tmp_path):
+    from fmpy import extract
+    from fmpy.build import build_platform_binary
+
+    if shutil.which("cmake") is None:
+        pytest.skip("cmake (used by fmpy to compile source FMUs) is not installed")
+    clean = Path(extract(fmus["transient"], unzipdir=str(tmp_path / "clean")))
+    shutil.rmtree(clean / "binaries")
+    (tmp_path / "cmake").mkdir()
+    build_platform_binary(clean, build_dir=tmp_path / "cmake")
+    assert (clean / "binaries" / "linux64" / "mftyre_transient.so").is_file()
+    start = dict(vx=20.0, omega=20.0 / RE0 * 0.97, vy=0.5)
+    ref = fmpy.simulate_fmu(str(fmus["transient"]), stop_time=0.1, output_interval=1e-3, start_values=start)
+    rebuilt = fmpy.simulate_fmu(str(clean), stop_time=0.1, output_interval=1e-3, start_values=start)
+    for name in ("Fx", "Fy", "Fz", "Mz", "u_x", "u_y"):
+        np.testing.assert_allclose(rebuilt[name], ref[name], rtol=1e-12, atol=1e-9)
+
+
+def test_libcosim_runs_four_tyres_of_each_model(fmus):
+    """A second, independent importer (OSP libcosim via libcosimpy): four instances of each model together give
+    the outputs fmpy gives for the same inputs."""
+    pytest.importorskip("libcosimpy")
+    from fmpy import read_model_description
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    log_output_level(CosimLogLevel.ERROR)
+    ex = CosimExecution.from_step_size(step_size=1_000_000)  # 1 ms in ns
+    obs = CosimObserver.create_last_value()
+    ex.add_observer(observer=obs)
+    runs = []
+    for kind, path in fmus.items():
+        vr = {v.name: v.valueReference for v in read_model_description(path).modelVariables}
+        for i in range(4):
+            start = {"vx": 8.0 + 2.0 * i, "omega": (8.0 + 2.0 * i) / RE0 * 1.02}
+            if kind == "swift":
+                start["x_start"] = 2.0 + 0.2 * i
+            idx = ex.add_local_slave(local_slave=CosimLocalSlave(fmu_path=str(path), instance_name=f"{kind}{i}"))
+            for name, value in start.items():
+                assert ex.real_initial_value(slave_index=idx, variable_reference=vr[name], value=value)
+            runs.append((kind, path, idx, vr, start))
+    assert ex.simulate_until(target_time=200_000_000)  # 0.2 s
+    for kind, path, idx, vr, start in runs:
+        got = obs.last_real_values(slave_index=idx, variable_references=[vr["Fx"], vr["Fz"], vr["My"]])
+        ref = fmpy.simulate_fmu(str(path), stop_time=0.2, output_interval=1e-3, start_values=start)
+        for value, name in zip(got, ("Fx", "Fz", "My")):
+            assert value == pytest.approx(ref[name][-1], rel=1e-12, abs=1e-9), (kind, idx, name)
+
+
+@pytest.mark.parametrize("args, text", [
+    (["--model", "swift", "--road", "cleat(x0=1.0)"], "cleat needs length, height"),
+    (["--model", "swift", "--road", "__import__('os').system('true')"], "each term must be one of"),
+    (["--model", "swift", "--road", "missing_profile.csv"], "not found"),
+    (["--model", "steady", "--road", "cleat(x0=1, length=0.05, height=0.01)"], "only used by --model swift"),
+])
+def test_build_errors_name_the_cause(tmp_path, capsys, args, text):
+    out = tmp_path / "t.fmu"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert _build([TIR62, "-o", out, *args]) == 1
+    assert text in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_existing_output_needs_overwrite(fmus, tmp_path, capsys):
+    out = tmp_path / "t.fmu"
+    out.write_bytes(b"keep")
+    assert _build([TIR61, "-o", out]) == 1
+    assert "--overwrite" in capsys.readouterr().err and out.read_bytes() == b"keep"
+    assert _build([TIR61, "-o", out, "--overwrite"]) == 0
+    assert zipfile.is_zipfile(out)
+
+
+def test_state_of_another_fmu_is_refused(fmus, tmp_path):
+    """An FMU state (or its bytes) belongs to the FMU that made it: another .tir or model is refused."""
+    from fmpy.fmi1 import FMICallException
+
+    other = tmp_path / "steady62.fmu"
+    assert _build([TIR62, "-o", other]) == 0
+    a = Slave(fmus["steady"], tmp_path, "a").initialise()
+    b = Slave(other, tmp_path, "b").initialise()
+    blob = a.fmu.serializeFMUstate(a.fmu.getFMUstate())
+    with pytest.raises(FMICallException):
+        b.fmu.deSerializeFMUstate(blob)
+    with pytest.raises(FMICallException):
+        b.fmu.setFMUstate(a.fmu.getFMUstate())  # same layout, another .tir
+    assert any("not a state of this FMU" in m for _, m in b.messages)
+    a.close()
+    b.close()
+
+
+def test_calls_out_of_order_are_errors_not_crashes(fmus, tmp_path):
+    from fmpy.fmi1 import FMICallException
+
+    s = Slave(fmus["swift"], tmp_path)
+    with pytest.raises(FMICallException):
+        s.fmu.doStep(0.0, 1e-3)  # before initialisation
+    with pytest.raises(FMICallException):
+        s.fmu.setReal([10_000], [1.0])  # unknown value reference
+    with pytest.raises(FMICallException):
+        s.fmu.getInteger([0])  # no Integer variables
+    s.initialise(**_swift_start(0.0))
+    with pytest.raises(FMICallException):
+        s.fmu.setReal([s.vr["x_start"]], [1.0])  # a fixed parameter after initialisation
+    with pytest.raises(FMICallException):  # swift provides no directional derivatives
+        s.fmu.getDirectionalDerivative([s.vr["Fz"]], [s.vr["vx"]], [1.0])
+    s.step()
+    s.fmu.terminate()
+    with pytest.raises(FMICallException):
+        s.fmu.doStep(s.t, 1e-3)  # after fmi2Terminate
+    assert all(st == 3 for st, _ in s.messages)
+    s.fmu.freeInstance()
+
+
+def test_turn_slip_from_the_yaw_rate(models, tmp_path):
+    """--turn-slip: the yaw_rate input gives the MF's turn slip phit = -yaw_rate / Vc; the native FMU equals
+    MFModel.evaluate with that phit (steady) and the Python twin (transient)."""
+    path = tmp_path / "ts.fmu"
+    assert _build([TIR61, "-o", path, "--model", "steady", "--turn-slip", "--vertical", "load"]) == 0
+    vx, yaw_rate, fz = 15.0, 0.8, 4500.0
+    s = Slave(path, tmp_path).initialise(vx=vx, omega=vx / RE0, Fz_in=fz, yaw_rate=yaw_rate)
+    out = s.get("Fx", "Fy", "Mz_c", "kappa")
+    ref = models["61"].evaluate(fz, out["kappa"], 0.0, 0.0, -yaw_rate / vx, vx, omega=vx / RE0, turn_slip=True)
+    assert out["Fy"] == pytest.approx(float(ref.fy), rel=1e-9) and abs(out["Fy"]) > 50.0
+    assert out["Mz_c"] == pytest.approx(float(ref.mz), rel=1e-9, abs=1e-9)
+    s.set(yaw_rate=0.0)
+    assert abs(s.get("Fy")["Fy"] - out["Fy"]) > 50.0  # the yaw rate matters
+    s.close()
+    py = WheelTyre(models["61"], "transient", vertical="load", turn_slip=True)
+    assert "yaw_rate" in py.functions.input_names
+
+
+def test_turn_slip_needs_native_steady_or_transient(tmp_path, capsys):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert _build([TIR62, "-o", tmp_path / "a.fmu", "--model", "swift", "--turn-slip"]) == 1
+    assert "--turn-slip is available for --model steady and transient" in capsys.readouterr().err
+    assert _build([TIR61, "-o", tmp_path / "b.fmu", "--turn-slip", "--backend", "pythonfmu"]) == 1
+
+
+@pytest.mark.parametrize("kind", ["transient", "swift"])
+def test_outputs_in_initialisation_mode_are_those_of_the_initial_state(fmus, tmp_path, kind):
+    start = _swift_start(1.0) if kind == "swift" else dict(vx=20.0, omega=20.0 / RE0 * 0.95, vy=0.4)
+    s = Slave(fmus[kind], tmp_path)
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.enterInitializationMode()
+    s.set(**start)
+    during = s.get()
+    s.fmu.exitInitializationMode()
+    assert s.get() == during
+    assert abs(during["Fx"]) > 100.0
+    s.close()
+
+
+@pytest.mark.parametrize("args, text", [
+    (["--input-mode", "rig"], "--input-mode is an option of --backend pythonfmu"),
+    (["--model", "swift", "--vertical", "load"], "takes the wheel-centre height"),
+    (["--backend", "pythonfmu", "--road", "cleat(x0=1, length=0.05, height=0.01)"], "set at run time"),
+])
+def test_options_of_the_other_backend_are_refused(tmp_path, capsys, args, text):
+    assert _build([TIR62, "-o", tmp_path / "x.fmu", *args]) == 1
+    assert text in capsys.readouterr().err
