@@ -253,13 +253,6 @@ class SwiftTyre:
         return "swift_" + hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
     @property
-    def step_function(self):
-        """One fixed step as a CasADi function (x, u, dt, x0w, grid, hw) -> (x_next, out): ``substeps`` RK4 steps
-        with the cam heights from the window ``hw`` of the table starting at ``x0w`` (``grid`` its abscissae
-        relative to ``x0w``); u in the order of :data:`swift.ring.INPUT_NAMES`."""
-        return self._step_fn
-
-    @property
     def rhs_function(self):
         """The right-hand side over a cam-height window as a CasADi function (x, u, x0w, grid, hw) -> (dx, out)."""
         return self._rhs_window
