@@ -357,8 +357,9 @@ def _uncertainties(problem, prm, data):
     live = col > 1e-12 * max(float(col.max()), 1e-300)
     stderr, corr = {n: None for n in names}, {}
     if live.any():
+        unit = jac[:, live] / col[live]  # columns of unit length: the covariance of parameters of any size
         with _one_blas_thread():
-            cov = s2 * np.linalg.pinv(jac[:, live].T @ jac[:, live])
+            cov = s2 * np.linalg.pinv(unit.T @ unit) / np.outer(col[live], col[live])
         sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
         idx = np.flatnonzero(live)
         for i, j in enumerate(idx):

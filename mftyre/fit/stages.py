@@ -120,11 +120,13 @@ def stage_rows(stage: Stage, data: TyreData) -> np.ndarray:
 
 
 def _count_levels(x: np.ndarray, width: float) -> int:
-    """Number of levels of a condition channel (:func:`mftyre.programme.cluster_levels`); when most values are on
-    no level (the channel is swept), the number of occupied bins of ``width`` instead."""
+    """Number of distinct values of a condition channel: its levels (:func:`mftyre.programme.cluster_levels`)
+    plus, when at least a tenth of the values are on no level (the channel is swept somewhere), the occupied
+    bins of ``width`` among those."""
     labels, centres = cluster_levels(x)
-    if np.mean(labels < 0) > 0.5:
-        return len(np.unique(np.round(x / width)))
+    off = labels < 0
+    if np.mean(off) >= 0.1:
+        return len(centres) + len(np.unique(np.round(x[off] / width)))
     return len(centres)
 
 
