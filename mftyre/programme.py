@@ -21,8 +21,10 @@ FZ whose range exceeds its sweep threshold (1 deg, 0.02, 3 m/s, a third of the m
 SL and VX, spans at least half the widest range that channel has in any segment (a shorter move, such as
 steering to the slip angle of a combined-slip test, is a transition); its
 direction (BRANCH +1 up / -1 down) is the sign of the change over a window of 5 % of the sweep's length.
-Segments without a swept channel are steady points; off-level segments shorter than 2 % of the data, or
-shorter than 50 samples in a time series, are transitions.
+Segments without a swept channel whose slips and speed stay within the sweep thresholds are steady points;
+other segments without a swept channel are transitions. A run shorter than 0.2 % of the data (and 50 samples in
+a time series) between two runs at the same levels belongs to them (a brief excursion of the scatter); an
+on-level run that short between off-level runs is a ramp passing through the level.
 """
 from __future__ import annotations
 
@@ -273,10 +275,14 @@ def recognise(data: TyreData) -> Programme:
     short_run = max(2, int(0.002 * n)) if sample_rate is None or sample_rate < 20 else max(50, int(0.002 * n))
     key = np.stack([labels[ch] for ch in cond_ch], axis=1) if n else np.zeros((0, 3), int)
     runs = _runs(key)
-    for i, (start, stop) in enumerate(runs):  # a ramp passing through a level is no stay at that level
-        if 0 < i < len(runs) - 1 and stop - start < short_run and key[start, 0] >= 0 \
-                and key[runs[i - 1][0], 0] < 0 and key[runs[i + 1][0], 0] < 0:
-            key[start:stop, 0] = -1
+    for i, (start, stop) in enumerate(runs):
+        if not (0 < i < len(runs) - 1 and stop - start < short_run):
+            continue
+        before, after = key[runs[i - 1][0]], key[runs[i + 1][0]]
+        if np.array_equal(before, after) and np.all(before >= 0):
+            key[start:stop] = before  # a brief excursion off a level (scatter) does not end the stay there
+        elif key[start, 0] >= 0 and before[0] < 0 and after[0] < 0:
+            key[start:stop, 0] = -1  # a ramp passing through a level is no stay at that level
     seg_id = np.full(n, -1, int)
     sweep_id = np.full(n, -1, int)
     kind = np.full(n, "transition", object)
@@ -316,10 +322,11 @@ def recognise(data: TyreData) -> Programme:
         if not off_level:
             score.pop("FZ", None)
         swept = max(score, key=score.get) if score else None
-        if swept is None and off_level and m < short_run:
-            k = "transition"
+        moving = any(ranges[ch] > SWEEP_THRESHOLD[ch] for ch in ("SA", "SL", "VX"))
+        if swept is None and (off_level or moving):
+            k = "transition"  # off-level, or a slip or speed changing without being a sweep
         elif swept is None:
-            k = "transition" if off_level else "steady"
+            k = "steady"
         elif off_level and swept != "FZ" and m < short_run:
             k = "transition"
         else:
