@@ -204,3 +204,46 @@ def test_free_radius_is_derived_when_not_given(truth):
                                                                           abs=0.003)
     rl, rho = res.model.loaded_radius(data.array("FZ"), p=data.array("P"))
     assert np.all(rho >= 0) and st.fit_error < 3.0
+
+
+# ------------------------------------------------------------------------------------- report, command
+def test_plots_are_drawn_per_sweep_in_distinct_colours(rig_fit):
+    from mftyre.fit.report import stage_figure
+
+    _, result = rig_fit
+    fig = stage_figure(result, "pure_fy")
+    ax = fig.axes[0]
+    lines = [ln for ln in ax.get_lines() if ln.get_linestyle() == "-"]
+    dots = [ln for ln in ax.get_lines() if ln.get_marker() == "."]
+    assert len(lines) == 4  # four loads at camber 0 and nominal pressure: one line per sweep
+    colours = {d.get_color() for d in dots}
+    assert len(colours) == len(dots) == 4  # four loads, four colours
+    for ln in lines:  # each line runs along one sweep: x increasing, within one slip-angle range
+        x = np.asarray(ln.get_xdata())
+        assert np.all(np.diff(x) >= 0) and x.size <= 2 * 25
+
+
+def test_command_logs_one_line_per_update_and_validates_numbers(truth, tmp_path, capsys):
+    import argparse
+
+    from mftyre.fit.command import register
+
+    parser = argparse.ArgumentParser(prog="mftyre")
+    register(parser.add_subparsers(dest="command"))
+    data = rig_programme(truth, loads=(0.6, 1.2), pressures=(1.0,), cambers_deg=(0.0,), longitudinal=False, seed=2)
+    csv = tmp_path / "rig.csv"
+    data.frame.drop(columns=["TEST"]).to_csv(csv, index=False)
+    args = parser.parse_args(["fit", str(csv), "-o", str(tmp_path / "o.tir"), "--stages", "pure_fy,vertical"])
+    assert args.func(args) == 0
+    out = capsys.readouterr()
+    assert "\r" not in out.err and len(out.err.strip().splitlines()) >= 2  # not a terminal: one line per update
+    assert "test programme: 2 loads" in out.out and "no longitudinal slip" in out.out
+    for bad, message in ((["--bins", "2"], "--bins: expected an integer >= 3, got 2"),
+                         (["--max-nfev", "many"], "--max-nfev: expected an integer >= 1, got 'many'")):
+        with pytest.raises(SystemExit):
+            parser.parse_args(["fit", str(csv), "-o", "x.tir", *bad])
+        assert message in capsys.readouterr().err
+    help_text = parser._subparsers._group_actions[0].choices["fit"].format_help()
+    assert "CSV format" in help_text and "FZ  vertical load [N]" in help_text
+    with pytest.raises(ValueError, match="bins must be an integer >= 3"):
+        fit_tir(data, bins=1)

@@ -564,8 +564,10 @@ def fit_tir(data, start=None, stages=STAGE_NAMES, fit_pressure: bool = True, *, 
     data = load_data(data)
     if weighting not in ("uniform", "load"):
         raise ValueError(f"weighting must be 'uniform' or 'load', got {weighting!r}")
-    if not (isinstance(bins, int) and bins >= 3):
+    if not (isinstance(bins, (int, np.integer)) and bins >= 3):
         raise ValueError(f"bins must be an integer >= 3, got {bins!r}")
+    if max_nfev is not None and not (isinstance(max_nfev, (int, np.integer)) and max_nfev >= 1):
+        raise ValueError(f"max_nfev must be None or an integer >= 1, got {max_nfev!r}")
     programme = recognise(data)
     notes = list(data.history) + ["test programme: " + programme.summary()]
     reduction = None
