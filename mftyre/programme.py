@@ -6,7 +6,7 @@ and which are transitions between conditions, and so which effects the data can 
 
 Levels (:func:`cluster_levels`) are the modes of the distribution of a condition channel: a histogram of
 bin width set by the channel's own short-term scatter (samples against the running median of their
-neighbours), smoothed, whose peaks are merged only when the valley between them is shallow (above half the
+neighbours; for a channel that steps every row, the distance to the third-nearest value), smoothed, whose peaks are merged only when the valley between them is shallow (above half the
 lower peak). A level is therefore separated from its neighbour by the empty room between them, however close
 they are relative to the largest value (1650 / 2200 / 2750 N with a few percent scatter are three levels), and a
 slow ramp between levels is no level. Samples far from every level (more than 4 robust standard deviations
@@ -46,13 +46,19 @@ _KIND = {"SA": "slip_angle", "SL": "slip_ratio", "VX": "speed", "FZ": "load"}
 
 # ------------------------------------------------------------------------------------------------- levels
 def _short_term_scatter(x: np.ndarray) -> float:
-    """Robust standard deviation of the samples about the running median of 5 neighbours (0 when < 20)."""
+    """Robust standard deviation of the samples about the running median of 5 neighbours (0 when < 20). When
+    that exceeds 5 % of the range, neighbouring rows are not repeated settings (the channel steps every row, as
+    the speeds of a free-rolling test): the median distance to the third-nearest value instead."""
     if x.size < 20:
         return 0.0
     from scipy.ndimage import median_filter
 
     dev = x - median_filter(x, size=5, mode="nearest")
-    return 1.4826 * float(np.median(np.abs(dev))) * 1.25  # 1.25: the median of 5 itself scatters
+    scatter = 1.4826 * float(np.median(np.abs(dev))) * 1.25  # 1.25: the median of 5 itself scatters
+    if scatter <= 0.05 * float(np.ptp(x)):
+        return scatter
+    v = np.sort(x)
+    return float(np.median(np.minimum(v[3:] - v[:-3], np.inf)))
 
 
 def cluster_levels(values, *, scatter: float | None = None):
@@ -170,7 +176,8 @@ class Programme:
     ``levels``: channel -> level centres (FZ, P, IA; VX of the slip tests); ``sweeps``: one row per segment
     (start, stop row, kind, swept channel, n rows, direction changes, the level centres held, branch counts);
     ``rows``: per-row DataFrame with SEGMENT, SWEEP (segment number of swept segments, -1 otherwise), KIND,
-    BRANCH (+1 up, -1 down, 0 held), STEADY (bool); ``sample_rate`` [Hz] when a TIME channel is present;
+    BRANCH (+1 up, -1 down, 0 held), STEADY (bool), FZ_LEVEL, P_LEVEL, IA_LEVEL (index into ``levels``, -1
+    off-level); ``sample_rate`` [Hz] when a TIME channel is present;
     ``fittable``: stage group -> bool; ``notes``: what cannot be determined and why.
     """
 
@@ -188,7 +195,7 @@ class Programme:
         return int((self.sweeps["kind"] == kind).sum()) if len(self.sweeps) else 0
 
     def annotate(self, data: TyreData) -> TyreData:
-        """``data`` with the per-row columns SEGMENT, SWEEP, KIND, BRANCH, STEADY added (replacing any)."""
+        """``data`` with the per-row columns of ``rows`` added (replacing any of the same name)."""
         frame = data.frame.copy()
         for c in self.rows.columns:
             frame[c] = self.rows[c].to_numpy()
@@ -346,7 +353,8 @@ def recognise(data: TyreData) -> Programme:
                          SL=float(np.median(sl[sub])), VX=float(np.median(vx[sub]))))
     sweeps = pd.DataFrame(rows)
     steady = np.isin(kind, ("steady", "slip_angle", "slip_ratio", "speed", "load"))
-    per_row = pd.DataFrame({"SEGMENT": seg_id, "SWEEP": sweep_id, "KIND": kind, "BRANCH": branch, "STEADY": steady})
+    per_row = pd.DataFrame({"SEGMENT": seg_id, "SWEEP": sweep_id, "KIND": kind, "BRANCH": branch, "STEADY": steady,
+                            **{f"{ch}_LEVEL": key[:, i] for i, ch in enumerate(cond_ch)}})
     slip_tests = np.isin(kind, ("slip_angle", "slip_ratio", "steady"))
     levels["VX"] = cluster_levels(vx[slip_tests])[1] if slip_tests.any() else np.zeros(0)
     has = dict(
