@@ -106,6 +106,8 @@ def test_every_fitted_parameter_is_determined(rig_fit):
         assert all(abs(c) <= 0.99 for c in st.correlations.values()), st.correlations
     # the effective number of independent samples is used (autocorrelated binned residuals)
     assert all(st.n_eff <= st.n_points for st in result.stages.values() if st.fitted)
+    # the optimiser stops on the relative change of the cost (old: 1,463 evaluations for pure Fy)
+    assert sum(res.nfev for _, res in result.stages["pure_fy"].passes) < 200
 
 
 def test_batched_jacobian_matches_casadi(truth):

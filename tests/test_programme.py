@@ -82,6 +82,8 @@ def test_rig_programme_is_a_realistic_time_series(truth, rig):
     assert np.std(e) > 0.5 * 0.005 * 4000  # at least half the realistic level (0.5 % of FNOMIN)
     assert {"vertical", "free_rolling", "pure_lateral", "pure_longitudinal", "combined"} <= set(f["TEST"])
     assert f["VX"].max() > 39.0 and f[f["TEST"] == "free_rolling"]["VX"].min() < 1.5
+    with pytest.raises(ValueError, match="sample_rate must be a positive number"):
+        rig_programme(truth, sample_rate=0.0)
 
 
 # ----------------------------------------------------------------------------------------- programme
