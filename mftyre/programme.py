@@ -202,17 +202,17 @@ class Programme:
         return data.with_frame(frame, "test programme recognised: " + self.summary(short=True))
 
     def summary(self, short: bool = False) -> str:
-        """One paragraph: '5 loads 450-2750 N, 3 pressures 0.83-0.97 bar, ... ; fittable: ...'."""
+        """One paragraph: '5 loads 450-2750 N, 3 pressures 0.83-0.97 bar, ...; fittable: ...'."""
         parts = []
-        for ch, name, fac, unit in (("FZ", "load", 1.0, "N"), ("P", "pressure", 1e-5, "bar"),
-                                    ("IA", "camber", 180 / math.pi, "deg"), ("VX", "speed", 1.0, "m/s")):
-            c = self.levels.get(ch, np.zeros(0))
+        for ch, name, fac, unit, digits in (("FZ", "load", 1.0, "N", 0), ("P", "pressure", 1e-5, "bar", 2),
+                                            ("IA", "camber", 180 / math.pi, "deg", 1), ("VX", "speed", 1.0, "m/s", 1)):
+            c = np.round(self.levels.get(ch, np.zeros(0)) * fac, digits) + 0.0  # + 0.0: no "-0.0"
             if c.size == 0:
                 parts.append(f"no {name} level")
             elif c.size == 1:
-                parts.append(f"1 {name} {c[0] * fac:.3g} {unit}")
+                parts.append(f"1 {name} {c[0]:.{digits}f} {unit}")
             else:
-                parts.append(f"{c.size} {name}s {c.min() * fac:.3g} to {c.max() * fac:.3g} {unit}")
+                parts.append(f"{c.size} {name}s {c.min():.{digits}f} to {c.max():.{digits}f} {unit}")
         for kind, what in (("slip_angle", "slip-angle sweeps"), ("slip_ratio", "slip-ratio sweeps"),
                            ("speed", "speed sweeps"), ("load", "load sweeps")):
             k = self.count(kind)
@@ -357,9 +357,12 @@ def recognise(data: TyreData) -> Programme:
                             **{f"{ch}_LEVEL": key[:, i] for i, ch in enumerate(cond_ch)}})
     slip_tests = np.isin(kind, ("slip_angle", "slip_ratio", "steady"))
     levels["VX"] = cluster_levels(vx[slip_tests])[1] if slip_tests.any() else np.zeros(0)
+    def beyond(x, threshold):  # slip applied on purpose: more than a few noise spikes beyond the threshold
+        return bool(np.sum(np.abs(x) > threshold) >= max(10, 0.005 * n))
+
     has = dict(
-        lateral_slip=bool(np.any(np.abs(sa) > SWEEP_THRESHOLD["SA"])),
-        longitudinal_slip=bool(np.any(np.abs(sl) > SWEEP_THRESHOLD["SL"])),
+        lateral_slip=beyond(sa, SWEEP_THRESHOLD["SA"]),
+        longitudinal_slip=beyond(sl, SWEEP_THRESHOLD["SL"]),
         camber=bool(np.any(np.abs(levels["IA"]) > math.radians(0.25))),
         speed_sweep=bool(np.any(kind == "speed")),
         loaded_radius=data.has("RL"), effective_radius=data.has("RE"),

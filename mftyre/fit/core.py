@@ -372,20 +372,21 @@ def _uncertainties(problem, prm, data):
 
 
 def _undetermined(names, values, stderr, corr):
-    """{name: reason} of the parameters the data do not determine: no effect on the data, standard error larger
-    than the value, or |correlation| > 0.99 with another (the one with the larger relative error)."""
-    out = {}
-    for n in names:
-        se = stderr.get(n)
-        if se is None:
-            out[n] = "no effect on the data"
-        elif se > abs(values[n]):
-            out[n] = f"standard error {se:.3g} exceeds its size {values[n]:.3g}"
+    """{name: reason} of the parameters the data do not determine, in order: those without effect on the data;
+    of each pair correlated beyond |r| = 0.99 the later one in the stage's order (the higher-order term: PKY2
+    rather than PKY1); only when no such pair is left, those whose standard error exceeds their size (a
+    collinear pair inflates the errors of both, so pairs are resolved first)."""
+    out = {n: "no effect on the data" for n in names if stderr.get(n) is None}
+    order = {n: i for i, n in enumerate(names)}
     for (a, b), c in sorted(corr.items(), key=lambda kv: -abs(kv[1])):
         if abs(c) > 0.99 and a not in out and b not in out:
-            rel = {x: (stderr.get(x) or np.inf) / max(abs(values[x]), 1e-300) for x in (a, b)}
-            worse = max(rel, key=rel.get)
-            out[worse] = f"correlated {c:+.4f} with {a if worse == b else b}"
+            later, earlier = (a, b) if order[a] > order[b] else (b, a)
+            out[later] = f"correlated {c:+.4f} with {earlier}"
+    if out:
+        return out
+    for n in names:
+        if stderr[n] > abs(values[n]):
+            out[n] = f"standard error {stderr[n]:.3g} exceeds its size {values[n]:.3g}"
     return out
 
 
@@ -440,9 +441,12 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
         return prm, StageResult(stage.name, stage.title, stage.channel, len(sub), [], skipped, {}, {}, {}, {},
                                 float("nan"), rejected=rejected or [], notes=list(notes))
 
+    if len(sub) == 0:
+        skipped.clear()
+        return not_fitted(f"no data for this stage ({_ROWS_NEEDED[stage.rows]} with a measured {stage.channel})")
     if len(sub) < max(len(names_all) + 1, 5) or not names_all:
-        return not_fitted("no data for this stage" if len(sub) == 0 else (
-            f"{len(sub)} points, too few for {len(names_all)} parameters" if names_all else "no parameter to fit"))
+        return not_fitted(f"{len(sub)} points, too few for {len(names_all)} parameters" if names_all
+                          else "no parameter to fit")
     before = prm
     notes = []
     if stage.name == "vertical":
@@ -517,6 +521,15 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
         result.fitted = []
         return before, result
     return prm, result
+
+
+#: what rows a stage needs, in words (for the reason a stage is not fitted)
+_ROWS_NEEDED = {"pure_lateral": "no rows with slip angle at zero longitudinal slip",
+                "pure_longitudinal": "no rows with longitudinal slip at zero slip angle",
+                "combined": "no rows with both slip angle and longitudinal slip",
+                "with_kappa": "no rows with longitudinal slip", "slip": "no rows with slip",
+                "free_rolling": "no free-rolling rows", "free_rolling_re": "no free-rolling rows",
+                "all_rl": "no rows"}
 
 
 def _fit_stages(data, prm, side, stages, fit_pressure, generic, weighting, progress, max_nfev, baseline,
