@@ -249,3 +249,22 @@ def test_command_logs_one_line_per_update_and_validates_numbers(truth, tmp_path,
     assert "CSV format" in help_text and "FZ  vertical load [N]" in help_text
     with pytest.raises(ValueError, match="bins must be an integer >= 3"):
         fit_tir(data, bins=1)
+
+
+def test_eight_point_load_deflection_gives_hardening_and_pressure(truth):
+    """2 pressures x 4 loads of measured deflection only (no RL): from a linear, pressure-blind start the vertical
+    stage finds the hardening (Q_FZ2) and the pressure dependence (PFZ1) of the true tyre, with uncertainties."""
+    import pandas as pd
+
+    rng = np.random.default_rng(8)
+    fz = np.tile([2000.0, 4000.0, 6000.0, 8000.0], 2)
+    p = np.repeat([1.8e5, 2.6e5], 4)
+    _, rho = truth.loaded_radius(fz, p=p)
+    data = TyreData(pd.DataFrame(dict(FZ=fz, SA=0.0, SL=0.0, VX=0.0, P=p, RHO=rho + 1e-5 * rng.normal(size=8))))
+    start = truth.params.replace(Q_FZ2=0.0, PFZ1=0.0)
+    res = fit_tir(data, start=start, stages=("vertical",))
+    st = res.stages["vertical"]
+    assert not st.rejected and {"Q_FZ2", "PFZ1"} <= set(st.fitted), (st.rejected, st.reset, st.skipped)
+    assert res.params.Q_FZ2 == pytest.approx(truth.params.Q_FZ2, rel=0.2)
+    assert res.params.PFZ1 == pytest.approx(truth.params.PFZ1, rel=0.1)
+    assert 0 < st.stderr["PFZ1"] < 0.1 * abs(st.values["PFZ1"]) and st.fit_error < 0.5

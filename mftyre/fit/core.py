@@ -158,8 +158,12 @@ def _predict(stage: Stage, model: MFModel, data: TyreData, inputs: dict) -> np.n
     if stage.output == "fz_from_rl":
         def chan(name):
             return np.nan_to_num(data.array(name)) if name in data else 0.0
-        return model.vertical_force(data.array("RL"), p=inputs["p"], omega=chan("OMEGA"), fx=chan("FX"),
-                                    fy=chan("FY"), gamma=inputs["gamma"])
+        if data.has("RL"):
+            rl = data.array("RL")
+        else:  # measured deflection: the loaded radius it means for the model
+            rl = vertical.free_radius(model.params, chan("OMEGA"), NUMPY) - data.array("RHO")
+        return model.vertical_force(rl, p=inputs["p"], omega=chan("OMEGA"), fx=chan("FX"), fy=chan("FY"),
+                                    gamma=inputs["gamma"])
     omega = data.array("OMEGA") if stage.output == "re" and data.has("OMEGA") else None
     return model.evaluate(**inputs, omega=omega)[stage.output]
 
@@ -174,7 +178,8 @@ class _BatchPredictor:
     def __init__(self, stage, prm, data, names, side):
         self.stage, self.prm, self.data, self.names, self.side = stage, prm, data, list(names), side
         structural = set(names) & STRUCTURAL_PARAMETERS
-        self.loop = side is not None or bool(structural and any(prm[f"QSX{i}"] != 0 for i in (12, 13, 14)))
+        self.loop = (side is not None or bool(structural and any(prm[f"QSX{i}"] != 0 for i in (12, 13, 14)))
+                     or (stage.output == "fz_from_rl" and prm.version == "62"))  # 6.2: branches on Q_FCY
         inp = data.inputs()
         self.inputs = inp
         row = {k: np.asarray(v, float)[None, :] for k, v in inp.items()}
@@ -182,7 +187,11 @@ class _BatchPredictor:
         if stage.output == "fz_from_rl":
             def chan(name):
                 return np.nan_to_num(data.array(name))[None, :] if name in data else np.zeros((1, len(data)))
-            self.vertical = dict(rl=data.array("RL")[None, :], omega=chan("OMEGA"), fx=chan("FX"), fy=chan("FY"))
+            self.vertical = dict(omega=chan("OMEGA"), fx=chan("FX"), fy=chan("FY"))
+            if data.has("RL"):
+                self.vertical["rl"] = data.array("RL")[None, :]
+            else:
+                self.vertical["rho"] = data.array("RHO")[None, :]
         self.omega_given = stage.output == "re" and data.has("OMEGA")
         self.omega = data.array("OMEGA")[None, :] if self.omega_given else np.zeros((1, len(data)))
 
@@ -199,12 +208,8 @@ class _BatchPredictor:
                 v = self.vertical
                 dpi = (r["p"] - prm.NOMPRES) / prm.NOMPRES
                 r_omega = vertical.free_radius(prm, v["omega"], NUMPY)
-                if self.prm.version == "62":
-                    out = vertical.vertical_force_62(prm, v["rl"], r_omega, v["omega"], v["fx"], v["fy"], r["gamma"],
-                                                     dpi, NUMPY)
-                else:
-                    out = vertical.vertical_force_61(prm, r_omega - v["rl"], r_omega, v["omega"], v["fx"], v["fy"],
-                                                     dpi, NUMPY)
+                rho = r_omega - v["rl"] if "rl" in v else v["rho"]
+                out = vertical.vertical_force_61(prm, rho, r_omega, v["omega"], v["fx"], v["fy"], dpi, NUMPY)
             else:
                 out = steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
                                    self.omega, self.omega_given, Modes(), NUMPY)[self.stage.output]
@@ -449,7 +454,7 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
                           else "no parameter to fit")
     before = prm
     notes = []
-    if stage.name == "vertical":
+    if stage.name == "vertical" and sub.has("RL"):
         prm, note, rejection = _vertical_consistency(prm, sub, radius_given)
         if rejection:
             return not_fitted("stage rejected", [rejection])
@@ -504,9 +509,7 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
     elif np.isfinite(err_before) and err > err_before * 1.001 + 1e-9:
         rejected.append(f"the fit error {err:.3g} % is worse than before the stage ({err_before:.3g} %)")
     if stage.name == "vertical" and not rejected:
-        _, rho = MFModel(prm, side=side).loaded_radius(sub.array("FZ"), p=sub.array("P"))
-        r_free = prm.UNLOADED_RADIUS * prm.Q_RE0
-        measured_rho = r_free - sub.array("RL")
+        measured_rho = (prm.UNLOADED_RADIUS * prm.Q_RE0 - sub.array("RL")) if sub.has("RL") else sub.array("RHO")
         if np.nanmin(measured_rho) < -0.02 * prm.UNLOADED_RADIUS or err > 25.0:
             rejected.append(f"the vertical relation does not describe the data (FZ error {err:.3g} %, measured "
                             f"deflection down to {np.nanmin(measured_rho):.3g} m)")
