@@ -268,3 +268,25 @@ def test_eight_point_load_deflection_gives_hardening_and_pressure(truth):
     assert res.params.Q_FZ2 == pytest.approx(truth.params.Q_FZ2, rel=0.2)
     assert res.params.PFZ1 == pytest.approx(truth.params.PFZ1, rel=0.1)
     assert 0 < st.stderr["PFZ1"] < 0.1 * abs(st.values["PFZ1"]) and st.fit_error < 0.5
+
+
+def test_physical_bounds_keep_radius_growth_and_stiffness_sane(truth):
+    """Whatever the optimiser does within the bounds, the free radius grows by at most 3 % up to beyond the
+    data's top speed and the vertical stiffness stays positive at every pressure of the data and the .tir."""
+    from mftyre.fit.core import physical_bounds
+    from mftyre.fit.verify import check_speeds
+
+    data = trailer_programme(truth, loads=(1.0,), pressures=(0.8, 1.2), cambers_deg=(0.0,), points=5)
+    bounds = physical_bounds(truth.params, data)
+    top = check_speeds(truth.params, data)[-1]
+    assert top >= 40.0
+    q_v1_max = bounds["Q_V1"][1]
+    extreme = truth.with_params(Q_V1=q_v1_max, Q_V2=bounds["Q_V2"][1])
+    omega = top / truth.params.UNLOADED_RADIUS
+    growth = q_v1_max * (omega * truth.params.UNLOADED_RADIUS / truth.params.LONGVL) ** 2
+    assert growth == pytest.approx(0.03)
+    assert verify_tir(extreme, data) == []
+    dpi = (np.array([truth.params.PRESMIN, truth.params.PRESMAX, 0.8 * 2.2e5, 1.2 * 2.2e5]) - 2.2e5) / 2.2e5
+    for pfz1 in bounds["PFZ1"]:
+        assert np.all(1.0 + pfz1 * dpi > 0)
+    assert bounds["Q_RE0"] == (0.95, 1.05)
