@@ -6,13 +6,14 @@ and which are transitions between conditions, and so which effects the data can 
 
 Levels (:func:`cluster_levels`) are the modes of the distribution of a condition channel: a histogram of
 bin width set by the channel's own short-term scatter (samples against the running median of their
-neighbours; for a channel that steps every row, the distance to the third-nearest value), smoothed, whose peaks are merged only when the valley between them is shallow (above half the
-lower peak). A level is therefore separated from its neighbour by the empty room between them, however close
-they are relative to the largest value (1650 / 2200 / 2750 N with a few percent scatter are three levels), and a
-slow ramp between levels is no level. Samples far from every level (more than 4 robust standard deviations
-of their nearest level, and more than the bin width) are off-level (label -1): ramps, load sweeps, transients.
-With a handful of points (< 50) distinct values whose separations are far below the others (a jump of 8x
-in the sorted separations) are merged: repeated settings that scatter.
+neighbours; for a channel that steps every row, the distance to the third-nearest value), smoothed, whose
+peaks are merged only when the valley between them is shallow (above half the lower peak). A level is
+therefore separated from its neighbour by the empty room between them, however close they are relative to
+the largest value (1650 / 2200 / 2750 N with a few percent scatter are three levels), and a slow ramp between
+levels is no level. Samples far from every level (more than 4 robust standard deviations of their nearest
+level, and more than the bin width) are off-level (label -1): ramps, load sweeps, transients. With a handful
+of points (< 50) distinct values whose separations are far below the others (a jump of 8x in the sorted
+separations) are merged: repeated settings that scatter.
 
 Segments and sweeps (:func:`recognise`): a new segment starts where the level of load, pressure or camber
 changes (an off-level run is a segment of its own). Within a segment the held slip channel's levels split it
@@ -304,7 +305,8 @@ def recognise(data: TyreData) -> Programme:
         split_by = None
         for ch, x in (("SA", sa), ("SL", sl)):
             other = sl if ch == "SA" else sa
-            if np.ptp(x[sub]) > SWEEP_THRESHOLD[ch] and np.ptp(other[sub]) > SWEEP_THRESHOLD["SL" if ch == "SA" else "SA"]:
+            other_ch = "SL" if ch == "SA" else "SA"
+            if np.ptp(x[sub]) > SWEEP_THRESHOLD[ch] and np.ptp(other[sub]) > SWEEP_THRESHOLD[other_ch]:
                 split_by = "SA" if np.ptp(sl[sub]) / SWEEP_THRESHOLD["SL"] > np.ptp(sa[sub]) / SWEEP_THRESHOLD["SA"] \
                     else "SL"
         if split_by is None:

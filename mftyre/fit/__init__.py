@@ -11,7 +11,8 @@ mz, combined_fx, combined_fy, mz_combined, mx, my, vertical, rolling_radius. Fit
 of Schmeitz et al. (2005), eq. (4) (:func:`normalised_rms`); the report's pressure comparison follows that
 paper's Table 2. Before fitting, the test programme is recognised (:mod:`mftyre.programme`) and a time series
 reduced per sweep (:mod:`mftyre.timeseries`); every stage result must pass :func:`verify_tir` (also the gap
-finder's check before it writes an improved .tir). Command line: ``mftyre fit DATA -o out.tir [--start FILE.tir] [--report report.md]``.
+finder's check before it writes an improved .tir).
+Command line: ``mftyre fit DATA -o out.tir [--start FILE.tir] [--report report.md]``.
 """
 from .core import BOUNDS, COMPARED_STAGES, FitResult, StageResult, fit_tir, load_data
 from .metrics import normalised_rms

@@ -1,13 +1,22 @@
 """Staged least-squares fitting of Magic Formula parameters with lmfit (trust-region reflective,
 ``scipy.optimize.least_squares``), and the lower/upper-bound comparison of Schmeitz et al. (2005), Table 2.
 
-Residuals: every residual evaluation runs the model once over the whole stage data (one vectorised
-:meth:`mftyre.MFModel.evaluate` call), residual_i = w_i (model_i - measured_i) / s with s the RMS of the
-measured channel over the stage data, so the cost is the squared normalised RMS error of
-:func:`mftyre.fit.normalised_rms` for uniform weights; w_i = 1 (``weighting="uniform"``) or FNOMIN / Fz_i
-(``"load"``: every load level counts alike). Shape conditions (:func:`mftyre.fit.stages.shape_violations`)
-enter as penalty residuals, 10 sqrt(n) times the violation, at the corners of the data's load, pressure and
-camber range. Model outputs that are not finite give the residual 10 (the step is rejected).
+Before the stages: the test programme is recognised (:func:`mftyre.programme.recognise`) and a time series is
+reduced per sweep to binned means with the up and down branches averaged (:func:`mftyre.timeseries.reduce_sweeps`).
+
+Residuals: residual_i = w_i (model_i - measured_i) / s with s the RMS of the measured channel over the stage
+data, so the cost is the squared normalised RMS error of :func:`mftyre.fit.normalised_rms` for uniform weights;
+w_i = 1 (``weighting="uniform"``) or FNOMIN / Fz_i (``"load"``: every load level counts alike). Shape
+conditions (:func:`mftyre.fit.stages.shape_violations`) enter as penalty residuals, 10 sqrt(n) times the
+violation, at the corners of the data's load, pressure and camber range. Model outputs that are not finite
+give the residual 10 (the step is rejected). The model is evaluated for all parameter vectors of a
+finite-difference Jacobian at once (:class:`_BatchPredictor`: parameters as column vectors against the data as
+a row), the optimiser stops on a relative cost change of 1e-6, BLAS runs on one thread.
+
+After each stage: undetermined parameters go back to their start values (:func:`_undetermined`), standard errors
+use the effective number of independent samples, and the stage is accepted only when it fits its data no
+worse than before and :func:`mftyre.fit.verify.verify_tir` finds no new problem (the vertical stage also
+needs a positive deflection at the measured loads); otherwise it is rejected and the previous values kept.
 """
 from __future__ import annotations
 
@@ -465,7 +474,8 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
         est = {k: v for k, v in estimate_stage(stage.name, prm, sub).items() if k in names_all}
         prm = prm.replace(**est)
     start = {n: float(prm[n]) for n in names_all}
-    err_before = normalised_rms(_predict(stage, MFModel(before, side=side), sub, sub.inputs()), sub.array(stage.channel))
+    err_before = normalised_rms(_predict(stage, MFModel(before, side=side), sub, sub.inputs()),
+                                sub.array(stage.channel))
     g, p = sub.array("IA"), sub.array("P")
     flat = np.abs(g) < math.radians(0.25)
     nominal = flat & (np.abs(p - prm.NOMPRES) <= 0.02 * prm.NOMPRES)
