@@ -59,8 +59,8 @@ def register(subparsers) -> None:
     p.add_argument("--no-pressure", action="store_true", help="do not fit the inflation-pressure terms")
     p.add_argument("--weighting", choices=("uniform", "load"), default="uniform",
                    help="residual weighting: uniform, or 1/Fz (every load alike)")
-    p.add_argument("--bins", type=_integer(3), default=25,
-                   help="bins per sweep when a time series is reduced (integer >= 3, default 25)")
+    p.add_argument("--bins", type=_integer(3), default=40,
+                   help="bins per sweep when a time series is reduced (integer >= 3, default 40)")
     p.add_argument("--max-nfev", type=_integer(1), default=None,
                    help="residual evaluations per pass at most (integer >= 1; default 30 x (parameters + 1))")
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
