@@ -110,8 +110,9 @@ def run(args) -> int:
             print(file=sys.stderr)
         print(f"mftyre fit: {exc}", file=sys.stderr)
         return 1
-    print(f"fitted {len(data)} points in {result.seconds:.1f} s; wrote {out}"
-          + (f" and {args.report}" if args.report else ""))
+    fitted = (f"{len(data)} rows ({len(result.data)} points after reduction)" if result.reduction is not None
+              else f"{len(data)} points")
+    print(f"fitted {fitted} in {result.seconds:.1f} s; wrote {out}" + (f" and {args.report}" if args.report else ""))
     for name, st in result.stages.items():
         print(f"  {name:<15} {st.n_points:6d} points  {len(st.fitted):3d} parameters  fit error "
               f"{st.fit_error:7.3f} %" + (f"  REJECTED: {'; '.join(st.rejected)}" if st.rejected else "")
