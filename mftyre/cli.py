@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .tir import same_file
+from .files import same_file
 
 __all__ = ["main", "build_parser"]
 

@@ -1,0 +1,117 @@
+"""The files a user hands to mftyre and the files it writes: one rule for all of them.
+
+Reading (:func:`read_user_file`): only regular files are read (a FIFO, a device such as ``/dev/zero`` or a
+directory is refused before a byte is read), and only up to a size limit, so a wrong path can neither block nor
+exhaust memory.
+
+Writing (:func:`check_outputs`, used by every command before it does any work): an output never replaces an input
+(compared by resolved path, and by inode where both exist), two outputs are never the same file, and an existing
+output is replaced only with ``--overwrite`` (``overwrite=True``). :func:`write_atomically` writes through a
+temporary file in the target folder and renames it into place, with the ordinary permissions of a new file
+(0666 less the umask, e.g. 0644).
+"""
+from __future__ import annotations
+
+import os
+import secrets
+import stat
+from collections.abc import Iterable
+from pathlib import Path
+
+from .errors import MFTyreError
+
+__all__ = ["OutputError", "read_user_file", "same_file", "check_outputs", "write_atomically",
+           "TIR_MAX_BYTES", "DATA_MAX_BYTES"]
+
+#: Largest .tir file read (16 MiB; real files are tens of kB).
+TIR_MAX_BYTES = 16 * 2**20
+#: Largest CSV/TYDEX file read (2 GiB; 1e6 rows of 17 channels are about 300 MB).
+DATA_MAX_BYTES = 2 * 2**30
+
+
+class OutputError(MFTyreError, FileExistsError):
+    """An output file would replace an input or an existing file (without ``--overwrite``)."""
+
+
+def read_user_file(path, *, max_bytes: int, what: str, error=MFTyreError) -> bytes:
+    """The bytes of the regular file ``path``; ``error`` (an MFTyreError subclass) naming the path and ``what``
+    was expected when it is missing, not a regular file or larger than ``max_bytes``."""
+    name = str(path)
+    try:  # O_NONBLOCK: opening a FIFO with no writer must not block; it is refused below
+        fd = os.open(name, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+    except FileNotFoundError:
+        raise error(f"{name}: file not found: expected an existing {what}") from None
+    except IsADirectoryError:
+        raise error(f"{name}: is a directory: expected a {what}") from None
+    except OSError as exc:
+        raise error(f"{name}: cannot open: {exc.strerror}: expected a readable {what}") from None
+    with os.fdopen(fd, "rb") as fh:
+        info = os.fstat(fd)
+        if stat.S_ISDIR(info.st_mode):
+            raise error(f"{name}: is a directory: expected a {what}")
+        if not stat.S_ISREG(info.st_mode):
+            raise error(f"{name}: not a regular file (a device, FIFO or socket): expected a {what}")
+        if info.st_size > max_bytes:
+            raise error(f"{name}: {info.st_size} bytes, more than the limit of {max_bytes} bytes for a {what}")
+        data = fh.read(max_bytes + 1)  # the file may have grown since fstat
+    if len(data) > max_bytes:
+        raise error(f"{name}: more than the limit of {max_bytes} bytes for a {what}")
+    return data
+
+
+def same_file(a, b) -> bool:
+    """True when ``a`` and ``b`` name the same file: by inode where both exist, else by resolved path."""
+    a, b = Path(a), Path(b)
+    try:
+        if a.exists() and b.exists():
+            return os.path.samefile(a, b)
+    except OSError:
+        pass
+    return a.resolve() == b.resolve()
+
+
+def check_outputs(outputs: Iterable, inputs: Iterable = (), *, overwrite: bool = False,
+                  option: str = "--overwrite") -> None:
+    """Refuse (:class:`OutputError`) to write any of ``outputs`` when it is one of ``inputs``, when two outputs
+    are the same file, or when it exists and ``overwrite`` is false. ``None`` entries are ignored; ``option`` is
+    how the caller spells the permission in the message (``--overwrite`` or ``overwrite=True``)."""
+    outputs = [Path(o) for o in outputs if o is not None]
+    inputs = [Path(i) for i in inputs if i is not None]
+    for out in outputs:
+        for inp in inputs:
+            if same_file(out, inp):
+                raise OutputError(f"{out}: is the input file {inp}; an input is never overwritten: choose "
+                                  "another output path")
+    for i, out in enumerate(outputs):
+        for other in outputs[i + 1:]:
+            if same_file(out, other):
+                raise OutputError(f"{out}: given for two outputs ({other}); choose different paths")
+    existing = [str(o) for o in outputs if o.exists() or o.is_symlink()]
+    if existing and not overwrite:
+        raise OutputError(f"{', '.join(existing)}: exist{'s' if len(existing) == 1 else ''}; pass {option} to "
+                          "replace")
+    for out in outputs:
+        if out.is_dir():
+            raise OutputError(f"{out}: is a directory: expected a file path")
+
+
+def write_atomically(path, data: bytes | str) -> Path:
+    """Write ``data`` (text as UTF-8) to ``path`` through a temporary file in the same folder renamed into
+    place; the new file has the permissions of any new file (0666 less the umask). Returns the path."""
+    path = Path(path)
+    if isinstance(data, str):
+        data = data.encode("utf-8")
+    folder = path.parent
+    tmp = folder / f".{path.name}.{secrets.token_hex(6)}.tmp"
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+    return path
