@@ -64,8 +64,11 @@ required channel.
 """
 from __future__ import annotations
 
+import csv
 import datetime as _dt
+import io
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -73,6 +76,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import DataError
+from .files import DATA_MAX_BYTES, read_user_file
 from .tir import UNIT_FACTORS
 
 __all__ = [
@@ -169,7 +173,7 @@ class TyreData:
                 self.frame[name] = 0.0
                 self.history.append(f"{name} absent: set to 0")
         for name in CHANNELS:
-            if name in self.frame.columns:
+            if name in self.frame.columns and not pd.api.types.is_float_dtype(self.frame[name].dtype):
                 col = pd.to_numeric(self.frame[name], errors="coerce").astype(float)
                 bad = col.isna() & self.frame[name].notna()
                 if bad.any():
@@ -177,11 +181,7 @@ class TyreData:
                     raise DataError(f"{where}: row {row}: channel {name}: non-numeric value "
                                     f"{self.frame[name].iloc[row]!r}")
                 self.frame[name] = col
-        for name in (*REQUIRED, *_ZERO_DEFAULT):
-            nan = self.frame[name].isna().to_numpy()
-            if nan.any():
-                raise DataError(f"{where}: row {int(np.flatnonzero(nan)[0])}: channel {name}: NaN in a required "
-                                f"channel ({int(nan.sum())} rows)")
+        _check_values(self.frame, lambda row: f"{where}: row {row}")
 
     # -- table access --------------------------------------------------------------------------------
     def __len__(self) -> int:
@@ -232,52 +232,106 @@ class TyreData:
 
 
 # ------------------------------------------------------------------------------------------------ CSV
+#: Text read as "not measured" (NaN) in CSV and TYDEX data; any other non-number is an error.
+_NAN_TEXT = ["", "nan", "NaN", "NAN"]
+
+
 def read_csv(path, *, columns: dict | None = None, units: dict | None = None, defaults: dict | None = None,
-             tyre: str = "") -> TyreData:
+             tyre: str = "", max_bytes: int = DATA_MAX_BYTES) -> TyreData:
     """Read a CSV file into :class:`TyreData`.
 
-    ``columns``: file column -> channel for columns not named canonically; ``units``: channel -> unit of the
-    file (SI when absent); ``defaults``: channel -> constant SI value for a required channel the file lacks
-    (e.g. ``{"P": 2.2e5, "VX": 16.7}``).
+    Comma separated, one header row (UTF-8, a byte-order mark allowed), one row per sample. ``columns``: file
+    column -> channel for columns not named canonically; ``units``: channel -> unit of the file (SI when
+    absent); ``defaults``: channel -> constant SI value for a required channel the file lacks (e.g.
+    ``{"P": 2.2e5, "VX": 16.7}``). An empty field or ``nan`` is "not measured" (an error in a required
+    channel); infinite values (``inf``, ``1e400``) are errors in every channel; two columns for one channel are
+    an error. Files larger than ``max_bytes`` are refused.
     """
     path = Path(path)
+    raw_bytes = read_user_file(path, max_bytes=max_bytes, what="CSV data file", error=DataError)
+    header = _csv_header(raw_bytes, path)
     try:
-        raw = pd.read_csv(path, dtype=str, skipinitialspace=True, keep_default_na=False)
-    except (OSError, pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise DataError(f"{path}: cannot read as CSV: {exc}") from exc
-    raw.columns = [str(c).strip() for c in raw.columns]
-    mapping = {c: c.upper() for c in raw.columns if c.upper() in CHANNELS}
+        raw = pd.read_csv(io.BytesIO(raw_bytes), skipinitialspace=True, keep_default_na=False, na_values=_NAN_TEXT,
+                          encoding="utf-8-sig")
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, ValueError) as exc:
+        raise DataError(f"{path}: cannot read as CSV: {exc}") from None
+    del raw_bytes
+    if len(raw.columns) != len(header):  # pragma: no cover - pandas and the csv module agree on the header
+        raise DataError(f"{path}: line 1: cannot read the header")
+    raw.columns = header
+    if len(raw) == 0:
+        raise DataError(f"{path}: no data rows: expected a header line followed by one line per sample")
+    mapping = {c: c.upper() for c in header if c.upper() in CHANNELS}
     for col, ch in (columns or {}).items():
-        if col not in raw.columns:
+        if col not in header:
             raise DataError(f"{path}: line 1: column {col!r} (for {ch}) not in the header; columns are "
-                            f"{', '.join(raw.columns)}")
+                            f"{', '.join(header)}")
         if ch.upper() not in CHANNELS:
             raise DataError(f"{path}: unknown channel {ch!r} for column {col!r}; channels: {', '.join(CHANNELS)}")
         mapping[col] = ch.upper()
+    _refuse_duplicates(header, mapping, path)
     units = {k.upper(): v for k, v in (units or {}).items()}
-    frame = pd.DataFrame(index=raw.index)
-    for col in raw.columns:
+    columns_out = {}
+    column_of = {}
+    for i, col in enumerate(header):
         ch = mapping.get(col)
-        text = raw[col].str.strip()
-        values = pd.to_numeric(text.replace({"": "nan", "NaN": "nan", "nan": "nan"}), errors="coerce")
-        bad = values.isna() & ~text.str.lower().isin(["", "nan"])
+        series = raw.iloc[:, i]
         if ch is None:
-            frame[col] = values if not bad.any() else raw[col]
+            columns_out[col] = series
             continue
-        if bad.any():
-            row = int(np.flatnonzero(bad.to_numpy())[0])
-            raise DataError(f"{path}: line {row + 2}: column {col!r} ({ch}): non-numeric value {text.iloc[row]!r}")
+        values = _numeric_column(series, lambda row, text: f"{path}: line {row + 2}: column {col!r} ({ch}): "
+                                                           f"non-numeric value {text!r}")
         factor = 1.0
         if ch in units:
             try:
                 factor = unit_to_si(ch, units[ch])
             except ValueError as exc:
                 raise DataError(f"{path}: column {col!r}: {exc}") from None
-        frame[ch] = values.to_numpy(float) * factor
+        columns_out[ch] = values * factor if factor != 1.0 else values
+        column_of[ch] = col
+    frame = pd.DataFrame(columns_out, copy=False)
     _apply_defaults(frame, defaults, path)
-    _check_required(frame, path, lambda row: f"line {row + 2}")
+    _check_required(frame, path, lambda row: f"{path}: line {row + 2}", column_of)
     unit_record = {ch: units.get(ch, _SI_NAME[CHANNELS[ch][0]]) for ch in CHANNELS if ch in frame.columns}
     return TyreData(frame, tyre=tyre or path.stem, source=str(path), units=unit_record)
+
+
+def _csv_header(raw_bytes: bytes, path) -> list[str]:
+    """The column names of the first line, stripped (a UTF-8 byte-order mark removed)."""
+    first = raw_bytes[:raw_bytes.find(b"\n") if b"\n" in raw_bytes else len(raw_bytes)]
+    try:
+        text = first.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise DataError(f"{path}: line 1: cannot read as CSV: {exc}") from None
+    names = next(csv.reader([text.rstrip("\r")]), [])
+    if not any(n.strip() for n in names):
+        raise DataError(f"{path}: line 1: no header: expected column names such as FZ,SA,SL,VX,P")
+    return [n.strip() for n in names]
+
+
+def _refuse_duplicates(header: list[str], mapping: dict, path) -> None:
+    seen: dict[str, str] = {}
+    for col in header:
+        ch = mapping.get(col, col)
+        if ch in seen:
+            what = f"column {col!r}" + (f" ({ch})" if ch != col else "")
+            also = f" (also as column {seen[ch]!r})" if seen[ch] != col else ""
+            raise DataError(f"{path}: line 1: {what} appears twice{also}: expected one column per channel")
+        seen[ch] = col
+
+
+def _numeric_column(series: pd.Series, where) -> np.ndarray:
+    """Float values of a column pandas has read; DataError ``where(row, text)`` at the first non-number
+    (Fortran exponents ``1.0D+3`` are read as numbers)."""
+    if pd.api.types.is_numeric_dtype(series.dtype) and not pd.api.types.is_bool_dtype(series.dtype):
+        return series.to_numpy(dtype=float)
+    text = series.astype(str).str.strip()
+    values = pd.to_numeric(text.str.replace(r"(?<=[0-9.])[dD](?=[+-]?[0-9])", "e", regex=True), errors="coerce")
+    bad = values.isna() & series.notna() & ~text.isin(_NAN_TEXT)
+    if bad.any():
+        row = int(np.flatnonzero(bad.to_numpy())[0])
+        raise DataError(where(row, text.iloc[row]))
+    return values.to_numpy(dtype=float)
 
 
 def _apply_defaults(frame, defaults, path):
@@ -289,20 +343,32 @@ def _apply_defaults(frame, defaults, path):
             frame[ch] = float(value)
 
 
-def _check_required(frame, path, where):
+def _check_required(frame, path, locate, column_of=None):
     missing = [c for c in REQUIRED if c not in frame.columns]
     if missing:
         raise DataError(f"{path}: missing channel(s) {', '.join(missing)} (required: {', '.join(REQUIRED)}; give "
                         f"a column map, or `defaults=` for a constant)")
-    _check_finite(frame, lambda row: f"{path}: {where(row)}")
+    _check_values(frame, locate, column_of)
 
 
-def _check_finite(frame, locate):
-    """DataError at the first NaN of a required channel; ``locate(row)`` says where that row is in the file."""
-    for ch in (*REQUIRED, *(c for c in _ZERO_DEFAULT if c in frame.columns)):
-        nan = np.isnan(frame[ch].to_numpy(float))
-        if nan.any():
-            raise DataError(f"{locate(int(np.flatnonzero(nan)[0]))}: channel {ch}: NaN in a required channel")
+def _check_values(frame, locate, column_of=None):
+    """DataError at the first value no measurement can have: NaN or +-inf in a required channel (and in IA,
+    PHIT when present), +-inf in any other channel (NaN there means "not measured"). ``locate(row)`` says
+    where that row is; ``column_of``: channel -> the file's column name, when they differ."""
+    for ch in CHANNELS:
+        if ch not in frame.columns:
+            continue
+        values = frame[ch].to_numpy(dtype=float)
+        required = ch in REQUIRED or ch in _ZERO_DEFAULT
+        bad = ~np.isfinite(values) if required else np.isinf(values)
+        if not bad.any():
+            continue
+        row = int(np.flatnonzero(bad)[0])
+        col = (column_of or {}).get(ch, ch)
+        what = ("NaN in a required channel" if np.isnan(values[row])
+                else f"{values[row]} (infinite, or beyond the float range such as 1e400): expected a finite number")
+        column = f"file column {col!r}, " if col != ch else ""
+        raise DataError(f"{locate(row)}: channel {ch}: {what} ({column}{int(bad.sum())} rows)")
 
 
 # ---------------------------------------------------------------------------------------------- TYDEX
@@ -324,70 +390,59 @@ def _fixed_fields(line: str):
     return line[:10].strip(), line[10:40].strip(), line[40:50].strip(), line[50:].strip()
 
 
-def read_tydex(path, *, defaults: dict | None = None) -> TyreData:
-    """Read a TYDEX ``.tdx`` file (the subset described in the module docstring) into :class:`TyreData`."""
+_DATA_BLOCK = re.compile(rb"^[ \t]*\*\*MEASURDATA(?=\s|\Z)[^\n]*\n?", re.M | re.I)
+
+
+def _block_start(raw: bytes, start: int) -> int:
+    """Offset of the first line at or after ``start`` that opens a block (``**``), else ``len(raw)``."""
+    at = raw.find(b"**", start)
+    while at >= 0:
+        line_start = raw.rfind(b"\n", start, at) + 1 if at > start else start
+        if not raw[line_start:at].strip():
+            return line_start
+        at = raw.find(b"**", at + 2)
+    return len(raw)
+
+
+def read_tydex(path, *, defaults: dict | None = None, max_bytes: int = DATA_MAX_BYTES) -> TyreData:
+    """Read a TYDEX ``.tdx`` file (the subset described in the module docstring) into :class:`TyreData`.
+
+    UTF-8 (a byte-order mark allowed); ``nan`` in the data is "not measured" (an error in a required channel).
+    Files larger than ``max_bytes`` are refused."""
     path = Path(path)
-    try:
-        lines = path.read_text(encoding="utf-8", errors="strict").splitlines()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DataError(f"{path}: cannot read: {exc}") from exc
-    block = None
-    seen = set()
-    header, constants, channels, rows, row_lines = {}, {}, [], [], []
-    for lineno, line in enumerate(lines, 1):
-        stripped = line.strip()
-        if not stripped or stripped.startswith("!"):
-            continue
-        if stripped.startswith("**"):
-            key = stripped.split()[0].upper()
-            if key not in _BLOCKS:
-                raise DataError(f"{path}:{lineno}: unknown block {stripped!r}; expected one of {', '.join(_BLOCKS)}")
-            block = key
-            seen.add(key)
-            if key == "**END":
-                break
-            continue
-        if block is None:
-            raise DataError(f"{path}:{lineno}: text before the first block (**HEADER expected)")
-        if block in ("**HEADER", "**CONSTANTS"):
-            name, desc, unit, value = _fixed_fields(line)
-            if not name:
-                raise DataError(f"{path}:{lineno}: column 1-10: empty name in {block}")
-            target = header if block == "**HEADER" else constants
-            target[name.upper()] = (_constant_value(name.upper(), unit, value, path, lineno), unit, desc)
-        elif block == "**MEASURCHANNELS":
-            name, desc, unit, rest = _fixed_fields(line)
-            parts = rest.split()
-            if not name or not parts:
-                raise DataError(f"{path}:{lineno}: channel line needs name (columns 1-10), description, unit "
-                                f"(41-50) and a conversion factor (from column 51): {line!r}")
-            try:
-                numbers = [float(p.replace("D", "E").replace("d", "e")) for p in parts[:3]]
-            except ValueError:
-                raise DataError(f"{path}:{lineno}: column 51: channel {name}: non-numeric factor/offset "
-                                f"{rest!r}") from None
-            factor, offset = numbers[0], sum(numbers[1:])
-            channels.append((name.upper(), unit, factor, offset, lineno))
-        elif block == "**MEASURDATA":
-            rows.append(stripped.split())
-            row_lines.append(lineno)
-        # **COMMENTS: free text, ignored
+    raw = read_user_file(path, max_bytes=max_bytes, what="TYDEX data file", error=DataError)
+    if raw.startswith(b"\xef\xbb\xbf"):
+        raw = raw[3:]
+    if b"\r" in raw:
+        raw = raw.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
+    # the sample rows (the bulk of the file) are parsed by pandas; the blocks around them line by line
+    found = _DATA_BLOCK.search(raw)
+    data_start = found.end() if found else len(raw)
+    data_end = _block_start(raw, data_start) if found else len(raw)
+    head = _decode(raw[:found.start()] if found else raw, path)
+    state = _TydexBlocks(path)
+    ended = state.read(head.split("\n"), first_line=1)
+    if found and not ended:
+        state.seen.add("**MEASURDATA")
+        data_line = raw.count(b"\n", 0, data_start) + 1  # file line of the first sample row
+        tail = raw[data_end:]
+        if not tail.lstrip().upper().startswith(b"**END"):  # anything but **END: line numbers are needed
+            tail_line = data_line + raw.count(b"\n", data_start, data_end)
+            state.read(_decode(tail, path).split("\n"), first_line=tail_line, after_data=True)
+        block = memoryview(raw)[data_start:data_end]  # a view: the sample rows are not copied
+    else:
+        block, data_line = memoryview(b""), 0
     for needed in ("**MEASURCHANNELS", "**MEASURDATA"):
-        if needed not in seen:
+        if needed not in state.seen:
             raise DataError(f"{path}: no {needed} block")
+    channels = state.channels
     if not channels:
         raise DataError(f"{path}: **MEASURCHANNELS lists no channel")
-    data = np.empty((len(rows), len(channels)))
-    for i, (row, lineno) in enumerate(zip(rows, row_lines)):
-        if len(row) != len(channels):
-            raise DataError(f"{path}:{lineno}: {len(row)} values, expected {len(channels)} (one per channel)")
-        for j, text in enumerate(row):
-            try:
-                data[i, j] = float(text.replace("D", "E").replace("d", "e"))
-            except ValueError:
-                raise DataError(f"{path}:{lineno}: value {j + 1} (channel {channels[j][0]}): non-numeric "
-                                f"value {text!r}") from None
-    frame = pd.DataFrame(index=range(len(rows)))
+    data, lines = _tydex_samples(block, data_line, channels, path)
+    if len(data) == 0:
+        raise DataError(f"{path}:{max(data_line - 1, 1)}: no data rows in **MEASURDATA: expected one line of values "
+                        "per sample")
+    frame = pd.DataFrame(index=range(len(data)))
     units = {}
     for j, (name, unit, factor, offset, lineno) in enumerate(channels):
         values = factor * data[:, j] + offset
@@ -400,7 +455,7 @@ def read_tydex(path, *, defaults: dict | None = None) -> TyreData:
         except ValueError as exc:
             raise DataError(f"{path}:{lineno}: columns 41-50: channel {name}: {exc}") from None
         units[ch] = unit
-    for name, (value, unit, _) in constants.items():  # constants standing in for absent channels
+    for name, (value, unit, _) in state.constants.items():  # constants standing in for absent channels
         ch = _CHANNEL_OF_TYDEX.get(name)
         if ch in REQUIRED + _ZERO_DEFAULT and ch not in frame.columns and isinstance(value, float):
             frame[ch] = value
@@ -410,10 +465,143 @@ def read_tydex(path, *, defaults: dict | None = None) -> TyreData:
     if missing:
         raise DataError(f"{path}: missing channel(s) {', '.join(missing)}: neither a measurement channel "
                         f"({', '.join(_TYDEX_NAMES[c][0] for c in missing)}) nor a constant")
-    _check_finite(frame, lambda row: f"{path}:{row_lines[row]}")
-    tyre = str(header.get("MEASID", ("", "", ""))[0] or path.stem)
-    consts = {k: v[0] for k, v in {**header, **constants}.items()}
+    name_of = {_CHANNEL_OF_TYDEX[name]: name for name, *_ in channels if name in _CHANNEL_OF_TYDEX}
+    _check_values(frame, lambda row: f"{path}:{lines()[row]}", name_of)
+    tyre = str(state.header.get("MEASID", ("", "", ""))[0] or path.stem)
+    consts = {k: v[0] for k, v in {**state.header, **state.constants}.items()}
     return TyreData(frame, tyre=tyre, source=str(path), units=units, constants=consts)
+
+
+def _decode(raw: bytes, path) -> str:
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        raise DataError(f"{path}: cannot read: not UTF-8 text near byte {exc.start} (line {line} of this part)") \
+            from None
+
+
+class _TydexBlocks:
+    """The blocks other than the sample rows, read line by line: header, constants, channels."""
+
+    def __init__(self, path):
+        self.path = path
+        self.block = None
+        self.seen: set[str] = set()
+        self.header: dict = {}
+        self.constants: dict = {}
+        self.channels: list = []
+
+    def read(self, lines, first_line: int, after_data: bool = False) -> bool:
+        """Read ``lines`` (file line numbers from ``first_line``); True when ``**END`` was reached."""
+        path = self.path
+        if after_data:
+            self.block = "**MEASURDATA"
+        for lineno, line in enumerate(lines, first_line):
+            stripped = line.strip()
+            if not stripped or stripped.startswith("!"):
+                continue
+            if stripped.startswith("**"):
+                key = stripped.split()[0].upper()
+                if key not in _BLOCKS:
+                    raise DataError(f"{path}:{lineno}: unknown block {stripped[:40]!r}; expected one of "
+                                    f"{', '.join(_BLOCKS)}")
+                if key == "**MEASURDATA" and after_data:
+                    raise DataError(f"{path}:{lineno}: a second **MEASURDATA block: expected one")
+                self.block = key
+                self.seen.add(key)
+                if key == "**END":
+                    return True
+                continue
+            if self.block is None:
+                raise DataError(f"{path}:{lineno}: text before the first block (**HEADER expected)")
+            if self.block in ("**HEADER", "**CONSTANTS"):
+                name, desc, unit, value = _fixed_fields(line)
+                if not name:
+                    raise DataError(f"{path}:{lineno}: column 1-10: empty name in {self.block}")
+                target = self.header if self.block == "**HEADER" else self.constants
+                target[name.upper()] = (_constant_value(name.upper(), unit, value, path, lineno), unit, desc)
+            elif self.block == "**MEASURCHANNELS":
+                name, desc, unit, rest = _fixed_fields(line)
+                parts = rest.split()
+                if not name or not parts:
+                    raise DataError(f"{path}:{lineno}: channel line needs name (columns 1-10), description, unit "
+                                    f"(41-50) and a conversion factor (from column 51): {line[:80]!r}")
+                try:
+                    numbers = [float(p.replace("D", "E").replace("d", "e")) for p in parts[:3]]
+                except ValueError:
+                    raise DataError(f"{path}:{lineno}: column 51: channel {name}: non-numeric factor/offset "
+                                    f"{rest[:40]!r}") from None
+                if not all(math.isfinite(x) for x in numbers):
+                    raise DataError(f"{path}:{lineno}: column 51: channel {name}: factor/offset {rest[:40]!r} "
+                                    "is not finite")
+                self.channels.append((name.upper(), unit, numbers[0], sum(numbers[1:]), lineno))
+            elif self.block == "**MEASURDATA":  # only after the data block: text where a block should start
+                raise DataError(f"{path}:{lineno}: values after the sample rows: expected a block keyword (**END)")
+            # **COMMENTS: free text, ignored
+        return False
+
+
+class _Reader(io.RawIOBase):
+    """A read-only binary file over a memoryview (pandas reads it in chunks; nothing is copied whole)."""
+
+    def __init__(self, view: memoryview):
+        self._view, self._at = view, 0
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, buffer) -> int:
+        n = min(len(buffer), len(self._view) - self._at)
+        buffer[:n] = self._view[self._at:self._at + n]
+        self._at += n
+        return n
+
+
+def _tydex_samples(block: bytes, first_line: int, channels, path):
+    """The sample rows (whitespace-separated numbers, one per channel) as a float array, and a function that
+    gives the file line of each row (computed only for an error message)."""
+    n = len(channels)
+    cache = []
+
+    def lines() -> np.ndarray:
+        if not cache:
+            numbers = [first_line + i for i, text in enumerate(bytes(block).split(b"\n"))
+                       if text.strip() and not text.strip().startswith(b"!")]
+            cache.append(np.asarray(numbers))
+        return cache[0]
+
+    def token_count_error():
+        for row, lineno in enumerate(lines()):
+            text = bytes(block).split(b"\n")[lineno - first_line].split(b"!")[0].split()
+            if len(text) != n:
+                raise DataError(f"{path}:{lineno}: {len(text)} values, expected {n} (one per channel)")
+
+    if not re.search(rb"[^\s]", block):
+        return np.empty((0, n)), lines
+    try:  # one spare column: a row with one value too many lands there instead of failing without a line
+        table = pd.read_csv(_Reader(block), sep=r"\s+", header=None, names=range(n + 1), comment="!",
+                            keep_default_na=False, na_values=_NAN_TEXT, skip_blank_lines=True, encoding="utf-8")
+    except pd.errors.ParserError:
+        token_count_error()
+        raise  # pragma: no cover - the scan above finds the row pandas failed on
+    except (UnicodeDecodeError, ValueError) as exc:
+        raise DataError(f"{path}: **MEASURDATA: cannot read: {exc}") from None
+    if table[n].notna().any():
+        token_count_error()
+    if table[n - 1].isna().any():  # a short row, or "nan" values in the last channel: look at those rows
+        short = np.flatnonzero(table[n - 1].isna().to_numpy())
+        rows = bytes(block).split(b"\n")
+        for row in short:
+            lineno = lines()[row]
+            count = len(rows[lineno - first_line].split(b"!")[0].split())
+            if count != n:
+                raise DataError(f"{path}:{lineno}: {count} values, expected {n} (one per channel)")
+    data = np.empty((len(table), n), order="F")  # columns contiguous
+    for j in range(n):
+        data[:, j] = _numeric_column(table[j], lambda row, text: f"{path}:{lines()[row]}: value {j + 1} (channel "
+                                                                 f"{channels[j][0]}): non-numeric value {text!r}")
+    return data, lines
 
 
 def _constant_value(name, unit, text, path, lineno):

@@ -53,9 +53,9 @@ def read_user_file(path, *, max_bytes: int, what: str, error=MFTyreError) -> byt
             raise error(f"{name}: not a regular file (a device, FIFO or socket): expected a {what}")
         if info.st_size > max_bytes:
             raise error(f"{name}: {info.st_size} bytes, more than the limit of {max_bytes} bytes for a {what}")
-        data = fh.read(max_bytes + 1)  # the file may have grown since fstat
-    if len(data) > max_bytes:
-        raise error(f"{name}: more than the limit of {max_bytes} bytes for a {what}")
+        data = fh.read(info.st_size + 1)
+    if len(data) != info.st_size:
+        raise error(f"{name}: changed while being read: expected a {what} that is not being written to")
     return data
 
 
