@@ -4,6 +4,9 @@ Reading (:func:`read_user_file`): only regular files are read (a FIFO, a device 
 directory is refused before a byte is read), and only up to a size limit, so a wrong path can neither block nor
 exhaust memory.
 
+Sample files (:func:`sample_tir`): the .tir files of the repository's ``tir_files/`` folder, installed with the
+package as ``mftyre.tir_files``.
+
 Writing (:func:`check_outputs`, used by every command before it does any work): an output never replaces an input
 (compared by resolved path, and by inode where both exist), two outputs are never the same file, and an existing
 output is replaced only with ``--overwrite`` (``overwrite=True``). :func:`write_atomically` writes through a
@@ -12,6 +15,7 @@ temporary file in the target folder and renames it into place, with the ordinary
 """
 from __future__ import annotations
 
+import importlib.resources
 import os
 import secrets
 import stat
@@ -20,7 +24,7 @@ from pathlib import Path
 
 from .errors import MFTyreError
 
-__all__ = ["OutputError", "read_user_file", "same_file", "check_outputs", "write_atomically",
+__all__ = ["OutputError", "read_user_file", "same_file", "check_outputs", "write_atomically", "sample_tir",
            "TIR_MAX_BYTES", "DATA_MAX_BYTES"]
 
 #: Largest .tir file read (16 MiB; real files are tens of kB).
@@ -70,29 +74,42 @@ def same_file(a, b) -> bool:
     return a.resolve() == b.resolve()
 
 
-def check_outputs(outputs: Iterable, inputs: Iterable = (), *, overwrite: bool = False,
-                  option: str = "--overwrite") -> None:
-    """Refuse (:class:`OutputError`) to write any of ``outputs`` when it is one of ``inputs``, when two outputs
-    are the same file, or when it exists and ``overwrite`` is false. ``None`` entries are ignored; ``option`` is
-    how the caller spells the permission in the message (``--overwrite`` or ``overwrite=True``)."""
-    outputs = [Path(o) for o in outputs if o is not None]
-    inputs = [Path(i) for i in inputs if i is not None]
-    for out in outputs:
-        for inp in inputs:
-            if same_file(out, inp):
-                raise OutputError(f"{out}: is the input file {inp}; an input is never overwritten: choose "
-                                  "another output path")
-    for i, out in enumerate(outputs):
-        for other in outputs[i + 1:]:
-            if same_file(out, other):
-                raise OutputError(f"{out}: given for two outputs ({other}); choose different paths")
-    existing = [str(o) for o in outputs if o.exists() or o.is_symlink()]
-    if existing and not overwrite:
-        raise OutputError(f"{', '.join(existing)}: exist{'s' if len(existing) == 1 else ''}; pass {option} to "
-                          "replace")
-    for out in outputs:
+def check_outputs(outputs: dict, inputs: dict | None = None, *, folders: dict | None = None,
+                  overwrite: bool = False, option: str = "--overwrite") -> None:
+    """Refuse (:class:`OutputError`) to write before any work is done, when
+
+    * an output file (``outputs``: label -> path, e.g. ``{"--csv": "out.csv"}``) or an output folder
+      (``folders``: label -> folder the command writes its files into) is one of the ``inputs`` (label -> path),
+    * two outputs are the same file,
+    * an output file exists, or an output folder exists and is not empty, and ``overwrite`` is false.
+
+    ``None`` paths are ignored; ``option`` is how the caller spells the permission (``--overwrite`` or
+    ``overwrite=True``)."""
+    files = {k: Path(v) for k, v in outputs.items() if v is not None}
+    dirs = {k: Path(v) for k, v in (folders or {}).items() if v is not None}
+    sources = {k: Path(v) for k, v in (inputs or {}).items() if v is not None}
+    for label, out in (*files.items(), *dirs.items()):
+        for source_label, source in sources.items():
+            if same_file(out, source):
+                raise OutputError(f"{label} {out}: is the input {source_label} ({source}); an input is never "
+                                  "overwritten: choose another output path")
+    labels = list(files)
+    for i, label in enumerate(labels):
+        for other in labels[i + 1:]:
+            if same_file(files[label], files[other]):
+                raise OutputError(f"{label} {files[label]}: is also the {other} output; choose different paths")
+    for label, out in files.items():
         if out.is_dir():
-            raise OutputError(f"{out}: is a directory: expected a file path")
+            raise OutputError(f"{label} {out}: is a folder: expected a file path")
+    for label, folder in dirs.items():
+        if folder.exists() and not folder.is_dir():
+            raise OutputError(f"{label} {folder}: is a file: expected a folder (new, or existing)")
+    existing = [f"{label} {out}" for label, out in files.items() if out.exists() or out.is_symlink()]
+    existing += [f"{label} {folder} (a folder that is not empty)" for label, folder in dirs.items()
+                 if folder.is_dir() and any(folder.iterdir())]
+    if existing and not overwrite:
+        raise OutputError(f"{'; '.join(existing)}: exist{'s' if len(existing) == 1 else ''}; pass {option} to "
+                          "replace")
 
 
 def write_atomically(path, data: bytes | str) -> Path:
@@ -114,4 +131,19 @@ def write_atomically(path, data: bytes | str) -> Path:
         except OSError:
             pass
         raise
+    return path
+
+
+def sample_tir(name: str) -> Path:
+    """Path of a sample .tir file shipped with mftyre (``tir_files/`` of the repository), e.g.
+    ``sample_tir("car_205_60R15_mf61.tir")``: package data ``mftyre.tir_files`` when installed (pip install . or a
+    wheel), the repository's folder in a source checkout."""
+    try:
+        folder = Path(str(importlib.resources.files("mftyre.tir_files")))
+    except ModuleNotFoundError:  # a source checkout on sys.path: the folder sits beside the package
+        folder = Path(__file__).resolve().parents[1] / "tir_files"
+    path = folder / name
+    if not path.is_file():
+        available = sorted(p.name for p in folder.glob("*.tir")) if folder.is_dir() else []
+        raise FileNotFoundError(f"no sample file {name!r} in {folder}; samples: {', '.join(available) or 'none'}")
     return path

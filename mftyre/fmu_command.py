@@ -57,12 +57,21 @@ def register(subparsers) -> argparse.ArgumentParser:
                        help="default of the FMU's vertical_input parameter (default load)")
     build.add_argument("--no-compile", action="store_true",
                        help="ship only the CasADi functions (no C libraries for this platform)")
+    build.add_argument("--overwrite", action="store_true", help="replace an existing FMU file")
     build.set_defaults(func=run)
     return fmu
 
 
 def run(args) -> int:
-    """Handler of ``mftyre fmu build``: returns the exit status (1 with a message on stderr on failure)."""
+    """Handler of ``mftyre fmu build``: returns the exit status (1 with a message on stderr on failure, 2 when the
+    output rule of :mod:`mftyre.files` refuses the output)."""
+    from .files import OutputError, check_outputs
+
+    try:
+        check_outputs({"-o": args.output}, {"FILE.tir": args.tir}, overwrite=args.overwrite)
+    except OutputError as exc:
+        print(f"mftyre fmu build: error: {exc}", file=sys.stderr)
+        return 2
     try:
         module = _load_build_module()
     except FileNotFoundError as exc:
