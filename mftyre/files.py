@@ -49,7 +49,7 @@ def read_user_file(path, *, max_bytes: int, what: str, error=MFTyreError) -> byt
         raise error(f"{name}: is a directory: expected a {what}") from None
     except OSError as exc:
         raise error(f"{name}: cannot open: {exc.strerror}: expected a readable {what}") from None
-    with os.fdopen(fd, "rb") as fh:
+    try:
         info = os.fstat(fd)
         if stat.S_ISDIR(info.st_mode):
             raise error(f"{name}: is a directory: expected a {what}")
@@ -57,7 +57,10 @@ def read_user_file(path, *, max_bytes: int, what: str, error=MFTyreError) -> byt
             raise error(f"{name}: not a regular file (a device, FIFO or socket): expected a {what}")
         if info.st_size > max_bytes:
             raise error(f"{name}: {info.st_size} bytes, more than the limit of {max_bytes} bytes for a {what}")
-        data = fh.read(info.st_size + 1)
+        with os.fdopen(fd, "rb", closefd=False) as fh:
+            data = fh.read(info.st_size + 1)
+    finally:
+        os.close(fd)
     if len(data) != info.st_size:
         raise error(f"{name}: changed while being read: expected a {what} that is not being written to")
     return data
