@@ -141,12 +141,13 @@ def sample_tir(name: str) -> Path:
     """Path of a sample .tir file shipped with mftyre (``tir_files/`` of the repository), e.g.
     ``sample_tir("car_205_60R15_mf61.tir")``: package data ``mftyre.tir_files`` when installed (pip install . or a
     wheel), the repository's folder in a source checkout."""
-    try:
-        folder = Path(str(importlib.resources.files("mftyre.tir_files")))
+    try:  # a folder without __init__.py: a namespace package, whose files() joins to real paths
+        folder = importlib.resources.files("mftyre.tir_files")
     except ModuleNotFoundError:  # a source checkout on sys.path: the folder sits beside the package
         folder = Path(__file__).resolve().parents[1] / "tir_files"
-    path = folder / name
+    path = folder.joinpath(name)
     if not path.is_file():
-        available = sorted(p.name for p in folder.glob("*.tir")) if folder.is_dir() else []
-        raise FileNotFoundError(f"no sample file {name!r} in {folder}; samples: {', '.join(available) or 'none'}")
-    return path
+        available = sorted(p.name for p in folder.iterdir() if p.name.endswith(".tir")) if folder.is_dir() else []
+        raise FileNotFoundError(f"no sample file {name!r} among the samples shipped with mftyre: "
+                                f"{', '.join(available) or 'none'}")
+    return Path(str(path))
