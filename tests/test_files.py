@@ -335,3 +335,16 @@ def test_sample_files_are_found_from_the_package():
     assert sample_tir("car_205_60R15_mf61.tir").read_bytes() == TIR61.read_bytes()
     with pytest.raises(FileNotFoundError, match="car_205_60R15_mf62_swift.tir"):
         sample_tir("nope.tir")
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this platform")
+def test_road_profile_path_is_read_like_every_user_file(tmp_path):
+    from swift.road import Sampled
+
+    fifo = tmp_path / "road.csv"
+    os.mkfifo(fifo)
+    finished, exc = _returns_within(lambda: Sampled.from_csv(fifo))
+    assert finished and isinstance(exc, DataError) and "not a regular file" in str(exc)
+    good = tmp_path / "good.csv"
+    good.write_text("x,z\n0,0\n1,0.01\n")
+    assert Sampled.from_csv(good).height_range() == (0.0, 0.01)
