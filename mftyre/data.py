@@ -29,7 +29,9 @@ constant (``constants`` of a TYDEX file, ``defaults=`` of the readers). Measured
 absent or NaN in rows where they were not measured.
 
 CSV (:func:`read_csv`)
-    Comma separated, one header row. Columns with canonical names are read as SI as they are. Otherwise pass
+    Comma separated, UTF-8 (a byte-order mark allowed), one header row, then one row per sample; an empty
+    field or ``nan`` is "not measured". Column names are matched to channels case-insensitively; other columns
+    (e.g. ``SWEEP``, ``TEST``) are kept as they are. Columns with canonical names are read as SI. Otherwise pass
     ``columns={"file column": "CHANNEL"}`` and ``units={"CHANNEL": "unit"}`` (e.g. ``"deg"``, ``"kN"``,
     ``"kPa"``, ``"km/h"``, ``"%"``, ``"N*m"``, ``"rpm"``, ``"mm"``); see :data:`UNITS`.
 
@@ -60,7 +62,10 @@ Description and Reference Manual, Release 1.3*, 1997) used for steady-state meas
 
 Every malformed input raises :class:`mftyre.errors.DataError` naming the file, the line (and column or
 channel) and the reason: missing channel, unknown unit, non-numeric value, wrong number of values, NaN in a
-required channel.
+required channel, an infinite value (``inf``, ``1e400``) in any channel, two columns for one channel, no data
+rows. Only regular files are read (a FIFO or a device is refused), up to :data:`mftyre.files.DATA_MAX_BYTES`
+(``max_bytes=`` of the readers). Both readers parse the samples with pandas' C parser (about the time of a plain
+``pandas.read_csv`` of the file; ``benchmarks/bench_data.py``).
 """
 from __future__ import annotations
 
