@@ -81,7 +81,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import DataError
-from .files import DATA_MAX_BYTES, read_user_file
+from .files import DATA_MAX_BYTES, check_outputs, read_user_file, write_atomically
 from .tir import UNIT_FACTORS
 
 __all__ = [
@@ -627,10 +627,13 @@ def _constant_value(name, unit, text, path, lineno):
 
 
 def write_tydex(data: TyreData, path, *, overwrite: bool = False) -> Path:
-    """Write ``data`` as a TYDEX file in SI units (factor 1, offsets 0); every canonical channel present."""
+    """Write ``data`` as a TYDEX file in SI units (factor 1, offsets 0); every canonical channel present.
+
+    Never replaces the file the data were read from; an existing ``path`` needs ``overwrite=True``
+    (:class:`mftyre.files.OutputError`, a FileExistsError, otherwise)."""
     path = Path(path)
-    if path.exists() and not overwrite:
-        raise FileExistsError(f"{path} exists; pass overwrite=True to replace it")
+    source = Path(data.source) if data.source and Path(data.source).is_file() else None
+    check_outputs({"path": path}, {"data.source": source}, overwrite=overwrite, option="overwrite=True")
     chans = [c for c in CHANNELS if c in data.frame.columns]
     extra = [c for c in data.frame.columns if c not in CHANNELS and len(str(c)) <= 10
              and pd.api.types.is_numeric_dtype(data.frame[c])]
@@ -662,7 +665,7 @@ def write_tydex(data: TyreData, path, *, overwrite: bool = False) -> Path:
     values = data.frame[chans + extra].to_numpy(float)
     out.extend(" ".join(f"{v:.17g}" for v in row) for row in values)
     out.append("**END")
-    path.write_text("\n".join(out) + "\n", encoding="utf-8")
+    write_atomically(path, "\n".join(out) + "\n")
     return path
 
 

@@ -348,3 +348,12 @@ def test_road_profile_path_is_read_like_every_user_file(tmp_path):
     good = tmp_path / "good.csv"
     good.write_text("x,z\n0,0\n1,0.01\n")
     assert Sampled.from_csv(good).height_range() == (0.0, 0.01)
+
+
+def test_write_tydex_never_replaces_the_file_it_read(tmp_path):
+    path = _csv(tmp_path, "FZ,SA,SL,VX,P\n4000,0,0,16,2e5\n")
+    tdx = write_tydex(read_csv(path), tmp_path / "d.tdx")
+    with pytest.raises(OutputError, match="an input is never overwritten"):
+        write_tydex(read_tydex(tdx), tdx, overwrite=True)
+    with pytest.raises(FileExistsError, match="overwrite=True"):
+        write_tydex(read_csv(path), tdx)
