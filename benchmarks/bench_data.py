@@ -1,5 +1,6 @@
 """Reading measured data: mftyre's CSV and TYDEX readers against plain ``pandas.read_csv`` of the same file,
-side by side in one run (wall time, best of ``--repeat``; peak memory traced by tracemalloc).
+side by side in one run (wall time, best of ``--repeat``; growth of the peak resident memory of a fresh process
+reading the file once).
 
     python benchmarks/bench_data.py [--rows 100000 1000000] [--repeat 3]
 
@@ -11,8 +12,8 @@ from __future__ import annotations
 
 import argparse
 import sys
+import subprocess
 import tempfile
-import tracemalloc
 from pathlib import Path
 
 import numpy as np
@@ -49,13 +50,31 @@ def _files(rows: int, folder: Path) -> tuple[Path, Path, int]:
     return csv, tdx, head.count("\n")
 
 
-def _peak_mb(fn) -> float:
-    tracemalloc.start()
-    try:
-        fn()
-        return tracemalloc.get_traced_memory()[1] / 2**20
-    finally:
-        tracemalloc.stop()
+_RSS_CODE = """
+import sys
+import pandas as pd
+from mftyre.data import read_csv, read_tydex
+kind, reader, path, skip, rows = sys.argv[1:6]
+import os
+before = int(open("/proc/self/statm").read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 1024  # current, kB
+if reader == "mftyre":
+    (read_csv if kind == "CSV" else read_tydex)(path)
+elif kind == "CSV":
+    pd.read_csv(path)
+else:
+    pd.read_csv(path, sep=r"\\s+", header=None, skiprows=int(skip), nrows=int(rows))
+peak = next(int(line.split()[1]) for line in open("/proc/self/status") if line.startswith("VmHWM"))  # kB
+print((peak - before) / 1024)
+"""
+
+
+def _rss_mb(kind: str, reader: str, path: Path, skip: int, rows: int) -> float:
+    """Peak resident memory [MB] of a fresh process reading the file, less its resident memory after the imports:
+    every allocation counted, C included (Linux: /proc/self/statm and VmHWM; ru_maxrss would carry this
+    process's peak across exec)."""
+    out = subprocess.run([sys.executable, "-c", _RSS_CODE, kind, reader, str(path), str(skip), str(rows)],
+                         capture_output=True, text=True, check=True)
+    return float(out.stdout)
 
 
 def main() -> None:
@@ -76,7 +95,8 @@ def main() -> None:
             }
             for kind, (ours, plain) in cases.items():
                 t_ours, t_plain = best_time(ours, repeat), best_time(plain, repeat)
-                m_ours, m_plain = _peak_mb(ours), _peak_mb(plain)
+                path = csv if kind == "CSV" else tdx
+                m_ours, m_plain = (_rss_mb(kind, who, path, head_lines, rows) for who in ("mftyre", "pandas"))
                 print(f"{kind:<6} {rows:>9} {t_ours:>9.3f} {t_plain:>9.3f} {t_ours / t_plain:>6.2f} "
                       f"{m_ours:>10.0f} {m_plain:>10.0f} {m_ours / m_plain:>6.2f}", flush=True)
 

@@ -81,7 +81,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import DataError
-from .files import DATA_MAX_BYTES, check_outputs, read_user_file, write_atomically
+from .files import DATA_MAX_BYTES, check_outputs, open_user_file, write_atomically
 from .tir import UNIT_FACTORS
 
 __all__ = [
@@ -253,14 +253,14 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
     an error. Files larger than ``max_bytes`` are refused.
     """
     path = Path(path)
-    raw_bytes = read_user_file(path, max_bytes=max_bytes, what="CSV data file", error=DataError)
-    header = _csv_header(raw_bytes, path)
-    try:
-        raw = pd.read_csv(io.BytesIO(raw_bytes), skipinitialspace=True, keep_default_na=False, na_values=_NAN_TEXT,
-                          encoding="utf-8-sig")
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, ValueError) as exc:
-        raise DataError(f"{path}: cannot read as CSV: {exc}") from None
-    del raw_bytes
+    with open_user_file(path, max_bytes=max_bytes, what="CSV data file", error=DataError) as fh:
+        header = _csv_header(fh.readline(), path)
+        fh.seek(0)
+        try:
+            raw = pd.read_csv(fh, skipinitialspace=True, keep_default_na=False, na_values=_NAN_TEXT,
+                              encoding="utf-8-sig")
+        except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, ValueError) as exc:
+            raise DataError(f"{path}: cannot read as CSV: {exc}") from None
     if len(raw.columns) != len(header):  # pragma: no cover - pandas and the csv module agree on the header
         raise DataError(f"{path}: line 1: cannot read the header")
     raw.columns = header
@@ -301,14 +301,13 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
     return TyreData(frame, tyre=tyre or path.stem, source=str(path), units=unit_record)
 
 
-def _csv_header(raw_bytes: bytes, path) -> list[str]:
+def _csv_header(first: bytes, path) -> list[str]:
     """The column names of the first line, stripped (a UTF-8 byte-order mark removed)."""
-    first = raw_bytes[:raw_bytes.find(b"\n") if b"\n" in raw_bytes else len(raw_bytes)]
     try:
         text = first.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise DataError(f"{path}: line 1: cannot read as CSV: {exc}") from None
-    names = next(csv.reader([text.rstrip("\r")]), [])
+    names = next(csv.reader([text.rstrip("\r\n")]), [])
     if not any(n.strip() for n in names):
         raise DataError(f"{path}: line 1: no header: expected column names such as FZ,SA,SL,VX,P")
     return [n.strip() for n in names]
@@ -395,18 +394,7 @@ def _fixed_fields(line: str):
     return line[:10].strip(), line[10:40].strip(), line[40:50].strip(), line[50:].strip()
 
 
-_DATA_BLOCK = re.compile(rb"^[ \t]*\*\*MEASURDATA(?=\s|\Z)[^\n]*\n?", re.M | re.I)
-
-
-def _block_start(raw: bytes, start: int) -> int:
-    """Offset of the first line at or after ``start`` that opens a block (``**``), else ``len(raw)``."""
-    at = raw.find(b"**", start)
-    while at >= 0:
-        line_start = raw.rfind(b"\n", start, at) + 1 if at > start else start
-        if not raw[line_start:at].strip():
-            return line_start
-        at = raw.find(b"**", at + 2)
-    return len(raw)
+_DATA_KEY = re.compile(rb"[ \t]*\*\*MEASURDATA(?=\s|\Z)", re.I)
 
 
 def read_tydex(path, *, defaults: dict | None = None, max_bytes: int = DATA_MAX_BYTES) -> TyreData:
@@ -415,51 +403,56 @@ def read_tydex(path, *, defaults: dict | None = None, max_bytes: int = DATA_MAX_
     UTF-8 (a byte-order mark allowed); ``nan`` in the data is "not measured" (an error in a required channel).
     Files larger than ``max_bytes`` are refused."""
     path = Path(path)
-    raw = read_user_file(path, max_bytes=max_bytes, what="TYDEX data file", error=DataError)
-    if raw.startswith(b"\xef\xbb\xbf"):
-        raw = raw[3:]
-    if b"\r" in raw:
-        raw = raw.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
-    # the sample rows (the bulk of the file) are parsed by pandas; the blocks around them line by line
-    found = _DATA_BLOCK.search(raw)
-    data_start = found.end() if found else len(raw)
-    data_end = _block_start(raw, data_start) if found else len(raw)
-    head = _decode(raw[:found.start()] if found else raw, path)
+    with open_user_file(path, max_bytes=max_bytes, what="TYDEX data file", error=DataError) as fh:
+        return _read_tydex(fh, path, defaults)
+
+
+def _read_tydex(fh, path: Path, defaults) -> TyreData:
+    """The blocks before and after the sample rows are read line by line; the rows (the bulk of the file) are
+    streamed to pandas' C parser."""
+    first = fh.readline()
+    if b"\r" in first and not first.endswith(b"\r\n"):  # lines ended by CR alone: normalise (in memory)
+        fh = io.BytesIO((first + fh.read()).replace(b"\r\n", b"\n").replace(b"\r", b"\n"))
+        first = fh.readline()
+    head, line = [], first.removeprefix(b"\xef\xbb\xbf")
+    while line and not _DATA_KEY.match(line):
+        head.append(line)
+        line = fh.readline()
     state = _TydexBlocks(path)
-    ended = state.read(head.split("\n"), first_line=1)
-    if found and not ended:
+    ended = state.read(_lines(b"".join(head), path), first_line=1)
+    data_line = len(head) + 2  # file line of the first sample row
+    if line and not ended:
         state.seen.add("**MEASURDATA")
-        data_line = raw.count(b"\n", 0, data_start) + 1  # file line of the first sample row
-        tail = raw[data_end:]
-        if not tail.lstrip().upper().startswith(b"**END"):  # anything but **END: line numbers are needed
-            tail_line = data_line + raw.count(b"\n", data_start, data_end)
-            state.read(_decode(tail, path).split("\n"), first_line=tail_line, after_data=True)
-        block = memoryview(raw)[data_start:data_end]  # a view: the sample rows are not copied
-    else:
-        block, data_line = memoryview(b""), 0
     for needed in ("**MEASURCHANNELS", "**MEASURDATA"):
         if needed not in state.seen:
             raise DataError(f"{path}: no {needed} block")
     channels = state.channels
     if not channels:
         raise DataError(f"{path}: **MEASURCHANNELS lists no channel")
-    data, lines = _tydex_samples(block, data_line, channels, path)
-    if len(data) == 0:
-        raise DataError(f"{path}:{max(data_line - 1, 1)}: no data rows in **MEASURDATA: expected one line of values "
-                        "per sample")
-    frame = pd.DataFrame(index=range(len(data)))
-    units = {}
-    for j, (name, unit, factor, offset, lineno) in enumerate(channels):
-        values = factor * data[:, j] + offset
+    rows = _SampleRows(fh)
+    columns, lines = _tydex_samples(rows, data_line, channels, path)
+    tail = rows.rest + fh.read()
+    if not tail.lstrip().upper().startswith(b"**END"):  # e.g. a block after the samples
+        state.read(_lines(tail, path), first_line=data_line + rows.newlines, after_data=True)
+    if len(columns[0]) == 0:
+        raise DataError(f"{path}:{data_line - 1}: no data rows in **MEASURDATA: expected one line of values per "
+                        "sample")
+    values_of, units = {}, {}
+    for (name, unit, factor, offset, lineno), values in zip(channels, columns):
         ch = _CHANNEL_OF_TYDEX.get(name)
-        if ch is None:
-            frame[name] = values
-            continue
         try:
-            frame[ch] = values * unit_to_si(ch, unit)
+            to_si = 1.0 if ch is None else unit_to_si(ch, unit)
         except ValueError as exc:
             raise DataError(f"{path}:{lineno}: columns 41-50: channel {name}: {exc}") from None
-        units[ch] = unit
+        values = values * factor  # value in the file's unit: factor * raw + offsets; then to SI
+        values += offset
+        if to_si != 1.0:
+            values *= to_si
+        values_of[name if ch is None else ch] = values
+        if ch is not None:
+            units[ch] = unit
+    del columns
+    frame = pd.DataFrame(values_of, copy=False)
     for name, (value, unit, _) in state.constants.items():  # constants standing in for absent channels
         ch = _CHANNEL_OF_TYDEX.get(name)
         if ch in REQUIRED + _ZERO_DEFAULT and ch not in frame.columns and isinstance(value, float):
@@ -477,13 +470,12 @@ def read_tydex(path, *, defaults: dict | None = None, max_bytes: int = DATA_MAX_
     return TyreData(frame, tyre=tyre, source=str(path), units=units, constants=consts)
 
 
-def _decode(raw: bytes, path) -> str:
+def _lines(raw: bytes, path) -> list[str]:
+    """The lines of a part of the file (UTF-8)."""
     try:
-        return raw.decode("utf-8")
+        return raw.decode("utf-8").replace("\r\n", "\n").split("\n")
     except UnicodeDecodeError as exc:
-        line = raw.count(b"\n", 0, exc.start) + 1
-        raise DataError(f"{path}: cannot read: not UTF-8 text near byte {exc.start} (line {line} of this part)") \
-            from None
+        raise DataError(f"{path}: cannot read: not UTF-8 text near byte {exc.start} of a block") from None
 
 
 class _TydexBlocks:
@@ -547,66 +539,96 @@ class _TydexBlocks:
         return False
 
 
-class _Reader(io.RawIOBase):
-    """A read-only binary file over a memoryview (pandas reads it in chunks; nothing is copied whole)."""
+class _SampleRows(io.RawIOBase):
+    """The sample rows of a TYDEX file as a binary stream for pandas: ``fh`` read in whole lines up to the next
+    line that opens a block (``**``). ``rest``: what was read beyond (the next block), ``newlines``: the lines
+    handed on; :meth:`block` reads them again (for an error message)."""
 
-    def __init__(self, view: memoryview):
-        self._view, self._at = view, 0
+    def __init__(self, fh):
+        self._fh, self._start = fh, fh.tell()
+        self._chunk, self._at, self._done = memoryview(b""), 0, False
+        self.rest, self.size, self.newlines = b"", 0, 0
 
     def readable(self) -> bool:
         return True
 
     def readinto(self, buffer) -> int:
-        n = min(len(buffer), len(self._view) - self._at)
-        buffer[:n] = self._view[self._at:self._at + n]
+        while self._at >= len(self._chunk) and not self._done:
+            self._next_chunk()
+        n = min(len(buffer), len(self._chunk) - self._at)
+        buffer[:n] = self._chunk[self._at:self._at + n]
         self._at += n
         return n
 
+    def _next_chunk(self) -> None:
+        chunk = self._fh.read(1 << 20)
+        if not chunk:
+            self._done = True
+        elif not chunk.endswith(b"\n"):
+            chunk += self._fh.readline()
+        at = chunk.find(b"**")
+        while at >= 0:
+            line_start = chunk.rfind(b"\n", 0, at) + 1
+            if not chunk[line_start:at].strip():
+                chunk, self.rest, self._done = chunk[:line_start], chunk[line_start:], True
+                break
+            at = chunk.find(b"**", at + 2)
+        self._chunk, self._at = memoryview(chunk), 0
+        self.size += len(chunk)
+        self.newlines += chunk.count(b"\n")
 
-def _tydex_samples(block: bytes, first_line: int, channels, path):
-    """The sample rows (whitespace-separated numbers, one per channel) as a float array, and a function that
-    gives the file line of each row (computed only for an error message)."""
+    def block(self) -> bytes:
+        here = self._fh.tell()
+        self._fh.seek(self._start)
+        text = self._fh.read(self.size)
+        self._fh.seek(here)
+        return text
+
+
+def _tydex_samples(rows: _SampleRows, first_line: int, channels, path):
+    """The sample rows (whitespace-separated numbers, one per channel) as one float array per channel, and a
+    function that gives the file line of each row (computed only for an error message)."""
     n = len(channels)
     cache = []
 
-    def lines() -> np.ndarray:
+    def text_lines() -> list[bytes]:
         if not cache:
-            numbers = [first_line + i for i, text in enumerate(bytes(block).split(b"\n"))
-                       if text.strip() and not text.strip().startswith(b"!")]
-            cache.append(np.asarray(numbers))
+            cache.append(rows.block().split(b"\n"))
         return cache[0]
 
-    def token_count_error():
-        for row, lineno in enumerate(lines()):
-            text = bytes(block).split(b"\n")[lineno - first_line].split(b"!")[0].split()
-            if len(text) != n:
-                raise DataError(f"{path}:{lineno}: {len(text)} values, expected {n} (one per channel)")
+    def lines() -> np.ndarray:
+        if len(cache) < 2:
+            text_lines()
+            cache.append(np.asarray([first_line + i for i, text in enumerate(cache[0])
+                                     if text.strip() and not text.strip().startswith(b"!")]))
+        return cache[1]
 
-    if not re.search(rb"[^\s]", block):
-        return np.empty((0, n)), lines
+    def count_values(lineno: int) -> int:
+        return len(text_lines()[lineno - first_line].split(b"!")[0].split())
+
+    def token_count_error(candidates):
+        for lineno in candidates:
+            if count_values(lineno) != n:
+                raise DataError(f"{path}:{lineno}: {count_values(lineno)} values, expected {n} (one per channel)")
+
     try:  # one spare column: a row with one value too many lands there instead of failing without a line
-        table = pd.read_csv(_Reader(block), sep=r"\s+", header=None, names=range(n + 1), comment="!",
+        table = pd.read_csv(rows, sep=r"\s+", header=None, names=range(n + 1), comment="!",
                             keep_default_na=False, na_values=_NAN_TEXT, skip_blank_lines=True, encoding="utf-8")
+    except pd.errors.EmptyDataError:  # no rows, only blank or comment lines
+        return [np.empty(0)] * n, lines
     except pd.errors.ParserError:
-        token_count_error()
+        token_count_error(lines())
         raise  # pragma: no cover - the scan above finds the row pandas failed on
     except (UnicodeDecodeError, ValueError) as exc:
         raise DataError(f"{path}: **MEASURDATA: cannot read: {exc}") from None
     if table[n].notna().any():
-        token_count_error()
+        token_count_error(lines()[np.flatnonzero(table[n].notna().to_numpy())])
     if table[n - 1].isna().any():  # a short row, or "nan" values in the last channel: look at those rows
-        short = np.flatnonzero(table[n - 1].isna().to_numpy())
-        rows = bytes(block).split(b"\n")
-        for row in short:
-            lineno = lines()[row]
-            count = len(rows[lineno - first_line].split(b"!")[0].split())
-            if count != n:
-                raise DataError(f"{path}:{lineno}: {count} values, expected {n} (one per channel)")
-    data = np.empty((len(table), n), order="F")  # columns contiguous
-    for j in range(n):
-        data[:, j] = _numeric_column(table[j], lambda row, text: f"{path}:{lines()[row]}: value {j + 1} (channel "
-                                                                 f"{channels[j][0]}): non-numeric value {text!r}")
-    return data, lines
+        token_count_error(lines()[np.flatnonzero(table[n - 1].isna().to_numpy())])
+    columns = [_numeric_column(table.pop(j), lambda row, text: f"{path}:{lines()[row]}: value {j + 1} (channel "
+                                                                f"{channels[j][0]}): non-numeric value {text!r}")
+               for j in range(n)]
+    return columns, lines
 
 
 def _constant_value(name, unit, text, path, lineno):

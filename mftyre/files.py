@@ -15,6 +15,7 @@ temporary file in the target folder and renames it into place, with the ordinary
 """
 from __future__ import annotations
 
+import contextlib
 import importlib.resources
 import os
 import secrets
@@ -24,7 +25,7 @@ from pathlib import Path
 
 from .errors import MFTyreError
 
-__all__ = ["OutputError", "read_user_file", "same_file", "check_outputs", "write_atomically", "sample_tir",
+__all__ = ["OutputError", "open_user_file", "read_user_file", "same_file", "check_outputs", "write_atomically", "sample_tir",
            "TIR_MAX_BYTES", "DATA_MAX_BYTES"]
 
 #: Largest .tir file read (16 MiB; real files are tens of kB).
@@ -37,9 +38,11 @@ class OutputError(MFTyreError, FileExistsError):
     """An output file would replace an input or an existing file (without ``--overwrite``)."""
 
 
-def read_user_file(path, *, max_bytes: int, what: str, error=MFTyreError) -> bytes:
-    """The bytes of the regular file ``path``; ``error`` (an MFTyreError subclass) naming the path and ``what``
-    was expected when it is missing, not a regular file or larger than ``max_bytes``."""
+@contextlib.contextmanager
+def open_user_file(path, *, max_bytes: int, what: str, error=MFTyreError):
+    """Open the regular file ``path`` for binary reading (a context manager giving the file object); ``error``
+    (an MFTyreError subclass) naming the path and ``what`` was expected when it is missing, not a regular file
+    or larger than ``max_bytes``."""
     name = str(path)
     try:  # O_NONBLOCK: opening a FIFO with no writer must not block; it is refused below
         fd = os.open(name, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
@@ -58,11 +61,18 @@ def read_user_file(path, *, max_bytes: int, what: str, error=MFTyreError) -> byt
         if info.st_size > max_bytes:
             raise error(f"{name}: {info.st_size} bytes, more than the limit of {max_bytes} bytes for a {what}")
         with os.fdopen(fd, "rb", closefd=False) as fh:
-            data = fh.read(info.st_size + 1)
+            yield fh
     finally:
         os.close(fd)
-    if len(data) != info.st_size:
-        raise error(f"{name}: changed while being read: expected a {what} that is not being written to")
+
+
+def read_user_file(path, *, max_bytes: int, what: str, error=MFTyreError) -> bytes:
+    """The bytes of the regular file ``path`` (see :func:`open_user_file`)."""
+    with open_user_file(path, max_bytes=max_bytes, what=what, error=error) as fh:
+        size = os.fstat(fh.fileno()).st_size
+        data = fh.read(size + 1)
+    if len(data) != size:
+        raise error(f"{path}: changed while being read: expected a {what} that is not being written to")
     return data
 
 
