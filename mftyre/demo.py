@@ -13,7 +13,8 @@
 
 Everything is written below ``DIR`` (default ``out/``). A ``DIR`` that exists and is not empty is refused unless
 ``--overwrite`` is given (then the demo's files there are replaced and nothing else is touched): the output rule
-of :mod:`mftyre.files`. The run takes well under a minute.
+of :mod:`mftyre.files`. The run takes about 20 s of CPU time with one BLAS thread (``OPENBLAS_NUM_THREADS=1``);
+with more BLAS threads the small least-squares problems of the fit take about twice the CPU time.
 """
 from __future__ import annotations
 
