@@ -1,7 +1,7 @@
 """The main job on bundled data: ``mftyre demo [--out DIR]``.
 
-1. Evaluate the bundled MF 6.1 car tyre (tir_files/car_205_60R15_mf61.tir, installed as mftyre.tir_files): lateral force and aligning moment
-   against slip angle at three inflation pressures -> ``characteristics.png``.
+1. Evaluate the bundled MF 6.1 car tyre (tir_files/car_205_60R15_mf61.tir, installed as mftyre.tir_files): lateral
+   force and aligning moment against slip angle at three inflation pressures -> ``characteristics.png``.
 2. Run a synthetic test-trailer programme on it (loads, pressures, cambers, pure and combined slip, free rolling,
    load-deflection; measurement noise) -> ``trailer.tdx`` (TYDEX).
 3. Fit a .tir to those data from generic start values, pressure terms included -> ``fitted.tir`` and

@@ -1,8 +1,8 @@
 """The files a user hands to mftyre and the files it writes: one rule for all of them.
 
-Reading (:func:`read_user_file`): only regular files are read (a FIFO, a device such as ``/dev/zero`` or a
-directory is refused before a byte is read), and only up to a size limit, so a wrong path can neither block nor
-exhaust memory.
+Reading (:func:`open_user_file`, :func:`read_user_file`): only regular files are read (a FIFO, a device such as
+``/dev/zero`` or a directory is refused before a byte is read), and only up to a size limit, so a wrong path can
+neither block nor exhaust memory.
 
 Sample files (:func:`sample_tir`): the .tir files of the repository's ``tir_files/`` folder, installed with the
 package as ``mftyre.tir_files``.
@@ -20,13 +20,12 @@ import importlib.resources
 import os
 import secrets
 import stat
-from collections.abc import Iterable
 from pathlib import Path
 
 from .errors import MFTyreError
 
-__all__ = ["OutputError", "open_user_file", "read_user_file", "same_file", "check_outputs", "write_atomically", "sample_tir",
-           "TIR_MAX_BYTES", "DATA_MAX_BYTES"]
+__all__ = ["OutputError", "open_user_file", "read_user_file", "same_file", "check_outputs", "write_atomically",
+           "sample_tir", "TIR_MAX_BYTES", "DATA_MAX_BYTES"]
 
 #: Largest .tir file read (16 MiB; real files are tens of kB).
 TIR_MAX_BYTES = 16 * 2**20

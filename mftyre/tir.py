@@ -207,12 +207,14 @@ def _split_assignment(raw: str, source: str, lineno: int):
         q = rest[0]
         end = rest.find(q, 1)
         if end < 0:
-            raise _err(source, lineno, name.upper(), f"unterminated quoted string {_shown(rest)}: expected a closing {q}")
+            raise _err(source, lineno, name.upper(),
+                       f"unterminated quoted string {_shown(rest)}: expected a closing {q}")
         value = rest[1:end]
         after = _strip_trailing_comment(rest[end + 1:]).strip()
         if after:
             raise _err(source, lineno, name.upper(),
-                       f"unexpected text {_shown(after)} after the quoted value: expected a comment ($ or !) or nothing")
+                       f"unexpected text {_shown(after)} after the quoted value: expected a comment ($ or !) "
+                       "or nothing")
         return name.upper(), value, True
     value = _strip_trailing_comment(rest).strip()
     if not value:
@@ -330,7 +332,8 @@ def _parse(text: str, source: str, *, strict: bool, stacklevel: int):
                 if spelling not in UNIT_FACTORS[name]:
                     accepted = ", ".join(UNIT_FACTORS[name])
                     raise _err(source, lineno, name,
-                               f"unknown unit {_shown(value)}: accepted spellings (any case, quoted or not) are {accepted}")
+                               f"unknown unit {_shown(value)}: accepted spellings (any case, quoted or not) are "
+                               f"{accepted}")
                 units[name] = spelling
                 units_as_read[name] = value
                 continue
