@@ -22,9 +22,7 @@ an SI file. Parameters not in the schema are kept as read, unconverted.
 from __future__ import annotations
 
 import math
-import os
 import re
-import tempfile
 import warnings
 from dataclasses import dataclass
 from fractions import Fraction
@@ -32,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from .errors import ModelInputError, TirError
+from .files import TIR_MAX_BYTES, read_user_file, same_file, write_atomically
 from .params import (
     PARAMETERS,
     SECTIONS,
@@ -149,7 +148,14 @@ def _convert(value: float, factor: Fraction) -> float:
 # ----------------------------------------------------------------------------------------------------
 _NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 _HEADER_RE = re.compile(r"\[\s*([A-Za-z0-9_]+(?:[ \t]+[A-Za-z0-9_]+)*)\s*\](.*)\Z")
-_NUMBER_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][+-]?\d+)?\Z")
+# Each digit can be taken by one sub-pattern only, so a match fails in time linear in the length (the form
+# "\d+\.?\d*" made 40,000 digits followed by a letter take 37 s).
+_NUMBER_RE = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eEdD][+-]?\d+)?\Z")
+
+
+def _shown(text: str, limit: int = 60) -> str:
+    """``repr(text)``, shortened to about ``limit`` characters for an error message."""
+    return repr(text) if len(text) <= limit else repr(text[:limit]) + f"... ({len(text)} characters)"
 
 
 def _err(source: str, line: int | None, parameter: str | None, message: str, cls=TirError) -> TirError:
@@ -191,22 +197,24 @@ def _split_assignment(raw: str, source: str, lineno: int):
     head = _strip_trailing_comment(stripped if eq < 0 else stripped[:eq]).strip()
     if eq < 0:
         raise _err(source, lineno, (head.split() or [None])[0],
-                   f"expected 'NAME = value' but found no '=' in {stripped!r}")
+                   f"expected 'NAME = value' but found no '=' in {_shown(stripped)}")
     name = head
     if not _NAME_RE.match(name):
         raise _err(source, lineno, name or None,
-                   f"invalid parameter name {name!r}: expected letters, digits and '_' before '='")
+                   f"invalid parameter name {_shown(name)}: expected letters, digits and '_' before '='")
     rest = stripped[eq + 1:].lstrip()
     if rest[:1] in ("'", '"'):
         q = rest[0]
         end = rest.find(q, 1)
         if end < 0:
-            raise _err(source, lineno, name.upper(), f"unterminated quoted string {rest!r}: expected a closing {q}")
+            raise _err(source, lineno, name.upper(),
+                       f"unterminated quoted string {_shown(rest)}: expected a closing {q}")
         value = rest[1:end]
         after = _strip_trailing_comment(rest[end + 1:]).strip()
         if after:
             raise _err(source, lineno, name.upper(),
-                       f"unexpected text {after!r} after the quoted value: expected a comment ($ or !) or nothing")
+                       f"unexpected text {_shown(after)} after the quoted value: expected a comment ($ or !) "
+                       "or nothing")
         return name.upper(), value, True
     value = _strip_trailing_comment(rest).strip()
     if not value:
@@ -293,7 +301,7 @@ def _parse(text: str, source: str, *, strict: bool, stacklevel: int):
     for section, header_line, body in blocks:
         if section == "\0bad":
             raise _err(source, header_line, None,
-                       f"malformed section header {body[0][1].strip()!r}: expected '[SECTION_NAME]'")
+                       f"malformed section header {_shown(body[0][1].strip())}: expected '[SECTION_NAME]'")
         content = [(n, r) for n, r in body if not _is_comment_or_blank(r.strip())]
         if section is None:
             if content:
@@ -324,7 +332,8 @@ def _parse(text: str, source: str, *, strict: bool, stacklevel: int):
                 if spelling not in UNIT_FACTORS[name]:
                     accepted = ", ".join(UNIT_FACTORS[name])
                     raise _err(source, lineno, name,
-                               f"unknown unit {value!r}: accepted spellings (any case, quoted or not) are {accepted}")
+                               f"unknown unit {_shown(value)}: accepted spellings (any case, quoted or not) are "
+                               f"{accepted}")
                 units[name] = spelling
                 units_as_read[name] = value
                 continue
@@ -345,15 +354,15 @@ def _parse(text: str, source: str, *, strict: bool, stacklevel: int):
             continue
         num = _parse_number(text_value)
         if num is None:
-            what = "a quoted string" if quoted else repr(text_value)
+            what = "a quoted string" if quoted else _shown(text_value)
             kind = "an integer" if spec.is_integer else "a number"
             raise _err(source, lineno, name,
                        f"expected {kind} ({spec.description}), got {what}")
         if not math.isfinite(num):
-            raise _err(source, lineno, name, f"expected a finite number, got {text_value!r}")
+            raise _err(source, lineno, name, f"expected a finite number, got {_shown(text_value)}")
         if spec.is_integer:
             if num != int(num):
-                raise _err(source, lineno, name, f"expected an integer, got {text_value!r}")
+                raise _err(source, lineno, name, f"expected an integer, got {_shown(text_value)}")
             values[name] = int(num)
         else:
             values[name] = _convert(num, unit_factor(spec.unit, base))
@@ -400,11 +409,7 @@ def read_tir(path, *, strict: bool = False) -> TyreParameters:
 
 
 def _read_text(p: Path) -> str:
-    if not p.exists():
-        raise _err(str(p), None, None, "file not found: expected an existing .tir property file")
-    if p.is_dir():
-        raise _err(str(p), None, None, "is a directory: expected a .tir property file")
-    data = p.read_bytes()
+    data = read_user_file(p, max_bytes=TIR_MAX_BYTES, what=".tir property file", error=TirError)
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError:
@@ -435,16 +440,6 @@ def _line(name: str, value: str, comment: str = "") -> str:
     if comment:
         text = f"{text:<50} ${comment}"
     return text
-
-
-def same_file(a: Path, b: Path) -> bool:
-    """True when ``a`` and ``b`` name the same file (existing files compared by inode)."""
-    try:
-        if a.exists() and b.exists():
-            return os.path.samefile(a, b)
-    except OSError:
-        pass
-    return a.resolve() == b.resolve()
 
 
 def tir_text(params: TyreParameters) -> str:
@@ -513,18 +508,7 @@ def write_tir(params: TyreParameters, path, *, overwrite: bool = False) -> Path:
         raise _err(str(p), None, None, "file exists: pass overwrite=True to replace it", cls=_TirFileExists)
     if p.is_dir():
         raise _err(str(p), None, None, "is a directory: expected a file path")
-    text = tir_text(params)
-    fd, tmp = tempfile.mkstemp(prefix=".mftyre-", suffix=".tir", dir=str(p.parent) if str(p.parent) else ".")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
-            fh.write(text)
-        os.replace(tmp, p)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+    write_atomically(p, tir_text(params))
     return p
 
 

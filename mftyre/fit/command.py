@@ -70,17 +70,24 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     from ..errors import MFTyreError
+    from ..files import OutputError, check_outputs
     from .core import fit_tir, load_data
     from .stages import STAGE_NAMES
 
     out = Path(args.output)
-    if out.exists() and not args.overwrite:
-        print(f"mftyre fit: {out} exists; use --overwrite to replace it", file=sys.stderr)
-        return 2
     stages = [s.strip() for s in args.stages.split(",") if s.strip()]
     unknown = [s for s in stages if s not in STAGE_NAMES]
     if unknown:
         print(f"mftyre fit: unknown stage(s) {', '.join(unknown)}; stages: {', '.join(STAGE_NAMES)}", file=sys.stderr)
+        return 2
+    outputs = {"-o": out, "--report": args.report}
+    if args.report:  # the report's plots beside it (mftyre.fit.report.save_report)
+        report = Path(args.report)
+        outputs.update({f"--report plot of {s}": report.with_name(f"{report.stem}_{s}.png") for s in stages})
+    try:
+        check_outputs(outputs, {"DATA": args.data, "--start": args.start}, overwrite=args.overwrite)
+    except OutputError as exc:
+        print(f"mftyre fit: {exc}", file=sys.stderr)
         return 2
     t0 = time.perf_counter()
 
