@@ -25,7 +25,7 @@ request the Jacobian of that (``jac_jac_<name>``, second derivatives), compiled 
 stays a small graph, instead of generating C for the whole problem.
 
 Cache. The key is a SHA-256 of everything that defines the function (parameter values, side, options, input
-and output names, the versions of mftyre and CasADi, the compiler flags). The folder is ``$MFTYRE_CACHE`` or
+and output names, the versions of mftyre and CasADi, this module's source, the compiler flags). The folder is ``$MFTYRE_CACHE`` or
 ``~/.cache/mftyre``; it must belong to the current user (or root) and be writable by no one else, as must
 every library loaded, else :class:`CacheSecurityError`. A library is compiled under a unique temporary name
 in that folder and renamed atomically to ``<stem>_<sha-256 of the library>.so``, then its description
@@ -61,7 +61,12 @@ __all__ = ["CompiledFunction", "CacheSecurityError", "compile_model", "compile_f
 
 _BLOCK = 256  # points per call of the vectorised kernel (inputs broadcast into stack buffers of this length)
 _FLAGS = ("-O3", "-fPIC", "-shared", "-fno-math-errno", "-fno-trapping-math", "-ffp-contract=off", "-fopenmp-simd")
+_PACKED = 4096  # batches of at most this many points are passed as one packed copy of the inputs
 _FLAG_BITS = 16  # flags of the single-point entry: bit k non-finite input k, 16+k non-positive, 32+k outside
+
+
+#: this module's own hash: part of every cache key, so that a changed generator never meets an old library
+_GENERATOR = hashlib.sha256(Path(__file__).read_bytes()).hexdigest()
 
 
 class CacheSecurityError(MFTyreError):
@@ -305,6 +310,18 @@ int mft_batch(int64_t n, const double *const *in, const int64_t *stride, double 
   }}
   return 0;
 }}
+
+/* n points packed: input k at X[k * n + i], output j at Y[j * n + i]; as mft_batch */
+int mft_packed(int64_t n, const double *X, double *Y, int64_t *counts)
+{{
+  const double *in[N_IN];
+  double *out[N_OUT];
+  int64_t stride[N_IN];
+  int k;
+  for (k = 0; k < N_IN; ++k) {{ in[k] = X + k * n; stride[k] = 1; }}
+  for (k = 0; k < N_OUT; ++k) out[k] = Y + k * n;
+  return mft_batch(n, in, stride, out, counts);
+}}
 """
 
 
@@ -375,6 +392,10 @@ class CompiledFunction:
         self._point.restype = ctypes.c_int64
         self._batch = self._lib.mft_batch
         self._batch.restype = ctypes.c_int
+        self._batch.argtypes = [ctypes.c_int64] + [ctypes.c_void_p] * 4
+        self._packed = self._lib.mft_packed
+        self._packed.restype = ctypes.c_int
+        self._packed.argtypes = [ctypes.c_int64] + [ctypes.c_void_p] * 3
         self._local = threading.local()
         self._unpack = struct.Struct(f"{len(self.outputs)}d").unpack_from
         self._ranges = {name: (c["range"][0], c["range"][1], c.get("describe", "")) for name, c in
@@ -414,37 +435,45 @@ class CompiledFunction:
         if len(arrays) != len(self.inputs):
             raise ModelInputError(self._arity_message(len(arrays)))
         values = [self._as_array(name, a) for name, a in zip(self.inputs, arrays)]
+        shapes = {v.shape for v in values if v.ndim}
         try:
-            shape = np.broadcast_shapes(*(v.shape for v in values))
+            shape = shapes.pop() if len(shapes) == 1 else np.broadcast_shapes(*(v.shape for v in values))
         except ValueError:
             shapes = ", ".join(f"{name} {v.shape}" for name, v in zip(self.inputs, values))
             raise ModelInputError(f"inputs cannot be broadcast to one shape: {shapes}") from None
         n = math.prod(shape)
+        n_in, n_out = len(self.inputs), len(self.outputs)
+        if n <= _PACKED:  # few points: one packed copy of the inputs, fewer pointers to pass
+            packed, result = np.empty((n_in, n)), np.empty((n_out, n))
+            for row, v in zip(packed, values):
+                row.reshape(shape)[...] = v
+            counts = np.zeros((n_in, 3), dtype=np.int64)
+            self._packed(n, _address(packed), _address(result), _address(counts))
+            if counts.any():
+                self._report(lambda k, kind: counts[k, kind], n, packed)
+            return tuple(result.reshape((n_out, *shape)))
         flat, strides = [], []
         for v in values:
-            if v.size == 1:
-                flat.append(np.ascontiguousarray(v.reshape(1)))
+            if v.size == 1:  # one value for every point: stride 0, no copy
+                flat.append(v.reshape(1))
                 strides.append(0)
             else:
                 flat.append(np.ascontiguousarray(np.broadcast_to(v, shape)).reshape(-1))
                 strides.append(1)
-        result = np.zeros((len(self.outputs), n))
+        result = np.empty((n_out, n))
         if threads == 0:
             threads = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-        parts = max(1, min(int(threads), n // 4096))
-        bounds = np.linspace(0, n, parts + 1).astype(np.int64)
-        counts = np.zeros((parts, len(self.inputs), 3), dtype=np.int64)
+        parts = max(1, min(int(threads), n // 4096))  # a thread for fewer points costs more than it saves
+        counts = np.zeros((parts, n_in, 3), dtype=np.int64)
+        in_addr = np.array([_address(a) for a in flat], dtype=np.uint64)
         stride_arr = np.array(strides, dtype=np.int64)
-        in_addr = [a.__array_interface__["data"][0] for a in flat]
-        out_addr = result.__array_interface__["data"][0]
+        out_addr = _address(result) + 8 * n * np.arange(n_out, dtype=np.uint64)
 
-        def run(part):
-            lo, hi = int(bounds[part]), int(bounds[part + 1])
-            pin = np.array([addr + 8 * lo * s for addr, s in zip(in_addr, strides)], dtype=np.uintp)
-            pout = np.array([out_addr + 8 * (j * n + lo) for j in range(len(self.outputs))], dtype=np.uintp)
-            return self._batch(ctypes.c_int64(hi - lo), ctypes.c_void_p(pin.ctypes.data),
-                               ctypes.c_void_p(stride_arr.ctypes.data), ctypes.c_void_p(pout.ctypes.data),
-                               ctypes.c_void_p(counts[part].ctypes.data))
+        def run(part):  # points [lo, hi): its own pointer arrays and counts
+            lo, hi = n * part // parts, n * (part + 1) // parts
+            pin = in_addr + (8 * lo) * stride_arr.astype(np.uint64)
+            pout = out_addr + np.uint64(8 * lo)
+            self._batch(hi - lo, _address(pin), _address(stride_arr), _address(pout), _address(counts[part]))
 
         if parts == 1:
             run(0)
@@ -456,7 +485,7 @@ class CompiledFunction:
         total = counts.sum(axis=0)
         if total.any():
             self._report(lambda k, kind: total[k, kind], n, flat)
-        return tuple(r.reshape(shape) for r in result)
+        return tuple(result.reshape((n_out, *shape)))
 
     def _as_array(self, name, value):
         arr = np.asarray(value)
@@ -486,6 +515,10 @@ class CompiledFunction:
         warn_outside(outside, n, self._ranges, stacklevel=4)
 
 
+def _address(array) -> int:
+    return array.__array_interface__["data"][0]
+
+
 def _first_bad(values, test):
     values = np.atleast_1d(np.asarray(values, dtype=float))
     return values[test(values)][:1].tolist()[0]
@@ -513,7 +546,7 @@ def compile_function(function, key: str, directory: Path | None = None, output_n
     library is not cached)."""
     directory = _private_dir(directory) if directory is not None else cache_dir()
     flags, libraries, tag = _toolchain()
-    stem = f"mftyre_{hashlib.sha256(f'{key}|{flags}|{libraries}'.encode()).hexdigest()[:24]}"
+    stem = f"mftyre_{hashlib.sha256(f'{key}|{flags}|{libraries}|{_GENERATOR}'.encode()).hexdigest()[:24]}"
     found = _find_cached(directory, stem)
     if found is not None:
         return found
@@ -599,7 +632,7 @@ def compile_external(model, inputs=("fz", "kappa", "alpha"), outputs=("fx", "fy"
     key = _key(model, {"external": name, "inputs": list(inputs), "outputs": list(outputs), "hessian": hessian,
                        **options})
     directory = _private_dir(directory) if directory is not None else cache_dir()
-    stem = f"mftyre_ext_{key[:24]}"
+    stem = f"mftyre_ext_{hashlib.sha256(f'{key}|{_GENERATOR}'.encode()).hexdigest()[:24]}"
     library = _find_cached(directory, stem)
     if library is None:
         f = model.casadi_function(inputs, outputs, name=name, **options)

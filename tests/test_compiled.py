@@ -301,3 +301,33 @@ def test_external_function_inside_ipopt(tmp_path):
     kappa, alpha = np.array(sol["x"]).ravel()
     out = model.evaluate(4000.0, kappa, alpha)
     assert float(out.fx) == pytest.approx(1500.0, abs=1e-6) and float(out.fy) == pytest.approx(-2500.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("table, tir", [("mf61_random", "MagicFormula61_Parameters.tir"),
+                                        ("mf62_random", "MagicFormula62_Parameters.tir")])
+def test_compiled_reproduces_reference_tables(mfeval_dir, tmp_path, table, tir):
+    """The vectorised C (vector maths library, no fast-math) against MFeval at the tolerances of
+    tests/test_reference_mfeval.py: 1e-9 relative, floors 1e-9 FNOMIN N, FNOMIN R0 N m, R0 m; MF 6.2 Rl 1e-7 m."""
+    import pandas as pd
+
+    model = mftyre.load_tir(mfeval_dir / tir)
+    prm = model.params
+    df = pd.read_csv(mfeval_dir / f"{table}.csv")
+    assert set(df["useMode"]) == {111} and (df["in_omega"] == 0).all()  # limits on, spin estimated
+    outputs = ("fx", "fy", "mx", "my", "mz", "re", "rl", "kya", "kxk", "mux", "muy")
+    f = compile_model(model, outputs=outputs, directory=tmp_path)
+    p = np.where(df["in_P"] == 0, prm.INFLPRES, df["in_P"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InputClippedWarning)
+        ours = dict(zip(outputs, f.batch(*(df[f"in_{c}"].to_numpy() for c in
+                                            ("Fz", "kappa", "alpha", "gamma", "phit", "Vx")), p)))
+    Fz0, R0 = prm.FNOMIN, prm.UNLOADED_RADIUS
+    columns = {"fx": ("Fx", Fz0), "fy": ("Fy", Fz0), "mx": ("Mx", Fz0 * R0), "my": ("My", Fz0 * R0),
+               "mz": ("Mz", Fz0 * R0), "re": ("Re", R0), "kya": ("Kya", Fz0), "kxk": ("Kxk", Fz0),
+               "mux": ("mux", 1.0), "muy": ("muy", 1.0)}
+    for name, (col, floor) in columns.items():
+        ref = df[col].to_numpy()
+        ok = np.isfinite(ref)
+        np.testing.assert_allclose(ours[name][ok], ref[ok], rtol=1e-9, atol=1e-9 * floor, err_msg=name)
+    ok = np.isfinite(df["Rl"].to_numpy())
+    np.testing.assert_allclose(ours["rl"][ok], df["Rl"].to_numpy()[ok], rtol=0, atol=1e-7 if "62" in table else 1e-9 * R0)
