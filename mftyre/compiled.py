@@ -545,11 +545,12 @@ def compile_function(function, key: str, directory: Path | None = None, output_n
     ``checks``: see :func:`generate_c`. ``function`` may also be a callable returning it (called only when the
     library is not cached)."""
     directory = _private_dir(directory) if directory is not None else cache_dir()
-    flags, libraries, tag = _toolchain()
-    stem = f"mftyre_{hashlib.sha256(f'{key}|{flags}|{libraries}|{_GENERATOR}'.encode()).hexdigest()[:24]}"
+    build = f"{key}|{_GENERATOR}|{os.environ.get('CC', 'cc')}|{platform.system()}|{platform.machine()}"
+    stem = f"mftyre_{hashlib.sha256(build.encode()).hexdigest()[:24]}"
     found = _find_cached(directory, stem)
     if found is not None:
         return found
+    flags, libraries, tag = _toolchain()
     if not hasattr(function, "n_in"):
         function = function()
     checks = checks or [{} for _ in range(function.n_in())]
