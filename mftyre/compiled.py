@@ -54,7 +54,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import MFTyreError, ModelInputError
-from .inputs import input_ranges, warn_outside
+from .inputs import check_finite, check_pressure, input_ranges, warn_outside
 
 __all__ = ["CompiledFunction", "CacheSecurityError", "compile_model", "compile_function", "compile_external",
            "compile_c", "cache_dir", "generate_c"]
@@ -101,7 +101,7 @@ def _private_dir(path) -> Path:
     return path
 
 
-def _atomic_write(directory: Path, name: str, data: bytes) -> Path:
+def _atomic_write(directory: Path, name: str, data: bytes) -> None:
     fd, tmp = tempfile.mkstemp(dir=directory, prefix=f".{name}.", suffix=".tmp")
     try:
         with os.fdopen(fd, "wb") as fh:
@@ -111,7 +111,6 @@ def _atomic_write(directory: Path, name: str, data: bytes) -> Path:
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
-    return directory / name
 
 
 def compile_c(source: Path, library: Path, flags=("-O2", "-fPIC", "-shared"), libraries=("-lm",)) -> None:
@@ -176,7 +175,7 @@ def generate_c(function, checks=None) -> str:
     """C source of the scalar-in, scalar-out SX ``function``: ``mft_point`` (one point) and ``mft_batch``
     (n points, inputs with stride 0 or 1 or any, outputs contiguous), both checking the inputs first.
 
-    ``checks``: per input ``{"positive": bool, "range": [lo, hi] or None}``; default: finite only.
+    ``checks``: per input ``{"positive": bool, "range": [lo, hi]}`` (both optional); default: finite only.
     """
     import casadi as ca
 
@@ -203,14 +202,15 @@ def generate_c(function, checks=None) -> str:
             body.append(f"w{o[0]} = {_c_number(f.instruction_constant(k))};")
         elif op in ops:
             expr = ops[op].format(*(f"w{j}" for j in i))
-            used.update(name for name in _LIBMVEC if f"{name}(" in ops[op])
+            call = ops[op].split("(")[0]
+            if call in _LIBMVEC:
+                used.add(call)
             body.append(f"w{o[0]} = {expr};")
         else:
             raise MFTyreError(f"CasADi operation {op} is not supported by mftyre's C generator")
     zero = [f"y{j}[i] = 0.0;" for j in range(n_out) if f.nnz_out(j) == 0]
     checks = checks or [{} for _ in range(n_in)]
-    lo = [c.get("range", [-math.inf, math.inf])[0] if c.get("range") else -math.inf for c in checks]
-    hi = [c.get("range", [-math.inf, math.inf])[1] if c.get("range") else math.inf for c in checks]
+    lo, hi = zip(*(c.get("range") or (-math.inf, math.inf) for c in checks))
     pos = [int(bool(c.get("positive"))) for c in checks]
     n_w = f.sz_w()
     decl = "\n".join(f"extern double {name}({', '.join(['double'] * (2 if name in ('atan2', 'pow', 'hypot') else 1))})"
@@ -416,14 +416,8 @@ class CompiledFunction:
         x, y = self._buffers()
         try:
             x[:] = values
-        except TypeError:
-            for name, v in zip(self.inputs, values):
-                if not isinstance(v, (int, float)):
-                    try:
-                        float(v)
-                    except (TypeError, ValueError):
-                        raise ModelInputError(f"input {name!r} must be a real number, got {v!r}") from None
-            x[:] = [float(v) for v in values]
+        except TypeError:  # numbers of other types (e.g. 0-d arrays) are converted; anything else is refused
+            x[:] = [_real(name, v) for name, v in zip(self.inputs, values)]
         flags = self._point(x, y)
         if flags:
             self._report(lambda k, kind: (flags >> (kind * _FLAG_BITS + k)) & 1, 1, list(x))
@@ -515,6 +509,15 @@ class CompiledFunction:
         warn_outside(outside, n, self._ranges, stacklevel=4)
 
 
+def _real(name, value) -> float:
+    try:
+        if isinstance(value, (str, bytes, complex)):
+            raise TypeError
+        return float(value)
+    except (TypeError, ValueError):
+        raise ModelInputError(f"input {name!r} must be a real number, got {value!r}") from None
+
+
 def _address(array) -> int:
     return array.__array_interface__["data"][0]
 
@@ -525,6 +528,27 @@ def _first_bad(values, test):
 
 
 # ------------------------------------------------------------------------------------------ building
+def _stem(prefix: str, key: str) -> str:
+    """File name stem of a library: the key with this generator, the compiler and the platform."""
+    build = f"{key}|{_GENERATOR}|{os.environ.get('CC', 'cc')}|{platform.system()}|{platform.machine()}"
+    return f"{prefix}_{hashlib.sha256(build.encode()).hexdigest()[:24]}"
+
+
+def _build(directory: Path, stem: str, write_source, flags, libraries, meta: dict) -> Path:
+    """Compile the C file that ``write_source(folder)`` writes into ``directory`` as ``<stem>_<sha>.so`` and its
+    description ``<stem>_<sha>.json`` (``meta`` plus the library's size and SHA-256), each renamed atomically."""
+    with tempfile.TemporaryDirectory(dir=directory) as tmp:
+        built = Path(tmp) / f"{stem}.so"
+        compile_c(write_source(Path(tmp)), built, flags, libraries)
+        data = built.read_bytes()
+        sha = hashlib.sha256(data).hexdigest()
+        library = directory / f"{stem}_{sha[:16]}.so"
+        os.replace(built, library)
+    meta = {**meta, "size": len(data), "sha256": sha}
+    _atomic_write(directory, library.with_suffix(".json").name, json.dumps(meta, indent=1).encode())
+    return library
+
+
 def _find_cached(directory: Path, stem: str):
     """A valid cached library named ``<stem>_*.so``, or None (damaged ones are skipped: rebuilt)."""
     for meta in sorted(directory.glob(f"{stem}_*.json")):
@@ -545,8 +569,7 @@ def compile_function(function, key: str, directory: Path | None = None, output_n
     ``checks``: see :func:`generate_c`. ``function`` may also be a callable returning it (called only when the
     library is not cached)."""
     directory = _private_dir(directory) if directory is not None else cache_dir()
-    build = f"{key}|{_GENERATOR}|{os.environ.get('CC', 'cc')}|{platform.system()}|{platform.machine()}"
-    stem = f"mftyre_{hashlib.sha256(build.encode()).hexdigest()[:24]}"
+    stem = _stem("mftyre", key)
     found = _find_cached(directory, stem)
     if found is not None:
         return found
@@ -554,19 +577,14 @@ def compile_function(function, key: str, directory: Path | None = None, output_n
     if not hasattr(function, "n_in"):
         function = function()
     checks = checks or [{} for _ in range(function.n_in())]
-    with tempfile.TemporaryDirectory(dir=directory) as tmp:
-        src = Path(tmp) / f"{stem}.c"
-        src.write_text(generate_c(function, checks))
-        built = Path(tmp) / f"{stem}.so"
-        compile_c(src, built, flags, libraries)
-        data = built.read_bytes()
-        sha = hashlib.sha256(data).hexdigest()
-        library = directory / f"{stem}_{sha[:16]}.so"
-        os.replace(built, library)
+
+    def write_source(folder):
+        (folder / f"{stem}.c").write_text(generate_c(function, checks))
+        return folder / f"{stem}.c"
+
     meta = {"inputs": list(function.name_in()), "outputs": list(output_names or function.name_out()),
-            "checks": checks, "size": len(data), "sha256": sha, "toolchain": tag}
-    _atomic_write(directory, library.with_suffix(".json").name, json.dumps(meta, indent=1).encode())
-    return library
+            "checks": checks, "toolchain": tag}
+    return _build(directory, stem, write_source, flags, libraries, meta)
 
 
 def _key(model, options: dict) -> str:
@@ -604,8 +622,6 @@ def compile_model(model, inputs=("fz", "kappa", "alpha", "gamma", "phit", "vx", 
 
 
 def _check_fixed(name, value):
-    from .inputs import check_finite, check_pressure
-
     check_finite(name, value)
     if name == "p":
         check_pressure(value)
@@ -633,27 +649,22 @@ def compile_external(model, inputs=("fz", "kappa", "alpha"), outputs=("fx", "fy"
     key = _key(model, {"external": name, "inputs": list(inputs), "outputs": list(outputs), "hessian": hessian,
                        **options})
     directory = _private_dir(directory) if directory is not None else cache_dir()
-    stem = f"mftyre_ext_{hashlib.sha256(f'{key}|{_GENERATOR}'.encode()).hexdigest()[:24]}"
+    stem = _stem("mftyre_ext", key)
     library = _find_cached(directory, stem)
     if library is None:
         f = model.casadi_function(inputs, outputs, name=name, **options)
         sx = f.sx_in()
         f = ca.Function(name, sx, f.call(sx), f.name_in(), f.name_out(), {"cse": True})
         jac = f.jacobian()
-        with tempfile.TemporaryDirectory(dir=directory) as tmp:
+
+        def write_source(folder):
             gen = ca.CodeGenerator(f"{stem}.c", {"with_header": False})
             for g in (f, jac, jac.jacobian()) if hessian else (f, jac):
                 gen.add(g)
-            src = Path(gen.generate(str(Path(tmp)) + os.sep))
-            built = Path(tmp) / f"{stem}.so"
-            compile_c(src, built, ("-O2", "-fPIC", "-shared", "-ffp-contract=off"), ("-lm",))
-            data = built.read_bytes()
-            sha = hashlib.sha256(data).hexdigest()
-            library = directory / f"{stem}_{sha[:16]}.so"
-            os.replace(built, library)
-        meta = {"inputs": list(f.name_in()), "outputs": list(f.name_out()), "checks": [], "size": len(data),
-                "sha256": sha, "toolchain": "casadi", "function": name, "hessian": hessian}
-        _atomic_write(directory, library.with_suffix(".json").name, json.dumps(meta, indent=1).encode())
-    else:
-        _verify(library)
+            return Path(gen.generate(str(folder) + os.sep))
+
+        meta = {"inputs": list(f.name_in()), "outputs": list(f.name_out()), "checks": [], "toolchain": "casadi",
+                "function": name, "hessian": hessian}
+        library = _build(directory, stem, write_source, ("-O2", "-fPIC", "-shared", "-ffp-contract=off"), ("-lm",),
+                         meta)
     return ca.external(name, str(library))

@@ -101,7 +101,7 @@ def test_batch_validates_arity_shapes_and_types(compiled):
     with pytest.raises(ModelInputError, match=r"expected 7 inputs.*got 3"):
         f(4000.0, 0.0, 0.0)
     with pytest.raises(ModelInputError, match="'gamma' must be a real number"):
-        f(4000.0, 0.0, 0.0, "x", 0.0, 20.0, 2e5)
+        f(4000.0, 0.0, 0.0, "0.1", 0.0, 20.0, 2e5)  # a numeric string is not a number
 
 
 @pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
