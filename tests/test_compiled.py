@@ -332,3 +332,32 @@ def test_compiled_reproduces_reference_tables(mfeval_dir, tmp_path, table, tir):
         np.testing.assert_allclose(ours[name][ok], ref[ok], rtol=1e-9, atol=1e-9 * floor, err_msg=name)
     ok = np.isfinite(df["Rl"].to_numpy())
     np.testing.assert_allclose(ours["rl"][ok], df["Rl"].to_numpy()[ok], rtol=0, atol=1e-7 if "62" in table else 1e-9 * R0)
+
+
+def test_compile_c_from_threads_into_one_library(tmp_path):
+    """compile_c (also used by swift) writes under a unique temporary name: no collision between threads."""
+    import ctypes
+
+    from mftyre.compiled import compile_c
+
+    source = tmp_path / "twice.c"
+    source.write_text("double twice(double x) { return 2.0 * x; }\n")
+    library = tmp_path / "twice.so"
+    errors = []
+
+    def work():
+        try:
+            compile_c(source, library)
+        except Exception as exc:  # noqa: BLE001
+            errors.append(repr(exc))
+
+    threads = [threading.Thread(target=work) for _ in range(6)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["twice.c", "twice.so"]  # no temporary files left
+    twice = ctypes.CDLL(str(library)).twice
+    twice.restype, twice.argtypes = ctypes.c_double, [ctypes.c_double]
+    assert twice(1.25) == 2.5
