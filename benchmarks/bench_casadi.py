@@ -1,6 +1,6 @@
 """Compiled C (mftyre.compiled) against NumPy MFModel.evaluate, every output, measured side by side in one run.
 
-    python benchmarks/bench_casadi.py [--tir FILE.tir] [--sizes 1000,10000,100000] [--repeat 5] [--fresh]
+    python benchmarks/bench_casadi.py [--tir FILE.tir] [--sizes 1000,10000,100000] [--repeat 5] [--fresh] [--cpu]
 
 Columns: one point (microseconds per call from Python: ``model.evaluate(...)`` on floats, ``compiled(...)``)
 and batches of 1e3, 1e4, 1e5 points (nanoseconds per point: ``model.evaluate`` on arrays,
@@ -8,6 +8,8 @@ and batches of 1e3, 1e4, 1e5 points (nanoseconds per point: ``model.evaluate`` o
 ``threads=0`` (every core). All 29 outputs in every row, inputs drawn at random inside the .tir ranges.
 Targets (issue 10): compiled batch <= 150 ns/point MF 6.1, <= 300 ns/point MF 6.2 on one core; a single
 point <= 2 us. Libraries come from the compile cache (``--fresh``: a new temporary cache, compile time shown).
+``--cpu``: the one-core rows in thread CPU time (see timing.py; on a busy shared machine a 1e5-point run is
+always interrupted and its wall time overstates the cost), the threads row always in wall time.
 """
 from __future__ import annotations
 
@@ -45,6 +47,7 @@ def main(argv=None):
     ap.add_argument("--sizes", default="1000,10000,100000")
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--fresh", action="store_true", help="compile into a new temporary cache (shows compile time)")
+    ap.add_argument("--cpu", action="store_true", help="one-core rows in thread CPU time instead of wall time")
     args = ap.parse_args(argv)
     files = args.tir or [ROOT / "tir_files" / "car_205_60R15_mf61.tir", ROOT / "tir_files" / "car_205_60R15_mf62_swift.tir"]
     sizes = [int(s) for s in args.sizes.split(",")]
@@ -61,27 +64,31 @@ def main(argv=None):
         t_compile = time.perf_counter() - t0
         one = [float(v[0]) for v in inputs(model, 1, seed=1)]
         reps = 5000
-        t_np1 = best_time(lambda: [model.evaluate(*one[:5], vx=one[5], p=one[6]) for _ in range(50)], 3) / 50
-        t_c1 = best_time(lambda: [compiled(*one) for _ in range(reps)], 2 * args.repeat) / reps
+        cpu = args.cpu
+        t_np1 = best_time(lambda: [model.evaluate(*one[:5], vx=one[5], p=one[6]) for _ in range(50)], 3, cpu) / 50
+        t_c1 = best_time(lambda: [compiled(*one) for _ in range(reps)], 2 * args.repeat, cpu) / reps
         rows = {"NumPy evaluate (baseline)": [t_np1 * 1e6], "compiled C, 1 core": [t_c1 * 1e6],
-                f"compiled C, threads=0 ({cores} cores)": [t_c1 * 1e6]}
+                f"compiled C, threads=0 ({cores} cores)": [None]}
         for n in sizes:
             x = inputs(model, n)
             repeat = args.repeat if n <= 10_000 else max(2, args.repeat // 2)
             rows["NumPy evaluate (baseline)"].append(best_time(lambda: model.evaluate(*x[:5], vx=x[5], p=x[6]),
-                                                               repeat) / n * 1e9)
+                                                               repeat, cpu) / n * 1e9)
             # the compiled rows are cheap: more repeats, so that a busy machine disturbs them less
-            rows["compiled C, 1 core"].append(best_time(lambda: compiled.batch(*x), 3 * args.repeat) / n * 1e9)
+            rows["compiled C, 1 core"].append(best_time(lambda: compiled.batch(*x), 3 * args.repeat, cpu) / n * 1e9)
             rows[f"compiled C, threads=0 ({cores} cores)"].append(
                 best_time(lambda: compiled.batch(*x, threads=0), 3 * args.repeat) / n * 1e9)
         base = rows["NumPy evaluate (baseline)"]
         print(f"\n{Path(path).name} (MF {version[0]}.{version[1:]}), all {len(compiled.outputs)} outputs; "
-              f"compile {'(fresh)' if fresh else '(or cache)'}: {t_compile:.1f} s")
+              f"compile {'(fresh)' if fresh else '(or cache)'}: {t_compile:.1f} s; one-core rows in "
+              f"{'thread CPU' if cpu else 'wall'} time")
         print(header)
         for label, values in rows.items():
-            print(f"{label:34}{values[0]:>13.2f}" + "".join(f"{v:>15.0f}" for v in values[1:]))
+            first = f"{values[0]:>13.2f}" if values[0] else f"{'':>13}"
+            print(f"{label:34}{first}" + "".join(f"{v:>15.0f}" for v in values[1:]))
             if label != "NumPy evaluate (baseline)":
-                print(f"{'  speed-up over NumPy':34}{base[0] / values[0]:>13.0f}"
+                first = f"{base[0] / values[0]:>13.0f}" if values[0] else f"{'':>13}"
+                print(f"{'  speed-up over NumPy':34}{first}"
                       + "".join(f"{b / v:>15.1f}" for b, v in zip(base[1:], values[1:])))
         c1 = rows["compiled C, 1 core"]
         target = TARGET_NS.get(version)

@@ -252,10 +252,12 @@ static void kernel(int64_t m, const double *const *in, double *const *out)
   }}
 }}
 
-/* one point: returns flags (bit k: input k not finite; 16+k: not positive; 32+k: outside its range);
+/* one point, inputs then outputs in xy: returns flags (bit k: input k not finite; 16+k: not positive; 32+k: outside its range);
    evaluates unless an input is not finite or not positive */
-int64_t mft_point(const double *x, double *y)
+int64_t mft_point(double *xy)
 {{
+  const double *x = xy;
+  double *y = xy + N_IN;
   int64_t flags = 0;
   const double *in[N_IN];
   double *out[N_OUT];
@@ -401,31 +403,28 @@ class CompiledFunction:
         self._packed.restype = ctypes.c_int
         self._packed.argtypes = [ctypes.c_int64] + [ctypes.c_void_p] * 3
         self._local = threading.local()
+        self._n_in = len(self.inputs)
         self._unpack = struct.Struct(f"{len(self.outputs)}d").unpack_from
         self._ranges = {name: (c["range"][0], c["range"][1], c.get("describe", "")) for name, c in
                         zip(self.inputs, self._checks) if c.get("range")}
 
-    def _buffers(self):
-        try:
-            return self._local.buffers
-        except AttributeError:
-            buffers = ((ctypes.c_double * len(self.inputs))(), (ctypes.c_double * len(self.outputs))())
-            self._local.buffers = buffers
-            return buffers
-
     def __call__(self, *values):
         """One point: the inputs as floats, in the order of :attr:`inputs`; returns a tuple of floats."""
-        if len(values) != len(self.inputs):
-            raise ModelInputError(self._arity_message(len(values)))
-        x, y = self._buffers()
+        try:  # this thread's buffer: the inputs, then the outputs
+            xy = self._local.xy
+        except AttributeError:
+            xy = self._local.xy = (ctypes.c_double * (len(self.inputs) + len(self.outputs)))()
+        n_in = self._n_in
         try:
-            x[:] = values
+            xy[:n_in] = values
+        except ValueError:
+            raise ModelInputError(self._arity_message(len(values))) from None
         except TypeError:  # numbers of other types (e.g. 0-d arrays) are converted; anything else is refused
-            x[:] = [_real(name, v) for name, v in zip(self.inputs, values)]
-        flags = self._point(x, y)
+            xy[:n_in] = [_real(name, v) for name, v in zip(self.inputs, values)]
+        flags = self._point(xy)
         if flags:
-            self._report(lambda k, kind: (flags >> (kind * _FLAG_BITS + k)) & 1, 1, list(x))
-        return self._unpack(y)
+            self._report(lambda k, kind: (flags >> (kind * _FLAG_BITS + k)) & 1, 1, xy[:n_in])
+        return self._unpack(xy, 8 * n_in)
 
     def batch(self, *arrays, threads: int = 1):
         """Many points: one array (or number) per input, broadcast together; one array per output.
