@@ -41,6 +41,12 @@ def inputs(model, n, seed=0):
             rng.uniform(-0.05, 0.05, n), np.zeros(n), rng.uniform(5.0, 35.0, n), rng.uniform(0.9, 1.1, n) * prm.NOMPRES]
 
 
+def _repeat(call, times):
+    """``times`` calls, each result dropped at once (as a caller would use it)."""
+    for _ in range(times):
+        call()
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tir", action="append")
@@ -65,8 +71,8 @@ def main(argv=None):
         one = [float(v[0]) for v in inputs(model, 1, seed=1)]
         reps = 5000
         cpu = args.cpu
-        t_np1 = best_time(lambda: [model.evaluate(*one[:5], vx=one[5], p=one[6]) for _ in range(50)], 3, cpu) / 50
-        t_c1 = best_time(lambda: [compiled(*one) for _ in range(reps)], 2 * args.repeat, cpu) / reps
+        t_np1 = best_time(lambda: _repeat(lambda: model.evaluate(*one[:5], vx=one[5], p=one[6]), 50), 3, cpu) / 50
+        t_c1 = best_time(lambda: _repeat(lambda: compiled(*one), reps), 2 * args.repeat, cpu) / reps
         rows = {"NumPy evaluate (baseline)": [t_np1 * 1e6], "compiled C, 1 core": [t_c1 * 1e6],
                 f"compiled C, threads=0 ({cores} cores)": [None]}
         for n in sizes:
