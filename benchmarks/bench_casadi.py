@@ -55,7 +55,8 @@ def main(argv=None):
     ap.add_argument("--fresh", action="store_true", help="compile into a new temporary cache (shows compile time)")
     ap.add_argument("--cpu", action="store_true", help="one-core rows in thread CPU time instead of wall time")
     args = ap.parse_args(argv)
-    files = args.tir or [ROOT / "tir_files" / "car_205_60R15_mf61.tir", ROOT / "tir_files" / "car_205_60R15_mf62_swift.tir"]
+    samples = ("car_205_60R15_mf61.tir", "car_205_60R15_mf62_swift.tir")
+    files = args.tir or [ROOT / "tir_files" / name for name in samples]
     sizes = [int(s) for s in args.sizes.split(",")]
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     fresh = tempfile.TemporaryDirectory() if args.fresh else None

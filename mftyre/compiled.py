@@ -8,34 +8,34 @@ cached on disk; and compiled CasADi functions with their derivatives for optimal
     FX, FY, MZ = tyre.batch(..., threads=0)                          # the same on every core
     f = compile_external(model, ("fz", "kappa", "alpha"), ("fx", "fy"), hessian=True)   # casadi.Function
 
-Evaluation (:func:`compile_model`, :class:`CompiledFunction`). The C is written here from the CasADi SX graph
-of :meth:`mftyre.MFModel.casadi_function` (after common-subexpression elimination): one straight-line kernel
-over a block of points, vectorised by the compiler (``#pragma omp simd``; on x86-64 Linux with glibc's vector
-maths library libmvec, one clone per instruction set, chosen at load time), plus a batch loop in C over all
-points and a single-point entry. Every call works on its own arrays (the caller's inputs, fresh outputs, stack
-buffers in C): a compiled object may be called from any number of threads at once, and ``batch`` releases the
-GIL while the C runs. Inputs are checked in C like :meth:`mftyre.MFModel.evaluate` (:mod:`mftyre.inputs`): NaN
-or +-inf and p <= 0 raise :class:`ModelInputError`; values outside the .tir ranges give one
-:class:`~mftyre.errors.InputClippedWarning` per call (``limits=True``). Compiler flags: ``-O1 -ftree-loop-vectorize
--fno-math-errno -fno-trapping-math -freciprocal-math -ffp-contract=off``: of the fast-math family only division by a reciprocal
-(at most 1 ulp per division, 15 % faster for MF 6.2); no reassociation, no finite-math assumptions, no
-flush-to-zero. The vector maths functions are within a few ulp: the C agrees with NumPy to about 3e-11 relative
-and reproduces the MFeval tables at the tolerances of the NumPy path (tests/test_compiled.py).
+Evaluation (:func:`compile_model`, :class:`CompiledFunction`). The C is written here from the CasADi SX graph of
+:meth:`mftyre.MFModel.casadi_function` (after common-subexpression elimination): one straight-line kernel over a
+block of points, vectorised by the compiler (``#pragma omp simd``; on x86-64 Linux with glibc's vector maths
+library libmvec, one clone per instruction set, chosen at load time), plus a batch loop in C over all points and a
+single-point entry. Every call works on its own arrays (the caller's inputs, fresh outputs, stack buffers in C): a
+compiled object may be called from any number of threads at once, and ``batch`` releases the GIL while the C runs.
+Inputs are checked in C like :meth:`mftyre.MFModel.evaluate` (:mod:`mftyre.inputs`): NaN or +-inf and p <= 0 raise
+:class:`ModelInputError`; values outside the .tir ranges give one :class:`~mftyre.errors.InputClippedWarning` per
+call (``limits=True``). Compiler flags: ``-O1 -ftree-loop-vectorize -fno-math-errno -fno-trapping-math
+-freciprocal-math -ffp-contract=off``: of the fast-math family only multiplication by a reciprocal instead of
+division (at most 1 ulp per division, 15 % faster for MF 6.2); no reassociation, no finite-math assumptions, no
+flush-to-zero. The vector maths functions are within a few ulp: the C agrees with NumPy to about 3e-11 relative and
+reproduces the MFeval tables at the tolerances of the NumPy path (tests/test_compiled.py).
 
 Derivatives (:func:`compile_external`): CasADi's own C for the function, its Jacobian (``jac_<name>``) and on
 request the Jacobian of that (``jac_jac_<name>``, second derivatives), compiled once and loaded with
-``casadi.external``: an NLP (IPOPT) calls the compiled tyre and its derivatives while the rest of the problem
-stays a small graph, instead of generating C for the whole problem.
+``casadi.external``: an NLP (IPOPT) calls the compiled tyre and its derivatives while the rest of the problem stays
+a small graph, instead of generating C for the whole problem.
 
-Cache. The key is a SHA-256 of everything that defines the function (parameter values, side, options, input
-and output names, the versions of mftyre and CasADi, this module's source, the compiler flags). The folder is ``$MFTYRE_CACHE`` or
-``~/.cache/mftyre``; it must belong to the current user (or root) and be writable by no one else, as must
-every library loaded, else :class:`CacheSecurityError`. A library is compiled under a unique temporary name
-in that folder and renamed atomically to ``<stem>_<sha-256 of the library>.so``, then its description
-``<stem>_<sha>.json`` (inputs, outputs, checks, size and SHA-256 of the library) is written the same way, so
-concurrent threads and processes never see half a pair. Before a library is loaded its size and SHA-256 are
-checked against the description: a truncated or altered file is rebuilt (from the cache) or refused.
-Compiler: ``$CC`` or ``cc``.
+Cache. The key is a SHA-256 of everything that defines the function (parameter values, side, options, input and
+output names, the versions of mftyre and CasADi, this module's source, the compiler and platform). The folder is
+``$MFTYRE_CACHE`` or ``~/.cache/mftyre``; it must belong to the current user (or root) and be writable by no one
+else, as must every library loaded, else :class:`CacheSecurityError`. A library is compiled under a unique
+temporary name in that folder and renamed atomically to ``<stem>_<sha-256 of the library>.so``, then its
+description ``<stem>_<sha>.json`` (inputs, outputs, checks, size and SHA-256 of the library) is written the same
+way, so concurrent threads and processes never see half a pair. Before a library is loaded its size and SHA-256 are
+checked against the description: a truncated or altered file is rebuilt (from the cache) or refused. Compiler:
+``$CC`` or ``cc``.
 """
 from __future__ import annotations
 
@@ -160,7 +160,8 @@ def _operations():
         "TANH": "tanh({0})", "ASINH": "asinh({0})", "ACOSH": "acosh({0})", "ATANH": "atanh({0})",
         "ERF": "erf({0})", "LOG1P": "log1p({0})", "EXPM1": "expm1({0})", "HYPOT": "hypot({0},{1})",
         "FLOOR": "floor({0})", "CEIL": "ceil({0})", "FMOD": "fmod({0},{1})", "COPYSIGN": "copysign({0},{1})",
-        # comparisons and logic give 0.0 / 1.0 (no short-circuit: no branches in the kernel); if_else_zero(c, x) = c ? x : 0 (x may be NaN or inf: dropped)
+        # comparisons and logic give 0.0 / 1.0 (no short-circuit: no branches in the kernel);
+        # if_else_zero(c, x) = c ? x : 0 (x may be NaN or inf: dropped)
         "LT": "({0}<{1}?1.0:0.0)", "LE": "({0}<={1}?1.0:0.0)", "EQ": "({0}=={1}?1.0:0.0)",
         "NE": "({0}!={1}?1.0:0.0)", "NOT": "({0}==0?1.0:0.0)", "AND": "(({0}!=0)&({1}!=0)?1.0:0.0)",
         "OR": "(({0}!=0)|({1}!=0)?1.0:0.0)", "IF_ELSE_ZERO": "({0}!=0?{1}:0.0)",
@@ -253,8 +254,8 @@ static void kernel(int64_t m, const double *const *in, double *const *out)
   }}
 }}
 
-/* one point, inputs then outputs in xy: returns flags (bit k: input k not finite; 16+k: not positive; 32+k: outside its range);
-   evaluates unless an input is not finite or not positive */
+/* one point, inputs then outputs in xy: returns flags (bit k: input k not finite; 16+k: not positive;
+   32+k: outside its range); evaluates unless an input is not finite or not positive */
 int64_t mft_point(double *xy)
 {{
   const double *x = xy;
@@ -367,14 +368,16 @@ def _read_meta(library: Path) -> dict:
 
 
 def _verify(library: Path) -> dict:
-    """Check a library against its description (owner, permissions, size, SHA-256) without loading it; its description."""
+    """Check a library against its description (owner, permissions, size, SHA-256) without loading it;
+    returns the description."""
     _check_private(library.parent, "the folder")
     meta = _read_meta(library)
     _check_private(library, "the library")
     data = library.read_bytes()
     if len(data) != meta["size"] or hashlib.sha256(data).hexdigest() != meta["sha256"]:
-        raise MFTyreError(f"{library} is damaged: {len(data)} bytes, SHA-256 {hashlib.sha256(data).hexdigest()[:16]}..., "
-                          f"its description says {meta['size']} bytes, {meta['sha256'][:16]}...; delete it to rebuild")
+        raise MFTyreError(f"{library} is damaged: {len(data)} bytes, SHA-256 "
+                          f"{hashlib.sha256(data).hexdigest()[:16]}..., its description says {meta['size']} bytes, "
+                          f"{meta['sha256'][:16]}...; delete it to rebuild")
     return meta
 
 
