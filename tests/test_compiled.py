@@ -362,3 +362,22 @@ def test_compile_c_from_threads_into_one_library(tmp_path):
     twice = ctypes.CDLL(str(library)).twice
     twice.restype, twice.argtypes = ctypes.c_double, [ctypes.c_double]
     assert twice(1.25) == 2.5
+
+
+def test_shared_range_check_gives_the_compiled_warning(compiled):
+    """mftyre.inputs (for MFModel.evaluate) counts and words the warning exactly as the compiled C does."""
+    from mftyre.inputs import count_outside, input_ranges, warn_outside
+
+    model, f = compiled["mf61"]
+    prm = model.params
+    x = dict(fz=np.array([4000.0, prm.FZMAX + 1.0, 3000.0]), kappa=np.array([0.0, prm.KPUMAX + 0.5, prm.KPUMIN - 1]),
+             alpha=0.0, gamma=0.0, phit=0.0, vx=20.0, p=np.array([prm.NOMPRES, prm.PRESMAX * 2, prm.NOMPRES]))
+    with pytest.warns(InputClippedWarning) as compiled_warning:
+        f.batch(*x.values())
+    ranges = input_ranges(prm, model.mirrored)
+    arrays = {k: np.broadcast_to(v, (3,)) for k, v in x.items()}
+    counts = count_outside(arrays, ranges)
+    assert counts == {"fz": 1, "kappa": 2, "alpha": 0, "gamma": 0, "p": 1}
+    with pytest.warns(InputClippedWarning) as shared_warning:
+        warn_outside(counts, 3, ranges)
+    assert str(shared_warning[0].message) == str(compiled_warning[0].message)
