@@ -15,3 +15,7 @@ class DataError(MFTyreError):
 
 class ModelInputError(MFTyreError, ValueError):
     """An input passed to the model is invalid (NaN, non-positive pressure, bad shape...)."""
+
+
+class InputClippedWarning(UserWarning):
+    """Inputs lay outside the .tir ranges and were saturated to them (``limits=True``); names the inputs."""
