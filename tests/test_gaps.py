@@ -243,3 +243,25 @@ def test_command_line_writes_tir_report_and_json(tmp_path):
     assert (tmp_path / "rep" / "residual_maps_before_after.png").exists()
     # refuses to overwrite
     assert args.func(args) == 2
+
+
+# ------------------------------------------------------------------------------- untestable effects (#11)
+def test_effects_the_data_cannot_test_are_not_candidates():
+    """Free rolling only (SL = SA = 0 throughout) with an Fx offset (rolling resistance seen by the load cell):
+    the Fx shifts act along kappa, so from kappa = 0 alone a horizontal shift cancels a vertical one and the curve
+    away from kappa = 0 is invented (issue 11: PVX1 = 0.55 gave Fx = -1024 / +2579 N at kappa = -/+0.05). The
+    effect is reported untestable with the reason, never tried; the model's Fx stays odd in kappa."""
+    full = _tyre_a()
+    d = trailer_programme(full, points=15, noise=1.0, seed=3)
+    d = d.select(d.frame["TEST"].to_numpy() == "free_rolling")
+    frame = d.frame.copy()
+    frame["FX"] = frame["FX"] - 0.012 * frame["FZ"]
+    rep = find_gaps(d.with_frame(frame, "rolling resistance in Fx"), neutralise(full, "fx_shift"))
+    assert rep.findings_before and rep.findings_before[0].channel == "FX"
+    assert "fx_shift" not in rep.effect_names
+    assert "SL = 0 throughout" in rep.untestable["fx_shift"]
+    assert "slip-angle sweep" in rep.untestable["camber_fy_peak"] and "SL = 0" in rep.untestable["camber_friction_x"]
+    tried = {c.name for r in rep.rounds for c in r}
+    assert not tried & {"fx_shift", "camber_fy_peak", "camber_friction_x", "load_curvature_x"}
+    fx = rep.model.evaluate(2750.0, np.array([-0.05, 0.05]), 0.0, 0.0, 0.0)["fx"]
+    assert abs(fx[0] + fx[1]) < 0.02 * 2750.0

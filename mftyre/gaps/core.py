@@ -18,7 +18,7 @@ from ..model import MFModel, load_tir
 from ..tir import write_tir
 from .catalogue import CATALOGUE, PARAM_STAGE, Effect, effect_state, parameter_needs
 from .locate import locate
-from .refit import FAIR_STAGES, _at_neutral, active_parameters, standard_errors, _stage_data, needs_met, refit, refit_stages
+from .refit import FAIR_STAGES, SWEEP_REASONS, _at_neutral, active_parameters, standard_errors, _stage_data, data_conditions, needs_met, refit, refit_stages
 from .residuals import Evaluator, holdout_mask, noise_levels
 
 __all__ = ["find_gaps", "GapReport", "AddedEffect", "Candidate"]
@@ -165,7 +165,7 @@ def _identifiable(effect: Effect, prm, data: TyreData, turn_slip: bool):
     for n in effect.parameters:
         stage = PARAM_STAGE.get(n)
         sub = _stage_data(stage, data) if stage in STAGES else data
-        cond = conditions(sub)
+        cond = data_conditions(sub)
         ts = turn_slip and bool(np.any(sub.array("PHIT") != 0))
         needs = tuple(parameter_needs(n)) + tuple(effect.needs)
         if len(sub) == 0:
@@ -181,7 +181,7 @@ def _identifiable(effect: Effect, prm, data: TyreData, turn_slip: bool):
     return keep, why
 
 
-_REASONS = dict(_STAGE_REASONS, turn_slip="no turn slip in the data")
+_REASONS = dict(_STAGE_REASONS, **SWEEP_REASONS, turn_slip="no turn slip in the data")
 
 
 def _matches(effect: Effect, findings) -> bool:

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import lmfit
 import numpy as np
 
-from ..data import TyreData
+from ..data import TyreData, levels
 from ..fit.core import bounded_parameters
 from ..fit.stages import STAGES, _met, conditions, shape_violations, stage_rows  # _met: the stages' own rule
 from ..model import MFModel
@@ -29,7 +29,7 @@ from ..params import PARAMETERS
 from .catalogue import BASE, CATALOGUE, PARAM_STAGE, TURN_SLIP_BASE, effect_state, parameter_needs
 from .residuals import Evaluator
 
-__all__ = ["refit", "RefitResult", "refit_stages", "stage_names", "needs_met", "active_parameters", "standard_errors", "FAIR_STAGES"]
+__all__ = ["refit", "RefitResult", "refit_stages", "stage_names", "needs_met", "data_conditions", "SWEEP_REASONS", "active_parameters", "standard_errors", "FAIR_STAGES"]
 
 #: Stages the fair start refits, in order (the effective rolling radius is not mapped).
 FAIR_STAGES = ("pure_fx", "pure_fy", "mz", "combined_fx", "combined_fy", "mz_combined", "mx", "my", "vertical")
@@ -135,8 +135,44 @@ def standard_errors(params, ev: Evaluator, names, channels, sigma: dict) -> dict
 
 
 def needs_met(needs, cond: dict, turn_slip: bool) -> bool:
-    """Whether data with the :func:`mftyre.fit.stages.conditions` ``cond`` determine a parameter with ``needs``."""
-    return all(turn_slip if n == "turn_slip" else _met(n, cond, True) for n in needs)
+    """Whether data with the conditions ``cond`` (:func:`data_conditions`) determine a parameter with ``needs``."""
+    return all(turn_slip if n == "turn_slip" else cond[n] if n in _SWEEPS else _met(n, cond, True) for n in needs)
+
+
+_SWEEPS = ("slip_ratio", "slip_angle", "combined", "deflection")
+#: Why a parameter whose stage sweeps an input cannot be determined without that sweep.
+SWEEP_REASONS = {
+    "slip_ratio": "no longitudinal-slip sweep in the data (SL = 0 throughout): the Fx curve's shape and shifts "
+                  "act along kappa",
+    "slip_angle": "no slip-angle sweep in the data (SA = 0 throughout): the Fy and Mz curves' shape and shifts "
+                  "act along alpha",
+    "combined": "no combined-slip sweep (kappa swept at a slip angle) in the data",
+    "deflection": "no load-deflection sweep (loaded radius or deflection at three or more loads) in the data",
+}
+
+
+def _swept(x, tol) -> bool:
+    """A sweep: three or more distinct levels, one of them away from zero."""
+    x = x[np.isfinite(x)]
+    return bool(x.size) and len(levels(x, tol)[1]) >= 3 and bool(np.any(np.abs(x) > tol))
+
+
+def data_conditions(data: TyreData) -> dict:
+    """:func:`mftyre.fit.stages.conditions` plus the swept inputs (``slip_ratio``, ``slip_angle``,
+    ``combined``, ``deflection``: True where the data sweep them)."""
+    cond = dict(conditions(data))
+    if len(data) == 0:
+        return dict(cond, **{k: False for k in _SWEEPS})
+    sl, sa = data.array("SL"), data.array("SA")
+    both = (np.abs(sl) > _KAPPA_TOL) & (np.abs(sa) > _ALPHA_TOL)
+    rl = data.array("RL") if data.has("RL") else (data.array("RHO") if data.has("RHO") else None)
+    fz = data.array("FZ")
+    deflect = rl is not None and _swept(fz[np.isfinite(rl)], 0.02 * float(np.max(np.abs(fz))))
+    return dict(cond, slip_ratio=_swept(sl, _KAPPA_TOL), slip_angle=_swept(sa, _ALPHA_TOL),
+                combined=_swept(sl[both], _KAPPA_TOL), deflection=bool(deflect))
+
+
+_KAPPA_TOL, _ALPHA_TOL = 0.005, math.radians(0.25)
 
 
 def _stage_data(stage_name: str, data: TyreData) -> TyreData:
@@ -203,7 +239,7 @@ def active_parameters(prm, turn_slip: bool = False) -> set:
 def stage_names(stage_name: str, prm, sub: TyreData, turn_slip: bool, extra=(), active=None) -> list:
     """Active parameters of a stage that its data determine (``active``: the active set, default that of
     ``prm``; ``extra``: parameters to add to it)."""
-    cond = conditions(sub)
+    cond = data_conditions(sub)
     ts = turn_slip and bool(np.any(sub.array("PHIT") != 0))
     out = []
     for n, st in PARAM_STAGE.items():
