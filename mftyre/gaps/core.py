@@ -20,6 +20,7 @@ from .catalogue import CATALOGUE, PARAM_STAGE, Effect, effect_state, parameter_n
 from .locate import locate
 from .refit import FAIR_STAGES, SWEEP_REASONS, _at_neutral, active_parameters, standard_errors, _stage_data, data_conditions, needs_met, refit, refit_stages
 from .residuals import Evaluator, holdout_mask, noise_levels
+from .small import SMALL_DATA, aicc, fit_all, loo_errors, weighted_rss
 
 __all__ = ["find_gaps", "GapReport", "AddedEffect", "Candidate"]
 
@@ -197,6 +198,103 @@ def _summary(data: TyreData) -> dict:
                 speeds=c["speeds"], camber=c["camber"], turn_slip=bool(np.any(data.array("PHIT") != 0)))
 
 
+def _candidates(pool, given, train: TyreData, ts: bool):
+    """({name: (effect, parameters the data determine, {parameter: why not})}, {untestable name: reason}) of the
+    absent (or partly absent) effects of ``pool``."""
+    untestable, candidates = {}, {}
+    for e in pool:
+        state = effect_state(e, given)
+        if state == "unavailable":
+            continue
+        if state == "active":
+            # partly switched on: the switches still at their neutral values are the candidate
+            off = [n for n in e.neutral if _at_neutral(given[n], e.neutral[n])]
+            if not off:
+                continue
+            e = replace(e, parameters=tuple(off), neutral={n: e.neutral[n] for n in off})
+        keep, why = _identifiable(e, given, train, ts)
+        if not keep:
+            untestable[e.name] = "; ".join(f"{k}: {v}" for k, v in why.items()) or "not determinable"
+            continue
+        candidates[e.name] = (e, keep, why)
+    return candidates, untestable
+
+
+def _find_small(data, given, start, fair, candidates, untestable, ev, ts, max_effects, t0, say) -> GapReport:
+    """The small-data search (:mod:`mftyre.gaps.small`): forward selection by AICc and leave-one-out over all
+    points; the report's "held-out" errors are the leave-one-out errors."""
+    chans = list(ev.channels)
+    names = sorted({k for r in fair.values() for k in r.names})
+    n = int(sum(ev.measured[c].size for c in chans))
+    scale = {c: float(np.sqrt(np.mean(ev.measured[c] ** 2))) or 1.0 for c in chans}
+    prm = start
+    crit = aicc(weighted_rss(ev, prm, chans, scale), n, len(names))
+    loo = loo_errors(prm, data, names, chans)
+    loo_start = dict(loo)
+    rounds, added = [], []
+    while candidates and len(added) < max_effects:
+        trials = []
+        for e, keep, why in candidates.values():
+            if not any(c in chans for c in e.channels):
+                continue
+            startv = {k: e.start.get(k, e.neutral.get(k, float(prm[k]))) for k in keep}
+            new, _ = fit_all(prm, ev, names + list(keep), chans, start=startv)
+            c_new = aicc(weighted_rss(ev, new, chans, scale), n, len(names) + len(keep))
+            trials.append([e, keep, why, new, c_new, None])
+        if not trials:
+            break
+        trials.sort(key=lambda t: t[4])
+        for t in trials[:3]:   # leave-one-out for the best few by AICc
+            t[5] = loo_errors(t[3], data, names + list(t[1]), chans)
+        rnd = []
+        for e, keep, why, new, c_new, loo_new in trials:
+            before, after = (float(np.mean(list(loo.values()))), float(np.mean(list(loo_new.values())))) \
+                if loo_new else (math.nan, math.nan)
+            ok = loo_new is not None and c_new < crit - 2.0 and after < before
+            rnd.append(Candidate(e.name, list(keep), crit, c_new, before, after, n, n, math.nan, math.nan,
+                                 crit - c_new, (before - after) / before if before > 0 else 0.0, ok,
+                                 {k: float(new[k]) for k in keep}, {},
+                                 "AICc before/after in the chi2 columns, leave-one-out error [%] in the held-out "
+                                 "columns"))
+        rounds.append(rnd)
+        best = next((t for t, c in zip(trials, rnd) if c.significant), None)
+        if best is None:
+            say("no effect lowers both AICc and the leave-one-out error")
+            break
+        e, keep, why, new, c_new, loo_new = best
+        by_ch = {c: (loo[c] - loo_new[c]) / loo[c] for c in loo_new if loo[c] > 0}
+        added.append(AddedEffect(e.name, e.description, {k: dict(value=float(new[k]), stderr=None,
+                                                                 meaning=e.parameter_descriptions()[k])
+                                                        for k in keep},
+                                 rnd[trials.index(best)].held_out_gain, by_ch, math.nan,
+                                 crit - c_new, len(rounds), f"AICc {crit:.1f} -> {c_new:.1f}"))
+        say(f"added {e.name}: AICc {crit:.1f} -> {c_new:.1f}; leave-one-out error "
+            + ", ".join(f"{c} {loo[c]:.2f} -> {loo_new[c]:.2f} %" for c in loo_new))
+        prm, crit, loo = new, c_new, loo_new
+        names += list(keep)
+        del candidates[e.name]
+    # noise: the residual standard deviation of the selected model; standard errors of all fitted parameters
+    k = len(names)
+    res = ev.residuals(prm, chans)
+    sigma = {c: (float(math.sqrt(np.sum(res[c] ** 2) / max(res[c].size - k, 1))),
+                 f"residual of the selected model ({res[c].size} points, {k} parameters)") for c in chans}
+    se = standard_errors(prm, ev, names, chans, sigma)
+    for a in added:
+        for p in a.parameters:
+            a.parameters[p].update(value=float(prm[p]), stderr=se.get(p))
+    message = ("small data: " + (f"added {len(added)} effect(s): {', '.join(a.name for a in added)}" if added
+                                 else "no effect lowers both AICc and the leave-one-out error; nothing added"))
+    say(message)
+    err_all = _errors(ev, prm)
+    return GapReport(
+        model_given=MFModel(given), model_start=MFModel(start), model=MFModel(prm), effects_added=added,
+        findings_before=[], findings_after=[], error_given=_errors(ev, given), error_before=loo_start,
+        error_after=loo, error_train_before=_errors(ev, start), error_train_after=err_all, noise=sigma,
+        rounds=rounds, untestable=untestable, message=message, data=data, test_mask=np.ones(len(data), bool),
+        evaluator=ev, data_summary=_summary(data), seconds=time.perf_counter() - t0, turn_slip=ts,
+        small_data=True, parameter_stderr=se)
+
+
 def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float = 1e-3,
               max_effects: int = 5, channels=None, effects=None, turn_slip: bool | None = None,
               max_nfev: int | None = None, progress=None) -> GapReport:
@@ -218,7 +316,8 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
         model = MFModel(model)
     given = model.params
     ts = bool(np.any(data.array("PHIT") != 0)) if turn_slip is None else bool(turn_slip)
-    test_mask = holdout_mask(data, holdout, seed)
+    small = len(data) < SMALL_DATA
+    test_mask = np.zeros(len(data), bool) if small else holdout_mask(data, holdout, seed)
     train, test = data.select(~test_mask), data.select(test_mask)
     if len(test) == 0:
         test = train
@@ -231,9 +330,14 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
     # 1. fair start
     error_given = _errors(ev_test, given)
     active = active_parameters(given, ts)        # what the given model has switched on, fixed from here
-    prm, _ = refit_stages(given, train, turn_slip=ts, channels=ev_train.channels, max_nfev=max_nfev, progress=say,
-                          active=active)
+    prm, fair = refit_stages(given, train, turn_slip=ts, channels=ev_train.channels, max_nfev=max_nfev,
+                             progress=say, active=active, min_points=2 if small else 10)
     start = prm
+    pool = [CATALOGUE[n] for n in (effects or CATALOGUE)]
+    candidates, untestable = _candidates(pool, given, train, ts)
+    if small:
+        say(f"small data ({len(data)} rows): effects judged by AICc and leave-one-out over all points")
+        return _find_small(data, given, start, fair, candidates, untestable, ev_all, ts, max_effects, t0, say)
     res_train = ev_train.residuals(prm)
     sigma = noise_levels(ev_train, res_train)
     say("noise: " + ", ".join(f"{c} {s:.3g}" for c, (s, _) in sigma.items()))
@@ -244,24 +348,6 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
     say(f"{len(findings)} significant findings" + (f"; strongest: {findings[0].text}" if findings else ""))
 
     # 3-4. name and add
-    pool = [CATALOGUE[n] for n in (effects or CATALOGUE)]
-    untestable = {}
-    candidates = {}
-    for e in pool:
-        state = effect_state(e, given)
-        if state == "unavailable":
-            continue
-        if state == "active":
-            # partly switched on: the switches still at their neutral values are the candidate
-            off = [n for n in e.neutral if _at_neutral(given[n], e.neutral[n])]
-            if not off:
-                continue
-            e = replace(e, parameters=tuple(off), neutral={n: e.neutral[n] for n in off})
-        keep, why = _identifiable(e, given, train, ts)
-        if not keep:
-            untestable[e.name] = "; ".join(f"{k}: {v}" for k, v in why.items()) or "not determinable"
-            continue
-        candidates[e.name] = (e, keep, why)
     rounds, added, candidates_all = [], [], {}
 
     def polish(new, e, names):
@@ -370,4 +456,5 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
         error_before=_errors(ev_test, start), error_after=_errors(ev_test, prm),
         error_train_before=_errors(ev_train, start), error_train_after=_errors(ev_train, prm),
         noise=sigma, rounds=rounds, untestable=untestable, message=message, data=data, test_mask=test_mask,
-        evaluator=ev_all, data_summary=_summary(data), seconds=time.perf_counter() - t0, turn_slip=ts)
+        evaluator=ev_all, data_summary=_summary(data), seconds=time.perf_counter() - t0, turn_slip=ts,
+        small_data=False)

@@ -257,8 +257,9 @@ def _versions(n):
 
 
 def refit_stages(params, data: TyreData, stages=FAIR_STAGES, *, turn_slip: bool = False, channels=None,
-                 max_nfev: int | None = None, progress=None, extra=(), active=None):
-    """Fair start: refit the active parameters stage by stage; returns (parameters, {stage: RefitResult})."""
+                 max_nfev: int | None = None, progress=None, extra=(), active=None, min_points: int = 10):
+    """Fair start: refit the active parameters stage by stage (stages with at least ``min_points`` rows, more
+    than their parameters); returns (parameters, {stage: RefitResult})."""
     prm = params.params if isinstance(params, MFModel) else params
     results = {}
     for name in stages:
@@ -266,7 +267,7 @@ def refit_stages(params, data: TyreData, stages=FAIR_STAGES, *, turn_slip: bool 
         if channels is not None and stage.channel not in channels:
             continue
         sub = _stage_data(name, data)
-        if len(sub) < 10:
+        if len(sub) < min_points:
             continue
         names = stage_names(name, prm, sub, turn_slip, extra, active)
         if not names or len(sub) <= len(names):

@@ -29,10 +29,7 @@ def markdown_report(rep, plot_names: dict | None = None) -> str:
              f"{s['pressures']} pressures, {s['speeds']} speeds, camber {'yes' if s['camber'] else 'no'}, turn slip "
              f"{'yes' if s['turn_slip'] else 'no'}. Held out: {int(rep.test_mask.sum())} points (whole sweeps). "
              f"Run time {rep.seconds:.1f} s.", "",
-             "## Fit error on held-out sweeps", "",
-             "Normalised RMS error, Schmeitz et al. (2005) eq. (4), 100 sqrt(sum (model - measured)^2 / sum "
-             "measured^2) %, on the held-out sweeps: the model as given, after the fair start (its active parameters "
-             "refitted) and with the effects added. The noise floor is the error pure measurement noise would give.", "",
+             *_error_heading(rep),
              "| channel | given [%] | before [%] | after [%] | shrink | noise floor [%] | noise sigma |",
              "| --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
     shrink = rep.shrink()
@@ -88,6 +85,20 @@ def markdown_report(rep, plot_names: dict | None = None) -> str:
             lines.append(f"- {k}: {v}")
         lines.append("")
     return "\n".join(lines)
+
+
+def _error_heading(rep) -> list:
+    if getattr(rep, "small_data", False):
+        return ["## Fit error, leave-one-out", "",
+                "Small data: every point predicted by the model refitted on the other points (leave-one-out), "
+                "normalised RMS error %; effects were added when they lowered both AICc (the small-sample Akaike "
+                "criterion over all points) and this error. Columns \"given\" and the noise floor refer to all "
+                "points; the noise is the residual standard deviation of the selected model.", ""]
+    return ["## Fit error on held-out sweeps", "",
+            "Normalised RMS error, Schmeitz et al. (2005) eq. (4), 100 sqrt(sum (model - measured)^2 / sum "
+            "measured^2) %, on the held-out sweeps: the model as given, after the fair start (its active parameters "
+            "refitted) and with the effects added. The noise floor is the error pure measurement noise would give.",
+            ""]
 
 
 def noise_floor(rep) -> dict:
