@@ -15,11 +15,13 @@ from ..fit.metrics import normalised_rms
 from ..fit.stages import _REASONS as _STAGE_REASONS  # the stages' own wording
 from ..fit.stages import STAGES, conditions
 from ..model import MFModel, load_tir
+from ..programme import recognise
+from ..timeseries import needs_reduction, reduce_sweeps
 from ..tir import write_tir
 from .catalogue import CATALOGUE, PARAM_STAGE, Effect, effect_state, parameter_needs
 from .locate import locate
 from .refit import FAIR_STAGES, SWEEP_REASONS, _at_neutral, active_parameters, standard_errors, _stage_data, data_conditions, needs_met, refit, refit_stages
-from .residuals import Evaluator, holdout_mask, noise_levels
+from .residuals import Evaluator, holdout_mask, noise_levels, noise_of_means
 from .small import SMALL_DATA, aicc, fit_all, loo_errors, weighted_rss
 
 __all__ = ["find_gaps", "GapReport", "AddedEffect", "Candidate"]
@@ -192,6 +194,17 @@ def _matches(effect: Effect, findings) -> bool:
     return False
 
 
+def _numbered(reduced: TyreData) -> TyreData:
+    """Reduced data with every steady point (SWEEP -1: one mean per steady segment) a sweep of its own, so that
+    held-out sweeps and repeats are counted per test."""
+    frame = reduced.frame.copy()
+    sweep = frame["SWEEP"].to_numpy().copy()
+    steady = sweep < 0
+    sweep[steady] = sweep.max(initial=-1) + 1 + np.arange(int(steady.sum()))
+    frame["SWEEP"] = sweep
+    return reduced.with_frame(frame, "steady points numbered as sweeps")
+
+
 def _summary(data: TyreData) -> dict:
     c = conditions(data)
     return dict(points=len(data), source=data.source, tyre=data.tyre, loads=c["loads"], pressures=c["pressures"],
@@ -310,6 +323,13 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
     t0 = time.perf_counter()
     say = progress or (lambda text: None)
     data = load_data(data)
+    programme = recognise(data)
+    say("test programme: " + programme.summary())
+    raw, reduction = data, None
+    if needs_reduction(data, programme):
+        reduction = reduce_sweeps(data, programme)
+        say(reduction.summary())
+        data = _numbered(reduction.mean)
     if isinstance(model, (str, Path)):
         model = load_tir(model)
     if not isinstance(model, MFModel):
@@ -340,6 +360,10 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
         return _find_small(data, given, start, fair, candidates, untestable, ev_all, ts, max_effects, t0, say)
     res_train = ev_train.residuals(prm)
     sigma = noise_levels(ev_train, res_train)
+    if reduction is not None:
+        kind = programme.rows["KIND"].to_numpy()
+        segments = np.where(kind != "transition", programme.rows["SEGMENT"].to_numpy(), -1)
+        sigma.update(noise_of_means(raw, segments, data, ev_train.channels, float(given.VERTICAL_STIFFNESS)))
     say("noise: " + ", ".join(f"{c} {s:.3g}" for c, (s, _) in sigma.items()))
 
     # 2. locate

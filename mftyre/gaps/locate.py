@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats
 
-from ..data import levels
+from ..programme import cluster_levels
 from .residuals import UNITS, Evaluator
 
 __all__ = ["Finding", "locate", "row_coordinates", "cell_table"]
@@ -96,19 +96,29 @@ def _slip_bin(x, tol):
 
 
 def _level_codes(x, kind, tol):
-    """Level index per value and the level centres (at most six levels; more: quantile bins)."""
+    """Level index per value and the level centres: the modes of the values (:func:`mftyre.programme.cluster_levels`,
+    so sweeps and points between the levels do not chain them); values on no level (a speed or load sweep) are
+    pooled into up to four quantile bins of their own; more than six levels: quantile bins."""
     if x.size == 0:
         return np.zeros(0, int), np.zeros(0)
-    t = tol * float(np.max(np.abs(x))) if kind == "rel" else tol
-    lab, cen = levels(x, max(t, 1e-12))
+    lab, cen = cluster_levels(x)
+    off = lab < 0
+    if off.any():
+        if off.mean() < 0.05 and len(cen):     # a few stragglers: the nearest level
+            lab[off] = np.argmin(np.abs(x[off, None] - cen[None, :]), axis=1)
+        else:
+            edges = np.unique(np.quantile(x[off], np.linspace(0, 1, 5)))
+            extra = np.clip(np.searchsorted(edges, x[off], side="right") - 1, 0, max(len(edges) - 2, 0))
+            lab[off] = len(cen) + extra
+            cen = np.concatenate([cen, [x[off][extra == k].mean() if np.any(extra == k) else np.nan
+                                        for k in range(max(len(edges) - 1, 1))]])
     if len(cen) > 6:
         edges = np.unique(np.quantile(x, np.linspace(0, 1, 6)))
         lab = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, len(edges) - 2)
         cen = np.array([x[lab == k].mean() if np.any(lab == k) else np.nan for k in range(len(edges) - 1)])
-        keep = np.isfinite(cen)
-        remap = np.cumsum(keep) - 1
-        lab, cen = remap[lab], cen[keep]
-    return lab, cen
+    keep = np.isfinite(cen) & np.isin(np.arange(len(cen)), lab)
+    remap = np.cumsum(keep) - 1
+    return remap[lab], cen[keep]
 
 
 def row_coordinates(ev: Evaluator, channel: str) -> dict:
