@@ -26,8 +26,10 @@ import numpy as np
 
 from ..data import TyreData, levels
 from ..params import PARAMETERS
+from ..programme import cluster_levels
 
-__all__ = ["Stage", "STAGES", "STAGE_NAMES", "conditions", "stage_parameters", "shape_violations"]
+__all__ = ["Stage", "STAGES", "STAGE_NAMES", "conditions", "stage_parameters", "shape_violations",
+           "supported_parameters"]
 
 _KAPPA_TOL = 0.005
 _ALPHA_TOL = math.radians(0.25)
@@ -117,20 +119,77 @@ def stage_rows(stage: Stage, data: TyreData) -> np.ndarray:
     return mask & np.isfinite(data.array(stage.channel))
 
 
+def _count_levels(x: np.ndarray, width: float) -> int:
+    """Number of distinct values of a condition channel: its levels (:func:`mftyre.programme.cluster_levels`)
+    plus, when at least a tenth of the values are on no level (the channel is swept somewhere), the occupied
+    bins of ``width`` among those."""
+    labels, centres = cluster_levels(x)
+    off = labels < 0
+    if np.mean(off) >= 0.1:
+        return len(centres) + len(np.unique(np.round(x[off] / width)))
+    return len(centres)
+
+
 def conditions(data: TyreData) -> dict:
-    """Number of load, pressure and speed levels, camber present, Fx/Fy present, of a data subset."""
+    """Number of load, pressure and speed levels, camber present, Fx/Fy present, of a data subset. Levels are
+    clusters separated by empty room (:func:`mftyre.programme.cluster_levels`), not by a fraction of the
+    largest value; a swept speed counts its 1 m/s bins."""
     if len(data) == 0:
         return dict(loads=0, pressures=0, speeds=0, camber=False, camber_levels=0, fx=False, fy=False)
     fz = data.array("FZ")
     return dict(
-        loads=len(levels(fz, 0.05 * float(np.max(np.abs(fz))))[1]),
-        pressures=len(levels(data.array("P"), 0.02 * float(np.max(data.array("P"))))[1]),
-        speeds=len(levels(data.array("VX"), 0.5)[1]),
+        loads=_count_levels(fz, 0.05 * float(np.median(np.abs(fz))) + 1e-9),
+        pressures=_count_levels(data.array("P"), 0.02 * float(np.median(data.array("P")))),
+        speeds=_count_levels(data.array("VX"), 1.0),
         camber=bool(np.any(np.abs(data.array("IA")) > _CAMBER_TOL)),
         camber_levels=_nonzero_camber_levels(data.array("IA")),
         fx=bool(data.has("FX") and np.nanmax(np.abs(data.array("FX"))) > 0.05 * float(np.max(fz))),
         fy=bool(data.has("FY") and np.nanmax(np.abs(data.array("FY"))) > 0.05 * float(np.max(fz))),
     )
+
+
+# the channel each stage's characteristic runs along, and the bin width that makes two values distinct
+_ALONG = {"pure_fx": ("SL", 0.005), "combined_fx": ("SL", 0.005), "combined_fy": ("SL", 0.005),
+          "mz_combined": ("SL", 0.005), "pure_fy": ("SA", math.radians(0.5)), "mz": ("SA", math.radians(0.5)),
+          "mx": ("SA", math.radians(0.5)), "my": ("VX", 1.0), "rolling_radius": ("VX", 1.0), "vertical": ("RL", 5e-4)}
+#: the leading letters (after P or Q) of the terms a characteristic measured at fewer than 5 distinct slip values
+#: can determine: slope and shifts (pure Fx, Fy; PPX1/2, PPY1/2 scale the slope), trail and residual torque (Mz)
+_SLOPE_TERMS = {"pure_fx": ("PK", "PH", "PV", "PPX1", "PPX2"), "pure_fy": ("PK", "PH", "PV", "PPY1", "PPY2"),
+                "mz": ("QD", "QH", "PPZ")}
+
+
+def supported_parameters(stage: Stage, groups: dict, data: TyreData):
+    """(groups, {dropped: reason}): never more parameters than the distinct conditions support.
+
+    A distinct condition is a cell (load level, pressure level, camber level, bin of the channel the
+    characteristic runs along: slip 0.005, slip angle 0.5 deg, speed 1 m/s, loaded radius 0.5 mm); at most one
+    parameter per three cells is freed, the last groups of the stage's list (the highest-order terms) dropped
+    first. A pure-slip characteristic measured at fewer than 5 distinct slip values per condition determines
+    only its slope and shifts (and Mz its trail): the shape and peak terms are dropped."""
+    names = [n for kind in ("base", "pressure", "camber") for n in groups[kind]]
+    if not names or len(data) == 0:
+        return groups, {}
+    along, width = _ALONG[stage.name]
+    x = data.array(along) if along in data else np.zeros(len(data))
+    keys = [cluster_levels(data.array(ch))[0] for ch in ("FZ", "P", "IA")]
+    cond = np.stack(keys, axis=1)
+    cells = np.column_stack([cond, np.round(np.nan_to_num(x) / width).astype(np.int64)])
+    support = len(np.unique(cells, axis=0))
+    per_condition = [len(np.unique(cells[np.all(cond == c, axis=1), 3])) for c in np.unique(cond, axis=0)]
+    n_along = int(np.median(per_condition))
+    dropped = {}
+    if stage.name in _SLOPE_TERMS and n_along < 5:
+        keep = _SLOPE_TERMS[stage.name]
+        for n in names:
+            if not n.startswith(keep):
+                dropped[n] = (f"only {n_along} distinct {'slip' if along == 'SL' else 'slip-angle'} value(s) per "
+                              "condition: the shape and peak are not measured")
+    order = [n for _, group in stage.groups for n in group if n in names and n not in dropped]
+    cap = max(support // 3, 1)
+    for n in reversed(order[cap:]):
+        dropped[n] = f"{support} distinct conditions support at most {cap} parameters"
+    out = {kind: [n for n in groups[kind] if n not in dropped] for kind in groups}
+    return out, dropped
 
 
 def _nonzero_camber_levels(gamma) -> int:
