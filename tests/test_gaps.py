@@ -312,3 +312,24 @@ def test_small_data_finds_hardening_and_pressure_stiffness_with_uncertainties():
         assert abs(v["value"] - true) < 3.0 * v["stderr"], (name, v)
     md = rep.markdown()
     assert "leave-one-out" in md and "Q_FZ2" in md
+
+
+# ------------------------------------------------------------------------------------ verify before writing (#11)
+def test_an_effect_whose_tir_fails_verification_is_rejected_with_the_reason():
+    """Drive-side slip sweeps only (kappa >= 0) with a large Fx offset: the Fx shifts fit the data, but the .tir
+    would carry the offset into braking, where there are no data (Fx = -62 / +171 N at kappa = -/+0.05): an
+    invented asymmetry. The effect is rejected with the verification's reason, the fair start's stage too, and
+    the improved model stays odd in kappa."""
+    full = _tyre_a()
+    d = trailer_programme(full, points=21, noise=1.0, seed=3, cambers_deg=(0.0,), combined_alpha_deg=())
+    d = d.select((d.frame["TEST"].to_numpy() == "pure_longitudinal") & (d.frame["SL"].to_numpy() >= 0))
+    frame = d.frame.copy()
+    frame["FX"] = frame["FX"] + 0.3 * frame["FZ"]
+    rep = find_gaps(d.with_frame(frame, "Fx offset"), neutralise(full, "fx_shift"))
+    assert rep.effect_names == []
+    assert "verification" in rep.rejected["fx_shift"] and "asymmetry" in rep.rejected["fx_shift"]
+    assert "fx_shift" in rep.markdown() and "Effects rejected" in rep.markdown()
+    fx = rep.model.evaluate(4000.0, np.array([-0.05, 0.05]), 0.0, 0.0, 0.0)["fx"]
+    assert abs(fx[0] + fx[1]) < 0.02 * 4000.0
+    from mftyre.fit.verify import verify_tir
+    assert verify_tir(rep.model) == []

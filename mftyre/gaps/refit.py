@@ -23,6 +23,7 @@ import numpy as np
 
 from ..data import TyreData, levels
 from ..fit.core import bounded_parameters
+from ..fit.verify import verify_tir
 from ..fit.stages import STAGES, _met, conditions, shape_violations, stage_rows  # _met: the stages' own rule
 from ..model import MFModel
 from ..programme import SWEEP_THRESHOLD, cluster_levels
@@ -30,7 +31,7 @@ from ..params import PARAMETERS
 from .catalogue import BASE, CATALOGUE, PARAM_STAGE, TURN_SLIP_BASE, effect_state, parameter_needs
 from .residuals import Evaluator
 
-__all__ = ["refit", "RefitResult", "refit_stages", "stage_names", "needs_met", "data_conditions", "SWEEP_REASONS", "active_parameters", "standard_errors", "FAIR_STAGES"]
+__all__ = ["refit", "RefitResult", "refit_stages", "stage_names", "needs_met", "data_conditions", "SWEEP_REASONS", "active_parameters", "standard_errors", "covariance", "FAIR_STAGES"]
 
 #: Stages the fair start refits, in order (the effective rolling radius is not mapped).
 FAIR_STAGES = ("pure_fx", "pure_fy", "mz", "combined_fx", "combined_fy", "mz_combined", "mx", "my", "vertical")
@@ -46,6 +47,7 @@ class RefitResult:
     n: int
     nfev: int
     success: bool
+    problems: tuple = ()
 
 
 def _corners(data: TyreData, prm) -> dict:
@@ -107,12 +109,22 @@ def refit(params, ev: Evaluator, names, channels=None, sigma: dict | None = None
     return new, RefitResult(names, values, stderr, chi2_before, chi2_after, n, int(out.nfev), bool(out.success))
 
 
-def standard_errors(params, ev: Evaluator, names, channels, sigma: dict) -> dict:
-    """Standard errors of ``names`` at their current values: sqrt(diag((J^T J)^-1) chi2/(n - k)) from the
-    central-difference Jacobian J of the noise-weighted residuals (as lmfit scales its covariance)."""
+def standard_errors(params, ev: Evaluator, names, channels, sigma: dict, n_eff: float | None = None) -> dict:
+    """Standard errors of ``names`` at their current values (see :func:`covariance`)."""
+    return covariance(params, ev, names, channels, sigma, n_eff)[0]
+
+
+def covariance(params, ev: Evaluator, names, channels, sigma: dict, n_eff: float | None = None):
+    """({name: standard error or None}, correlation matrix) of ``names`` at their current values:
+    cov = (J^T J)^-1 chi2/(n - k) from the central-difference Jacobian J of the noise-weighted residuals (as lmfit
+    scales its covariance), times n / n_eff when only ``n_eff`` of the n residuals are independent
+    (autocorrelated samples carry less information than their number says)."""
     prm = params.params if isinstance(params, MFModel) else params
     channels = [c for c in channels if c in ev.channels]
     scale = {c: sigma[c][0] if isinstance(sigma[c], tuple) else sigma[c] for c in channels}
+    none = ({k: None for k in names}, np.full((len(names), len(names)), np.nan))
+    if not channels or not names:
+        return none
 
     def vec(p):
         res = ev.residuals(p, channels)
@@ -128,11 +140,23 @@ def standard_errors(params, ev: Evaluator, names, channels, sigma: dict) -> dict
     ok = np.all(np.isfinite(jac), axis=1) & np.isfinite(r0)
     jac, r0 = jac[ok], r0[ok]
     dof = max(r0.size - len(names), 1)
+    inflation = max(r0.size / n_eff, 1.0) if n_eff else 1.0
     try:
-        cov = np.linalg.inv(jac.T @ jac) * float(np.sum(r0**2)) / dof
+        cov = np.linalg.inv(jac.T @ jac) * float(np.sum(r0**2)) / dof * inflation
     except np.linalg.LinAlgError:
-        return {k: None for k in names}
-    return {k: (float(math.sqrt(cov[i, i])) if cov[i, i] > 0 else None) for i, k in enumerate(names)}
+        return none
+    d = np.sqrt(np.where(np.diag(cov) > 0, np.diag(cov), np.nan))
+    corr = cov / np.outer(d, d)
+    return {k: (float(d[i]) if np.isfinite(d[i]) else None) for i, k in enumerate(names)}, corr
+
+
+def _new_problems(before: list, after: list) -> list:
+    """The verification problems (:func:`mftyre.fit.verify.verify_tir`) of ``after`` that ``before`` did not have
+    (compared by their first words)."""
+    def key(text):
+        return " ".join(text.split()[:3])
+    old = {key(t) for t in before}
+    return [t for t in after if key(t) not in old]
 
 
 def needs_met(needs, cond: dict, turn_slip: bool) -> bool:
@@ -283,5 +307,13 @@ def refit_stages(params, data: TyreData, stages=FAIR_STAGES, *, turn_slip: bool 
             continue
         if progress:
             progress(f"fair start: {name}: {len(names)} parameters on {len(sub)} points")
-        prm, results[name] = refit(prm, ev, names, max_nfev=max_nfev)
+        new, results[name] = refit(prm, ev, names, max_nfev=max_nfev)
+        problems = _new_problems(verify_tir(prm, data), verify_tir(new, data))
+        if problems:   # the stage's values would make the .tir implausible where there are no data: keep the previous
+            results[name].success, results[name].values = False, {k: float(prm[k]) for k in names}
+            results[name].problems = problems
+            if progress:
+                progress(f"fair start: {name} rejected, the previous values kept: " + "; ".join(problems))
+            continue
+        prm = new
     return prm, results

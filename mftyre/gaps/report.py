@@ -29,6 +29,8 @@ def markdown_report(rep, plot_names: dict | None = None) -> str:
              f"{s['pressures']} pressures, {s['speeds']} speeds, camber {'yes' if s['camber'] else 'no'}, turn slip "
              f"{'yes' if s['turn_slip'] else 'no'}. Held out: {int(rep.test_mask.sum())} points (whole sweeps). "
              f"Run time {rep.seconds:.1f} s.", "",
+             *([f"Test programme: {rep.programme}.", ""] if rep.programme else []),
+             *([f"Time series: {rep.reduction}.", ""] if rep.reduction else []),
              *_error_heading(rep),
              "| channel | given [%] | before [%] | after [%] | shrink | noise floor [%] | noise sigma |",
              "| --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
@@ -78,6 +80,12 @@ def markdown_report(rep, plot_names: dict | None = None) -> str:
         for c in rnd:
             lines.append(f"| {c.name} | {' '.join(c.parameters)} | {c.f_statistic:.3g} | {c.p_value:.2g} | "
                          f"{100 * c.held_out_gain:.1f} % | {c.score:.0f} | {'yes' if c.name == best else ''} |")
+        lines.append("")
+    if rep.rejected:
+        lines += ["## Effects rejected", "", "Significant, but their parameters are not determined by the data or the "
+                  "improved .tir fails verification over its declared range; the previous values are kept.", ""]
+        for k, v in rep.rejected.items():
+            lines.append(f"- {k}: {v}")
         lines.append("")
     if rep.untestable:
         lines += ["## Effects the data cannot test", ""]
