@@ -23,6 +23,7 @@ from .catalogue import CATALOGUE, PARAM_STAGE, Effect, effect_state, parameter_n
 from .locate import locate
 from .refit import FAIR_STAGES, SWEEP_REASONS, _at_neutral, _new_problems, active_parameters, covariance, standard_errors, _stage_data, data_conditions, needs_met, refit, refit_stages
 from .residuals import Evaluator, _sweeps, holdout_mask, noise_levels, noise_of_means
+from .transient import sweep_hysteresis
 from .small import SMALL_DATA, aicc, fit_all, loo_errors, weighted_rss
 
 __all__ = ["find_gaps", "GapReport", "AddedEffect", "Candidate"]
@@ -98,6 +99,12 @@ class GapReport:
         return {c: (self.error_before[c] - self.error_after[c]) / self.error_before[c]
                 for c in self.error_before if self.error_before[c] > 0}
 
+    def held_out_error(self, model) -> dict:
+        """Channel -> normalised RMS error [%] of any ``model`` (e.g. the true one) on the held-out points."""
+        ev, mask = self.evaluator, self.test_mask
+        pred = ev.predict(model)
+        return {c: normalised_rms(pred[c][mask[ev.rows[c]]], ev.measured[c][mask[ev.rows[c]]]) for c in pred}
+
     def to_dict(self) -> dict:
         return dict(
             message=self.message,
@@ -108,7 +115,7 @@ class GapReport:
             findings_after=[f.to_dict() for f in self.findings_after],
             noise={c: dict(sigma=s, method=m) for c, (s, m) in self.noise.items()},
             rounds=[[c.to_dict() for c in r] for r in self.rounds],
-            untestable=self.untestable, rejected=self.rejected, programme=self.programme,
+            untestable=self.untestable, rejected=self.rejected, transient=self.transient, programme=self.programme,
             reduction=self.reduction, data=self.data_summary, seconds=self.seconds,
         )
 
@@ -167,8 +174,12 @@ def _chi2(ev: Evaluator, prm, sigma, channels) -> float:
                      for c, r in res.items()))
 
 
+#: Candidates retried with their stages refitted when none is significant alone.
+DEEP_RETRIES = 3
+#: Bins per sweep when a time series is reduced (per branch; fewer points, faster refits, the same curves).
+REDUCED_BINS = 15
 #: One-sided level of the held-out test by whole sweeps (the training F test carries the family-wise alpha).
-HELD_OUT_ALPHA = 0.01
+HELD_OUT_ALPHA = 0.05
 
 
 def _sweep_ids(ev: Evaluator, c: str) -> np.ndarray:
@@ -369,7 +380,7 @@ def _find_small(data, given, start, fair, candidates, untestable, ev, ts, max_ef
         findings_before=[], findings_after=[], error_given=_errors(ev, given), error_before=loo_start,
         error_after=loo, error_train_before=_errors(ev, start), error_train_after=err_all, noise=sigma,
         rounds=rounds, untestable=untestable, rejected={}, message=message, data=data,
-        test_mask=np.ones(len(data), bool), programme=None, reduction=None,
+        test_mask=np.ones(len(data), bool), transient=[], programme=None, reduction=None,
         evaluator=ev, data_summary=_summary(data), seconds=time.perf_counter() - t0, turn_slip=ts,
         small_data=True, parameter_stderr=se)
 
@@ -393,7 +404,7 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
     say("test programme: " + programme.summary())
     raw, reduction = data, None
     if needs_reduction(data, programme):
-        reduction = reduce_sweeps(data, programme)
+        reduction = reduce_sweeps(data, programme, bins=REDUCED_BINS)
         say(reduction.summary())
         data = _numbered(reduction.mean)
     if isinstance(model, (str, Path)):
@@ -431,6 +442,10 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
         segments = np.where(kind != "transition", programme.rows["SEGMENT"].to_numpy(), -1)
         sigma.update(noise_of_means(raw, segments, data, ev_train.channels, float(given.VERTICAL_STIFFNESS)))
     say("noise: " + ", ".join(f"{c} {s:.3g}" for c, (s, _) in sigma.items()))
+
+    transient = sweep_hysteresis(reduction, raw, MFModel(start), sigma, alpha)
+    for t in transient:
+        say("transient: " + t["text"])
 
     # 2. locate
     findings = locate(ev_train, res_train, sigma, alpha)
@@ -496,13 +511,13 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
             # candidates with their stages refitted around them (the same test, the same held-out data)
             results.sort(key=lambda t: -t[0].score)
             deep = []
-            for cand, new, rr in results[:6]:
+            for cand, new, rr in results[:DEEP_RETRIES]:
                 e = candidates[cand.name][0]
                 say(f"round {len(rounds) + 1}: {e.name} with its stages refitted")
                 new = polish(new, e, cand.parameters)
                 deep.append(score(e, cand.parameters, candidates[cand.name][2], new, rr, len(tried),
                                   "scored with its stages refitted"))
-            results = deep + results[6:]
+            results = deep + results[DEEP_RETRIES:]
         results.sort(key=lambda t: -t[0].score)
         rounds.append([r[0] for r in results])
         best = None
@@ -561,6 +576,10 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
         message = f"added {len(added)} effect(s): {', '.join(a.name for a in added)}" + (
             "; remaining structure: " + findings_after[0].text if findings_after else
             "; no significant residual structure remains")
+    if transient:
+        message += "; transient (named, not fitted): " + ", ".join(
+            f"{t['channel']} up/down hysteresis +-{t['rms']:.3g} (relaxation length, {t['parameters']})"
+            for t in transient)
     say(message)
     return GapReport(
         model_given=MFModel(given), model_start=MFModel(start), model=MFModel(prm), effects_added=added,
@@ -568,6 +587,6 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
         error_before=_errors(ev_test, start), error_after=_errors(ev_test, prm),
         error_train_before=_errors(ev_train, start), error_train_after=_errors(ev_train, prm),
         noise=sigma, rounds=rounds, untestable=untestable, rejected=rejected, message=message, data=data,
-        test_mask=test_mask, programme=programme.summary(), reduction=reduction.summary() if reduction else None,
+        test_mask=test_mask, transient=transient, programme=programme.summary(), reduction=reduction.summary() if reduction else None,
         evaluator=ev_all, data_summary=_summary(data), seconds=time.perf_counter() - t0, turn_slip=ts,
         small_data=False)

@@ -43,6 +43,10 @@ def markdown_report(rep, plot_names: dict | None = None) -> str:
     lines.append("")
     if "errors" in plot_names:
         lines += [f"![held-out errors]({plot_names['errors']})", ""]
+    if getattr(rep, "transient", None):
+        lines += ["## Transient effects (named, not fitted)", ""]
+        lines += [f"- {t['text']}." for t in rep.transient]
+        lines.append("")
     lines += ["## Effects added", ""]
     if not rep.effects_added:
         lines += ["None." + (" The model explains the data: nothing to add." if not rep.findings_before else ""), ""]
