@@ -6,7 +6,7 @@ and which are transitions between conditions, and so which effects the data can 
 
 Levels (:func:`cluster_levels`) are the modes of the distribution of a condition channel: a histogram of
 bin width set by the channel's own short-term scatter (samples against the running median of their
-neighbours), smoothed, whose peaks are merged only when the valley between them is shallow (above half the
+neighbours; for a channel that steps every row, the distance to the third-nearest value), smoothed, whose peaks are merged only when the valley between them is shallow (above half the
 lower peak). A level is therefore separated from its neighbour by the empty room between them, however close
 they are relative to the largest value (1650 / 2200 / 2750 N with a few percent scatter are three levels), and a
 slow ramp between levels is no level. Samples far from every level (more than 4 robust standard deviations
@@ -21,8 +21,10 @@ FZ whose range exceeds its sweep threshold (1 deg, 0.02, 3 m/s, a third of the m
 SL and VX, spans at least half the widest range that channel has in any segment (a shorter move, such as
 steering to the slip angle of a combined-slip test, is a transition); its
 direction (BRANCH +1 up / -1 down) is the sign of the change over a window of 5 % of the sweep's length.
-Segments without a swept channel are steady points; off-level segments shorter than 2 % of the data, or
-shorter than 50 samples in a time series, are transitions.
+Segments without a swept channel whose slips and speed stay within the sweep thresholds are steady points;
+other segments without a swept channel are transitions. A run shorter than 0.2 % of the data (and 50 samples in
+a time series) between two runs at the same levels belongs to them (a brief excursion of the scatter); an
+on-level run that short between off-level runs is a ramp passing through the level.
 """
 from __future__ import annotations
 
@@ -44,13 +46,19 @@ _KIND = {"SA": "slip_angle", "SL": "slip_ratio", "VX": "speed", "FZ": "load"}
 
 # ------------------------------------------------------------------------------------------------- levels
 def _short_term_scatter(x: np.ndarray) -> float:
-    """Robust standard deviation of the samples about the running median of 5 neighbours (0 when < 20)."""
+    """Robust standard deviation of the samples about the running median of 5 neighbours (0 when < 20). When
+    that exceeds 5 % of the range, neighbouring rows are not repeated settings (the channel steps every row, as
+    the speeds of a free-rolling test): the median distance to the third-nearest value instead."""
     if x.size < 20:
         return 0.0
     from scipy.ndimage import median_filter
 
     dev = x - median_filter(x, size=5, mode="nearest")
-    return 1.4826 * float(np.median(np.abs(dev))) * 1.25  # 1.25: the median of 5 itself scatters
+    scatter = 1.4826 * float(np.median(np.abs(dev))) * 1.25  # 1.25: the median of 5 itself scatters
+    if scatter <= 0.05 * float(np.ptp(x)):
+        return scatter
+    v = np.sort(x)
+    return float(np.median(np.minimum(v[3:] - v[:-3], np.inf)))
 
 
 def cluster_levels(values, *, scatter: float | None = None):
@@ -168,7 +176,8 @@ class Programme:
     ``levels``: channel -> level centres (FZ, P, IA; VX of the slip tests); ``sweeps``: one row per segment
     (start, stop row, kind, swept channel, n rows, direction changes, the level centres held, branch counts);
     ``rows``: per-row DataFrame with SEGMENT, SWEEP (segment number of swept segments, -1 otherwise), KIND,
-    BRANCH (+1 up, -1 down, 0 held), STEADY (bool); ``sample_rate`` [Hz] when a TIME channel is present;
+    BRANCH (+1 up, -1 down, 0 held), STEADY (bool), FZ_LEVEL, P_LEVEL, IA_LEVEL (index into ``levels``, -1
+    off-level); ``sample_rate`` [Hz] when a TIME channel is present;
     ``fittable``: stage group -> bool; ``notes``: what cannot be determined and why.
     """
 
@@ -186,7 +195,7 @@ class Programme:
         return int((self.sweeps["kind"] == kind).sum()) if len(self.sweeps) else 0
 
     def annotate(self, data: TyreData) -> TyreData:
-        """``data`` with the per-row columns SEGMENT, SWEEP, KIND, BRANCH, STEADY added (replacing any)."""
+        """``data`` with the per-row columns of ``rows`` added (replacing any of the same name)."""
         frame = data.frame.copy()
         for c in self.rows.columns:
             frame[c] = self.rows[c].to_numpy()
@@ -273,10 +282,14 @@ def recognise(data: TyreData) -> Programme:
     short_run = max(2, int(0.002 * n)) if sample_rate is None or sample_rate < 20 else max(50, int(0.002 * n))
     key = np.stack([labels[ch] for ch in cond_ch], axis=1) if n else np.zeros((0, 3), int)
     runs = _runs(key)
-    for i, (start, stop) in enumerate(runs):  # a ramp passing through a level is no stay at that level
-        if 0 < i < len(runs) - 1 and stop - start < short_run and key[start, 0] >= 0 \
-                and key[runs[i - 1][0], 0] < 0 and key[runs[i + 1][0], 0] < 0:
-            key[start:stop, 0] = -1
+    for i, (start, stop) in enumerate(runs):
+        if not (0 < i < len(runs) - 1 and stop - start < short_run):
+            continue
+        before, after = key[runs[i - 1][0]], key[runs[i + 1][0]]
+        if np.array_equal(before, after) and np.all(before >= 0):
+            key[start:stop] = before  # a brief excursion off a level (scatter) does not end the stay there
+        elif key[start, 0] >= 0 and before[0] < 0 and after[0] < 0:
+            key[start:stop, 0] = -1  # a ramp passing through a level is no stay at that level
     seg_id = np.full(n, -1, int)
     sweep_id = np.full(n, -1, int)
     kind = np.full(n, "transition", object)
@@ -316,10 +329,11 @@ def recognise(data: TyreData) -> Programme:
         if not off_level:
             score.pop("FZ", None)
         swept = max(score, key=score.get) if score else None
-        if swept is None and off_level and m < short_run:
-            k = "transition"
+        moving = any(ranges[ch] > SWEEP_THRESHOLD[ch] for ch in ("SA", "SL", "VX"))
+        if swept is None and (off_level or moving):
+            k = "transition"  # off-level, or a slip or speed changing without being a sweep
         elif swept is None:
-            k = "transition" if off_level else "steady"
+            k = "steady"
         elif off_level and swept != "FZ" and m < short_run:
             k = "transition"
         else:
@@ -339,7 +353,8 @@ def recognise(data: TyreData) -> Programme:
                          SL=float(np.median(sl[sub])), VX=float(np.median(vx[sub]))))
     sweeps = pd.DataFrame(rows)
     steady = np.isin(kind, ("steady", "slip_angle", "slip_ratio", "speed", "load"))
-    per_row = pd.DataFrame({"SEGMENT": seg_id, "SWEEP": sweep_id, "KIND": kind, "BRANCH": branch, "STEADY": steady})
+    per_row = pd.DataFrame({"SEGMENT": seg_id, "SWEEP": sweep_id, "KIND": kind, "BRANCH": branch, "STEADY": steady,
+                            **{f"{ch}_LEVEL": key[:, i] for i, ch in enumerate(cond_ch)}})
     slip_tests = np.isin(kind, ("slip_angle", "slip_ratio", "steady"))
     levels["VX"] = cluster_levels(vx[slip_tests])[1] if slip_tests.any() else np.zeros(0)
     has = dict(

@@ -2,7 +2,7 @@
 independent samples.
 
 * :func:`reduce_sweeps`: per recognised sweep (:func:`mftyre.programme.recognise`) and branch (up / down), the
-  samples are averaged in ``bins`` equal bins of the swept channel (same edges for both branches). The
+  samples (with the programme's level of load, pressure and camber: FZ_LEVEL, P_LEVEL, IA_LEVEL) are averaged in ``bins`` equal bins of the swept channel (same edges for both branches). The
   branches stay apart in ``Reduction.branches``; ``Reduction.mean`` averages the up and down branch of each
   bin (so a first-order lag cancels) and is what a fit uses. Steady segments give one mean row each;
   transitions are left out (counted in the history).
@@ -73,8 +73,8 @@ def reduce_sweeps(data: TyreData, programme: Programme | None = None, *, bins: i
                   min_per_bin: int = 2) -> Reduction:
     """Binned means per sweep and branch (see the module text); ``min_per_bin`` samples or the bin is dropped."""
     prog = programme or recognise(data)
-    frame = data.frame
     rows = prog.rows
+    frame = data.frame.assign(**{c: rows[c].to_numpy() for c in ("FZ_LEVEL", "P_LEVEL", "IA_LEVEL")})
     numeric = [c for c in frame.columns if pd.api.types.is_numeric_dtype(frame[c])
                and c not in ("SWEEP", "BRANCH", "SEGMENT")]
     values = frame[numeric].to_numpy(float)

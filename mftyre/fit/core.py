@@ -27,12 +27,12 @@ from ..errors import DataError
 from ..formula import Modes, steady_state, vertical
 from ..model import STRUCTURAL_PARAMETERS, MFModel
 from ..params import TyreParameters
-from ..programme import cluster_levels, recognise
+from ..programme import recognise
 from ..timeseries import effective_samples, needs_reduction, reduce_sweeps
 from ..tir import read_tir, write_tir
 from .metrics import normalised_rms
-from .stages import (STAGE_NAMES, STAGES, Stage, conditions, shape_violations, stage_parameters, stage_rows,
-                     supported_parameters)
+from .stages import (STAGE_NAMES, STAGES, Stage, conditions, level_labels, shape_violations, stage_parameters,
+                     stage_rows, supported_parameters)
 from .start import estimate_stage, start_parameters
 from .verify import check_speeds, verify_tir
 
@@ -564,8 +564,10 @@ def fit_tir(data, start=None, stages=STAGE_NAMES, fit_pressure: bool = True, *, 
     data = load_data(data)
     if weighting not in ("uniform", "load"):
         raise ValueError(f"weighting must be 'uniform' or 'load', got {weighting!r}")
-    if not (isinstance(bins, int) and bins >= 3):
+    if not (isinstance(bins, (int, np.integer)) and bins >= 3):
         raise ValueError(f"bins must be an integer >= 3, got {bins!r}")
+    if max_nfev is not None and not (isinstance(max_nfev, (int, np.integer)) and max_nfev >= 1):
+        raise ValueError(f"max_nfev must be None or an integer >= 1, got {max_nfev!r}")
     programme = recognise(data)
     notes = list(data.history) + ["test programme: " + programme.summary()]
     reduction = None
@@ -574,7 +576,7 @@ def fit_tir(data, start=None, stages=STAGE_NAMES, fit_pressure: bool = True, *, 
         notes.append(reduction.summary())
         fit_data = reduction.mean
     else:
-        fit_data = programme.annotate(data) if "SWEEP" not in data else data
+        fit_data = programme.annotate(data)
     radius_given = start is not None or isinstance(data.constants.get("RFREE"), float)
     prm, generic = _start(fit_data, start)
     side = None
@@ -603,9 +605,10 @@ def _pressure_comparison(data, start_prm, generic, side, compared, extended, wei
     pressure terms), upper bound = one fit of all pressures without pressure terms, and the extended fit
     (with pressure terms); recovered = (upper - extended) / (upper - lower)."""
     _, upper = _fit_stages(data, start_prm, side, compared, False, generic, weighting, progress, max_nfev, start_prm)
-    labels, centres = cluster_levels(data.array("P"))
+    labels = level_labels(data, "P")
+    centres = np.unique(labels[labels >= 0])
     lower = {s: [] for s in compared}
-    for k in range(len(centres)):
+    for k in centres:
         part = data.select(labels == k)
         _, res = _fit_stages(part, start_prm, side, compared, False, generic, weighting, progress, max_nfev,
                              start_prm)

@@ -119,13 +119,35 @@ def stage_rows(stage: Stage, data: TyreData) -> np.ndarray:
     return mask & np.isfinite(data.array(stage.channel))
 
 
+def level_labels(data: TyreData, channel: str) -> np.ndarray:
+    """Level index per row of a condition channel: the recognised programme's (column ``<channel>_LEVEL``, see
+    :func:`mftyre.programme.recognise`) when present, else :func:`mftyre.programme.cluster_levels` of the
+    values; -1 off-level."""
+    col = f"{channel}_LEVEL"
+    if col in data:
+        return np.round(data.frame[col].to_numpy(float)).astype(int)
+    return cluster_levels(data.array(channel))[0]
+
+
+def _count(data: TyreData, channel: str, width: float) -> int:
+    """Number of distinct values of a condition channel: its levels plus, when at least 10 values (and 1 %) are
+    on no level (the channel is swept somewhere, or held at settings too brief to count as levels), the
+    occupied bins of ``width`` among those."""
+    labels = level_labels(data, channel)
+    off = labels < 0
+    n = len(np.unique(labels[~off]))
+    if off.sum() >= max(10, 0.01 * labels.size):
+        n += len(np.unique(np.round(data.array(channel)[off] / width)))
+    return n
+
+
 def _count_levels(x: np.ndarray, width: float) -> int:
     """Number of distinct values of a condition channel: its levels (:func:`mftyre.programme.cluster_levels`)
-    plus, when at least a tenth of the values are on no level (the channel is swept somewhere), the occupied
-    bins of ``width`` among those."""
+    plus, when at least 10 values (and 1 %) are on no level (the channel is swept somewhere, or held at
+    settings too brief to count as levels), the occupied bins of ``width`` among those."""
     labels, centres = cluster_levels(x)
     off = labels < 0
-    if np.mean(off) >= 0.1:
+    if off.sum() >= max(10, 0.01 * x.size):
         return len(centres) + len(np.unique(np.round(x[off] / width)))
     return len(centres)
 
@@ -138,8 +160,8 @@ def conditions(data: TyreData) -> dict:
         return dict(loads=0, pressures=0, speeds=0, camber=False, camber_levels=0, fx=False, fy=False)
     fz = data.array("FZ")
     return dict(
-        loads=_count_levels(fz, 0.05 * float(np.median(np.abs(fz))) + 1e-9),
-        pressures=_count_levels(data.array("P"), 0.02 * float(np.median(data.array("P")))),
+        loads=_count(data, "FZ", 0.05 * float(np.median(np.abs(fz))) + 1e-9),
+        pressures=_count(data, "P", 0.02 * float(np.median(data.array("P")))),
         speeds=_count_levels(data.array("VX"), 1.0),
         camber=bool(np.any(np.abs(data.array("IA")) > _CAMBER_TOL)),
         camber_levels=_nonzero_camber_levels(data.array("IA")),
@@ -171,7 +193,7 @@ def supported_parameters(stage: Stage, groups: dict, data: TyreData):
         return groups, {}
     along, width = _ALONG[stage.name]
     x = data.array(along) if along in data else np.zeros(len(data))
-    keys = [cluster_levels(data.array(ch))[0] for ch in ("FZ", "P", "IA")]
+    keys = [level_labels(data, ch) for ch in ("FZ", "P", "IA")]
     cond = np.stack(keys, axis=1)
     cells = np.column_stack([cond, np.round(np.nan_to_num(x) / width).astype(np.int64)])
     support = len(np.unique(cells, axis=0))
