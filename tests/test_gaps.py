@@ -5,9 +5,10 @@ handed that model with one (or two) catalogue effects switched off (their switch
 must name exactly the hidden effect(s) and shrink the held-out error of the effect's primary channel by at least
 70 %; handed the full model it must add nothing. Two tyres: A, the MF 6.1 sample; B, the MF 6.2 sample scaled to a
 different tyre (5 kN nominal load, 0.33 m radius, 2.5 bar, 12 % more friction, 25 % more cornering stiffness, 10 %
-less slip stiffness, 20 % longer trail, stiffer carcass). Noise: 0.3 x the realistic level of
-:data:`mftyre.data.NOISE` (at the realistic level the noise floor alone is about 40 % of the before-error of the
-weaker effects, so a 70 % shrink of the raw error would be impossible whatever the model).
+less slip stiffness, 20 % longer trail, stiffer carcass). Noise: the realistic level of :data:`mftyre.data.NOISE`;
+the target is the held-out error's excess over the true model's (the noise floor), which must shrink by 70 %.
+Issue 11 adds realistic rig time series (100 Hz, AR(1) noise, hysteresis, drift, load scatter: :mod:`mftyre.rig`),
+effects the data cannot test, verification before writing, honest statistics and small data.
 
 Independent checks: the catalogue's neutral values reproduce the full model exactly at the nominal condition
 (dpi = 0, gamma = 0, dfz = 0, phit = 0: the analytic limit where every switched term vanishes) and change it
@@ -32,7 +33,7 @@ from mftyre.tir import write_tir
 
 from conftest import TIR_FILES
 
-NOISE = 0.3
+NOISE = 1.0   # the realistic level of mftyre.data.NOISE
 
 
 def _tyre_a():
@@ -168,16 +169,12 @@ def test_holdout_takes_whole_sweeps_of_every_kind():
 # --------------------------------------------------------------------------------- hidden-effect evidence
 CASES = {
     # id: (tyre, hidden effects, partial range)
-    "A-fy-pressure_cornering_stiffness": ("A", ("pressure_cornering_stiffness",), False),
-    "A-fx-pressure_slip_stiffness": ("A", ("pressure_slip_stiffness",), False),
-    "A-mx-camber_overturning": ("A", ("camber_overturning",), False),
     "B-fy-camber_thrust": ("B", ("camber_thrust",), False),
     "B-my-pressure_rolling_resistance": ("B", ("pressure_rolling_resistance",), False),
     "B-fz-pressure_vertical_stiffness": ("B", ("pressure_vertical_stiffness",), False),
     "A-two-pressure_slip_stiffness+camber_overturning": ("A", ("pressure_slip_stiffness", "camber_overturning"),
                                                           False),
     "A-partial-range-load_slip_stiffness": ("A", ("load_slip_stiffness",), True),
-    "A-control-nothing-hidden": ("A", (), False),
 }
 EVIDENCE = {}
 
@@ -189,14 +186,15 @@ def test_hidden_effect_is_named_added_and_the_gap_shrinks(case):
     rep = find_gaps(data, neutralise(full, *hidden))
     shrink = rep.shrink()
     affected = sorted({CATALOGUE[h].channels[0] for h in hidden})
-    EVIDENCE[case] = (rep.effect_names, {c: (rep.error_before[c], rep.error_after[c], shrink[c]) for c in affected})
+    EVIDENCE[case] = (rep.effect_names, {c: (rep.error_before[c], rep.error_after[c], shrink.get(c)) for c in affected})
     print(case, EVIDENCE[case])
     assert sorted(rep.effect_names) == sorted(hidden), rep.message
-    for c in affected:
-        assert shrink[c] >= 0.70, (c, rep.error_before[c], rep.error_after[c])
-    if not hidden:
-        assert rep.findings_before == [] and "nothing added" in rep.message
-    else:
+    true = rep.held_out_error(full)
+    for c in affected:   # the held-out error's excess over the true model's shrinks by at least 70 %
+        excess_before, excess_after = rep.error_before[c] - true[c], rep.error_after[c] - true[c]
+        assert excess_before > 0 and excess_after <= 0.3 * excess_before, (c, rep.error_before[c],
+                                                                            rep.error_after[c], true[c])
+    if hidden:
         assert rep.findings_before[0].channel in {c for h in hidden for c in CATALOGUE[h].channels}
         for a in rep.effects_added:   # every added parameter carries a value and a standard error
             assert all(math.isfinite(v["value"]) and v["stderr"] is not None for v in a.parameters.values())
@@ -333,3 +331,49 @@ def test_an_effect_whose_tir_fails_verification_is_rejected_with_the_reason():
     assert abs(fx[0] + fx[1]) < 0.02 * 4000.0
     from mftyre.fit.verify import verify_tir
     assert verify_tir(rep.model) == []
+
+
+# ------------------------------------------------------------------- realistic rig data, realistic noise (#11)
+# 100 Hz time series from the fit helper's generator (mftyre.rig): AR(1) noise at the realistic level (1 x NOISE),
+# relaxation hysteresis, friction drifting over the day, load scatter, levels that are not round numbers. The gap
+# finder reduces each sweep (up and down branches apart), so its held-out errors are those of binned means; the
+# target is the excess of the held-out error over the true model's (friction drift and load scatter are errors
+# of every steady-state model): it must shrink by at least 70 %.
+RIG_CASES = {
+    # id: (hidden effects, rig_programme keywords)
+    "rig-fy-pressure_cornering_stiffness": (("pressure_cornering_stiffness",),
+                                            dict(cambers_deg=(0.0,), longitudinal=False)),
+    "rig-fx-pressure_slip_stiffness": (("pressure_slip_stiffness",), dict(combined_alpha_deg=())),
+    "rig-mx-camber_overturning": (("camber_overturning",), dict(longitudinal=False)),
+    "rig-control-nothing-hidden": ((), dict(cambers_deg=(0.0,), longitudinal=False)),
+}
+_RIG = {}
+
+
+def _rig(kw_key, kw):
+    from mftyre.rig import rig_programme
+
+    if kw_key not in _RIG:
+        _RIG[kw_key] = rig_programme(_tyre_a(), loads=(0.5, 1.0, 1.5), noise=1.0, seed=21, **kw)
+    return _RIG[kw_key]
+
+
+@pytest.mark.parametrize("case", list(RIG_CASES))
+def test_rig_data_at_realistic_noise(case):
+    hidden, kw = RIG_CASES[case]
+    full = _tyre_a()
+    data = _rig(repr(sorted(kw.items())), kw)
+    rep = find_gaps(data, neutralise(full, *hidden))
+    assert rep.reduction and "100 Hz" in rep.programme
+    assert sorted(rep.effect_names) == sorted(hidden), rep.message
+    true = rep.held_out_error(full)
+    for c in sorted({CATALOGUE[h].channels[0] for h in hidden}):
+        excess_before, excess_after = rep.error_before[c] - true[c], rep.error_after[c] - true[c]
+        print(case, c, "held-out", rep.error_before[c], "->", rep.error_after[c], "true model", true[c])
+        assert excess_before > 0 and excess_after <= 0.3 * excess_before, (c, rep.error_before[c],
+                                                                            rep.error_after[c], true[c])
+    # the up/down hysteresis is named as the transient effect it is, with a relaxation length near the model's
+    named = {t["channel"]: t for t in rep.transient}
+    assert "FY" in named and "PTY1" in named["FY"]["parameters"] and "relaxation length" in rep.message
+    assert 0.6 < named["FY"]["relaxation_length"] / named["FY"]["model_relaxation_length"] < 1.4
+    assert "Transient effects" in rep.markdown()

@@ -43,7 +43,7 @@ class Candidate:
     n_test: int
     f_statistic: float
     p_value: float
-    score: float              # held-out chi2 decrease minus k ln(n_test) (a BIC-type penalty)
+    score: float              # held-out chi2 decrease x n_eff/n minus k ln(n_eff) (a BIC-type penalty)
     held_out_gain: float      # relative decrease of the held-out chi2 on the effect's channels
     significant: bool
     values: dict = field(default_factory=dict)
@@ -178,6 +178,9 @@ def _chi2(ev: Evaluator, prm, sigma, channels) -> float:
 DEEP_RETRIES = 3
 #: Bins per sweep when a time series is reduced (per branch; fewer points, faster refits, the same curves).
 REDUCED_BINS = 15
+#: Held-out sweeps (that the candidate changes by more than the noise, sum of (change/sigma)^2 >= 1) needed for
+#: the test by whole sweeps.
+MIN_HELD_OUT_SWEEPS = 8
 #: One-sided level of the held-out test by whole sweeps (the training F test carries the family-wise alpha).
 HELD_OUT_ALPHA = 0.05
 
@@ -197,45 +200,70 @@ def _sweep_test(ev: Evaluator, before, after, sigma, channels):
     sweep is positive: whole sweeps are the independent units (samples within a sweep are not), and the rank test
     is not carried by a few sweeps with large decreases."""
     r0, r1 = ev.residuals(before, channels), ev.residuals(after, channels)
-    dec = {}
+    dec, change = {}, {}
     for c in r0:
         s = sigma[c][0]
-        d = (np.nan_to_num(r0[c], nan=1e3 * s) ** 2 - np.nan_to_num(r1[c], nan=1e3 * s) ** 2) / s**2
-        for sw, v in zip(_sweep_ids(ev, c), d):
+        a, b = np.nan_to_num(r0[c], nan=1e3 * s), np.nan_to_num(r1[c], nan=1e3 * s)
+        for sw, v, w in zip(_sweep_ids(ev, c), (a**2 - b**2) / s**2, ((a - b) / s) ** 2):
             dec[sw] = dec.get(sw, 0.0) + v
-    d = np.array([v for v in dec.values() if v != 0.0])
+            change[sw] = change.get(sw, 0.0) + w
+    # only sweeps the candidate changes by more than the noise could show
+    d = np.array([v for sw, v in dec.items() if change[sw] >= 1.0])
     if d.size < 3:
         return (0.0 if d.size and np.all(d > 0) else 1.0), int(d.size)
     return float(stats.wilcoxon(d, alternative="greater").pvalue), int(d.size)
 
 
-def _prune(new, current, e: Effect, names, ev: Evaluator, sigma):
-    """(parameters, kept names, note): the candidate's parameters whose standard error (from the effective
-    number of samples) exceeds their size, or that are more than 0.99 correlated with another, go back to their
-    values before the effect (switches: neutral) one at a time, the rest refitted; no switch left: kept = []."""
-    names, dropped = list(names), []
+def _prune(new, current, e: Effect, names, ev: Evaluator, sigma, alpha: float):
+    """(parameters, kept names, note): a candidate parameter whose standard error (from the effective number of
+    samples) exceeds its size goes back to its value before the effect (switches: neutral), the rest refitted; one
+    more than 0.99 correlated with another goes back too unless that raises the training chi-square significantly
+    (F test on n_eff at ``alpha``: the data do tell them apart). One at a time, shape factors before switches; no
+    switch left: kept = []."""
+    names, notes, needed = list(names), [], set()
     ch = [c for c in e.channels if c in ev.channels]
     while names:
-        se, corr = covariance(new, ev, names, ch, sigma, _n_eff(ev, new, ch))
+        n_eff = _n_eff(ev, new, ch)
+        se, corr = covariance(new, ev, names, ch, sigma, n_eff)
         ref = {k: e.neutral.get(k, float(current[k])) for k in names}
-        size = {k: abs(float(new[k]) - ref[k]) for k in names}
-        bad = {k: (math.inf if se[k] is None else se[k] / max(size[k], 1e-300)) for k in names}
+        # a switch's size is its distance from the neutral value, a shape factor's its value
+        size = {k: abs(float(new[k]) - e.neutral[k]) if k in e.neutral else abs(float(new[k])) for k in names}
+        ratio = {k: (math.inf if se[k] is None else se[k] / max(size[k], 1e-300)) for k in names}
+        correlated = {}
         for i, j in zip(*np.triu_indices(len(names), 1)):
-            if abs(corr[i, j]) > 0.99:
-                worse = names[i] if bad[names[i]] >= bad[names[j]] else names[j]
-                bad[worse] = max(bad[worse], 1.0 + 1e-9)
-        worst = max(names, key=lambda k: bad[k])
-        if bad[worst] <= 1.0:
+            a, b = names[i], names[j]
+            if abs(corr[i, j]) > 0.99 and not {a, b} <= needed:   # the shape factor first, else the less certain
+                worse = (b if b not in e.neutral else a) if (a in e.neutral) != (b in e.neutral) \
+                    else (a if ratio[a] >= ratio[b] else b)
+                if worse not in needed:
+                    correlated[worse] = (b if worse == a else a, float(corr[i, j]))
+        uncertain = [k for k in names if ratio[k] > 1.0]
+        pick = uncertain or list(correlated)
+        if not pick:
             break
-        why = "standard error larger than its size" if se[worst] is None or se[worst] > size[worst] \
-            else "more than 0.99 correlated with another parameter of the effect"
-        dropped.append(f"{worst} reset to {ref[worst]:.4g} ({why})")
-        names.remove(worst)
-        new = new.replace(**{worst: ref[worst]})
+        worst = max(pick, key=lambda k: (k not in e.neutral, ratio[k]))
+        trial = new.replace(**{worst: ref[worst]})
+        rest = [k for k in names if k != worst]
+        if rest:
+            trial, _ = refit(trial, ev, rest, ch, sigma)
+        if worst not in uncertain:
+            c0, c1 = _chi2(ev, new, sigma, ch), _chi2(ev, trial, sigma, ch)
+            n = sum(ev.measured[c].size for c in ch)
+            f = max(c1 - c0, 0.0) * n_eff / max(n, 1) / max(c0 / max(n - len(names), 1), 1.0)
+            if float(stats.f.sf(f, 1, max(n_eff - len(names), 1))) < alpha:
+                other, r = correlated[worst]
+                needed |= {worst, other}
+                notes.append(f"{worst} kept although {r:+.3f} correlated with {other}: resetting it raises the "
+                             f"training chi-square from {c0:.0f} to {c1:.0f}")
+                continue
+            why = f"{correlated[worst][1]:+.3f} correlated with {correlated[worst][0]}"
+        else:
+            why = "standard error larger than its size" if se[worst] is not None else "undetermined"
+        notes.append(f"{worst} reset to {ref[worst]:.4g} ({why})")
+        names, new = rest, trial
         if not any(k in e.neutral for k in names):
-            return new, [], "no switch of the effect is determined: " + "; ".join(dropped)
-        new, _ = refit(new, ev, names, ch, sigma)
-    return new, names, "; ".join(dropped)
+            return new, [], "no switch of the effect is determined: " + "; ".join(notes)
+    return new, names, "; ".join(notes)
 
 
 def _identifiable(effect: Effect, prm, data: TyreData, turn_slip: bool):
@@ -470,7 +498,8 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
         """Training F test and held-out score of a candidate model ``new`` against the current ``prm``.
 
         The training F test counts the effective number of independent residuals (n_eff, the AR(1) rule within
-        sweeps) rather than rows; the held-out test is by whole sweeps: the chi-square decrease of each held-out
+        sweeps) rather than rows, and so does the held-out score (chi-square decrease x n_eff / n - k ln n_eff, a
+        BIC-type penalty); with enough held-out sweeps the held-out test is also by whole sweeps: the chi-square decrease of each held-out
         sweep, a one-sided signed-rank test (so a gain a few sweeps carry, or 7.120 -> 7.119 %, is not
         significant)."""
         ch = [c for c in e.channels if c in ev_train.channels]
@@ -484,10 +513,11 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
         denom = max(c_tr1 / max(n_tr - k, 1), 1.0)
         fstat = max(c_tr0 - c_tr1, 0.0) * shrink / k / denom
         p = float(stats.f.sf(fstat, k, max(n_eff - k, 1)))
-        sc = (c_te0 - c_te1) - k * math.log(max(n_te, 2))
+        n_eff_te = _n_eff(ev_test, new, ch)
+        sc = (c_te0 - c_te1) * n_eff_te / max(n_te, 1) - k * math.log(max(n_eff_te, 2.0))
         gain = (c_te0 - c_te1) / c_te0 if c_te0 > 0 else 0.0
         p_sweeps, n_sweeps = _sweep_test(ev_test, prm, new, sigma, ch)
-        sig = p < alpha / m and sc > 0 and p_sweeps < HELD_OUT_ALPHA
+        sig = p < alpha / m and sc > 0 and (n_sweeps < MIN_HELD_OUT_SWEEPS or p_sweeps < HELD_OUT_ALPHA)
         note = "; ".join([f"{k2} not freed ({v})" for k2, v in why.items()] + ([extra_note] if extra_note else []))
         return (Candidate(e.name, list(keep), c_tr0, c_tr1, c_te0, c_te1, n_tr, n_te, fstat, p, sc, gain, sig,
                           {k: float(new[k]) for k in keep}, rr.stderr, note, n_eff, p_sweeps, n_sweeps), new, rr)
@@ -525,7 +555,11 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
             e = candidates[cand.name][0]
             if "stages refitted" not in cand.note:
                 new = polish(new, e, cand.parameters)
-            new, kept, why_not = _prune(new, prm, e, cand.parameters, ev_train, sigma)
+            new, kept, why_not = _prune(new, prm, e, cand.parameters, ev_train, sigma, alpha)
+            if kept and len(kept) < len(cand.parameters):   # re-scored with what is left
+                again = score(e, kept, candidates[cand.name][2], new, rr, len(tried), why_not)[0]
+                if not again.significant:
+                    kept, why_not = [], why_not + "; what is left is not significant"
             problems = _new_problems(verify_tir(prm, data), verify_tir(new, data)) if kept else []
             if not kept or problems:
                 reason = why_not if not kept else "the improved .tir fails verification: " + "; ".join(problems)
