@@ -377,3 +377,44 @@ def test_rig_data_at_realistic_noise(case):
     assert "FY" in named and "PTY1" in named["FY"]["parameters"] and "relaxation length" in rep.message
     assert 0.6 < named["FY"]["relaxation_length"] / named["FY"]["model_relaxation_length"] < 1.4
     assert "Transient effects" in rep.markdown()
+
+
+# ------------------------------------------------------------------------------- honest statistics (#11)
+def test_autocorrelated_samples_do_not_make_a_negligible_gain_significant():
+    """100 Hz samples with AR(1) noise (lag-one correlation 0.95): a constant offset fitted to the noise of the
+    training sweeps changes the held-out error by a negligible amount (like 7.120 -> 7.119 %). Counted as
+    independent rows it passes the F test; with the effective number of samples and whole held-out sweeps it does
+    not."""
+    import pandas as pd
+    from scipy.signal import lfilter
+
+    from mftyre.gaps.core import _n_eff, _sweep_test, f_test
+    from mftyre.gaps.refit import refit
+
+    full = _tyre_a()
+    rng = np.random.default_rng(8)
+    n_sweeps, m, rho, sd = 40, 600, 0.95, 20.0
+    alpha = np.tile(np.radians(np.linspace(-8.0, 8.0, m)), n_sweeps)
+    fz = np.full(alpha.size, 4000.0)
+    fy = full.evaluate(fz, 0.0, alpha, 0.0, 0.0).fy
+    noise = lfilter([1.0], [1.0, -rho], rng.normal(0.0, sd * math.sqrt(1 - rho**2), alpha.size))
+    frame = pd.DataFrame(dict(FZ=fz, SL=0.0, SA=alpha, IA=0.0, VX=16.7, P=full.params.NOMPRES, PHIT=0.0,
+                              FY=fy + noise, SWEEP=np.repeat(np.arange(n_sweeps), m)))
+    data = TyreData(frame, source="AR(1) noise")
+    train, test = data.select(frame["SWEEP"].to_numpy() % 4 != 0), data.select(frame["SWEEP"].to_numpy() % 4 == 0)
+    ev_tr, ev_te = Evaluator(train, ["FY"]), Evaluator(test, ["FY"])
+    sigma = {"FY": (sd,)}
+    new, res = refit(full.params, ev_tr, ["PVY1"], ["FY"], sigma)
+    n = ev_tr.measured["FY"].size
+    n_eff = _n_eff(ev_tr, new, ["FY"])
+    assert n_eff == pytest.approx(n * (1 - rho) / (1 + rho), rel=0.25)
+    err0 = mftyre.fit.metrics.normalised_rms(ev_te.predict(full)["FY"], ev_te.measured["FY"])
+    err1 = mftyre.fit.metrics.normalised_rms(ev_te.predict(new)["FY"], ev_te.measured["FY"])
+    assert abs(err1 - err0) < 0.01 * err0          # a negligible held-out change
+    _, p_rows = f_test(res.chi2_before, res.chi2_after, n, n, 1)
+    _, p_eff = f_test(res.chi2_before, res.chi2_after, n, n_eff, 1)
+    print("n", n, "n_eff", n_eff, "held-out", err0, err1, "p rows", p_rows, "p n_eff", p_eff)
+    assert p_rows < 1e-3 < p_eff                   # significant only when 100 Hz rows count as independent
+    p_sweeps, sweeps = _sweep_test(ev_te, full, new, sigma, ["FY"])
+    print("held-out sweeps", sweeps, "p", p_sweeps)
+    assert sweeps == 0 or p_sweeps > 0.05

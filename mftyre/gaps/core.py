@@ -185,6 +185,15 @@ MIN_HELD_OUT_SWEEPS = 8
 HELD_OUT_ALPHA = 0.05
 
 
+def f_test(chi2_before: float, chi2_after: float, n: int, n_eff: float, k: int):
+    """(F, p) of the chi-square decrease from freeing ``k`` parameters, with ``n`` residuals of which ``n_eff`` are
+    independent: the decrease counts n_eff / n of its size (correlated residuals repeat the same information) and
+    the residual variance per degree of freedom is at least the noise's (chi2 per dof >= 1)."""
+    denom = max(chi2_after / max(n - k, 1), 1.0)
+    fstat = max(chi2_before - chi2_after, 0.0) * (n_eff / max(n, 1)) / k / denom
+    return fstat, float(stats.f.sf(fstat, k, max(n_eff - k, 1)))
+
+
 def _sweep_ids(ev: Evaluator, c: str) -> np.ndarray:
     return _sweeps(ev.data)[ev.rows[c]]
 
@@ -509,10 +518,7 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
         n_tr = int(sum(ev_train.measured[c].size for c in ch))
         n_te = int(sum(n_test_rows[c] for c in ch))
         n_eff = _n_eff(ev_train, new, ch)
-        shrink = n_eff / max(n_tr, 1)
-        denom = max(c_tr1 / max(n_tr - k, 1), 1.0)
-        fstat = max(c_tr0 - c_tr1, 0.0) * shrink / k / denom
-        p = float(stats.f.sf(fstat, k, max(n_eff - k, 1)))
+        fstat, p = f_test(c_tr0, c_tr1, n_tr, n_eff, k)
         n_eff_te = _n_eff(ev_test, new, ch)
         sc = (c_te0 - c_te1) * n_eff_te / max(n_te, 1) - k * math.log(max(n_eff_te, 2.0))
         gain = (c_te0 - c_te1) / c_te0 if c_te0 > 0 else 0.0
