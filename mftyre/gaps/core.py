@@ -357,7 +357,7 @@ def _find_small(data, given, start, fair, candidates, untestable, ev, ts, max_ef
     crit = aicc(weighted_rss(ev, prm, chans, scale), n, len(names))
     loo = loo_errors(prm, data, names, chans)
     loo_start = dict(loo)
-    rounds, added = [], []
+    rounds, added, rejected = [], [], {}
     while candidates and len(added) < max_effects:
         trials = []
         for e, keep, why in candidates.values():
@@ -383,7 +383,18 @@ def _find_small(data, given, start, fair, candidates, untestable, ev, ts, max_ef
                                  "AICc before/after in the chi2 columns, leave-one-out error [%] in the held-out "
                                  "columns"))
         rounds.append(rnd)
-        best = next((t for t, c in zip(trials, rnd) if c.significant), None)
+        best = None
+        for t, c in zip(trials, rnd):
+            if not c.significant:
+                continue
+            problems = _new_problems(verify_tir(prm, data), verify_tir(t[3], data))
+            if problems:
+                c.significant = False
+                rejected[c.name] = "the improved .tir fails verification: " + "; ".join(problems)
+                say(f"rejected {c.name}: {rejected[c.name]}")
+                continue
+            best = t
+            break
         if best is None:
             say("no effect lowers both AICc and the leave-one-out error")
             break
@@ -416,7 +427,7 @@ def _find_small(data, given, start, fair, candidates, untestable, ev, ts, max_ef
         model_given=MFModel(given), model_start=MFModel(start), model=MFModel(prm), effects_added=added,
         findings_before=[], findings_after=[], error_given=_errors(ev, given), error_before=loo_start,
         error_after=loo, error_train_before=_errors(ev, start), error_train_after=err_all, noise=sigma,
-        rounds=rounds, untestable=untestable, rejected={}, message=message, data=data,
+        rounds=rounds, untestable=untestable, rejected=rejected, message=message, data=data,
         test_mask=np.ones(len(data), bool), transient=[], programme=None, reduction=None,
         evaluator=ev, data_summary=_summary(data), seconds=time.perf_counter() - t0, turn_slip=ts,
         small_data=True, parameter_stderr=se)
