@@ -6,13 +6,14 @@ and which are transitions between conditions, and so which effects the data can 
 
 Levels (:func:`cluster_levels`) are the modes of the distribution of a condition channel: a histogram of
 bin width set by the channel's own short-term scatter (samples against the running median of their
-neighbours; for a channel that steps every row, the distance to the third-nearest value), smoothed, whose peaks are merged only when the valley between them is shallow (above half the
-lower peak). A level is therefore separated from its neighbour by the empty room between them, however close
-they are relative to the largest value (1650 / 2200 / 2750 N with a few percent scatter are three levels), and a
-slow ramp between levels is no level. Samples far from every level (more than 4 robust standard deviations
-of their nearest level, and more than the bin width) are off-level (label -1): ramps, load sweeps, transients.
-With a handful of points (< 50) distinct values whose separations are far below the others (a jump of 8x
-in the sorted separations) are merged: repeated settings that scatter.
+neighbours; for a channel that steps every row, the distance to the third-nearest value), smoothed, whose
+peaks are merged only when the valley between them is shallow (above half the lower peak). A level is
+therefore separated from its neighbour by the empty room between them, however close they are relative to
+the largest value (1650 / 2200 / 2750 N with a few percent scatter are three levels), and a slow ramp between
+levels is no level. Samples far from every level (more than 4 robust standard deviations of their nearest
+level, and more than the bin width) are off-level (label -1): ramps, load sweeps, transients. With a handful
+of points (< 50) distinct values whose separations are far below the others (a jump of 8x in the sorted
+separations) are merged: repeated settings that scatter.
 
 Segments and sweeps (:func:`recognise`): a new segment starts where the level of load, pressure or camber
 changes (an off-level run is a segment of its own). Within a segment the held slip channel's levels split it
@@ -202,17 +203,17 @@ class Programme:
         return data.with_frame(frame, "test programme recognised: " + self.summary(short=True))
 
     def summary(self, short: bool = False) -> str:
-        """One paragraph: '5 loads 450-2750 N, 3 pressures 0.83-0.97 bar, ... ; fittable: ...'."""
+        """One paragraph: '5 loads 450-2750 N, 3 pressures 0.83-0.97 bar, ...; fittable: ...'."""
         parts = []
-        for ch, name, fac, unit in (("FZ", "load", 1.0, "N"), ("P", "pressure", 1e-5, "bar"),
-                                    ("IA", "camber", 180 / math.pi, "deg"), ("VX", "speed", 1.0, "m/s")):
-            c = self.levels.get(ch, np.zeros(0))
+        for ch, name, fac, unit, digits in (("FZ", "load", 1.0, "N", 0), ("P", "pressure", 1e-5, "bar", 2),
+                                            ("IA", "camber", 180 / math.pi, "deg", 1), ("VX", "speed", 1.0, "m/s", 1)):
+            c = np.round(self.levels.get(ch, np.zeros(0)) * fac, digits) + 0.0  # + 0.0: no "-0.0"
             if c.size == 0:
                 parts.append(f"no {name} level")
             elif c.size == 1:
-                parts.append(f"1 {name} {c[0] * fac:.3g} {unit}")
+                parts.append(f"1 {name} {c[0]:.{digits}f} {unit}")
             else:
-                parts.append(f"{c.size} {name}s {c.min() * fac:.3g} to {c.max() * fac:.3g} {unit}")
+                parts.append(f"{c.size} {name}s {c.min():.{digits}f} to {c.max():.{digits}f} {unit}")
         for kind, what in (("slip_angle", "slip-angle sweeps"), ("slip_ratio", "slip-ratio sweeps"),
                            ("speed", "speed sweeps"), ("load", "load sweeps")):
             k = self.count(kind)
@@ -304,7 +305,8 @@ def recognise(data: TyreData) -> Programme:
         split_by = None
         for ch, x in (("SA", sa), ("SL", sl)):
             other = sl if ch == "SA" else sa
-            if np.ptp(x[sub]) > SWEEP_THRESHOLD[ch] and np.ptp(other[sub]) > SWEEP_THRESHOLD["SL" if ch == "SA" else "SA"]:
+            other_ch = "SL" if ch == "SA" else "SA"
+            if np.ptp(x[sub]) > SWEEP_THRESHOLD[ch] and np.ptp(other[sub]) > SWEEP_THRESHOLD[other_ch]:
                 split_by = "SA" if np.ptp(sl[sub]) / SWEEP_THRESHOLD["SL"] > np.ptp(sa[sub]) / SWEEP_THRESHOLD["SA"] \
                     else "SL"
         if split_by is None:
@@ -357,9 +359,12 @@ def recognise(data: TyreData) -> Programme:
                             **{f"{ch}_LEVEL": key[:, i] for i, ch in enumerate(cond_ch)}})
     slip_tests = np.isin(kind, ("slip_angle", "slip_ratio", "steady"))
     levels["VX"] = cluster_levels(vx[slip_tests])[1] if slip_tests.any() else np.zeros(0)
+    def beyond(x, threshold):  # slip applied on purpose: more than a few noise spikes beyond the threshold
+        return bool(np.sum(np.abs(x) > threshold) >= max(10, 0.005 * n))
+
     has = dict(
-        lateral_slip=bool(np.any(np.abs(sa) > SWEEP_THRESHOLD["SA"])),
-        longitudinal_slip=bool(np.any(np.abs(sl) > SWEEP_THRESHOLD["SL"])),
+        lateral_slip=beyond(sa, SWEEP_THRESHOLD["SA"]),
+        longitudinal_slip=beyond(sl, SWEEP_THRESHOLD["SL"]),
         camber=bool(np.any(np.abs(levels["IA"]) > math.radians(0.25))),
         speed_sweep=bool(np.any(kind == "speed")),
         loaded_radius=data.has("RL"), effective_radius=data.has("RE"),

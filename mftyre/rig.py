@@ -94,6 +94,14 @@ def rig_programme(model, *, loads=(0.45, 0.8, 1.15, 1.5), pressures=(0.86, 1.0, 
     ``speed_ramp`` m/s^2). Per pressure: one vertical load sweep up and down, ``vertical_range`` x FNOMIN.
     Slip tests run at ``speed`` (default LONGVL). ``relaxation=False`` removes the slip lag (no hysteresis).
     """
+    for name, value in (("sample_rate", sample_rate), ("slip_angle_rate_deg", slip_angle_rate_deg),
+                        ("slip_ratio_rate", slip_ratio_rate), ("speed_ramp", speed_ramp)):
+        if not (np.isfinite(value) and value > 0):
+            raise ValueError(f"rig_programme: {name} must be a positive number, got {value!r}")
+    for name, value in (("noise", noise), ("noise_time", noise_time), ("load_scatter", load_scatter),
+                        ("friction_drift", friction_drift)):
+        if not (np.isfinite(value) and value >= 0):
+            raise ValueError(f"rig_programme: {name} must be a number >= 0, got {value!r}")
     rng = np.random.default_rng(seed)
     prm = model.params
     fz0, p0, r0 = prm.FNOMIN, prm.NOMPRES, prm.UNLOADED_RADIUS

@@ -2,10 +2,11 @@
 independent samples.
 
 * :func:`reduce_sweeps`: per recognised sweep (:func:`mftyre.programme.recognise`) and branch (up / down), the
-  samples (with the programme's level of load, pressure and camber: FZ_LEVEL, P_LEVEL, IA_LEVEL) are averaged in ``bins`` equal bins of the swept channel (same edges for both branches). The
-  branches stay apart in ``Reduction.branches``; ``Reduction.mean`` averages the up and down branch of each
-  bin (so a first-order lag cancels) and is what a fit uses. Steady segments give one mean row each;
-  transitions are left out (counted in the history).
+  samples (with the programme's level of load, pressure and camber: FZ_LEVEL, P_LEVEL, IA_LEVEL) are averaged
+  in ``bins`` equal bins of the swept channel (same edges for both branches). The branches stay apart in
+  ``Reduction.branches``; ``Reduction.mean`` averages the up and down branch of each bin (so a first-order lag
+  cancels) and is what a fit uses. Steady segments give one mean row each; transitions are left out (counted
+  in the history).
 * :func:`hysteresis`: half the difference up - down of the branch means, per sweep and channel: its RMS over
   the bins (``amplitude``) and the largest (``peak``), the transient effect of the relaxation length that a
   steady-state model must not be asked to explain.

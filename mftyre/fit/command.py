@@ -47,7 +47,8 @@ def register(subparsers) -> None:
                     "rolling radius), to TYDEX (.tdx) or CSV data; pressure terms when the data have several "
                     "pressures. The test programme is recognised first and printed; stages whose result fails "
                     "the physical checks are rejected with their reason. Writes the .tir file and optionally a "
-                    "Markdown report with plots.", epilog=_CSV_FORMAT, formatter_class=argparse.RawDescriptionHelpFormatter)
+                    "Markdown report with plots.", epilog=_CSV_FORMAT,
+        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("data", help="measurement file: .tdx (TYDEX) or .csv (see the CSV format below)")
     p.add_argument("-o", "--output", required=True, help="the .tir file to write")
     p.add_argument("--start", help="start parameters from this .tir file (default: neutral values and estimates "

@@ -1,13 +1,22 @@
 """Staged least-squares fitting of Magic Formula parameters with lmfit (trust-region reflective,
 ``scipy.optimize.least_squares``), and the lower/upper-bound comparison of Schmeitz et al. (2005), Table 2.
 
-Residuals: every residual evaluation runs the model once over the whole stage data (one vectorised
-:meth:`mftyre.MFModel.evaluate` call), residual_i = w_i (model_i - measured_i) / s with s the RMS of the
-measured channel over the stage data, so the cost is the squared normalised RMS error of
-:func:`mftyre.fit.normalised_rms` for uniform weights; w_i = 1 (``weighting="uniform"``) or FNOMIN / Fz_i
-(``"load"``: every load level counts alike). Shape conditions (:func:`mftyre.fit.stages.shape_violations`)
-enter as penalty residuals, 10 sqrt(n) times the violation, at the corners of the data's load, pressure and
-camber range. Model outputs that are not finite give the residual 10 (the step is rejected).
+Before the stages: the test programme is recognised (:func:`mftyre.programme.recognise`) and a time series is
+reduced per sweep to binned means with the up and down branches averaged (:func:`mftyre.timeseries.reduce_sweeps`).
+
+Residuals: residual_i = w_i (model_i - measured_i) / s with s the RMS of the measured channel over the stage
+data, so the cost is the squared normalised RMS error of :func:`mftyre.fit.normalised_rms` for uniform weights;
+w_i = 1 (``weighting="uniform"``) or FNOMIN / Fz_i (``"load"``: every load level counts alike). Shape
+conditions (:func:`mftyre.fit.stages.shape_violations`) enter as penalty residuals, 10 sqrt(n) times the
+violation, at the corners of the data's load, pressure and camber range. Model outputs that are not finite
+give the residual 10 (the step is rejected). The model is evaluated for all parameter vectors of a
+finite-difference Jacobian at once (:class:`_BatchPredictor`: parameters as column vectors against the data as
+a row), the optimiser stops on a relative cost change of 1e-6, BLAS runs on one thread.
+
+After each stage: undetermined parameters go back to their start values (:func:`_undetermined`), standard errors
+use the effective number of independent samples, and the stage is accepted only when it fits its data no
+worse than before and :func:`mftyre.fit.verify.verify_tir` finds no new problem (the vertical stage also
+needs a positive deflection at the measured loads); otherwise it is rejected and the previous values kept.
 """
 from __future__ import annotations
 
@@ -158,8 +167,12 @@ def _predict(stage: Stage, model: MFModel, data: TyreData, inputs: dict) -> np.n
     if stage.output == "fz_from_rl":
         def chan(name):
             return np.nan_to_num(data.array(name)) if name in data else 0.0
-        return model.vertical_force(data.array("RL"), p=inputs["p"], omega=chan("OMEGA"), fx=chan("FX"),
-                                    fy=chan("FY"), gamma=inputs["gamma"])
+        if data.has("RL"):
+            rl = data.array("RL")
+        else:  # measured deflection: the loaded radius it means for the model
+            rl = vertical.free_radius(model.params, chan("OMEGA"), NUMPY) - data.array("RHO")
+        return model.vertical_force(rl, p=inputs["p"], omega=chan("OMEGA"), fx=chan("FX"), fy=chan("FY"),
+                                    gamma=inputs["gamma"])
     omega = data.array("OMEGA") if stage.output == "re" and data.has("OMEGA") else None
     return model.evaluate(**inputs, omega=omega)[stage.output]
 
@@ -174,7 +187,8 @@ class _BatchPredictor:
     def __init__(self, stage, prm, data, names, side):
         self.stage, self.prm, self.data, self.names, self.side = stage, prm, data, list(names), side
         structural = set(names) & STRUCTURAL_PARAMETERS
-        self.loop = side is not None or bool(structural and any(prm[f"QSX{i}"] != 0 for i in (12, 13, 14)))
+        self.loop = (side is not None or bool(structural and any(prm[f"QSX{i}"] != 0 for i in (12, 13, 14)))
+                     or (stage.output == "fz_from_rl" and prm.version == "62"))  # 6.2: branches on Q_FCY
         inp = data.inputs()
         self.inputs = inp
         row = {k: np.asarray(v, float)[None, :] for k, v in inp.items()}
@@ -182,7 +196,11 @@ class _BatchPredictor:
         if stage.output == "fz_from_rl":
             def chan(name):
                 return np.nan_to_num(data.array(name))[None, :] if name in data else np.zeros((1, len(data)))
-            self.vertical = dict(rl=data.array("RL")[None, :], omega=chan("OMEGA"), fx=chan("FX"), fy=chan("FY"))
+            self.vertical = dict(omega=chan("OMEGA"), fx=chan("FX"), fy=chan("FY"))
+            if data.has("RL"):
+                self.vertical["rl"] = data.array("RL")[None, :]
+            else:
+                self.vertical["rho"] = data.array("RHO")[None, :]
         self.omega_given = stage.output == "re" and data.has("OMEGA")
         self.omega = data.array("OMEGA")[None, :] if self.omega_given else np.zeros((1, len(data)))
 
@@ -199,12 +217,8 @@ class _BatchPredictor:
                 v = self.vertical
                 dpi = (r["p"] - prm.NOMPRES) / prm.NOMPRES
                 r_omega = vertical.free_radius(prm, v["omega"], NUMPY)
-                if self.prm.version == "62":
-                    out = vertical.vertical_force_62(prm, v["rl"], r_omega, v["omega"], v["fx"], v["fy"], r["gamma"],
-                                                     dpi, NUMPY)
-                else:
-                    out = vertical.vertical_force_61(prm, r_omega - v["rl"], r_omega, v["omega"], v["fx"], v["fy"],
-                                                     dpi, NUMPY)
+                rho = r_omega - v["rl"] if "rl" in v else v["rho"]
+                out = vertical.vertical_force_61(prm, rho, r_omega, v["omega"], v["fx"], v["fy"], dpi, NUMPY)
             else:
                 out = steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
                                    self.omega, self.omega_given, Modes(), NUMPY)[self.stage.output]
@@ -372,20 +386,21 @@ def _uncertainties(problem, prm, data):
 
 
 def _undetermined(names, values, stderr, corr):
-    """{name: reason} of the parameters the data do not determine: no effect on the data, standard error larger
-    than the value, or |correlation| > 0.99 with another (the one with the larger relative error)."""
-    out = {}
-    for n in names:
-        se = stderr.get(n)
-        if se is None:
-            out[n] = "no effect on the data"
-        elif se > abs(values[n]):
-            out[n] = f"standard error {se:.3g} exceeds its size {values[n]:.3g}"
+    """{name: reason} of the parameters the data do not determine, in order: those without effect on the data;
+    of each pair correlated beyond |r| = 0.99 the later one in the stage's order (the higher-order term: PKY2
+    rather than PKY1); only when no such pair is left, those whose standard error exceeds their size (a
+    collinear pair inflates the errors of both, so pairs are resolved first)."""
+    out = {n: "no effect on the data" for n in names if stderr.get(n) is None}
+    order = {n: i for i, n in enumerate(names)}
     for (a, b), c in sorted(corr.items(), key=lambda kv: -abs(kv[1])):
         if abs(c) > 0.99 and a not in out and b not in out:
-            rel = {x: (stderr.get(x) or np.inf) / max(abs(values[x]), 1e-300) for x in (a, b)}
-            worse = max(rel, key=rel.get)
-            out[worse] = f"correlated {c:+.4f} with {a if worse == b else b}"
+            later, earlier = (a, b) if order[a] > order[b] else (b, a)
+            out[later] = f"correlated {c:+.4f} with {earlier}"
+    if out:
+        return out
+    for n in names:
+        if stderr[n] > abs(values[n]):
+            out[n] = f"standard error {stderr[n]:.3g} exceeds its size {values[n]:.3g}"
     return out
 
 
@@ -440,12 +455,15 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
         return prm, StageResult(stage.name, stage.title, stage.channel, len(sub), [], skipped, {}, {}, {}, {},
                                 float("nan"), rejected=rejected or [], notes=list(notes))
 
+    if len(sub) == 0:
+        skipped.clear()
+        return not_fitted(f"no data for this stage ({_ROWS_NEEDED[stage.rows]} with a measured {stage.channel})")
     if len(sub) < max(len(names_all) + 1, 5) or not names_all:
-        return not_fitted("no data for this stage" if len(sub) == 0 else (
-            f"{len(sub)} points, too few for {len(names_all)} parameters" if names_all else "no parameter to fit"))
+        return not_fitted(f"{len(sub)} points, too few for {len(names_all)} parameters" if names_all
+                          else "no parameter to fit")
     before = prm
     notes = []
-    if stage.name == "vertical":
+    if stage.name == "vertical" and sub.has("RL"):
         prm, note, rejection = _vertical_consistency(prm, sub, radius_given)
         if rejection:
             return not_fitted("stage rejected", [rejection])
@@ -456,7 +474,8 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
         est = {k: v for k, v in estimate_stage(stage.name, prm, sub).items() if k in names_all}
         prm = prm.replace(**est)
     start = {n: float(prm[n]) for n in names_all}
-    err_before = normalised_rms(_predict(stage, MFModel(before, side=side), sub, sub.inputs()), sub.array(stage.channel))
+    err_before = normalised_rms(_predict(stage, MFModel(before, side=side), sub, sub.inputs()),
+                                sub.array(stage.channel))
     g, p = sub.array("IA"), sub.array("P")
     flat = np.abs(g) < math.radians(0.25)
     nominal = flat & (np.abs(p - prm.NOMPRES) <= 0.02 * prm.NOMPRES)
@@ -500,9 +519,7 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
     elif np.isfinite(err_before) and err > err_before * 1.001 + 1e-9:
         rejected.append(f"the fit error {err:.3g} % is worse than before the stage ({err_before:.3g} %)")
     if stage.name == "vertical" and not rejected:
-        _, rho = MFModel(prm, side=side).loaded_radius(sub.array("FZ"), p=sub.array("P"))
-        r_free = prm.UNLOADED_RADIUS * prm.Q_RE0
-        measured_rho = r_free - sub.array("RL")
+        measured_rho = (prm.UNLOADED_RADIUS * prm.Q_RE0 - sub.array("RL")) if sub.has("RL") else sub.array("RHO")
         if np.nanmin(measured_rho) < -0.02 * prm.UNLOADED_RADIUS or err > 25.0:
             rejected.append(f"the vertical relation does not describe the data (FZ error {err:.3g} %, measured "
                             f"deflection down to {np.nanmin(measured_rho):.3g} m)")
@@ -517,6 +534,15 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
         result.fitted = []
         return before, result
     return prm, result
+
+
+#: what rows a stage needs, in words (for the reason a stage is not fitted)
+_ROWS_NEEDED = {"pure_lateral": "no rows with slip angle at zero longitudinal slip",
+                "pure_longitudinal": "no rows with longitudinal slip at zero slip angle",
+                "combined": "no rows with both slip angle and longitudinal slip",
+                "with_kappa": "no rows with longitudinal slip", "slip": "no rows with slip",
+                "free_rolling": "no free-rolling rows", "free_rolling_re": "no free-rolling rows",
+                "all_rl": "no rows"}
 
 
 def _fit_stages(data, prm, side, stages, fit_pressure, generic, weighting, progress, max_nfev, baseline,

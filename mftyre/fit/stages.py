@@ -80,7 +80,8 @@ STAGES: dict[str, Stage] = {s.name: s for s in (
     Stage("my", "Rolling-resistance moment My (paper A48)", "MY", "my", "free_rolling", (
         _g("", "QSY1"), _g("speeds", "QSY3"), _g("speeds3", "QSY4"), _g("loads", "QSY7"), _g("camber", "QSY5"),
         _g("camber loads", "QSY6"), _g("pressure", "QSY8"))),
-    Stage("vertical", "Vertical load vs deflection and loaded radius (A3.3, paper (3)-(5))", "FZ", "fz_from_rl",
+    Stage("vertical", "Vertical load vs deflection and loaded radius (A3.3, paper (3)-(5)); RL, or RHO without RL",
+          "FZ", "fz_from_rl",
           "all_rl", (
               _g("", "VERTICAL_STIFFNESS Q_FZ2 Q_RE0"), _g("pressure", "PFZ1"), _g("speeds", "Q_V1 Q_V2"),
               _g("fx", "Q_FCX"), _g("fy", "Q_FCY"))),
@@ -107,11 +108,11 @@ def stage_rows(stage: Stage, data: TyreData) -> np.ndarray:
         mask = ~(pure_alpha & pure_kappa)
     elif kind in ("free_rolling", "free_rolling_re"):
         mask = pure_alpha & pure_kappa
-    elif kind == "all_rl":
-        mask = np.ones(len(data), bool)
-        if not data.has("RL"):
+    elif kind == "all_rl":  # the loaded radius, or else the deflection, measured
+        ch = "RL" if data.has("RL") else "RHO"
+        if not data.has(ch):
             return np.zeros(len(data), bool)
-        mask &= np.isfinite(data.array("RL"))
+        mask = np.isfinite(data.array(ch))
     else:  # pragma: no cover - guards the table
         raise ValueError(kind)
     if stage.channel not in data:
@@ -173,7 +174,7 @@ def conditions(data: TyreData) -> dict:
 # the channel each stage's characteristic runs along, and the bin width that makes two values distinct
 _ALONG = {"pure_fx": ("SL", 0.005), "combined_fx": ("SL", 0.005), "combined_fy": ("SL", 0.005),
           "mz_combined": ("SL", 0.005), "pure_fy": ("SA", math.radians(0.5)), "mz": ("SA", math.radians(0.5)),
-          "mx": ("SA", math.radians(0.5)), "my": ("VX", 1.0), "rolling_radius": ("VX", 1.0), "vertical": ("RL", 5e-4)}
+          "mx": ("SA", math.radians(0.5)), "my": ("VX", 1.0), "rolling_radius": ("VX", 1.0), "vertical": ("FZ", 1.0)}
 #: the leading letters (after P or Q) of the terms a characteristic measured at fewer than 5 distinct slip values
 #: can determine: slope and shifts (pure Fx, Fy; PPX1/2, PPY1/2 scale the slope), trail and residual torque (Mz)
 _SLOPE_TERMS = {"pure_fx": ("PK", "PH", "PV", "PPX1", "PPX2"), "pure_fy": ("PK", "PH", "PV", "PPY1", "PPY2"),
@@ -184,8 +185,8 @@ def supported_parameters(stage: Stage, groups: dict, data: TyreData):
     """(groups, {dropped: reason}): never more parameters than the distinct conditions support.
 
     A distinct condition is a cell (load level, pressure level, camber level, bin of the channel the
-    characteristic runs along: slip 0.005, slip angle 0.5 deg, speed 1 m/s, loaded radius 0.5 mm); at most one
-    parameter per three cells is freed, the last groups of the stage's list (the highest-order terms) dropped
+    characteristic runs along: slip 0.005, slip angle 0.5 deg, speed 1 m/s, load 1 N); at most one
+    parameter per two cells is freed, the last groups of the stage's list (the highest-order terms) dropped
     first. A pure-slip characteristic measured at fewer than 5 distinct slip values per condition determines
     only its slope and shifts (and Mz its trail): the shape and peak terms are dropped."""
     names = [n for kind in ("base", "pressure", "camber") for n in groups[kind]]
@@ -207,7 +208,7 @@ def supported_parameters(stage: Stage, groups: dict, data: TyreData):
                 dropped[n] = (f"only {n_along} distinct {'slip' if along == 'SL' else 'slip-angle'} value(s) per "
                               "condition: the shape and peak are not measured")
     order = [n for _, group in stage.groups for n in group if n in names and n not in dropped]
-    cap = max(support // 3, 1)
+    cap = max(support // 2, 1)
     for n in reversed(order[cap:]):
         dropped[n] = f"{support} distinct conditions support at most {cap} parameters"
     out = {kind: [n for n in groups[kind] if n not in dropped] for kind in groups}
