@@ -26,7 +26,6 @@ from ..fit.core import bounded_parameters
 from ..fit.verify import verify_tir
 from ..fit.stages import STAGES, _met, conditions, shape_violations, stage_rows  # _met: the stages' own rule
 from ..model import MFModel
-from ..programme import SWEEP_THRESHOLD, cluster_levels
 from ..params import PARAMETERS
 from .catalogue import BASE, CATALOGUE, PARAM_STAGE, TURN_SLIP_BASE, effect_state, parameter_needs
 from .residuals import Evaluator
@@ -193,12 +192,7 @@ def data_conditions(data: TyreData) -> dict:
     rl = data.array("RL") if data.has("RL") else (data.array("RHO") if data.has("RHO") else None)
     fz = data.array("FZ")
     deflect = rl is not None and _swept(fz[np.isfinite(rl)], 0.02 * float(np.max(np.abs(fz))))
-    # levels as the modes of each condition channel (:func:`mftyre.programme.cluster_levels`): load sweeps and
-    # steady points between the levels do not chain them into one; a speed sweep counts as three speeds
-    vx = data.array("VX")
-    speeds = max(len(cluster_levels(vx)[1]), 3 if np.ptp(vx) > SWEEP_THRESHOLD["VX"] else 1)
-    return dict(cond, loads=max(len(cluster_levels(fz)[1]), 1), pressures=max(len(cluster_levels(data.array("P"))[1]), 1),
-                speeds=speeds, slip_ratio=_swept(sl, _KAPPA_TOL), slip_angle=_swept(sa, _ALPHA_TOL),
+    return dict(cond, slip_ratio=_swept(sl, _KAPPA_TOL), slip_angle=_swept(sa, _ALPHA_TOL),
                 combined=_swept(sl[both], _KAPPA_TOL), deflection=bool(deflect))
 
 
