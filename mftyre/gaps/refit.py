@@ -22,7 +22,7 @@ import lmfit
 import numpy as np
 
 from ..data import TyreData, levels
-from ..fit.core import bounded_parameters
+from ..fit.core import BOUNDS, bounded_parameters, physical_bounds
 from ..fit.verify import verify_tir
 from ..fit.stages import STAGES, _met, conditions, shape_violations, stage_rows  # _met: the stages' own rule
 from ..model import MFModel
@@ -84,7 +84,7 @@ def refit(params, ev: Evaluator, names, channels=None, sigma: dict | None = None
     stage_set = sorted({PARAM_STAGE.get(k) for k in names} & set(STAGES))
     corners = _corners(ev.data, prm)
     penalty = 10.0 * math.sqrt(max(n, 1)) * max(1.0, float(np.sqrt(np.mean(r0**2))))
-    lp = bounded_parameters(prm, names)
+    lp = bounded_parameters(prm, names, {**BOUNDS, **physical_bounds(prm, ev.data)})   # the fit's physics
 
     def residual(p):
         trial = prm.replace(**{k: p[k].value for k in names})
