@@ -341,11 +341,10 @@ def test_an_effect_whose_tir_fails_verification_is_rejected_with_the_reason():
 # of every steady-state model): it must shrink by at least 70 %.
 RIG_CASES = {
     # id: (hidden effects, rig_programme keywords)
-    "rig-fy-pressure_cornering_stiffness": (("pressure_cornering_stiffness",),
-                                            dict(cambers_deg=(0.0,), longitudinal=False)),
+    "rig-fy-pressure_cornering_stiffness": (("pressure_cornering_stiffness",), dict(longitudinal=False)),
     "rig-fx-pressure_slip_stiffness": (("pressure_slip_stiffness",), dict(combined_alpha_deg=())),
     "rig-mx-camber_overturning": (("camber_overturning",), dict(longitudinal=False)),
-    "rig-control-nothing-hidden": ((), dict(cambers_deg=(0.0,), longitudinal=False)),
+    "rig-control-nothing-hidden": ((), dict(longitudinal=False)),
 }
 _RIG = {}
 
@@ -365,6 +364,7 @@ def test_rig_data_at_realistic_noise(case):
     data = _rig(repr(sorted(kw.items())), kw)
     rep = find_gaps(data, neutralise(full, *hidden))
     assert rep.reduction and "100 Hz" in rep.programme
+    assert "3 loads" in rep.programme and "3 pressures" in rep.programme and "27 slip-angle sweeps" in rep.programme
     assert sorted(rep.effect_names) == sorted(hidden), rep.message
     true = rep.held_out_error(full)
     for c in sorted({CATALOGUE[h].channels[0] for h in hidden}):
