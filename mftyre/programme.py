@@ -22,10 +22,11 @@ FZ whose range exceeds its sweep threshold (1 deg, 0.02, 3 m/s, a third of the m
 SL and VX, spans at least half the widest range that channel has in any segment (a shorter move, such as
 steering to the slip angle of a combined-slip test, is a transition); its
 direction (BRANCH +1 up / -1 down) is the sign of the change over a window of 5 % of the sweep's length.
-Segments without a swept channel whose slips and speed stay within the sweep thresholds are steady points;
-other segments without a swept channel are transitions. A run shorter than 0.2 % of the data (and 50 samples in
-a time series) between two runs at the same levels belongs to them (a brief excursion of the scatter); an
-on-level run that short between off-level runs is a ramp passing through the level.
+Segments without a swept channel whose slips and speed stay within the sweep thresholds, held for at least
+the short run below, are steady points; other segments without a swept channel are transitions. The short
+run is 0.2 % of the data (at least 50 samples in a time series, 2 rows otherwise): such a run between two
+runs at the same levels belongs to them (a brief excursion of the scatter), and an on-level run that short
+between off-level runs is a ramp passing through the level.
 """
 from __future__ import annotations
 
@@ -335,7 +336,7 @@ def recognise(data: TyreData) -> Programme:
         if swept is None and (off_level or moving):
             k = "transition"  # off-level, or a slip or speed changing without being a sweep
         elif swept is None:
-            k = "steady"
+            k = "steady" if m >= short_run else "transition"  # too brief to be a measured steady point
         elif off_level and swept != "FZ" and m < short_run:
             k = "transition"
         else:

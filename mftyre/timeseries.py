@@ -57,7 +57,7 @@ class Reduction:
         return text
 
 
-def needs_reduction(data: TyreData, programme: Programme | None = None, bins: int = 25) -> bool:
+def needs_reduction(data: TyreData, programme: Programme | None = None, bins: int = 40) -> bool:
     """True when the median sweep branch holds at least 2 samples per bin (a sampled time series)."""
     prog = programme or recognise(data)
     sweeps = prog.sweeps
@@ -70,7 +70,7 @@ def needs_reduction(data: TyreData, programme: Programme | None = None, bins: in
     return bool(np.median(per_branch) >= 2 * bins)
 
 
-def reduce_sweeps(data: TyreData, programme: Programme | None = None, *, bins: int = 25,
+def reduce_sweeps(data: TyreData, programme: Programme | None = None, *, bins: int = 40,
                   min_per_bin: int = 2) -> Reduction:
     """Binned means per sweep and branch (see the module text); ``min_per_bin`` samples or the bin is dropped."""
     prog = programme or recognise(data)

@@ -59,8 +59,8 @@ def register(subparsers) -> None:
     p.add_argument("--no-pressure", action="store_true", help="do not fit the inflation-pressure terms")
     p.add_argument("--weighting", choices=("uniform", "load"), default="uniform",
                    help="residual weighting: uniform, or 1/Fz (every load alike)")
-    p.add_argument("--bins", type=_integer(3), default=25,
-                   help="bins per sweep when a time series is reduced (integer >= 3, default 25)")
+    p.add_argument("--bins", type=_integer(3), default=40,
+                   help="bins per sweep when a time series is reduced (integer >= 3, default 40)")
     p.add_argument("--max-nfev", type=_integer(1), default=None,
                    help="residual evaluations per pass at most (integer >= 1; default 30 x (parameters + 1))")
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
@@ -110,8 +110,9 @@ def run(args) -> int:
             print(file=sys.stderr)
         print(f"mftyre fit: {exc}", file=sys.stderr)
         return 1
-    print(f"fitted {len(data)} points in {result.seconds:.1f} s; wrote {out}"
-          + (f" and {args.report}" if args.report else ""))
+    fitted = (f"{len(data)} rows ({len(result.data)} points after reduction)" if result.reduction is not None
+              else f"{len(data)} points")
+    print(f"fitted {fitted} in {result.seconds:.1f} s; wrote {out}" + (f" and {args.report}" if args.report else ""))
     for name, st in result.stages.items():
         print(f"  {name:<15} {st.n_points:6d} points  {len(st.fitted):3d} parameters  fit error "
               f"{st.fit_error:7.3f} %" + (f"  REJECTED: {'; '.join(st.rejected)}" if st.rejected else "")

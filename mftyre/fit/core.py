@@ -563,7 +563,7 @@ def _fit_stages(data, prm, side, stages, fit_pressure, generic, weighting, progr
 
 def fit_tir(data, start=None, stages=STAGE_NAMES, fit_pressure: bool = True, *, weighting: str = "uniform",
             compare: bool | None = None, progress=None, max_nfev: int | None = None, reduce: bool | None = None,
-            bins: int = 25) -> FitResult:
+            bins: int = 40) -> FitResult:
     """Fit MF 6.1 parameters to tyre measurements, stage by stage.
 
     ``data``: :class:`mftyre.data.TyreData` or a ``.tdx``/``.csv`` path. ``start``: None (neutral parameters

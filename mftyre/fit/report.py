@@ -38,13 +38,12 @@ def markdown_report(result, plot_names: dict | None = None) -> str:
     for name, ch, fac, unit in (("loads", "FZ", 1.0, "N"), ("pressures", "P", 1e-5, "bar"),
                                 ("cambers", "IA", 180 / math.pi, "deg"), ("speeds", "VX", 1.0, "m/s")):
         centres = result.programme.levels[ch] if result.programme is not None else cluster_levels(data.array(ch))[1]
-        summ[name] = (", ".join(f"{c * fac:.4g}" for c in centres) or "none on a level") + f" {unit}"
+        summ[name] = (", ".join(f"{round(c * fac, 3) + 0.0:.4g}" for c in centres) or "none on a level") + f" {unit}"
     start = "neutral schema values sized to the tyre, leading coefficients estimated from the data" \
         if result.start.source is None else f"`{result.start.source}`"
-    programme = f" Test programme: {result.programme.summary()}." if result.programme is not None else ""
     lines += [f"Data: `{data.source}`, {len(result.raw_data)} rows, {len(data)} points fitted. Loads: "
               f"{summ['loads']}; pressures: {summ['pressures']}; cambers: {summ['cambers']}; speeds: "
-              f"{summ['speeds']}.{programme}", "",
+              f"{summ['speeds']}.", "",
               f"Start values: {start}. FNOMIN {result.params.FNOMIN:g} N, NOMPRES {result.params.NOMPRES:g} Pa, "
               f"UNLOADED_RADIUS {result.params.UNLOADED_RADIUS:g} m. Fit time {result.seconds:.1f} s.", ""]
     if result.notes:
