@@ -27,7 +27,8 @@ def markdown_report(rep, plot_names: dict | None = None) -> str:
     lines = ["# Gap finder report", "", f"**{rep.message[0].upper() + rep.message[1:]}.**", "",
              f"Data: `{s['source']}` ({s['tyre'] or 'tyre'}), {s['points']} points; {s['loads']} loads, "
              f"{s['pressures']} pressures, {s['speeds']} speeds, camber {'yes' if s['camber'] else 'no'}, turn slip "
-             f"{'yes' if s['turn_slip'] else 'no'}. Held out: {int(rep.test_mask.sum())} points (whole sweeps). "
+             f"{'yes' if s['turn_slip'] else 'no'}. " + (f"Small data: judged on all {s['points']} points (leave-one-out). "
+             if getattr(rep, "small_data", False) else f"Held out: {int(rep.test_mask.sum())} points (whole sweeps). ") +
              f"Run time {rep.seconds:.1f} s.", "",
              *([f"Test programme: {rep.programme}.", ""] if rep.programme else []),
              *([f"Time series: {rep.reduction}.", ""] if rep.reduction else []),
@@ -52,9 +53,13 @@ def markdown_report(rep, plot_names: dict | None = None) -> str:
         lines += ["None." + (" The model explains the data: nothing to add." if not rep.findings_before else ""), ""]
     for a in rep.effects_added:
         gains = ", ".join(f"{c} {100 * g:.0f} %" for c, g in a.held_out_gain_by_channel.items())
-        lines += [f"### {a.name}", "", f"{a.description}. Round {a.round}; held-out chi-square decrease "
-                  f"{100 * a.held_out_gain:.0f} %; held-out error decrease {gains}; F-test p = {a.p_value:.2g}; "
-                  f"score {a.score:.0f}." + (f" {a.note}." if a.note else ""), "",
+        if getattr(rep, "small_data", False):
+            how = f"leave-one-out error decrease {gains}"
+        else:
+            how = (f"held-out chi-square decrease {100 * a.held_out_gain:.0f} %; held-out error decrease {gains}; "
+                   f"F-test p = {a.p_value:.2g}; score {a.score:.0f}")
+        lines += [f"### {a.name}", "", f"{a.description}. Round {a.round}; {how}." + (f" {a.note}." if a.note else ""),
+                  "",
                   "| parameter | value | standard error | meaning |", "| --- | ---: | ---: | --- |"]
         for k, v in a.parameters.items():
             lines.append(f"| {k} | {v['value']:.6g} | {_f(v['stderr'], '{:.3g}')} | {v['meaning']} |")
