@@ -8,9 +8,13 @@ once (an effect on Fy also moves Mz and Mx) and weighs each channel's residual b
 (sigma), so that the cost is a chi-square and differences of costs are likelihood-ratio statistics; without
 sigma each channel is normalised by its RMS as in the fit.
 
+Bounds are the fit's (:data:`mftyre.fit.core.BOUNDS` tightened by :func:`mftyre.fit.core.physical_bounds`).
+
 :func:`refit_stages` is the "fair start": stage by stage (rows and channel of :data:`mftyre.fit.STAGES`), the
 parameters that are active in the model (base parameters, and those of every effect that is switched on) and
-that the stage's data can determine (the stage groups' ``needs``) are refitted.
+that the stage's data can determine (the stage groups' ``needs``, and a sweep of the input the stage's curve runs
+along, :func:`data_conditions`) are refitted; a stage whose values fail :func:`mftyre.fit.verify.verify_tir` where
+the previous ones passed keeps the previous ones.
 """
 from __future__ import annotations
 

@@ -11,6 +11,10 @@ within 1 % of the largest, e.g. the out-and-back halves of a trailer sweep): the
 smooth missing effect cancel from. Channels without enough repeats use neighbouring points instead: the
 second difference d_i = r_i - (r_{i-1} + r_{i+1})/2 along each sweep, var(d) = 1.5 sigma^2 for white noise.
 
+Reduced time series (:func:`noise_of_means`): the noise of a binned mean of N raw samples follows from the raw
+AR(1) noise (sigma and lag-one correlation from the second differences of the samples within sweeps, where the
+swept signal's own curvature is negligible), never from the reduced curve's neighbours.
+
 Held-out data (:func:`holdout_mask`): whole sweeps, every k-th sweep of each kind of test (``TEST`` when present,
 else pure lateral / pure longitudinal / combined / free rolling / other from the slip values), so every kind of
 test and the whole operating range are represented in both parts.
