@@ -77,13 +77,23 @@ def run(args) -> int:
         print(f"mftyre gaps: {exc}", file=sys.stderr)
         return 1
     print(rep.message)
+    if rep.programme:
+        print(f"  test programme: {rep.programme}")
+    if rep.reduction:
+        print(f"  time series: {rep.reduction}")
+    for t in rep.transient:
+        print(f"  transient: {t['text']}")
     for f in rep.findings_before[:5]:
         print(f"  finding: {f.text}")
     for a in rep.effects_added:
         vals = ", ".join(f"{k} = {v['value']:.4g}" + (f" +- {v['stderr']:.2g}" if v['stderr'] else "")
                          for k, v in a.parameters.items())
         print(f"  added {a.name}: {a.description}; {vals}")
-    print("  held-out error [%]:  " + "  ".join(f"{c} {rep.error_before[c]:.3f} -> {rep.error_after[c]:.3f}"
+    for name, why in rep.rejected.items():
+        print(f"  rejected {name}: {why}")
+    if rep.untestable:
+        print(f"  {len(rep.untestable)} effects the data cannot test (listed with the reason in the report)")
+    print(("  leave-one-out" if rep.small_data else "  held-out") + " error [%]:  " + "  ".join(f"{c} {rep.error_before[c]:.3f} -> {rep.error_after[c]:.3f}"
                                               for c in rep.error_before))
     written = [x for x in (args.output, args.report, args.json) if x]
     if written:
