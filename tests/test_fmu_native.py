@@ -175,8 +175,9 @@ def _slalom(t):
         2 * math.pi * 1.5 * t), z=0.29 + 0.005 * math.sin(2 * math.pi * 3 * t))
 
 
-#: Floors of the 1e-9 relative comparison, by unit: FNOMIN-sized forces, FNOMIN R0 moments, R0 lengths.
-SCALE = {"N": 4000.0, "N.m": 4000.0 * 0.3, "m": 0.3, "rad": 1.0, "1": 1.0}
+#: Floors of the 1e-9 relative comparison, by unit: FNOMIN-sized forces, FNOMIN R0 moments, R0 lengths (1/R0
+#: curvatures).
+SCALE = {"N": 4000.0, "N.m": 4000.0 * 0.3, "m": 0.3, "rad": 1.0, "1": 1.0, "1/m": 1.0 / 0.3}
 
 
 def _assert_close(py, nat, units, where):
