@@ -223,9 +223,10 @@ def test_native_equals_python_swift_cleat(fmus, swift_wheel, tmp_path, before):
         fz_nat.append(out["Fz"])
         if k % 25 == 0 or k == n:
             _assert_close(swift_wheel.outputs(), out, units, f"step {k}")
-    # the cleat is met where it is: the load peaks after travelling `before` (+ the tyre's own lag)
+    # the cleat is met where it is: the load peaks while the tandem cams ride over it (the front cam climbs the
+    # cleat up to 0.11 m before the wheel centre reaches it: reach = cam half-length + half the tandem base)
     t_peak = (int(np.argmax(fz_nat)) + 1) * 1e-3
-    assert before / 10.0 < t_peak < before / 10.0 + 0.015
+    assert before / 10.0 - 0.015 < t_peak < before / 10.0 + 0.015
     assert max(fz_nat) > fz_nat[0] + 1000.0
     nat.close()
 
@@ -242,7 +243,7 @@ def test_swift_meets_cleat_where_it_is_for_any_start(fmus):
         assert res["x_road"][0] == pytest.approx(xs, abs=1e-12)
     assert peaks[1] - peaks[0] == pytest.approx(0.26, abs=1.5e-3)
     assert peaks[0] - peaks[2] == pytest.approx(0.10, abs=1.5e-3)
-    assert np.ptp(where) < 0.015 and 3.0 < where[0] < 3.15
+    assert np.ptp(where) < 0.015 and 2.85 < where[0] < 3.15  # within the tandem's reach of the cleat [3, 3.05]
 
 
 # ------------------------------------------------------------------------------------------------ state
