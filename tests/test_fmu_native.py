@@ -231,6 +231,71 @@ def test_native_equals_python_swift_cleat(fmus, swift_wheel, tmp_path, before):
     nat.close()
 
 
+def _on_moving_road(scenario):  # the vehicle simulator's road under the wheel: height offset and camber
+    def inputs(t):
+        return dict(scenario(t), road_z=0.004 * math.sin(2 * math.pi * 2 * t), road_camber=0.03 * math.sin(5 * t))
+    return inputs
+
+
+@pytest.mark.parametrize("scenario", [_braking, _slalom])
+def test_native_equals_python_swift(fmus, swift_wheel, tmp_path, scenario):
+    """Braking (over the cleat at 30 m/s) and slalom, with road height and camber inputs: native = Python twin."""
+    inputs = _on_moving_road(scenario)
+    nat = Slave(fmus["swift"], tmp_path).initialise(x_start=0.0, **inputs(0.0))
+    units = {v.name: v.unit or "1" for v in nat.md.modelVariables}
+    swift_wheel.set_inputs(**inputs(0.0))
+    swift_wheel.set_parameters(x_start=0.0)
+    swift_wheel.initialise()
+    _assert_close(swift_wheel.outputs(), nat.get(), units, "t=0")
+    for k in range(1, 401):
+        u = inputs(k * 1e-3)
+        nat.set(**u)
+        nat.step()
+        swift_wheel.set_inputs(**u)
+        swift_wheel.step(1e-3)
+        if k % 40 == 0:
+            _assert_close(swift_wheel.outputs(), nat.get(), units, f"step {k}")
+    nat.close()
+
+
+def test_native_swift_road_inputs_equal_swift_tyre(fmus, models, swift_wheel, tmp_path):
+    """road_z and road_camber mean what modelDescription says: the FMU = swift.SwiftTyre.step on the same cam table
+    with the axle height taken above the lifted road (z - road_z) and the ring's road_camber input."""
+    from swift import CamTable, StepInputs, SwiftTyre
+    from swift.ring import OUTPUT_NAMES, STATE_NAMES
+
+    f = swift_wheel.functions
+    table = CamTable(f.table_x0, f.table_dx, f.table_h[0::2], f.table_h[1::2])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ref = SwiftTyre(models["62"], table, substeps=1, compiled=False)
+    vx, vy, z, road_z, camber, x0 = 10.0, 0.2, 0.30, 0.012, 0.05, 2.5
+    nat = Slave(fmus["swift"], tmp_path).initialise(vx=vx, vy=vy, omega=vx / RE0, z=z, road_z=road_z,
+                                                    road_camber=camber, x_start=x0)
+    units = {v.name: v.unit or "1" for v in nat.md.modelVariables}
+
+    def u(t):
+        return StepInputs(x=x0 + vx * t, vx=vx, z=z - road_z, omega=vx / RE0, y=vy * t, vy=vy,
+                          road_camber=camber)
+
+    state = ref.initial_state(u(0.0))
+    fz = []
+    for k in range(1, 101):
+        state, _ = ref.step(state, u((k - 1) * 1e-3), 1e-3)
+        nat.step()
+        got = nat.get()
+        fz.append(got["Fz"])
+        if k % 20 == 0:  # the outputs at the end of the step: the rim moved on to y = vy t
+            out = dict(zip(OUTPUT_NAMES, ref.outputs(state, u(k * 1e-3))))
+            expect = {"Fx": out["fx"], "Fy": out["fy"], "Fz": out["fz"], "Mz": out["mz"], "road_w": out["w"] + road_z,
+                      "road_camber_eff": out["beta_x"], "x_contact": out["x_c"],
+                      "road_curvature": out["curvature"], "x_road": state[STATE_NAMES.index("xa")]}
+            _assert_close(expect, got, units, f"step {k}")
+    assert got["road_camber_eff"] == pytest.approx(camber, abs=1e-12)
+    assert abs(got["Fy"]) > 100.0 and max(fz) > fz[0] + 1000.0  # the camber pushes sideways; the cleat was felt
+    nat.close()
+
+
 def test_swift_meets_cleat_where_it_is_for_any_start(fmus):
     """x_start 0, -2.6 and 1.0 m at 10 m/s: the hits are (3.0 - x_start)/10 s apart, x_road agrees."""
     peaks, where = [], []
