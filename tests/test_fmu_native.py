@@ -142,6 +142,11 @@ def test_validate_and_describe(fmus):
         deps = {u.variable.name: {d.name for d in (u.dependencies or [])} for u in md.outputs}
         if kind == "swift":  # belt forces through the sidewall: rim speed inputs act directly, the height not
             assert "vx" in deps["Fx"] and "z" not in deps["Fz"] and deps["x_road"] == set()
+            # the road acts on the contact at once (Fy on the rim only through the sidewall), on the rim through
+            # bottoming
+            assert {"road_z", "road_camber"} <= deps["Fy_c"] and "road_camber" not in deps["Fy"]
+            assert "road_z" in deps["Fz"] and "road_z" in deps["road_w"]
+            assert names["road_curvature"].unit == "1/m" and "road datum" in names["road_z"].description
         else:
             assert {"z", "road_z", "p"} <= deps["Fz"] and "vy" not in deps["Fz"]
             assert "vy" in deps["Fy"]  # transient: through the low-speed damping of the deflection
