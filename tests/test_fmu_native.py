@@ -216,6 +216,8 @@ def test_native_equals_python_swift_cleat(fmus, swift_wheel, tmp_path, before):
     start = _swift_start(3.0 - before)
     nat = Slave(fmus["swift"], tmp_path).initialise(**start)
     units = {v.name: v.unit or "1" for v in nat.md.modelVariables}
+    f = swift_wheel.functions
+    swift_wheel.set_inputs(**dict(zip(f.input_names, f.input_starts)))  # the fixture is shared: start values
     swift_wheel.set_inputs(**{k: v for k, v in start.items() if k != "x_start"})
     swift_wheel.set_parameters(x_start=start["x_start"])
     swift_wheel.initialise()
@@ -242,12 +244,15 @@ def _on_moving_road(scenario):  # the vehicle simulator's road under the wheel: 
     return inputs
 
 
-@pytest.mark.parametrize("scenario", [_braking, _slalom])
+@pytest.mark.parametrize("scenario", [_braking, _slalom, _to_standstill])
 def test_native_equals_python_swift(fmus, swift_wheel, tmp_path, scenario):
-    """Braking (over the cleat at 30 m/s) and slalom, with road height and camber inputs: native = Python twin."""
+    """Braking (over the cleat at 30 m/s), slalom and slowing to rest, with road height and camber inputs: native =
+    Python twin."""
     inputs = _on_moving_road(scenario)
     nat = Slave(fmus["swift"], tmp_path).initialise(x_start=0.0, **inputs(0.0))
     units = {v.name: v.unit or "1" for v in nat.md.modelVariables}
+    f = swift_wheel.functions
+    swift_wheel.set_inputs(**dict(zip(f.input_names, f.input_starts)))  # the fixture is shared: start values
     swift_wheel.set_inputs(**inputs(0.0))
     swift_wheel.set_parameters(x_start=0.0)
     swift_wheel.initialise()
