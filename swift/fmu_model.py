@@ -129,9 +129,6 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
     mapped onto it: the state holds heights above the road datum, the ring sees them above ``road_z``."""
     import casadi as ca
 
-    from mftyre.backend import casadi_backend
-    from mftyre.formula import vertical as vert
-
     from .simulate import SwiftTyre
 
     road = parse_road(road)
@@ -168,22 +165,9 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
     y = [special[n] if n in special else ring_out[_RING[n]] for n in OUTPUTS]
     outw = ca.Function("swift_out", [x, u, x0w, grid, hw], [ca.vertcat(*y)], ["x", "u", "x0w", "grid", "hw"], ["y"])
 
-    # static equilibrium (SwiftTyre's Newton, axle height imposed) from the steady-state deflection
-    be = casadi_backend()
-    lookup = ca.interpolant("cam", "linear", [WINDOW], 2, {"lookup_mode": ["exact"]})
-    xs = q[0]
-    z = U["z"] - U["road_z"]
-    h_c = lookup(xs - x0w, grid, hw)[0]
-    ro0 = vert.free_radius(prm, 0.0, be)
-    dpi = (U["p"] - prm.NOMPRES) / prm.NOMPRES
-    rl0 = be.fmin(z - h_c, prm.UNLOADED_RADIUS)
-    fz0 = (vert.vertical_force_62(prm, rl0, ro0, 0.0, 0.0, 0.0, 0.0, dpi, be) if prm.version == "62"
-           else vert.vertical_force_61(prm, ro0 - rl0, ro0, 0.0, 0.0, 0.0, dpi, be))
-    guess = {n: 0 for n in STATE_NAMES}
-    guess.update(xa=xs, xb=xs, za=z, vza=U["vz"], zb=z + be.fmax(fz0, 0.0) / tyre.constants.cbx, vxb=U["vx"],
-                 vyb=U["vy"], oma=U["omega"], omb=U["omega"], gb=U["gamma"])
+    # static equilibrium at x_start (SwiftTyre's, axle height imposed), in the road frame
     equilibrium = tyre.equilibrium_function(NEWTON_STEPS)
-    x_eq = equilibrium(ca.vertcat(*(guess[n] for n in STATE_NAMES)), uring, x0w, grid, hw)
+    x_eq = equilibrium(q[0], U["z"] - U["road_z"], U["vz"], U["omega"], uring, x0w, grid, hw)
     init = ca.Function("swift_init", [u, q, x0w, grid, hw], [lifted(x_eq, U["road_z"])],
                        ["u", "q", "x0w", "grid", "hw"], ["x0"])
 

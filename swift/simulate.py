@@ -417,26 +417,47 @@ class SwiftTyre:
         return unknown, eqs
 
     def equilibrium_function(self, iterations: int = 30):
-        """:meth:`initial_state` as one CasADi function for code generation (FMU): ``(s, u, x0w, grid, hw) -> s_eq``,
-        ``iterations`` Newton steps (QR solves) on :attr:`equilibrium_unknowns` from the guess ``s``, then the
-        contact solution stored in the memory entries."""
+        """:meth:`initial_state` with the axle height imposed as one CasADi function for code generation (FMU):
+        ``(xa, za, vza, omega, u, x0w, grid, hw) -> x`` at the axle position ``xa``, height ``za`` (above the cam
+        table's road), vertical speed ``vza`` and spin ``omega`` (with ``rim="torque"`` its first guess), ring
+        inputs ``u`` (INPUT_NAMES) and the window of :attr:`step_function`: the same start (the steady-state load
+        at the deflection under the axle), ``iterations`` Newton steps (QR solves) on :attr:`equilibrium_unknowns`,
+        then the contact solution stored in the memory entries."""
         import casadi as ca
 
+        from mftyre.backend import casadi_backend
+
+        if self.axle != "height":
+            raise ModelInputError("equilibrium_function takes the axle height: build the SwiftTyre with "
+                                  "axle='height'")
+        be, prm, n = casadi_backend(), self.model.params, self.window
+        xa, za, vza, omega = (ca.MX.sym(name) for name in ("xa", "za", "vza", "omega"))
+        u = ca.MX.sym("u", len(INPUT_NAMES))
+        x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", n), ca.MX.sym("hw", 2 * n)
+        U = {name: u[i] for i, name in enumerate(INPUT_NAMES)}
+        h = ca.interpolant("cam", "linear", [n], 2, {"lookup_mode": ["exact"]})(xa - x0w, grid, hw)[0]
+        rl = be.fmin(za - h, prm.UNLOADED_RADIUS)  # as initial_state: model.vertical_force at no spin or slip
+        r0, dpi = vertical.free_radius(prm, 0.0, be), (U["p"] - prm.NOMPRES) / prm.NOMPRES
+        fz = (vertical.vertical_force_62(prm, rl, r0, 0.0, 0.0, 0.0, 0.0, dpi, be) if prm.version == "62"
+              else vertical.vertical_force_61(prm, r0 - rl, r0, 0.0, 0.0, 0.0, dpi, be))
+        guess = dict.fromkeys(STATE_NAMES, 0.0)
+        guess.update(xa=xa, xb=xa, za=za, vza=vza, zb=za + be.fmax(fz, 0.0) / self.constants.cbx, vxb=U["vx"],
+                     vyb=U["vy"], oma=omega, omb=omega, yb=U["y"], gb=U["gamma"], psb=U["psi"])
+
         unknown, eqs = self.equilibrium_unknowns
-        s, u = ca.MX.sym("s", len(STATE_NAMES)), ca.MX.sym("u", len(INPUT_NAMES))
-        x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
+        s = ca.MX.sym("s", len(STATE_NAMES))
         r = self._rhs_window(s, u, x0w, grid, hw, 0.0)[0][eqs]
         delta = ca.solve(ca.jacobian(r, s)[:, unknown], -r, "qr")
         parts = ca.vertsplit(s)
         for k, i in enumerate(unknown):
             parts[i] = parts[i] + delta[k]
         newton = ca.Function("swift_newton", [s, u, x0w, grid, hw], [ca.vertcat(*parts)])
-        xi = s
+        xi = ca.vertcat(*(guess[name] for name in STATE_NAMES))
         for _ in range(iterations):
             xi = newton(xi, u, x0w, grid, hw)
         xi = _remember_contact(xi, self._rhs_window(xi, u, x0w, grid, hw, 0.0)[1])
-        return ca.Function("swift_equilibrium", [s, u, x0w, grid, hw], [xi], ["s", "u", "x0w", "grid", "hw"],
-                           ["x"])
+        return ca.Function("swift_equilibrium", [xa, za, vza, omega, u, x0w, grid, hw], [xi],
+                           ["xa", "za", "vza", "omega", "u", "x0w", "grid", "hw"], ["x"])
 
     def initial_state(self, inputs: StepInputs, iterations: int = 30) -> np.ndarray:
         """Static equilibrium (steady rolling at the input speeds) at the axle position of ``inputs``: Newton

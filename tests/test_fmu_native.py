@@ -288,7 +288,10 @@ def test_native_swift_road_inputs_equal_swift_tyre(fmus, models, swift_wheel, tm
         return StepInputs(x=x0 + vx * t, vx=vx, z=z - road_z, omega=vx / RE0, y=vy * t, vy=vy,
                           road_camber=camber)
 
-    state = ref.initial_state(u(0.0))
+    state = ref.initial_state(u(0.0))  # the FMU's equilibrium (equilibrium_function) = initial_state
+    out = dict(zip(OUTPUT_NAMES, ref.outputs(state, u(0.0))))
+    _assert_close({"Fx": out["fx"], "Fy": out["fy"], "Fz": out["fz"], "My": out["my"], "Mz": out["mz"],
+                   "x_contact": out["x_c"]}, nat.get(), units, "t=0")
     fz = []
     for k in range(1, 101):
         state, _ = ref.step(state, u((k - 1) * 1e-3), 1e-3)
