@@ -175,8 +175,7 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
     jac = ca.jacobian(outw(x, u, x0w, grid, hw), u).sparsity()
     deps = [[i for i in range(jac.size2()) if jac.has_nz(j, i)] for j in range(jac.size1())]
     table = tyre.table
-    camber = np.zeros(table.h.size) if table.camber is None else table.camber
-    h = np.ascontiguousarray(np.column_stack([table.h, camber]).ravel(), dtype=float)  # interleaved, as SwiftTyre
+    h = tyre.cam_pairs
     grid_v = np.ascontiguousarray(table.dx * np.arange(WINDOW))
     extra = (f"#define ROAD_N {table.h.size}\n#define ROAD_WINDOW {WINDOW}\n#define ROAD_X0 {table.x0!r}\n"
              f"#define ROAD_DX {table.dx!r}\n#define SWIFT_MAX_TRAVEL {MAX_TRAVEL!r}\n"

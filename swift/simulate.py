@@ -252,6 +252,12 @@ class SwiftTyre:
         return "swift_" + hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
     @property
+    def cam_pairs(self) -> np.ndarray:
+        """The whole cam table as :attr:`step_function` reads its window ``hw``: (cam height, road-camber slope)
+        per sample of ``table``, interleaved (do not modify)."""
+        return self._h
+
+    @property
     def output_function(self):
         """The outputs :meth:`step` reports at a state, as a CasADi function ``(x, u, x0w, grid, hw) -> out``
         (= ``step_function`` with dt = 0 at a quarter of the cost: the contact solution from the state's memory);
