@@ -8,7 +8,8 @@ never call ``numpy`` or ``casadi`` directly. Two backends exist:
 
 Both offer the elementary functions, comparisons folded into :meth:`where`, the MATLAB-style ``sign`` (with
 sign(0) = 0) and the "non-zero" sign used by the Magic Formula's singularity guards (sign(0) = +1), and two
-iteration primitives: :meth:`fixed_point` and :meth:`solve_bracketed`. NumPy iterates until every element has
+iteration primitives: :meth:`fixed_point` and :meth:`solve_bracketed`, and the grid scan
+:meth:`first_sign_change`. NumPy iterates until every element has
 converged (with an iteration cap); CasADi unrolls a fixed, documented number of iterations so the resulting
 expression graph is static and differentiable.
 """
@@ -17,6 +18,8 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["NumpyBackend", "CasadiBackend", "NUMPY", "CASADI", "casadi_backend"]
+
+_ULP4 = 4.0 * np.finfo(float).eps  # the root searches' relative floor: 4 units in the last place
 
 
 class NumpyBackend:
@@ -37,6 +40,7 @@ class NumpyBackend:
     fmin = staticmethod(np.minimum)
     fmax = staticmethod(np.maximum)
     logical_and = staticmethod(np.logical_and)
+    logical_or = staticmethod(np.logical_or)
 
     @staticmethod
     def where(cond, a, b):
@@ -77,13 +81,41 @@ class NumpyBackend:
         raise ArithmeticError(f"fixed-point iteration did not converge in {max_iter} iterations")
 
     @staticmethod
+    def first_sign_change(fun, x0, f0, scale, offsets, active):
+        """Scan ``x0 + offsets[k] scale`` (increasing offsets) for the first point where ``fun`` is <= 0, on the elements
+        ``active`` (where ``f0 = fun(x0) > 0``). ``fun(x, idx)`` evaluates the elements ``idx``.
+
+        Returns ``(found, lo, hi, f_lo, f_hi)``: where found, [lo, hi] is the first grid interval with a sign
+        change and f_lo > 0 >= f_hi; elsewhere lo = hi = x0 and f_lo = f_hi = 0.
+        """
+        x0, f0, scale = (np.atleast_1d(np.array(v, dtype=float)) for v in np.broadcast_arrays(x0, f0, scale))
+        lo, hi = x0.copy(), x0.copy()
+        f_lo, f_hi = np.zeros_like(x0), np.zeros_like(x0)
+        found = np.zeros(x0.shape, dtype=bool)
+        idx = np.nonzero(np.broadcast_to(active, x0.shape) & (f0 > 0))
+        x_prev, f_prev = x0[idx], f0[idx]
+        for offset in offsets:
+            if idx[0].size == 0:
+                break
+            x = x0[idx] + offset * scale[idx]
+            f = fun(x, idx)
+            hit = f <= 0
+            hit_idx = tuple(i[hit] for i in idx)
+            lo[hit_idx], hi[hit_idx], f_lo[hit_idx], f_hi[hit_idx] = x_prev[hit], x[hit], f_prev[hit], f[hit]
+            found[hit_idx] = True
+            idx = tuple(i[~hit] for i in idx)
+            x_prev, f_prev = x[~hit], f[~hit]
+        return found, lo, hi, f_lo, f_hi
+
+    @staticmethod
     def solve_bracketed(fun, a, b, fa, fb, xtol, widen=None, max_iter=100, unrolled=None):
         """Root of ``fun`` between ``a`` and ``b`` (``fa``, ``fb`` of opposite sign or zero), element-wise.
 
         Dekker's method: secant steps from the best point ``b``, bisection whenever the secant leaves
         the half of the bracket next to ``b``, steps of at least xtol/2; the bracket [a, b] always holds a
         sign change. ``fun(x, idx)``
-        evaluates the elements ``idx`` (a tuple of index arrays) at ``x``. Iterates until |b - a| <= xtol
+        evaluates the elements ``idx`` (a tuple of index arrays) at ``x``. Iterates until |b - a| <= xtol (plus
+        4 ulp of b, for roots far from zero)
         or f(b) = 0 for every element. ``widen(a, b, fb, idx) -> b'``, if given, first moves ``b`` (only where
         fa and fb have the same non-zero sign, at most ``max_iter`` times) until the bracket holds a root;
         elements still without a sign change return the end with the smaller |f|.
@@ -100,7 +132,7 @@ class NumpyBackend:
         swap = np.abs(fa) < np.abs(fb)
         a, b, fa, fb = np.where(swap, b, a), np.where(swap, a, b), np.where(swap, fb, fa), np.where(swap, fa, fb)
         c, fc = a.copy(), fa.copy()
-        active = (fa * fb < 0) & (np.abs(b - a) > xtol)
+        active = (fa * fb < 0) & (np.abs(b - a) > xtol + _ULP4 * np.abs(b))
         for _ in range(max_iter):
             if not active.any():
                 break
@@ -112,7 +144,8 @@ class NumpyBackend:
             new = np.where(inside, secant, mid)
             # a step shorter than xtol/2 is lengthened to xtol/2 towards a: once b is that close to the
             # root the next point lands beyond it and the bracket collapses (as in Brent's method)
-            new = np.where(np.abs(new - bi) < 0.5 * xtol, bi + 0.5 * xtol * np.sign(ai - bi), new)
+            tol = xtol + _ULP4 * np.abs(bi)
+            new = np.where(np.abs(new - bi) < 0.5 * tol, bi + 0.5 * tol * np.sign(ai - bi), new)
             fnew = fun(new, idx)
             keep_a = fnew * fai < 0
             ai, fai = np.where(keep_a, ai, bi), np.where(keep_a, fai, fbi)
@@ -122,7 +155,7 @@ class NumpyBackend:
             ai, bi = np.where(swap, bi, ai), np.where(swap, ai, bi)
             fai, fbi = np.where(swap, fbi, fai), np.where(swap, fai, fbi)
             a[idx], b[idx], c[idx], fa[idx], fb[idx], fc[idx] = ai, bi, ci, fai, fbi, fci
-            active[idx] = (fbi != 0) & (np.abs(bi - ai) > xtol)
+            active[idx] = (fbi != 0) & (np.abs(bi - ai) > xtol + _ULP4 * np.abs(bi))
         else:
             if active.any():
                 raise ArithmeticError(f"bracketed root search did not converge in {max_iter} iterations")
@@ -160,7 +193,7 @@ class CasadiBackend:
         self.sin, self.cos, self.tan = ca.sin, ca.cos, ca.tan
         self.atan, self.acos = ca.atan, ca.acos
         self.sqrt, self.exp = ca.sqrt, ca.exp
-        self.logical_and = ca.logic_and
+        self.logical_and, self.logical_or = ca.logic_and, ca.logic_or
         if smooth is None:
             self.abs, self.sign = ca.fabs, ca.sign
             self.fmin, self.fmax = ca.fmin, ca.fmax
@@ -200,6 +233,24 @@ class CasadiBackend:
             x, aux = step(x)
         return x, aux
 
+    def first_sign_change(self, fun, x0, f0, scale, offsets, active):
+        """The scan of :meth:`NumpyBackend.first_sign_change`, one unrolled evaluation per offset."""
+        ca = self.ca
+        found = ca.logic_and(active, f0 <= 0) * 0  # all False, as an expression
+        lo = hi = x0
+        f_lo = f_hi = 0 * f0
+        x_prev, f_prev = x0, f0
+        searching = ca.logic_and(active, f0 > 0)
+        for offset in offsets:
+            x = x0 + offset * scale
+            f = fun(x, None)
+            hit = ca.logic_and(ca.logic_and(searching, ca.logic_not(found)), f <= 0)
+            lo, hi = ca.if_else(hit, x_prev, lo), ca.if_else(hit, x, hi)
+            f_lo, f_hi = ca.if_else(hit, f_prev, f_lo), ca.if_else(hit, f, f_hi)
+            found = ca.logic_or(found, hit)
+            x_prev, f_prev = x, f
+        return found, lo, hi, f_lo, f_hi
+
     def solve_bracketed(self, fun, a, b, fa, fb, xtol, widen=None, max_iter=100, unrolled=40):
         """Up to 8 widening steps, then ``unrolled`` steps of Dekker's method (see
         :meth:`NumpyBackend.solve_bracketed`)."""
@@ -217,12 +268,13 @@ class CasadiBackend:
         a, b, fa, fb = ordered(a, b, fa, fb)
         c, fc = a, fa
         for _ in range(unrolled):
-            open_ = ca.logic_and(fa * fb < 0, ca.fabs(b - a) > xtol)
+            tol = xtol + _ULP4 * ca.fabs(b)
+            open_ = ca.logic_and(fa * fb < 0, ca.fabs(b - a) > tol)
             mid = 0.5 * (a + b)
             secant = b - fb * (b - c) / (fb - fc)
             inside = ca.logic_and(fb != fc, (secant - b) * (secant - mid) <= 0)
             new = ca.if_else(inside, secant, mid)
-            new = ca.if_else(ca.fabs(new - b) < 0.5 * xtol, b + 0.5 * xtol * ca.sign(a - b), new)
+            new = ca.if_else(ca.fabs(new - b) < 0.5 * tol, b + 0.5 * tol * ca.sign(a - b), new)
             fnew = fun(new, None)
             keep_a = fnew * fa < 0
             a2, fa2 = ca.if_else(keep_a, a, b), ca.if_else(keep_a, fa, fb)

@@ -21,9 +21,14 @@ x = 2c / (B + sqrt(B^2 + 4 A c)), finite also for Q_FZ2 = 0 (linear tyre) where 
 divides by zero. MF 6.2: the relation is not monotone near zero deflection (Q_FCY2 < 0 makes the side-force
 term grow without bound as rho -> 0), so a secant started near R0 can diverge. mftyre brackets the root
 between the free radius and a deflection where the load is exceeded, then refines with Dekker's method (secant with
-bisection safeguard) to 1e-15 m; whenever a root with Rl <= R_omega exists it is found. When even zero free deflection already gives
-more than the requested load (a cambered tyre at almost no load, touching with its shoulder) the loaded radius
-is R_omega: the contact is about to be lost.
+bisection safeguard) to 1e-15 m; whenever a root with Rl <= R_omega exists it is found. When even zero free
+deflection already gives more than the requested load (a cambered tyre at almost no load: the camber deflection
+rho_zgamma alone carries more), the relation's root lies above R_omega, where the camber asymmetry S_Fygamma,
+growing with Rl/R_omega, brings the load down: a grid scan above R_omega (steps of 0.05 R0 up to R_omega + R0)
+brackets the root nearest to the free radius, refined as above (this is the root the reference evaluator reports, e.g. Rl = 0.4737 m
+for Fz = 0 at 31 m/s on its MF 6.2 sample file). Where the relation has no root there (no camber, no S_Fygamma,
+or a camber so small that the root lies more than R0 above the free radius: a wheel lifted by more than its own
+radius is not in contact) the loaded radius is R_omega, where the camber deflection carries a small load.
 """
 from __future__ import annotations
 
@@ -135,6 +140,11 @@ def vertical_force_62(prm, rl, r_omega, omega, fx, fy, gamma, dpi, be):
     return fz + _bottoming_force(prm, rl, be)
 
 
+#: the scan above the free radius for the root of a lifted tyre, in units of R0: 0.01, 0.025, then steps of 0.05
+#: up to R_omega + R0 (as the camber vanishes the root moves up as 1/sqrt(|gamma|), beyond any contact)
+_LIFT_OFFSETS = (0.01, 0.025, *(0.05 * k for k in range(1, 21)))
+
+
 def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     """Inverse of :func:`vertical_force_62`: (Rl, rho_z) carrying ``fz``, see the module notes."""
     args = (r_omega, omega, fx, fy, gamma, dpi)
@@ -165,10 +175,17 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
         top = r_omega if idx is None else r_omega[idx]
         return top - (top - rl_2) * be.where(f_2 < 0, 1.5, 0.5)
 
-    f_1, f_2 = be.where(contact, f_1, 0.0 * f_1), be.where(contact, f_2, 0.0 * f_2)
-    rl = be.solve_bracketed(residual, r_omega - rho_1, r_omega - rho_2, f_1, f_2, xtol=1e-15, widen=widen,
-                            max_iter=200, unrolled=30)
-    rl = be.where(contact, rl, r_omega)
+    # lifted: the free tyre already carries more than fz (camber deflection at a low load); the root, if any,
+    # lies above R_omega, where the camber asymmetry S_Fygamma grows with Rl/R_omega: the first sign change on
+    # a grid growing geometrically above R_omega brackets the root nearest to the free radius
+    lifted, lo, hi, f_lo, f_hi = be.first_sign_change(residual, r_omega, f_top, prm.UNLOADED_RADIUS + 0.0 * fz,
+                                                      _LIFT_OFFSETS, True)
+    a = be.where(contact, r_omega - rho_1, lo)
+    b = be.where(contact, r_omega - rho_2, hi)
+    f_a = be.where(contact, f_1, be.where(lifted, f_lo, 0.0 * f_1))
+    f_b = be.where(contact, f_2, be.where(lifted, f_hi, 0.0 * f_2))
+    rl = be.solve_bracketed(residual, a, b, f_a, f_b, xtol=1e-15, widen=widen, max_iter=200, unrolled=30)
+    rl = be.where(be.logical_or(contact, lifted), rl, r_omega)
     return rl, deflection_62(prm, rl, r_omega, args[4], be)
 
 
