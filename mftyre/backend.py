@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .errors import ModelInputError
+
 __all__ = ["NumpyBackend", "CasadiBackend", "NUMPY", "CASADI", "casadi_backend"]
 
 _ULP4 = 4.0 * np.finfo(float).eps  # the root searches' relative floor: 4 units in the last place
@@ -69,7 +71,7 @@ class NumpyBackend:
         """Iterate ``x = step(x)`` until every element changes by at most ``tol``.
 
         Returns ``(x, aux)`` where ``step`` returns ``(x_new, aux)``. Raises if not converged in
-        ``max_iter`` iterations (never returns an unconverged value silently).
+        ``max_iter`` iterations (never returns an unconverged value silently): ModelInputError.
         """
         x = x0
         for _ in range(max_iter):
@@ -78,7 +80,8 @@ class NumpyBackend:
             x = x_new
             if done:
                 return x, aux
-        raise ArithmeticError(f"fixed-point iteration did not converge in {max_iter} iterations")
+        raise ModelInputError(f"fixed-point iteration did not converge in {max_iter} iterations: inputs far outside "
+                              "the range the model was fitted for?")
 
     @staticmethod
     def first_sign_change(fun, x0, f0, scale, offsets, active):
@@ -158,7 +161,8 @@ class NumpyBackend:
             active[idx] = (fbi != 0) & (np.abs(bi - ai) > xtol + _ULP4 * np.abs(bi))
         else:
             if active.any():
-                raise ArithmeticError(f"bracketed root search did not converge in {max_iter} iterations")
+                raise ModelInputError(f"bracketed root search did not converge in {max_iter} iterations: inputs far "
+                                      "outside the range the model was fitted for?")
         return np.where(np.abs(fb) <= np.abs(fa), b, a).reshape(shape)
 
 

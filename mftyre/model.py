@@ -305,15 +305,17 @@ class _SymbolicParameters:
 
 
 def _as_float_arrays(inputs: dict) -> dict:
-    """Broadcast the inputs to one shape as float arrays; NaN or non-numeric -> ModelInputError."""
+    """Broadcast the inputs to one shape as float arrays; NaN, +-inf or non-numeric -> ModelInputError."""
     arrays = {}
     for name, value in inputs.items():
         try:
             arr = np.asarray(value, dtype=float)
         except (TypeError, ValueError) as exc:
             raise ModelInputError(f"input {name!r} must be numeric, got {value!r}") from exc
-        if np.isnan(arr).any():
-            raise ModelInputError(f"input {name!r} contains NaN at {np.argwhere(np.isnan(arr))[:5].tolist()}")
+        bad = ~np.isfinite(arr)
+        if bad.any():
+            where = np.argwhere(bad)[:5].tolist() if arr.ndim else "(scalar)"
+            raise ModelInputError(f"input {name!r} must be finite, got {arr[bad][0]!r} at {where}")
         arrays[name] = arr
     try:
         broadcast = np.broadcast_arrays(*arrays.values())

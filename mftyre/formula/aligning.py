@@ -62,10 +62,11 @@ def aligning_coefficients(prm, s, lat, gyk, modes, be) -> SimpleNamespace:
         spin = s.phi if published else s.phit
         d_rp = d_drp * be.sin(c_drp * be.atan(b_drp * R0 * spin))  # (4.93)
         mz90 = mz_inf * (2.0 / be.pi) * be.atan(prm.QCRP2 * R0 * be.abs(s.phit)) * gyk  # (4.103)
-        # (4.104): Cr = zeta7 = (2/pi) acos(Mz90 / |D_rphi|); a ratio above 1 gives 0 (the real part of acos);
-        # without turn slip (Mz90 = 0) the ratio is 0 and Cr = 1 as in the model without turn slip
+        # (4.104): Cr = zeta7 = (2/pi) acos(Mz90 / |D_rphi|); a ratio above 1 gives 0 (the real part of acos),
+        # below -1 (Gyk < 0, far beyond the slip ranges) 2; without turn slip (Mz90 = 0) the ratio is 0 and
+        # Cr = 1 as in the model without turn slip
         ratio = be.where(mz90 == 0, 0.0, mz90 / be.abs(d_rp))
-        zeta7 = (2.0 / be.pi) * be.acos(be.fmin(ratio, 1.0))
+        zeta7 = (2.0 / be.pi) * be.acos(be.clip(ratio, -1.0, 1.0))
         zeta8 = 1.0 + d_rp  # (4.97)
     else:
         zeta0 = zeta2 = zeta6 = zeta7 = zeta8 = 1.0

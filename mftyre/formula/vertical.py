@@ -58,21 +58,33 @@ def rolling_radius_reduction(prm, fz, dpi, be):
 def spin_and_radius(prm, s, omega_in, omega_given, be):
     """Spin omega, free radius R_omega and effective rolling radius Re.
 
-    Where the spin is not given it follows from the longitudinal slip: omega = (1 + kappa) Vx / Re (2.5),
-    solved together with Re(omega) by fixed-point iteration from Re = 0.965 R0 (the iteration contracts by
-    about 2 Q_V1 (omega R0/V0)^2 per step).
+    Where the spin is not given it follows from the longitudinal slip: omega = (1 + kappa) Vx / Re (2.5).
+    With (1) and (7), Re = c + d / Re^2 where c = R0 Q_RE0 - (R_omega - Re) and d = R0 Q_V1 (omega Re R0/V0)^2,
+    i.e. the cubic f(Re) = Re^3 - c Re^2 - d = 0, which has exactly one positive root, above max(c, 0). Newton's
+    method from the upper bound min(c + d/c^2, max(c, 0) + d^(1/3)) descends to it monotonically (f is convex
+    there) and quadratically, at any speed and slip (a plain fixed-point iteration diverges once
+    2 Q_V1 (omega R0/V0)^2 > 1, above about 840 m/s or kappa = 52).
     """
     reduction = rolling_radius_reduction(prm, s.uFz, s.dpi, be)
     wheel_speed = (1.0 + s.ukappa) * s.vx  # omega Re (2.5)
 
-    def step(re):
-        return free_radius(prm, wheel_speed / re, be) - reduction, None
-
     if omega_given is True:
         omega = omega_in
     else:
-        re0 = 0.965 * prm.UNLOADED_RADIUS + be.zeros_like(wheel_speed * reduction)
-        re, _ = be.fixed_point(step, re0, tol=1e-13, max_iter=200, unrolled=8)
+        R0 = prm.UNLOADED_RADIUS
+        c = R0 * prm.Q_RE0 - reduction
+        d = R0 * prm.Q_V1 * (wheel_speed * R0 / prm.LONGVL) ** 2
+        c_pos = be.fmax(c, 0.0)
+        cube_bound = c_pos + d ** (1.0 / 3.0)
+        re0 = be.where(c > 0, be.fmin(c + d / be.where(c > 0, c, 1.0) ** 2, cube_bound), cube_bound)
+        re0 = be.where(d == 0, c, re0)  # no spin: Re = c
+
+        def newton(re):
+            slope = 3.0 * re**2 - 2.0 * c * re
+            step = (re**3 - c * re**2 - d) / be.where(slope == 0, 1.0, slope)
+            return be.where(slope == 0, re, re - step), None
+
+        re, _ = be.fixed_point(newton, re0, tol=1e-15 + 1e-15 * be.abs(re0), max_iter=100, unrolled=6)
         omega_est = wheel_speed / re  # consistent with the converged radius
         omega = omega_est if omega_given is False else be.where(omega_given, omega_in, omega_est)
     r_omega = free_radius(prm, omega, be)
@@ -98,10 +110,16 @@ def vertical_force_61(prm, rho, r_omega, omega, fx, fy, dpi, be):
 
 
 def deflection_61(prm, fz, r_omega, omega, fx, fy, dpi, be):
-    """Inverse of :func:`vertical_force_61`: deflection rho >= 0 carrying the load ``fz``."""
+    """Inverse of :func:`vertical_force_61`: deflection rho >= 0 carrying the load ``fz``.
+
+    Where the force factor is not positive (|Fx| or |Fy| beyond about Fz0/Q_FCX, Fz0/Q_FCY: far outside any
+    measured range) the relation carries no load at any deflection; the factor is then held at 1e-3 so that the
+    deflection stays finite (the tyre deflects down to the rim, where bottoming carries the load).
+    """
     R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
     correction = (1.0 + prm.Q_V2 * (R0 / prm.LONGVL) * be.abs(omega) - (prm.Q_FCX * fx / Fz0) ** 2
                   - (prm.Q_FCY * fy / Fz0) ** 2) * (1.0 + prm.PFZ1 * dpi)
+    correction = be.fmax(correction, 1e-3)
     A, B = prm.Q_FZ2 * correction * Fz0, _q_fz1(prm, be) * correction * Fz0
 
     def root(a, b, c):  # positive root of a x^2 + b x = c, cancellation free
