@@ -126,3 +126,28 @@ def test_casadi_loaded_radius_matches_numpy_and_implicit_derivative(turn_slip):
             up, down = (model.evaluate(fz[j] + d, kappa[j], alpha[j], gamma[j], 0.0, vx=vx[j], turn_slip=turn_slip).rl
                         for d in (h, -h))
             assert slope == pytest.approx((up - down) / (2 * h), rel=1e-4, abs=1e-12)
+
+
+@pytest.mark.parametrize("path", [TIR_FILES / "car_205_60R15_mf61.tir", TIR_FILES / "car_205_60R15_mf62_swift.tir"],
+                         ids=["mf61", "mf62"])
+def test_vertical_force_is_zero_above_the_free_radius(path):
+    """A lifted tyre carries nothing: Fz(Rl > R_omega) = 0 (it was -6000 N at 0.35 m), NumPy and CasADi."""
+    import casadi as ca
+
+    from mftyre.backend import casadi_backend
+
+    model = mftyre.load_tir(path)
+    prm = model.params
+    r_omega = vertical.free_radius(prm, 0.0, NUMPY)
+    rl = np.array([r_omega, r_omega + 1e-6, 0.33, 0.35, 0.5, 1.0])
+    np.testing.assert_array_equal(model.vertical_force(rl), 0.0)
+    assert np.all(model.vertical_force(rl, fy=3000.0, fx=-2000.0, omega=80.0) >= 0.0)
+    assert model.vertical_force(r_omega - 0.01) > 1000.0  # and a deflected one does
+    x = ca.SX.sym("rl")
+    be = casadi_backend()
+    if prm.version == "62":
+        fz = vertical.vertical_force_62(prm, x, r_omega, 0.0, 0.0, 0.0, 0.0, 0.0, be)
+    else:
+        fz = vertical.vertical_force_61(prm, r_omega - x, r_omega, 0.0, 0.0, 0.0, 0.0, be)
+    f = ca.Function("fz", [x], [fz])
+    assert [float(f(v)) for v in rl] == [0.0] * len(rl)

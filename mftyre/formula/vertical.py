@@ -101,12 +101,14 @@ def _bottoming_force(prm, rl, be):
 
 
 def vertical_force_61(prm, rho, r_omega, omega, fx, fy, dpi, be):
-    """MF 6.1 Fz(rho, p): A3.3 / paper (3) with the speed, Fx and Fy factors, plus bottoming."""
+    """MF 6.1 Fz(rho, p): A3.3 / paper (3) with the speed, Fx and Fy factors, plus bottoming; zero where the tyre
+    is lifted (rho <= 0) or the force factor is negative (the road cannot pull the tyre down)."""
     R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
-    x = rho / R0
+    x = be.fmax(rho, 0.0) / R0
     correction = (1.0 + prm.Q_V2 * (R0 / prm.LONGVL) * be.abs(omega) - (prm.Q_FCX * fx / Fz0) ** 2
                   - (prm.Q_FCY * fy / Fz0) ** 2) * (1.0 + prm.PFZ1 * dpi)
-    return correction * (_q_fz1(prm, be) * x + prm.Q_FZ2 * x**2) * Fz0 + _bottoming_force(prm, r_omega - rho, be)
+    fz = correction * (_q_fz1(prm, be) * x + prm.Q_FZ2 * x**2) * Fz0 + _bottoming_force(prm, r_omega - rho, be)
+    return be.fmax(fz, 0.0)
 
 
 def deflection_61(prm, fz, r_omega, omega, fx, fy, dpi, be):
@@ -133,6 +135,9 @@ def deflection_61(prm, fz, r_omega, omega, fx, fy, dpi, be):
     return be.where(x * R0 > rho_b, x_b, x) * R0
 
 
+_RHO_FLOOR = 1e-12  # m, the smallest MF 6.2 deflection
+
+
 def deflection_62(prm, rl, r_omega, gamma, be):
     """MF 6.2 vertical deflection at loaded radius ``rl``: free-rolling deflection plus the camber deflection
     rho_zgamma (Q_CAM1-3, reference tread width (1.075 - 0.5 ASPECT_RATIO) WIDTH), at least 1e-12 m."""
@@ -142,19 +147,27 @@ def deflection_62(prm, rl, r_omega, gamma, be):
         tread_width = (1.075 - 0.5 * prm.ASPECT_RATIO) * prm.WIDTH
         growth = (prm.Q_CAM1 * rl + prm.Q_CAM2 * rl**2) / (prm.Q_CAM1 * r_omega + prm.Q_CAM2 * r_omega**2)
         rho = rho + growth**2 * (tread_width / 8.0) * be.abs(be.tan(gamma))
-    return be.fmax(rho, 1e-12)
+    return be.fmax(rho, _RHO_FLOOR)
 
 
 def vertical_force_62(prm, rl, r_omega, omega, fx, fy, gamma, dpi, be):
-    """MF 6.2 Fz(Rl) at loaded radius ``rl`` (terms whose parameters are zero are skipped)."""
+    """MF 6.2 Fz(Rl) at loaded radius ``rl``: the relation below, or zero where it is negative (lifted tyre)."""
+    return be.fmax(_relation_62(prm, rl, r_omega, omega, fx, fy, gamma, dpi, be), 0.0)
+
+
+def _relation_62(prm, rl, r_omega, omega, fx, fy, gamma, dpi, be):
+    """The MF 6.2 load-radius relation, negative where the side-force term exceeds the rest (terms whose
+    parameters are zero are skipped). Its sign change above R_omega is a lifted tyre's loaded radius."""
     R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
-    x = deflection_62(prm, rl, r_omega, gamma, be) / R0
+    rho = deflection_62(prm, rl, r_omega, gamma, be)
+    x = rho / R0
+    x_load = be.where(rho > _RHO_FLOOR, x, 0.0)  # no deflection, no load (the floor only keeps x^Q_FCY2 finite)
     correction = 1.0 + prm.Q_V2 * (R0 / prm.LONGVL) * be.abs(omega) - (prm.Q_FCX * fx / Fz0) ** 2
     if prm.Q_FCY != 0.0:  # side force, with the camber asymmetry S_Fygamma and the deflection dependency
         ratio = rl / r_omega
         s_fygamma = (prm.Q_FYS1 + prm.Q_FYS2 * ratio + prm.Q_FYS3 * ratio**2) * gamma
         correction = correction - (x ** prm.Q_FCY2 * prm.Q_FCY * (fy - s_fygamma) / Fz0) ** 2
-    fz = correction * (1.0 + prm.PFZ1 * dpi) * (_q_fz1(prm, be) * x + prm.Q_FZ2 * x**2) * Fz0
+    fz = correction * (1.0 + prm.PFZ1 * dpi) * (_q_fz1(prm, be) * x_load + prm.Q_FZ2 * x_load**2) * Fz0
     return fz + _bottoming_force(prm, rl, be)
 
 
@@ -171,7 +184,7 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     def residual(rl, idx):
         sub = args if idx is None else [v[idx] for v in args]
         target = fz if idx is None else fz[idx]
-        return vertical_force_62(prm, rl, *sub, be) - target
+        return _relation_62(prm, rl, *sub, be) - target
 
     r_omega = args[0]
     f_top = residual(r_omega, None)  # < 0 when the free tyre carries less than fz
