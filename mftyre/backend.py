@@ -34,6 +34,8 @@ class NumpyBackend:
     tan = staticmethod(np.tan)
     atan = staticmethod(np.arctan)
     acos = staticmethod(np.arccos)
+    acosh = staticmethod(np.arccosh)
+    cosh = staticmethod(np.cosh)
     sqrt = staticmethod(np.sqrt)
     exp = staticmethod(np.exp)
     log10 = staticmethod(np.log10)
@@ -196,6 +198,7 @@ class CasadiBackend:
         self.smooth = smooth
         self.sin, self.cos, self.tan = ca.sin, ca.cos, ca.tan
         self.atan, self.acos = ca.atan, ca.acos
+        self.acosh, self.cosh = ca.acosh, ca.cosh
         self.sqrt, self.exp = ca.sqrt, ca.exp
         self.logical_and, self.logical_or = ca.logic_and, ca.logic_or
         if smooth is None:

@@ -12,7 +12,15 @@ Two forms (``Modes.turn_slip_form``):
   Vc' = max(Vc, VXLOW) (continuous, positive in both directions of travel).
 * "mfeval": the reference evaluator's choices, reproduced for comparison: (4.76) without the minus sign (its
   authors' reading of the axis systems), Vc' = VXLOW sign(Vx) below VXLOW, D_rphi from phit instead of phi,
-  and K_zgamma,r0 = Fz R0 (QDZ8 QDZ9 dfz + QDZ10 + QDZ11 dfz |gamma|) LKZC instead of (4.99).
+  and K_zgamma,r0 = Fz R0 (QDZ8 QDZ9 dfz + QDZ10 + QDZ11 dfz |gamma|) LKZC instead of (4.99), and Cr (4.104) taken
+  through MATLAB's complex acos where Mz90/|D_rphi| > 1 (Mzr = Dr cos(a x) cosh(b x), the real part MFeval
+  reports). The last matters on files with QDZ10 = QDZ11 = 0 and a small QDZ9 (TNO's 205/60 R15 MF 6.2 example):
+  there K_zgamma,r0 ~ 0, D_rphi ~ 0, the ratio is far above 1 and Mzr grows with the slip angle (182 N m at
+  Fz = 4.1 kN, gamma = 0.099 rad, phit = 0.0011 1/m), while on MFeval's public sample files (QDZ10 = 1.03) the
+  ratio stays below 1, which is why its tables could not show it.
+
+The published form follows Pacejka (2012) (4.76)-(4.106) and Besselink et al. (2010); where (4.104)'s ratio leaves
+[-1, 1] it holds it there, so that Cr stays a real shape factor (0..2) and |Mzr| <= |Dr|.
 """
 from __future__ import annotations
 
