@@ -16,13 +16,15 @@ conicity, the camber-induced shifts) into their mirror images and keeps the symm
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
-from .errors import ModelInputError
+from .errors import InputClippedWarning, ModelInputError
 from .formula import OUTPUT_NAMES, Modes, steady_state, vertical
 from .backend import NUMPY
 
-__all__ = ["MFModel", "MFOutputs", "load_tir", "OUTPUT_UNITS"]
+__all__ = ["MFModel", "MFOutputs", "load_tir", "OUTPUT_UNITS", "INPUT_RANGES"]
 
 #: Unit and meaning of every output.
 OUTPUT_UNITS = {
@@ -57,6 +59,12 @@ OUTPUT_UNITS = {
     "sigmay": ("m", "lateral relaxation length"),
 }
 assert tuple(OUTPUT_UNITS) == OUTPUT_NAMES
+
+#: The .tir ranges that ``limits=True`` saturates the inputs to (Fz: FZMAX saturates; FZMIN raises the load in
+#: the aligning torque and the MF 6.1 deflection only).
+INPUT_RANGES = {"fz": ("FZMIN", "FZMAX"), "kappa": ("KPUMIN", "KPUMAX"), "alpha": ("ALPMIN", "ALPMAX"),
+                "gamma": ("CAMMIN", "CAMMAX"), "p": ("PRESMIN", "PRESMAX")}
+_INPUT_UNITS = {"fz": "N", "kappa": "", "alpha": " rad", "gamma": " rad", "p": " Pa"}
 
 _INPUT_ORDER = ("fz", "kappa", "alpha", "gamma", "phit", "vx", "p", "omega")
 _CHUNK = 16384
@@ -145,6 +153,13 @@ class MFModel:
         INFLPRES), omega [rad/s] (default: estimated from kappa and vx). Keywords switch turn slip, alpha*
         (4.E3-4.E4), the .tir limits and low-speed model, and the form of the turn-slip K_zgamma,r0
         ('published' (4.99) or 'mfeval').
+
+        ``limits=True`` (default) saturates kappa, alpha, gamma, p and Fz to the .tir ranges (KPUMIN/KPUMAX,
+        ALPMIN/ALPMAX, CAMMIN/CAMMAX, PRESMIN/PRESMAX, FZMAX; FZMIN raises the load in the aligning torque and the
+        deflection) and switches on the low-speed model below VXLOW; one :class:`mftyre.InputClippedWarning` per
+        input and call names the input, the range and how many points were outside it (the outputs kappa,
+        alpha, p carry the values used). ``limits=False`` evaluates the equations at the inputs as given,
+        extrapolating beyond the fitted ranges, with no low-speed model.
         """
         modes = Modes(limits=limits, alpha_star=alpha_star, turn_slip=turn_slip, turn_slip_form=turn_slip_form)
         prm = self._params
@@ -153,7 +168,41 @@ class MFModel:
                       omega=0.0 if omega is None else omega)
         arrays = _as_float_arrays(inputs)
         self._check_pressure(arrays["p"])
+        if limits:
+            for name, (count, lo, hi) in self.clipped_inputs(arrays).items():
+                warnings.warn(f"{name}: {count} of {arrays[name].size} point(s) outside the .tir range "
+                              f"[{lo:g}, {hi:g}]{_INPUT_UNITS[name]} ({' to '.join(INPUT_RANGES[name])}) were "
+                              + ("raised to FZMIN in the aligning torque and deflection or saturated at FZMAX"
+                                 if name == "fz" else "saturated to it") + "; limits=False evaluates them as given",
+                              InputClippedWarning, stacklevel=2)
         return MFOutputs(**self._evaluate_arrays(arrays, omega is not None, modes))
+
+    def input_range(self, name: str) -> tuple[float, float]:
+        """(lo, hi) that ``limits=True`` saturates input ``name`` to, in the mounted side's axes (a mirrored
+        model's alpha and gamma ranges are mirrored too)."""
+        lo_name, hi_name = INPUT_RANGES[name]
+        lo, hi = float(self._params[lo_name]), float(self._params[hi_name])
+        return (-hi, -lo) if self.mirrored and name in _MIRRORED_INPUTS else (lo, hi)
+
+    def used_input(self, name: str, values):
+        """The values of input ``name`` that ``limits=True`` evaluates (saturated to :meth:`input_range`; Fz at
+        FZMAX only, since FZMIN acts on a few terms)."""
+        lo, hi = self.input_range(name)
+        values = np.asarray(values, dtype=float)
+        return np.minimum(values, hi) if name == "fz" else np.clip(values, lo, hi)
+
+    def clipped_inputs(self, arrays: dict) -> dict:
+        """{input: (points outside the range, lo, hi)} for the inputs of ``arrays`` that ``limits=True`` changes."""
+        out = {}
+        for name in INPUT_RANGES:
+            if name not in arrays or arrays[name] is None:
+                continue
+            v = np.asarray(arrays[name], dtype=float)
+            lo, hi = self.input_range(name)
+            outside = (v > hi) | ((v < lo) & (v > 0) if name == "fz" else (v < lo))
+            if outside.any():
+                out[name] = (int(np.count_nonzero(outside)), lo, hi)
+        return out
 
     def _evaluate_arrays(self, arrays: dict, omega_given, modes: Modes) -> dict:
         """Evaluate broadcast float arrays (no validation). ``omega_given``: bool or boolean array."""
