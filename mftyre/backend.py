@@ -179,6 +179,7 @@ class CasadiBackend:
     ========  =====================================  ==================================
     |x|        sqrt(x^2 + eps^2)                      eps (at x = 0)
     sign(x)    x / sqrt(x^2 + eps^2)                  1 at x = 0, < 0.5 (eps/x)^2 for |x| >> eps
+    sign_nz    (x+eps) / sqrt((x+eps)^2 + eps^2)      0.29 at x = 0, < (eps/x)^2 for |x| >> eps
     min(a,b)   (a + b - sqrt((a - b)^2 + eps^2)) / 2  eps / 2 (at a = b)
     max(a,b)   (a + b + sqrt((a - b)^2 + eps^2)) / 2  eps / 2 (at a = b)
     ========  =====================================  ==================================
@@ -220,7 +221,12 @@ class CasadiBackend:
         return self.ca.if_else(cond, a, b)
 
     def sign_nz(self, x):
-        return self.ca.if_else(x < 0, -1.0, 1.0) if self.smooth is None else self.sign(x)
+        """sign(x) with sign(0) = +1; smooth: (x + eps)/sqrt((x + eps)^2 + eps^2), 0.71 at x = 0, so that a guarded
+        denominator x + 1e-6 sign_nz(x) stays positive where x and its numerator vanish together (zero load)."""
+        if self.smooth is None:
+            return self.ca.if_else(x < 0, -1.0, 1.0)
+        shifted = x + self.smooth
+        return shifted / self.ca.sqrt(shifted * shifted + self.smooth**2)
 
     def clip(self, x, lo, hi):
         return self.fmin(self.fmax(x, lo), hi)

@@ -145,7 +145,7 @@ class MFModel:
 
     # ------------------------------------------------------------------------------------------ evaluation
     def evaluate(self, fz, kappa, alpha, gamma=0.0, phit=0.0, vx=None, p=None, omega=None, *,
-                 turn_slip: bool = False, alpha_star: bool = False, limits: bool = True,
+                 turn_slip: bool = False, alpha_star: bool = False, limits: bool | str = True,
                  turn_slip_form: str = "published") -> MFOutputs:
         """Evaluate every output; inputs broadcast like NumPy.
 
@@ -159,7 +159,8 @@ class MFModel:
         deflection) and switches on the low-speed model below VXLOW; one :class:`mftyre.InputClippedWarning` per
         input and call names the input, the range and how many points were outside it (the outputs kappa,
         alpha, p carry the values used). ``limits=False`` evaluates the equations at the inputs as given,
-        extrapolating beyond the fitted ranges, with no low-speed model.
+        extrapolating beyond the fitted ranges, with no low-speed model. ``limits="smooth"`` saturates with a
+        1 % slope left beyond the ranges (for optimisers, see :class:`mftyre.formula.Modes`).
         """
         modes = Modes(limits=limits, alpha_star=alpha_star, turn_slip=turn_slip, turn_slip_form=turn_slip_form)
         prm = self._params
@@ -227,7 +228,7 @@ class MFModel:
 
     # ------------------------------------------------------------------------------------------ casadi
     def casadi_function(self, inputs=("fz", "kappa", "alpha", "gamma", "phit", "vx", "p"), outputs=OUTPUT_NAMES,
-                        *, turn_slip: bool = False, alpha_star: bool = False, limits: bool = True,
+                        *, turn_slip: bool = False, alpha_star: bool = False, limits: bool | str = True,
                         turn_slip_form: str = "published", fixed: dict | None = None, parameters=(),
                         smooth: float | None = None, name: str = "mftyre"):
         """A ``casadi.Function`` of the same equations, built from ``casadi.SX`` scalars.
@@ -242,7 +243,11 @@ class MFModel:
         ``outputs``: any of :data:`OUTPUT_NAMES`; the echoed inputs are named ``kappa_used``, ``alpha_used``...
         in the function (CasADi needs distinct input and output names).
         ``smooth``: None for the exact model, or eps > 0 for smooth kinks (see
-        :class:`mftyre.backend.CasadiBackend`).
+        :class:`mftyre.backend.CasadiBackend`); outputs stay finite at any finite input, a negative Fz included.
+        ``limits``: True saturates the inputs to the .tir ranges, so every derivative with respect to an input
+        beyond its range is exactly zero (and at Fz <= 0 the forces and their derivatives are zero: no contact);
+        an optimiser that may step outside the ranges should use ``limits="smooth"`` (1 % of the slope kept
+        beyond the ranges, derivatives non-zero) together with ``smooth=1e-6``; False extrapolates.
         The MF 6.2 loaded radius is solved with up to 8 bracket-widening and 30 Dekker steps and a final
         Newton step, so its derivatives are those of the implicit function. Evaluate many points with
         ``f.map(n)``; :mod:`mftyre.compiled` compiles the function to C.

@@ -15,6 +15,8 @@ from mftyre.formula import OUTPUT_NAMES, vertical
 
 from conftest import MFEVAL_DIR, SHARED, TIR_FILES
 
+pytestmark = pytest.mark.filterwarnings("ignore::mftyre.errors.InputClippedWarning")
+
 TIR61 = TIR_FILES / "car_205_60R15_mf61.tir"
 TIR62 = TIR_FILES / "car_205_60R15_mf62_swift.tir"
 EXTRA = [MFEVAL_DIR / "MagicFormula62_Parameters.tir", MFEVAL_DIR / "MagicFormula52_Parameters.tir",

@@ -70,7 +70,8 @@ def aligning_coefficients(prm, s, lat, gyk, modes, be) -> SimpleNamespace:
         # real part of Mzr: Dr cos(a x) cosh(b x), x = atan(Br alpha_r) (unbounded in alpha_r)
         ratio = be.where(mz90 == 0, 0.0, mz90 / be.abs(d_rp))
         zeta7 = (2.0 / be.pi) * be.acos(be.clip(ratio, -1.0, 1.0))
-        zeta7_imag = None if published else (2.0 / be.pi) * be.acosh(be.fmax(be.abs(ratio), 1.0))
+        # (where D_rphi = 0 MFeval divides by zero; the ratio is held at 1e12 to keep Mzr finite)
+        zeta7_imag = None if published else (2.0 / be.pi) * be.acosh(be.clip(be.abs(ratio), 1.0, 1e12))
         zeta8 = 1.0 + d_rp  # (4.97)
     else:
         zeta0 = zeta2 = zeta6 = zeta7 = zeta8 = 1.0

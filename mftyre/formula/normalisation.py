@@ -16,6 +16,8 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
+from .options import SMOOTH_LIMITS_SLOPE
+
 __all__ = ["condition_inputs", "smooth_low_speed"]
 
 
@@ -36,12 +38,18 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
         phit = be.where(vx < 0, -phit, phit)
         speed_sum = be.abs(vx) + be.abs(be.tan(alpha) * vx)
         alpha = be.where(speed_sum < VXLOW, alpha * speed_sum / VXLOW, alpha)
-        kappa = be.clip(kappa * reduction_linear, prm.KPUMIN, prm.KPUMAX)
-        alpha = be.clip(alpha, prm.ALPMIN, prm.ALPMAX)
-        gamma = be.clip(gamma, prm.CAMMIN, prm.CAMMAX)
-        Fz = be.fmin(uFz, prm.FZMAX)
+        def saturate(x, lo, hi):
+            inside = be.clip(x, lo, hi) if lo is not None else be.fmin(x, hi)
+            if modes.limits == "smooth":  # a small slope beyond the ranges (see Modes.limits)
+                return inside + SMOOTH_LIMITS_SLOPE * (x - inside)
+            return inside
+
+        kappa = saturate(kappa * reduction_linear, prm.KPUMIN, prm.KPUMAX)
+        alpha = saturate(alpha, prm.ALPMIN, prm.ALPMAX)
+        gamma = saturate(gamma, prm.CAMMIN, prm.CAMMAX)
+        Fz = saturate(uFz, None, prm.FZMAX)
         s.Fz_low = be.fmax(Fz, prm.FZMIN)
-        p = be.clip(p, prm.PRESMIN, prm.PRESMAX)
+        p = saturate(p, prm.PRESMIN, prm.PRESMAX)
     else:
         s.low_speed = None
         s.reduction_smooth = None
