@@ -113,7 +113,7 @@ class NumpyBackend:
         return found, lo, hi, f_lo, f_hi
 
     @staticmethod
-    def solve_bracketed(fun, a, b, fa, fb, xtol, widen=None, max_iter=100, unrolled=None):
+    def solve_bracketed(fun, a, b, fa, fb, xtol, widen=None, max_iter=100, unrolled=None, ftol=0.0):
         """Root of ``fun`` between ``a`` and ``b`` (``fa``, ``fb`` of opposite sign or zero), element-wise.
 
         Dekker's method: secant steps from the best point ``b``, bisection whenever the secant leaves
@@ -121,7 +121,8 @@ class NumpyBackend:
         sign change. ``fun(x, idx)``
         evaluates the elements ``idx`` (a tuple of index arrays) at ``x``. Iterates until |b - a| <= xtol (plus
         4 ulp of b, for roots far from zero)
-        or f(b) = 0 for every element. ``widen(a, b, fb, idx) -> b'``, if given, first moves ``b`` (only where
+        or |f(b)| <= ``ftol`` (a scalar or one value per element) for every element. ``idx`` is None while every
+        element is still iterating (no gathering). ``widen(a, b, fb, idx) -> b'``, if given, first moves ``b`` (only where
         fa and fb have the same non-zero sign, at most ``max_iter`` times) until the bracket holds a root;
         elements still without a sign change return the end with the smaller |f|.
         """
@@ -137,12 +138,16 @@ class NumpyBackend:
         swap = np.abs(fa) < np.abs(fb)
         a, b, fa, fb = np.where(swap, b, a), np.where(swap, a, b), np.where(swap, fb, fa), np.where(swap, fa, fb)
         c, fc = a.copy(), fa.copy()
-        active = (fa * fb < 0) & (np.abs(b - a) > xtol + _ULP4 * np.abs(b))
+        ftol = np.broadcast_to(ftol, a.shape)
+        active = (fa * fb < 0) & (np.abs(b - a) > xtol + _ULP4 * np.abs(b)) & (np.abs(fb) > ftol)
         for _ in range(max_iter):
             if not active.any():
                 break
-            idx = np.nonzero(active)
-            ai, bi, ci, fai, fbi, fci = a[idx], b[idx], c[idx], fa[idx], fb[idx], fc[idx]
+            idx = None if active.all() else np.nonzero(active)
+            if idx is None:
+                ai, bi, ci, fai, fbi, fci, ftoli = a, b, c, fa, fb, fc, ftol
+            else:
+                ai, bi, ci, fai, fbi, fci, ftoli = a[idx], b[idx], c[idx], fa[idx], fb[idx], fc[idx], ftol[idx]
             mid = 0.5 * (ai + bi)
             secant = bi - fbi * (bi - ci) / (fbi - fci)
             inside = (fbi != fci) & ((secant - bi) * (secant - mid) <= 0)
@@ -159,8 +164,12 @@ class NumpyBackend:
             swap = np.abs(fai) < np.abs(fbi)
             ai, bi = np.where(swap, bi, ai), np.where(swap, ai, bi)
             fai, fbi = np.where(swap, fbi, fai), np.where(swap, fai, fbi)
-            a[idx], b[idx], c[idx], fa[idx], fb[idx], fc[idx] = ai, bi, ci, fai, fbi, fci
-            active[idx] = (fbi != 0) & (np.abs(bi - ai) > xtol + _ULP4 * np.abs(bi))
+            still = (np.abs(fbi) > ftoli) & (np.abs(bi - ai) > xtol + _ULP4 * np.abs(bi))
+            if idx is None:
+                a, b, c, fa, fb, fc, active = ai, bi, ci, fai, fbi, fci, still
+            else:
+                a[idx], b[idx], c[idx], fa[idx], fb[idx], fc[idx] = ai, bi, ci, fai, fbi, fci
+                active[idx] = still
         else:
             if active.any():
                 raise ModelInputError(f"bracketed root search did not converge in {max_iter} iterations: inputs far "
@@ -264,9 +273,9 @@ class CasadiBackend:
             x_prev, f_prev = x, f
         return found, lo, hi, f_lo, f_hi
 
-    def solve_bracketed(self, fun, a, b, fa, fb, xtol, widen=None, max_iter=100, unrolled=40):
+    def solve_bracketed(self, fun, a, b, fa, fb, xtol, widen=None, max_iter=100, unrolled=40, ftol=0.0):
         """Up to 8 widening steps, then ``unrolled`` steps of Dekker's method (see
-        :meth:`NumpyBackend.solve_bracketed`)."""
+        :meth:`NumpyBackend.solve_bracketed`; ``ftol`` is not needed: the final Newton step polishes)."""
         ca = self.ca
         for _ in range(8 if widen is not None else 0):
             same_sign = fa * fb > 0
