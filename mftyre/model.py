@@ -129,6 +129,7 @@ class MFModel:
             raise ModelInputError(f"side must be 'left' or 'right', got {side!r}")
         self.side = side
         self.mirrored = side != file_side
+        self._plain = _PlainParameters(params)
 
     @property
     def params(self):
@@ -212,15 +213,27 @@ class MFModel:
         if not isinstance(omega_given, bool):
             omega_given = np.ravel(omega_given)
         n = flat["fz"].size
-        out = {k: np.empty(n) for k in OUTPUT_NAMES}
-        # large batches in chunks: the temporaries of one chunk stay in the CPU cache (about 1.5x faster)
-        for start in range(0, n, _CHUNK):
-            part = slice(start, min(start + _CHUNK, n))
-            given = omega_given if isinstance(omega_given, bool) else omega_given[part]
+        if n == 1:  # one point: NumPy scalars (operations on them cost a fraction of those on arrays)
+            given = omega_given if isinstance(omega_given, bool) else omega_given[0]
             with np.errstate(all="ignore"):
-                values = steady_state(self._params, *(flat[k][part] for k in _INPUT_ORDER), given, modes, NUMPY)
-            for k, v in values.items():
-                out[k][part] = v
+                values = steady_state(self._plain, *(flat[k][0] for k in _INPUT_ORDER), given, modes, NUMPY)
+            out = {k: np.array(v, dtype=float).reshape(1) for k, v in values.items()}
+        elif n <= _CHUNK:  # one chunk: the results are the outputs (no copy)
+            with np.errstate(all="ignore"):
+                values = steady_state(self._plain, *(flat[k] for k in _INPUT_ORDER), omega_given, modes, NUMPY)
+            out = _own_arrays(values, n, list(flat.values()))
+        else:
+            out = {k: np.empty(n) for k in OUTPUT_NAMES}
+            # large batches in chunks of equal size: the temporaries of one chunk stay in the CPU cache
+            bounds = np.linspace(0, n, -(-n // _CHUNK) + 1).astype(int)
+            for start, stop in zip(bounds[:-1], bounds[1:]):
+                part = slice(start, stop)
+                given = omega_given if isinstance(omega_given, bool) else omega_given[part]
+                with np.errstate(all="ignore"):
+                    values = steady_state(self._plain, *(flat[k][part] for k in _INPUT_ORDER), given, modes,
+                                          NUMPY)
+                for k, v in values.items():
+                    out[k][part] = v
         out = {k: v.reshape(shape) for k, v in out.items()}
         if self.mirrored:
             out = {k: (-v if k in _MIRRORED_OUTPUTS else v) for k, v in out.items()}
@@ -334,6 +347,18 @@ STRUCTURAL_PARAMETERS = frozenset(["FITTYP", "TYRESIDE", "FZMIN", "Q_CAM1", "Q_C
                                    *(f"QSX{i}" for i in range(1, 15))])
 
 
+class _PlainParameters:
+    """The values of a parameter set as plain attributes (the equations read hundreds of them per evaluation;
+    TyreParameters' mapping lookup costs more than a single-point evaluation's arithmetic)."""
+
+    def __init__(self, params):
+        self.__dict__.update(params.to_dict())
+        self.version, self.fittyp = params.version, params.fittyp
+
+    def __getitem__(self, name):
+        return self.__dict__[name]
+
+
 class _SymbolicParameters:
     """A parameter set in which some parameters are CasADi symbols (for :meth:`MFModel.casadi_function`)."""
 
@@ -356,6 +381,18 @@ class _SymbolicParameters:
 
     def __contains__(self, name):
         return name in self._params
+
+
+def _own_arrays(values: dict, n: int, inputs: list) -> dict:
+    """The outputs as arrays of n elements that share memory with no input and no other output."""
+    out, seen = {}, set()
+    for k, v in values.items():
+        if not isinstance(v, np.ndarray) or v.shape != (n,) or id(v) in seen \
+                or any(np.may_share_memory(v, x) for x in inputs):
+            v = np.array(np.broadcast_to(v, (n,)), dtype=float)
+        seen.add(id(v))
+        out[k] = v
+    return out
 
 
 def _as_float_arrays(inputs: dict) -> dict:

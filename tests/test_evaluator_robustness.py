@@ -88,3 +88,24 @@ def test_finite_outputs_at_extreme_inputs(path):
                              turn_slip=turn_slip, turn_slip_form=form)
         bad = [k for k in OUTPUT_NAMES if not np.all(np.isfinite(out[k]))]
         assert not bad, (limits, turn_slip, form, bad)
+
+
+@pytest.mark.parametrize("path", [TIR61, TIR62, *EXTRA], ids=lambda p: p.stem)
+def test_single_point_equals_batch(path):
+    """One point is evaluated on NumPy scalars (a faster path): every output equals the batch evaluation."""
+    if not path.exists():
+        pytest.skip(f"reference material {path} not found (../shared beside the project)")
+    model = _load(path)
+    rng = np.random.default_rng(2)
+    n = 12
+    for limits, turn_slip, form in itertools.product([True, False], [False, True], ["published", "mfeval"]):
+        x = dict(fz=np.r_[0.0, rng.uniform(0, 9000, n - 1)], kappa=rng.uniform(-1, 1, n),
+                 alpha=rng.uniform(-0.5, 0.5, n), gamma=rng.uniform(-0.2, 0.2, n), phit=rng.uniform(-0.1, 0.1, n),
+                 vx=np.r_[0.0, -0.5, rng.uniform(-40, 60, n - 2)], p=rng.uniform(1.5e5, 3e5, n))
+        kw = dict(limits=limits, turn_slip=turn_slip, turn_slip_form=form)
+        batch = model.evaluate(**x, **kw)
+        for j in range(n):
+            one = model.evaluate(**{k: v[j] for k, v in x.items()}, **kw)
+            for name in OUTPUT_NAMES:
+                assert np.shape(one[name]) == ()
+                np.testing.assert_allclose(one[name], batch[name][j], rtol=1e-12, atol=1e-12, err_msg=name)
