@@ -47,6 +47,11 @@ class NumpyBackend:
     logical_or = staticmethod(np.logical_or)
 
     @staticmethod
+    def cos_atan(x):
+        """cos(atan(x)) = 1 / sqrt(1 + x^2), without the two transcendental functions."""
+        return 1.0 / np.sqrt(1.0 + x * x)
+
+    @staticmethod
     def where(cond, a, b):
         if type(cond) is np.bool_:  # one point (scalars): a Python choice, np.where costs microseconds
             return a if cond else b
@@ -229,6 +234,10 @@ class CasadiBackend:
 
     def log10(self, x):
         return self.ca.log(x) / np.log(10.0)
+
+    def cos_atan(self, x):
+        """cos(atan(x)) = 1 / sqrt(1 + x^2)."""
+        return 1.0 / self.ca.sqrt(1.0 + x * x)
 
     def where(self, cond, a, b):
         return self.ca.if_else(cond, a, b)

@@ -224,10 +224,9 @@ class MFModel:
             out = _own_arrays(values, n, list(flat.values()))
         else:
             out = {k: np.empty(n) for k in OUTPUT_NAMES}
-            # large batches in chunks of equal size: the temporaries of one chunk stay in the CPU cache
-            bounds = np.linspace(0, n, -(-n // _CHUNK) + 1).astype(int)
-            for start, stop in zip(bounds[:-1], bounds[1:]):
-                part = slice(start, stop)
+            # large batches in chunks: the temporaries of one chunk stay in the CPU cache
+            for start in range(0, n, _CHUNK):
+                part = slice(start, min(start + _CHUNK, n))
                 given = omega_given if isinstance(omega_given, bool) else omega_given[part]
                 with np.errstate(all="ignore"):
                     values = steady_state(self._plain, *(flat[k][part] for k in _INPUT_ORDER), given, modes,

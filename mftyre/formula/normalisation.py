@@ -58,20 +58,21 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
         s.Fz_low = Fz
 
     s.Fz, s.kappa, s.alpha, s.gamma, s.phit, s.p = Fz, kappa, alpha, gamma, phit, p
+    s.tan_alpha = be.tan(alpha)
 
     s.Fz0p = prm.LFZO * prm.FNOMIN  # Fz0' (4.E1)
     s.dfz = (Fz - s.Fz0p) / s.Fz0p  # (4.E2a)
     s.dpi = (p - prm.NOMPRES) / prm.NOMPRES  # (4.E2b)
 
     if modes.alpha_star:
-        s.alpha_star = be.tan(alpha) * be.sign(vx)  # (4.E3)
+        s.alpha_star = s.tan_alpha * be.sign(vx)  # (4.E3)
         s.gamma_star = be.sin(gamma)  # (4.E4)
     else:
         s.alpha_star, s.gamma_star = alpha, gamma
 
     # slip and contact-centre velocities, ISO-W signs: Vsy = tan(alpha) |Vx| (2.12, 4.E5)
     vsx = -kappa * be.abs(vx)
-    vsy = be.tan(alpha) * be.abs(vx)
+    vsy = s.tan_alpha * be.abs(vx)
     vs = be.sqrt(vsx**2 + vsy**2)
     vc = be.sqrt(vx**2 + vsy**2)
     vc_prime = vc + 1e-6  # (4.E6a), Vc >= 0 so sign(Vc) = +1

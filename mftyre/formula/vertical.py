@@ -141,33 +141,57 @@ _RHO_FLOOR = 1e-12  # m, the smallest MF 6.2 deflection
 def deflection_62(prm, rl, r_omega, gamma, be):
     """MF 6.2 vertical deflection at loaded radius ``rl``: free-rolling deflection plus the camber deflection
     rho_zgamma (Q_CAM1-3, reference tread width (1.075 - 0.5 ASPECT_RATIO) WIDTH), at least 1e-12 m."""
-    rho_free = be.fmax(r_omega - rl, 0.0)
-    rho = rho_free - prm.Q_CAM3 * rho_free * be.abs(gamma)
+    return _deflection_62(prm, rl, r_omega, *_camber_terms_62(prm, r_omega, gamma, be), be)
+
+
+def _camber_terms_62(prm, r_omega, gamma, be):
+    """(free share 1 - Q_CAM3 |gamma|, camber factor (W/8) |tan gamma| / (Q_CAM1 R_omega + Q_CAM2 R_omega^2)^2):
+    the parts of the MF 6.2 deflection that do not depend on Rl."""
+    free_share = 1.0 - prm.Q_CAM3 * be.abs(gamma)
+    camber = 0.0
     if prm.Q_CAM1 != 0.0 or prm.Q_CAM2 != 0.0:
         tread_width = (1.075 - 0.5 * prm.ASPECT_RATIO) * prm.WIDTH
-        growth = (prm.Q_CAM1 * rl + prm.Q_CAM2 * rl**2) / (prm.Q_CAM1 * r_omega + prm.Q_CAM2 * r_omega**2)
-        rho = rho + growth**2 * (tread_width / 8.0) * be.abs(be.tan(gamma))
+        camber = (tread_width / 8.0) * be.abs(be.tan(gamma)) / (prm.Q_CAM1 * r_omega + prm.Q_CAM2 * r_omega**2) ** 2
+    return free_share, camber
+
+
+def _deflection_62(prm, rl, r_omega, free_share, camber, be):
+    """rho = (R_omega - Rl)+ (1 - Q_CAM3 |gamma|) + growth^2 (W/8) |tan gamma|, growth = (Q_CAM1 Rl + Q_CAM2 Rl^2)
+    / (Q_CAM1 R_omega + Q_CAM2 R_omega^2)."""
+    rho = be.fmax(r_omega - rl, 0.0) * free_share
+    if prm.Q_CAM1 != 0.0 or prm.Q_CAM2 != 0.0:
+        rho = rho + (prm.Q_CAM1 * rl + prm.Q_CAM2 * rl**2) ** 2 * camber
     return be.fmax(rho, _RHO_FLOOR)
 
 
 def vertical_force_62(prm, rl, r_omega, omega, fx, fy, gamma, dpi, be):
     """MF 6.2 Fz(Rl) at loaded radius ``rl``: the relation below, or zero where it is negative (lifted tyre)."""
-    return be.fmax(_relation_62(prm, rl, r_omega, omega, fx, fy, gamma, dpi, be), 0.0)
+    terms = _relation_terms_62(prm, r_omega, omega, fx, fy, gamma, dpi, be)
+    return be.fmax(_relation_62(prm, rl, terms, be), 0.0)
 
 
-def _relation_62(prm, rl, r_omega, omega, fx, fy, gamma, dpi, be):
+def _relation_terms_62(prm, r_omega, omega, fx, fy, gamma, dpi, be) -> tuple:
+    """The parts of the MF 6.2 relation that do not depend on Rl (computed once per root search)."""
+    R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
+    free_share, camber = _camber_terms_62(prm, r_omega, gamma, be)
+    correction = 1.0 + prm.Q_V2 * (R0 / prm.LONGVL) * be.abs(omega) - (prm.Q_FCX * fx / Fz0) ** 2
+    stiffness = (1.0 + prm.PFZ1 * dpi) * Fz0
+    return r_omega, free_share, camber, correction, stiffness, fy, gamma
+
+
+def _relation_62(prm, rl, terms, be):
     """The MF 6.2 load-radius relation, negative where the side-force term exceeds the rest (terms whose
     parameters are zero are skipped). Its sign change above R_omega is a lifted tyre's loaded radius."""
+    r_omega, free_share, camber, correction, stiffness, fy, gamma = terms
     R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
-    rho = deflection_62(prm, rl, r_omega, gamma, be)
+    rho = _deflection_62(prm, rl, r_omega, free_share, camber, be)
     x = rho / R0
     x_load = be.where(rho > _RHO_FLOOR, x, 0.0)  # no deflection, no load (the floor only keeps x^Q_FCY2 finite)
-    correction = 1.0 + prm.Q_V2 * (R0 / prm.LONGVL) * be.abs(omega) - (prm.Q_FCX * fx / Fz0) ** 2
     if prm.Q_FCY != 0.0:  # side force, with the camber asymmetry S_Fygamma and the deflection dependency
         ratio = rl / r_omega
         s_fygamma = (prm.Q_FYS1 + prm.Q_FYS2 * ratio + prm.Q_FYS3 * ratio**2) * gamma
         correction = correction - (x ** prm.Q_FCY2 * prm.Q_FCY * (fy - s_fygamma) / Fz0) ** 2
-    fz = correction * (1.0 + prm.PFZ1 * dpi) * (_q_fz1(prm, be) * x_load + prm.Q_FZ2 * x_load**2) * Fz0
+    fz = correction * stiffness * (_q_fz1(prm, be) * x_load + prm.Q_FZ2 * x_load**2)
     return fz + _bottoming_force(prm, rl, be)
 
 
@@ -180,11 +204,12 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     """Inverse of :func:`vertical_force_62`: (Rl, rho_z) carrying ``fz``, see the module notes."""
     args = (r_omega, omega, fx, fy, gamma, dpi)
     fz, *args = be.broadcast(fz, *args)  # the residual below evaluates subsets of the elements
+    terms = be.broadcast(*_relation_terms_62(prm, *args, be))
 
     def residual(rl, idx):
-        sub = args if idx is None else [v[idx] for v in args]
+        sub = terms if idx is None else [v[idx] for v in terms]
         target = fz if idx is None else fz[idx]
-        return _relation_62(prm, rl, *sub, be) - target
+        return _relation_62(prm, rl, sub, be) - target
 
     r_omega = args[0]
     f_top = residual(r_omega, None)  # < 0 when the free tyre carries less than fz
@@ -208,7 +233,7 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
 
     # lifted: the free tyre already carries more than fz (camber deflection at a low load); the root, if any,
     # lies above R_omega, where the camber asymmetry S_Fygamma grows with Rl/R_omega: the first sign change on
-    # a grid growing geometrically above R_omega brackets the root nearest to the free radius
+    # a grid above R_omega brackets the root nearest to the free radius
     lifted, lo, hi, f_lo, f_hi = be.first_sign_change(residual, r_omega, f_top, prm.UNLOADED_RADIUS + 0.0 * fz,
                                                       _LIFT_OFFSETS, True)
     a = be.where(contact, r_omega - rho_1, lo)
