@@ -69,10 +69,6 @@ class NumpyBackend:
         return np.minimum(np.maximum(x, lo), hi)
 
     @staticmethod
-    def zeros_like(x):
-        return np.zeros_like(x, dtype=float)
-
-    @staticmethod
     def broadcast(*values):
         """The values as float arrays of one common shape, at least 1-D (writable copies)."""
         return [np.atleast_1d(np.array(v, dtype=float)) for v in np.broadcast_arrays(*values)]
@@ -252,9 +248,6 @@ class CasadiBackend:
 
     def clip(self, x, lo, hi):
         return self.fmin(self.fmax(x, lo), hi)
-
-    def zeros_like(self, x):
-        return 0 * x
 
     @staticmethod
     def broadcast(*values):
