@@ -52,6 +52,11 @@ class NumpyBackend:
         return 1.0 / np.sqrt(1.0 + x * x)
 
     @staticmethod
+    def any(cond) -> bool:
+        """Whether any element meets ``cond``: equations skip a case no element is in (CasADi: always True)."""
+        return bool(np.any(cond))
+
+    @staticmethod
     def where(cond, a, b):
         if type(cond) is np.bool_:  # one point (scalars): a Python choice, np.where costs microseconds
             return a if cond else b
@@ -234,6 +239,11 @@ class CasadiBackend:
     def cos_atan(self, x):
         """cos(atan(x)) = 1 / sqrt(1 + x^2)."""
         return 1.0 / self.ca.sqrt(1.0 + x * x)
+
+    @staticmethod
+    def any(cond) -> bool:
+        """True: a symbolic graph keeps every case."""
+        return True
 
     def where(self, cond, a, b):
         return self.ca.if_else(cond, a, b)

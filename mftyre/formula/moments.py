@@ -60,6 +60,9 @@ def rolling_resistance_moment(prm, s, fx, be):
     high = prm.VXLOW / be.abs(vx) - 1.0
     low = -1.0 - prm.VXLOW - high
     ramp = be.logical_and(kappa >= low, kappa <= high)
-    my = be.where(ramp, my * be.sin(0.5 * be.pi * (kappa + 1.0) / (high + 1.0)), my)
-    my = be.where(kappa < low, -my, my)
+    if be.any(ramp):  # (NumPy skips this when no wheel is near lock)
+        my = be.where(ramp, my * be.sin(0.5 * be.pi * (kappa + 1.0) / (high + 1.0)), my)
+    reversed_ = kappa < low
+    if be.any(reversed_):
+        my = be.where(reversed_, -my, my)
     return be.where(vx == 0, 0.0, my)

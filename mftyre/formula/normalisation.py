@@ -31,20 +31,26 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
     if modes.limits:
         VXLOW = prm.VXLOW
         s.low_speed = be.abs(vx) <= VXLOW
-        reduction_linear = be.where(s.low_speed, be.abs(vx / VXLOW), 1.0)
-        s.reduction_smooth = be.where(s.low_speed, 1.0 - 0.5 * (1.0 + be.cos(be.pi * vx / VXLOW)), 1.0)
-        s.kappa_out = kappa * reduction_linear
-        phit = phit * be.cos(alpha) * reduction_linear
+        phit = phit * be.cos(alpha)
+        if be.any(s.low_speed):  # (NumPy skips this when no point is that slow; the factors would all be 1)
+            reduction_linear = be.where(s.low_speed, be.abs(vx / VXLOW), 1.0)
+            s.reduction_smooth = be.where(s.low_speed, 1.0 - 0.5 * (1.0 + be.cos(be.pi * vx / VXLOW)), 1.0)
+            kappa = kappa * reduction_linear
+            phit = phit * reduction_linear
+            speed_sum = be.abs(vx) + be.abs(be.tan(alpha) * vx)  # below VXLOW only where |Vx| is
+            alpha = be.where(speed_sum < VXLOW, alpha * speed_sum / VXLOW, alpha)
+        else:
+            s.reduction_smooth = None
+        s.kappa_out = kappa
         phit = be.where(vx < 0, -phit, phit)
-        speed_sum = be.abs(vx) + be.abs(be.tan(alpha) * vx)
-        alpha = be.where(speed_sum < VXLOW, alpha * speed_sum / VXLOW, alpha)
+
         def saturate(x, lo, hi):
             inside = be.clip(x, lo, hi) if lo is not None else be.fmin(x, hi)
             if modes.limits == "smooth":  # a small slope beyond the ranges (see Modes.limits)
                 return inside + SMOOTH_LIMITS_SLOPE * (x - inside)
             return inside
 
-        kappa = saturate(kappa * reduction_linear, prm.KPUMIN, prm.KPUMAX)
+        kappa = saturate(kappa, prm.KPUMIN, prm.KPUMAX)
         alpha = saturate(alpha, prm.ALPMIN, prm.ALPMAX)
         gamma = saturate(gamma, prm.CAMMIN, prm.CAMMAX)
         Fz = saturate(uFz, None, prm.FZMAX)
