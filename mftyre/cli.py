@@ -361,12 +361,12 @@ def _cmd_eval(args) -> int:
         table_cols = args.outputs or _DEFAULT_OUTPUTS
         if not args.quiet:
             print(_eval_header(args, model, given, swept, shape))
-            print(_format_table(_eval_frame(args, out, swept, shape, table_cols)))
+            print(_format_table(_eval_frame(args, out, swept, shape, table_cols, model)))
         for target in (args.csv, args.plot):
             if target is not None:
                 Path(target).parent.mkdir(parents=True, exist_ok=True)
         if args.csv is not None:
-            frame = _eval_frame(args, out, swept, shape, args.outputs or tuple(out.keys()))
+            frame = _eval_frame(args, out, swept, shape, args.outputs or tuple(out.keys()), model)
             frame.to_csv(args.csv, index=False)
             print(f"wrote {args.csv} ({len(frame)} rows, {frame.shape[1]} columns)", file=sys.stderr)
         if args.plot is not None:
@@ -402,8 +402,18 @@ def _eval_grid(args, swept: list[str], prm) -> tuple[dict, tuple[int, ...]]:
     return inputs, shape
 
 
-def _eval_frame(args, out, swept: list[str], shape, outputs):
-    """Swept inputs as given, then the outputs; column names 'name [SI unit]'."""
+def _used(args, model, name, values):
+    """The values of input ``name`` the model evaluated (saturated to the .tir range unless --no-limits)."""
+    from .model import INPUT_RANGES
+
+    if args.no_limits or name not in INPUT_RANGES:
+        return np.asarray(values, dtype=float)
+    return model.used_input(name, values)
+
+
+def _eval_frame(args, out, swept: list[str], shape, outputs, model=None):
+    """Swept inputs as given (and as used, where the .tir ranges saturated them), then the outputs; column names
+    'name [SI unit]'."""
     import pandas as pd
 
     from .model import OUTPUT_UNITS
@@ -413,6 +423,9 @@ def _eval_frame(args, out, swept: list[str], shape, outputs):
     grids = np.meshgrid(*(getattr(args, s).values for s in swept), indexing="ij") if swept else []
     for name, grid in zip(swept, grids):
         cols[f"{name} [{_SWEEPS[name][0]}]"] = grid.ravel()
+        used = grid.ravel() if model is None else _used(args, model, name, grid.ravel())
+        if not np.array_equal(used, grid.ravel()) and name not in outputs:
+            cols[f"{name}_used [{_SWEEPS[name][0]}]"] = used
     for name in outputs:
         label = f"{name}_used" if name in swept else name
         cols[f"{label} [{OUTPUT_UNITS[name][0]}]"] = np.broadcast_to(out[name], shape).reshape(n)
@@ -421,6 +434,11 @@ def _eval_frame(args, out, swept: list[str], shape, outputs):
 
 def _format_table(frame) -> str:
     return frame.to_string(index=False, float_format=lambda v: f"{v:.6g}")
+
+
+def _used_note(args, model, name, value) -> str:
+    used = float(_used(args, model, name, value))
+    return "" if used == value else f" (used: {used:g}, the .tir range limit)"
 
 
 def _eval_header(args, model, given, swept, shape) -> str:
@@ -432,13 +450,14 @@ def _eval_header(args, model, given, swept, shape) -> str:
         unit = _SWEEPS[name][0]
         sweep = getattr(args, name)
         if sweep is not None:
-            fixed.append(f"{name} = {sweep.values[0]:g}" + ("" if unit == "-" else f" {unit}"))
+            fixed.append(f"{name} = {sweep.values[0]:g}" + ("" if unit == "-" else f" {unit}")
+                         + _used_note(args, model, name, sweep.values[0]))
         elif name == "fz":
             fixed.append(f"fz = {prm.FNOMIN:g} N (FNOMIN)")
         elif name == "vx":
             fixed.append(f"vx = {prm.LONGVL:g} m/s (LONGVL)")
         elif name == "p":
-            fixed.append(f"p = {prm.INFLPRES:g} Pa (INFLPRES)")
+            fixed.append(f"p = {prm.INFLPRES:g} Pa (INFLPRES)" + _used_note(args, model, name, prm.INFLPRES))
         elif name == "omega":
             fixed.append("omega from kappa and vx")
         else:
@@ -466,8 +485,11 @@ def _eval_plot(args, model, out, swept, shape, outputs) -> None:
     others = [n for n in swept if n != xname]
     other_shape = tuple(shape[swept.index(n)] for n in others)
     combos = list(np.ndindex(*other_shape)) if others else [()]
-    labels = [", ".join(getattr(args, n).label(getattr(args, n).values[i]) for n, i in zip(others, c))
-              for c in combos]
+    def legend(n, value):  # the value used, and the one asked for where the .tir range saturated it
+        sweep, used = getattr(args, n), float(_used(args, model, n, value))
+        return sweep.label(used) + ("" if used == value else f" (asked {sweep.label(value).split(' = ')[1]})")
+
+    labels = [", ".join(legend(n, getattr(args, n).values[i]) for n, i in zip(others, c)) for c in combos]
 
     nout = len(outputs)
     ncols = 1 if nout <= 2 else 2

@@ -50,8 +50,9 @@ def run_demo(out_dir="out", tir=None, *, seed: int = 1, echo=print, overwrite: b
     echo(f"1/3 evaluate {Path(tir).name} (FITTYP {prm.fittyp}, FNOMIN {prm.FNOMIN:.0f} N, "
          f"NOMPRES {prm.NOMPRES / 1e5:.2f} bar)")
     alpha = np.radians(np.linspace(-12.0, 12.0, 97))
-    pressures = np.array([0.8, 1.0, 1.2]) * prm.NOMPRES
+    pressures = np.array([prm.PRESMIN, prm.NOMPRES, prm.PRESMAX])  # the file's pressure range and nominal
     res = truth.evaluate(prm.FNOMIN, 0.0, alpha[None, :], p=pressures[:, None])
+    pressures = res.p[:, 0]  # the pressures used: the labels say what was evaluated
     fig = Figure(figsize=(6, 6), dpi=90)
     ax_fy, ax_mz = fig.subplots(2, 1, sharex=True)
     for p, fy, mz in zip(pressures, res.fy, res.mz):

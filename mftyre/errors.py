@@ -18,4 +18,5 @@ class ModelInputError(MFTyreError, ValueError):
 
 
 class InputClippedWarning(UserWarning):
-    """Inputs lay outside the .tir ranges and were saturated to them (``limits=True``); names the inputs."""
+    """Inputs outside the .tir ranges were saturated to them (``limits=True``); the message names the input, the
+    range and how many points."""
