@@ -178,7 +178,9 @@ class MFModel:
                               + ("raised to FZMIN in the aligning torque and deflection or saturated at FZMAX"
                                  if name == "fz" else "saturated to it") + "; limits=False evaluates them as given",
                               InputClippedWarning, stacklevel=2)
-        return MFOutputs(**self._evaluate_arrays(arrays, omega is not None, modes))
+        out = self._evaluate_arrays(arrays, omega is not None, modes)
+        _check_finite_outputs(out, arrays)
+        return MFOutputs(**out)
 
     def input_range(self, name: str) -> tuple[float, float]:
         """(lo, hi) that ``limits=True`` saturates input ``name`` to, in the mounted side's axes (a mirrored
@@ -392,6 +394,23 @@ def _own_arrays(values: dict, n: int, inputs: list) -> dict:
         seen.add(id(v))
         out[k] = v
     return out
+
+
+def _check_finite_outputs(out: dict, arrays: dict) -> None:
+    """Finite inputs must give finite outputs: where the .tir parameters admit no finite solution (e.g. Q_V1, Q_V2
+    that make the free radius vanish at the speed asked for), raise ModelInputError naming the outputs and the
+    first such point instead of returning NaN."""
+    bad = [k for k, v in out.items() if not np.isfinite(v).all()]
+    if not bad:
+        return
+    mask = np.zeros(np.shape(out[bad[0]]), dtype=bool)
+    for k in bad:
+        mask |= ~np.isfinite(out[k])
+    i = np.unravel_index(np.argmax(mask), mask.shape) if mask.ndim else ()
+    at = ", ".join(f"{k}={np.broadcast_to(v, mask.shape)[i]:.6g}" for k, v in arrays.items())
+    raise ModelInputError(f"the equations give non-finite {', '.join(bad)} at {int(mask.sum())} of {mask.size} "
+                          f"point(s), first at {at}: the .tir parameters have no finite solution there "
+                          "(check the speed terms Q_V1, Q_V2 and the vertical parameters)")
 
 
 def _as_float_arrays(inputs: dict) -> dict:

@@ -556,3 +556,13 @@ def test_broadcasting_shapes_of_vertical_helpers():
     rl0, _ = model.loaded_radius(4000.0)
     assert np.shape(rl0) in ((), (1,))
     assert float(np.ravel(rl0)[0]) == pytest.approx(float(rl[1, 1]), abs=1e-12)
+
+
+def test_parameters_without_a_finite_solution_raise_instead_of_returning_nan():
+    """Q_V1 = -1433, Q_V2 = 480 (written by an old fit) make the free radius vanish: evaluate returned NaN radii
+    and spin silently; now a ModelInputError names the outputs and the point."""
+    from conftest import TIR_FILES
+
+    bad = mftyre.load_tir(TIR_FILES / "car_205_60R15_mf62_swift.tir").with_params(Q_V1=-1433.0, Q_V2=480.0)
+    with pytest.raises(ModelInputError, match=r"non-finite .*rl.* vx=40"):
+        bad.evaluate(4000.0, 0.0, 0.0, vx=40.0)
