@@ -390,15 +390,28 @@ def test_failed_initialisation_is_an_error(fmus, tmp_path, kind, start, text):
 
 
 def test_wrong_guid_is_refused(fmus, tmp_path):
+    """fmi2Instantiate with another GUID returns NULL and logs the cause. The test passes its own logger: fmpy's
+    logger proxy keeps a pointer to the last Python logger registered (by any earlier instance), which may be
+    freed by then, so fmpy's default callbacks cannot be used once another instance logged."""
     from fmpy import extract, read_model_description
-    from fmpy.fmi2 import FMU2Slave
+    from fmpy.fmi1 import calloc, free
+    from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                           fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+    from fmpy.logging import addLoggerProxy
 
+    messages = []
+    cb = fmi2CallbackFunctions()
+    cb.logger = fmi2CallbackLoggerTYPE(lambda env, inst, status, cat, msg: messages.append(msg.decode()))
+    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    addLoggerProxy(byref(cb))
     md = read_model_description(fmus["steady"])
     fmu = FMU2Slave(guid="{00000000-0000-0000-0000-000000000000}", unzipDirectory=extract(
         fmus["steady"], unzipdir=str(tmp_path / "g")), modelIdentifier=md.coSimulation.modelIdentifier,
         instanceName="x")
     with pytest.raises(Exception):
-        fmu.instantiate()
+        fmu.instantiate(callbacks=cb)
+    assert any("GUID {00000000-0000-0000-0000-000000000000} does not match" in m for m in messages), messages
 
 
 @pytest.mark.parametrize("kind", ["steady", "transient", "swift"])
