@@ -224,7 +224,7 @@ def test_reset_and_reinitialise(swift_fmu, tmp_path):
     ({"road": "cleat(x0=1.0)"}, "cleat needs length, height"),
     ({"road": "__import__('os').system('true')"}, "each term must be one of"),
     ({"road": "sine(amplitude=0.01, wavelength=1.0)"}, "sine needs x_end"),
-    ({"road": "csv('missing_profile.csv')"}, "cannot read road profile"),
+    ({"road": "csv('missing_profile.csv')"}, "file not found: expected an existing road profile CSV"),
     ({"rim": "free"}, "rim must be"),
     ({"input_mode": "rig"}, "for model='steady' only"),
     ({"max_step": -1.0}, "max_step must be positive"),
