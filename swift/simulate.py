@@ -152,7 +152,7 @@ class SwiftTyre:
     # ------------------------------------------------------------------ equations
     def _rhs(self, n_window, warm=False):
         """rhs(x, u, x0w, grid, hw, h) -> (dx, out): MX graph, so that the cam-height lookups stay compiled
-        constant-time table accesses (an SX expansion would scan the whole window). ``h``: the integration step
+        constant-time table accesses (an index computed from x into the window, no search). ``h``: the integration step
         that bounds the relaxation rate (0: the exact model). The contact solution: ``CONTACT_PASSES`` Newton
         passes from an estimate, or (``warm``, the stepper) ``WARM_PASSES`` from the solution stored in the state."""
         import casadi as ca
@@ -161,10 +161,6 @@ class SwiftTyre:
         u = ca.MX.sym("u", len(INPUT_NAMES))
         x0w, grid, h = ca.MX.sym("x0w"), ca.MX.sym("grid", n_window), ca.MX.sym("h")
         hw = ca.MX.sym("hw", 2 * n_window)  # cam height and road-camber slope, interleaved
-        lookup = ca.interpolant("cam", "linear", [n_window], 2, {"lookup_mode": ["exact"]})
-        xq = ca.MX.sym("xq")
-        hq = lookup(xq, grid, hw)
-        cam_fn = ca.Function("cam_height", [xq, grid, hw], [hq, ca.jacobian(hq, xq)])
 
         # the physics as SX functions (compact C), the table lookups as MX calls between them
         m, c = self.model, self.constants
@@ -177,9 +173,14 @@ class SwiftTyre:
                                        h=hstep, road_camber=ca.atan(hs[6]))
         physics = ca.Function("ring", [xs, us, hs, hstep], [dx_sx, out_sx])
 
-        def cam(xc):  # (height, its slope along x, road-camber slope) at xc
-            value, slope = cam_fn(xc - x0w, grid, hw)
-            return value[0], slope[0], value[1]
+        dx = grid[1] - grid[0]
+
+        def cam(xc):  # (height, its slope along x, road-camber slope) at xc: linear between the uniform samples
+            t = (xc - x0w - grid[0]) / dx
+            i = ca.fmin(ca.fmax(ca.floor(t), 0), n_window - 2)  # the sample left of xc (the end segments extrapolate)
+            w = t - i
+            h0, h1, c0, c1 = hw[2 * i], hw[2 * i + 2], hw[2 * i + 1], hw[2 * i + 3]
+            return h0 + w * (h1 - h0), (h1 - h0) / dx, c0 + w * (c1 - c0)
 
         if warm:
             xc, ls, passes = x[_S["xb"]] + x[_S["xcs"]], x[_S["lsm"]], WARM_PASSES
