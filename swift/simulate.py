@@ -63,6 +63,7 @@ from .road import Road
 __all__ = ["StepInputs", "SwiftTyre", "SimResult"]
 
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
+_LSM = _S["lsm"]
 #: The compiled functions' cache key includes the equations' source, so an edit never reuses an old library.
 _SOURCE_HASH = hashlib.sha256(b"".join(Path(__file__).with_name(n).read_bytes()
                                        for n in ("ring.py", "simulate.py"))).hexdigest()
@@ -123,6 +124,7 @@ class SwiftTyre:
         if axle not in ("height", "load") or rim not in ("speed", "torque"):
             raise ModelInputError(f"axle must be 'height' or 'load', rim 'speed' or 'torque'; got {axle!r}, {rim!r}")
         self.model, self.axle, self.rim = model, axle, rim
+        self._p_nominal = model.params.INFLPRES  # the default inflation pressure (the parameters are immutable)
         self.constants = RingConstants.from_model(model, axle_mass, rim_extra_inertia)
         self.cams = Cams.from_params(model.params)
         margin = window * table_dx
@@ -243,7 +245,7 @@ class SwiftTyre:
     def _row(self, inputs: StepInputs):
         """One step's inputs for the compiled loop: the ring's input vector (order of INPUT_NAMES), then the imposed
         axle x, z, vz and rim spin."""
-        p = self.model.params.INFLPRES if inputs.p is None else inputs.p
+        p = self._p_nominal if inputs.p is None else inputs.p
         return (inputs.vx, inputs.load, inputs.torque, p, inputs.y, inputs.vy, inputs.gamma, inputs.psi,
                 inputs.road_camber, inputs.x, inputs.z, inputs.vz, inputs.omega)
 
@@ -288,7 +290,7 @@ class SwiftTyre:
         which the wheel would travel further than the cam-height window reaches is split into equal parts.
         Compiled: imposing the inputs, the window and the splitting run in C (:data:`_DRIVER`)."""
         if self._compiled is not None:
-            if not state[_S["lsm"]] > 0:  # no contact solution stored yet (a state built by hand)
+            if not state[_LSM] > 0:  # no contact solution stored yet (a state built by hand)
                 state = self._impose(state, inputs)
             state, out = self._compiled.step(state, self._row(inputs), dt)
             return state, dict(zip(OUTPUT_NAMES, out))
