@@ -70,8 +70,8 @@ _SOURCE_HASH = hashlib.sha256(b"".join(Path(__file__).with_name(n).read_bytes()
 #: Distance [m] the cam lookups may reach beyond the belt centre: half the tandem base plus the forward shift of
 #: the contact centre (0.1 m each would need a 2a of 0.24 m and a slope of 20 deg).
 TANDEM_REACH = 0.25
-#: Newton passes of the contact solution in the stepper, from the solution of the previous step.
-WARM_PASSES = 2
+#: Newton passes of the contact solution in the stepper, from the solution of the previous RK stage.
+WARM_PASSES = 1
 
 
 @dataclass(frozen=True)
@@ -203,16 +203,20 @@ class SwiftTyre:
         dt, x0w = ca.MX.sym("dt"), ca.MX.sym("x0w")
         grid, hw = ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
         h = dt / self.substeps
-        f = lambda s: rhs(s, u, x0w, grid, hw, h)[0]  # noqa: E731
-        xs = x
-        for _ in range(self.substeps):  # classical RK4
-            k1 = f(xs)
-            k2 = f(xs + h / 2 * k1)
-            k3 = f(xs + h / 2 * k2)
-            k4 = f(xs + h * k3)
+
+        def f(s, memory):  # (dx, out, the contact solution) at s, its contact solution started from ``memory``
+            s = ca.vertcat(s[:_S["xcs"]], memory, s[_S["lsm"] + 1:])
+            dx, out = rhs(s, u, x0w, grid, hw, h)
+            return dx, out, ca.vertcat(out[OUTPUT_NAMES.index("x_c")] - s[_S["xb"]], out[OUTPUT_NAMES.index("ls")])
+
+        xs, memory = x, x[_S["xcs"]:_S["lsm"] + 1]
+        for _ in range(self.substeps):  # classical RK4; each stage starts from the previous stage's contact
+            k1, _, memory = f(xs, memory)
+            k2, _, memory = f(xs + h / 2 * k1, memory)
+            k3, _, memory = f(xs + h / 2 * k2, memory)
+            k4, _, memory = f(xs + h * k3, memory)
             xs = xs + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        out = rhs(xs, u, x0w, grid, hw, h)[1]
-        memory = ca.vertcat(out[OUTPUT_NAMES.index("x_c")] - xs[_S["xb"]], out[OUTPUT_NAMES.index("ls")])
+        _, out, memory = f(xs, memory)
         xs = ca.vertcat(xs[:_S["xcs"]], memory, xs[_S["lsm"] + 1:])  # the contact solution for the next step
         return ca.Function("swift_step", [x, u, dt, x0w, grid, hw], [xs, out],
                            ["x", "u", "dt", "x0w", "grid", "hw"], ["x_next", "out"])
