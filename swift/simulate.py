@@ -269,7 +269,10 @@ class SwiftTyre:
 
     def _store_contact(self, state, u):
         """Write the converged contact solution (x_c - x_b, l_s) of ``state`` into its memory entries."""
-        out = np.asarray(self._rhs_window(state, u, *self._rhs_args(state))[1]).ravel()
+        if self._compiled is not None:
+            out = self._compiled.rhs(state, u, self._rhs_args(state)[0], self._window_start(state[_S["xb"]]))[1]
+        else:
+            out = np.asarray(self._rhs_window(state, u, *self._rhs_args(state))[1]).ravel()
         state[_S["xcs"]] = out[OUTPUT_NAMES.index("x_c")] - state[_S["xb"]]
         state[_S["lsm"]] = out[OUTPUT_NAMES.index("ls")]
 
@@ -492,7 +495,8 @@ def _compile(tyre, key: str) -> Path:
         return library
     with tempfile.TemporaryDirectory(dir=directory) as tmp:
         gen = ca.CodeGenerator(f"{key[:40]}.c", {"with_header": False})
-        gen.add(tyre.step_function)
+        for function in (tyre.step_function, tyre.rhs_function):
+            gen.add(function)
         source = Path(gen.generate(str(Path(tmp)) + os.sep))
         with source.open("a") as f:
             f.write(_DRIVER % dict(nx=len(STATE_NAMES), ny=len(OUTPUT_NAMES), nu=_NU, ni=_NI, window=tyre.window,
@@ -541,6 +545,14 @@ class _Compiled:
         self._x_next, self._y = np.zeros(len(STATE_NAMES)), np.zeros(len(OUTPUT_NAMES))
         self._in[-1] = 1.0
         self._step_args = self._pointers(self._x, self._in, self._in[_NI:], self._x_next, self._y)
+        self._rhs = _Generated(self._lib, tyre.rhs_function)
+
+    def rhs(self, state, u, x0w, i0):
+        """The right-hand side (:attr:`SwiftTyre.rhs_function`, the exact model: h = 0) on the cam window that
+        starts at sample ``i0`` (x = ``x0w``): (dx, out)."""
+        with self._lock:
+            return self._rhs((state, u, x0w, None, None, 0.0), self._tyre._grid.ctypes.data,
+                             self._tyre._h.ctypes.data + 16 * i0)
 
     def _pointers(self, x, rows, scal, xs, ys):
         t = self._tyre
@@ -575,3 +587,30 @@ class _Compiled:
             code = self._fn(self._pointers(x, rows, scal, xs, ys))
         self._check(code, (xs[code - 2] if code > 1 else x)[_S["xb"]])
         return xs, ys
+
+
+class _Generated:
+    """A generated function of the tyre's library with buffers of its own (the caller holds the tyre's lock);
+    arguments 3 and 4 (the cam grid and window) are passed by pointer."""
+
+    def __init__(self, lib, function):
+        self._fn = getattr(lib, function.name())
+        self._fn.argtypes = [ctypes.c_void_p] * 4 + [ctypes.c_int]
+        self._fn.restype = ctypes.c_int
+        n_in, n_out = function.n_in(), function.n_out()
+        self._in = [np.zeros(function.nnz_in(i)) for i in range(n_in)]
+        self._out = [np.zeros(function.nnz_out(i)) for i in range(n_out)]
+        self._shapes = [function.size_out(i) for i in range(n_out)]
+        self._arg = (ctypes.c_void_p * max(function.sz_arg(), n_in))(*[a.ctypes.data for a in self._in])
+        self._res = (ctypes.c_void_p * max(function.sz_res(), n_out))(*[r.ctypes.data for r in self._out])
+        self._iw = (ctypes.c_longlong * max(function.sz_iw(), 1))()
+        self._w = (ctypes.c_double * max(function.sz_w(), 1))()
+
+    def __call__(self, args, grid, window):
+        for i, (buf, value) in enumerate(zip(self._in, args)):
+            if i not in (3, 4):
+                buf[:] = value
+        self._arg[3], self._arg[4] = grid, window
+        if self._fn(self._arg, self._res, self._iw, self._w, 0):
+            raise ArithmeticError("compiled SWIFT function reported an evaluation error")
+        return [r.reshape(shape, order="F").copy() if shape[1] > 1 else r.copy() for r, shape in zip(self._out, self._shapes)]
