@@ -148,11 +148,13 @@ class SwiftTyre:
         self._equilibrium = None  # static equations for initial_state, built on first use
 
     # ------------------------------------------------------------------ equations
-    def _rhs(self, n_window, warm=False):
+    def _rhs(self, n_window, warm=False, stage=False):
         """rhs(x, u, x0w, grid, hw, h) -> (dx, out): MX graph, so that the cam-height lookups stay compiled
-        constant-time table accesses (an index computed from x into the window, no search). ``h``: the integration step
-        that bounds the relaxation rate (0: the exact model). The contact solution: ``CONTACT_PASSES`` Newton
-        passes from an estimate, or (``warm``, the stepper) ``WARM_PASSES`` from the solution stored in the state."""
+        constant-time table accesses (an index computed from x into the window, no search). ``h``: the integration
+        step that bounds the relaxation rate (0: the exact model). The contact solution: ``CONTACT_PASSES`` Newton
+        passes from an estimate, or (``warm``, the stepper) ``WARM_PASSES`` from the solution stored in the state.
+        ``stage`` (an RK stage of the stepper): (dx, the contact solution x_c - x_b, l_s) instead, without the
+        expressions only the outputs need."""
         import casadi as ca
 
         x = ca.MX.sym("x", len(STATE_NAMES))
@@ -170,7 +172,7 @@ class SwiftTyre:
                                {"cse": True})
         dx_sx, out_sx = ring_equations(m, c, xs, us, *(hs[i] for i in range(6)), axle=self.axle, rim=self.rim,
                                        h=hstep, road_camber=ca.atan(hs[6]))
-        physics = ca.Function("ring", [xs, us, hs, hstep], [dx_sx, out_sx], {"cse": True})
+        physics = ca.Function("ring", [xs, us, hs, hstep], [dx_sx] if stage else [dx_sx, out_sx], {"cse": True})
 
         dx = grid[1] - grid[0]
 
@@ -191,33 +193,37 @@ class SwiftTyre:
             nxt = geometry(x, u, ca.vertcat(hf, dhf, hr, dhr, ls, xc))
             xc, ls = nxt[0], nxt[1]
         (hf, dhf, cf), (hr, dhr, cr) = cam(xc + ls / 2), cam(xc - ls / 2)
-        dx, out = physics(x, u, ca.vertcat(hf, dhf, hr, dhr, ls, xc, (cf + cr) / 2), h)
-        return ca.Function("rhs", [x, u, x0w, grid, hw, h], [dx, out])
+        results = physics.call([x, u, ca.vertcat(hf, dhf, hr, dhr, ls, xc, (cf + cr) / 2), h])
+        if stage:
+            return ca.Function("rhs_stage", [x, u, x0w, grid, hw, h], [results[0], ca.vertcat(xc - x[_S["xb"]], ls)])
+        return ca.Function("rhs", [x, u, x0w, grid, hw, h], results)
 
     def _build_step(self):
         import casadi as ca
 
-        rhs = self._rhs_warm
+        rhs, rhs_stage = self._rhs_warm, self._rhs(self.window, warm=True, stage=True)
         x = ca.MX.sym("x", len(STATE_NAMES))
         u = ca.MX.sym("u", len(INPUT_NAMES))
         dt, x0w = ca.MX.sym("dt"), ca.MX.sym("x0w")
         grid, hw = ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
         h = dt / self.substeps
 
-        def f(s, memory):  # (dx, out, the contact solution) at s, its contact solution started from ``memory``
-            s = ca.vertcat(s[:_S["xcs"]], memory, s[_S["lsm"] + 1:])
-            dx, out = rhs(s, u, x0w, grid, hw, h)
-            return dx, out, ca.vertcat(out[OUTPUT_NAMES.index("x_c")] - s[_S["xb"]], out[OUTPUT_NAMES.index("ls")])
+        def with_memory(s, memory):  # s with its contact solution to start from
+            return ca.vertcat(s[:_S["xcs"]], memory, s[_S["lsm"] + 1:])
+
+        def f(s, memory):  # (dx, the contact solution) at s, its contact solution started from ``memory``
+            return rhs_stage(with_memory(s, memory), u, x0w, grid, hw, h)
 
         xs, memory = x, x[_S["xcs"]:_S["lsm"] + 1]
         for _ in range(self.substeps):  # classical RK4; each stage starts from the previous stage's contact
-            k1, _, memory = f(xs, memory)
-            k2, _, memory = f(xs + h / 2 * k1, memory)
-            k3, _, memory = f(xs + h / 2 * k2, memory)
-            k4, _, memory = f(xs + h * k3, memory)
+            k1, memory = f(xs, memory)
+            k2, memory = f(xs + h / 2 * k1, memory)
+            k3, memory = f(xs + h / 2 * k2, memory)
+            k4, memory = f(xs + h * k3, memory)
             xs = xs + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        _, out, memory = f(xs, memory)
-        xs = ca.vertcat(xs[:_S["xcs"]], memory, xs[_S["lsm"] + 1:])  # the contact solution for the next step
+        out = rhs(with_memory(xs, memory), u, x0w, grid, hw, h)[1]
+        memory = ca.vertcat(out[OUTPUT_NAMES.index("x_c")] - xs[_S["xb"]], out[OUTPUT_NAMES.index("ls")])
+        xs = with_memory(xs, memory)  # the contact solution for the next step
         return ca.Function("swift_step", [x, u, dt, x0w, grid, hw], [xs, out],
                            ["x", "u", "dt", "x0w", "grid", "hw"], ["x_next", "out"])
 
