@@ -58,10 +58,10 @@ def _rows(swift, model, repeat: int):
     u = swift.StepInputs(x=0.0, vx=V, z=float(rl), omega=V / 0.3044)
     StepInputs = swift.StepInputs
 
-    def step_loop():
-        s = tyre.initial_state(u)
+    def step_loop():  # a co-simulation master: new inputs (floats) every step
+        s, z, omega = tyre.initial_state(u), float(rl), V / 0.3044
         for k in range(int(round(T_END / DT))):
-            s, _ = tyre.step(s, StepInputs(x=V * k * DT, vx=V, z=float(rl), omega=V / 0.3044), DT)
+            s, _ = tyre.step(s, StepInputs(x=V * k * DT, vx=V, z=z, omega=omega), DT)
 
     vm = swift.SwiftTyre(model, road, axle="height", rim="speed", x_range=(0.0, 24.0), compiled=False)
     t_vm = best_time(lambda: vm.run(0.1, u, DT), 1) * (T_END / 0.1)

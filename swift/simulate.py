@@ -513,7 +513,7 @@ def _compile(tyre, key: str) -> Path:
 
 #: Compiler flags of the SWIFT library: ~10 % fewer instructions per step than -O2 (-fno-math-errno: sqrt and
 #: friends inline, errno is never read); portable (no -march), as the FMU ships the library.
-_CFLAGS = ("-O3", "-fno-math-errno")
+_CFLAGS = ("-O3", "-fno-math-errno", "-std=gnu89")
 
 
 def _compile_c(source: Path, library: Path) -> None:
@@ -547,10 +547,12 @@ class _Compiled:
         self._cfg = np.array([tyre.table.x0, tyre.table.dx, tyre.table.h.size, tyre._reach])
         self._fn = self._lib.swift_run  # called with one ctypes array of 12 pointers (no argtypes: no conversion)
         # one step (step()): state in, inputs row + dt + 1, state and outputs out
-        self._x, self._in = np.zeros(len(STATE_NAMES)), np.zeros(_NI + 2)
+        self._x, self._in = np.zeros(len(STATE_NAMES)), (ctypes.c_double * (_NI + 2))()  # ctypes: fastest to fill
         self._x_next, self._y = np.zeros(len(STATE_NAMES)), np.zeros(len(OUTPUT_NAMES))
-        self._in[-1] = 1.0
-        self._step_args = self._pointers(self._x, self._in, self._in[_NI:], self._x_next, self._y)
+        self._in[_NI + 1] = 1.0
+        at = ctypes.addressof(self._in)
+        self._step_args = self._pointers(self._x.ctypes.data, at, at + 8 * _NI, self._x_next.ctypes.data,
+                                         self._y.ctypes.data)
         self._rhs = _Generated(self._lib, tyre.rhs_function)
 
     def rhs(self, state, u, x0w, i0):
@@ -560,11 +562,10 @@ class _Compiled:
             return self._rhs((state, u, x0w, None, None, 0.0), self._tyre._grid.ctypes.data,
                              self._tyre._h.ctypes.data + 16 * i0)
 
-    def _pointers(self, x, rows, scal, xs, ys):
+    def _pointers(self, x, rows, scal, xs, ys):  # the driver's argument array (addresses of the buffers)
         t = self._tyre
-        return (ctypes.c_void_p * 12)(x.ctypes.data, rows.ctypes.data, scal.ctypes.data, self._cfg.ctypes.data,
-                                      t._grid.ctypes.data, t._h.ctypes.data, xs.ctypes.data, ys.ctypes.data,
-                                      *(ctypes.addressof(v) for v in self._work))
+        return (ctypes.c_void_p * 12)(x, rows, scal, self._cfg.ctypes.data, t._grid.ctypes.data, t._h.ctypes.data,
+                                      xs, ys, *(ctypes.addressof(v) for v in self._work))
 
     def _check(self, code, xb):
         if code > 0:
@@ -590,7 +591,7 @@ class _Compiled:
         x, rows = np.array(state, dtype=float), np.ascontiguousarray(rows, dtype=float)
         xs, ys, scal = np.empty((n, len(STATE_NAMES))), np.empty((n, len(OUTPUT_NAMES))), np.array([dt, n])
         with self._lock:
-            code = self._fn(self._pointers(x, rows, scal, xs, ys))
+            code = self._fn(self._pointers(*(a.ctypes.data for a in (x, rows, scal, xs, ys))))
         self._check(code, (xs[code - 2] if code > 1 else x)[_S["xb"]])
         return xs, ys
 
