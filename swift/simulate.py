@@ -420,14 +420,22 @@ class SwiftTyre:
             d = self._rhs_window(xs, us, x0w, grid, hw, 0.0)[0][eqs]
             self._equilibrium = ca.Function("equilibrium", [xs, us, x0w, grid, hw],
                                             [d, ca.jacobian(d, xs)[:, unknown]])
-        u, window = self._u(inputs), self._rhs_args(s)[:3]
-        for _ in range(iterations):
-            r, jac = (np.asarray(v) for v in self._equilibrium(s, u, *window))
-            r = r.ravel()
-            step = np.linalg.lstsq(jac, -r, rcond=None)[0]
+        u, window, i0 = self._u(inputs), self._rhs_args(s)[:3], self._window_start(s[_S["xb"]])
+        inverse, last = None, np.inf
+        for _ in range(iterations):  # Newton; compiled, the Jacobian is kept while the steps shrink tenfold
+            if inverse is None or self._compiled is None:
+                r, jac = (np.asarray(v) for v in self._equilibrium(s, u, *window))
+                inverse = np.linalg.pinv(jac, rtol=np.finfo(float).eps * max(jac.shape))  # least squares
+            else:
+                r = self._compiled.rhs(s, u, window[0], i0)[0][eqs]
+            step = -inverse @ r.ravel()
             s[unknown] += step
-            if np.max(np.abs(step)) < 1e-13:
+            size = np.max(np.abs(step))
+            if size < 1e-13:
                 break
+            if not size < 0.1 * last:
+                inverse = None
+            last = size
         self._store_contact(s, u)
         return s
 
