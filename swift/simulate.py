@@ -166,7 +166,8 @@ class SwiftTyre:
         m, c = self.model, self.constants
         xs, us, hs = ca.SX.sym("x", len(STATE_NAMES)), ca.SX.sym("u", len(INPUT_NAMES)), ca.SX.sym("h", 7)
         hstep = ca.SX.sym("hstep")
-        start = ca.Function("contact_start", [xs, us, hs[0]], [ca.vertcat(*contact_start(m, c, xs, us, hs[0]))], {"cse": True})
+        start = ca.Function("contact_start", [xs, us, hs[0]], [ca.vertcat(*contact_start(m, c, xs, us, hs[0]))],
+                            {"cse": True})
         geometry = ca.Function("contact_geometry", [xs, us, hs[:6]],
                                [ca.vertcat(*contact_geometry(m, c, xs, us, *(hs[i] for i in range(6))))],
                                {"cse": True})
@@ -174,14 +175,14 @@ class SwiftTyre:
                                        h=hstep, road_camber=ca.atan(hs[6]))
         physics = ca.Function("ring", [xs, us, hs, hstep], [dx_sx] if stage else [dx_sx, out_sx], {"cse": True})
 
-        dx = grid[1] - grid[0]
+        spacing = grid[1] - grid[0]
 
         def cam(xc):  # (height, its slope along x, road-camber slope) at xc: linear between the uniform samples
-            t = (xc - x0w - grid[0]) / dx
+            t = (xc - x0w - grid[0]) / spacing
             i = ca.fmin(ca.fmax(ca.floor(t), 0), n_window - 2)  # the sample left of xc (the end segments extrapolate)
             w = t - i
             h0, h1, c0, c1 = hw[2 * i], hw[2 * i + 2], hw[2 * i + 1], hw[2 * i + 3]
-            return h0 + w * (h1 - h0), (h1 - h0) / dx, c0 + w * (c1 - c0)
+            return h0 + w * (h1 - h0), (h1 - h0) / spacing, c0 + w * (c1 - c0)
 
         if warm:
             xc, ls, passes = x[_S["xb"]] + x[_S["xcs"]], x[_S["lsm"]], WARM_PASSES
@@ -519,8 +520,9 @@ def _compile(tyre, key: str) -> Path:
     return library
 
 
-#: Compiler flags of the SWIFT library: ~10 % fewer instructions per step than -O2 (-fno-math-errno: sqrt and
-#: friends inline, errno is never read); portable (no -march), as the FMU ships the library.
+#: Compiler flags of the SWIFT library: ~15 % fewer instructions per step than -O2 (-fno-math-errno: sqrt and
+#: friends inline, errno is never read; gnu89: CasADi's fmax/fmin become inlined comparisons instead of libm calls,
+#: equal for all non-NaN arguments); portable (no -march), as the FMU ships the library.
 _CFLAGS = ("-O3", "-fno-math-errno", "-std=gnu89")
 
 
@@ -628,4 +630,5 @@ class _Generated:
         self._arg[3], self._arg[4] = grid, window
         if self._fn(self._arg, self._res, self._iw, self._w, 0):
             raise ArithmeticError("compiled SWIFT function reported an evaluation error")
-        return [r.reshape(shape, order="F").copy() if shape[1] > 1 else r.copy() for r, shape in zip(self._out, self._shapes)]
+        return [r.reshape(shape, order="F").copy() if shape[1] > 1 else r.copy()
+                for r, shape in zip(self._out, self._shapes)]
