@@ -50,7 +50,7 @@ def inputs(model, n, seed=0):
     rng = np.random.default_rng(seed)
     return dict(fz=rng.uniform(0.25, 2.0, n) * prm.FNOMIN, kappa=rng.uniform(-0.3, 0.3, n),
                 alpha=rng.uniform(-0.3, 0.3, n), gamma=rng.uniform(-0.05, 0.05, n),
-                vx=rng.uniform(5.0, 35.0, n), p=rng.uniform(0.8, 1.2, n) * prm.NOMPRES)
+                vx=rng.uniform(5.0, 35.0, n), p=rng.uniform(prm.PRESMIN, prm.PRESMAX, n))  # inside the .tir range
 
 
 def main(argv=None):

@@ -7,8 +7,9 @@
 
 ISO-W (TYDEX W) axes, SI units.
 """
-from .errors import DataError, MFTyreError, ModelInputError, TirError
+from .errors import DataError, InputClippedWarning, MFTyreError, ModelInputError, TirError
 from .model import MFModel, MFOutputs, load_tir
 
 __version__ = "0.1.0"
-__all__ = ["load_tir", "MFModel", "MFOutputs", "MFTyreError", "TirError", "DataError", "ModelInputError"]
+__all__ = ["load_tir", "MFModel", "MFOutputs", "MFTyreError", "TirError", "DataError", "ModelInputError",
+           "InputClippedWarning"]

@@ -8,7 +8,8 @@ never call ``numpy`` or ``casadi`` directly. Two backends exist:
 
 Both offer the elementary functions, comparisons folded into :meth:`where`, the MATLAB-style ``sign`` (with
 sign(0) = 0) and the "non-zero" sign used by the Magic Formula's singularity guards (sign(0) = +1), and two
-iteration primitives: :meth:`fixed_point` and :meth:`solve_bracketed`. NumPy iterates until every element has
+iteration primitives: :meth:`fixed_point` and :meth:`solve_bracketed`, and the grid scan
+:meth:`first_sign_change`. NumPy iterates until every element has
 converged (with an iteration cap); CasADi unrolls a fixed, documented number of iterations so the resulting
 expression graph is static and differentiable.
 """
@@ -16,7 +17,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from .errors import ModelInputError
+
 __all__ = ["NumpyBackend", "CasadiBackend", "NUMPY", "CASADI", "casadi_backend"]
+
+_ULP4 = 4.0 * np.finfo(float).eps  # the root searches' relative floor: 4 units in the last place
 
 
 class NumpyBackend:
@@ -29,6 +34,8 @@ class NumpyBackend:
     tan = staticmethod(np.tan)
     atan = staticmethod(np.arctan)
     acos = staticmethod(np.arccos)
+    acosh = staticmethod(np.arccosh)
+    cosh = staticmethod(np.cosh)
     sqrt = staticmethod(np.sqrt)
     exp = staticmethod(np.exp)
     log10 = staticmethod(np.log10)
@@ -37,23 +44,34 @@ class NumpyBackend:
     fmin = staticmethod(np.minimum)
     fmax = staticmethod(np.maximum)
     logical_and = staticmethod(np.logical_and)
+    logical_or = staticmethod(np.logical_or)
+
+    @staticmethod
+    def cos_atan(x):
+        """cos(atan(x)) = 1 / sqrt(1 + x^2), without the two transcendental functions."""
+        return 1.0 / np.sqrt(1.0 + x * x)
+
+    @staticmethod
+    def any(cond) -> bool:
+        """Whether any element meets ``cond``: equations skip a case no element is in (CasADi: always True)."""
+        return bool(np.any(cond))
 
     @staticmethod
     def where(cond, a, b):
+        if type(cond) is np.bool_:  # one point (scalars): a Python choice, np.where costs microseconds
+            return a if cond else b
         return np.where(cond, a, b)
 
     @staticmethod
     def sign_nz(x):
         """sign(x) with sign(0) = +1: the guard used in the Magic Formula's epsilon terms."""
+        if type(x) is np.float64:
+            return -1.0 if x < 0 else 1.0
         return np.where(x < 0, -1.0, 1.0)
 
     @staticmethod
     def clip(x, lo, hi):
         return np.minimum(np.maximum(x, lo), hi)
-
-    @staticmethod
-    def zeros_like(x):
-        return np.zeros_like(x, dtype=float)
 
     @staticmethod
     def broadcast(*values):
@@ -65,7 +83,7 @@ class NumpyBackend:
         """Iterate ``x = step(x)`` until every element changes by at most ``tol``.
 
         Returns ``(x, aux)`` where ``step`` returns ``(x_new, aux)``. Raises if not converged in
-        ``max_iter`` iterations (never returns an unconverged value silently).
+        ``max_iter`` iterations (never returns an unconverged value silently): ModelInputError.
         """
         x = x0
         for _ in range(max_iter):
@@ -74,17 +92,47 @@ class NumpyBackend:
             x = x_new
             if done:
                 return x, aux
-        raise ArithmeticError(f"fixed-point iteration did not converge in {max_iter} iterations")
+        raise ModelInputError(f"fixed-point iteration did not converge in {max_iter} iterations: inputs far outside "
+                              "the range the model was fitted for?")
 
     @staticmethod
-    def solve_bracketed(fun, a, b, fa, fb, xtol, widen=None, max_iter=100, unrolled=None):
+    def first_sign_change(fun, x0, f0, scale, offsets, active):
+        """Scan ``x0 + offsets[k] scale`` (increasing offsets) for the first point where ``fun`` is <= 0, on the elements
+        ``active`` (where ``f0 = fun(x0) > 0``). ``fun(x, idx)`` evaluates the elements ``idx``.
+
+        Returns ``(found, lo, hi, f_lo, f_hi)``: where found, [lo, hi] is the first grid interval with a sign
+        change and f_lo > 0 >= f_hi; elsewhere lo = hi = x0 and f_lo = f_hi = 0.
+        """
+        x0, f0, scale = (np.atleast_1d(np.array(v, dtype=float)) for v in np.broadcast_arrays(x0, f0, scale))
+        lo, hi = x0.copy(), x0.copy()
+        f_lo, f_hi = np.zeros_like(x0), np.zeros_like(x0)
+        found = np.zeros(x0.shape, dtype=bool)
+        idx = np.nonzero(np.broadcast_to(active, x0.shape) & (f0 > 0))
+        x_prev, f_prev = x0[idx], f0[idx]
+        for offset in offsets:
+            if idx[0].size == 0:
+                break
+            x = x0[idx] + offset * scale[idx]
+            f = fun(x, idx)
+            hit = f <= 0
+            hit_idx = tuple(i[hit] for i in idx)
+            lo[hit_idx], hi[hit_idx], f_lo[hit_idx], f_hi[hit_idx] = x_prev[hit], x[hit], f_prev[hit], f[hit]
+            found[hit_idx] = True
+            idx = tuple(i[~hit] for i in idx)
+            x_prev, f_prev = x[~hit], f[~hit]
+        return found, lo, hi, f_lo, f_hi
+
+    @staticmethod
+    def solve_bracketed(fun, a, b, fa, fb, xtol, widen=None, max_iter=100, unrolled=None, ftol=0.0):
         """Root of ``fun`` between ``a`` and ``b`` (``fa``, ``fb`` of opposite sign or zero), element-wise.
 
         Dekker's method: secant steps from the best point ``b``, bisection whenever the secant leaves
         the half of the bracket next to ``b``, steps of at least xtol/2; the bracket [a, b] always holds a
         sign change. ``fun(x, idx)``
-        evaluates the elements ``idx`` (a tuple of index arrays) at ``x``. Iterates until |b - a| <= xtol
-        or f(b) = 0 for every element. ``widen(a, b, fb, idx) -> b'``, if given, first moves ``b`` (only where
+        evaluates the elements ``idx`` (a tuple of index arrays) at ``x``. Iterates until |b - a| <= xtol (plus
+        4 ulp of b, for roots far from zero)
+        or |f(b)| <= ``ftol`` (a scalar or one value per element) for every element. ``idx`` is None while every
+        element is still iterating (no gathering). ``widen(a, b, fb, idx) -> b'``, if given, first moves ``b`` (only where
         fa and fb have the same non-zero sign, at most ``max_iter`` times) until the bracket holds a root;
         elements still without a sign change return the end with the smaller |f|.
         """
@@ -100,19 +148,24 @@ class NumpyBackend:
         swap = np.abs(fa) < np.abs(fb)
         a, b, fa, fb = np.where(swap, b, a), np.where(swap, a, b), np.where(swap, fb, fa), np.where(swap, fa, fb)
         c, fc = a.copy(), fa.copy()
-        active = (fa * fb < 0) & (np.abs(b - a) > xtol)
+        ftol = np.broadcast_to(ftol, a.shape)
+        active = (fa * fb < 0) & (np.abs(b - a) > xtol + _ULP4 * np.abs(b)) & (np.abs(fb) > ftol)
         for _ in range(max_iter):
             if not active.any():
                 break
-            idx = np.nonzero(active)
-            ai, bi, ci, fai, fbi, fci = a[idx], b[idx], c[idx], fa[idx], fb[idx], fc[idx]
+            idx = None if active.all() else np.nonzero(active)
+            if idx is None:
+                ai, bi, ci, fai, fbi, fci, ftoli = a, b, c, fa, fb, fc, ftol
+            else:
+                ai, bi, ci, fai, fbi, fci, ftoli = a[idx], b[idx], c[idx], fa[idx], fb[idx], fc[idx], ftol[idx]
             mid = 0.5 * (ai + bi)
             secant = bi - fbi * (bi - ci) / (fbi - fci)
             inside = (fbi != fci) & ((secant - bi) * (secant - mid) <= 0)
             new = np.where(inside, secant, mid)
             # a step shorter than xtol/2 is lengthened to xtol/2 towards a: once b is that close to the
             # root the next point lands beyond it and the bracket collapses (as in Brent's method)
-            new = np.where(np.abs(new - bi) < 0.5 * xtol, bi + 0.5 * xtol * np.sign(ai - bi), new)
+            tol = xtol + _ULP4 * np.abs(bi)
+            new = np.where(np.abs(new - bi) < 0.5 * tol, bi + 0.5 * tol * np.sign(ai - bi), new)
             fnew = fun(new, idx)
             keep_a = fnew * fai < 0
             ai, fai = np.where(keep_a, ai, bi), np.where(keep_a, fai, fbi)
@@ -121,11 +174,16 @@ class NumpyBackend:
             swap = np.abs(fai) < np.abs(fbi)
             ai, bi = np.where(swap, bi, ai), np.where(swap, ai, bi)
             fai, fbi = np.where(swap, fbi, fai), np.where(swap, fai, fbi)
-            a[idx], b[idx], c[idx], fa[idx], fb[idx], fc[idx] = ai, bi, ci, fai, fbi, fci
-            active[idx] = (fbi != 0) & (np.abs(bi - ai) > xtol)
+            still = (np.abs(fbi) > ftoli) & (np.abs(bi - ai) > xtol + _ULP4 * np.abs(bi))
+            if idx is None:
+                a, b, c, fa, fb, fc, active = ai, bi, ci, fai, fbi, fci, still
+            else:
+                a[idx], b[idx], c[idx], fa[idx], fb[idx], fc[idx] = ai, bi, ci, fai, fbi, fci
+                active[idx] = still
         else:
             if active.any():
-                raise ArithmeticError(f"bracketed root search did not converge in {max_iter} iterations")
+                raise ModelInputError(f"bracketed root search did not converge in {max_iter} iterations: inputs far "
+                                      "outside the range the model was fitted for?")
         return np.where(np.abs(fb) <= np.abs(fa), b, a).reshape(shape)
 
 
@@ -140,6 +198,7 @@ class CasadiBackend:
     ========  =====================================  ==================================
     |x|        sqrt(x^2 + eps^2)                      eps (at x = 0)
     sign(x)    x / sqrt(x^2 + eps^2)                  1 at x = 0, < 0.5 (eps/x)^2 for |x| >> eps
+    sign_nz    (x+eps) / sqrt((x+eps)^2 + eps^2)      0.29 at x = 0, < (eps/x)^2 for |x| >> eps
     min(a,b)   (a + b - sqrt((a - b)^2 + eps^2)) / 2  eps / 2 (at a = b)
     max(a,b)   (a + b + sqrt((a - b)^2 + eps^2)) / 2  eps / 2 (at a = b)
     ========  =====================================  ==================================
@@ -159,8 +218,9 @@ class CasadiBackend:
         self.smooth = smooth
         self.sin, self.cos, self.tan = ca.sin, ca.cos, ca.tan
         self.atan, self.acos = ca.atan, ca.acos
+        self.acosh, self.cosh = ca.acosh, ca.cosh
         self.sqrt, self.exp = ca.sqrt, ca.exp
-        self.logical_and = ca.logic_and
+        self.logical_and, self.logical_or = ca.logic_and, ca.logic_or
         if smooth is None:
             self.abs, self.sign = ca.fabs, ca.sign
             self.fmin, self.fmax = ca.fmin, ca.fmax
@@ -176,17 +236,28 @@ class CasadiBackend:
     def log10(self, x):
         return self.ca.log(x) / np.log(10.0)
 
+    def cos_atan(self, x):
+        """cos(atan(x)) = 1 / sqrt(1 + x^2)."""
+        return 1.0 / self.ca.sqrt(1.0 + x * x)
+
+    @staticmethod
+    def any(cond) -> bool:
+        """True: a symbolic graph keeps every case."""
+        return True
+
     def where(self, cond, a, b):
         return self.ca.if_else(cond, a, b)
 
     def sign_nz(self, x):
-        return self.ca.if_else(x < 0, -1.0, 1.0) if self.smooth is None else self.sign(x)
+        """sign(x) with sign(0) = +1; smooth: (x + eps)/sqrt((x + eps)^2 + eps^2), 0.71 at x = 0, so that a guarded
+        denominator x + 1e-6 sign_nz(x) stays positive where x and its numerator vanish together (zero load)."""
+        if self.smooth is None:
+            return self.ca.if_else(x < 0, -1.0, 1.0)
+        shifted = x + self.smooth
+        return shifted / self.ca.sqrt(shifted * shifted + self.smooth**2)
 
     def clip(self, x, lo, hi):
         return self.fmin(self.fmax(x, lo), hi)
-
-    def zeros_like(self, x):
-        return 0 * x
 
     @staticmethod
     def broadcast(*values):
@@ -200,9 +271,27 @@ class CasadiBackend:
             x, aux = step(x)
         return x, aux
 
-    def solve_bracketed(self, fun, a, b, fa, fb, xtol, widen=None, max_iter=100, unrolled=40):
+    def first_sign_change(self, fun, x0, f0, scale, offsets, active):
+        """The scan of :meth:`NumpyBackend.first_sign_change`, one unrolled evaluation per offset."""
+        ca = self.ca
+        found = ca.logic_and(active, f0 <= 0) * 0  # all False, as an expression
+        lo = hi = x0
+        f_lo = f_hi = 0 * f0
+        x_prev, f_prev = x0, f0
+        searching = ca.logic_and(active, f0 > 0)
+        for offset in offsets:
+            x = x0 + offset * scale
+            f = fun(x, None)
+            hit = ca.logic_and(ca.logic_and(searching, ca.logic_not(found)), f <= 0)
+            lo, hi = ca.if_else(hit, x_prev, lo), ca.if_else(hit, x, hi)
+            f_lo, f_hi = ca.if_else(hit, f_prev, f_lo), ca.if_else(hit, f, f_hi)
+            found = ca.logic_or(found, hit)
+            x_prev, f_prev = x, f
+        return found, lo, hi, f_lo, f_hi
+
+    def solve_bracketed(self, fun, a, b, fa, fb, xtol, widen=None, max_iter=100, unrolled=40, ftol=0.0):
         """Up to 8 widening steps, then ``unrolled`` steps of Dekker's method (see
-        :meth:`NumpyBackend.solve_bracketed`)."""
+        :meth:`NumpyBackend.solve_bracketed`; ``ftol`` is not needed: the final Newton step polishes)."""
         ca = self.ca
         for _ in range(8 if widen is not None else 0):
             same_sign = fa * fb > 0
@@ -217,12 +306,13 @@ class CasadiBackend:
         a, b, fa, fb = ordered(a, b, fa, fb)
         c, fc = a, fa
         for _ in range(unrolled):
-            open_ = ca.logic_and(fa * fb < 0, ca.fabs(b - a) > xtol)
+            tol = xtol + _ULP4 * ca.fabs(b)
+            open_ = ca.logic_and(fa * fb < 0, ca.fabs(b - a) > tol)
             mid = 0.5 * (a + b)
             secant = b - fb * (b - c) / (fb - fc)
             inside = ca.logic_and(fb != fc, (secant - b) * (secant - mid) <= 0)
             new = ca.if_else(inside, secant, mid)
-            new = ca.if_else(ca.fabs(new - b) < 0.5 * xtol, b + 0.5 * xtol * ca.sign(a - b), new)
+            new = ca.if_else(ca.fabs(new - b) < 0.5 * tol, b + 0.5 * tol * ca.sign(a - b), new)
             fnew = fun(new, None)
             keep_a = fnew * fa < 0
             a2, fa2 = ca.if_else(keep_a, a, b), ca.if_else(keep_a, fa, fb)

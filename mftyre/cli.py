@@ -9,6 +9,10 @@ eval FILE.tir [sweeps] [options]
                             evaluate the steady-state model on a grid of inputs; prints a table, optionally
                             writes a CSV file (``--csv``) and a PNG plot (``--plot``). See :func:`_add_eval`.
 
+Every command follows the output rule of :mod:`mftyre.files` (one home, :func:`mftyre.files.check_outputs`,
+checked before any work): an input is never overwritten, two outputs are never the same file, and an existing
+output file (or a non-empty output folder) is replaced only with ``--overwrite``; a refusal exits with status 2.
+
 Adding a command: write ``_add_<name>(subparsers)`` that creates the sub-parser and sets
 ``func=<handler>`` (a function ``(args) -> int``), and call it from :func:`build_parser`.
 """
@@ -26,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .tir import same_file
+from .files import OutputError, check_outputs
 
 __all__ = ["main", "build_parser"]
 
@@ -92,7 +96,9 @@ _EXAMPLES = {"fz": "3kN,5kN", "kappa": "-10%:10%:21", "alpha": "-10deg:10deg:21"
              "phit": "0/m,0.1/m", "vx": "30km/h,60km/h", "p": "1.8bar,2.2bar", "omega": "100rpm,200rpm"}
 #: Outputs printed when --outputs is not given.
 _DEFAULT_OUTPUTS = ("fx", "fy", "mz", "mx", "my", "rl")
-_NUMBER = re.compile(r"\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*(.*?)\s*$")
+_NUMBER = re.compile(r"\s*([+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?)\s*(.*?)\s*$")  # linear time
+#: Most points `mftyre eval` evaluates in one call (a range's COUNT and the whole grid; about 2 GB of outputs).
+MAX_POINTS = 10_000_000
 
 
 @dataclass(frozen=True)
@@ -145,9 +151,12 @@ def parse_sweep(name: str, text: str) -> Sweep:
         if len(parts) != 3:
             raise ValueError(f"{text!r} has {len(parts)} ':'-separated fields; a range is START:STOP:COUNT")
         count_text = parts[2].strip()
-        if not re.fullmatch(r"\d+", count_text) or int(count_text) < 2:
-            raise ValueError(f"range {text!r}: COUNT must be an integer >= 2, got {count_text!r} "
+        if not re.fullmatch(r"\d{1,30}", count_text) or int(count_text) < 2:
+            raise ValueError(f"range {text[:60]!r}: COUNT must be an integer >= 2, got {count_text[:30]!r} "
                              "(START:STOP:COUNT gives COUNT equally spaced values from START to STOP)")
+        if int(count_text) > MAX_POINTS:
+            raise ValueError(f"range {text!r}: COUNT {int(count_text):,} is more than the {MAX_POINTS:,} points "
+                             "mftyre eval evaluates in one call; for more, call MFModel.evaluate from Python in chunks")
         items = [quantity(parts[0]), quantity(parts[1])]
         count = int(count_text)
     else:
@@ -182,6 +191,30 @@ def _sweep_type(name: str):
             raise argparse.ArgumentTypeError(str(exc)) from None
 
     convert.__name__ = f"{name} sweep"
+    return convert
+
+
+def number_type(low: float | None = None, high: float | None = None, *, integer: bool = False,
+                open_low: bool = False, open_high: bool = False):
+    """An argparse ``type``: a finite number (an integer when ``integer``) within ``low``..``high`` (bounds
+    excluded when ``open_low``/``open_high``), else an error naming what was expected."""
+    lo = "" if low is None else ("(" if open_low else "[") + f"{low:g}"
+    hi = "" if high is None else f"{high:g}" + (")" if open_high else "]")
+    expected = ("an integer" if integer else "a finite number") + (f" in {lo or '(-inf'}, {hi or 'inf)'}"
+                                                                  if lo or hi else "")
+
+    def convert(text: str):
+        try:
+            value = int(text) if integer else float(text)
+        except ValueError:
+            value = None
+        if value is None or not math.isfinite(value) \
+                or (low is not None and (value < low or (open_low and value == low))) \
+                or (high is not None and (value > high or (open_high and value == high))):
+            raise argparse.ArgumentTypeError(f"expected {expected}, got {text[:40]!r}")
+        return value
+
+    convert.__name__ = "integer" if integer else "number"
     return convert
 
 
@@ -284,6 +317,7 @@ command line.""",
     out.add_argument("--csv", metavar="OUT.csv", help="write the table as CSV (column names 'name [unit]')")
     out.add_argument("--plot", metavar="OUT.png", help="draw the outputs against the swept input, save as PNG")
     out.add_argument("--x", choices=tuple(_SWEEPS), help="swept input for the plot's x axis")
+    out.add_argument("--overwrite", action="store_true", help="replace existing --csv/--plot files")
     out.add_argument("-q", "--quiet", action="store_true", help="do not print the table")
     p.set_defaults(func=_cmd_eval, parser=p, sweep_order=None)
 
@@ -296,12 +330,15 @@ def _cmd_eval(args) -> int:
     parser = args.parser
     given = [n for n in (args.sweep_order or [])]
     swept = [n for n in given if getattr(args, n).values.size > 1]
-    src = Path(args.file)
-    for opt, target in (("--csv", args.csv), ("--plot", args.plot)):
-        if target is not None and same_file(Path(target), src):
-            parser.error(f"argument {opt}: {target!r} is the input .tir file; choose another output file")
-    if args.csv is not None and args.plot is not None and same_file(Path(args.csv), Path(args.plot)):
-        parser.error(f"argument --plot: {args.plot!r} is also the --csv file; choose two different files")
+    try:
+        check_outputs({"--csv": args.csv, "--plot": args.plot}, {"FILE.tir": args.file}, overwrite=args.overwrite)
+    except OutputError as exc:
+        parser.error(str(exc))
+    points = math.prod(getattr(args, n).values.size for n in swept)
+    if points > MAX_POINTS:
+        parser.error(f"the grid of {' x '.join(str(getattr(args, n).values.size) for n in swept)} = {points:,} points "
+                     f"({', '.join('--' + n for n in swept)}) is more than the {MAX_POINTS:,} points mftyre eval "
+                     "evaluates in one call; for more, call MFModel.evaluate from Python in chunks")
     if args.plot is not None and not swept:
         parser.error("argument --plot: nothing to plot; sweep at least one input over several values "
                      "(e.g. --alpha -10deg:10deg:41)")
@@ -324,12 +361,12 @@ def _cmd_eval(args) -> int:
         table_cols = args.outputs or _DEFAULT_OUTPUTS
         if not args.quiet:
             print(_eval_header(args, model, given, swept, shape))
-            print(_format_table(_eval_frame(args, out, swept, shape, table_cols)))
+            print(_format_table(_eval_frame(args, out, swept, shape, table_cols, model)))
         for target in (args.csv, args.plot):
             if target is not None:
                 Path(target).parent.mkdir(parents=True, exist_ok=True)
         if args.csv is not None:
-            frame = _eval_frame(args, out, swept, shape, args.outputs or tuple(out.keys()))
+            frame = _eval_frame(args, out, swept, shape, args.outputs or tuple(out.keys()), model)
             frame.to_csv(args.csv, index=False)
             print(f"wrote {args.csv} ({len(frame)} rows, {frame.shape[1]} columns)", file=sys.stderr)
         if args.plot is not None:
@@ -365,8 +402,18 @@ def _eval_grid(args, swept: list[str], prm) -> tuple[dict, tuple[int, ...]]:
     return inputs, shape
 
 
-def _eval_frame(args, out, swept: list[str], shape, outputs):
-    """Swept inputs as given, then the outputs; column names 'name [SI unit]'."""
+def _used(args, model, name, values):
+    """The values of input ``name`` the model evaluated (saturated to the .tir range unless --no-limits)."""
+    from .model import INPUT_RANGES
+
+    if args.no_limits or name not in INPUT_RANGES:
+        return np.asarray(values, dtype=float)
+    return model.used_input(name, values)
+
+
+def _eval_frame(args, out, swept: list[str], shape, outputs, model=None):
+    """Swept inputs as given (and as used, where the .tir ranges saturated them), then the outputs; column names
+    'name [SI unit]'."""
     import pandas as pd
 
     from .model import OUTPUT_UNITS
@@ -376,6 +423,9 @@ def _eval_frame(args, out, swept: list[str], shape, outputs):
     grids = np.meshgrid(*(getattr(args, s).values for s in swept), indexing="ij") if swept else []
     for name, grid in zip(swept, grids):
         cols[f"{name} [{_SWEEPS[name][0]}]"] = grid.ravel()
+        used = grid.ravel() if model is None else _used(args, model, name, grid.ravel())
+        if not np.array_equal(used, grid.ravel()) and name not in outputs:
+            cols[f"{name}_used [{_SWEEPS[name][0]}]"] = used
     for name in outputs:
         label = f"{name}_used" if name in swept else name
         cols[f"{label} [{OUTPUT_UNITS[name][0]}]"] = np.broadcast_to(out[name], shape).reshape(n)
@@ -384,6 +434,11 @@ def _eval_frame(args, out, swept: list[str], shape, outputs):
 
 def _format_table(frame) -> str:
     return frame.to_string(index=False, float_format=lambda v: f"{v:.6g}")
+
+
+def _used_note(args, model, name, value) -> str:
+    used = float(_used(args, model, name, value))
+    return "" if used == value else f" (used: {used:g}, the .tir range limit)"
 
 
 def _eval_header(args, model, given, swept, shape) -> str:
@@ -395,13 +450,14 @@ def _eval_header(args, model, given, swept, shape) -> str:
         unit = _SWEEPS[name][0]
         sweep = getattr(args, name)
         if sweep is not None:
-            fixed.append(f"{name} = {sweep.values[0]:g}" + ("" if unit == "-" else f" {unit}"))
+            fixed.append(f"{name} = {sweep.values[0]:g}" + ("" if unit == "-" else f" {unit}")
+                         + _used_note(args, model, name, sweep.values[0]))
         elif name == "fz":
             fixed.append(f"fz = {prm.FNOMIN:g} N (FNOMIN)")
         elif name == "vx":
             fixed.append(f"vx = {prm.LONGVL:g} m/s (LONGVL)")
         elif name == "p":
-            fixed.append(f"p = {prm.INFLPRES:g} Pa (INFLPRES)")
+            fixed.append(f"p = {prm.INFLPRES:g} Pa (INFLPRES)" + _used_note(args, model, name, prm.INFLPRES))
         elif name == "omega":
             fixed.append("omega from kappa and vx")
         else:
@@ -429,8 +485,11 @@ def _eval_plot(args, model, out, swept, shape, outputs) -> None:
     others = [n for n in swept if n != xname]
     other_shape = tuple(shape[swept.index(n)] for n in others)
     combos = list(np.ndindex(*other_shape)) if others else [()]
-    labels = [", ".join(getattr(args, n).label(getattr(args, n).values[i]) for n, i in zip(others, c))
-              for c in combos]
+    def legend(n, value):  # the value used, and the one asked for where the .tir range saturated it
+        sweep, used = getattr(args, n), float(_used(args, model, n, value))
+        return sweep.label(used) + ("" if used == value else f" (asked {sweep.label(value).split(' = ')[1]})")
+
+    labels = [", ".join(legend(n, getattr(args, n).values[i]) for n, i in zip(others, c)) for c in combos]
 
     nout = len(outputs)
     ncols = 1 if nout <= 2 else 2

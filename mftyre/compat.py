@@ -57,9 +57,12 @@ def mfeval(tir, inputs, use_mode: int, *, turn_slip_form: str = "published") -> 
             result[:, j] = out[_FROM_OUTPUT[name]]
     result[:, MFEVAL_COLUMNS.index("2a")] = 2.0 * out["a"]
     result[:, MFEVAL_COLUMNS.index("2b")] = 2.0 * out["b"]
-    # MFeval reports a placeholder deflection of 1e-6 m where the tyre carries no load
-    rho_col = MFEVAL_COLUMNS.index("rho")
-    result[:, rho_col] = np.where(out["fz"] == 0, 1e-6, result[:, rho_col])
+    # MFeval's MF 6.1/6.2 branch reports a placeholder deflection of 1e-6 m where the tyre carries no load; its
+    # MF 5.2 branch reports the deflection it computes (at FZMIN with limit checks, FZMIN/Cz ~ 2.16e-4 m for
+    # its MF 5.2 sample file)
+    if prm.version != "52":
+        rho_col = MFEVAL_COLUMNS.index("rho")
+        result[:, rho_col] = np.where(out["fz"] == 0, 1e-6, result[:, rho_col])
     # "instantaneous" cornering stiffness: forward difference over consecutive rows of the call
     with np.errstate(all="ignore"):
         sign = -1.0 if model.mirrored else 1.0

@@ -29,7 +29,9 @@ constant (``constants`` of a TYDEX file, ``defaults=`` of the readers). Measured
 absent or NaN in rows where they were not measured.
 
 CSV (:func:`read_csv`)
-    Comma separated, one header row. Columns with canonical names are read as SI as they are. Otherwise pass
+    Comma separated, UTF-8 (a byte-order mark allowed), one header row, then one row per sample; an empty
+    field or ``nan`` is "not measured". Column names are matched to channels case-insensitively; other columns
+    (e.g. ``SWEEP``, ``TEST``) are kept as they are. Columns with canonical names are read as SI. Otherwise pass
     ``columns={"file column": "CHANNEL"}`` and ``units={"CHANNEL": "unit"}`` (e.g. ``"deg"``, ``"kN"``,
     ``"kPa"``, ``"km/h"``, ``"%"``, ``"N*m"``, ``"rpm"``, ``"mm"``); see :data:`UNITS`.
 
@@ -60,12 +62,18 @@ Description and Reference Manual, Release 1.3*, 1997) used for steady-state meas
 
 Every malformed input raises :class:`mftyre.errors.DataError` naming the file, the line (and column or
 channel) and the reason: missing channel, unknown unit, non-numeric value, wrong number of values, NaN in a
-required channel.
+required channel, an infinite value (``inf``, ``1e400``) in any channel, two columns for one channel, no data
+rows. Only regular files are read (a FIFO or a device is refused), up to :data:`mftyre.files.DATA_MAX_BYTES`
+(``max_bytes=`` of the readers). Both readers parse the samples with pandas' C parser (about the time of a plain
+``pandas.read_csv`` of the file; ``benchmarks/bench_data.py``).
 """
 from __future__ import annotations
 
+import csv
 import datetime as _dt
+import io
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -73,6 +81,7 @@ import numpy as np
 import pandas as pd
 
 from .errors import DataError
+from .files import DATA_MAX_BYTES, check_outputs, open_user_file, write_atomically
 from .tir import UNIT_FACTORS
 
 __all__ = [
@@ -169,7 +178,7 @@ class TyreData:
                 self.frame[name] = 0.0
                 self.history.append(f"{name} absent: set to 0")
         for name in CHANNELS:
-            if name in self.frame.columns:
+            if name in self.frame.columns and not pd.api.types.is_float_dtype(self.frame[name].dtype):
                 col = pd.to_numeric(self.frame[name], errors="coerce").astype(float)
                 bad = col.isna() & self.frame[name].notna()
                 if bad.any():
@@ -177,11 +186,7 @@ class TyreData:
                     raise DataError(f"{where}: row {row}: channel {name}: non-numeric value "
                                     f"{self.frame[name].iloc[row]!r}")
                 self.frame[name] = col
-        for name in (*REQUIRED, *_ZERO_DEFAULT):
-            nan = self.frame[name].isna().to_numpy()
-            if nan.any():
-                raise DataError(f"{where}: row {int(np.flatnonzero(nan)[0])}: channel {name}: NaN in a required "
-                                f"channel ({int(nan.sum())} rows)")
+        _check_values(self.frame, lambda row: f"{where}: row {row}")
 
     # -- table access --------------------------------------------------------------------------------
     def __len__(self) -> int:
@@ -232,52 +237,105 @@ class TyreData:
 
 
 # ------------------------------------------------------------------------------------------------ CSV
+#: Text read as "not measured" (NaN) in CSV and TYDEX data; any other non-number is an error.
+_NAN_TEXT = ["", "nan", "NaN", "NAN"]
+
+
 def read_csv(path, *, columns: dict | None = None, units: dict | None = None, defaults: dict | None = None,
-             tyre: str = "") -> TyreData:
+             tyre: str = "", max_bytes: int = DATA_MAX_BYTES) -> TyreData:
     """Read a CSV file into :class:`TyreData`.
 
-    ``columns``: file column -> channel for columns not named canonically; ``units``: channel -> unit of the
-    file (SI when absent); ``defaults``: channel -> constant SI value for a required channel the file lacks
-    (e.g. ``{"P": 2.2e5, "VX": 16.7}``).
+    Comma separated, one header row (UTF-8, a byte-order mark allowed), one row per sample. ``columns``: file
+    column -> channel for columns not named canonically; ``units``: channel -> unit of the file (SI when
+    absent); ``defaults``: channel -> constant SI value for a required channel the file lacks (e.g.
+    ``{"P": 2.2e5, "VX": 16.7}``). An empty field or ``nan`` is "not measured" (an error in a required
+    channel); infinite values (``inf``, ``1e400``) are errors in every channel; two columns for one channel are
+    an error. Files larger than ``max_bytes`` are refused.
     """
     path = Path(path)
-    try:
-        raw = pd.read_csv(path, dtype=str, skipinitialspace=True, keep_default_na=False)
-    except (OSError, pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise DataError(f"{path}: cannot read as CSV: {exc}") from exc
-    raw.columns = [str(c).strip() for c in raw.columns]
-    mapping = {c: c.upper() for c in raw.columns if c.upper() in CHANNELS}
+    with open_user_file(path, max_bytes=max_bytes, what="CSV data file", error=DataError) as fh:
+        header = _csv_header(fh.readline(), path)
+        fh.seek(0)
+        try:
+            raw = pd.read_csv(fh, skipinitialspace=True, keep_default_na=False, na_values=_NAN_TEXT,
+                              encoding="utf-8-sig")
+        except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, ValueError) as exc:
+            raise DataError(f"{path}: cannot read as CSV: {exc}") from None
+    if len(raw.columns) != len(header):  # pragma: no cover - pandas and the csv module agree on the header
+        raise DataError(f"{path}: line 1: cannot read the header")
+    raw.columns = header
+    if len(raw) == 0:
+        raise DataError(f"{path}: no data rows: expected a header line followed by one line per sample")
+    mapping = {c: c.upper() for c in header if c.upper() in CHANNELS}
     for col, ch in (columns or {}).items():
-        if col not in raw.columns:
+        if col not in header:
             raise DataError(f"{path}: line 1: column {col!r} (for {ch}) not in the header; columns are "
-                            f"{', '.join(raw.columns)}")
+                            f"{', '.join(header)}")
         if ch.upper() not in CHANNELS:
             raise DataError(f"{path}: unknown channel {ch!r} for column {col!r}; channels: {', '.join(CHANNELS)}")
         mapping[col] = ch.upper()
+    _refuse_duplicates(header, mapping, path)
     units = {k.upper(): v for k, v in (units or {}).items()}
-    frame = pd.DataFrame(index=raw.index)
-    for col in raw.columns:
+    columns_out = {}
+    column_of = {}
+    for i, col in enumerate(header):
         ch = mapping.get(col)
-        text = raw[col].str.strip()
-        values = pd.to_numeric(text.replace({"": "nan", "NaN": "nan", "nan": "nan"}), errors="coerce")
-        bad = values.isna() & ~text.str.lower().isin(["", "nan"])
+        series = raw.iloc[:, i]
         if ch is None:
-            frame[col] = values if not bad.any() else raw[col]
+            columns_out[col] = series
             continue
-        if bad.any():
-            row = int(np.flatnonzero(bad.to_numpy())[0])
-            raise DataError(f"{path}: line {row + 2}: column {col!r} ({ch}): non-numeric value {text.iloc[row]!r}")
+        values = _numeric_column(series, lambda row, text: f"{path}: line {row + 2}: column {col!r} ({ch}): "
+                                                           f"non-numeric value {text!r}")
         factor = 1.0
         if ch in units:
             try:
                 factor = unit_to_si(ch, units[ch])
             except ValueError as exc:
                 raise DataError(f"{path}: column {col!r}: {exc}") from None
-        frame[ch] = values.to_numpy(float) * factor
+        columns_out[ch] = values * factor if factor != 1.0 else values
+        column_of[ch] = col
+    frame = pd.DataFrame(columns_out, copy=False)
     _apply_defaults(frame, defaults, path)
-    _check_required(frame, path, lambda row: f"line {row + 2}")
+    _check_required(frame, path, lambda row: f"{path}: line {row + 2}", column_of)
     unit_record = {ch: units.get(ch, _SI_NAME[CHANNELS[ch][0]]) for ch in CHANNELS if ch in frame.columns}
     return TyreData(frame, tyre=tyre or path.stem, source=str(path), units=unit_record)
+
+
+def _csv_header(first: bytes, path) -> list[str]:
+    """The column names of the first line, stripped (a UTF-8 byte-order mark removed)."""
+    try:
+        text = first.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise DataError(f"{path}: line 1: cannot read as CSV: {exc}") from None
+    names = next(csv.reader([text.rstrip("\r\n")]), [])
+    if not any(n.strip() for n in names):
+        raise DataError(f"{path}: line 1: no header: expected column names such as FZ,SA,SL,VX,P")
+    return [n.strip() for n in names]
+
+
+def _refuse_duplicates(header: list[str], mapping: dict, path) -> None:
+    seen: dict[str, str] = {}
+    for col in header:
+        ch = mapping.get(col, col)
+        if ch in seen:
+            what = f"column {col!r}" + (f" ({ch})" if ch != col else "")
+            also = f" (also as column {seen[ch]!r})" if seen[ch] != col else ""
+            raise DataError(f"{path}: line 1: {what} appears twice{also}: expected one column per channel")
+        seen[ch] = col
+
+
+def _numeric_column(series: pd.Series, where) -> np.ndarray:
+    """Float values of a column pandas has read; DataError ``where(row, text)`` at the first non-number
+    (Fortran exponents ``1.0D+3`` are read as numbers)."""
+    if pd.api.types.is_numeric_dtype(series.dtype) and not pd.api.types.is_bool_dtype(series.dtype):
+        return series.to_numpy(dtype=float)
+    text = series.astype(str).str.strip()
+    values = pd.to_numeric(text.str.replace(r"(?<=[0-9.])[dD](?=[+-]?[0-9])", "e", regex=True), errors="coerce")
+    bad = values.isna() & series.notna() & ~text.isin(_NAN_TEXT)
+    if bad.any():
+        row = int(np.flatnonzero(bad.to_numpy())[0])
+        raise DataError(where(row, text.iloc[row]))
+    return values.to_numpy(dtype=float)
 
 
 def _apply_defaults(frame, defaults, path):
@@ -289,20 +347,32 @@ def _apply_defaults(frame, defaults, path):
             frame[ch] = float(value)
 
 
-def _check_required(frame, path, where):
+def _check_required(frame, path, locate, column_of=None):
     missing = [c for c in REQUIRED if c not in frame.columns]
     if missing:
         raise DataError(f"{path}: missing channel(s) {', '.join(missing)} (required: {', '.join(REQUIRED)}; give "
                         f"a column map, or `defaults=` for a constant)")
-    _check_finite(frame, lambda row: f"{path}: {where(row)}")
+    _check_values(frame, locate, column_of)
 
 
-def _check_finite(frame, locate):
-    """DataError at the first NaN of a required channel; ``locate(row)`` says where that row is in the file."""
-    for ch in (*REQUIRED, *(c for c in _ZERO_DEFAULT if c in frame.columns)):
-        nan = np.isnan(frame[ch].to_numpy(float))
-        if nan.any():
-            raise DataError(f"{locate(int(np.flatnonzero(nan)[0]))}: channel {ch}: NaN in a required channel")
+def _check_values(frame, locate, column_of=None):
+    """DataError at the first value no measurement can have: NaN or +-inf in a required channel (and in IA,
+    PHIT when present), +-inf in any other channel (NaN there means "not measured"). ``locate(row)`` says
+    where that row is; ``column_of``: channel -> the file's column name, when they differ."""
+    for ch in CHANNELS:
+        if ch not in frame.columns:
+            continue
+        values = frame[ch].to_numpy(dtype=float)
+        required = ch in REQUIRED or ch in _ZERO_DEFAULT
+        bad = ~np.isfinite(values) if required else np.isinf(values)
+        if not bad.any():
+            continue
+        row = int(np.flatnonzero(bad)[0])
+        col = (column_of or {}).get(ch, ch)
+        what = ("NaN in a required channel" if np.isnan(values[row])
+                else f"{values[row]} (infinite, or beyond the float range such as 1e400): expected a finite number")
+        column = f"file column {col!r}, " if col != ch else ""
+        raise DataError(f"{locate(row)}: channel {ch}: {what} ({column}{int(bad.sum())} rows)")
 
 
 # ---------------------------------------------------------------------------------------------- TYDEX
@@ -324,83 +394,66 @@ def _fixed_fields(line: str):
     return line[:10].strip(), line[10:40].strip(), line[40:50].strip(), line[50:].strip()
 
 
-def read_tydex(path, *, defaults: dict | None = None) -> TyreData:
-    """Read a TYDEX ``.tdx`` file (the subset described in the module docstring) into :class:`TyreData`."""
+_DATA_KEY = re.compile(rb"[ \t]*\*\*MEASURDATA(?=\s|\Z)", re.I)
+
+
+def read_tydex(path, *, defaults: dict | None = None, max_bytes: int = DATA_MAX_BYTES) -> TyreData:
+    """Read a TYDEX ``.tdx`` file (the subset described in the module docstring) into :class:`TyreData`.
+
+    UTF-8 (a byte-order mark allowed); ``nan`` in the data is "not measured" (an error in a required channel).
+    Files larger than ``max_bytes`` are refused."""
     path = Path(path)
-    try:
-        lines = path.read_text(encoding="utf-8", errors="strict").splitlines()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DataError(f"{path}: cannot read: {exc}") from exc
-    block = None
-    seen = set()
-    header, constants, channels, rows, row_lines = {}, {}, [], [], []
-    for lineno, line in enumerate(lines, 1):
-        stripped = line.strip()
-        if not stripped or stripped.startswith("!"):
-            continue
-        if stripped.startswith("**"):
-            key = stripped.split()[0].upper()
-            if key not in _BLOCKS:
-                raise DataError(f"{path}:{lineno}: unknown block {stripped!r}; expected one of {', '.join(_BLOCKS)}")
-            block = key
-            seen.add(key)
-            if key == "**END":
-                break
-            continue
-        if block is None:
-            raise DataError(f"{path}:{lineno}: text before the first block (**HEADER expected)")
-        if block in ("**HEADER", "**CONSTANTS"):
-            name, desc, unit, value = _fixed_fields(line)
-            if not name:
-                raise DataError(f"{path}:{lineno}: column 1-10: empty name in {block}")
-            target = header if block == "**HEADER" else constants
-            target[name.upper()] = (_constant_value(name.upper(), unit, value, path, lineno), unit, desc)
-        elif block == "**MEASURCHANNELS":
-            name, desc, unit, rest = _fixed_fields(line)
-            parts = rest.split()
-            if not name or not parts:
-                raise DataError(f"{path}:{lineno}: channel line needs name (columns 1-10), description, unit "
-                                f"(41-50) and a conversion factor (from column 51): {line!r}")
-            try:
-                numbers = [float(p.replace("D", "E").replace("d", "e")) for p in parts[:3]]
-            except ValueError:
-                raise DataError(f"{path}:{lineno}: column 51: channel {name}: non-numeric factor/offset "
-                                f"{rest!r}") from None
-            factor, offset = numbers[0], sum(numbers[1:])
-            channels.append((name.upper(), unit, factor, offset, lineno))
-        elif block == "**MEASURDATA":
-            rows.append(stripped.split())
-            row_lines.append(lineno)
-        # **COMMENTS: free text, ignored
+    with open_user_file(path, max_bytes=max_bytes, what="TYDEX data file", error=DataError) as fh:
+        return _read_tydex(fh, path, defaults)
+
+
+def _read_tydex(fh, path: Path, defaults) -> TyreData:
+    """The blocks before and after the sample rows are read line by line; the rows (the bulk of the file) are
+    streamed to pandas' C parser."""
+    first = fh.readline()
+    if b"\r" in first and not first.endswith(b"\r\n"):  # lines ended by CR alone: normalise (in memory)
+        fh = io.BytesIO((first + fh.read()).replace(b"\r\n", b"\n").replace(b"\r", b"\n"))
+        first = fh.readline()
+    head, line = [], first.removeprefix(b"\xef\xbb\xbf")
+    while line and not _DATA_KEY.match(line):
+        head.append(line)
+        line = fh.readline()
+    state = _TydexBlocks(path)
+    ended = state.read(_lines(b"".join(head), path), first_line=1)
+    data_line = len(head) + 2  # file line of the first sample row
+    if line and not ended:
+        state.seen.add("**MEASURDATA")
     for needed in ("**MEASURCHANNELS", "**MEASURDATA"):
-        if needed not in seen:
+        if needed not in state.seen:
             raise DataError(f"{path}: no {needed} block")
+    channels = state.channels
     if not channels:
         raise DataError(f"{path}: **MEASURCHANNELS lists no channel")
-    data = np.empty((len(rows), len(channels)))
-    for i, (row, lineno) in enumerate(zip(rows, row_lines)):
-        if len(row) != len(channels):
-            raise DataError(f"{path}:{lineno}: {len(row)} values, expected {len(channels)} (one per channel)")
-        for j, text in enumerate(row):
-            try:
-                data[i, j] = float(text.replace("D", "E").replace("d", "e"))
-            except ValueError:
-                raise DataError(f"{path}:{lineno}: value {j + 1} (channel {channels[j][0]}): non-numeric "
-                                f"value {text!r}") from None
-    frame = pd.DataFrame(index=range(len(rows)))
-    units = {}
-    for j, (name, unit, factor, offset, lineno) in enumerate(channels):
-        values = factor * data[:, j] + offset
+    rows = _SampleRows(fh)
+    columns, lines = _tydex_samples(rows, data_line, channels, path)
+    tail = rows.rest + fh.read()
+    if not tail.lstrip().upper().startswith(b"**END"):  # e.g. a block after the samples
+        state.read(_lines(tail, path), first_line=data_line + rows.newlines, after_data=True)
+    if len(columns[0]) == 0:
+        raise DataError(f"{path}:{data_line - 1}: no data rows in **MEASURDATA: expected one line of values per "
+                        "sample")
+    values_of, units = {}, {}
+    for (name, unit, factor, offset, lineno), values in zip(channels, columns):
         ch = _CHANNEL_OF_TYDEX.get(name)
-        if ch is None:
-            frame[name] = values
-            continue
         try:
-            frame[ch] = values * unit_to_si(ch, unit)
+            to_si = 1.0 if ch is None else unit_to_si(ch, unit)
         except ValueError as exc:
             raise DataError(f"{path}:{lineno}: columns 41-50: channel {name}: {exc}") from None
-        units[ch] = unit
-    for name, (value, unit, _) in constants.items():  # constants standing in for absent channels
+        values = values * factor  # value in the file's unit: factor * raw + offsets; then to SI
+        values += offset
+        if to_si != 1.0:
+            values *= to_si
+        values_of[name if ch is None else ch] = values
+        if ch is not None:
+            units[ch] = unit
+    del columns
+    frame = pd.DataFrame(values_of, copy=False)
+    for name, (value, unit, _) in state.constants.items():  # constants standing in for absent channels
         ch = _CHANNEL_OF_TYDEX.get(name)
         if ch in REQUIRED + _ZERO_DEFAULT and ch not in frame.columns and isinstance(value, float):
             frame[ch] = value
@@ -410,10 +463,172 @@ def read_tydex(path, *, defaults: dict | None = None) -> TyreData:
     if missing:
         raise DataError(f"{path}: missing channel(s) {', '.join(missing)}: neither a measurement channel "
                         f"({', '.join(_TYDEX_NAMES[c][0] for c in missing)}) nor a constant")
-    _check_finite(frame, lambda row: f"{path}:{row_lines[row]}")
-    tyre = str(header.get("MEASID", ("", "", ""))[0] or path.stem)
-    consts = {k: v[0] for k, v in {**header, **constants}.items()}
+    name_of = {_CHANNEL_OF_TYDEX[name]: name for name, *_ in channels if name in _CHANNEL_OF_TYDEX}
+    _check_values(frame, lambda row: f"{path}:{lines()[row]}", name_of)
+    tyre = str(state.header.get("MEASID", ("", "", ""))[0] or path.stem)
+    consts = {k: v[0] for k, v in {**state.header, **state.constants}.items()}
     return TyreData(frame, tyre=tyre, source=str(path), units=units, constants=consts)
+
+
+def _lines(raw: bytes, path) -> list[str]:
+    """The lines of a part of the file (UTF-8)."""
+    try:
+        return raw.decode("utf-8").replace("\r\n", "\n").split("\n")
+    except UnicodeDecodeError as exc:
+        raise DataError(f"{path}: cannot read: not UTF-8 text near byte {exc.start} of a block") from None
+
+
+class _TydexBlocks:
+    """The blocks other than the sample rows, read line by line: header, constants, channels."""
+
+    def __init__(self, path):
+        self.path = path
+        self.block = None
+        self.seen: set[str] = set()
+        self.header: dict = {}
+        self.constants: dict = {}
+        self.channels: list = []
+
+    def read(self, lines, first_line: int, after_data: bool = False) -> bool:
+        """Read ``lines`` (file line numbers from ``first_line``); True when ``**END`` was reached."""
+        path = self.path
+        if after_data:
+            self.block = "**MEASURDATA"
+        for lineno, line in enumerate(lines, first_line):
+            stripped = line.strip()
+            if not stripped or stripped.startswith("!"):
+                continue
+            if stripped.startswith("**"):
+                key = stripped.split()[0].upper()
+                if key not in _BLOCKS:
+                    raise DataError(f"{path}:{lineno}: unknown block {stripped[:40]!r}; expected one of "
+                                    f"{', '.join(_BLOCKS)}")
+                if key == "**MEASURDATA" and after_data:
+                    raise DataError(f"{path}:{lineno}: a second **MEASURDATA block: expected one")
+                self.block = key
+                self.seen.add(key)
+                if key == "**END":
+                    return True
+                continue
+            if self.block is None:
+                raise DataError(f"{path}:{lineno}: text before the first block (**HEADER expected)")
+            if self.block in ("**HEADER", "**CONSTANTS"):
+                name, desc, unit, value = _fixed_fields(line)
+                if not name:
+                    raise DataError(f"{path}:{lineno}: column 1-10: empty name in {self.block}")
+                target = self.header if self.block == "**HEADER" else self.constants
+                target[name.upper()] = (_constant_value(name.upper(), unit, value, path, lineno), unit, desc)
+            elif self.block == "**MEASURCHANNELS":
+                name, desc, unit, rest = _fixed_fields(line)
+                parts = rest.split()
+                if not name or not parts:
+                    raise DataError(f"{path}:{lineno}: channel line needs name (columns 1-10), description, unit "
+                                    f"(41-50) and a conversion factor (from column 51): {line[:80]!r}")
+                try:
+                    numbers = [float(p.replace("D", "E").replace("d", "e")) for p in parts[:3]]
+                except ValueError:
+                    raise DataError(f"{path}:{lineno}: column 51: channel {name}: non-numeric factor/offset "
+                                    f"{rest[:40]!r}") from None
+                if not all(math.isfinite(x) for x in numbers):
+                    raise DataError(f"{path}:{lineno}: column 51: channel {name}: factor/offset {rest[:40]!r} "
+                                    "is not finite")
+                self.channels.append((name.upper(), unit, numbers[0], sum(numbers[1:]), lineno))
+            elif self.block == "**MEASURDATA":  # only after the data block: text where a block should start
+                raise DataError(f"{path}:{lineno}: values after the sample rows: expected a block keyword (**END)")
+            # **COMMENTS: free text, ignored
+        return False
+
+
+class _SampleRows(io.RawIOBase):
+    """The sample rows of a TYDEX file as a binary stream for pandas: ``fh`` read in whole lines up to the next
+    line that opens a block (``**``). ``rest``: what was read beyond (the next block), ``newlines``: the lines
+    handed on; :meth:`block` reads them again (for an error message)."""
+
+    def __init__(self, fh):
+        self._fh, self._start = fh, fh.tell()
+        self._chunk, self._at, self._done = memoryview(b""), 0, False
+        self.rest, self.size, self.newlines = b"", 0, 0
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, buffer) -> int:
+        while self._at >= len(self._chunk) and not self._done:
+            self._next_chunk()
+        n = min(len(buffer), len(self._chunk) - self._at)
+        buffer[:n] = self._chunk[self._at:self._at + n]
+        self._at += n
+        return n
+
+    def _next_chunk(self) -> None:
+        chunk = self._fh.read(1 << 20)
+        if not chunk:
+            self._done = True
+        elif not chunk.endswith(b"\n"):
+            chunk += self._fh.readline()
+        at = chunk.find(b"**")
+        while at >= 0:
+            line_start = chunk.rfind(b"\n", 0, at) + 1
+            if not chunk[line_start:at].strip():
+                chunk, self.rest, self._done = chunk[:line_start], chunk[line_start:], True
+                break
+            at = chunk.find(b"**", at + 2)
+        self._chunk, self._at = memoryview(chunk), 0
+        self.size += len(chunk)
+        self.newlines += chunk.count(b"\n")
+
+    def block(self) -> bytes:
+        here = self._fh.tell()
+        self._fh.seek(self._start)
+        text = self._fh.read(self.size)
+        self._fh.seek(here)
+        return text
+
+
+def _tydex_samples(rows: _SampleRows, first_line: int, channels, path):
+    """The sample rows (whitespace-separated numbers, one per channel) as one float array per channel, and a
+    function that gives the file line of each row (computed only for an error message)."""
+    n = len(channels)
+    cache = []
+
+    def text_lines() -> list[bytes]:
+        if not cache:
+            cache.append(rows.block().split(b"\n"))
+        return cache[0]
+
+    def lines() -> np.ndarray:
+        if len(cache) < 2:
+            text_lines()
+            cache.append(np.asarray([first_line + i for i, text in enumerate(cache[0])
+                                     if text.strip() and not text.strip().startswith(b"!")]))
+        return cache[1]
+
+    def count_values(lineno: int) -> int:
+        return len(text_lines()[lineno - first_line].split(b"!")[0].split())
+
+    def token_count_error(candidates):
+        for lineno in candidates:
+            if count_values(lineno) != n:
+                raise DataError(f"{path}:{lineno}: {count_values(lineno)} values, expected {n} (one per channel)")
+
+    try:  # one spare column: a row with one value too many lands there instead of failing without a line
+        table = pd.read_csv(rows, sep=r"\s+", header=None, names=range(n + 1), comment="!",
+                            keep_default_na=False, na_values=_NAN_TEXT, skip_blank_lines=True, encoding="utf-8")
+    except pd.errors.EmptyDataError:  # no rows, only blank or comment lines
+        return [np.empty(0)] * n, lines
+    except pd.errors.ParserError:
+        token_count_error(lines())
+        raise  # pragma: no cover - the scan above finds the row pandas failed on
+    except (UnicodeDecodeError, ValueError) as exc:
+        raise DataError(f"{path}: **MEASURDATA: cannot read: {exc}") from None
+    if table[n].notna().any():
+        token_count_error(lines()[np.flatnonzero(table[n].notna().to_numpy())])
+    if table[n - 1].isna().any():  # a short row, or "nan" values in the last channel: look at those rows
+        token_count_error(lines()[np.flatnonzero(table[n - 1].isna().to_numpy())])
+    columns = [_numeric_column(table.pop(j), lambda row, text: f"{path}:{lines()[row]}: value {j + 1} (channel "
+                                                                f"{channels[j][0]}): non-numeric value {text!r}")
+               for j in range(n)]
+    return columns, lines
 
 
 def _constant_value(name, unit, text, path, lineno):
@@ -434,10 +649,13 @@ def _constant_value(name, unit, text, path, lineno):
 
 
 def write_tydex(data: TyreData, path, *, overwrite: bool = False) -> Path:
-    """Write ``data`` as a TYDEX file in SI units (factor 1, offsets 0); every canonical channel present."""
+    """Write ``data`` as a TYDEX file in SI units (factor 1, offsets 0); every canonical channel present.
+
+    Never replaces the file the data were read from; an existing ``path`` needs ``overwrite=True``
+    (:class:`mftyre.files.OutputError`, a FileExistsError, otherwise)."""
     path = Path(path)
-    if path.exists() and not overwrite:
-        raise FileExistsError(f"{path} exists; pass overwrite=True to replace it")
+    source = Path(data.source) if data.source and Path(data.source).is_file() else None
+    check_outputs({"path": path}, {"data.source": source}, overwrite=overwrite, option="overwrite=True")
     chans = [c for c in CHANNELS if c in data.frame.columns]
     extra = [c for c in data.frame.columns if c not in CHANNELS and len(str(c)) <= 10
              and pd.api.types.is_numeric_dtype(data.frame[c])]
@@ -469,7 +687,7 @@ def write_tydex(data: TyreData, path, *, overwrite: bool = False) -> Path:
     values = data.frame[chans + extra].to_numpy(float)
     out.extend(" ".join(f"{v:.17g}" for v in row) for row in values)
     out.append("**END")
-    path.write_text("\n".join(out) + "\n", encoding="utf-8")
+    write_atomically(path, "\n".join(out) + "\n")
     return path
 
 

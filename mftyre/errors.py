@@ -15,3 +15,8 @@ class DataError(MFTyreError):
 
 class ModelInputError(MFTyreError, ValueError):
     """An input passed to the model is invalid (NaN, non-positive pressure, bad shape...)."""
+
+
+class InputClippedWarning(UserWarning):
+    """Inputs outside the .tir ranges were saturated to them (``limits=True``); the message names the input, the
+    range and how many points."""

@@ -11,7 +11,6 @@ from __future__ import annotations
 import argparse
 import importlib.resources
 import sys
-from pathlib import Path
 
 from .errors import MFTyreError
 
@@ -65,7 +64,15 @@ def register(subparsers) -> argparse.ArgumentParser:
 
 
 def run(args) -> int:
-    """Handler of ``mftyre fmu build``: returns the exit status (1 with a message on stderr on failure)."""
+    """Handler of ``mftyre fmu build``: returns the exit status (1 with a message on stderr on failure, 2 when the
+    output rule of :mod:`mftyre.files` refuses the output)."""
+    from .files import OutputError, check_outputs
+
+    try:
+        check_outputs({"-o": args.output}, {"FILE.tir": args.tir}, overwrite=args.overwrite)
+    except OutputError as exc:
+        print(f"mftyre fmu build: error: {exc}", file=sys.stderr)
+        return 2
     try:
         if args.backend == "native":
             if args.input_mode is not None:
@@ -79,8 +86,6 @@ def run(args) -> int:
                                     turn_slip=args.turn_slip,
                                     overwrite=args.overwrite, quiet=False)
             return 0
-        if Path(args.output).exists() and not args.overwrite:
-            raise FileExistsError(f"{args.output} exists; use --overwrite to replace it")
         if args.model == "transient" or args.turn_slip:
             raise ValueError("--model transient and --turn-slip are only available with --backend native")
         if args.road is not None or args.x_start != 0.0:

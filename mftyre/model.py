@@ -16,13 +16,16 @@ conicity, the camber-induced shifts) into their mirror images and keeps the symm
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
-from .errors import ModelInputError
+from .errors import InputClippedWarning, ModelInputError
+from .inputs import check_pressure
 from .formula import OUTPUT_NAMES, Modes, steady_state, vertical
 from .backend import NUMPY
 
-__all__ = ["MFModel", "MFOutputs", "load_tir", "OUTPUT_UNITS"]
+__all__ = ["MFModel", "MFOutputs", "load_tir", "OUTPUT_UNITS", "INPUT_RANGES"]
 
 #: Unit and meaning of every output.
 OUTPUT_UNITS = {
@@ -57,6 +60,12 @@ OUTPUT_UNITS = {
     "sigmay": ("m", "lateral relaxation length"),
 }
 assert tuple(OUTPUT_UNITS) == OUTPUT_NAMES
+
+#: The .tir ranges that ``limits=True`` saturates the inputs to (Fz: FZMAX saturates; FZMIN raises the load in
+#: the aligning torque and the MF 6.1 deflection only).
+INPUT_RANGES = {"fz": ("FZMIN", "FZMAX"), "kappa": ("KPUMIN", "KPUMAX"), "alpha": ("ALPMIN", "ALPMAX"),
+                "gamma": ("CAMMIN", "CAMMAX"), "p": ("PRESMIN", "PRESMAX")}
+_INPUT_UNITS = {"fz": "N", "kappa": "", "alpha": " rad", "gamma": " rad", "p": " Pa"}
 
 _INPUT_ORDER = ("fz", "kappa", "alpha", "gamma", "phit", "vx", "p", "omega")
 _CHUNK = 16384
@@ -121,6 +130,7 @@ class MFModel:
             raise ModelInputError(f"side must be 'left' or 'right', got {side!r}")
         self.side = side
         self.mirrored = side != file_side
+        self._plain = _PlainParameters(params)
 
     @property
     def params(self):
@@ -137,7 +147,7 @@ class MFModel:
 
     # ------------------------------------------------------------------------------------------ evaluation
     def evaluate(self, fz, kappa, alpha, gamma=0.0, phit=0.0, vx=None, p=None, omega=None, *,
-                 turn_slip: bool = False, alpha_star: bool = False, limits: bool = True,
+                 turn_slip: bool = False, alpha_star: bool = False, limits: bool | str = True,
                  turn_slip_form: str = "published") -> MFOutputs:
         """Evaluate every output; inputs broadcast like NumPy.
 
@@ -145,6 +155,14 @@ class MFModel:
         INFLPRES), omega [rad/s] (default: estimated from kappa and vx). Keywords switch turn slip, alpha*
         (4.E3-4.E4), the .tir limits and low-speed model, and the form of the turn-slip K_zgamma,r0
         ('published' (4.99) or 'mfeval').
+
+        ``limits=True`` (default) saturates kappa, alpha, gamma, p and Fz to the .tir ranges (KPUMIN/KPUMAX,
+        ALPMIN/ALPMAX, CAMMIN/CAMMAX, PRESMIN/PRESMAX, FZMAX; FZMIN raises the load in the aligning torque and the
+        deflection) and switches on the low-speed model below VXLOW; one :class:`mftyre.InputClippedWarning` per
+        input and call names the input, the range and how many points were outside it (the outputs kappa,
+        alpha, p carry the values used). ``limits=False`` evaluates the equations at the inputs as given,
+        extrapolating beyond the fitted ranges, with no low-speed model. ``limits="smooth"`` saturates with a
+        1 % slope left beyond the ranges (for optimisers, see :class:`mftyre.formula.Modes`).
         """
         modes = Modes(limits=limits, alpha_star=alpha_star, turn_slip=turn_slip, turn_slip_form=turn_slip_form)
         prm = self._params
@@ -153,7 +171,43 @@ class MFModel:
                       omega=0.0 if omega is None else omega)
         arrays = _as_float_arrays(inputs)
         self._check_pressure(arrays["p"])
-        return MFOutputs(**self._evaluate_arrays(arrays, omega is not None, modes))
+        if limits:
+            for name, (count, lo, hi) in self.clipped_inputs(arrays).items():
+                warnings.warn(f"{name}: {count} of {arrays[name].size} point(s) outside the .tir range "
+                              f"[{lo:g}, {hi:g}]{_INPUT_UNITS[name]} ({' to '.join(INPUT_RANGES[name])}) were "
+                              + ("raised to FZMIN in the aligning torque and deflection or saturated at FZMAX"
+                                 if name == "fz" else "saturated to it") + "; limits=False evaluates them as given",
+                              InputClippedWarning, stacklevel=2)
+        out = self._evaluate_arrays(arrays, omega is not None, modes)
+        _check_finite_outputs(out, arrays)
+        return MFOutputs(**out)
+
+    def input_range(self, name: str) -> tuple[float, float]:
+        """(lo, hi) that ``limits=True`` saturates input ``name`` to, in the mounted side's axes (a mirrored
+        model's alpha and gamma ranges are mirrored too)."""
+        lo_name, hi_name = INPUT_RANGES[name]
+        lo, hi = float(self._params[lo_name]), float(self._params[hi_name])
+        return (-hi, -lo) if self.mirrored and name in _MIRRORED_INPUTS else (lo, hi)
+
+    def used_input(self, name: str, values):
+        """The values of input ``name`` that ``limits=True`` evaluates (saturated to :meth:`input_range`; Fz at
+        FZMAX only, since FZMIN acts on a few terms)."""
+        lo, hi = self.input_range(name)
+        values = np.asarray(values, dtype=float)
+        return np.minimum(values, hi) if name == "fz" else np.clip(values, lo, hi)
+
+    def clipped_inputs(self, arrays: dict) -> dict:
+        """{input: (points outside the range, lo, hi)} for the inputs of ``arrays`` that ``limits=True`` changes."""
+        out = {}
+        for name in INPUT_RANGES:
+            if name not in arrays or arrays[name] is None:
+                continue
+            v = np.asarray(arrays[name], dtype=float)
+            lo, hi = self.input_range(name)
+            outside = (v > hi) | ((v < lo) & (v > 0) if name == "fz" else (v < lo))
+            if outside.any():
+                out[name] = (int(np.count_nonzero(outside)), lo, hi)
+        return out
 
     def _evaluate_arrays(self, arrays: dict, omega_given, modes: Modes) -> dict:
         """Evaluate broadcast float arrays (no validation). ``omega_given``: bool or boolean array."""
@@ -162,15 +216,26 @@ class MFModel:
         if not isinstance(omega_given, bool):
             omega_given = np.ravel(omega_given)
         n = flat["fz"].size
-        out = {k: np.empty(n) for k in OUTPUT_NAMES}
-        # large batches in chunks: the temporaries of one chunk stay in the CPU cache (about 1.5x faster)
-        for start in range(0, n, _CHUNK):
-            part = slice(start, min(start + _CHUNK, n))
-            given = omega_given if isinstance(omega_given, bool) else omega_given[part]
+        if n == 1:  # one point: NumPy scalars (operations on them cost a fraction of those on arrays)
+            given = omega_given if isinstance(omega_given, bool) else omega_given[0]
             with np.errstate(all="ignore"):
-                values = steady_state(self._params, *(flat[k][part] for k in _INPUT_ORDER), given, modes, NUMPY)
-            for k, v in values.items():
-                out[k][part] = v
+                values = steady_state(self._plain, *(flat[k][0] for k in _INPUT_ORDER), given, modes, NUMPY)
+            out = {k: np.array(v, dtype=float).reshape(1) for k, v in values.items()}
+        elif n <= _CHUNK:  # one chunk: the results are the outputs (no copy)
+            with np.errstate(all="ignore"):
+                values = steady_state(self._plain, *(flat[k] for k in _INPUT_ORDER), omega_given, modes, NUMPY)
+            out = _own_arrays(values, n, list(flat.values()))
+        else:
+            out = {k: np.empty(n) for k in OUTPUT_NAMES}
+            # large batches in chunks: the temporaries of one chunk stay in the CPU cache
+            for start in range(0, n, _CHUNK):
+                part = slice(start, min(start + _CHUNK, n))
+                given = omega_given if isinstance(omega_given, bool) else omega_given[part]
+                with np.errstate(all="ignore"):
+                    values = steady_state(self._plain, *(flat[k][part] for k in _INPUT_ORDER), given, modes,
+                                          NUMPY)
+                for k, v in values.items():
+                    out[k][part] = v
         out = {k: v.reshape(shape) for k, v in out.items()}
         if self.mirrored:
             out = {k: (-v if k in _MIRRORED_OUTPUTS else v) for k, v in out.items()}
@@ -178,7 +243,7 @@ class MFModel:
 
     # ------------------------------------------------------------------------------------------ casadi
     def casadi_function(self, inputs=("fz", "kappa", "alpha", "gamma", "phit", "vx", "p"), outputs=OUTPUT_NAMES,
-                        *, turn_slip: bool = False, alpha_star: bool = False, limits: bool = True,
+                        *, turn_slip: bool = False, alpha_star: bool = False, limits: bool | str = True,
                         turn_slip_form: str = "published", fixed: dict | None = None, parameters=(),
                         smooth: float | None = None, name: str = "mftyre"):
         """A ``casadi.Function`` of the same equations, built from ``casadi.SX`` scalars.
@@ -193,7 +258,11 @@ class MFModel:
         ``outputs``: any of :data:`OUTPUT_NAMES`; the echoed inputs are named ``kappa_used``, ``alpha_used``...
         in the function (CasADi needs distinct input and output names).
         ``smooth``: None for the exact model, or eps > 0 for smooth kinks (see
-        :class:`mftyre.backend.CasadiBackend`).
+        :class:`mftyre.backend.CasadiBackend`); outputs stay finite at any finite input, a negative Fz included.
+        ``limits``: True saturates the inputs to the .tir ranges, so every derivative with respect to an input
+        beyond its range is exactly zero (and at Fz <= 0 the forces and their derivatives are zero: no contact);
+        an optimiser that may step outside the ranges should use ``limits="smooth"`` (1 % of the slope kept
+        beyond the ranges, derivatives non-zero) together with ``smooth=1e-6``; False extrapolates.
         The MF 6.2 loaded radius is solved with up to 8 bracket-widening and 30 Dekker steps and a final
         Newton step, so its derivatives are those of the implicit function. Evaluate many points with
         ``f.map(n)``; :mod:`mftyre.compiled` compiles the function to C.
@@ -267,8 +336,7 @@ class MFModel:
 
     @staticmethod
     def _check_pressure(p):
-        if np.any(p <= 0):
-            raise ModelInputError(f"inflation pressure p must be positive (in Pa); got minimum {np.min(p)!r}")
+        check_pressure(p)
 
     def __repr__(self):
         src = getattr(self._params, "source", None)
@@ -278,6 +346,18 @@ class MFModel:
 #: Parameters that choose between forms of the equations (Python branches): they cannot be symbolic.
 STRUCTURAL_PARAMETERS = frozenset(["FITTYP", "TYRESIDE", "FZMIN", "Q_CAM1", "Q_CAM2", "Q_A1", "Q_A2", "PHYP4",
                                    *(f"QSX{i}" for i in range(1, 15))])
+
+
+class _PlainParameters:
+    """The values of a parameter set as plain attributes (the equations read hundreds of them per evaluation;
+    TyreParameters' mapping lookup costs more than a single-point evaluation's arithmetic)."""
+
+    def __init__(self, params):
+        self.__dict__.update(params.to_dict())
+        self.version, self.fittyp = params.version, params.fittyp
+
+    def __getitem__(self, name):
+        return self.__dict__[name]
 
 
 class _SymbolicParameters:
@@ -304,16 +384,47 @@ class _SymbolicParameters:
         return name in self._params
 
 
+def _own_arrays(values: dict, n: int, inputs: list) -> dict:
+    """The outputs as arrays of n elements that share memory with no input and no other output."""
+    out, seen = {}, set()
+    for k, v in values.items():
+        if not isinstance(v, np.ndarray) or v.shape != (n,) or id(v) in seen \
+                or any(np.may_share_memory(v, x) for x in inputs):
+            v = np.array(np.broadcast_to(v, (n,)), dtype=float)
+        seen.add(id(v))
+        out[k] = v
+    return out
+
+
+def _check_finite_outputs(out: dict, arrays: dict) -> None:
+    """Finite inputs must give finite outputs: where the .tir parameters admit no finite solution (e.g. Q_V1, Q_V2
+    that make the free radius vanish at the speed asked for), raise ModelInputError naming the outputs and the
+    first such point instead of returning NaN."""
+    bad = [k for k, v in out.items() if not np.isfinite(v).all()]
+    if not bad:
+        return
+    mask = np.zeros(np.shape(out[bad[0]]), dtype=bool)
+    for k in bad:
+        mask |= ~np.isfinite(out[k])
+    i = np.unravel_index(np.argmax(mask), mask.shape) if mask.ndim else ()
+    at = ", ".join(f"{k}={np.broadcast_to(v, mask.shape)[i]:.6g}" for k, v in arrays.items())
+    raise ModelInputError(f"the equations give non-finite {', '.join(bad)} at {int(mask.sum())} of {mask.size} "
+                          f"point(s), first at {at}: the .tir parameters have no finite solution there "
+                          "(check the speed terms Q_V1, Q_V2 and the vertical parameters)")
+
+
 def _as_float_arrays(inputs: dict) -> dict:
-    """Broadcast the inputs to one shape as float arrays; NaN or non-numeric -> ModelInputError."""
+    """Broadcast the inputs to one shape as float arrays; NaN, +-inf or non-numeric -> ModelInputError."""
     arrays = {}
     for name, value in inputs.items():
         try:
             arr = np.asarray(value, dtype=float)
         except (TypeError, ValueError) as exc:
             raise ModelInputError(f"input {name!r} must be numeric, got {value!r}") from exc
-        if np.isnan(arr).any():
-            raise ModelInputError(f"input {name!r} contains NaN at {np.argwhere(np.isnan(arr))[:5].tolist()}")
+        bad = ~np.isfinite(arr)
+        if bad.any():
+            where = np.argwhere(bad)[:5].tolist() if arr.ndim else "(scalar)"
+            raise ModelInputError(f"input {name!r} must be finite, got {arr[bad][0]!r} at {where}")
         arrays[name] = arr
     try:
         broadcast = np.broadcast_arrays(*arrays.values())

@@ -76,6 +76,8 @@ __all__ = [
     "describe",
     "version_of_fittyp",
     "VALID_FITTYP",
+    "CORE_PARAMETERS",
+    "invalid_values",
 ]
 
 
@@ -156,7 +158,7 @@ _TABLE: dict[str, list[tuple]] = {
     ],
     "MODEL": [
         ("FITTYP", None, "integer", "A", "Magic Formula version: 61 (MF 6.1), 62 (MF 6.2), 6/21/52 (MF 5.2)"),
-        ("TYRESIDE", "LEFT", "string", "A", "Side the tyre was measured as: LEFT, RIGHT or SYMMETRIC"),
+        ("TYRESIDE", "LEFT", "string", "A", "Side the tyre was measured on: LEFT or RIGHT"),
         ("LONGVL", 16.7, "length/time", "A", "Reference (measurement) speed V0"),
         ("VXLOW", 1.0, "length/time", "A", "Speed below which the low-speed slip model is used"),
         ("ROAD_INCREMENT", 0.01, "length", "", "Increment in road sampling (ADAMS)"),
@@ -504,6 +506,64 @@ PARAMETERS: dict[str, ParamSpec] = _build()
 DERIVED_DEFAULTS: dict[str, tuple[tuple[str, ...], Any]] = {
     "INFLPRES": (("NOMPRES",), lambda v: v["NOMPRES"]),
 }
+
+
+#: The coefficients a file of each model version must define itself: without them the pure-slip curves
+#: (peak D, shape C, slip stiffness K), the pneumatic trail or the vertical stiffness are generic defaults, not
+#: the measured tyre (a misspelt PKY1 would silently become the default). ``check_tir`` reports their absence
+#: as an error; ``load_tir`` warns (MissingParameterWarning) as for every missing parameter.
+CORE_PARAMETERS: dict[str, tuple[str, ...]] = {
+    "52": ("FNOMIN", "UNLOADED_RADIUS", "VERTICAL_STIFFNESS", "PCX1", "PDX1", "PKX1", "PCY1", "PDY1", "PKY1",
+           "PKY2", "QBZ1", "QCZ1", "QDZ1"),
+    "61": ("FNOMIN", "UNLOADED_RADIUS", "VERTICAL_STIFFNESS", "NOMPRES", "PCX1", "PDX1", "PKX1", "PCY1", "PDY1",
+           "PKY1", "PKY2", "QBZ1", "QCZ1", "QDZ1"),
+}
+CORE_PARAMETERS["62"] = CORE_PARAMETERS["61"]
+
+_POSITIVE = {
+    "FNOMIN": "the nominal load Fz0, which every normalised load divides by",
+    "LFZO": "the scale factor of the nominal load (a negative one flips the force signs)",
+    "LONGVL": "the reference speed, which the speed terms divide by",
+    "UNLOADED_RADIUS": "the free tyre radius",
+    "WIDTH": "the tyre width",
+    "VERTICAL_STIFFNESS": "the vertical stiffness",
+    "NOMPRES": "the nominal pressure, which the pressure increment divides by",
+    "INFLPRES": "the inflation pressure",
+    "VXLOW": "the low-speed limit, which the low-speed scaling divides by",
+    "FZMAX": "the largest load (loads are saturated to it)",
+}
+
+
+def invalid_values(prm) -> list[tuple[str, str]]:
+    """(parameter, what is wrong and what is expected) for every value no tyre can have.
+
+    The one rule shared by the .tir reader (a TirError naming file, line and parameter), the writer and
+    ``check_tir``: positive scales and dimensions, radii in order, ranges not inverted, a real Q_FZ1, a
+    known tyre side.
+    """
+    out = []
+    for name, meaning in _POSITIVE.items():
+        if not prm[name] > 0:
+            out.append((name, f"must be positive ({meaning}), got {prm[name]!r}"))
+    if not 0 <= prm["RIM_RADIUS"] < prm["UNLOADED_RADIUS"]:
+        out.append(("RIM_RADIUS", f"must be at least 0 and smaller than UNLOADED_RADIUS "
+                                  f"{prm['UNLOADED_RADIUS']!r}, got {prm['RIM_RADIUS']!r}"))
+    if prm["BOTTOM_STIFF"] < 0:
+        out.append(("BOTTOM_STIFF", f"must not be negative, got {prm['BOTTOM_STIFF']!r}"))
+    for lo, hi in (("PRESMIN", "PRESMAX"), ("FZMIN", "FZMAX"), ("KPUMIN", "KPUMAX"), ("ALPMIN", "ALPMAX"),
+                   ("CAMMIN", "CAMMAX")):
+        if prm[lo] > prm[hi]:
+            out.append((lo, f"inverted range: {lo} = {prm[lo]!r} > {hi} = {prm[hi]!r}"))
+    if prm["FNOMIN"] > 0:
+        disc = (prm["VERTICAL_STIFFNESS"] * prm["UNLOADED_RADIUS"] / prm["FNOMIN"]) ** 2 - 4 * prm["Q_FZ2"]
+        if disc < 0:
+            out.append(("Q_FZ2", f"(Cz0*R0/Fz0)^2 - 4*Q_FZ2 = {disc!r} < 0: Q_FZ1 = sqrt(...) is undefined "
+                                 "(VERTICAL_STIFFNESS too small or Q_FZ2 too large)"))
+    side = str(prm["TYRESIDE"]).strip().strip("'\"").upper()
+    if side not in ("LEFT", "RIGHT"):
+        out.append(("TYRESIDE", f"expected 'LEFT' or 'RIGHT' (the side the tyre was measured on; mftyre mirrors "
+                                f"it to the other side), got {prm['TYRESIDE']!r}"))
+    return out
 
 
 def version_of_fittyp(fittyp: int) -> str:

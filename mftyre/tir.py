@@ -22,9 +22,7 @@ an SI file. Parameters not in the schema are kept as read, unconverted.
 from __future__ import annotations
 
 import math
-import os
 import re
-import tempfile
 import warnings
 from dataclasses import dataclass
 from fractions import Fraction
@@ -32,12 +30,15 @@ from pathlib import Path
 from typing import Any
 
 from .errors import ModelInputError, TirError
+from .files import TIR_MAX_BYTES, read_user_file, same_file, write_atomically
 from .params import (
+    CORE_PARAMETERS,
     PARAMETERS,
     SECTIONS,
     MissingParameterWarning,
     TyreParameters,
     VALID_FITTYP,
+    invalid_values,
 )
 
 __all__ = ["read_tir", "parse_tir", "write_tir", "check_tir", "Finding", "UNIT_FACTORS", "unit_factor"]
@@ -149,7 +150,14 @@ def _convert(value: float, factor: Fraction) -> float:
 # ----------------------------------------------------------------------------------------------------
 _NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 _HEADER_RE = re.compile(r"\[\s*([A-Za-z0-9_]+(?:[ \t]+[A-Za-z0-9_]+)*)\s*\](.*)\Z")
-_NUMBER_RE = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][+-]?\d+)?\Z")
+# Each digit can be taken by one sub-pattern only, so a match fails in time linear in the length (the form
+# "\d+\.?\d*" made 40,000 digits followed by a letter take 37 s).
+_NUMBER_RE = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eEdD][+-]?\d+)?\Z")
+
+
+def _shown(text: str, limit: int = 60) -> str:
+    """``repr(text)``, shortened to about ``limit`` characters for an error message."""
+    return repr(text) if len(text) <= limit else repr(text[:limit]) + f"... ({len(text)} characters)"
 
 
 def _err(source: str, line: int | None, parameter: str | None, message: str, cls=TirError) -> TirError:
@@ -191,22 +199,24 @@ def _split_assignment(raw: str, source: str, lineno: int):
     head = _strip_trailing_comment(stripped if eq < 0 else stripped[:eq]).strip()
     if eq < 0:
         raise _err(source, lineno, (head.split() or [None])[0],
-                   f"expected 'NAME = value' but found no '=' in {stripped!r}")
+                   f"expected 'NAME = value' but found no '=' in {_shown(stripped)}")
     name = head
     if not _NAME_RE.match(name):
         raise _err(source, lineno, name or None,
-                   f"invalid parameter name {name!r}: expected letters, digits and '_' before '='")
+                   f"invalid parameter name {_shown(name)}: expected letters, digits and '_' before '='")
     rest = stripped[eq + 1:].lstrip()
     if rest[:1] in ("'", '"'):
         q = rest[0]
         end = rest.find(q, 1)
         if end < 0:
-            raise _err(source, lineno, name.upper(), f"unterminated quoted string {rest!r}: expected a closing {q}")
+            raise _err(source, lineno, name.upper(),
+                       f"unterminated quoted string {_shown(rest)}: expected a closing {q}")
         value = rest[1:end]
         after = _strip_trailing_comment(rest[end + 1:]).strip()
         if after:
             raise _err(source, lineno, name.upper(),
-                       f"unexpected text {after!r} after the quoted value: expected a comment ($ or !) or nothing")
+                       f"unexpected text {_shown(after)} after the quoted value: expected a comment ($ or !) "
+                       "or nothing")
         return name.upper(), value, True
     value = _strip_trailing_comment(rest).strip()
     if not value:
@@ -264,8 +274,9 @@ def parse_tir(text: str, source: str = "<string>", *, strict: bool = False) -> T
     return _parse(text, source, strict=strict, stacklevel=3)[0]
 
 
-def _parse(text: str, source: str, *, strict: bool, stacklevel: int):
-    """-> (TyreParameters, {schema name: section it was read in}). ``stacklevel`` is for the warning."""
+def _parse(text: str, source: str, *, strict: bool, stacklevel: int, validate: bool = True):
+    """-> (TyreParameters, {schema name: section it was read in}). ``stacklevel`` is for the warning;
+    ``validate``: raise TirError on the first value no tyre can have (:func:`mftyre.params.invalid_values`)."""
     source = str(source)
     blocks = _split_blocks(text)
     if not any(sec is not None and sec != "\0bad" for sec, _, _ in blocks):
@@ -293,7 +304,7 @@ def _parse(text: str, source: str, *, strict: bool, stacklevel: int):
     for section, header_line, body in blocks:
         if section == "\0bad":
             raise _err(source, header_line, None,
-                       f"malformed section header {body[0][1].strip()!r}: expected '[SECTION_NAME]'")
+                       f"malformed section header {_shown(body[0][1].strip())}: expected '[SECTION_NAME]'")
         content = [(n, r) for n, r in body if not _is_comment_or_blank(r.strip())]
         if section is None:
             if content:
@@ -324,7 +335,8 @@ def _parse(text: str, source: str, *, strict: bool, stacklevel: int):
                 if spelling not in UNIT_FACTORS[name]:
                     accepted = ", ".join(UNIT_FACTORS[name])
                     raise _err(source, lineno, name,
-                               f"unknown unit {value!r}: accepted spellings (any case, quoted or not) are {accepted}")
+                               f"unknown unit {_shown(value)}: accepted spellings (any case, quoted or not) are "
+                               f"{accepted}")
                 units[name] = spelling
                 units_as_read[name] = value
                 continue
@@ -345,15 +357,15 @@ def _parse(text: str, source: str, *, strict: bool, stacklevel: int):
             continue
         num = _parse_number(text_value)
         if num is None:
-            what = "a quoted string" if quoted else repr(text_value)
+            what = "a quoted string" if quoted else _shown(text_value)
             kind = "an integer" if spec.is_integer else "a number"
             raise _err(source, lineno, name,
                        f"expected {kind} ({spec.description}), got {what}")
         if not math.isfinite(num):
-            raise _err(source, lineno, name, f"expected a finite number, got {text_value!r}")
+            raise _err(source, lineno, name, f"expected a finite number, got {_shown(text_value)}")
         if spec.is_integer:
             if num != int(num):
-                raise _err(source, lineno, name, f"expected an integer, got {text_value!r}")
+                raise _err(source, lineno, name, f"expected an integer, got {_shown(text_value)}")
             values[name] = int(num)
         else:
             values[name] = _convert(num, unit_factor(spec.unit, base))
@@ -377,6 +389,8 @@ def _parse(text: str, source: str, *, strict: bool, stacklevel: int):
         )
     except ModelInputError as exc:  # pragma: no cover - values were checked above
         raise _err(source, None, None, str(exc)) from exc
+    if validate:
+        _validate(prm, source)
 
     if prm.missing_reported:
         listing = ", ".join(f"{n}={prm[n]!r}" for n in prm.missing_reported)
@@ -392,6 +406,13 @@ def _parse(text: str, source: str, *, strict: bool, stacklevel: int):
     return prm, sections_read
 
 
+def _validate(prm: TyreParameters, source: str) -> None:
+    """TirError naming file, line and parameter for the first value no tyre can have."""
+    for name, message in invalid_values(prm):
+        where = "" if name in prm.lines else " (its default: the file does not set it)"
+        raise _err(source, prm.lines.get(name), name, message + where)
+
+
 def read_tir(path, *, strict: bool = False) -> TyreParameters:
     """Read a .tir file (see :func:`parse_tir`)."""
     p = Path(path)
@@ -400,11 +421,7 @@ def read_tir(path, *, strict: bool = False) -> TyreParameters:
 
 
 def _read_text(p: Path) -> str:
-    if not p.exists():
-        raise _err(str(p), None, None, "file not found: expected an existing .tir property file")
-    if p.is_dir():
-        raise _err(str(p), None, None, "is a directory: expected a .tir property file")
-    data = p.read_bytes()
+    data = read_user_file(p, max_bytes=TIR_MAX_BYTES, what=".tir property file", error=TirError)
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError:
@@ -435,16 +452,6 @@ def _line(name: str, value: str, comment: str = "") -> str:
     if comment:
         text = f"{text:<50} ${comment}"
     return text
-
-
-def same_file(a: Path, b: Path) -> bool:
-    """True when ``a`` and ``b`` name the same file (existing files compared by inode)."""
-    try:
-        if a.exists() and b.exists():
-            return os.path.samefile(a, b)
-    except OSError:
-        pass
-    return a.resolve() == b.resolve()
 
 
 def tir_text(params: TyreParameters) -> str:
@@ -513,18 +520,8 @@ def write_tir(params: TyreParameters, path, *, overwrite: bool = False) -> Path:
         raise _err(str(p), None, None, "file exists: pass overwrite=True to replace it", cls=_TirFileExists)
     if p.is_dir():
         raise _err(str(p), None, None, "is a directory: expected a file path")
-    text = tir_text(params)
-    fd, tmp = tempfile.mkstemp(prefix=".mftyre-", suffix=".tir", dir=str(p.parent) if str(p.parent) else ".")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
-            fh.write(text)
-        os.replace(tmp, p)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+    _validate(params, str(p))
+    write_atomically(p, tir_text(params))
     return p
 
 
@@ -552,7 +549,7 @@ def check_tir(path) -> list[Finding]:
         p = Path(path)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", MissingParameterWarning)
-            prm, sections_read = _parse(_read_text(p), str(p), strict=False, stacklevel=2)
+            prm, sections_read = _parse(_read_text(p), str(p), strict=False, stacklevel=2, validate=False)
     except TirError as exc:
         return [Finding("error", getattr(exc, "parameter", None), getattr(exc, "line", None), str(exc))]
 
@@ -560,8 +557,13 @@ def check_tir(path) -> list[Finding]:
         findings.append(Finding(sev, name, prm.lines.get(name) if name else None,
                                 f"{name}: {msg}" if name else msg))
 
+    core = CORE_PARAMETERS[prm.version]
     for name in prm.missing_reported:
-        add("warning", name, f"missing; the default {prm[name]!r} is used ({PARAMETERS[name].description})")
+        severity = "error" if name in core else "warning"
+        add(severity, name, f"missing; the default {prm[name]!r} is used ({PARAMETERS[name].description})"
+            + (": a core coefficient of the model, which the file must define" if name in core else ""))
+    for name, message in invalid_values(prm):
+        add("error", name, message)
     si = all(UNIT_FACTORS[k][v.strip().lower()] == 1 for k, v in prm.units_as_read.items())
     for name, (section, value) in prm.unknown.items():
         add("warning", name, f"unknown parameter in [{section}] (kept and written back unchanged"
@@ -576,34 +578,15 @@ def check_tir(path) -> list[Finding]:
                                 "[UNITS] has no PRESSURE entry: pressures were read in FORCE/LENGTH^2 of the file"))
 
     v = prm
-    checks = [
-        (v.FNOMIN <= 0, "error", "FNOMIN", f"must be positive (nominal load), got {v.FNOMIN!r}"),
-        (v.UNLOADED_RADIUS <= 0, "error", "UNLOADED_RADIUS", f"must be positive, got {v.UNLOADED_RADIUS!r}"),
-        (v.RIM_RADIUS >= v.UNLOADED_RADIUS, "error", "RIM_RADIUS",
-         f"{v.RIM_RADIUS!r} is not smaller than UNLOADED_RADIUS {v.UNLOADED_RADIUS!r}"),
-        (v.NOMPRES <= 0, "error", "NOMPRES", f"must be positive (nominal pressure), got {v.NOMPRES!r}"),
-        (v.VERTICAL_STIFFNESS <= 0, "error", "VERTICAL_STIFFNESS", f"must be positive, got {v.VERTICAL_STIFFNESS!r}"),
-        (v.LONGVL <= 0, "error", "LONGVL", f"must be positive (reference speed), got {v.LONGVL!r}"),
-        (v.VXLOW <= 0, "error", "VXLOW", f"must be positive (low-speed limit), got {v.VXLOW!r}"),
-    ]
-    for lo, hi in (("PRESMIN", "PRESMAX"), ("FZMIN", "FZMAX"), ("KPUMIN", "KPUMAX"), ("ALPMIN", "ALPMAX"),
-                   ("CAMMIN", "CAMMAX")):
-        checks.append((v[lo] > v[hi], "error", lo, f"inverted range: {lo} = {v[lo]!r} > {hi} = {v[hi]!r}"))
+    checks = []
     for name in ("PCX1", "PCY1", "PDX1", "PDY1"):
         checks.append((v[name] <= 0, "warning", name, f"should be positive, got {v[name]!r}"))
     if v.version in ("52", "61"):
         checks.append((v.Q_FZ2 == 0, "warning", "Q_FZ2",
                        "is 0: the reference evaluator's MF 6.1 deflection divides by 2*Q_FZ2 (its rho, Rl and Cz "
                        "are meaningless); mftyre uses a form that stays finite"))
-    if v.FNOMIN > 0 and v.Q_FZ1 == 0:
-        disc = (v.VERTICAL_STIFFNESS * v.UNLOADED_RADIUS / v.FNOMIN) ** 2 - 4 * v.Q_FZ2
-        checks.append((disc < 0, "error", "Q_FZ2",
-                       f"(Cz0*R0/Fz0)^2 - 4*Q_FZ2 = {disc!r} < 0: Q_FZ1 = sqrt(...) is undefined "
-                       "(VERTICAL_STIFFNESS too small or Q_FZ2 too large)"))
     checks.append(((v.PRESMIN <= v.PRESMAX) and not (v.PRESMIN <= v.INFLPRES <= v.PRESMAX), "warning", "INFLPRES",
                    f"{v.INFLPRES!r} Pa is outside PRESMIN..PRESMAX = {v.PRESMIN!r}..{v.PRESMAX!r} Pa"))
-    checks.append((str(v.TYRESIDE).upper() not in ("LEFT", "RIGHT", "SYMMETRIC"), "warning", "TYRESIDE",
-                   f"{v.TYRESIDE!r}: expected LEFT, RIGHT or SYMMETRIC"))
     for cond, sev, name, msg in checks:
         if cond:
             add(sev, name, msg)

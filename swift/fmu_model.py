@@ -11,11 +11,13 @@ rigid ring of :mod:`swift.ring` stepped by :class:`swift.simulate.SwiftTyre`'s R
     wheel.step(1e-3); wheel.outputs()["Fz"]
 
 Modes: axle height imposed (input ``z``, wheel-centre height above the road datum, moving with ``vz`` within a
-step), spin imposed (``omega``). The wheel starts at ``x_start`` on the road (x_road = x_start + integral of
-vx dt: obstacles are met where they are, whatever the start) in static equilibrium (the Newton iteration of
-:meth:`swift.simulate.SwiftTyre.initial_state`, 30 steps). A step of length h is split into
-n = max(ceil(h / max_step), ceil(|vx| h / MAX_TRAVEL)) equal RK4 steps (``SUBSTEPS``); before each the cam-height window
-(``WINDOW`` samples of the table, step ``TABLE_DX``) is placed around the belt, clamped to the table, whose
+step), spin imposed (``omega``); the road is the profile lifted by ``road_z`` (held over a step) and tilted by
+``road_camber`` (the ring's input, added to the multi-track camber of a 3D profile). The wheel starts at
+``x_start`` on the road (x_road = x_start + integral of vx dt: obstacles are met where they are, whatever the
+start) in static equilibrium (the Newton iteration of
+:meth:`swift.simulate.SwiftTyre.equilibrium_function`, 30 steps). A step of length h is split into
+n = max(ceil(h / max_step), ceil(|vx| h / MAX_TRAVEL)) equal RK4 steps (``SUBSTEPS``); before each the
+cam-height window (``WINDOW`` samples of the table, step ``TABLE_DX``) is placed around the belt, clamped to the table, whose
 ends are constant road (the table spans the obstacles plus the cam reach plus a window on each side), so any
 distance can be driven. The rim's lateral position is the frame origin (the belt's y is moved back by vy dt
 after each step). The same functions are generated as C for the native FMU; this class evaluates them with
@@ -54,6 +56,9 @@ INPUTS = {  # name -> (unit, start, description)
     "z": ("m", 0.29, "wheel-centre height above the road datum, ISO-W z (imposed)"),
     "vz": ("m/s", 0.0, "wheel-centre vertical velocity (z moves with it within a step)"),
     "p": ("Pa", float("nan"), "inflation pressure (start: the .tir INFLPRES)"),
+    "road_z": ("m", 0.0, "height of the whole road profile above the road datum (the tyre meets z - road_z)"),
+    "road_camber": ("rad", 0.0, "road camber angle about ISO-W x (> 0: the road rises to the left), added to the "
+                    "profile's own multi-track camber"),
 }
 PARAMETERS = {
     "x_start": ("m", "wheel-centre position on the road profile at the start"),
@@ -78,19 +83,22 @@ OUTPUTS = {  # name -> (unit, description, ring output or state)
     "contact_length": ("m", "contact patch length 2a"),
     "road_w": ("m", "effective road height (tandem cams)"),
     "road_slope": ("rad", "effective forward road slope beta_y (> 0 rising ahead)"),
+    "road_curvature": ("1/m", "effective road curvature d beta_y / dx"),
+    "road_camber_eff": ("rad", "effective road camber beta_x: the profile's multi-track camber plus road_camber"),
+    "x_contact": ("m", "contact centre on the road (x_road plus the forward shift to the foot of the normal)"),
     "x_road": ("m", "wheel-centre position on the road: x_start + integral of vx dt"),
 }
 _RING = {"Fx": "fx", "Fy": "fy", "Fz": "fz", "Mx": "mx", "My": "my", "Mz": "mz", "Fx_c": "fx_c", "Fy_c": "fy_c",
          "Fz_c": "fz_c", "Mz_c": "mz_c", "kappa": "kappa", "alpha": "alpha", "rho": "rho", "Rl": "rl", "Re": "re",
-         "road_w": "w", "road_slope": "beta"}
+         "road_slope": "beta", "road_curvature": "curvature", "road_camber_eff": "beta_x", "x_contact": "x_c"}
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
 
 
 @dataclass(frozen=True)
 class SwiftFunctions:
-    """CasADi functions (window arguments ``x0w``, ``grid``, ``hw``: the table window, see module notes):
-    ``init(u, q, x0w, grid, hw) -> x``, ``step(x, u, dt, x0w, grid, hw) -> x_next`` (one RK4 step),
-    ``out(x, u, q) -> y`` is not windowed: ``outw(x, u, x0w, grid, hw) -> y``."""
+    """CasADi functions (window arguments ``x0w``, ``grid``, ``hw``: the table window, see module notes; ``hw``
+    holds (cam height, road-camber slope) pairs, interleaved, as ``table_h``): ``init(u, q, x0w, grid, hw) -> x``,
+    ``step(x, u, dt, x0w, grid, hw) -> x_next`` (one RK4 step), ``out(x, u, x0w, grid, hw) -> y``."""
 
     init: object
     step: object
@@ -111,16 +119,15 @@ class SwiftFunctions:
     def window_start(self, xb: float) -> int:
         """First table sample of the window around the belt at ``xb``, clamped to the table."""
         i0 = math.floor((xb - self.table_x0) / self.table_dx) - WINDOW // 2
-        return min(max(i0, 0), self.table_h.size - WINDOW)
+        return min(max(i0, 0), self.table_h.size // 2 - WINDOW)
 
 
 def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions:
     """The functions of the SWIFT wheel of ``model`` on ``road`` (a :class:`swift.road.Road`, an expression or a
-    CSV file, see :func:`swift.road.parse_road`); ``x_start``: default start position."""
+    CSV file, see :func:`swift.road.parse_road`); ``x_start``: default start position. The ring is
+    :class:`swift.simulate.SwiftTyre`'s (its step, outputs and static equilibrium); here only the FMU's inputs are
+    mapped onto it: the state holds heights above the road datum, the ring sees them above ``road_z``."""
     import casadi as ca
-
-    from mftyre.backend import casadi_backend
-    from mftyre.formula import vertical as vert
 
     from .simulate import SwiftTyre
 
@@ -133,63 +140,48 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
     lo, hi = (min(bps) - reach, max(bps) + reach) if bps else (0.0, 1.0)
     tyre = SwiftTyre(model, road, axle="height", rim="speed", x_range=(math.floor(lo / dx) * dx,
                      math.ceil(hi / dx) * dx), table_dx=dx, window=WINDOW, substeps=SUBSTEPS, compiled=False)
-    c = tyre.constants
-    rhs, step1 = tyre.rhs_function, tyre.step_function
     nx = len(STATE_NAMES)
     x, u, q = ca.MX.sym("x", nx), ca.MX.sym("u", len(INPUTS)), ca.MX.sym("q", len(PARAMETERS))
-    x0w, grid, hw, dt = ca.MX.sym("x0w"), ca.MX.sym("grid", WINDOW), ca.MX.sym("hw", WINDOW), ca.MX.sym("dt")
+    x0w, grid, hw, dt = ca.MX.sym("x0w"), ca.MX.sym("grid", WINDOW), ca.MX.sym("hw", 2 * WINDOW), ca.MX.sym("dt")
     U = {n: u[i] for i, n in enumerate(INPUTS)}
     ring_u = {"vx": U["vx"], "load": 0, "torque": 0, "p": U["p"], "y": 0, "vy": U["vy"], "gamma": U["gamma"],
-              "psi": 0, "road_camber": 0}
+              "psi": 0, "road_camber": U["road_camber"]}
     uring = ca.vertcat(*(ring_u[n] for n in INPUT_NAMES))
 
-    # one RK4 step, then the rim's lateral position back to the frame origin
-    xn = step1(x, uring, dt, x0w, grid, hw)[0]
+    def lifted(state, dz):  # belt and axle heights moved by dz (between the datum and the ring's road frame)
+        parts = ca.vertsplit(state)
+        for n in ("zb", "za"):
+            parts[_S[n]] = parts[_S[n]] + dz
+        return ca.vertcat(*parts)
+
+    # one RK4 step in the road frame, then the rim's lateral position back to the frame origin
+    xn = lifted(tyre.step_function(lifted(x, -U["road_z"]), uring, dt, x0w, grid, hw)[0], U["road_z"])
     xn = ca.vertcat(xn[:_S["yb"]], xn[_S["yb"]] - U["vy"] * dt, xn[_S["yb"] + 1:])
     step = ca.Function("swift_substep", [x, u, dt, x0w, grid, hw], [xn], ["x", "u", "dt", "x0w", "grid", "hw"],
                        ["x_next"])
-    ring_out = dict(zip(OUTPUT_NAMES, ca.vertsplit(rhs(x, uring, x0w, grid, hw)[1])))
-    y = [2 * ring_out["a"] if n == "contact_length" else x[_S["xa"]] if n == "x_road" else ring_out[_RING[n]]
-         for n in OUTPUTS]
+    ring_out = dict(zip(OUTPUT_NAMES, ca.vertsplit(tyre.output_function(lifted(x, -U["road_z"]), uring, x0w,
+                                                                         grid, hw))))
+    special = {"contact_length": 2 * ring_out["a"], "x_road": x[_S["xa"]], "road_w": ring_out["w"] + U["road_z"]}
+    y = [special[n] if n in special else ring_out[_RING[n]] for n in OUTPUTS]
     outw = ca.Function("swift_out", [x, u, x0w, grid, hw], [ca.vertcat(*y)], ["x", "u", "x0w", "grid", "hw"], ["y"])
 
-    # static equilibrium (as SwiftTyre.initial_state, axle height imposed): guess, then NEWTON_STEPS steps
-    be = casadi_backend()
-    lookup = ca.interpolant("cam", "linear", [WINDOW], 1, {"lookup_mode": ["exact"]})
-    xs = q[0]
-    h_c = lookup(xs - x0w, grid, hw)
-    ro0 = vert.free_radius(prm, 0.0, be)
-    dpi = (U["p"] - prm.NOMPRES) / prm.NOMPRES
-    rl0 = be.fmin(U["z"] - h_c, prm.UNLOADED_RADIUS)
-    fz0 = (vert.vertical_force_62(prm, rl0, ro0, 0.0, 0.0, 0.0, 0.0, dpi, be) if prm.version == "62"
-           else vert.vertical_force_61(prm, ro0 - rl0, ro0, 0.0, 0.0, 0.0, dpi, be))
-    guess = {n: 0 for n in STATE_NAMES}
-    guess.update(xa=xs, xb=xs, za=U["z"], vza=U["vz"], zb=U["z"] + be.fmax(fz0, 0.0) / c.cbx, vxb=U["vx"],
-                 vyb=U["vy"], oma=U["omega"], omb=U["omega"], gb=U["gamma"])
-    unknown = [_S[n] for n in ("xb", "zb", "thw", "yb", "gb", "psb", "ux", "uy", "kappa", "alpha")]
-    eqs = [_S[n] for n in ("vxb", "vzb", "omb", "vyb", "wgb", "wpsb", "ux", "uy", "kappa", "alpha")]
-    s = ca.MX.sym("s", nx)
-    r = rhs(s, uring, x0w, grid, hw)[0][eqs]
-    delta = ca.solve(ca.jacobian(r, s)[:, unknown], -r, "qr")
-    parts = ca.vertsplit(s)
-    for k, i in enumerate(unknown):
-        parts[i] = parts[i] + delta[k]
-    newton = ca.Function("swift_newton", [s, u, x0w, grid, hw], [ca.vertcat(*parts)])
-    xi = ca.vertcat(*(guess[n] for n in STATE_NAMES))
-    for _ in range(NEWTON_STEPS):
-        xi = newton(xi, u, x0w, grid, hw)
-    init = ca.Function("swift_init", [u, q, x0w, grid, hw], [xi], ["u", "q", "x0w", "grid", "hw"], ["x0"])
+    # static equilibrium at x_start (SwiftTyre's, axle height imposed), in the road frame
+    equilibrium = tyre.equilibrium_function(NEWTON_STEPS)
+    x_eq = equilibrium(q[0], U["z"] - U["road_z"], U["vz"], U["omega"], uring, x0w, grid, hw)
+    init = ca.Function("swift_init", [u, q, x0w, grid, hw], [lifted(x_eq, U["road_z"])],
+                       ["u", "q", "x0w", "grid", "hw"], ["x0"])
 
     # direct feedthrough of the inputs to the outputs (structural)
     jac = ca.jacobian(outw(x, u, x0w, grid, hw), u).sparsity()
     deps = [[i for i in range(jac.size2()) if jac.has_nz(j, i)] for j in range(jac.size1())]
     table = tyre.table
-    h = np.ascontiguousarray(table.h, dtype=float)
+    h = tyre.cam_pairs
     grid_v = np.ascontiguousarray(table.dx * np.arange(WINDOW))
-    extra = (f"#define ROAD_N {h.size}\n#define ROAD_WINDOW {WINDOW}\n#define ROAD_X0 {table.x0!r}\n"
+    extra = (f"#define ROAD_N {table.h.size}\n#define ROAD_WINDOW {WINDOW}\n#define ROAD_X0 {table.x0!r}\n"
              f"#define ROAD_DX {table.dx!r}\n#define SWIFT_MAX_TRAVEL {MAX_TRAVEL!r}\n"
              + "".join(f"#define S_{n.upper()} {i}\n" for i, n in enumerate(STATE_NAMES))
-             + "static const double ROAD_H[ROAD_N] = {" + ",".join(repr(float(v)) for v in h) + "};\n"
+             + "/* cam height and road-camber slope per sample, interleaved */\n"
+             + "static const double ROAD_H[2 * ROAD_N] = {" + ",".join(repr(float(v)) for v in h) + "};\n"
              + "static const double ROAD_GRID[ROAD_WINDOW] = {" + ",".join(repr(float(v)) for v in grid_v) + "};\n")
     starts = tuple(prm.INFLPRES if n == "p" else v[1] for n, v in INPUTS.items())
     return SwiftFunctions(init, step, outw, float(table.x0), float(table.dx), h, grid_v, STATE_NAMES,
@@ -224,7 +216,7 @@ class SwiftWheel:
     def _window(self, xb):
         f = self.functions
         i0 = f.window_start(xb)
-        return f.table_x0 + i0 * f.table_dx, f.grid, f.table_h[i0:i0 + WINDOW]
+        return f.table_x0 + i0 * f.table_dx, f.grid, f.table_h[2 * i0:2 * (i0 + WINDOW)]
 
     def initialise(self):
         x = np.asarray(self.functions.init(self.u, self.q, *self._window(self.q[0])), dtype=float).ravel()

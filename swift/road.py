@@ -17,6 +17,7 @@ Profiles: :class:`Flat`, :class:`Step` (up or down), :class:`Cleat` (rectangular
 """
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import numpy as np
@@ -171,10 +172,13 @@ class Sampled(Road):
     @classmethod
     def from_csv(cls, path, x_column: str = "x", z_column: str = "z", delimiter: str = ","):
         """Read a profile from a CSV file with a header row naming ``x_column`` and ``z_column`` (metres)."""
+        from mftyre.files import DATA_MAX_BYTES, read_user_file
+
         path = Path(path)
+        raw = read_user_file(path, max_bytes=DATA_MAX_BYTES, what="road profile CSV file", error=DataError)
         try:
-            data = np.genfromtxt(path, delimiter=delimiter, names=True)
-        except OSError as exc:
+            data = np.genfromtxt(io.BytesIO(raw), delimiter=delimiter, names=True)
+        except ValueError as exc:
             raise DataError(f"{path}: cannot read road profile ({exc})") from exc
         names = data.dtype.names or ()
         missing = [c for c in (x_column, z_column) if c not in names]

@@ -41,8 +41,6 @@ import hashlib
 import json
 import math
 import os
-import shutil
-import subprocess
 import tempfile
 import threading
 from dataclasses import dataclass, replace
@@ -50,9 +48,9 @@ from pathlib import Path
 
 import numpy as np
 
-from mftyre.compiled import cache_dir  # the core's cache folder
+from mftyre.compiled import cache_dir, compile_c  # the core's cache folder and compiler call
 from mftyre.backend import NUMPY
-from mftyre.errors import MFTyreError, ModelInputError
+from mftyre.errors import ModelInputError
 from mftyre.formula import vertical
 
 from .enveloping import Cams, CamTable
@@ -223,8 +221,7 @@ class SwiftTyre:
             k4, memory = f(xs + h * k3, memory)
             xs = xs + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         out = rhs(with_memory(xs, memory), u, x0w, grid, hw, h)[1]
-        memory = ca.vertcat(out[OUTPUT_NAMES.index("x_c")] - xs[_S["xb"]], out[OUTPUT_NAMES.index("ls")])
-        xs = with_memory(xs, memory)  # the contact solution for the next step
+        xs = _remember_contact(xs, out)  # the contact solution for the next step
         return ca.Function("swift_step", [x, u, dt, x0w, grid, hw], [xs, out],
                            ["x", "u", "dt", "x0w", "grid", "hw"], ["x_next", "out"])
 
@@ -248,8 +245,27 @@ class SwiftTyre:
         return "swift_" + hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
     @property
+    def cam_pairs(self) -> np.ndarray:
+        """The whole cam table as :attr:`step_function` reads its window ``hw``: (cam height, road-camber slope)
+        per sample of ``table``, interleaved (do not modify)."""
+        return self._h
+
+    @property
+    def output_function(self):
+        """The outputs :meth:`step` reports at a state, as a CasADi function ``(x, u, x0w, grid, hw) -> out``
+        (= ``step_function`` with dt = 0 at a quarter of the cost: the contact solution from the state's memory);
+        for code generation (FMU)."""
+        import casadi as ca
+
+        x, u = ca.MX.sym("x", len(STATE_NAMES)), ca.MX.sym("u", len(INPUT_NAMES))
+        x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
+        return ca.Function("swift_outputs", [x, u, x0w, grid, hw], [self._rhs_warm(x, u, x0w, grid, hw, 0.0)[1]],
+                           ["x", "u", "x0w", "grid", "hw"], ["out"])
+
+    @property
     def rhs_function(self):
-        """The right-hand side over a cam-height window as a CasADi function (x, u, x0w, grid, hw) -> (dx, out)."""
+        """The right-hand side over a cam-height window as a CasADi function (x, u, x0w, grid, hw, h) -> (dx, out)
+        (``h``: the integration step bounding the relaxation rate, 0 for the exact model; contact solved afresh)."""
         return self._rhs_window
 
     # ------------------------------------------------------------------ stepping
@@ -383,6 +399,63 @@ class SwiftTyre:
         d = self._rhs_window(xs, self._u(inputs), *self._rhs_args(state))[0]
         return np.asarray(ca.Function("linearised", [xs], [ca.jacobian(d, xs)])(state))
 
+    @property
+    def equilibrium_unknowns(self):
+        """(unknowns, equations) of the static equilibrium: state indices solved for and the derivatives (in the
+        order of STATE_NAMES) that vanish there, for :meth:`initial_state` and the FMU's initialisation."""
+        unknown = [_S[n] for n in ("xb", "zb", "thw", "yb", "gb", "psb", "ux", "uy", "kappa", "alpha", "psr")]
+        eqs = [_S[n] for n in ("vxb", "vzb", "omb", "vyb", "wgb", "wpsb", "ux", "uy", "kappa", "alpha", "psr")]
+        if self.axle == "load":
+            unknown.append(_S["za"])
+            eqs.append(_S["vza"])
+        if self.rim == "torque":  # the spin follows the torque: rim at rest relative to the belt, torques balanced
+            unknown += [_S["oma"], _S["omb"]]
+            eqs += [_S["oma"], _S["thw"]]
+        return unknown, eqs
+
+    def equilibrium_function(self, iterations: int = 30):
+        """:meth:`initial_state` with the axle height imposed as one CasADi function for code generation (FMU):
+        ``(xa, za, vza, omega, u, x0w, grid, hw) -> x`` at the axle position ``xa``, height ``za`` (above the cam
+        table's road), vertical speed ``vza`` and spin ``omega`` (with ``rim="torque"`` its first guess), ring
+        inputs ``u`` (INPUT_NAMES) and the window of :attr:`step_function`: the same start (the steady-state load
+        at the deflection under the axle), ``iterations`` Newton steps (QR solves) on :attr:`equilibrium_unknowns`,
+        then the contact solution stored in the memory entries."""
+        import casadi as ca
+
+        from mftyre.backend import casadi_backend
+
+        if self.axle != "height":
+            raise ModelInputError("equilibrium_function takes the axle height: build the SwiftTyre with "
+                                  "axle='height'")
+        be, prm, n = casadi_backend(), self.model.params, self.window
+        xa, za, vza, omega = (ca.MX.sym(name) for name in ("xa", "za", "vza", "omega"))
+        u = ca.MX.sym("u", len(INPUT_NAMES))
+        x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", n), ca.MX.sym("hw", 2 * n)
+        U = {name: u[i] for i, name in enumerate(INPUT_NAMES)}
+        h = ca.interpolant("cam", "linear", [n], 2, {"lookup_mode": ["exact"]})(xa - x0w, grid, hw)[0]
+        rl = be.fmin(za - h, prm.UNLOADED_RADIUS)  # as initial_state: model.vertical_force at no spin or slip
+        r0, dpi = vertical.free_radius(prm, 0.0, be), (U["p"] - prm.NOMPRES) / prm.NOMPRES
+        fz = (vertical.vertical_force_62(prm, rl, r0, 0.0, 0.0, 0.0, 0.0, dpi, be) if prm.version == "62"
+              else vertical.vertical_force_61(prm, r0 - rl, r0, 0.0, 0.0, 0.0, dpi, be))
+        guess = dict.fromkeys(STATE_NAMES, 0.0)
+        guess.update(xa=xa, xb=xa, za=za, vza=vza, zb=za + be.fmax(fz, 0.0) / self.constants.cbx, vxb=U["vx"],
+                     vyb=U["vy"], oma=omega, omb=omega, yb=U["y"], gb=U["gamma"], psb=U["psi"])
+
+        unknown, eqs = self.equilibrium_unknowns
+        s = ca.MX.sym("s", len(STATE_NAMES))
+        r = self._rhs_window(s, u, x0w, grid, hw, 0.0)[0][eqs]
+        delta = ca.solve(ca.jacobian(r, s)[:, unknown], -r, "qr")
+        parts = ca.vertsplit(s)
+        for k, i in enumerate(unknown):
+            parts[i] = parts[i] + delta[k]
+        newton = ca.Function("swift_newton", [s, u, x0w, grid, hw], [ca.vertcat(*parts)])
+        xi = ca.vertcat(*(guess[name] for name in STATE_NAMES))
+        for _ in range(iterations):
+            xi = newton(xi, u, x0w, grid, hw)
+        xi = _remember_contact(xi, self._rhs_window(xi, u, x0w, grid, hw, 0.0)[1])
+        return ca.Function("swift_equilibrium", [xa, za, vza, omega, u, x0w, grid, hw], [xi],
+                           ["xa", "za", "vza", "omega", "u", "x0w", "grid", "hw"], ["x"])
+
     def initial_state(self, inputs: StepInputs, iterations: int = 30) -> np.ndarray:
         """Static equilibrium (steady rolling at the input speeds) at the axle position of ``inputs``: Newton
         on the accelerations and patch rates, from the steady-state model's deflection. With ``rim="torque"`` the
@@ -407,14 +480,7 @@ class SwiftTyre:
         s[_S["oma"]] = s[_S["omb"]] = inputs.omega
         s[_S["yb"]] = inputs.y
         s[_S["gb"]], s[_S["psb"]] = inputs.gamma, inputs.psi
-        unknown = [_S[n] for n in ("xb", "zb", "thw", "yb", "gb", "psb", "ux", "uy", "kappa", "alpha", "psr")]
-        eqs = [_S[n] for n in ("vxb", "vzb", "omb", "vyb", "wgb", "wpsb", "ux", "uy", "kappa", "alpha", "psr")]
-        if self.axle == "load":
-            unknown.append(_S["za"])
-            eqs.append(_S["vza"])
-        if self.rim == "torque":  # the spin follows the torque: rim at rest relative to the belt, torques balanced
-            unknown += [_S["oma"], _S["omb"]]
-            eqs += [_S["oma"], _S["thw"]]
+        unknown, eqs = self.equilibrium_unknowns
         if self._equilibrium is None:  # built once: the static equations and their Jacobian in the unknowns
             xs, us = ca.MX.sym("x", len(STATE_NAMES)), ca.MX.sym("u", len(INPUT_NAMES))
             x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
@@ -439,6 +505,14 @@ class SwiftTyre:
             last = size
         self._store_contact(s, u)
         return s
+
+
+def _remember_contact(x, out):
+    """The state ``x`` (CasADi) with the contact solution of its outputs ``out`` in the memory entries xcs, lsm."""
+    import casadi as ca
+
+    memory = ca.vertcat(out[OUTPUT_NAMES.index("x_c")] - x[_S["xb"]], out[OUTPUT_NAMES.index("ls")])
+    return ca.vertcat(x[:_S["xcs"]], memory, x[_S["lsm"] + 1:])
 
 
 _NU = len(INPUT_NAMES)
@@ -498,6 +572,12 @@ CASADI_SYMBOL_EXPORT int swift_run(void** p) {
 """
 
 
+#: Compiler flags of the SWIFT library: ~15 % fewer instructions per step than -O2 (-fno-math-errno: sqrt and
+#: friends inline, errno is never read; gnu89: CasADi's fmax/fmin become inlined comparisons instead of libm calls,
+#: equal for all non-NaN arguments); portable (no -march), as the FMU ships the library.
+_CFLAGS = ("-O3", "-fno-math-errno", "-std=gnu89")
+
+
 def _compile(tyre, key: str) -> Path:
     """C code of the MX step as it is (no SX expansion) plus :data:`_DRIVER`, compiled with the system compiler
     and cached in :func:`mftyre.compiled.cache_dir`."""
@@ -516,27 +596,8 @@ def _compile(tyre, key: str) -> Path:
         with source.open("a") as f:
             f.write(_DRIVER % dict(nx=len(STATE_NAMES), ny=len(OUTPUT_NAMES), nu=_NU, ni=_NI, window=tyre.window,
                                    height=int(tyre.axle == "height"), speed=int(tyre.rim == "speed"), **_S))
-        _compile_c(source, library)
+        compile_c(source, library, flags=(*_CFLAGS, "-fPIC", "-shared"))
     return library
-
-
-#: Compiler flags of the SWIFT library: ~15 % fewer instructions per step than -O2 (-fno-math-errno: sqrt and
-#: friends inline, errno is never read; gnu89: CasADi's fmax/fmin become inlined comparisons instead of libm calls,
-#: equal for all non-NaN arguments); portable (no -march), as the FMU ships the library.
-_CFLAGS = ("-O3", "-fno-math-errno", "-std=gnu89")
-
-
-def _compile_c(source: Path, library: Path) -> None:
-    """Compile ``source`` into the shared library ``library`` with :data:`_CFLAGS` (written atomically)."""
-    compiler = os.environ.get("CC", "cc")
-    if shutil.which(compiler) is None:
-        raise MFTyreError(f"no C compiler found ({compiler!r}); install gcc or set CC to compile the SWIFT step")
-    tmp = library.with_name(f".{library.name}.{os.getpid()}.tmp")
-    cmd = [compiler, *_CFLAGS, "-fPIC", "-shared", str(source), "-o", str(tmp), "-lm"]
-    run = subprocess.run(cmd, capture_output=True, text=True)
-    if run.returncode != 0:
-        raise MFTyreError(f"compiling {source} failed ({' '.join(cmd)}):\n{run.stderr[-2000:]}")
-    os.replace(tmp, library)
 
 
 class _Compiled:

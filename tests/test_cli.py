@@ -146,9 +146,12 @@ def test_negative_values_after_option(capsys):
 # ------------------------------------------------------------------------------------ csv and plot
 def test_csv_selected_outputs_roundtrip(tmp_path, capsys):
     out_csv = tmp_path / "fy.csv"
-    out_csv.write_text("old content\n")  # overwriting an output file is fine
-    rc = cli.main(["eval", str(TIR61), "--alpha", "-0.1:0.1:7", "--fz", "4000", "--outputs", "fy,mz",
-                   "--csv", str(out_csv), "-q"])
+    out_csv.write_text("old content\n")  # an existing output is replaced only with --overwrite
+    argv = ["eval", str(TIR61), "--alpha", "-0.1:0.1:7", "--fz", "4000", "--outputs", "fy,mz", "--csv", str(out_csv),
+            "-q"]
+    assert cli.main(argv) == 2 and "--overwrite" in capsys.readouterr().err
+    assert out_csv.read_text() == "old content\n"
+    rc = cli.main(argv + ["--overwrite"])
     assert rc == 0, capsys.readouterr().err
     df = _read_csv(out_csv)
     assert list(df.columns) == ["alpha [rad]", "fy [N]", "mz [N m]"]

@@ -5,9 +5,10 @@ handed that model with one (or two) catalogue effects switched off (their switch
 must name exactly the hidden effect(s) and shrink the held-out error of the effect's primary channel by at least
 70 %; handed the full model it must add nothing. Two tyres: A, the MF 6.1 sample; B, the MF 6.2 sample scaled to a
 different tyre (5 kN nominal load, 0.33 m radius, 2.5 bar, 12 % more friction, 25 % more cornering stiffness, 10 %
-less slip stiffness, 20 % longer trail, stiffer carcass). Noise: 0.3 x the realistic level of
-:data:`mftyre.data.NOISE` (at the realistic level the noise floor alone is about 40 % of the before-error of the
-weaker effects, so a 70 % shrink of the raw error would be impossible whatever the model).
+less slip stiffness, 20 % longer trail, stiffer carcass). Noise: the realistic level of :data:`mftyre.data.NOISE`;
+the target is the held-out error's excess over the true model's (the noise floor), which must shrink by 70 %.
+Issue 11 adds realistic rig time series (100 Hz, AR(1) noise, hysteresis, drift, load scatter: :mod:`mftyre.rig`),
+effects the data cannot test, verification before writing, honest statistics and small data.
 
 Independent checks: the catalogue's neutral values reproduce the full model exactly at the nominal condition
 (dpi = 0, gamma = 0, dfz = 0, phit = 0: the analytic limit where every switched term vanishes) and change it
@@ -32,7 +33,7 @@ from mftyre.tir import write_tir
 
 from conftest import TIR_FILES
 
-NOISE = 0.3
+NOISE = 1.0   # the realistic level of mftyre.data.NOISE
 
 
 def _tyre_a():
@@ -168,16 +169,12 @@ def test_holdout_takes_whole_sweeps_of_every_kind():
 # --------------------------------------------------------------------------------- hidden-effect evidence
 CASES = {
     # id: (tyre, hidden effects, partial range)
-    "A-fy-pressure_cornering_stiffness": ("A", ("pressure_cornering_stiffness",), False),
-    "A-fx-pressure_slip_stiffness": ("A", ("pressure_slip_stiffness",), False),
-    "A-mx-camber_overturning": ("A", ("camber_overturning",), False),
     "B-fy-camber_thrust": ("B", ("camber_thrust",), False),
     "B-my-pressure_rolling_resistance": ("B", ("pressure_rolling_resistance",), False),
     "B-fz-pressure_vertical_stiffness": ("B", ("pressure_vertical_stiffness",), False),
     "A-two-pressure_slip_stiffness+camber_overturning": ("A", ("pressure_slip_stiffness", "camber_overturning"),
                                                           False),
     "A-partial-range-load_slip_stiffness": ("A", ("load_slip_stiffness",), True),
-    "A-control-nothing-hidden": ("A", (), False),
 }
 EVIDENCE = {}
 
@@ -189,14 +186,15 @@ def test_hidden_effect_is_named_added_and_the_gap_shrinks(case):
     rep = find_gaps(data, neutralise(full, *hidden))
     shrink = rep.shrink()
     affected = sorted({CATALOGUE[h].channels[0] for h in hidden})
-    EVIDENCE[case] = (rep.effect_names, {c: (rep.error_before[c], rep.error_after[c], shrink[c]) for c in affected})
+    EVIDENCE[case] = (rep.effect_names, {c: (rep.error_before[c], rep.error_after[c], shrink.get(c)) for c in affected})
     print(case, EVIDENCE[case])
     assert sorted(rep.effect_names) == sorted(hidden), rep.message
-    for c in affected:
-        assert shrink[c] >= 0.70, (c, rep.error_before[c], rep.error_after[c])
-    if not hidden:
-        assert rep.findings_before == [] and "nothing added" in rep.message
-    else:
+    true = rep.held_out_error(full)
+    for c in affected:   # the held-out error's excess over the true model's shrinks by at least 70 %
+        excess_before, excess_after = rep.error_before[c] - true[c], rep.error_after[c] - true[c]
+        assert excess_before > 0 and excess_after <= 0.3 * excess_before, (c, rep.error_before[c],
+                                                                            rep.error_after[c], true[c])
+    if hidden:
         assert rep.findings_before[0].channel in {c for h in hidden for c in CATALOGUE[h].channels}
         for a in rep.effects_added:   # every added parameter carries a value and a standard error
             assert all(math.isfinite(v["value"]) and v["stderr"] is not None for v in a.parameters.values())
@@ -243,3 +241,180 @@ def test_command_line_writes_tir_report_and_json(tmp_path):
     assert (tmp_path / "rep" / "residual_maps_before_after.png").exists()
     # refuses to overwrite
     assert args.func(args) == 2
+
+
+# ------------------------------------------------------------------------------- untestable effects (#11)
+def test_effects_the_data_cannot_test_are_not_candidates():
+    """Free rolling only (SL = SA = 0 throughout) with an Fx offset (rolling resistance seen by the load cell):
+    the Fx shifts act along kappa, so from kappa = 0 alone a horizontal shift cancels a vertical one and the curve
+    away from kappa = 0 is invented (issue 11: PVX1 = 0.55 gave Fx = -1024 / +2579 N at kappa = -/+0.05). The
+    effect is reported untestable with the reason, never tried; the model's Fx stays odd in kappa."""
+    full = _tyre_a()
+    d = trailer_programme(full, points=15, noise=1.0, seed=3)
+    d = d.select(d.frame["TEST"].to_numpy() == "free_rolling")
+    frame = d.frame.copy()
+    frame["FX"] = frame["FX"] - 0.012 * frame["FZ"]
+    rep = find_gaps(d.with_frame(frame, "rolling resistance in Fx"), neutralise(full, "fx_shift"))
+    assert rep.findings_before and rep.findings_before[0].channel == "FX"
+    assert "fx_shift" not in rep.effect_names
+    assert "SL = 0 throughout" in rep.untestable["fx_shift"]
+    assert "slip-angle sweep" in rep.untestable["camber_fy_peak"] and "SL = 0" in rep.untestable["camber_friction_x"]
+    tried = {c.name for r in rep.rounds for c in r}
+    assert not tried & {"fx_shift", "camber_fy_peak", "camber_friction_x", "load_curvature_x"}
+    fx = rep.model.evaluate(2750.0, np.array([-0.05, 0.05]), 0.0, 0.0, 0.0)["fx"]
+    assert abs(fx[0] + fx[1]) < 0.02 * 2750.0
+
+
+# ------------------------------------------------------------------------------------------ small data (#11)
+def _agricultural_tyre():
+    """A 460/85R34-class tractor tyre: free radius 0.80 m, 20 kN nominal load, 1.3 bar nominal (1.0-1.6 bar used),
+    vertical stiffness 400 kN/m at nominal load and pressure, hardening Q_FZ2 = 40 (deflection 39-96 mm over
+    10-30 kN), stiffness +/- 14 % over the pressure range (PFZ1 = 0.6)."""
+    return _tyre_a().with_params(
+        UNLOADED_RADIUS=0.80, WIDTH=0.46, RIM_RADIUS=0.432, FNOMIN=20000.0, NOMPRES=1.3e5, INFLPRES=1.3e5,
+        PRESMIN=0.9e5, PRESMAX=1.8e5, FZMIN=2000.0, FZMAX=40000.0, VERTICAL_STIFFNESS=4.0e5, Q_FZ2=40.0, PFZ1=0.6,
+        Q_RE0=1.0, Q_V1=0.0, Q_V2=0.0, LONGVL=1.0)
+
+
+def _load_deflection_8_points(full, seed=11):
+    """Measured load-deflection table: 2 pressures x 4 loads, the load measured with 1 % noise, rolling at
+    0.5 m/s."""
+    import pandas as pd
+
+    fz = np.tile([10e3, 16.7e3, 23.3e3, 30e3], 2)
+    p = np.repeat([1.0e5, 1.6e5], 4)
+    rl, rho = full.loaded_radius(fz, p=p, omega=0.5 / full.params.UNLOADED_RADIUS)
+    noisy = fz * (1.0 + 0.01 * np.random.default_rng(seed).normal(size=fz.size))
+    frame = pd.DataFrame(dict(TEST="vertical", SWEEP=np.repeat([0, 1], 4), FZ=noisy, SL=0.0, SA=0.0, IA=0.0,
+                              VX=0.5, P=p, RL=rl, RHO=rho))
+    return TyreData(frame, source="load-deflection 460/85R34, 8 points")
+
+
+def test_small_data_finds_hardening_and_pressure_stiffness_with_uncertainties():
+    """Issue 11: against a linear, pressure-blind model the old search estimated the noise from second differences
+    of four-point sweeps (i.e. from the curvature under test) and added nothing while the held-out FZ error was
+    12.4 %. With 8 points the effects are judged by AICc and leave-one-out over all points; both are found, each
+    with a standard error, and the leave-one-out error falls to the 1 % noise level."""
+    full = _agricultural_tyre()
+    data = _load_deflection_8_points(full)
+    base = neutralise(full, "vertical_hardening", "pressure_vertical_stiffness").with_params(
+        VERTICAL_STIFFNESS=3.5e5)
+    rep = find_gaps(data, base)
+    assert sorted(rep.effect_names) == ["pressure_vertical_stiffness", "vertical_hardening"], rep.message
+    assert rep.error_before["FZ"] > 10.0 and rep.error_after["FZ"] < 2.0      # leave-one-out errors [%]
+    assert "selected model" in rep.noise["FZ"][1]                             # not from second differences
+    values = {k: v for a in rep.effects_added for k, v in a.parameters.items()}
+    for name, true in (("PFZ1", 0.6), ("Q_FZ2", 40.0)):
+        v = values[name]
+        assert v["stderr"] is not None and v["stderr"] < 0.3 * abs(v["value"]), (name, v)
+        assert abs(v["value"] - true) < 3.0 * v["stderr"], (name, v)
+    md = rep.markdown()
+    assert "leave-one-out" in md and "Q_FZ2" in md
+
+
+# ------------------------------------------------------------------------------------ verify before writing (#11)
+def test_an_effect_whose_tir_fails_verification_is_rejected_with_the_reason():
+    """Drive-side slip sweeps only (kappa >= 0) with a large Fx offset: the Fx shifts fit the data, but the .tir
+    would carry the offset into braking, where there are no data (Fx = -62 / +171 N at kappa = -/+0.05): an
+    invented asymmetry. The effect is rejected with the verification's reason, the fair start's stage too, and
+    the improved model stays odd in kappa."""
+    full = _tyre_a()
+    d = trailer_programme(full, points=21, noise=1.0, seed=3, cambers_deg=(0.0,), combined_alpha_deg=())
+    d = d.select((d.frame["TEST"].to_numpy() == "pure_longitudinal") & (d.frame["SL"].to_numpy() >= 0))
+    frame = d.frame.copy()
+    frame["FX"] = frame["FX"] + 0.3 * frame["FZ"]
+    rep = find_gaps(d.with_frame(frame, "Fx offset"), neutralise(full, "fx_shift"))
+    assert rep.effect_names == []
+    assert "verification" in rep.rejected["fx_shift"] and "asymmetry" in rep.rejected["fx_shift"]
+    assert "fx_shift" in rep.markdown() and "Effects rejected" in rep.markdown()
+    fx = rep.model.evaluate(4000.0, np.array([-0.05, 0.05]), 0.0, 0.0, 0.0)["fx"]
+    assert abs(fx[0] + fx[1]) < 0.02 * 4000.0
+    from mftyre.fit.verify import verify_tir
+    assert verify_tir(rep.model) == []
+
+
+# ------------------------------------------------------------------- realistic rig data, realistic noise (#11)
+# 100 Hz time series from the fit helper's generator (mftyre.rig): AR(1) noise at the realistic level (1 x NOISE),
+# relaxation hysteresis, friction drifting over the day, load scatter, levels that are not round numbers. The gap
+# finder reduces each sweep (up and down branches apart), so its held-out errors are those of binned means; the
+# target is the excess of the held-out error over the true model's (friction drift and load scatter are errors
+# of every steady-state model): it must shrink by at least 70 %.
+RIG_CASES = {
+    # id: (hidden effects, rig_programme keywords)
+    "rig-fy-pressure_cornering_stiffness": (("pressure_cornering_stiffness",), dict(longitudinal=False)),
+    "rig-fx-pressure_slip_stiffness": (("pressure_slip_stiffness",), dict(combined_alpha_deg=())),
+    "rig-mx-camber_overturning": (("camber_overturning",), dict(longitudinal=False)),
+    "rig-control-nothing-hidden": ((), dict(longitudinal=False)),
+}
+_RIG = {}
+
+
+def _rig(kw_key, kw):
+    from mftyre.rig import rig_programme
+
+    if kw_key not in _RIG:
+        _RIG[kw_key] = rig_programme(_tyre_a(), loads=(0.5, 1.0, 1.5), noise=1.0, seed=21, **kw)
+    return _RIG[kw_key]
+
+
+@pytest.mark.parametrize("case", list(RIG_CASES))
+def test_rig_data_at_realistic_noise(case):
+    hidden, kw = RIG_CASES[case]
+    full = _tyre_a()
+    data = _rig(repr(sorted(kw.items())), kw)
+    rep = find_gaps(data, neutralise(full, *hidden))
+    assert rep.reduction and "100 Hz" in rep.programme
+    assert "3 loads" in rep.programme and "3 pressures" in rep.programme and "27 slip-angle sweeps" in rep.programme
+    assert sorted(rep.effect_names) == sorted(hidden), rep.message
+    true = rep.held_out_error(full)
+    for c in sorted({CATALOGUE[h].channels[0] for h in hidden}):
+        excess_before, excess_after = rep.error_before[c] - true[c], rep.error_after[c] - true[c]
+        print(case, c, "held-out", rep.error_before[c], "->", rep.error_after[c], "true model", true[c])
+        assert excess_before > 0 and excess_after <= 0.3 * excess_before, (c, rep.error_before[c],
+                                                                            rep.error_after[c], true[c])
+    # the up/down hysteresis is named as the transient effect it is, with a relaxation length near the model's
+    named = {t["channel"]: t for t in rep.transient}
+    assert "FY" in named and "PTY1" in named["FY"]["parameters"] and "relaxation length" in rep.message
+    assert 0.6 < named["FY"]["relaxation_length"] / named["FY"]["model_relaxation_length"] < 1.4
+    assert "Transient effects" in rep.markdown()
+
+
+# ------------------------------------------------------------------------------- honest statistics (#11)
+def test_autocorrelated_samples_do_not_make_a_negligible_gain_significant():
+    """100 Hz samples with AR(1) noise (lag-one correlation 0.95): a constant offset fitted to the noise of the
+    training sweeps changes the held-out error by a negligible amount (like 7.120 -> 7.119 %). Counted as
+    independent rows it passes the F test; with the effective number of samples and whole held-out sweeps it does
+    not."""
+    import pandas as pd
+    from scipy.signal import lfilter
+
+    from mftyre.gaps.core import _n_eff, _sweep_test, f_test
+    from mftyre.gaps.refit import refit
+
+    full = _tyre_a()
+    rng = np.random.default_rng(8)
+    n_sweeps, m, rho, sd = 40, 600, 0.95, 20.0
+    alpha = np.tile(np.radians(np.linspace(-8.0, 8.0, m)), n_sweeps)
+    fz = np.full(alpha.size, 4000.0)
+    fy = full.evaluate(fz, 0.0, alpha, 0.0, 0.0).fy
+    noise = lfilter([1.0], [1.0, -rho], rng.normal(0.0, sd * math.sqrt(1 - rho**2), alpha.size))
+    frame = pd.DataFrame(dict(FZ=fz, SL=0.0, SA=alpha, IA=0.0, VX=16.7, P=full.params.NOMPRES, PHIT=0.0,
+                              FY=fy + noise, SWEEP=np.repeat(np.arange(n_sweeps), m)))
+    data = TyreData(frame, source="AR(1) noise")
+    train, test = data.select(frame["SWEEP"].to_numpy() % 4 != 0), data.select(frame["SWEEP"].to_numpy() % 4 == 0)
+    ev_tr, ev_te = Evaluator(train, ["FY"]), Evaluator(test, ["FY"])
+    sigma = {"FY": (sd,)}
+    new, res = refit(full.params, ev_tr, ["PVY1"], ["FY"], sigma)
+    n = ev_tr.measured["FY"].size
+    n_eff = _n_eff(ev_tr, new, ["FY"])
+    assert n_eff == pytest.approx(n * (1 - rho) / (1 + rho), rel=0.25)
+    err0 = mftyre.fit.metrics.normalised_rms(ev_te.predict(full)["FY"], ev_te.measured["FY"])
+    err1 = mftyre.fit.metrics.normalised_rms(ev_te.predict(new)["FY"], ev_te.measured["FY"])
+    assert abs(err1 - err0) < 0.01 * err0          # a negligible held-out change
+    _, p_rows = f_test(res.chi2_before, res.chi2_after, n, n, 1)
+    _, p_eff = f_test(res.chi2_before, res.chi2_after, n, n_eff, 1)
+    print("n", n, "n_eff", n_eff, "held-out", err0, err1, "p rows", p_rows, "p n_eff", p_eff)
+    assert p_rows < 1e-3 < p_eff                   # significant only when 100 Hz rows count as independent
+    p_sweeps, sweeps = _sweep_test(ev_te, full, new, sigma, ["FY"])
+    print("held-out sweeps", sweeps, "p", p_sweeps)
+    assert sweeps == 0 or p_sweeps > 0.05

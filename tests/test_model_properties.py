@@ -448,7 +448,7 @@ def test_loaded_radius_and_vertical_force_are_inverse(spec):
         assert np.all(np.isfinite(rl)) and np.all(rl > 0) and np.all(rho > 0)
         back = m.vertical_force(rl, p=p, omega=omega, fx=500.0, fy=fy, gamma=gamma)
         # MF 6.2: a cambered tyre touching the road with its shoulder already carries a load at Rl = R_omega
-        # (the camber deflection); loads below that have no root, and the documented answer is Rl = R_omega.
+        # (the camber deflection); smaller loads have their root above R_omega (wheel lifted) or none (Rl = R_omega)
         r_omega = prm.UNLOADED_RADIUS * (prm.Q_RE0 + prm.Q_V1 * (omega * prm.UNLOADED_RADIUS / prm.LONGVL) ** 2)
         f_top = m.vertical_force(r_omega, p=p, omega=omega, fx=500.0, fy=fy, gamma=gamma)
         reachable = np.broadcast_to(fz, back.shape) > f_top
@@ -456,7 +456,9 @@ def test_loaded_radius_and_vertical_force_are_inverse(spec):
             assert np.all(reachable)
         assert np.mean(reachable) > 0.9
         np.testing.assert_allclose(back[reachable], np.broadcast_to(fz, back.shape)[reachable], rtol=1e-9, atol=1e-6)
-        np.testing.assert_allclose(rl[~reachable], r_omega, rtol=0, atol=1e-12)
+        lifted = ~reachable & (rl > r_omega)
+        np.testing.assert_allclose(back[lifted], np.broadcast_to(fz, back.shape)[lifted], rtol=1e-9)
+        np.testing.assert_allclose(rl[~reachable & ~lifted], r_omega, rtol=0, atol=1e-12)
         # and the other way round, from radii
         rls = np.linspace(prm.UNLOADED_RADIUS - 0.04, prm.UNLOADED_RADIUS - 0.005, 5)[:, None, None, None]
         f = m.vertical_force(rls, p=p, omega=omega, fx=500.0, fy=fy, gamma=gamma)
@@ -554,3 +556,13 @@ def test_broadcasting_shapes_of_vertical_helpers():
     rl0, _ = model.loaded_radius(4000.0)
     assert np.shape(rl0) in ((), (1,))
     assert float(np.ravel(rl0)[0]) == pytest.approx(float(rl[1, 1]), abs=1e-12)
+
+
+def test_parameters_without_a_finite_solution_raise_instead_of_returning_nan():
+    """Q_V1 = -1433, Q_V2 = 480 (written by an old fit) make the free radius vanish: evaluate returned NaN radii
+    and spin silently; now a ModelInputError names the outputs and the point."""
+    from conftest import TIR_FILES
+
+    bad = mftyre.load_tir(TIR_FILES / "car_205_60R15_mf62_swift.tir").with_params(Q_V1=-1433.0, Q_V2=480.0)
+    with pytest.raises(ModelInputError, match=r"non-finite .*rl.* vx=40"):
+        bad.evaluate(4000.0, 0.0, 0.0, vx=40.0)

@@ -111,9 +111,8 @@ def _check_vertical_equation(model, df, ours):
     if prm.version == "62":
         fz = vertical.vertical_force_62(prm, ours["Rl"].to_numpy(), r_omega, omega, ours["Fx"].to_numpy(),
                                            ours["Fy"].to_numpy(), gamma, dpi, NUMPY)
-        # either the load is carried, or the tyre touches only with its cambered shoulder at zero free
-        # deflection (Rl = R_omega) and already carries more: the contact limit (the MF 6.2 relation's only
-        # roots there lie above the free radius, with the wheel lifted; see mftyre.formula.vertical)
+        # either the load is carried (also by a root above the free radius, wheel lifted), or the relation has
+        # no root within R0 above it and Rl = R_omega (see mftyre.formula.vertical)
         carried = np.abs(fz - fz_in) <= 1e-9 * prm.FNOMIN
         at_limit = (ours["Rl"].to_numpy() == r_omega) & (fz >= fz_in)
         assert np.all(carried | at_limit), np.c_[fz, fz_in][~(carried | at_limit)]

@@ -256,7 +256,7 @@ ALPMIN = -0.5
                                                            ("KM", "N", "KG", 1000.0)])
 def test_more_unit_spellings(length, force, mass, expected_r0):
     text = f"[UNITS]\nLENGTH='{length}'\nFORCE='{force}'\nMASS='{mass}'\n[MODEL]\nFITTYP=61\n" \
-           "[DIMENSION]\nUNLOADED_RADIUS = 1\n[VERTICAL]\nFNOMIN = 1\n[INERTIA]\nMASS = 1\n"
+           "[DIMENSION]\nUNLOADED_RADIUS = 1\nRIM_RADIUS = 0.5\n[VERTICAL]\nFNOMIN = 1\nQ_FZ2 = 0\n[INERTIA]\nMASS = 1\n"
     prm = parse_quiet(text)
     assert prm.UNLOADED_RADIUS == pytest.approx(expected_r0, rel=1e-15)
     assert prm.FNOMIN == pytest.approx({"kgf": 9.80665, "kilonewton": 1000.0, "N": 1.0}[force], rel=1e-15)
@@ -528,7 +528,7 @@ def test_check_more_value_rules(tmp_path):
     assert ("warning", "INFLPRES") in by and ("warning", "Q_FZ2") in by
     assert ("error", "Q_FZ2") not in by  # (Cz0 R0/Fz0)^2 - 0 >= 0
     path.write_text(HEAD + "[VERTICAL]\nFNOMIN = 4000\nVERTICAL_STIFFNESS = 1000\nQ_FZ2 = 10\n")
-    errs = [f for f in check_tir(path) if f.severity == "error"]
+    errs = [f for f in check_tir(path) if f.severity == "error" and "core coefficient" not in f.message]
     assert [f.parameter for f in errs] == ["Q_FZ2"] and "Q_FZ1" in errs[0].message
 
 

@@ -5,11 +5,37 @@
 """
 from __future__ import annotations
 
+import argparse
 import sys
 import time
 from pathlib import Path
 
 __all__ = ["register", "run"]
+
+
+_CSV_FORMAT = """\
+CSV format: one header row, comma separated, one row per sample (rows in measurement order). Columns with
+these names are read as they are, in SI units and ISO-W / TYDEX W axes:
+  FZ  vertical load [N] (required)        FX FY  longitudinal / lateral force [N]
+  SA  slip angle [rad] (required)         MX MY MZ  overturning / rolling-resistance / aligning moment [N m]
+  SL  longitudinal slip [-] (required)    RL RHO RE  loaded radius, deflection, effective radius [m]
+  VX  speed [m/s] (required)              OMEGA  wheel spin [rad/s]
+  P   inflation pressure [Pa] (required)  IA  inclination [rad] (default 0)   PHIT  turn slip [1/m] (default 0)
+  TIME [s] (optional: sample rate of a time series)
+Other names or units: read the file with mftyre.data.read_csv(path, columns={...}, units={...}) in Python.
+Time series (100 Hz and more) are reduced per sweep to binned means, up and down branches averaged."""
+
+
+def _integer(minimum):
+    def parse(text):
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}, got {text!r}") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}, got {value}")
+        return value
+    return parse
 
 
 def register(subparsers) -> None:
@@ -19,8 +45,11 @@ def register(subparsers) -> None:
         "fit", help="fit Magic Formula parameters to tyre measurements and write a .tir file",
         description="Fit MF 6.1 parameters, stage by stage (pure Fx, pure Fy, Mz, combined, Mx, My, vertical, "
                     "rolling radius), to TYDEX (.tdx) or CSV data; pressure terms when the data have several "
-                    "pressures. Writes the .tir file and optionally a Markdown report with plots.")
-    p.add_argument("data", help="measurement file: .tdx (TYDEX) or .csv (canonical channels, SI)")
+                    "pressures. The test programme is recognised first and printed; stages whose result fails "
+                    "the physical checks are rejected with their reason. Writes the .tir file and optionally a "
+                    "Markdown report with plots.", epilog=_CSV_FORMAT,
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("data", help="measurement file: .tdx (TYDEX) or .csv (see the CSV format below)")
     p.add_argument("-o", "--output", required=True, help="the .tir file to write")
     p.add_argument("--start", help="start parameters from this .tir file (default: neutral values and estimates "
                                    "from the data)")
@@ -30,6 +59,10 @@ def register(subparsers) -> None:
     p.add_argument("--no-pressure", action="store_true", help="do not fit the inflation-pressure terms")
     p.add_argument("--weighting", choices=("uniform", "load"), default="uniform",
                    help="residual weighting: uniform, or 1/Fz (every load alike)")
+    p.add_argument("--bins", type=_integer(3), default=40,
+                   help="bins per sweep when a time series is reduced (integer >= 3, default 40)")
+    p.add_argument("--max-nfev", type=_integer(1), default=None,
+                   help="residual evaluations per pass at most (integer >= 1; default 30 x (parameters + 1))")
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=run)
@@ -37,44 +70,60 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     from ..errors import MFTyreError
+    from ..files import OutputError, check_outputs
     from .core import fit_tir, load_data
     from .stages import STAGE_NAMES
 
     out = Path(args.output)
-    if out.exists() and not args.overwrite:
-        print(f"mftyre fit: {out} exists; use --overwrite to replace it", file=sys.stderr)
-        return 2
     stages = [s.strip() for s in args.stages.split(",") if s.strip()]
     unknown = [s for s in stages if s not in STAGE_NAMES]
     if unknown:
         print(f"mftyre fit: unknown stage(s) {', '.join(unknown)}; stages: {', '.join(STAGE_NAMES)}", file=sys.stderr)
         return 2
+    outputs = {"-o": out, "--report": args.report}
+    if args.report:  # the report's plots beside it (mftyre.fit.report.save_report)
+        report = Path(args.report)
+        outputs.update({f"--report plot of {s}": report.with_name(f"{report.stem}_{s}.png") for s in stages})
+    try:
+        check_outputs(outputs, {"DATA": args.data, "--start": args.start}, overwrite=args.overwrite)
+    except OutputError as exc:
+        print(f"mftyre fit: {exc}", file=sys.stderr)
+        return 2
     t0 = time.perf_counter()
 
+    terminal = sys.stderr.isatty()
+
     def progress(stage, label, nfev, cost):
+        # on a terminal one line updated in place; in a log one line per update
         if not args.quiet:
-            print(f"\r  [{time.perf_counter() - t0:6.1f} s] {stage:<15} {label:<30} {nfev:5d} evaluations, "
-                  f"cost {cost:.4g}", end="", file=sys.stderr, flush=True)
+            print(f"{chr(13) if terminal else ''}  [{time.perf_counter() - t0:6.1f} s] {stage:<15} {label:<30} "
+                  f"{nfev:5d} evaluations, cost {cost:.4g}", end="" if terminal else "\n", file=sys.stderr,
+                  flush=True)
 
     try:
         data = load_data(args.data)
         result = fit_tir(data, start=args.start, stages=stages, fit_pressure=not args.no_pressure,
-                         weighting=args.weighting, progress=progress)
+                         weighting=args.weighting, progress=progress, bins=args.bins, max_nfev=args.max_nfev)
+        if not args.quiet and terminal:
+            print(file=sys.stderr)
+        print(f"test programme: {result.programme.summary()}")
+        if result.reduction is not None:
+            print(result.reduction.summary())
         result.write_tir(out, overwrite=args.overwrite)
         if args.report:
             result.save_report(args.report)
     except (MFTyreError, OSError) as exc:
-        if not args.quiet:
+        if not args.quiet and terminal:
             print(file=sys.stderr)
         print(f"mftyre fit: {exc}", file=sys.stderr)
         return 1
-    if not args.quiet:
-        print(file=sys.stderr)
-    print(f"fitted {len(data)} points in {result.seconds:.1f} s; wrote {out}"
-          + (f" and {args.report}" if args.report else ""))
+    fitted = (f"{len(data)} rows ({len(result.data)} points after reduction)" if result.reduction is not None
+              else f"{len(data)} points")
+    print(f"fitted {fitted} in {result.seconds:.1f} s; wrote {out}" + (f" and {args.report}" if args.report else ""))
     for name, st in result.stages.items():
         print(f"  {name:<15} {st.n_points:6d} points  {len(st.fitted):3d} parameters  fit error "
-              f"{st.fit_error:7.3f} %")
+              f"{st.fit_error:7.3f} %" + (f"  REJECTED: {'; '.join(st.rejected)}" if st.rejected else "")
+              + (f"  reset (not determined): {', '.join(st.reset)}" if st.reset else ""))
     if result.comparison is not None:
         for _, row in result.comparison.iterrows():
             print(f"  pressure comparison {row.stage:<8} lower {row.lower:.3f} %  upper {row.upper:.3f} %  "

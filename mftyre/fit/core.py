@@ -1,13 +1,22 @@
 """Staged least-squares fitting of Magic Formula parameters with lmfit (trust-region reflective,
 ``scipy.optimize.least_squares``), and the lower/upper-bound comparison of Schmeitz et al. (2005), Table 2.
 
-Residuals: every residual evaluation runs the model once over the whole stage data (one vectorised
-:meth:`mftyre.MFModel.evaluate` call), residual_i = w_i (model_i - measured_i) / s with s the RMS of the
-measured channel over the stage data, so the cost is the squared normalised RMS error of
-:func:`mftyre.fit.normalised_rms` for uniform weights; w_i = 1 (``weighting="uniform"``) or FNOMIN / Fz_i
-(``"load"``: every load level counts alike). Shape conditions (:func:`mftyre.fit.stages.shape_violations`)
-enter as penalty residuals, 10 sqrt(n) times the violation, at the corners of the data's load, pressure and
-camber range. Model outputs that are not finite give the residual 10 (the step is rejected).
+Before the stages: the test programme is recognised (:func:`mftyre.programme.recognise`) and a time series is
+reduced per sweep to binned means with the up and down branches averaged (:func:`mftyre.timeseries.reduce_sweeps`).
+
+Residuals: residual_i = w_i (model_i - measured_i) / s with s the RMS of the measured channel over the stage
+data, so the cost is the squared normalised RMS error of :func:`mftyre.fit.normalised_rms` for uniform weights;
+w_i = 1 (``weighting="uniform"``) or FNOMIN / Fz_i (``"load"``: every load level counts alike). Shape
+conditions (:func:`mftyre.fit.stages.shape_violations`) enter as penalty residuals, 10 sqrt(n) times the
+violation, at the corners of the data's load, pressure and camber range. Model outputs that are not finite
+give the residual 10 (the step is rejected). The model is evaluated for all parameter vectors of a
+finite-difference Jacobian at once (:class:`_BatchPredictor`: parameters as column vectors against the data as
+a row), the optimiser stops on a relative cost change of 1e-6, BLAS runs on one thread.
+
+After each stage: undetermined parameters go back to their start values (:func:`_undetermined`), standard errors
+use the effective number of independent samples, and the stage is accepted only when it fits its data no
+worse than before and :func:`mftyre.fit.verify.verify_tir` finds no new problem (the vertical stage also
+needs a positive deflection at the measured loads); otherwise it is rejected and the previous values kept.
 """
 from __future__ import annotations
 
@@ -21,14 +30,20 @@ import lmfit
 import numpy as np
 import pandas as pd
 
-from ..data import TyreData, levels, read_csv, read_tydex
+from ..backend import NUMPY
+from ..data import TyreData, read_csv, read_tydex
 from ..errors import DataError
-from ..model import MFModel
+from ..formula import Modes, steady_state, vertical
+from ..model import STRUCTURAL_PARAMETERS, MFModel
 from ..params import TyreParameters
+from ..programme import recognise
+from ..timeseries import effective_samples, needs_reduction, reduce_sweeps
 from ..tir import read_tir, write_tir
 from .metrics import normalised_rms
-from .stages import STAGE_NAMES, STAGES, Stage, conditions, shape_violations, stage_parameters, stage_rows
+from .stages import (STAGE_NAMES, STAGES, Stage, conditions, level_labels, shape_violations, stage_parameters,
+                     stage_rows, supported_parameters)
 from .start import estimate_stage, start_parameters
+from .verify import check_speeds, verify_tir
 
 __all__ = ["fit_tir", "FitResult", "StageResult", "load_data", "COMPARED_STAGES", "BOUNDS", "bounded_parameters"]
 
@@ -49,7 +64,10 @@ COMPARED_STAGES = ("pure_fx", "pure_fy", "mz")
 
 @dataclass
 class StageResult:
-    """One fitted stage: its passes' lmfit results, the final values and standard errors, the fit error."""
+    """One fitted stage: its passes' lmfit results, the final values and standard errors (scaled for the
+    effective number of independent samples ``n_eff``), the fit error; ``reset``: {parameter: why it went back to
+    its start value}; ``rejected``: reasons the stage was rejected (its values then not used; ``fitted`` empty);
+    ``notes``: what the stage changed besides its parameters (e.g. the free radius derived from the data)."""
 
     name: str
     title: str
@@ -64,6 +82,10 @@ class StageResult:
     fit_error: float
     passes: list = field(default_factory=list)  # [(label, lmfit.MinimizerResult)]
     seconds: float = 0.0
+    reset: dict = field(default_factory=dict)
+    rejected: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+    n_eff: float = float("nan")
 
     @property
     def result(self):
@@ -73,7 +95,8 @@ class StageResult:
 
 class FitResult:
     """The outcome of :func:`fit_tir`: ``model``, ``params``, ``stages`` (name -> :class:`StageResult`),
-    ``comparison`` (Table-2 DataFrame or None), ``data``, ``start``; ``report`` (Markdown),
+    ``comparison`` (Table-2 DataFrame or None), ``data`` (as fitted), ``raw_data``, ``programme``, ``reduction``,
+    ``problems`` (:func:`mftyre.fit.verify.verify_tir` of the result), ``start``; ``report`` (Markdown),
     ``save_report(path)`` (Markdown and PNG plots), ``write_tir(path)``."""
 
     def __init__(self, params, data, start, stages, comparison, notes, seconds):
@@ -81,6 +104,9 @@ class FitResult:
         self.model = MFModel(params)
         self.data, self.start, self.stages = data, start, stages
         self.comparison, self.notes, self.seconds = comparison, notes, seconds
+        self.programme = self.reduction = None  # the recognised programme, the time-series reduction (or None)
+        self.raw_data = data  # the data as given (``data``: what was fitted, reduced when a time series)
+        self.problems = []  # what verify_tir finds in the final parameters
 
     @property
     def fit_errors(self) -> dict:
@@ -99,6 +125,13 @@ class FitResult:
         return save_report(self, path)
 
     def write_tir(self, path, *, overwrite: bool = False) -> Path:
+        """Write the fitted .tir; refused (:class:`mftyre.errors.TirError`) when the parameters fail
+        :func:`mftyre.fit.verify.verify_tir` (which no accepted stage allows)."""
+        if self.problems:
+            from ..errors import TirError
+
+            raise TirError(f"{path}: not written: the fitted parameters fail verification: "
+                           + "; ".join(self.problems))
         return write_tir(self.params, path, overwrite=overwrite)
 
     def __repr__(self):
@@ -134,10 +167,85 @@ def _predict(stage: Stage, model: MFModel, data: TyreData, inputs: dict) -> np.n
     if stage.output == "fz_from_rl":
         def chan(name):
             return np.nan_to_num(data.array(name)) if name in data else 0.0
-        return model.vertical_force(data.array("RL"), p=inputs["p"], omega=chan("OMEGA"), fx=chan("FX"),
-                                    fy=chan("FY"), gamma=inputs["gamma"])
+        if data.has("RL"):
+            rl = data.array("RL")
+        else:  # measured deflection: the loaded radius it means for the model
+            rl = vertical.free_radius(model.params, chan("OMEGA"), NUMPY) - data.array("RHO")
+        return model.vertical_force(rl, p=inputs["p"], omega=chan("OMEGA"), fx=chan("FX"), fy=chan("FY"),
+                                    gamma=inputs["gamma"])
     omega = data.array("OMEGA") if stage.output == "re" and data.has("OMEGA") else None
     return model.evaluate(**inputs, omega=omega)[stage.output]
+
+
+class _BatchPredictor:
+    """The stage's model output for many parameter vectors at once: the equations evaluated once with the varied
+    parameters as column vectors (shape (K, 1)) against the data as a row (shape (1, N)), so a finite-difference
+    Jacobian of K parameters costs one vectorised evaluation instead of K. Falls back to a loop when a varied
+    parameter selects the form of the equations (:data:`mftyre.model.STRUCTURAL_PARAMETERS`) in a way a batch
+    could switch."""
+
+    def __init__(self, stage, prm, data, names, side):
+        self.stage, self.prm, self.data, self.names, self.side = stage, prm, data, list(names), side
+        structural = set(names) & STRUCTURAL_PARAMETERS
+        self.loop = (side is not None or bool(structural and any(prm[f"QSX{i}"] != 0 for i in (12, 13, 14)))
+                     or (stage.output == "fz_from_rl" and prm.version == "62"))  # 6.2: branches on Q_FCY
+        inp = data.inputs()
+        self.inputs = inp
+        row = {k: np.asarray(v, float)[None, :] for k, v in inp.items()}
+        self.row = row
+        if stage.output == "fz_from_rl":
+            def chan(name):
+                return np.nan_to_num(data.array(name))[None, :] if name in data else np.zeros((1, len(data)))
+            self.vertical = dict(omega=chan("OMEGA"), fx=chan("FX"), fy=chan("FY"))
+            if data.has("RL"):
+                self.vertical["rl"] = data.array("RL")[None, :]
+            else:
+                self.vertical["rho"] = data.array("RHO")[None, :]
+        self.omega_given = stage.output == "re" and data.has("OMEGA")
+        self.omega = data.array("OMEGA")[None, :] if self.omega_given else np.zeros((1, len(data)))
+
+    def __call__(self, values: np.ndarray) -> np.ndarray:
+        """(K, N) predictions for the (K, P) parameter values (P = len(names))."""
+        values = np.atleast_2d(values)
+        if self.loop:
+            return np.stack([_predict(self.stage, MFModel(self.prm.replace(**dict(zip(self.names, v))), side=self.side),
+                                      self.data, self.inputs) for v in values])
+        prm = _BatchParameters(self.prm, {n: values[:, j:j + 1] for j, n in enumerate(self.names)})
+        r = self.row
+        with np.errstate(all="ignore"):
+            if self.stage.output == "fz_from_rl":
+                v = self.vertical
+                dpi = (r["p"] - prm.NOMPRES) / prm.NOMPRES
+                r_omega = vertical.free_radius(prm, v["omega"], NUMPY)
+                rho = r_omega - v["rl"] if "rl" in v else v["rho"]
+                out = vertical.vertical_force_61(prm, rho, r_omega, v["omega"], v["fx"], v["fy"], dpi, NUMPY)
+            else:
+                out = steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
+                                   self.omega, self.omega_given, Modes(), NUMPY)[self.stage.output]
+        return np.broadcast_to(out, (values.shape[0], len(self.data)))
+
+
+class _BatchParameters:
+    """Parameters of which some are column vectors (one row per parameter set); ``prm[name]`` of a structural
+    parameter (a choice of equation form) gives the first row's value (the rows of a batch differ by small
+    steps that, as :class:`_BatchPredictor` ensures, do not switch the form)."""
+
+    def __init__(self, params, columns: dict):
+        self._params, self._columns = params, columns
+        self.version, self.fittyp = params.version, params.fittyp
+
+    def __getattr__(self, name):
+        columns = self.__dict__["_columns"]
+        return columns[name] if name in columns else getattr(self.__dict__["_params"], name)
+
+    def __getitem__(self, name):
+        if name in self._columns:
+            value = self._columns[name]
+            return float(np.ravel(value)[0]) if name in STRUCTURAL_PARAMETERS else value
+        return self._params[name]
+
+    def __contains__(self, name):
+        return name in self._params
 
 
 def _corners(data: TyreData, prm) -> dict:
@@ -147,67 +255,227 @@ def _corners(data: TyreData, prm) -> dict:
     return dict(dfz=(grid[0] - fz0) / fz0, dpi=(grid[1] - prm.NOMPRES) / prm.NOMPRES, gamma=grid[2])
 
 
-def bounded_parameters(prm, names) -> lmfit.Parameters:
-    """lmfit parameters ``names`` started at their values in ``prm``, clipped into :data:`BOUNDS`."""
+def physical_bounds(prm, data: TyreData) -> dict:
+    """Bounds that follow from physics and the data's range, tighter than :data:`BOUNDS` where they apply:
+    free-radius growth with speed (Q_V1) at most 3 % and the speed stiffening (Q_V2) at most 40 % at the top
+    speed checked by :func:`mftyre.fit.verify.verify_tir`; Q_RE0 within 5 % of 1; a positive vertical stiffness
+    over PRESMIN..PRESMAX and the data's pressures (PFZ1); shifts of a few percent (PHX1, PVX1, PHY1, PVY1)."""
+    speed_ratio = float(check_speeds(prm, data)[-1]) / prm.LONGVL  # omega R0 / V0 at the top speed
+    p = np.concatenate([data.array("P"), [prm.PRESMIN, prm.PRESMAX]])
+    dpi = np.abs((p[p > 0] - prm.NOMPRES) / prm.NOMPRES)
+    pfz1 = 0.9 / max(float(np.max(dpi)), 1e-3)
+    return {"Q_V1": (0.0, 0.03 / speed_ratio**2), "Q_V2": (0.0, 0.4 / speed_ratio), "Q_RE0": (0.95, 1.05),
+            "PFZ1": (-min(pfz1, 5.0), min(pfz1, 5.0)), "PHX1": (-0.05, 0.05), "PVX1": (-0.1, 0.1),
+            "PHY1": (-0.05, 0.05), "PVY1": (-0.2, 0.2)}
+
+
+def bounded_parameters(prm, names, bounds: dict | None = None) -> lmfit.Parameters:
+    """lmfit parameters ``names`` started at their values in ``prm``, clipped into ``bounds`` (default
+    :data:`BOUNDS`)."""
+    bounds = BOUNDS if bounds is None else bounds
     params = lmfit.Parameters()
     for n in names:
-        lo, hi = BOUNDS.get(n, (-np.inf, np.inf))
+        lo, hi = bounds.get(n, (-np.inf, np.inf))
         params.add(n, value=min(max(float(prm[n]), lo), hi), min=lo, max=hi)
     return params
 
 
-def _fit_pass(stage, prm, side, data, names, weighting, progress, label, max_nfev):
-    """One least-squares pass over ``data`` varying ``names``; returns (new parameters, lmfit result)."""
-    measured = data.array(stage.channel)
-    inputs = data.inputs()
-    scale = float(np.sqrt(np.mean(measured**2))) or 1.0
-    weights = prm.FNOMIN / data.array("FZ") if weighting == "load" else np.ones(len(data))
-    corners = _corners(data, prm)
-    penalty = 10.0 * math.sqrt(len(data))
-    params = bounded_parameters(prm, names)
+class _Problem:
+    """The least-squares problem of one pass: residuals of many parameter vectors at once (data rows, then the
+    shape-condition penalties) and their forward-difference Jacobian from one batched evaluation."""
 
-    def residual(p):
-        trial = prm.replace(**{n: p[n].value for n in names})
-        pred = _predict(stage, MFModel(trial, side=side), data, inputs)
-        r = weights * (pred - measured) / scale
+    def __init__(self, stage, prm, side, data, names, weighting, bounds):
+        self.stage, self.prm, self.names = stage, prm, list(names)
+        self.measured = data.array(stage.channel)
+        self.scale = float(np.sqrt(np.mean(self.measured**2))) or 1.0
+        self.weights = prm.FNOMIN / data.array("FZ") if weighting == "load" else np.ones(len(data))
+        self.corners = _corners(data, prm)
+        self.penalty = 10.0 * math.sqrt(len(data))
+        self.params = bounded_parameters(prm, names, bounds)
+        self.predict = _BatchPredictor(stage, prm, data, names, side)
+        self.hi = np.array([self.params[n].max for n in names])
+        self.n_data = len(data)
+        self.shaped = shape_violations(stage.name, prm, self.corners).size > 0
+
+    def residuals(self, values):
+        pred = self.predict(values)
+        r = self.weights * (pred - self.measured) / self.scale
         r = np.where(np.isfinite(r), r, 10.0)
-        return np.concatenate([r, penalty * shape_violations(stage.name, trial, corners)])
+        if not self.shaped:
+            return r
+        pen = np.stack([self.penalty * shape_violations(self.stage.name, _BatchParameters(self.prm, dict(
+            zip(self.names, v))), self.corners) for v in values])
+        return np.concatenate([r, pen], axis=1)
 
-    counter = {"n": 0, "t": time.perf_counter()}
+    def jacobian(self, x):
+        step = 1.5e-8 * np.maximum(np.abs(x), 1e-2)
+        step = np.where(x + step > self.hi, -step, step)
+        base = self.residuals(np.vstack([x, x + np.diag(step)]))
+        return ((base[1:] - base[0]) / step[:, None]).T
+
+
+def _fit_pass(stage, prm, side, data, names, weighting, progress, label, max_nfev, bounds):
+    """One least-squares pass over ``data`` varying ``names``; returns (new parameters, lmfit result, problem).
+
+    The Jacobian is a forward difference computed in one batched evaluation (:class:`_BatchPredictor`); the
+    optimiser stops when the cost changes by less than 1e-6 relative (ftol)."""
+    problem = _Problem(stage, prm, side, data, names, weighting, bounds)
+
+    def vector(p):
+        return np.array([p[n].value for n in names], float)
+
+    counter = {"n": 0}
 
     def iter_cb(p, it, resid, *a, **k):
         counter["n"] += 1
         if progress is not None and (counter["n"] % 25 == 0):
             progress(stage.name, label, counter["n"], float(np.sum(resid**2)))
 
-    nfev = max_nfev or 60 * (len(names) + 1)
-    minimizer = lmfit.Minimizer(residual, params, iter_cb=iter_cb)
-    with warnings.catch_warnings():  # a singular covariance leaves the standard errors undefined (None/NaN)
-        warnings.simplefilter("ignore", RuntimeWarning)
-        result = minimizer.minimize(method="least_squares", max_nfev=nfev, x_scale="jac", ftol=1e-7, xtol=1e-7)
+    nfev = max_nfev or 30 * (len(names) + 1)
+    minimizer = lmfit.Minimizer(lambda p: problem.residuals(vector(p)[None, :])[0], problem.params, iter_cb=iter_cb)
+    with warnings.catch_warnings(), _one_blas_thread():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a singular covariance: lmfit's errors undefined
+        result = minimizer.minimize(method="least_squares", max_nfev=nfev, x_scale="jac", ftol=1e-6, xtol=1e-8,
+                                    gtol=1e-8, Dfun=lambda p: problem.jacobian(vector(p)))
     new = prm.replace(**{n: float(result.params[n].value) for n in names})
     if progress is not None:
         progress(stage.name, label, counter["n"], float(result.chisqr))
-    return new, result
+    return new, result, problem
 
 
-def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progress, max_nfev):
+def _one_blas_thread():
+    """BLAS limited to one thread: the small dense factorisations of the optimiser run 10-100x slower when
+    OpenBLAS spreads them over the cores of a busy machine."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # pragma: no cover - threadpoolctl is a dependency; without it the fit is only slower
+        import contextlib
+
+        return contextlib.nullcontext()
+    return threadpool_limits(1, user_api="blas")
+
+
+def _uncertainties(problem, prm, data):
+    """(stderr, correlations, n_eff) at ``prm`` from the Jacobian of the data residuals: covariance
+    s^2 (J^T J)^+ with s^2 = sum r^2 / (n_eff - p), n_eff the effective number of independent residuals (AR(1)
+    rule within each sweep, :func:`mftyre.timeseries.effective_samples`). A parameter without effect on the data
+    (a zero column of J) has an undefined error (None)."""
+    names = problem.names
+    x = np.array([float(prm[n]) for n in names])
+    r = problem.residuals(x[None, :])[0][:problem.n_data]
+    jac = problem.jacobian(x)[:problem.n_data]
+    groups = data.frame["SWEEP"].to_numpy() if "SWEEP" in data else None
+    n_eff = effective_samples(r, groups)
+    s2 = float(r @ r) / max(n_eff - len(names), 1.0)
+    col = np.linalg.norm(jac, axis=0)
+    live = col > 1e-12 * max(float(col.max()), 1e-300)
+    stderr, corr = {n: None for n in names}, {}
+    if live.any():
+        unit = jac[:, live] / col[live]  # columns of unit length: the covariance of parameters of any size
+        with _one_blas_thread():
+            cov = s2 * np.linalg.pinv(unit.T @ unit) / np.outer(col[live], col[live])
+        sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
+        idx = np.flatnonzero(live)
+        for i, j in enumerate(idx):
+            stderr[names[j]] = float(sd[i])
+            for k in range(i + 1, len(idx)):
+                c = cov[i, k] / (sd[i] * sd[k]) if sd[i] > 0 and sd[k] > 0 else 0.0
+                if abs(c) >= 0.95:
+                    corr[tuple(sorted((names[j], names[idx[k]])))] = float(c)
+    return stderr, corr, n_eff
+
+
+def _undetermined(names, values, stderr, corr):
+    """{name: reason} of the parameters the data do not determine, in order: those without effect on the data;
+    of each pair correlated beyond |r| = 0.99 the later one in the stage's order (the higher-order term: PKY2
+    rather than PKY1); only when no such pair is left, those whose standard error exceeds their size (a
+    collinear pair inflates the errors of both, so pairs are resolved first)."""
+    out = {n: "no effect on the data" for n in names if stderr.get(n) is None}
+    order = {n: i for i, n in enumerate(names)}
+    for (a, b), c in sorted(corr.items(), key=lambda kv: -abs(kv[1])):
+        if abs(c) > 0.99 and a not in out and b not in out:
+            later, earlier = (a, b) if order[a] > order[b] else (b, a)
+            out[later] = f"correlated {c:+.4f} with {earlier}"
+    if out:
+        return out
+    for n in names:
+        if stderr[n] > abs(values[n]):
+            out[n] = f"standard error {stderr[n]:.3g} exceeds its size {values[n]:.3g}"
+    return out
+
+
+def _free_radius_from_rl(data: TyreData) -> float | None:
+    """Free radius the loaded-radius data extrapolate to at zero load (quadratic in Fz over the lower half of the
+    loads at the lowest speeds), or None."""
+    rl, fz, vx = data.array("RL"), data.array("FZ"), data.array("VX")
+    ok = np.isfinite(rl) & (fz > 0)
+    if ok.sum() < 4:
+        return None
+    ok &= vx <= np.quantile(vx[ok], 0.5) + 1.0
+    low = ok & (fz <= np.quantile(fz[ok], 0.5))
+    if low.sum() < 4 or np.ptp(fz[low]) <= 0:
+        return None
+    deg = 2 if len(np.unique(np.round(fz[low]))) >= 6 else 1
+    return float(np.polyval(np.polyfit(fz[low], rl[low], deg), 0.0))
+
+
+def _vertical_consistency(prm, data: TyreData, radius_given: bool):
+    """(parameters, note, rejection): the free radius the RL data imply against UNLOADED_RADIUS x Q_RE0. More
+    than 5 % apart, or a measured loaded radius above the free radius (negative deflection): the radius is
+    derived from the data when it was not given, otherwise the stage is rejected with the reason."""
+    r_data = _free_radius_from_rl(data)
+    r_free = prm.UNLOADED_RADIUS * prm.Q_RE0
+    rl = data.array("RL")
+    negative = float(np.nanmedian(rl[data.array("FZ") > 0.5 * prm.FNOMIN])) > r_free if np.any(
+        data.array("FZ") > 0.5 * prm.FNOMIN) else False
+    if r_data is None or (abs(r_data / r_free - 1.0) <= 0.05 and not negative):
+        return prm, None, None
+    what = (f"the RL data extrapolate to a free radius of {r_data:.4g} m at zero load, UNLOADED_RADIUS x Q_RE0 is "
+            f"{r_free:.4g} m" + (" (the measured loaded radius exceeds it: negative deflection)" if negative else ""))
+    if radius_given:
+        return prm, None, f"inconsistent data: {what}; check the RL channel (loaded radius from the wheel centre " \
+                          "to the ground) or the .tir's UNLOADED_RADIUS"
+    return prm.replace(UNLOADED_RADIUS=r_data, Q_RE0=1.0), f"UNLOADED_RADIUS set to {r_data:.4g} m: {what}", None
+
+
+def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progress, max_nfev, baseline,
+               radius_given=False):
     rows = stage_rows(stage, data)
     sub = data.select(rows)
     cond = conditions(sub)
     groups, skipped = stage_parameters(stage, cond, fit_pressure)
+    groups, capped = supported_parameters(stage, groups, sub)
+    skipped.update(capped)
     names_all = groups["base"] + groups["pressure"] + groups["camber"]
     t0 = time.perf_counter()
-    if len(sub) < max(len(names_all) + 1, 5) or not names_all:
-        reason = "no data for this stage" if len(sub) == 0 else (
-            f"{len(sub)} points, too few for {len(names_all)} parameters" if names_all else "no parameter to fit")
-        skipped.update({n: reason for needs, names in stage.groups for n in names if n not in skipped})
+
+    def not_fitted(reason_all=None, rejected=None, notes=()):
+        if reason_all:
+            skipped.update({n: reason_all for needs, names in stage.groups for n in names if n not in skipped})
         return prm, StageResult(stage.name, stage.title, stage.channel, len(sub), [], skipped, {}, {}, {}, {},
-                                float("nan"))
+                                float("nan"), rejected=rejected or [], notes=list(notes))
+
+    if len(sub) == 0:
+        skipped.clear()
+        return not_fitted(f"no data for this stage ({_ROWS_NEEDED[stage.rows]} with a measured {stage.channel})")
+    if len(sub) < max(len(names_all) + 1, 5) or not names_all:
+        return not_fitted(f"{len(sub)} points, too few for {len(names_all)} parameters" if names_all
+                          else "no parameter to fit")
+    before = prm
+    notes = []
+    if stage.name == "vertical" and sub.has("RL"):
+        prm, note, rejection = _vertical_consistency(prm, sub, radius_given)
+        if rejection:
+            return not_fitted("stage rejected", [rejection])
+        if note:
+            notes.append(note)
+    bounds = dict(BOUNDS, **physical_bounds(prm, data))
     if generic:
         est = {k: v for k, v in estimate_stage(stage.name, prm, sub).items() if k in names_all}
         prm = prm.replace(**est)
     start = {n: float(prm[n]) for n in names_all}
+    err_before = normalised_rms(_predict(stage, MFModel(before, side=side), sub, sub.inputs()),
+                                sub.array(stage.channel))
     g, p = sub.array("IA"), sub.array("P")
     flat = np.abs(g) < math.radians(0.25)
     nominal = flat & (np.abs(p - prm.NOMPRES) <= 0.02 * prm.NOMPRES)
@@ -220,40 +488,82 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
     plan.append(("all data", names_all, np.ones(len(sub), bool)))
     for label, names, mask in plan:
         part = sub if mask.all() else sub.select(mask)
-        prm, res = _fit_pass(stage, prm, side, part, names, weighting, progress, label, max_nfev)
+        prm, res, problem = _fit_pass(stage, prm, side, part, names, weighting, progress, label, max_nfev, bounds)
         passes.append((label, res))
-    last = passes[-1][1]
-    values = {n: float(last.params[n].value) for n in names_all}
-    stderr = {n: (None if last.params[n].stderr is None or not np.isfinite(last.params[n].stderr)
-                  else float(last.params[n].stderr)) for n in names_all}
-    corr = {}
-    for n in names_all:
-        for m, c in (last.params[n].correl or {}).items():
-            if n < m and abs(c) >= 0.95:
-                corr[(n, m)] = float(c)
+    # parameters the data do not determine go back to their default (the start parameter set) and the rest
+    # is refitted, until every fitted parameter is determined
+    free = list(names_all)
+    reset = {}
+    for _ in range(4):
+        values = {n: float(prm[n]) for n in free}
+        stderr, corr, n_eff = _uncertainties(problem, prm, sub)
+        drop = _undetermined(free, values, stderr, corr)
+        if not drop:
+            break
+        reset.update(drop)
+        free = [n for n in free if n not in drop]
+        prm = prm.replace(**{n: float(baseline[n]) for n in drop})
+        if not free:
+            break
+        prm, res, problem = _fit_pass(stage, prm, side, sub, free, weighting, progress,
+                                      "after resetting undetermined", max_nfev, bounds)
+        passes.append(("after resetting undetermined", res))
+    values = {n: float(prm[n]) for n in names_all}
+    stderr, corr, n_eff = _uncertainties(problem, prm, sub) if free else ({}, {}, float(len(sub)))
+    stderr.update({n: None for n in reset})
     pred = _predict(stage, MFModel(prm, side=side), sub, sub.inputs())
     err = normalised_rms(pred, sub.array(stage.channel))
-    return prm, StageResult(stage.name, stage.title, stage.channel, len(sub), names_all, skipped, start, values,
-                            stderr, corr, err, passes, time.perf_counter() - t0)
+    rejected = []
+    if not np.isfinite(err):
+        rejected.append("the fitted model is not finite on the stage data")
+    elif np.isfinite(err_before) and err > err_before * 1.001 + 1e-9:
+        rejected.append(f"the fit error {err:.3g} % is worse than before the stage ({err_before:.3g} %)")
+    if stage.name == "vertical" and not rejected:
+        measured_rho = (prm.UNLOADED_RADIUS * prm.Q_RE0 - sub.array("RL")) if sub.has("RL") else sub.array("RHO")
+        if np.nanmin(measured_rho) < -0.02 * prm.UNLOADED_RADIUS or err > 25.0:
+            rejected.append(f"the vertical relation does not describe the data (FZ error {err:.3g} %, measured "
+                            f"deflection down to {np.nanmin(measured_rho):.3g} m)")
+    if not rejected:
+        new_problems = [q for q in verify_tir(MFModel(prm, side=side), data)
+                        if q not in verify_tir(MFModel(before, side=side), data)]
+        rejected += new_problems
+    result = StageResult(stage.name, stage.title, stage.channel, len(sub), free, skipped, start, values, stderr,
+                         corr, err, passes, time.perf_counter() - t0, reset=reset, rejected=rejected, notes=notes,
+                         n_eff=n_eff)
+    if rejected:
+        result.fitted = []
+        return before, result
+    return prm, result
 
 
-def _fit_stages(data, prm, side, stages, fit_pressure, generic, weighting, progress, max_nfev):
+#: what rows a stage needs, in words (for the reason a stage is not fitted)
+_ROWS_NEEDED = {"pure_lateral": "no rows with slip angle at zero longitudinal slip",
+                "pure_longitudinal": "no rows with longitudinal slip at zero slip angle",
+                "combined": "no rows with both slip angle and longitudinal slip",
+                "with_kappa": "no rows with longitudinal slip", "slip": "no rows with slip",
+                "free_rolling": "no free-rolling rows", "free_rolling_re": "no free-rolling rows",
+                "all_rl": "no rows"}
+
+
+def _fit_stages(data, prm, side, stages, fit_pressure, generic, weighting, progress, max_nfev, baseline,
+                radius_given=False):
     results = {}
     for name in stages:
         if name not in STAGES:
             raise ValueError(f"unknown stage {name!r}; stages are {', '.join(STAGE_NAMES)}")
         prm, results[name] = _fit_stage(STAGES[name], prm, side, data, fit_pressure, generic, weighting, progress,
-                                        max_nfev)
+                                        max_nfev, baseline, radius_given)
         if name == "mz_combined" and results[name].fitted and "mz" in results and results["mz"].fitted:
             # the pure-Mz stage ran with the moment arm s = 0 and took the moment s Fx (paper A56) of the small
             # Fx at zero slip into the trail and residual torque; refit it now that s is known
             prm, results["mz"] = _fit_stage(STAGES["mz"], prm, side, data, fit_pressure, False, weighting, progress,
-                                            max_nfev)
+                                            max_nfev, baseline, radius_given)
     return prm, results
 
 
 def fit_tir(data, start=None, stages=STAGE_NAMES, fit_pressure: bool = True, *, weighting: str = "uniform",
-            compare: bool | None = None, progress=None, max_nfev: int | None = None) -> FitResult:
+            compare: bool | None = None, progress=None, max_nfev: int | None = None, reduce: bool | None = None,
+            bins: int = 40) -> FitResult:
     """Fit MF 6.1 parameters to tyre measurements, stage by stage.
 
     ``data``: :class:`mftyre.data.TyreData` or a ``.tdx``/``.csv`` path. ``start``: None (neutral parameters
@@ -264,42 +574,70 @@ def fit_tir(data, start=None, stages=STAGE_NAMES, fit_pressure: bool = True, *, 
     ``weighting``: "uniform" or "load". ``compare``: run the lower/upper-bound comparison of Schmeitz et al.
     (2005) for pure Fx, Fy, Mz (default: when pressure terms are fitted). ``progress``: callable
     (stage, pass, evaluations, cost) called every 25 residual evaluations and after each pass.
-    ``max_nfev``: evaluations per pass (default 60 x (parameters + 1)).
+    ``max_nfev``: evaluations per pass (default 30 x (parameters + 1)). ``reduce``: reduce a time series to
+    binned means per sweep first (:func:`mftyre.timeseries.reduce_sweeps`, ``bins`` per sweep; default: when
+    the data are dense enough, :func:`mftyre.timeseries.needs_reduction`).
+
+    The test programme is recognised first (:func:`mftyre.programme.recognise`, in ``result.programme``).
+    In every stage: physical bounds (:func:`physical_bounds`), only the parameters the data's distinct
+    conditions support (:func:`mftyre.fit.stages.supported_parameters`), parameters whose standard error (for the
+    effective number of independent samples) exceeds their size or that are > 0.99 correlated go back to the
+    start value (``StageResult.reset``), and the result must pass :func:`mftyre.fit.verify.verify_tir`, fit the
+    stage data no worse than before and, for the vertical stage, describe the loaded radius with positive
+    deflection; otherwise the stage is rejected (``StageResult.rejected``) and the previous values are kept.
     """
     t0 = time.perf_counter()
     data = load_data(data)
     if weighting not in ("uniform", "load"):
         raise ValueError(f"weighting must be 'uniform' or 'load', got {weighting!r}")
-    prm, generic = _start(data, start)
+    if not (isinstance(bins, (int, np.integer)) and bins >= 3):
+        raise ValueError(f"bins must be an integer >= 3, got {bins!r}")
+    if max_nfev is not None and not (isinstance(max_nfev, (int, np.integer)) and max_nfev >= 1):
+        raise ValueError(f"max_nfev must be None or an integer >= 1, got {max_nfev!r}")
+    programme = recognise(data)
+    notes = list(data.history) + ["test programme: " + programme.summary()]
+    reduction = None
+    if reduce or (reduce is None and needs_reduction(data, programme, bins)):
+        reduction = reduce_sweeps(data, programme, bins=bins)
+        notes.append(reduction.summary())
+        fit_data = reduction.mean
+    else:
+        fit_data = programme.annotate(data)
+    radius_given = start is not None or isinstance(data.constants.get("RFREE"), float)
+    prm, generic = _start(fit_data, start)
     side = None
     start_prm = prm
-    prm, results = _fit_stages(data, prm, side, stages, fit_pressure, generic, weighting, progress, max_nfev)
-    notes = list(data.history)
-    n_p = len(levels(data.array("P"), 0.02 * float(np.max(data.array("P"))))[1])
+    prm, results = _fit_stages(fit_data, prm, side, stages, fit_pressure, generic, weighting, progress, max_nfev,
+                               start_prm, radius_given)
+    n_p = programme.levels["P"].size
     if compare is None:
         compare = fit_pressure and n_p >= 2
     comparison = None
     compared = [s for s in COMPARED_STAGES if s in results and results[s].fitted]
     if compare and n_p >= 2 and compared:
-        comparison = _pressure_comparison(data, start_prm, generic, side, compared, results, weighting, progress,
+        comparison = _pressure_comparison(fit_data, start_prm, generic, side, compared, results, weighting, progress,
                                           max_nfev)
     elif compare:
         notes.append("pressure comparison not run: one pressure in the data")
-    return FitResult(prm.replace(INFLPRES=prm.NOMPRES), data, start_prm, results, comparison, notes,
-                     time.perf_counter() - t0)
+    result = FitResult(prm.replace(INFLPRES=prm.NOMPRES), fit_data, start_prm, results, comparison, notes,
+                       time.perf_counter() - t0)
+    result.programme, result.reduction, result.raw_data = programme, reduction, data
+    result.problems = verify_tir(result.model, data)
+    return result
 
 
 def _pressure_comparison(data, start_prm, generic, side, compared, extended, weighting, progress, max_nfev):
     """Table 2 of Schmeitz et al. (2005): lower bound = mean fit error of separate fits per pressure (no
     pressure terms), upper bound = one fit of all pressures without pressure terms, and the extended fit
     (with pressure terms); recovered = (upper - extended) / (upper - lower)."""
-    _, upper = _fit_stages(data, start_prm, side, compared, False, generic, weighting, progress, max_nfev)
-    p = data.array("P")
-    labels, centres = levels(p, 0.02 * float(np.max(p)))
+    _, upper = _fit_stages(data, start_prm, side, compared, False, generic, weighting, progress, max_nfev, start_prm)
+    labels = level_labels(data, "P")
+    centres = np.unique(labels[labels >= 0])
     lower = {s: [] for s in compared}
-    for k in range(len(centres)):
+    for k in centres:
         part = data.select(labels == k)
-        _, res = _fit_stages(part, start_prm, side, compared, False, generic, weighting, progress, max_nfev)
+        _, res = _fit_stages(part, start_prm, side, compared, False, generic, weighting, progress, max_nfev,
+                             start_prm)
         for s in compared:
             if np.isfinite(res[s].fit_error):
                 lower[s].append(res[s].fit_error)

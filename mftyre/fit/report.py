@@ -9,12 +9,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..data import levels
+from ..programme import cluster_levels
 from ..model import MFModel
 from .core import _predict
 from .stages import STAGES, stage_rows
 
-__all__ = ["markdown_report", "save_report", "plot_stage"]
+__all__ = ["markdown_report", "save_report", "plot_stage", "stage_figure"]
 
 # x axis of each stage's plot: (channel, label, factor)
 _X = {"pure_fx": ("SL", "kappa [-]", 1.0), "combined_fx": ("SL", "kappa [-]", 1.0),
@@ -35,19 +35,28 @@ def markdown_report(result, plot_names: dict | None = None) -> str:
     data = result.data
     lines = [f"# Magic Formula fit: {data.tyre or 'tyre'}", ""]
     summ = {}
-    for name, ch, tol, fac, unit in (("loads", "FZ", 0.05, 1.0, "N"), ("pressures", "P", 0.02, 1e-5, "bar"),
-                                     ("cambers", "IA", None, 180 / math.pi, "deg"), ("speeds", "VX", None, 1.0, "m/s")):
-        x = data.array(ch)
-        t = tol * float(np.max(np.abs(x))) if tol else (math.radians(0.25) if ch == "IA" else 0.5)
-        summ[name] = ", ".join(f"{c * fac:.4g}" for c in levels(x, t)[1]) + f" {unit}"
+    for name, ch, fac, unit in (("loads", "FZ", 1.0, "N"), ("pressures", "P", 1e-5, "bar"),
+                                ("cambers", "IA", 180 / math.pi, "deg"), ("speeds", "VX", 1.0, "m/s")):
+        centres = result.programme.levels[ch] if result.programme is not None else cluster_levels(data.array(ch))[1]
+        summ[name] = (", ".join(f"{round(c * fac, 3) + 0.0:.4g}" for c in centres) or "none on a level") + f" {unit}"
     start = "neutral schema values sized to the tyre, leading coefficients estimated from the data" \
         if result.start.source is None else f"`{result.start.source}`"
-    lines += [f"Data: `{data.source}`, {len(data)} points. Loads: {summ['loads']}; pressures: {summ['pressures']}; "
-              f"cambers: {summ['cambers']}; speeds: {summ['speeds']}.", "",
+    lines += [f"Data: `{data.source}`, {len(result.raw_data)} rows, {len(data)} points fitted. Loads: "
+              f"{summ['loads']}; pressures: {summ['pressures']}; cambers: {summ['cambers']}; speeds: "
+              f"{summ['speeds']}.", "",
               f"Start values: {start}. FNOMIN {result.params.FNOMIN:g} N, NOMPRES {result.params.NOMPRES:g} Pa, "
               f"UNLOADED_RADIUS {result.params.UNLOADED_RADIUS:g} m. Fit time {result.seconds:.1f} s.", ""]
     if result.notes:
         lines += ["Data preparation: " + "; ".join(result.notes), ""]
+    if result.programme is not None and result.programme.notes:
+        lines += ["Not determinable from these data: " + "; ".join(result.programme.notes) + ".", ""]
+    rejected = {n: st.rejected for n, st in result.stages.items() if st.rejected}
+    if rejected:
+        lines += ["## Rejected stages", "", "Their previous parameter values are kept.", ""]
+        lines += [f"- {result.stages[n].title}: " + "; ".join(why) for n, why in rejected.items()]
+        lines.append("")
+    if result.problems:
+        lines += ["## Verification problems", ""] + [f"- {p}" for p in result.problems] + [""]
     lines += ["## Fit errors", "",
               "Normalised RMS error, Schmeitz et al. (2005) eq. (4): "
               "100 sqrt(sum (A_MF - A_meas)^2 / sum A_meas^2) %, over the data of each stage.", "",
@@ -70,12 +79,15 @@ def markdown_report(result, plot_names: dict | None = None) -> str:
     lines += ["## Stages", ""]
     for name, st in result.stages.items():
         lines += [f"### {st.title}", ""]
-        if not st.fitted:
+        if st.rejected:
+            lines += [f"Rejected ({st.n_points} points): " + "; ".join(st.rejected) + ". Previous values kept.", ""]
+        elif not st.fitted:
             lines += [f"Not fitted ({st.n_points} points).", ""]
         else:
             passes = "; ".join(f"{label}: {res.nfev} evaluations, {'converged' if res.success else 'stopped'}"
                                for label, res in st.passes)
-            lines += [f"{st.n_points} points, fit error {_fmt(st.fit_error)} % on {st.channel}. Passes: {passes}.", "",
+            lines += [f"{st.n_points} points ({st.n_eff:.0f} effective independent samples), fit error "
+                      f"{_fmt(st.fit_error)} % on {st.channel}. Passes: {passes}.", "",
                       "| parameter | start | fitted | standard error |", "| --- | ---: | ---: | ---: |"]
             for n in st.fitted:
                 lines.append(f"| {n} | {_fmt(st.start[n])} | {_fmt(st.values[n])} | {_fmt(st.stderr[n])} |")
@@ -83,6 +95,11 @@ def markdown_report(result, plot_names: dict | None = None) -> str:
             if st.correlations:
                 pairs = ", ".join(f"{a}/{b} {c:+.3f}" for (a, b), c in sorted(st.correlations.items()))
                 lines += [f"Strongly correlated (|r| >= 0.95): {pairs}.", ""]
+        if st.reset:
+            lines += ["Not determined by the data, back to their start values: " + "; ".join(
+                f"{n} ({why})" for n, why in st.reset.items()) + ".", ""]
+        for note in st.notes:
+            lines += [note + ".", ""]
         if st.skipped:
             by_reason = {}
             for n, why in st.skipped.items():
@@ -95,7 +112,17 @@ def markdown_report(result, plot_names: dict | None = None) -> str:
 
 
 def plot_stage(result, name: str, path) -> Path | None:
-    """Measured vs fitted (zero camber, nominal pressure, one colour per load) and residuals of all points."""
+    """Save :func:`stage_figure` to ``path`` (None when the stage was not fitted)."""
+    fig = stage_figure(result, name)
+    if fig is None:
+        return None
+    fig.savefig(path)
+    return Path(path)
+
+
+def stage_figure(result, name: str):
+    """Measured (dots) and fitted (lines) per sweep at zero camber and nominal pressure, one colour per load
+    level (no line joins two sweeps), and the residuals of all points: a matplotlib Figure (no pyplot)."""
     from matplotlib.figure import Figure  # no pyplot: the caller's backend and figures are left alone
 
     st, stage = result.stages[name], STAGES[name]
@@ -107,23 +134,38 @@ def plot_stage(result, name: str, path) -> Path | None:
     measured = data.array(stage.channel)
     xch, xlabel, fac = _X[name]
     x = data.array(xch) * fac
-    p0 = result.params.NOMPRES
-    ref = (np.abs(data.array("IA")) < math.radians(0.25)) & (np.abs(data.array("P") - p0) <= 0.02 * p0)
+    # the levels of the whole programme (recognised on the raw data), each point on its nearest level
+    levels = {ch: (result.programme.levels[ch] if result.programme is not None else cluster_levels(data.array(ch))[1])
+              for ch in ("FZ", "P", "IA")}
+    nearest = {ch: (np.argmin(np.abs(data.array(ch)[:, None] - c[None, :]), axis=1) if len(c) else
+                    np.zeros(len(data), int)) for ch, c in levels.items()}
+    ref = np.ones(len(data), bool)
+    for ch, target in (("P", result.params.NOMPRES), ("IA", 0.0)):  # the level nearest nominal p, camber 0
+        if len(levels[ch]):
+            ref &= nearest[ch] == int(np.argmin(np.abs(levels[ch] - target)))
     if ref.sum() == 0:
         ref = np.ones(len(data), bool)
     fig = Figure(figsize=(9, 3.4), dpi=80)
     ax1, ax2 = fig.subplots(1, 2)
-    fz = data.array("FZ")
-    lab, cen = levels(fz[ref], 0.05 * float(np.max(fz)))
+    cen = levels["FZ"] if len(levels["FZ"]) else np.array([float(np.mean(data.array("FZ")))])
+    lab = nearest["FZ"][ref]
+    sweep = data.frame["SWEEP"].to_numpy() if "SWEEP" in data else np.zeros(len(data), int)
+    colours = [f"C{k % 10}" for k in range(max(len(cen), 1))]
+    idx = np.flatnonzero(ref)
     for k, c in enumerate(cen):
-        sel = np.flatnonzero(ref)[lab == k]
-        order = np.argsort(x[sel], kind="stable")
-        line = ax1.plot(x[sel][order], fitted[sel][order], "-", lw=1.2, label=f"Fz {c:.0f} N")[0]
-        ax1.plot(x[sel], measured[sel], ".", ms=3, color=line.get_color())
+        sel = idx[lab == k]
+        ax1.plot(x[sel], measured[sel], ".", ms=3, color=colours[k], label=f"Fz {c:.0f} N")
+        for s in np.unique(sweep[sel]):
+            one = sel[sweep[sel] == s]
+            if s < 0 or one.size < 3:  # a line needs a sweep, not two points of one
+                continue
+            order = np.argsort(x[one], kind="stable")
+            ax1.plot(x[one][order], fitted[one][order], "-", lw=1.0, color=colours[k])
     ax1.set_xlabel(xlabel)
     ax1.set_ylabel(f"{stage.channel} [{_UNIT.get(stage.channel, '')}]")
-    ax1.set_title("measured (dots) vs fitted, camber 0, nominal p", fontsize=9)
-    ax1.legend(fontsize=7)
+    ax1.set_title("measured (dots), fitted per sweep (lines); camber 0, nominal p", fontsize=9)
+    if len(cen):
+        ax1.legend(fontsize=7)
     ax2.plot(x, fitted - measured, ".", ms=2)
     ax2.axhline(0.0, color="k", lw=0.8)
     ax2.set_xlabel(xlabel)
@@ -131,8 +173,7 @@ def plot_stage(result, name: str, path) -> Path | None:
     ax2.set_title(f"residuals, all {len(data)} points ({st.fit_error:.2f} %)", fontsize=9)
     fig.suptitle(st.title, fontsize=10)
     fig.tight_layout()
-    fig.savefig(path)
-    return Path(path)
+    return fig
 
 
 def save_report(result, path) -> Path:

@@ -26,8 +26,10 @@ import numpy as np
 
 from ..data import TyreData, levels
 from ..params import PARAMETERS
+from ..programme import cluster_levels
 
-__all__ = ["Stage", "STAGES", "STAGE_NAMES", "conditions", "stage_parameters", "shape_violations"]
+__all__ = ["Stage", "STAGES", "STAGE_NAMES", "conditions", "stage_parameters", "shape_violations",
+           "supported_parameters"]
 
 _KAPPA_TOL = 0.005
 _ALPHA_TOL = math.radians(0.25)
@@ -78,7 +80,8 @@ STAGES: dict[str, Stage] = {s.name: s for s in (
     Stage("my", "Rolling-resistance moment My (paper A48)", "MY", "my", "free_rolling", (
         _g("", "QSY1"), _g("speeds", "QSY3"), _g("speeds3", "QSY4"), _g("loads", "QSY7"), _g("camber", "QSY5"),
         _g("camber loads", "QSY6"), _g("pressure", "QSY8"))),
-    Stage("vertical", "Vertical load vs deflection and loaded radius (A3.3, paper (3)-(5))", "FZ", "fz_from_rl",
+    Stage("vertical", "Vertical load vs deflection and loaded radius (A3.3, paper (3)-(5)); RL, or RHO without RL",
+          "FZ", "fz_from_rl",
           "all_rl", (
               _g("", "VERTICAL_STIFFNESS Q_FZ2 Q_RE0"), _g("pressure", "PFZ1"), _g("speeds", "Q_V1 Q_V2"),
               _g("fx", "Q_FCX"), _g("fy", "Q_FCY"))),
@@ -105,11 +108,11 @@ def stage_rows(stage: Stage, data: TyreData) -> np.ndarray:
         mask = ~(pure_alpha & pure_kappa)
     elif kind in ("free_rolling", "free_rolling_re"):
         mask = pure_alpha & pure_kappa
-    elif kind == "all_rl":
-        mask = np.ones(len(data), bool)
-        if not data.has("RL"):
+    elif kind == "all_rl":  # the loaded radius, or else the deflection, measured
+        ch = "RL" if data.has("RL") else "RHO"
+        if not data.has(ch):
             return np.zeros(len(data), bool)
-        mask &= np.isfinite(data.array("RL"))
+        mask = np.isfinite(data.array(ch))
     else:  # pragma: no cover - guards the table
         raise ValueError(kind)
     if stage.channel not in data:
@@ -117,20 +120,99 @@ def stage_rows(stage: Stage, data: TyreData) -> np.ndarray:
     return mask & np.isfinite(data.array(stage.channel))
 
 
+def level_labels(data: TyreData, channel: str) -> np.ndarray:
+    """Level index per row of a condition channel: the recognised programme's (column ``<channel>_LEVEL``, see
+    :func:`mftyre.programme.recognise`) when present, else :func:`mftyre.programme.cluster_levels` of the
+    values; -1 off-level."""
+    col = f"{channel}_LEVEL"
+    if col in data:
+        return np.round(data.frame[col].to_numpy(float)).astype(int)
+    return cluster_levels(data.array(channel))[0]
+
+
+def _count(data: TyreData, channel: str, width: float) -> int:
+    """Number of distinct values of a condition channel: its levels plus, when at least 10 values (and 1 %) are
+    on no level (the channel is swept somewhere, or held at settings too brief to count as levels), the
+    occupied bins of ``width`` among those."""
+    labels = level_labels(data, channel)
+    off = labels < 0
+    n = len(np.unique(labels[~off]))
+    if off.sum() >= max(10, 0.01 * labels.size):
+        n += len(np.unique(np.round(data.array(channel)[off] / width)))
+    return n
+
+
+def _count_levels(x: np.ndarray, width: float) -> int:
+    """Number of distinct values of a condition channel: its levels (:func:`mftyre.programme.cluster_levels`)
+    plus, when at least 10 values (and 1 %) are on no level (the channel is swept somewhere, or held at
+    settings too brief to count as levels), the occupied bins of ``width`` among those."""
+    labels, centres = cluster_levels(x)
+    off = labels < 0
+    if off.sum() >= max(10, 0.01 * x.size):
+        return len(centres) + len(np.unique(np.round(x[off] / width)))
+    return len(centres)
+
+
 def conditions(data: TyreData) -> dict:
-    """Number of load, pressure and speed levels, camber present, Fx/Fy present, of a data subset."""
+    """Number of load, pressure and speed levels, camber present, Fx/Fy present, of a data subset. Levels are
+    clusters separated by empty room (:func:`mftyre.programme.cluster_levels`), not by a fraction of the
+    largest value; a swept speed counts its 1 m/s bins."""
     if len(data) == 0:
         return dict(loads=0, pressures=0, speeds=0, camber=False, camber_levels=0, fx=False, fy=False)
     fz = data.array("FZ")
     return dict(
-        loads=len(levels(fz, 0.05 * float(np.max(np.abs(fz))))[1]),
-        pressures=len(levels(data.array("P"), 0.02 * float(np.max(data.array("P"))))[1]),
-        speeds=len(levels(data.array("VX"), 0.5)[1]),
+        loads=_count(data, "FZ", 0.05 * float(np.median(np.abs(fz))) + 1e-9),
+        pressures=_count(data, "P", 0.02 * float(np.median(data.array("P")))),
+        speeds=_count_levels(data.array("VX"), 1.0),
         camber=bool(np.any(np.abs(data.array("IA")) > _CAMBER_TOL)),
         camber_levels=_nonzero_camber_levels(data.array("IA")),
         fx=bool(data.has("FX") and np.nanmax(np.abs(data.array("FX"))) > 0.05 * float(np.max(fz))),
         fy=bool(data.has("FY") and np.nanmax(np.abs(data.array("FY"))) > 0.05 * float(np.max(fz))),
     )
+
+
+# the channel each stage's characteristic runs along, and the bin width that makes two values distinct
+_ALONG = {"pure_fx": ("SL", 0.005), "combined_fx": ("SL", 0.005), "combined_fy": ("SL", 0.005),
+          "mz_combined": ("SL", 0.005), "pure_fy": ("SA", math.radians(0.5)), "mz": ("SA", math.radians(0.5)),
+          "mx": ("SA", math.radians(0.5)), "my": ("VX", 1.0), "rolling_radius": ("VX", 1.0), "vertical": ("FZ", 1.0)}
+#: the leading letters (after P or Q) of the terms a characteristic measured at fewer than 5 distinct slip values
+#: can determine: slope and shifts (pure Fx, Fy; PPX1/2, PPY1/2 scale the slope), trail and residual torque (Mz)
+_SLOPE_TERMS = {"pure_fx": ("PK", "PH", "PV", "PPX1", "PPX2"), "pure_fy": ("PK", "PH", "PV", "PPY1", "PPY2"),
+                "mz": ("QD", "QH", "PPZ")}
+
+
+def supported_parameters(stage: Stage, groups: dict, data: TyreData):
+    """(groups, {dropped: reason}): never more parameters than the distinct conditions support.
+
+    A distinct condition is a cell (load level, pressure level, camber level, bin of the channel the
+    characteristic runs along: slip 0.005, slip angle 0.5 deg, speed 1 m/s, load 1 N); at most one
+    parameter per two cells is freed, the last groups of the stage's list (the highest-order terms) dropped
+    first. A pure-slip characteristic measured at fewer than 5 distinct slip values per condition determines
+    only its slope and shifts (and Mz its trail): the shape and peak terms are dropped."""
+    names = [n for kind in ("base", "pressure", "camber") for n in groups[kind]]
+    if not names or len(data) == 0:
+        return groups, {}
+    along, width = _ALONG[stage.name]
+    x = data.array(along) if along in data else np.zeros(len(data))
+    keys = [level_labels(data, ch) for ch in ("FZ", "P", "IA")]
+    cond = np.stack(keys, axis=1)
+    cells = np.column_stack([cond, np.round(np.nan_to_num(x) / width).astype(np.int64)])
+    support = len(np.unique(cells, axis=0))
+    per_condition = [len(np.unique(cells[np.all(cond == c, axis=1), 3])) for c in np.unique(cond, axis=0)]
+    n_along = int(np.median(per_condition))
+    dropped = {}
+    if stage.name in _SLOPE_TERMS and n_along < 5:
+        keep = _SLOPE_TERMS[stage.name]
+        for n in names:
+            if not n.startswith(keep):
+                dropped[n] = (f"only {n_along} distinct {'slip' if along == 'SL' else 'slip-angle'} value(s) per "
+                              "condition: the shape and peak are not measured")
+    order = [n for _, group in stage.groups for n in group if n in names and n not in dropped]
+    cap = max(support // 2, 1)
+    for n in reversed(order[cap:]):
+        dropped[n] = f"{support} distinct conditions support at most {cap} parameters"
+    out = {kind: [n for n in groups[kind] if n not in dropped] for kind in groups}
+    return out, dropped
 
 
 def _nonzero_camber_levels(gamma) -> int:

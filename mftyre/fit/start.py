@@ -14,23 +14,27 @@ import math
 
 import numpy as np
 
-from ..data import TyreData, levels
+from ..data import TyreData
 from ..errors import DataError
 from ..params import TyreParameters
+from ..programme import cluster_levels
+from .stages import level_labels
 
 __all__ = ["start_parameters", "estimate_stage"]
 
 
-def _level_centres(x, rel_tol):
+def _level_centres(x):
+    """Level centres (:func:`mftyre.programme.cluster_levels`); the median when no value is on a level."""
     x = np.asarray(x, dtype=float)
-    return levels(x, rel_tol * float(np.max(np.abs(x))))[1]
+    centres = cluster_levels(x)[1]
+    return centres if centres.size else np.array([float(np.median(x))])
 
 
 def start_parameters(data: TyreData, fittyp: int = 61, **given) -> TyreParameters:
     """A neutral MF 6.1 (or 6.2) parameter set for the tyre measured in ``data``; ``given`` overrides."""
     c = data.constants
-    fz_levels = _level_centres(data.array("FZ"), 0.05)
-    p_levels = _level_centres(data.array("P"), 0.02)
+    fz_levels = _level_centres(data.array("FZ"))
+    p_levels = _level_centres(data.array("P"))
     values = dict(
         FNOMIN=float(c.get("FNOMIN") or round(float(np.median(fz_levels)), -1)),
         NOMPRES=float(c.get("NOMPRES") or p_levels[len(p_levels) // 2]),
@@ -116,14 +120,16 @@ def estimate_stage(stage_name: str, prm: TyreParameters, data: TyreData) -> dict
     if ref.sum() < 5:
         ref = np.ones(len(data), bool)
     fz = data.array("FZ")[ref]
-    groups = levels(fz, 0.05 * float(np.max(fz)))[0]
+    groups = level_labels(data, "FZ")[ref]
+    if np.all(groups < 0):  # no load level (e.g. a load sweep): one group
+        groups = np.zeros_like(groups)
     if stage_name in ("pure_fx", "pure_fy"):
         lateral = stage_name == "pure_fy"
         slip = data.array("SA" if lateral else "SL")[ref]
         force = data.array("FY" if lateral else "FX")[ref]
         small = math.radians(2.0) if lateral else 0.02
         dfz, mu, stiff, shift = [], [], [], []
-        for k in np.unique(groups):
+        for k in np.unique(groups[groups >= 0]):
             sel = groups == k
             fz_k = float(np.mean(fz[sel]))
             dfz.append((fz_k - fz0) / fz0)
@@ -152,7 +158,7 @@ def estimate_stage(stage_name: str, prm: TyreParameters, data: TyreData) -> dict
         sa, fy, mz = data.array("SA")[ref], data.array("FY")[ref], data.array("MZ")[ref]
         r0 = prm.UNLOADED_RADIUS
         dfz, q = [], []
-        for k in np.unique(groups):
+        for k in np.unique(groups[groups >= 0]):
             sel = (groups == k) & (np.abs(sa) >= math.radians(0.5)) & (np.abs(sa) <= math.radians(2.5))
             if sel.sum() < 2:
                 continue

@@ -33,7 +33,7 @@ MODELS = ("steady", "transient", "swift")
 _UNIT_BASES = {
     "N": dict(kg=1, m=1, s=-2), "N.m": dict(kg=1, m=2, s=-2), "m": dict(m=1), "m/s": dict(m=1, s=-1),
     "rad": dict(rad=1), "rad/s": dict(rad=1, s=-1), "Pa": dict(kg=1, m=-1, s=-2), "s": dict(s=1),
-    "kg": dict(kg=1), "N/m": dict(kg=1, s=-2),
+    "kg": dict(kg=1), "N/m": dict(kg=1, s=-2), "1/m": dict(m=-1),
 }
 
 

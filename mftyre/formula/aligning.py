@@ -62,13 +62,20 @@ def aligning_coefficients(prm, s, lat, gyk, modes, be) -> SimpleNamespace:
         spin = s.phi if published else s.phit
         d_rp = d_drp * be.sin(c_drp * be.atan(b_drp * R0 * spin))  # (4.93)
         mz90 = mz_inf * (2.0 / be.pi) * be.atan(prm.QCRP2 * R0 * be.abs(s.phit)) * gyk  # (4.103)
-        # (4.104): Cr = zeta7 = (2/pi) acos(Mz90 / |D_rphi|); a ratio above 1 gives 0 (the real part of acos);
-        # without turn slip (Mz90 = 0) the ratio is 0 and Cr = 1 as in the model without turn slip
+        # (4.104): Cr = zeta7 = (2/pi) acos(Mz90 / |D_rphi|), real for ratios in [-1, 1]; without turn slip
+        # (Mz90 = 0) the ratio is 0 and Cr = 1 as in the model without turn slip. Beyond [-1, 1] (|D_rphi| small:
+        # a file with QDZ8 QDZ9 dfz + QDZ10 ~ 0 in the mfeval K_zgamma,r0, or small turn slip):
+        # published: Cr = (2/pi) acos of the ratio held in [-1, 1] (0 or 2), a real shape factor as (4.46) needs;
+        # mfeval: MATLAB's complex acos, Cr = a + i b with b = (2/pi) acosh|ratio|, of which MFeval reports the
+        # real part of Mzr: Dr cos(a x) cosh(b x), x = atan(Br alpha_r) (unbounded in alpha_r)
         ratio = be.where(mz90 == 0, 0.0, mz90 / be.abs(d_rp))
-        zeta7 = (2.0 / be.pi) * be.acos(be.fmin(ratio, 1.0))
+        zeta7 = (2.0 / be.pi) * be.acos(be.clip(ratio, -1.0, 1.0))
+        # (where D_rphi = 0 MFeval divides by zero; the ratio is held at 1e12 to keep Mzr finite)
+        zeta7_imag = None if published else (2.0 / be.pi) * be.acosh(be.clip(be.abs(ratio), 1.0, 1e12))
         zeta8 = 1.0 + d_rp  # (4.97)
     else:
         zeta0 = zeta2 = zeta6 = zeta7 = zeta8 = 1.0
+        zeta7_imag = None
 
     c.Dr = (Fz * R0 * ((prm.QDZ6 + prm.QDZ7 * dfz) * prm.LRES * zeta2
                        + ((prm.QDZ8 + prm.QDZ9 * dfz) * (1.0 + prm.PPZ2 * dpi)
@@ -76,6 +83,7 @@ def aligning_coefficients(prm, s, lat, gyk, modes, be) -> SimpleNamespace:
             * s.LMUY_star * be.sign(s.vx) * be.cos(s.alpha_star) + zeta8 - 1.0)  # (4.E47)
     c.Br = (prm.QBZ9 * prm.LKY / s.LMUY_star + prm.QBZ10 * lat.By * lat.Cy) * zeta6  # (4.E45)
     c.Cr = zeta7  # (4.E46)
+    c.Cr_imag = zeta7_imag  # mfeval form only (None: Cr is real)
     return c
 
 
@@ -86,7 +94,10 @@ def aligning_torque(prm, s, c, kxk, fx, fy, svyk, fy0_gamma0, gyk, modes, be):
     alpha_r_eq = be.atan(be.sqrt(be.tan(c.alpha_r) ** 2 + k_ratio2)) * be.sign(c.alpha_r)  # paper A54
     alpha_t_eq = be.atan(be.sqrt(be.tan(c.alpha_t) ** 2 + k_ratio2)) * be.sign(c.alpha_t)  # paper A55
     arm = R0 * (prm.SSZ1 + prm.SSZ2 * (fy / prm.FNOMIN) + (prm.SSZ3 + prm.SSZ4 * s.dfz) * s.gamma) * prm.LS  # paper A56
-    mzr = c.Dr * be.cos(c.Cr * be.atan(c.Br * alpha_r_eq))  # (4.E75)
+    shape_arg = be.atan(c.Br * alpha_r_eq)
+    mzr = c.Dr * be.cos(c.Cr * shape_arg)  # (4.E75)
+    if c.Cr_imag is not None:  # mfeval form: the real part of cos((Cr + i Cr_imag) x)
+        mzr = mzr * be.cosh(c.Cr_imag * shape_arg)
     bt = c.Bt * alpha_t_eq
     t = c.Dt * be.cos(c.Ct * be.atan(bt - c.Et * (bt - be.atan(bt)))) * s.cos_alpha_prime  # (4.E73)
     t = t * prm.LFZO

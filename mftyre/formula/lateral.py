@@ -76,14 +76,14 @@ def combined_lateral(prm, s, fy0, muy, modes, be):
     dfz = s.dfz
     zeta2 = s.zeta2 if modes.turn_slip else 1.0
     DVyk = (muy * s.Fz * (prm.RVY1 + prm.RVY2 * dfz + prm.RVY3 * s.gamma_star)
-            * be.cos(be.atan(prm.RVY4 * s.alpha_star)) * zeta2)  # (4.E67)
+            * be.cos_atan(prm.RVY4 * s.alpha_star) * zeta2)  # (4.E67)
     SVyk = DVyk * be.sin(prm.RVY5 * be.atan(prm.RVY6 * s.kappa)) * prm.LVYKA  # (4.E66)
     SHyk = prm.RHY1 + prm.RHY2 * dfz  # (4.E65)
     Eyk = prm.REY1 + prm.REY2 * dfz  # (4.E64)
     if modes.limits:
         Eyk = be.fmin(Eyk, 1.0)
     Cyk = prm.RCY1  # (4.E63)
-    Byk = (prm.RBY1 + prm.RBY4 * s.gamma_star**2) * be.cos(be.atan(prm.RBY2 * (s.alpha_star - prm.RBY3))) * prm.LYKA  # (4.E62)
+    Byk = (prm.RBY1 + prm.RBY4 * s.gamma_star**2) * be.cos_atan(prm.RBY2 * (s.alpha_star - prm.RBY3)) * prm.LYKA  # (4.E62)
     kappa_s = s.kappa + SHyk  # (4.E61)
 
     def weight(x):

@@ -39,7 +39,7 @@ def combined_longitudinal(prm, s, fx0, modes, be):
     if modes.limits:
         Exa = be.fmin(Exa, 1.0)
     SHxa = prm.RHX1  # (4.E57)
-    Bxa = (prm.RBX1 + prm.RBX3 * s.gamma_star**2) * be.cos(be.atan(prm.RBX2 * s.kappa)) * prm.LXAL  # (4.E54)
+    Bxa = (prm.RBX1 + prm.RBX3 * s.gamma_star**2) * be.cos_atan(prm.RBX2 * s.kappa) * prm.LXAL  # (4.E54)
     alpha_s = s.alpha_star + SHxa  # (4.E53)
 
     def weight(x):

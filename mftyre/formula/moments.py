@@ -52,13 +52,17 @@ def rolling_resistance_moment(prm, s, fx, be):
         my = -R0 * Fz * prm.LMY * speed_terms
     else:
         my = (-R0 * Fz0 * prm.LMY * (speed_terms + (prm.QSY5 + prm.QSY6 * Fz / Fz0) * s.gamma**2)
-              * ((Fz / Fz0) ** prm.QSY7 * (s.p / prm.NOMPRES) ** prm.QSY8))  # paper A48
+              * ((be.fmax(Fz, 1e-300) / Fz0) ** prm.QSY7 * (s.p / prm.NOMPRES) ** prm.QSY8))  # paper A48
+        # (the floor keeps the derivative of Fz^QSY7 finite at zero load: 0 times a finite slope)
     my = be.where(vx < 0, -my, my)
     # fade towards wheel lock (MF-Tyre low-speed behaviour)
     kappa = s.ukappa
     high = prm.VXLOW / be.abs(vx) - 1.0
     low = -1.0 - prm.VXLOW - high
     ramp = be.logical_and(kappa >= low, kappa <= high)
-    my = be.where(ramp, my * be.sin(0.5 * be.pi * (kappa + 1.0) / (high + 1.0)), my)
-    my = be.where(kappa < low, -my, my)
+    if be.any(ramp):  # (NumPy skips this when no wheel is near lock)
+        my = be.where(ramp, my * be.sin(0.5 * be.pi * (kappa + 1.0) / (high + 1.0)), my)
+    reversed_ = kappa < low
+    if be.any(reversed_):
+        my = be.where(reversed_, -my, my)
     return be.where(vx == 0, 0.0, my)

@@ -16,6 +16,8 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
+from .options import SMOOTH_LIMITS_SLOPE
+
 __all__ = ["condition_inputs", "smooth_low_speed"]
 
 
@@ -29,19 +31,31 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
     if modes.limits:
         VXLOW = prm.VXLOW
         s.low_speed = be.abs(vx) <= VXLOW
-        reduction_linear = be.where(s.low_speed, be.abs(vx / VXLOW), 1.0)
-        s.reduction_smooth = be.where(s.low_speed, 1.0 - 0.5 * (1.0 + be.cos(be.pi * vx / VXLOW)), 1.0)
-        s.kappa_out = kappa * reduction_linear
-        phit = phit * be.cos(alpha) * reduction_linear
+        phit = phit * be.cos(alpha)
+        if be.any(s.low_speed):  # (NumPy skips this when no point is that slow; the factors would all be 1)
+            reduction_linear = be.where(s.low_speed, be.abs(vx / VXLOW), 1.0)
+            s.reduction_smooth = be.where(s.low_speed, 1.0 - 0.5 * (1.0 + be.cos(be.pi * vx / VXLOW)), 1.0)
+            kappa = kappa * reduction_linear
+            phit = phit * reduction_linear
+            speed_sum = be.abs(vx) + be.abs(be.tan(alpha) * vx)  # below VXLOW only where |Vx| is
+            alpha = be.where(speed_sum < VXLOW, alpha * speed_sum / VXLOW, alpha)
+        else:
+            s.reduction_smooth = None
+        s.kappa_out = kappa
         phit = be.where(vx < 0, -phit, phit)
-        speed_sum = be.abs(vx) + be.abs(be.tan(alpha) * vx)
-        alpha = be.where(speed_sum < VXLOW, alpha * speed_sum / VXLOW, alpha)
-        kappa = be.clip(kappa * reduction_linear, prm.KPUMIN, prm.KPUMAX)
-        alpha = be.clip(alpha, prm.ALPMIN, prm.ALPMAX)
-        gamma = be.clip(gamma, prm.CAMMIN, prm.CAMMAX)
-        Fz = be.fmin(uFz, prm.FZMAX)
+
+        def saturate(x, lo, hi):
+            inside = be.clip(x, lo, hi) if lo is not None else be.fmin(x, hi)
+            if modes.limits == "smooth":  # a small slope beyond the ranges (see Modes.limits)
+                return inside + SMOOTH_LIMITS_SLOPE * (x - inside)
+            return inside
+
+        kappa = saturate(kappa, prm.KPUMIN, prm.KPUMAX)
+        alpha = saturate(alpha, prm.ALPMIN, prm.ALPMAX)
+        gamma = saturate(gamma, prm.CAMMIN, prm.CAMMAX)
+        Fz = saturate(uFz, None, prm.FZMAX)
         s.Fz_low = be.fmax(Fz, prm.FZMIN)
-        p = be.clip(p, prm.PRESMIN, prm.PRESMAX)
+        p = saturate(p, prm.PRESMIN, prm.PRESMAX)
     else:
         s.low_speed = None
         s.reduction_smooth = None
@@ -50,20 +64,21 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
         s.Fz_low = Fz
 
     s.Fz, s.kappa, s.alpha, s.gamma, s.phit, s.p = Fz, kappa, alpha, gamma, phit, p
+    s.tan_alpha = be.tan(alpha)
 
     s.Fz0p = prm.LFZO * prm.FNOMIN  # Fz0' (4.E1)
     s.dfz = (Fz - s.Fz0p) / s.Fz0p  # (4.E2a)
     s.dpi = (p - prm.NOMPRES) / prm.NOMPRES  # (4.E2b)
 
     if modes.alpha_star:
-        s.alpha_star = be.tan(alpha) * be.sign(vx)  # (4.E3)
+        s.alpha_star = s.tan_alpha * be.sign(vx)  # (4.E3)
         s.gamma_star = be.sin(gamma)  # (4.E4)
     else:
         s.alpha_star, s.gamma_star = alpha, gamma
 
     # slip and contact-centre velocities, ISO-W signs: Vsy = tan(alpha) |Vx| (2.12, 4.E5)
     vsx = -kappa * be.abs(vx)
-    vsy = be.tan(alpha) * be.abs(vx)
+    vsy = s.tan_alpha * be.abs(vx)
     vs = be.sqrt(vsx**2 + vsy**2)
     vc = be.sqrt(vx**2 + vsy**2)
     vc_prime = vc + 1e-6  # (4.E6a), Vc >= 0 so sign(Vc) = +1

@@ -3,14 +3,18 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["Modes", "TURN_SLIP_FORMS"]
+__all__ = ["Modes", "TURN_SLIP_FORMS", "SMOOTH_LIMITS_SLOPE"]
+
+#: With ``limits="smooth"``, the share of an input's change beyond its .tir range that still reaches the equations.
+SMOOTH_LIMITS_SLOPE = 0.01
 
 #: Forms of the turn-slip equations (see :mod:`mftyre.formula.turnslip`):
 #: "published": Pacejka (2012) as printed: the spin (4.76) with its leading minus sign, K_zgamma,r0 (4.99),
 #:              the residual spin torque D_rphi driven by the spin phi; singularity protection Vc' >= VXLOW.
 #: "mfeval":    the reference evaluator MFeval 4.3.1: (4.76) without the minus sign, K_zgamma,r0 =
 #:              Fz R0 (QDZ8 QDZ9 dfz + QDZ10 + QDZ11 dfz |gamma|) LKZC, D_rphi driven by the turn slip phit,
-#:              Vc' = VXLOW sign(Vx) below VXLOW.
+#:              Vc' = VXLOW sign(Vx) below VXLOW, and Cr = (2/pi) acos(Mz90/|D_rphi|) (4.104) complex where the
+#:              ratio leaves [-1, 1] (MATLAB's acos), Mzr its real part (see mftyre.formula.aligning).
 TURN_SLIP_FORMS = ("published", "mfeval")
 
 
@@ -18,8 +22,14 @@ TURN_SLIP_FORMS = ("published", "mfeval")
 class Modes:
     """Switches of one evaluation.
 
-    limits:     saturate the inputs to the .tir ranges, low-speed model below VXLOW, cap the curvature
-                factors E at 1 (the reference evaluator's use mode 1xx).
+    limits:     True: saturate the inputs to the .tir ranges, low-speed model below VXLOW, cap the curvature
+                factors E at 1 (the reference evaluator's use mode 1xx). The saturation makes every derivative
+                with respect to a saturated input exactly zero beyond its range (and a load Fz <= 0 gives zero
+                forces and zero derivatives: the wheel has left the road).
+                "smooth": the same, but beyond the ranges the inputs keep SMOOTH_LIMITS_SLOPE (1 %) of their
+                slope, kappa_used = clip(kappa) + 0.01 (kappa - clip(kappa)), so that a gradient-based optimiser
+                still sees the way back into the range (outputs beyond the ranges differ slightly from True).
+                False: the equations at the inputs as given (use mode 2xx).
     alpha_star: alpha* = tan(alpha) sign(Vx), gamma* = sin(gamma) (4.E3, 4.E4); otherwise alpha* = alpha.
     turn_slip:  turn slip and camber spin through the zeta factors (4.76-4.106).
     turn_slip_form: "published" or "mfeval", see :data:`TURN_SLIP_FORMS`.
@@ -31,6 +41,8 @@ class Modes:
     turn_slip_form: str = "published"
 
     def __post_init__(self):
+        if self.limits not in (True, False, "smooth"):
+            raise ValueError(f"limits must be True, False or 'smooth', got {self.limits!r}")
         if self.turn_slip_form not in TURN_SLIP_FORMS:
             raise ValueError(f"turn_slip_form must be one of {TURN_SLIP_FORMS}, got {self.turn_slip_form!r}")
 

@@ -12,7 +12,15 @@ Two forms (``Modes.turn_slip_form``):
   Vc' = max(Vc, VXLOW) (continuous, positive in both directions of travel).
 * "mfeval": the reference evaluator's choices, reproduced for comparison: (4.76) without the minus sign (its
   authors' reading of the axis systems), Vc' = VXLOW sign(Vx) below VXLOW, D_rphi from phit instead of phi,
-  and K_zgamma,r0 = Fz R0 (QDZ8 QDZ9 dfz + QDZ10 + QDZ11 dfz |gamma|) LKZC instead of (4.99).
+  and K_zgamma,r0 = Fz R0 (QDZ8 QDZ9 dfz + QDZ10 + QDZ11 dfz |gamma|) LKZC instead of (4.99), and Cr (4.104) taken
+  through MATLAB's complex acos where Mz90/|D_rphi| > 1 (Mzr = Dr cos(a x) cosh(b x), the real part MFeval
+  reports). The last matters on files with QDZ10 = QDZ11 = 0 and a small QDZ9 (TNO's 205/60 R15 MF 6.2 example):
+  there K_zgamma,r0 ~ 0, D_rphi ~ 0, the ratio is far above 1 and Mzr grows with the slip angle (182 N m at
+  Fz = 4.1 kN, gamma = 0.099 rad, phit = 0.0011 1/m), while on MFeval's public sample files (QDZ10 = 1.03) the
+  ratio stays below 1, which is why its tables could not show it.
+
+The published form follows Pacejka (2012) (4.76)-(4.106) and Besselink et al. (2010); where (4.104)'s ratio leaves
+[-1, 1] it holds it there, so that Cr stays a real shape factor (0..2) and |Mzr| <= |Dr|.
 """
 from __future__ import annotations
 
@@ -22,7 +30,7 @@ __all__ = ["spin_slip", "zeta_factors", "lateral_shift_turn_slip"]
 def spin_slip(prm, s, omega, modes, be):
     """phi (4.76) and the camber reduction factor eps_gamma (4.90)."""
     eps_gamma = prm.PECP1 * (1.0 + prm.PECP2 * s.dfz)  # (4.90)
-    vsy = -be.tan(s.alpha) * be.abs(s.vx)
+    vsy = -s.tan_alpha * be.abs(s.vx)
     vc = be.sqrt(s.vx**2 + vsy**2)
     camber_spin = (1.0 - eps_gamma) * omega * be.sin(s.gamma)
     if modes.turn_slip_form == "published":
@@ -39,13 +47,13 @@ def spin_slip(prm, s, omega, modes, be):
 def zeta_factors(prm, s, be):
     """zeta1, zeta2, zeta3, zeta5, zeta6 from the spin phi (stored in ``s``)."""
     R0, phi = prm.UNLOADED_RADIUS, s.phi
-    bxp = prm.PDXP1 * (1.0 + prm.PDXP2 * s.dfz) * be.cos(be.atan(prm.PDXP3 * s.kappa))  # (4.106)
-    s.zeta1 = be.cos(be.atan(bxp * R0 * phi))  # (4.105)
-    byp = prm.PDYP1 * (1.0 + prm.PDYP2 * s.dfz) * be.cos(be.atan(prm.PDYP3 * be.tan(s.alpha)))  # (4.78)
-    s.zeta2 = be.cos(be.atan(byp * (R0 * be.abs(phi) + prm.PDYP4 * be.sqrt(R0 * be.abs(phi)))))  # (4.77)
-    s.zeta3 = be.cos(be.atan(prm.PKYP1 * R0**2 * phi**2))  # (4.79)
-    s.zeta5 = be.cos(be.atan(prm.QDTP1 * R0 * phi))  # (4.91)
-    s.zeta6 = be.cos(be.atan(prm.QBRP1 * R0 * phi))  # (4.102)
+    bxp = prm.PDXP1 * (1.0 + prm.PDXP2 * s.dfz) * be.cos_atan(prm.PDXP3 * s.kappa)  # (4.106)
+    s.zeta1 = be.cos_atan(bxp * R0 * phi)  # (4.105)
+    byp = prm.PDYP1 * (1.0 + prm.PDYP2 * s.dfz) * be.cos_atan(prm.PDYP3 * s.tan_alpha)  # (4.78)
+    s.zeta2 = be.cos_atan(byp * (R0 * be.abs(phi) + prm.PDYP4 * be.sqrt(R0 * be.abs(phi))))  # (4.77)
+    s.zeta3 = be.cos_atan(prm.PKYP1 * R0**2 * phi**2)  # (4.79)
+    s.zeta5 = be.cos_atan(prm.QDTP1 * R0 * phi)  # (4.91)
+    s.zeta6 = be.cos_atan(prm.QBRP1 * R0 * phi)  # (4.102)
 
 
 def lateral_shift_turn_slip(prm, s, kya, kya0, kyg0, svyg, limits, be):

@@ -21,9 +21,14 @@ x = 2c / (B + sqrt(B^2 + 4 A c)), finite also for Q_FZ2 = 0 (linear tyre) where 
 divides by zero. MF 6.2: the relation is not monotone near zero deflection (Q_FCY2 < 0 makes the side-force
 term grow without bound as rho -> 0), so a secant started near R0 can diverge. mftyre brackets the root
 between the free radius and a deflection where the load is exceeded, then refines with Dekker's method (secant with
-bisection safeguard) to 1e-15 m; whenever a root with Rl <= R_omega exists it is found. When even zero free deflection already gives
-more than the requested load (a cambered tyre at almost no load, touching with its shoulder) the loaded radius
-is R_omega: the contact is about to be lost.
+bisection safeguard) to 1e-15 m; whenever a root with Rl <= R_omega exists it is found. When even zero free
+deflection already gives more than the requested load (a cambered tyre at almost no load: the camber deflection
+rho_zgamma alone carries more), the relation's root lies above R_omega, where the camber asymmetry S_Fygamma,
+growing with Rl/R_omega, brings the load down: a grid scan above R_omega (steps of 0.05 R0 up to R_omega + R0)
+brackets the root nearest to the free radius, refined as above (this is the root the reference evaluator reports, e.g. Rl = 0.4737 m
+for Fz = 0 at 31 m/s on its MF 6.2 sample file). Where the relation has no root there (no camber, no S_Fygamma,
+or a camber so small that the root lies more than R0 above the free radius: a wheel lifted by more than its own
+radius is not in contact) the loaded radius is R_omega, where the camber deflection carries a small load.
 """
 from __future__ import annotations
 
@@ -53,21 +58,33 @@ def rolling_radius_reduction(prm, fz, dpi, be):
 def spin_and_radius(prm, s, omega_in, omega_given, be):
     """Spin omega, free radius R_omega and effective rolling radius Re.
 
-    Where the spin is not given it follows from the longitudinal slip: omega = (1 + kappa) Vx / Re (2.5),
-    solved together with Re(omega) by fixed-point iteration from Re = 0.965 R0 (the iteration contracts by
-    about 2 Q_V1 (omega R0/V0)^2 per step).
+    Where the spin is not given it follows from the longitudinal slip: omega = (1 + kappa) Vx / Re (2.5).
+    With (1) and (7), Re = c + d / Re^2 where c = R0 Q_RE0 - (R_omega - Re) and d = R0 Q_V1 (omega Re R0/V0)^2,
+    i.e. the cubic f(Re) = Re^3 - c Re^2 - d = 0, which has exactly one positive root, above max(c, 0). Newton's
+    method from the upper bound min(c + d/c^2, max(c, 0) + d^(1/3)) descends to it monotonically (f is convex
+    there) and quadratically, at any speed and slip (a plain fixed-point iteration diverges once
+    2 Q_V1 (omega R0/V0)^2 > 1, above about 840 m/s or kappa = 52).
     """
     reduction = rolling_radius_reduction(prm, s.uFz, s.dpi, be)
     wheel_speed = (1.0 + s.ukappa) * s.vx  # omega Re (2.5)
 
-    def step(re):
-        return free_radius(prm, wheel_speed / re, be) - reduction, None
-
     if omega_given is True:
         omega = omega_in
     else:
-        re0 = 0.965 * prm.UNLOADED_RADIUS + be.zeros_like(wheel_speed * reduction)
-        re, _ = be.fixed_point(step, re0, tol=1e-13, max_iter=200, unrolled=8)
+        R0 = prm.UNLOADED_RADIUS
+        c = R0 * prm.Q_RE0 - reduction
+        d = R0 * prm.Q_V1 * (wheel_speed * R0 / prm.LONGVL) ** 2
+        c_pos = be.fmax(c, 0.0)
+        cube_bound = c_pos + d ** (1.0 / 3.0)
+        re0 = be.where(c > 0, be.fmin(c + d / be.where(c > 0, c, 1.0) ** 2, cube_bound), cube_bound)
+        re0 = be.where(d == 0, c, re0)  # no spin: Re = c
+
+        def newton(re):
+            slope = 3.0 * re**2 - 2.0 * c * re
+            step = (re**3 - c * re**2 - d) / be.where(slope == 0, 1.0, slope)
+            return be.where(slope == 0, re, re - step), None
+
+        re, _ = be.fixed_point(newton, re0, tol=1e-15 + 1e-15 * be.abs(re0), max_iter=100, unrolled=6)
         omega_est = wheel_speed / re  # consistent with the converged radius
         omega = omega_est if omega_given is False else be.where(omega_given, omega_in, omega_est)
     r_omega = free_radius(prm, omega, be)
@@ -84,19 +101,27 @@ def _bottoming_force(prm, rl, be):
 
 
 def vertical_force_61(prm, rho, r_omega, omega, fx, fy, dpi, be):
-    """MF 6.1 Fz(rho, p): A3.3 / paper (3) with the speed, Fx and Fy factors, plus bottoming."""
+    """MF 6.1 Fz(rho, p): A3.3 / paper (3) with the speed, Fx and Fy factors, plus bottoming; zero where the tyre
+    is lifted (rho <= 0) or the force factor is negative (the road cannot pull the tyre down)."""
     R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
-    x = rho / R0
+    x = be.fmax(rho, 0.0) / R0
     correction = (1.0 + prm.Q_V2 * (R0 / prm.LONGVL) * be.abs(omega) - (prm.Q_FCX * fx / Fz0) ** 2
                   - (prm.Q_FCY * fy / Fz0) ** 2) * (1.0 + prm.PFZ1 * dpi)
-    return correction * (_q_fz1(prm, be) * x + prm.Q_FZ2 * x**2) * Fz0 + _bottoming_force(prm, r_omega - rho, be)
+    fz = correction * (_q_fz1(prm, be) * x + prm.Q_FZ2 * x**2) * Fz0 + _bottoming_force(prm, r_omega - rho, be)
+    return be.fmax(fz, 0.0)
 
 
 def deflection_61(prm, fz, r_omega, omega, fx, fy, dpi, be):
-    """Inverse of :func:`vertical_force_61`: deflection rho >= 0 carrying the load ``fz``."""
+    """Inverse of :func:`vertical_force_61`: deflection rho >= 0 carrying the load ``fz``.
+
+    Where the force factor is not positive (|Fx| or |Fy| beyond about Fz0/Q_FCX, Fz0/Q_FCY: far outside any
+    measured range) the relation carries no load at any deflection; the factor is then held at 1e-3 so that the
+    deflection stays finite (the tyre deflects down to the rim, where bottoming carries the load).
+    """
     R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
     correction = (1.0 + prm.Q_V2 * (R0 / prm.LONGVL) * be.abs(omega) - (prm.Q_FCX * fx / Fz0) ** 2
                   - (prm.Q_FCY * fy / Fz0) ** 2) * (1.0 + prm.PFZ1 * dpi)
+    correction = be.fmax(correction, 1e-3)
     A, B = prm.Q_FZ2 * correction * Fz0, _q_fz1(prm, be) * correction * Fz0
 
     def root(a, b, c):  # positive root of a x^2 + b x = c, cancellation free
@@ -110,40 +135,81 @@ def deflection_61(prm, fz, r_omega, omega, fx, fy, dpi, be):
     return be.where(x * R0 > rho_b, x_b, x) * R0
 
 
+_RHO_FLOOR = 1e-12  # m, the smallest MF 6.2 deflection
+
+
 def deflection_62(prm, rl, r_omega, gamma, be):
     """MF 6.2 vertical deflection at loaded radius ``rl``: free-rolling deflection plus the camber deflection
     rho_zgamma (Q_CAM1-3, reference tread width (1.075 - 0.5 ASPECT_RATIO) WIDTH), at least 1e-12 m."""
-    rho_free = be.fmax(r_omega - rl, 0.0)
-    rho = rho_free - prm.Q_CAM3 * rho_free * be.abs(gamma)
+    return _deflection_62(prm, rl, r_omega, *_camber_terms_62(prm, r_omega, gamma, be), be)
+
+
+def _camber_terms_62(prm, r_omega, gamma, be):
+    """(free share 1 - Q_CAM3 |gamma|, camber factor (W/8) |tan gamma| / (Q_CAM1 R_omega + Q_CAM2 R_omega^2)^2):
+    the parts of the MF 6.2 deflection that do not depend on Rl."""
+    free_share = 1.0 - prm.Q_CAM3 * be.abs(gamma)
+    camber = 0.0
     if prm.Q_CAM1 != 0.0 or prm.Q_CAM2 != 0.0:
         tread_width = (1.075 - 0.5 * prm.ASPECT_RATIO) * prm.WIDTH
-        growth = (prm.Q_CAM1 * rl + prm.Q_CAM2 * rl**2) / (prm.Q_CAM1 * r_omega + prm.Q_CAM2 * r_omega**2)
-        rho = rho + growth**2 * (tread_width / 8.0) * be.abs(be.tan(gamma))
-    return be.fmax(rho, 1e-12)
+        camber = (tread_width / 8.0) * be.abs(be.tan(gamma)) / (prm.Q_CAM1 * r_omega + prm.Q_CAM2 * r_omega**2) ** 2
+    return free_share, camber
+
+
+def _deflection_62(prm, rl, r_omega, free_share, camber, be):
+    """rho = (R_omega - Rl)+ (1 - Q_CAM3 |gamma|) + growth^2 (W/8) |tan gamma|, growth = (Q_CAM1 Rl + Q_CAM2 Rl^2)
+    / (Q_CAM1 R_omega + Q_CAM2 R_omega^2)."""
+    rho = be.fmax(r_omega - rl, 0.0) * free_share
+    if prm.Q_CAM1 != 0.0 or prm.Q_CAM2 != 0.0:
+        rho = rho + (prm.Q_CAM1 * rl + prm.Q_CAM2 * rl**2) ** 2 * camber
+    return be.fmax(rho, _RHO_FLOOR)
 
 
 def vertical_force_62(prm, rl, r_omega, omega, fx, fy, gamma, dpi, be):
-    """MF 6.2 Fz(Rl) at loaded radius ``rl`` (terms whose parameters are zero are skipped)."""
+    """MF 6.2 Fz(Rl) at loaded radius ``rl``: the relation below, or zero where it is negative (lifted tyre)."""
+    terms = _relation_terms_62(prm, r_omega, omega, fx, fy, gamma, dpi, be)
+    return be.fmax(_relation_62(prm, rl, terms, be), 0.0)
+
+
+def _relation_terms_62(prm, r_omega, omega, fx, fy, gamma, dpi, be) -> tuple:
+    """The parts of the MF 6.2 relation that do not depend on Rl (computed once per root search)."""
     R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
-    x = deflection_62(prm, rl, r_omega, gamma, be) / R0
+    free_share, camber = _camber_terms_62(prm, r_omega, gamma, be)
     correction = 1.0 + prm.Q_V2 * (R0 / prm.LONGVL) * be.abs(omega) - (prm.Q_FCX * fx / Fz0) ** 2
+    stiffness = (1.0 + prm.PFZ1 * dpi) * Fz0
+    return r_omega, free_share, camber, correction, stiffness, fy, gamma
+
+
+def _relation_62(prm, rl, terms, be):
+    """The MF 6.2 load-radius relation, negative where the side-force term exceeds the rest (terms whose
+    parameters are zero are skipped). Its sign change above R_omega is a lifted tyre's loaded radius."""
+    r_omega, free_share, camber, correction, stiffness, fy, gamma = terms
+    R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
+    rho = _deflection_62(prm, rl, r_omega, free_share, camber, be)
+    x = rho / R0
+    x_load = be.where(rho > _RHO_FLOOR, x, 0.0)  # no deflection, no load (the floor only keeps x^Q_FCY2 finite)
     if prm.Q_FCY != 0.0:  # side force, with the camber asymmetry S_Fygamma and the deflection dependency
         ratio = rl / r_omega
         s_fygamma = (prm.Q_FYS1 + prm.Q_FYS2 * ratio + prm.Q_FYS3 * ratio**2) * gamma
         correction = correction - (x ** prm.Q_FCY2 * prm.Q_FCY * (fy - s_fygamma) / Fz0) ** 2
-    fz = correction * (1.0 + prm.PFZ1 * dpi) * (_q_fz1(prm, be) * x + prm.Q_FZ2 * x**2) * Fz0
+    fz = correction * stiffness * (_q_fz1(prm, be) * x_load + prm.Q_FZ2 * x_load**2)
     return fz + _bottoming_force(prm, rl, be)
+
+
+#: the scan above the free radius for the root of a lifted tyre, in units of R0: 0.01, 0.025, then steps of 0.05
+#: up to R_omega + R0 (as the camber vanishes the root moves up as 1/sqrt(|gamma|), beyond any contact)
+_LIFT_OFFSETS = (0.01, 0.025, *(0.05 * k for k in range(1, 21)))
 
 
 def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     """Inverse of :func:`vertical_force_62`: (Rl, rho_z) carrying ``fz``, see the module notes."""
     args = (r_omega, omega, fx, fy, gamma, dpi)
     fz, *args = be.broadcast(fz, *args)  # the residual below evaluates subsets of the elements
+    terms = be.broadcast(*_relation_terms_62(prm, *args, be))
 
     def residual(rl, idx):
-        sub = args if idx is None else [v[idx] for v in args]
+        sub = terms if idx is None else [v[idx] for v in terms]
         target = fz if idx is None else fz[idx]
-        return vertical_force_62(prm, rl, *sub, be) - target
+        return _relation_62(prm, rl, sub, be) - target
 
     r_omega = args[0]
     f_top = residual(r_omega, None)  # < 0 when the free tyre carries less than fz
@@ -165,10 +231,19 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
         top = r_omega if idx is None else r_omega[idx]
         return top - (top - rl_2) * be.where(f_2 < 0, 1.5, 0.5)
 
-    f_1, f_2 = be.where(contact, f_1, 0.0 * f_1), be.where(contact, f_2, 0.0 * f_2)
-    rl = be.solve_bracketed(residual, r_omega - rho_1, r_omega - rho_2, f_1, f_2, xtol=1e-15, widen=widen,
-                            max_iter=200, unrolled=30)
-    rl = be.where(contact, rl, r_omega)
+    # lifted: the free tyre already carries more than fz (camber deflection at a low load); the root, if any,
+    # lies above R_omega, where the camber asymmetry S_Fygamma grows with Rl/R_omega: the first sign change on
+    # a grid above R_omega brackets the root nearest to the free radius
+    lifted, lo, hi, f_lo, f_hi = be.first_sign_change(residual, r_omega, f_top, prm.UNLOADED_RADIUS + 0.0 * fz,
+                                                      _LIFT_OFFSETS, True)
+    a = be.where(contact, r_omega - rho_1, lo)
+    b = be.where(contact, r_omega - rho_2, hi)
+    f_a = be.where(contact, f_1, be.where(lifted, f_lo, 0.0 * f_1))
+    f_b = be.where(contact, f_2, be.where(lifted, f_hi, 0.0 * f_2))
+    # stop at 1e-15 m or once the load is matched to 1e-12 relative (floor 1e-12 N)
+    rl = be.solve_bracketed(residual, a, b, f_a, f_b, xtol=1e-15, widen=widen, max_iter=200, unrolled=30,
+                            ftol=1e-12 * be.fmax(fz, 1.0))
+    rl = be.where(be.logical_or(contact, lifted), rl, r_omega)
     return rl, deflection_62(prm, rl, r_omega, args[4], be)
 
 

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from ..fit.stages import STAGES
 from ..params import PARAMETERS
 
-__all__ = ["Effect", "CATALOGUE", "BASE", "VARIABLES", "PARAM_STAGE", "parameter_needs", "coverage",
+__all__ = ["Effect", "CATALOGUE", "BASE", "VARIABLES", "PARAM_STAGE", "parameter_needs", "SWEPT_INPUT", "coverage",
            "effect_state", "neutralise", "EXCLUDED"]
 
 #: Condition variables findings and effects speak of: name -> text used in findings.
@@ -238,10 +238,26 @@ EXCLUDED = {
 }
 
 
+#: The input a stage's parameters shape the output along: without a sweep of it the data cannot tell them apart
+#: (e.g. the Fx shifts PHX1 and PVX1 both give a constant Fx at kappa = 0: from free rolling alone any
+#: horizontal shift is cancelled by a vertical one, and the fitted curve's shape away from kappa = 0 is invented).
+SWEPT_INPUT = {"pure_fx": "slip_ratio", "pure_fy": "slip_angle", "mz": "slip_angle", "combined_fx": "combined",
+               "combined_fy": "combined", "mz_combined": "slip_ratio", "vertical": "deflection"}
+#: Exceptions: the kappa-induced side force (S_Vykappa) is largest at alpha = 0, a slip-ratio sweep shows it.
+_SWEPT_EXCEPTIONS = {"RVY1": "slip_ratio", "RVY2": "slip_ratio", "RVY3": "slip_ratio", "RVY5": "slip_ratio",
+                     "RVY6": "slip_ratio"}
+
+
 def parameter_needs(name: str) -> tuple:
-    """Data conditions needed to determine a parameter: the ``needs`` of its stage group; ``turn_slip`` for the
-    turn-slip coefficients, ``camber`` / ``fy`` for the Mx and MF 6.2 vertical terms no stage lists. (LMUV needs
-    nothing: the slip speed varies within every slip sweep.)"""
+    """Data conditions needed to determine a parameter: the input its stage sweeps (:data:`SWEPT_INPUT`:
+    ``slip_ratio``, ``slip_angle``, ``combined``, ``deflection``) and the ``needs`` of its stage group;
+    ``turn_slip`` for the turn-slip coefficients, ``camber`` / ``fy`` for the Mx and MF 6.2 vertical terms no
+    stage lists. (LMUV needs a slip sweep: the slip speed varies within it.)"""
+    swept = _SWEPT_EXCEPTIONS.get(name) or SWEPT_INPUT.get(PARAM_STAGE.get(name, ""))
+    return ((swept,) if swept else ()) + _condition_needs(name)
+
+
+def _condition_needs(name: str) -> tuple:
     for stage in STAGES.values():
         for needs, names in stage.groups:
             if name in names:

@@ -8,12 +8,13 @@ from __future__ import annotations
 
 import sys
 import time
-from pathlib import Path
 
 __all__ = ["register", "run"]
 
 
 def register(subparsers) -> None:
+    from ..cli import number_type
+
     p = subparsers.add_parser(
         "gaps", help="find the effects a .tir model misses in measured data, add them, show the gap shrink",
         description="Refit the model's active parameters to the data, locate residual structure beyond measurement "
@@ -23,12 +24,16 @@ def register(subparsers) -> None:
     p.add_argument("data", help="measurement file: .tdx (TYDEX) or .csv (canonical channels, SI)")
     p.add_argument("--model", required=True, help="the base .tir file")
     p.add_argument("-o", "--output", help="write the improved .tir file here")
-    p.add_argument("--report", metavar="DIR", help="write report.md and PNG plots into this folder")
+    p.add_argument("--report", metavar="DIR", help="write report.md, PNG plots and gaps.json into this folder (an "
+                                                 "existing folder that is not empty needs --overwrite)")
     p.add_argument("--json", metavar="FILE", help="write the JSON report here")
-    p.add_argument("--holdout", type=float, default=0.25, help="fraction of sweeps held out (default 0.25)")
-    p.add_argument("--seed", type=int, default=0, help="which sweeps are held out (default 0)")
-    p.add_argument("--alpha", type=float, default=1e-3, help="family-wise significance level (default 1e-3)")
-    p.add_argument("--max-effects", type=int, default=5, help="add at most this many effects (default 5)")
+    p.add_argument("--holdout", type=number_type(0, 1, open_low=True, open_high=True), default=0.25,
+                   help="fraction of sweeps held out (default 0.25)")
+    p.add_argument("--seed", type=number_type(0, integer=True), default=0, help="which sweeps are held out (default 0)")
+    p.add_argument("--alpha", type=number_type(0, 1, open_low=True, open_high=True), default=1e-3,
+                   help="family-wise significance level (default 1e-3)")
+    p.add_argument("--max-effects", type=number_type(0, integer=True), default=5,
+                   help="add at most this many effects (default 5)")
     p.add_argument("--channels", help="comma-separated channels to use (default: all measured of FX,FY,MZ,MX,MY,FZ)")
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
     p.add_argument("--quiet", action="store_true", help="no progress output")
@@ -37,12 +42,14 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     from ..errors import MFTyreError
+    from ..files import OutputError, check_outputs
     from .core import find_gaps
 
-    outputs = [Path(x) for x in (args.output, args.json) if x]
-    existing = [str(x) for x in outputs if x.exists()]
-    if existing and not args.overwrite:
-        print(f"mftyre gaps: {', '.join(existing)} exist(s); use --overwrite to replace", file=sys.stderr)
+    try:
+        check_outputs({"-o": args.output, "--json": args.json}, {"DATA": args.data, "--model": args.model},
+                      folders={"--report": args.report}, overwrite=args.overwrite)
+    except OutputError as exc:
+        print(f"mftyre gaps: {exc}", file=sys.stderr)
         return 2
     channels = None
     if args.channels:
@@ -70,13 +77,23 @@ def run(args) -> int:
         print(f"mftyre gaps: {exc}", file=sys.stderr)
         return 1
     print(rep.message)
+    if rep.programme:
+        print(f"  test programme: {rep.programme}")
+    if rep.reduction:
+        print(f"  time series: {rep.reduction}")
+    for t in rep.transient:
+        print(f"  transient: {t['text']}")
     for f in rep.findings_before[:5]:
         print(f"  finding: {f.text}")
     for a in rep.effects_added:
         vals = ", ".join(f"{k} = {v['value']:.4g}" + (f" +- {v['stderr']:.2g}" if v['stderr'] else "")
                          for k, v in a.parameters.items())
         print(f"  added {a.name}: {a.description}; {vals}")
-    print("  held-out error [%]:  " + "  ".join(f"{c} {rep.error_before[c]:.3f} -> {rep.error_after[c]:.3f}"
+    for name, why in rep.rejected.items():
+        print(f"  rejected {name}: {why}")
+    if rep.untestable:
+        print(f"  {len(rep.untestable)} effects the data cannot test (listed with the reason in the report)")
+    print(("  leave-one-out" if rep.small_data else "  held-out") + " error [%]:  " + "  ".join(f"{c} {rep.error_before[c]:.3f} -> {rep.error_after[c]:.3f}"
                                               for c in rep.error_before))
     written = [x for x in (args.output, args.report, args.json) if x]
     if written:

@@ -12,14 +12,19 @@ from scipy import stats
 from ..data import TyreData
 from ..fit.core import load_data
 from ..fit.metrics import normalised_rms
+from ..fit.verify import verify_tir
 from ..fit.stages import _REASONS as _STAGE_REASONS  # the stages' own wording
 from ..fit.stages import STAGES, conditions
 from ..model import MFModel, load_tir
+from ..programme import recognise
+from ..timeseries import effective_samples, needs_reduction, reduce_sweeps
 from ..tir import write_tir
 from .catalogue import CATALOGUE, PARAM_STAGE, Effect, effect_state, parameter_needs
 from .locate import locate
-from .refit import FAIR_STAGES, _at_neutral, active_parameters, standard_errors, _stage_data, needs_met, refit, refit_stages
-from .residuals import Evaluator, holdout_mask, noise_levels
+from .refit import FAIR_STAGES, SWEEP_REASONS, _at_neutral, _new_problems, active_parameters, covariance, standard_errors, _stage_data, data_conditions, needs_met, refit, refit_stages
+from .residuals import Evaluator, _sweeps, holdout_mask, noise_levels, noise_of_means
+from .transient import sweep_hysteresis
+from .small import SMALL_DATA, aicc, fit_all, loo_errors, weighted_rss
 
 __all__ = ["find_gaps", "GapReport", "AddedEffect", "Candidate"]
 
@@ -38,12 +43,15 @@ class Candidate:
     n_test: int
     f_statistic: float
     p_value: float
-    score: float              # held-out chi2 decrease minus k ln(n_test) (a BIC-type penalty)
+    score: float              # held-out chi2 decrease x n_eff/n minus k ln(n_eff) (a BIC-type penalty)
     held_out_gain: float      # relative decrease of the held-out chi2 on the effect's channels
     significant: bool
     values: dict = field(default_factory=dict)
     stderr: dict = field(default_factory=dict)
     note: str = ""
+    n_eff: float = math.nan           # effective number of independent training residuals (AR(1) within sweeps)
+    held_out_p: float = math.nan      # one-sided signed-rank test of the chi-square decrease per held-out sweep
+    held_out_sweeps: int = 0
 
     def to_dict(self) -> dict:
         return dict(self.__dict__)
@@ -91,6 +99,12 @@ class GapReport:
         return {c: (self.error_before[c] - self.error_after[c]) / self.error_before[c]
                 for c in self.error_before if self.error_before[c] > 0}
 
+    def held_out_error(self, model) -> dict:
+        """Channel -> normalised RMS error [%] of any ``model`` (e.g. the true one) on the held-out points."""
+        ev, mask = self.evaluator, self.test_mask
+        pred = ev.predict(model)
+        return {c: normalised_rms(pred[c][mask[ev.rows[c]]], ev.measured[c][mask[ev.rows[c]]]) for c in pred}
+
     def to_dict(self) -> dict:
         return dict(
             message=self.message,
@@ -101,7 +115,8 @@ class GapReport:
             findings_after=[f.to_dict() for f in self.findings_after],
             noise={c: dict(sigma=s, method=m) for c, (s, m) in self.noise.items()},
             rounds=[[c.to_dict() for c in r] for r in self.rounds],
-            untestable=self.untestable, data=self.data_summary, seconds=self.seconds,
+            untestable=self.untestable, rejected=self.rejected, transient=self.transient, programme=self.programme,
+            reduction=self.reduction, data=self.data_summary, seconds=self.seconds,
         )
 
     def to_json(self, path=None) -> str:
@@ -159,13 +174,114 @@ def _chi2(ev: Evaluator, prm, sigma, channels) -> float:
                      for c, r in res.items()))
 
 
+#: Candidates retried with their stages refitted when none is significant alone.
+DEEP_RETRIES = 3
+#: Bins per sweep when a time series is reduced (per branch; fewer points, faster refits, the same curves).
+REDUCED_BINS = 15
+#: Held-out sweeps (that the candidate changes by more than the noise, sum of (change/sigma)^2 >= 1) needed for
+#: the test by whole sweeps.
+MIN_HELD_OUT_SWEEPS = 8
+#: One-sided level of the held-out test by whole sweeps (the training F test carries the family-wise alpha).
+HELD_OUT_ALPHA = 0.05
+
+
+def f_test(chi2_before: float, chi2_after: float, n: int, n_eff: float, k: int):
+    """(F, p) of the chi-square decrease from freeing ``k`` parameters, with ``n`` residuals of which ``n_eff`` are
+    independent: the decrease counts n_eff / n of its size (correlated residuals repeat the same information) and
+    the residual variance per degree of freedom is at least the noise's (chi2 per dof >= 1)."""
+    denom = max(chi2_after / max(n - k, 1), 1.0)
+    fstat = max(chi2_before - chi2_after, 0.0) * (n_eff / max(n, 1)) / k / denom
+    return fstat, float(stats.f.sf(fstat, k, max(n_eff - k, 1)))
+
+
+def _sweep_ids(ev: Evaluator, c: str) -> np.ndarray:
+    return _sweeps(ev.data)[ev.rows[c]]
+
+
+def _n_eff(ev: Evaluator, prm, channels) -> float:
+    """Effective number of independent residuals of ``prm`` on ``channels`` (AR(1) rule within sweeps)."""
+    res = ev.residuals(prm, channels)
+    return float(sum(effective_samples(res[c], _sweep_ids(ev, c)) for c in res))
+
+
+def _sweep_test(ev: Evaluator, before, after, sigma, channels):
+    """(p value, sweeps) of the one-sided Wilcoxon signed-rank test that the chi-square decrease per held-out
+    sweep is positive: whole sweeps are the independent units (samples within a sweep are not), and the rank test
+    is not carried by a few sweeps with large decreases."""
+    r0, r1 = ev.residuals(before, channels), ev.residuals(after, channels)
+    dec, change = {}, {}
+    for c in r0:
+        s = sigma[c][0]
+        a, b = np.nan_to_num(r0[c], nan=1e3 * s), np.nan_to_num(r1[c], nan=1e3 * s)
+        for sw, v, w in zip(_sweep_ids(ev, c), (a**2 - b**2) / s**2, ((a - b) / s) ** 2):
+            dec[sw] = dec.get(sw, 0.0) + v
+            change[sw] = change.get(sw, 0.0) + w
+    # only sweeps the candidate changes by more than the noise could show
+    d = np.array([v for sw, v in dec.items() if change[sw] >= 1.0])
+    if d.size < 3:
+        return (0.0 if d.size and np.all(d > 0) else 1.0), int(d.size)
+    return float(stats.wilcoxon(d, alternative="greater").pvalue), int(d.size)
+
+
+def _prune(new, current, e: Effect, names, ev: Evaluator, sigma, alpha: float):
+    """(parameters, kept names, note): a candidate parameter whose standard error (from the effective number of
+    samples) exceeds its size goes back to its value before the effect (switches: neutral), the rest refitted; one
+    more than 0.99 correlated with another goes back too unless that raises the training chi-square significantly
+    (F test on n_eff at ``alpha``: the data do tell them apart). One at a time, shape factors before switches; no
+    switch left: kept = []."""
+    names, notes, needed = list(names), [], set()
+    ch = [c for c in e.channels if c in ev.channels]
+    while names:
+        n_eff = _n_eff(ev, new, ch)
+        se, corr = covariance(new, ev, names, ch, sigma, n_eff)
+        ref = {k: e.neutral.get(k, float(current[k])) for k in names}
+        # a switch's size is its distance from the neutral value, a shape factor's its value
+        size = {k: abs(float(new[k]) - e.neutral[k]) if k in e.neutral else abs(float(new[k])) for k in names}
+        ratio = {k: (math.inf if se[k] is None else se[k] / max(size[k], 1e-300)) for k in names}
+        correlated = {}
+        for i, j in zip(*np.triu_indices(len(names), 1)):
+            a, b = names[i], names[j]
+            if abs(corr[i, j]) > 0.99 and not {a, b} <= needed:   # the shape factor first, else the less certain
+                worse = (b if b not in e.neutral else a) if (a in e.neutral) != (b in e.neutral) \
+                    else (a if ratio[a] >= ratio[b] else b)
+                if worse not in needed:
+                    correlated[worse] = (b if worse == a else a, float(corr[i, j]))
+        uncertain = [k for k in names if ratio[k] > 1.0]
+        pick = uncertain or list(correlated)
+        if not pick:
+            break
+        worst = max(pick, key=lambda k: (k not in e.neutral, ratio[k]))
+        trial = new.replace(**{worst: ref[worst]})
+        rest = [k for k in names if k != worst]
+        if rest:
+            trial, _ = refit(trial, ev, rest, ch, sigma)
+        if worst not in uncertain:
+            c0, c1 = _chi2(ev, new, sigma, ch), _chi2(ev, trial, sigma, ch)
+            n = sum(ev.measured[c].size for c in ch)
+            f = max(c1 - c0, 0.0) * n_eff / max(n, 1) / max(c0 / max(n - len(names), 1), 1.0)
+            if float(stats.f.sf(f, 1, max(n_eff - len(names), 1))) < alpha:
+                other, r = correlated[worst]
+                needed |= {worst, other}
+                notes.append(f"{worst} kept although {r:+.3f} correlated with {other}: resetting it raises the "
+                             f"training chi-square from {c0:.0f} to {c1:.0f}")
+                continue
+            why = f"{correlated[worst][1]:+.3f} correlated with {correlated[worst][0]}"
+        else:
+            why = "standard error larger than its size" if se[worst] is not None else "undetermined"
+        notes.append(f"{worst} reset to {ref[worst]:.4g} ({why})")
+        names, new = rest, trial
+        if not any(k in e.neutral for k in names):
+            return new, [], "no switch of the effect is determined: " + "; ".join(notes)
+    return new, names, "; ".join(notes)
+
+
 def _identifiable(effect: Effect, prm, data: TyreData, turn_slip: bool):
     """(parameters the data determine, {parameter: reason})."""
     keep, why = [], {}
     for n in effect.parameters:
         stage = PARAM_STAGE.get(n)
         sub = _stage_data(stage, data) if stage in STAGES else data
-        cond = conditions(sub)
+        cond = data_conditions(sub)
         ts = turn_slip and bool(np.any(sub.array("PHIT") != 0))
         needs = tuple(parameter_needs(n)) + tuple(effect.needs)
         if len(sub) == 0:
@@ -181,7 +297,7 @@ def _identifiable(effect: Effect, prm, data: TyreData, turn_slip: bool):
     return keep, why
 
 
-_REASONS = dict(_STAGE_REASONS, turn_slip="no turn slip in the data")
+_REASONS = dict(_STAGE_REASONS, **SWEEP_REASONS, turn_slip="no turn slip in the data")
 
 
 def _matches(effect: Effect, findings) -> bool:
@@ -191,10 +307,130 @@ def _matches(effect: Effect, findings) -> bool:
     return False
 
 
+def _numbered(reduced: TyreData) -> TyreData:
+    """Reduced data with every steady point (SWEEP -1: one mean per steady segment) a sweep of its own, so that
+    held-out sweeps and repeats are counted per test."""
+    frame = reduced.frame.copy()
+    sweep = frame["SWEEP"].to_numpy().copy()
+    steady = sweep < 0
+    sweep[steady] = sweep.max(initial=-1) + 1 + np.arange(int(steady.sum()))
+    frame["SWEEP"] = sweep
+    return reduced.with_frame(frame, "steady points numbered as sweeps")
+
+
 def _summary(data: TyreData) -> dict:
     c = conditions(data)
     return dict(points=len(data), source=data.source, tyre=data.tyre, loads=c["loads"], pressures=c["pressures"],
                 speeds=c["speeds"], camber=c["camber"], turn_slip=bool(np.any(data.array("PHIT") != 0)))
+
+
+def _candidates(pool, given, train: TyreData, ts: bool):
+    """({name: (effect, parameters the data determine, {parameter: why not})}, {untestable name: reason}) of the
+    absent (or partly absent) effects of ``pool``."""
+    untestable, candidates = {}, {}
+    for e in pool:
+        state = effect_state(e, given)
+        if state == "unavailable":
+            continue
+        if state == "active":
+            # partly switched on: the switches still at their neutral values are the candidate
+            off = [n for n in e.neutral if _at_neutral(given[n], e.neutral[n])]
+            if not off:
+                continue
+            e = replace(e, parameters=tuple(off), neutral={n: e.neutral[n] for n in off})
+        keep, why = _identifiable(e, given, train, ts)
+        if not keep:
+            untestable[e.name] = "; ".join(f"{k}: {v}" for k, v in why.items()) or "not determinable"
+            continue
+        candidates[e.name] = (e, keep, why)
+    return candidates, untestable
+
+
+def _find_small(data, given, start, fair, candidates, untestable, ev, ts, max_effects, t0, say) -> GapReport:
+    """The small-data search (:mod:`mftyre.gaps.small`): forward selection by AICc and leave-one-out over all
+    points; the report's "held-out" errors are the leave-one-out errors."""
+    chans = list(ev.channels)
+    names = sorted({k for r in fair.values() for k in r.names})
+    n = int(sum(ev.measured[c].size for c in chans))
+    scale = {c: float(np.sqrt(np.mean(ev.measured[c] ** 2))) or 1.0 for c in chans}
+    prm = start
+    crit = aicc(weighted_rss(ev, prm, chans, scale), n, len(names))
+    loo = loo_errors(prm, data, names, chans)
+    loo_start = dict(loo)
+    rounds, added, rejected = [], [], {}
+    while candidates and len(added) < max_effects:
+        trials = []
+        for e, keep, why in candidates.values():
+            if not any(c in chans for c in e.channels):
+                continue
+            startv = {k: e.start.get(k, e.neutral.get(k, float(prm[k]))) for k in keep}
+            new, _ = fit_all(prm, ev, names + list(keep), chans, start=startv)
+            c_new = aicc(weighted_rss(ev, new, chans, scale), n, len(names) + len(keep))
+            trials.append([e, keep, why, new, c_new, None])
+        if not trials:
+            break
+        trials.sort(key=lambda t: t[4])
+        for t in trials[:3]:   # leave-one-out for the best few by AICc
+            t[5] = loo_errors(t[3], data, names + list(t[1]), chans)
+        rnd = []
+        for e, keep, why, new, c_new, loo_new in trials:
+            before, after = (float(np.mean(list(loo.values()))), float(np.mean(list(loo_new.values())))) \
+                if loo_new else (math.nan, math.nan)
+            ok = loo_new is not None and c_new < crit - 2.0 and after < before
+            rnd.append(Candidate(e.name, list(keep), crit, c_new, before, after, n, n, math.nan, math.nan,
+                                 crit - c_new, (before - after) / before if before > 0 else 0.0, ok,
+                                 {k: float(new[k]) for k in keep}, {},
+                                 "AICc before/after in the chi2 columns, leave-one-out error [%] in the held-out "
+                                 "columns"))
+        rounds.append(rnd)
+        best = None
+        for t, c in zip(trials, rnd):
+            if not c.significant:
+                continue
+            problems = _new_problems(verify_tir(prm, data), verify_tir(t[3], data))
+            if problems:
+                c.significant = False
+                rejected[c.name] = "the improved .tir fails verification: " + "; ".join(problems)
+                say(f"rejected {c.name}: {rejected[c.name]}")
+                continue
+            best = t
+            break
+        if best is None:
+            say("no effect lowers both AICc and the leave-one-out error")
+            break
+        e, keep, why, new, c_new, loo_new = best
+        by_ch = {c: (loo[c] - loo_new[c]) / loo[c] for c in loo_new if loo[c] > 0}
+        added.append(AddedEffect(e.name, e.description, {k: dict(value=float(new[k]), stderr=None,
+                                                                 meaning=e.parameter_descriptions()[k])
+                                                        for k in keep},
+                                 rnd[trials.index(best)].held_out_gain, by_ch, math.nan,
+                                 crit - c_new, len(rounds), f"AICc {crit:.1f} -> {c_new:.1f}"))
+        say(f"added {e.name}: AICc {crit:.1f} -> {c_new:.1f}; leave-one-out error "
+            + ", ".join(f"{c} {loo[c]:.2f} -> {loo_new[c]:.2f} %" for c in loo_new))
+        prm, crit, loo = new, c_new, loo_new
+        names += list(keep)
+        del candidates[e.name]
+    # noise: the residual standard deviation of the selected model; standard errors of all fitted parameters
+    k = len(names)
+    res = ev.residuals(prm, chans)
+    sigma = {c: (float(math.sqrt(np.sum(res[c] ** 2) / max(res[c].size - k, 1))),
+                 f"residual of the selected model ({res[c].size} points, {k} parameters)") for c in chans}
+    se = standard_errors(prm, ev, names, chans, sigma)
+    for a in added:
+        for p in a.parameters:
+            a.parameters[p].update(value=float(prm[p]), stderr=se.get(p))
+    message = ("small data: " + (f"added {len(added)} effect(s): {', '.join(a.name for a in added)}" if added
+                                 else "no effect lowers both AICc and the leave-one-out error; nothing added"))
+    say(message)
+    err_all = _errors(ev, prm)
+    return GapReport(
+        model_given=MFModel(given), model_start=MFModel(start), model=MFModel(prm), effects_added=added,
+        findings_before=[], findings_after=[], error_given=_errors(ev, given), error_before=loo_start,
+        error_after=loo, error_train_before=_errors(ev, start), error_train_after=err_all, noise=sigma,
+        rounds=rounds, untestable=untestable, rejected=rejected, message=message, data=data,
+        test_mask=np.ones(len(data), bool), transient=[], programme=None, reduction=None,
+        evaluator=ev, data_summary=_summary(data), seconds=time.perf_counter() - t0, turn_slip=ts,
+        small_data=True, parameter_stderr=se)
 
 
 def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float = 1e-3,
@@ -212,13 +448,21 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
     t0 = time.perf_counter()
     say = progress or (lambda text: None)
     data = load_data(data)
+    programme = recognise(data)
+    say("test programme: " + programme.summary())
+    raw, reduction = data, None
+    if needs_reduction(data, programme):
+        reduction = reduce_sweeps(data, programme, bins=REDUCED_BINS)
+        say(reduction.summary())
+        data = _numbered(reduction.mean)
     if isinstance(model, (str, Path)):
         model = load_tir(model)
     if not isinstance(model, MFModel):
         model = MFModel(model)
     given = model.params
     ts = bool(np.any(data.array("PHIT") != 0)) if turn_slip is None else bool(turn_slip)
-    test_mask = holdout_mask(data, holdout, seed)
+    small = len(data) < SMALL_DATA
+    test_mask = np.zeros(len(data), bool) if small else holdout_mask(data, holdout, seed)
     train, test = data.select(~test_mask), data.select(test_mask)
     if len(test) == 0:
         test = train
@@ -231,12 +475,25 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
     # 1. fair start
     error_given = _errors(ev_test, given)
     active = active_parameters(given, ts)        # what the given model has switched on, fixed from here
-    prm, _ = refit_stages(given, train, turn_slip=ts, channels=ev_train.channels, max_nfev=max_nfev, progress=say,
-                          active=active)
+    prm, fair = refit_stages(given, train, turn_slip=ts, channels=ev_train.channels, max_nfev=max_nfev,
+                             progress=say, active=active, min_points=2 if small else 10)
     start = prm
+    pool = [CATALOGUE[n] for n in (effects or CATALOGUE)]
+    candidates, untestable = _candidates(pool, given, train, ts)
+    if small:
+        say(f"small data ({len(data)} rows): effects judged by AICc and leave-one-out over all points")
+        return _find_small(data, given, start, fair, candidates, untestable, ev_all, ts, max_effects, t0, say)
     res_train = ev_train.residuals(prm)
     sigma = noise_levels(ev_train, res_train)
+    if reduction is not None:
+        kind = programme.rows["KIND"].to_numpy()
+        segments = np.where(kind != "transition", programme.rows["SEGMENT"].to_numpy(), -1)
+        sigma.update(noise_of_means(raw, segments, data, ev_train.channels, float(given.VERTICAL_STIFFNESS)))
     say("noise: " + ", ".join(f"{c} {s:.3g}" for c, (s, _) in sigma.items()))
+
+    transient = sweep_hysteresis(reduction, raw, MFModel(start), sigma, alpha)
+    for t in transient:
+        say("transient: " + t["text"])
 
     # 2. locate
     findings = locate(ev_train, res_train, sigma, alpha)
@@ -244,25 +501,7 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
     say(f"{len(findings)} significant findings" + (f"; strongest: {findings[0].text}" if findings else ""))
 
     # 3-4. name and add
-    pool = [CATALOGUE[n] for n in (effects or CATALOGUE)]
-    untestable = {}
-    candidates = {}
-    for e in pool:
-        state = effect_state(e, given)
-        if state == "unavailable":
-            continue
-        if state == "active":
-            # partly switched on: the switches still at their neutral values are the candidate
-            off = [n for n in e.neutral if _at_neutral(given[n], e.neutral[n])]
-            if not off:
-                continue
-            e = replace(e, parameters=tuple(off), neutral={n: e.neutral[n] for n in off})
-        keep, why = _identifiable(e, given, train, ts)
-        if not keep:
-            untestable[e.name] = "; ".join(f"{k}: {v}" for k, v in why.items()) or "not determinable"
-            continue
-        candidates[e.name] = (e, keep, why)
-    rounds, added, candidates_all = [], [], {}
+    rounds, added, candidates_all, rejected = [], [], {}, {}
 
     def polish(new, e, names):
         """Refit from the current model: the stages of the effect's parameters and of its channels, with the
@@ -276,22 +515,29 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
         return new
 
     def score(e, keep, why, new, rr, m, extra_note=""):
-        """Training F test and held-out score of a candidate model ``new`` against the current ``prm``."""
+        """Training F test and held-out score of a candidate model ``new`` against the current ``prm``.
+
+        The training F test counts the effective number of independent residuals (n_eff, the AR(1) rule within
+        sweeps) rather than rows, and so does the held-out score (chi-square decrease x n_eff / n - k ln n_eff, a
+        BIC-type penalty); with enough held-out sweeps the held-out test is also by whole sweeps: the chi-square decrease of each held-out
+        sweep, a one-sided signed-rank test (so a gain a few sweeps carry, or 7.120 -> 7.119 %, is not
+        significant)."""
         ch = [c for c in e.channels if c in ev_train.channels]
         k = len(keep)
         c_tr0, c_tr1 = _chi2(ev_train, prm, sigma, ch), _chi2(ev_train, new, sigma, ch)
         c_te0, c_te1 = _chi2(ev_test, prm, sigma, ch), _chi2(ev_test, new, sigma, ch)
         n_tr = int(sum(ev_train.measured[c].size for c in ch))
         n_te = int(sum(n_test_rows[c] for c in ch))
-        denom = max(c_tr1 / max(n_tr - k, 1), 1.0)
-        fstat = max(c_tr0 - c_tr1, 0.0) / k / denom
-        p = float(stats.f.sf(fstat, k, max(n_tr - k, 1)))
-        sc = (c_te0 - c_te1) - k * math.log(max(n_te, 2))
+        n_eff = _n_eff(ev_train, new, ch)
+        fstat, p = f_test(c_tr0, c_tr1, n_tr, n_eff, k)
+        n_eff_te = _n_eff(ev_test, new, ch)
+        sc = (c_te0 - c_te1) * n_eff_te / max(n_te, 1) - k * math.log(max(n_eff_te, 2.0))
         gain = (c_te0 - c_te1) / c_te0 if c_te0 > 0 else 0.0
-        sig = p < alpha / m and sc > 0
+        p_sweeps, n_sweeps = _sweep_test(ev_test, prm, new, sigma, ch)
+        sig = p < alpha / m and sc > 0 and (n_sweeps < MIN_HELD_OUT_SWEEPS or p_sweeps < HELD_OUT_ALPHA)
         note = "; ".join([f"{k2} not freed ({v})" for k2, v in why.items()] + ([extra_note] if extra_note else []))
         return (Candidate(e.name, list(keep), c_tr0, c_tr1, c_te0, c_te1, n_tr, n_te, fstat, p, sc, gain, sig,
-                          {k: float(new[k]) for k in keep}, rr.stderr, note), new, rr)
+                          {k: float(new[k]) for k in keep}, rr.stderr, note, n_eff, p_sweeps, n_sweeps), new, rr)
     n_test_rows = {c: ev_test.measured[c].size for c in ev_test.channels}
     while findings and len(added) < max_effects:
         tried = [(e, keep, why) for e, keep, why in candidates.values() if _matches(e, findings)]
@@ -312,24 +558,42 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
             # candidates with their stages refitted around them (the same test, the same held-out data)
             results.sort(key=lambda t: -t[0].score)
             deep = []
-            for cand, new, rr in results[:6]:
+            for cand, new, rr in results[:DEEP_RETRIES]:
                 e = candidates[cand.name][0]
                 say(f"round {len(rounds) + 1}: {e.name} with its stages refitted")
                 new = polish(new, e, cand.parameters)
                 deep.append(score(e, cand.parameters, candidates[cand.name][2], new, rr, len(tried),
                                   "scored with its stages refitted"))
-            results = deep + results[6:]
+            results = deep + results[DEEP_RETRIES:]
         results.sort(key=lambda t: -t[0].score)
         rounds.append([r[0] for r in results])
-        best = next((r for r in results if r[0].significant), None)
+        best = None
+        for cand, new, rr in (r for r in results if r[0].significant):
+            e = candidates[cand.name][0]
+            if "stages refitted" not in cand.note:
+                new = polish(new, e, cand.parameters)
+            new, kept, why_not = _prune(new, prm, e, cand.parameters, ev_train, sigma, alpha)
+            if kept and len(kept) < len(cand.parameters):   # re-scored with what is left
+                again = score(e, kept, candidates[cand.name][2], new, rr, len(tried), why_not)[0]
+                if not again.significant:
+                    kept, why_not = [], why_not + "; what is left is not significant"
+            problems = _new_problems(verify_tir(prm, data), verify_tir(new, data)) if kept else []
+            if not kept or problems:
+                reason = why_not if not kept else "the improved .tir fails verification: " + "; ".join(problems)
+                cand.significant, cand.note = False, "; ".join(x for x in (cand.note, "rejected: " + reason) if x)
+                rejected[e.name] = reason
+                del candidates[e.name]
+                say(f"rejected {e.name}: {reason}")
+                continue
+            cand.parameters, cand.note = kept, "; ".join(x for x in (cand.note, why_not) if x)
+            best = (cand, new, rr)
+            break
         if best is None:
-            say("no candidate is significant on the held-out data")
+            say("no candidate is significant on the held-out data" + (" and passes verification" if rejected else ""))
             break
         cand, new, rr = best
         e = candidates[cand.name][0]
         before_err = _errors(ev_test, prm)
-        if "stages refitted" not in cand.note:
-            new = polish(new, e, cand.parameters)
         se = standard_errors(new, ev_train, cand.parameters, e.channels, sigma)
         prm = new
         after_err = _errors(ev_test, prm)
@@ -363,11 +627,17 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
         message = f"added {len(added)} effect(s): {', '.join(a.name for a in added)}" + (
             "; remaining structure: " + findings_after[0].text if findings_after else
             "; no significant residual structure remains")
+    if transient:
+        message += "; transient (named, not fitted): " + ", ".join(
+            f"{t['channel']} up/down hysteresis +-{t['rms']:.3g} (relaxation length, {t['parameters']})"
+            for t in transient)
     say(message)
     return GapReport(
         model_given=MFModel(given), model_start=MFModel(start), model=MFModel(prm), effects_added=added,
         findings_before=findings_before, findings_after=findings_after, error_given=error_given,
         error_before=_errors(ev_test, start), error_after=_errors(ev_test, prm),
         error_train_before=_errors(ev_train, start), error_train_after=_errors(ev_train, prm),
-        noise=sigma, rounds=rounds, untestable=untestable, message=message, data=data, test_mask=test_mask,
-        evaluator=ev_all, data_summary=_summary(data), seconds=time.perf_counter() - t0, turn_slip=ts)
+        noise=sigma, rounds=rounds, untestable=untestable, rejected=rejected, message=message, data=data,
+        test_mask=test_mask, transient=transient, programme=programme.summary(), reduction=reduction.summary() if reduction else None,
+        evaluator=ev_all, data_summary=_summary(data), seconds=time.perf_counter() - t0, turn_slip=ts,
+        small_data=False)

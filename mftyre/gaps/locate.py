@@ -7,9 +7,10 @@ The points are put into cells:
 * the sweep coordinate B: for forces and moments the signed slip-angle bin x the signed slip-ratio bin (seven
   bins each: zero, and |slip| / max|slip| up to 0.2, 0.5, 1 on either side), which separates free rolling, pure
   lateral, pure longitudinal and combined slip; for FZ the deflection (six quantile bins of RHO, or of R0 - RL);
-* the condition variables: load, pressure, camber, speed, turn slip (levels as the data's clusters, at most
-  six; more levels are pooled into quantile bins); for FZ also the slip cell (Fx and Fy act on the vertical
-  stiffness).
+* the condition variables: load, pressure, camber, speed, turn slip (levels as the modes of the values,
+  :func:`mftyre.programme.cluster_levels`; values on no level, e.g. a speed sweep, in up to four quantile bins of
+  their own; more than six levels pooled into quantile bins); for FZ also the slip cell (Fx and Fy act on the
+  vertical stiffness).
 
 With known sigma the explained sum of squares of a cell-mean model, ESS = sum over cells n_c mean_c^2 (of z), is
 chi-square with (number of cells) degrees of freedom when the residual is pure noise. The tests:
@@ -34,14 +35,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats
 
-from ..data import levels
+from ..programme import cluster_levels
 from .residuals import UNITS, Evaluator
 
 __all__ = ["Finding", "locate", "row_coordinates", "cell_table"]
 
 _CONDITIONS = (("load", "FZ"), ("pressure", "P"), ("camber", "IA"), ("speed", "VX"), ("turn_slip", "PHIT"))
-_TOL = {"FZ": ("rel", 0.05), "P": ("rel", 0.02), "IA": ("abs", math.radians(0.25)), "VX": ("abs", 0.5),
-        "PHIT": ("rel", 0.05)}
 _FMT = {"load": (1.0, "{:.0f} N"), "pressure": (1e-5, "{:.2f} bar"), "camber": (180 / math.pi, "{:.1f} deg"),
         "speed": (1.0, "{:.1f} m/s"), "turn_slip": (1.0, "{:.3g} 1/m")}
 _NAMES = {"load": "load", "pressure": "pressure", "camber": "camber", "speed": "speed", "turn_slip": "turn slip",
@@ -95,20 +94,30 @@ def _slip_bin(x, tol):
     return (np.sign(x) * b).astype(int)
 
 
-def _level_codes(x, kind, tol):
-    """Level index per value and the level centres (at most six levels; more: quantile bins)."""
+def _level_codes(x):
+    """Level index per value and the level centres: the modes of the values (:func:`mftyre.programme.cluster_levels`,
+    so sweeps and points between the levels do not chain them); values on no level (a speed or load sweep) are
+    pooled into up to four quantile bins of their own; more than six levels: quantile bins."""
     if x.size == 0:
         return np.zeros(0, int), np.zeros(0)
-    t = tol * float(np.max(np.abs(x))) if kind == "rel" else tol
-    lab, cen = levels(x, max(t, 1e-12))
+    lab, cen = cluster_levels(x)
+    off = lab < 0
+    if off.any():
+        if off.mean() < 0.05 and len(cen):     # a few stragglers: the nearest level
+            lab[off] = np.argmin(np.abs(x[off, None] - cen[None, :]), axis=1)
+        else:
+            edges = np.unique(np.quantile(x[off], np.linspace(0, 1, 5)))
+            extra = np.clip(np.searchsorted(edges, x[off], side="right") - 1, 0, max(len(edges) - 2, 0))
+            lab[off] = len(cen) + extra
+            cen = np.concatenate([cen, [x[off][extra == k].mean() if np.any(extra == k) else np.nan
+                                        for k in range(max(len(edges) - 1, 1))]])
     if len(cen) > 6:
         edges = np.unique(np.quantile(x, np.linspace(0, 1, 6)))
         lab = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, len(edges) - 2)
         cen = np.array([x[lab == k].mean() if np.any(lab == k) else np.nan for k in range(len(edges) - 1)])
-        keep = np.isfinite(cen)
-        remap = np.cumsum(keep) - 1
-        lab, cen = remap[lab], cen[keep]
-    return lab, cen
+    keep = np.isfinite(cen) & np.isin(np.arange(len(cen)), lab)
+    remap = np.cumsum(keep) - 1
+    return remap[lab], cen[keep]
 
 
 def row_coordinates(ev: Evaluator, channel: str) -> dict:
@@ -138,8 +147,7 @@ def row_coordinates(ev: Evaluator, channel: str) -> dict:
     for name, ch in _CONDITIONS:
         if name == "load" and channel == "FZ":
             continue
-        kind, tol = _TOL[ch]
-        lab, cen = _level_codes(d.array(ch)[rows], kind, tol)
+        lab, cen = _level_codes(d.array(ch)[rows])
         if len(cen) >= 2:
             conds[name] = (lab, cen)
     out["conditions"] = conds

@@ -8,9 +8,13 @@ once (an effect on Fy also moves Mz and Mx) and weighs each channel's residual b
 (sigma), so that the cost is a chi-square and differences of costs are likelihood-ratio statistics; without
 sigma each channel is normalised by its RMS as in the fit.
 
+Bounds are the fit's (:data:`mftyre.fit.core.BOUNDS` tightened by :func:`mftyre.fit.core.physical_bounds`).
+
 :func:`refit_stages` is the "fair start": stage by stage (rows and channel of :data:`mftyre.fit.STAGES`), the
 parameters that are active in the model (base parameters, and those of every effect that is switched on) and
-that the stage's data can determine (the stage groups' ``needs``) are refitted.
+that the stage's data can determine (the stage groups' ``needs``, and a sweep of the input the stage's curve runs
+along, :func:`data_conditions`) are refitted; a stage whose values fail :func:`mftyre.fit.verify.verify_tir` where
+the previous ones passed keeps the previous ones.
 """
 from __future__ import annotations
 
@@ -21,15 +25,16 @@ from dataclasses import dataclass
 import lmfit
 import numpy as np
 
-from ..data import TyreData
-from ..fit.core import bounded_parameters
+from ..data import TyreData, levels
+from ..fit.core import BOUNDS, bounded_parameters, physical_bounds
+from ..fit.verify import verify_tir
 from ..fit.stages import STAGES, _met, conditions, shape_violations, stage_rows  # _met: the stages' own rule
 from ..model import MFModel
 from ..params import PARAMETERS
 from .catalogue import BASE, CATALOGUE, PARAM_STAGE, TURN_SLIP_BASE, effect_state, parameter_needs
 from .residuals import Evaluator
 
-__all__ = ["refit", "RefitResult", "refit_stages", "stage_names", "needs_met", "active_parameters", "standard_errors", "FAIR_STAGES"]
+__all__ = ["refit", "RefitResult", "refit_stages", "stage_names", "needs_met", "data_conditions", "SWEEP_REASONS", "active_parameters", "standard_errors", "covariance", "FAIR_STAGES"]
 
 #: Stages the fair start refits, in order (the effective rolling radius is not mapped).
 FAIR_STAGES = ("pure_fx", "pure_fy", "mz", "combined_fx", "combined_fy", "mz_combined", "mx", "my", "vertical")
@@ -45,6 +50,7 @@ class RefitResult:
     n: int
     nfev: int
     success: bool
+    problems: tuple = ()
 
 
 def _corners(data: TyreData, prm) -> dict:
@@ -82,7 +88,7 @@ def refit(params, ev: Evaluator, names, channels=None, sigma: dict | None = None
     stage_set = sorted({PARAM_STAGE.get(k) for k in names} & set(STAGES))
     corners = _corners(ev.data, prm)
     penalty = 10.0 * math.sqrt(max(n, 1)) * max(1.0, float(np.sqrt(np.mean(r0**2))))
-    lp = bounded_parameters(prm, names)
+    lp = bounded_parameters(prm, names, {**BOUNDS, **physical_bounds(prm, ev.data)})   # the fit's physics
 
     def residual(p):
         trial = prm.replace(**{k: p[k].value for k in names})
@@ -106,12 +112,22 @@ def refit(params, ev: Evaluator, names, channels=None, sigma: dict | None = None
     return new, RefitResult(names, values, stderr, chi2_before, chi2_after, n, int(out.nfev), bool(out.success))
 
 
-def standard_errors(params, ev: Evaluator, names, channels, sigma: dict) -> dict:
-    """Standard errors of ``names`` at their current values: sqrt(diag((J^T J)^-1) chi2/(n - k)) from the
-    central-difference Jacobian J of the noise-weighted residuals (as lmfit scales its covariance)."""
+def standard_errors(params, ev: Evaluator, names, channels, sigma: dict, n_eff: float | None = None) -> dict:
+    """Standard errors of ``names`` at their current values (see :func:`covariance`)."""
+    return covariance(params, ev, names, channels, sigma, n_eff)[0]
+
+
+def covariance(params, ev: Evaluator, names, channels, sigma: dict, n_eff: float | None = None):
+    """({name: standard error or None}, correlation matrix) of ``names`` at their current values:
+    cov = (J^T J)^-1 chi2/(n - k) from the central-difference Jacobian J of the noise-weighted residuals (as lmfit
+    scales its covariance), times n / n_eff when only ``n_eff`` of the n residuals are independent
+    (autocorrelated samples carry less information than their number says)."""
     prm = params.params if isinstance(params, MFModel) else params
     channels = [c for c in channels if c in ev.channels]
     scale = {c: sigma[c][0] if isinstance(sigma[c], tuple) else sigma[c] for c in channels}
+    none = ({k: None for k in names}, np.full((len(names), len(names)), np.nan))
+    if not channels or not names:
+        return none
 
     def vec(p):
         res = ev.residuals(p, channels)
@@ -127,16 +143,64 @@ def standard_errors(params, ev: Evaluator, names, channels, sigma: dict) -> dict
     ok = np.all(np.isfinite(jac), axis=1) & np.isfinite(r0)
     jac, r0 = jac[ok], r0[ok]
     dof = max(r0.size - len(names), 1)
+    inflation = max(r0.size / n_eff, 1.0) if n_eff else 1.0
     try:
-        cov = np.linalg.inv(jac.T @ jac) * float(np.sum(r0**2)) / dof
+        cov = np.linalg.inv(jac.T @ jac) * float(np.sum(r0**2)) / dof * inflation
     except np.linalg.LinAlgError:
-        return {k: None for k in names}
-    return {k: (float(math.sqrt(cov[i, i])) if cov[i, i] > 0 else None) for i, k in enumerate(names)}
+        return none
+    d = np.sqrt(np.where(np.diag(cov) > 0, np.diag(cov), np.nan))
+    corr = cov / np.outer(d, d)
+    return {k: (float(d[i]) if np.isfinite(d[i]) else None) for i, k in enumerate(names)}, corr
+
+
+def _new_problems(before: list, after: list) -> list:
+    """The verification problems (:func:`mftyre.fit.verify.verify_tir`) of ``after`` that ``before`` did not have
+    (compared by their first words)."""
+    def key(text):
+        return " ".join(text.split()[:3])
+    old = {key(t) for t in before}
+    return [t for t in after if key(t) not in old]
 
 
 def needs_met(needs, cond: dict, turn_slip: bool) -> bool:
-    """Whether data with the :func:`mftyre.fit.stages.conditions` ``cond`` determine a parameter with ``needs``."""
-    return all(turn_slip if n == "turn_slip" else _met(n, cond, True) for n in needs)
+    """Whether data with the conditions ``cond`` (:func:`data_conditions`) determine a parameter with ``needs``."""
+    return all(turn_slip if n == "turn_slip" else cond[n] if n in _SWEEPS else _met(n, cond, True) for n in needs)
+
+
+_SWEEPS = ("slip_ratio", "slip_angle", "combined", "deflection")
+#: Why a parameter whose stage sweeps an input cannot be determined without that sweep.
+SWEEP_REASONS = {
+    "slip_ratio": "no longitudinal-slip sweep in the data (SL = 0 throughout): the Fx curve's shape and shifts "
+                  "act along kappa",
+    "slip_angle": "no slip-angle sweep in the data (SA = 0 throughout): the Fy and Mz curves' shape and shifts "
+                  "act along alpha",
+    "combined": "no combined-slip sweep (kappa swept at a slip angle) in the data",
+    "deflection": "no load-deflection sweep (loaded radius or deflection at three or more loads) in the data",
+}
+
+
+def _swept(x, tol) -> bool:
+    """A sweep: three or more distinct levels, one of them away from zero."""
+    x = x[np.isfinite(x)]
+    return bool(x.size) and len(levels(x, tol)[1]) >= 3 and bool(np.any(np.abs(x) > tol))
+
+
+def data_conditions(data: TyreData) -> dict:
+    """:func:`mftyre.fit.stages.conditions` plus the swept inputs (``slip_ratio``, ``slip_angle``,
+    ``combined``, ``deflection``: True where the data sweep them)."""
+    cond = dict(conditions(data))
+    if len(data) == 0:
+        return dict(cond, **{k: False for k in _SWEEPS})
+    sl, sa = data.array("SL"), data.array("SA")
+    both = (np.abs(sl) > _KAPPA_TOL) & (np.abs(sa) > _ALPHA_TOL)
+    rl = data.array("RL") if data.has("RL") else (data.array("RHO") if data.has("RHO") else None)
+    fz = data.array("FZ")
+    deflect = rl is not None and _swept(fz[np.isfinite(rl)], 0.02 * float(np.max(np.abs(fz))))
+    return dict(cond, slip_ratio=_swept(sl, _KAPPA_TOL), slip_angle=_swept(sa, _ALPHA_TOL),
+                combined=_swept(sl[both], _KAPPA_TOL), deflection=bool(deflect))
+
+
+_KAPPA_TOL, _ALPHA_TOL = 0.005, math.radians(0.25)
 
 
 def _stage_data(stage_name: str, data: TyreData) -> TyreData:
@@ -203,7 +267,7 @@ def active_parameters(prm, turn_slip: bool = False) -> set:
 def stage_names(stage_name: str, prm, sub: TyreData, turn_slip: bool, extra=(), active=None) -> list:
     """Active parameters of a stage that its data determine (``active``: the active set, default that of
     ``prm``; ``extra``: parameters to add to it)."""
-    cond = conditions(sub)
+    cond = data_conditions(sub)
     ts = turn_slip and bool(np.any(sub.array("PHIT") != 0))
     out = []
     for n, st in PARAM_STAGE.items():
@@ -221,8 +285,9 @@ def _versions(n):
 
 
 def refit_stages(params, data: TyreData, stages=FAIR_STAGES, *, turn_slip: bool = False, channels=None,
-                 max_nfev: int | None = None, progress=None, extra=(), active=None):
-    """Fair start: refit the active parameters stage by stage; returns (parameters, {stage: RefitResult})."""
+                 max_nfev: int | None = None, progress=None, extra=(), active=None, min_points: int = 10):
+    """Fair start: refit the active parameters stage by stage (stages with at least ``min_points`` rows, more
+    than their parameters); returns (parameters, {stage: RefitResult})."""
     prm = params.params if isinstance(params, MFModel) else params
     results = {}
     for name in stages:
@@ -230,7 +295,7 @@ def refit_stages(params, data: TyreData, stages=FAIR_STAGES, *, turn_slip: bool 
         if channels is not None and stage.channel not in channels:
             continue
         sub = _stage_data(name, data)
-        if len(sub) < 10:
+        if len(sub) < min_points:
             continue
         names = stage_names(name, prm, sub, turn_slip, extra, active)
         if not names or len(sub) <= len(names):
@@ -240,5 +305,13 @@ def refit_stages(params, data: TyreData, stages=FAIR_STAGES, *, turn_slip: bool 
             continue
         if progress:
             progress(f"fair start: {name}: {len(names)} parameters on {len(sub)} points")
-        prm, results[name] = refit(prm, ev, names, max_nfev=max_nfev)
+        new, results[name] = refit(prm, ev, names, max_nfev=max_nfev)
+        problems = _new_problems(verify_tir(prm, data), verify_tir(new, data))
+        if problems:   # the stage's values would make the .tir implausible where there are no data: keep the previous
+            results[name].success, results[name].values = False, {k: float(prm[k]) for k in names}
+            results[name].problems = problems
+            if progress:
+                progress(f"fair start: {name} rejected, the previous values kept: " + "; ".join(problems))
+            continue
+        prm = new
     return prm, results

@@ -27,12 +27,12 @@ def markdown_report(rep, plot_names: dict | None = None) -> str:
     lines = ["# Gap finder report", "", f"**{rep.message[0].upper() + rep.message[1:]}.**", "",
              f"Data: `{s['source']}` ({s['tyre'] or 'tyre'}), {s['points']} points; {s['loads']} loads, "
              f"{s['pressures']} pressures, {s['speeds']} speeds, camber {'yes' if s['camber'] else 'no'}, turn slip "
-             f"{'yes' if s['turn_slip'] else 'no'}. Held out: {int(rep.test_mask.sum())} points (whole sweeps). "
+             f"{'yes' if s['turn_slip'] else 'no'}. " + (f"Small data: judged on all {s['points']} points (leave-one-out). "
+             if getattr(rep, "small_data", False) else f"Held out: {int(rep.test_mask.sum())} points (whole sweeps). ") +
              f"Run time {rep.seconds:.1f} s.", "",
-             "## Fit error on held-out sweeps", "",
-             "Normalised RMS error, Schmeitz et al. (2005) eq. (4), 100 sqrt(sum (model - measured)^2 / sum "
-             "measured^2) %, on the held-out sweeps: the model as given, after the fair start (its active parameters "
-             "refitted) and with the effects added. The noise floor is the error pure measurement noise would give.", "",
+             *([f"Test programme: {rep.programme}.", ""] if rep.programme else []),
+             *([f"Time series: {rep.reduction}.", ""] if rep.reduction else []),
+             *_error_heading(rep),
              "| channel | given [%] | before [%] | after [%] | shrink | noise floor [%] | noise sigma |",
              "| --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
     shrink = rep.shrink()
@@ -44,14 +44,22 @@ def markdown_report(rep, plot_names: dict | None = None) -> str:
     lines.append("")
     if "errors" in plot_names:
         lines += [f"![held-out errors]({plot_names['errors']})", ""]
+    if getattr(rep, "transient", None):
+        lines += ["## Transient effects (named, not fitted)", ""]
+        lines += [f"- {t['text']}." for t in rep.transient]
+        lines.append("")
     lines += ["## Effects added", ""]
     if not rep.effects_added:
         lines += ["None." + (" The model explains the data: nothing to add." if not rep.findings_before else ""), ""]
     for a in rep.effects_added:
         gains = ", ".join(f"{c} {100 * g:.0f} %" for c, g in a.held_out_gain_by_channel.items())
-        lines += [f"### {a.name}", "", f"{a.description}. Round {a.round}; held-out chi-square decrease "
-                  f"{100 * a.held_out_gain:.0f} %; held-out error decrease {gains}; F-test p = {a.p_value:.2g}; "
-                  f"score {a.score:.0f}." + (f" {a.note}." if a.note else ""), "",
+        if getattr(rep, "small_data", False):
+            how = f"leave-one-out error decrease {gains}"
+        else:
+            how = (f"held-out chi-square decrease {100 * a.held_out_gain:.0f} %; held-out error decrease {gains}; "
+                   f"F-test p = {a.p_value:.2g}; score {a.score:.0f}")
+        lines += [f"### {a.name}", "", f"{a.description}. Round {a.round}; {how}." + (f" {a.note}." if a.note else ""),
+                  "",
                   "| parameter | value | standard error | meaning |", "| --- | ---: | ---: | --- |"]
         for k, v in a.parameters.items():
             lines.append(f"| {k} | {v['value']:.6g} | {_f(v['stderr'], '{:.3g}')} | {v['meaning']} |")
@@ -82,12 +90,32 @@ def markdown_report(rep, plot_names: dict | None = None) -> str:
             lines.append(f"| {c.name} | {' '.join(c.parameters)} | {c.f_statistic:.3g} | {c.p_value:.2g} | "
                          f"{100 * c.held_out_gain:.1f} % | {c.score:.0f} | {'yes' if c.name == best else ''} |")
         lines.append("")
+    if rep.rejected:
+        lines += ["## Effects rejected", "", "Significant, but their parameters are not determined by the data or the "
+                  "improved .tir fails verification over its declared range; the previous values are kept.", ""]
+        for k, v in rep.rejected.items():
+            lines.append(f"- {k}: {v}")
+        lines.append("")
     if rep.untestable:
         lines += ["## Effects the data cannot test", ""]
         for k, v in rep.untestable.items():
             lines.append(f"- {k}: {v}")
         lines.append("")
     return "\n".join(lines)
+
+
+def _error_heading(rep) -> list:
+    if getattr(rep, "small_data", False):
+        return ["## Fit error, leave-one-out", "",
+                "Small data: every point predicted by the model refitted on the other points (leave-one-out), "
+                "normalised RMS error %; effects were added when they lowered both AICc (the small-sample Akaike "
+                "criterion over all points) and this error. Columns \"given\" and the noise floor refer to all "
+                "points; the noise is the residual standard deviation of the selected model.", ""]
+    return ["## Fit error on held-out sweeps", "",
+            "Normalised RMS error, Schmeitz et al. (2005) eq. (4), 100 sqrt(sum (model - measured)^2 / sum "
+            "measured^2) %, on the held-out sweeps: the model as given, after the fair start (its active parameters "
+            "refitted) and with the effects added. The noise floor is the error pure measurement noise would give.",
+            ""]
 
 
 def noise_floor(rep) -> dict:

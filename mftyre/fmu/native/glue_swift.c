@@ -79,7 +79,7 @@ int glue_init(GlueWork *g, const double *u, const double *q, double *x, char *ms
     g->arg[1] = q;
     g->arg[2] = &x0w;
     g->arg[3] = ROAD_GRID;
-    g->arg[4] = ROAD_H + i0;
+    g->arg[4] = ROAD_H + 2 * i0; /* interleaved (height, camber slope) pairs */
     g->res[0] = x;
     if (swift_init(g->arg, g->res, g->iw, g->w, 0)) {
         snprintf(msg, n, "the static equilibrium could not be evaluated");
@@ -113,7 +113,7 @@ int glue_step(GlueWork *g, double *x, const double *u, const double *q, double h
         g->arg[2] = &dt;
         g->arg[3] = &x0w;
         g->arg[4] = ROAD_GRID;
-        g->arg[5] = ROAD_H + i0;
+        g->arg[5] = ROAD_H + 2 * i0; /* interleaved (height, camber slope) pairs */
         g->res[0] = x_next;
         if (swift_substep(g->arg, g->res, g->iw, g->w, 0)) return 1;
         for (int i = 0; i < TYRE_NX; i++) x[i] = x_next[i];
@@ -129,7 +129,7 @@ int glue_out(GlueWork *g, const double *x, const double *u, const double *q, dou
     g->arg[1] = u;
     g->arg[2] = &x0w;
     g->arg[3] = ROAD_GRID;
-    g->arg[4] = ROAD_H + i0;
+    g->arg[4] = ROAD_H + 2 * i0; /* interleaved (height, camber slope) pairs */
     g->res[0] = y;
     return swift_out(g->arg, g->res, g->iw, g->w, 0);
 }

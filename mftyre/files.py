@@ -1,0 +1,162 @@
+"""The files a user hands to mftyre and the files it writes: one rule for all of them.
+
+Reading (:func:`open_user_file`, :func:`read_user_file`): only regular files are read (a FIFO, a device such as
+``/dev/zero`` or a directory is refused before a byte is read), and only up to a size limit, so a wrong path can
+neither block nor exhaust memory.
+
+Sample files (:func:`sample_tir`): the .tir files of the repository's ``tir_files/`` folder, installed with the
+package as ``mftyre.tir_files``.
+
+Writing (:func:`check_outputs`, used by every command before it does any work): an output never replaces an input
+(compared by resolved path, and by inode where both exist), two outputs are never the same file, and an existing
+output is replaced only with ``--overwrite`` (``overwrite=True``). :func:`write_atomically` writes through a
+temporary file in the target folder and renames it into place, with the ordinary permissions of a new file
+(0666 less the umask, e.g. 0644).
+"""
+from __future__ import annotations
+
+import contextlib
+import importlib.resources
+import os
+import secrets
+import stat
+from pathlib import Path
+
+from .errors import MFTyreError
+
+__all__ = ["OutputError", "open_user_file", "read_user_file", "same_file", "check_outputs", "write_atomically",
+           "sample_tir", "TIR_MAX_BYTES", "DATA_MAX_BYTES"]
+
+#: Largest .tir file read (16 MiB; real files are tens of kB).
+TIR_MAX_BYTES = 16 * 2**20
+#: Largest CSV/TYDEX file read (2 GiB; 1e6 rows of 17 channels are about 300 MB).
+DATA_MAX_BYTES = 2 * 2**30
+
+
+class OutputError(MFTyreError, FileExistsError):
+    """An output file would replace an input or an existing file (without ``--overwrite``)."""
+
+
+@contextlib.contextmanager
+def open_user_file(path, *, max_bytes: int, what: str, error=MFTyreError):
+    """Open the regular file ``path`` for binary reading (a context manager giving the file object); ``error``
+    (an MFTyreError subclass) naming the path and ``what`` was expected when it is missing, not a regular file
+    or larger than ``max_bytes``."""
+    name = str(path)
+    try:  # O_NONBLOCK: opening a FIFO with no writer must not block; it is refused below
+        fd = os.open(name, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+    except FileNotFoundError:
+        raise error(f"{name}: file not found: expected an existing {what}") from None
+    except IsADirectoryError:
+        raise error(f"{name}: is a directory: expected a {what}") from None
+    except OSError as exc:
+        raise error(f"{name}: cannot open: {exc.strerror}: expected a readable {what}") from None
+    try:
+        info = os.fstat(fd)
+        if stat.S_ISDIR(info.st_mode):
+            raise error(f"{name}: is a directory: expected a {what}")
+        if not stat.S_ISREG(info.st_mode):
+            raise error(f"{name}: not a regular file (a device, FIFO or socket): expected a {what}")
+        if info.st_size > max_bytes:
+            raise error(f"{name}: {info.st_size} bytes, more than the limit of {max_bytes} bytes for a {what}")
+        with os.fdopen(fd, "rb", closefd=False) as fh:
+            yield fh
+    finally:
+        os.close(fd)
+
+
+def read_user_file(path, *, max_bytes: int, what: str, error=MFTyreError) -> bytes:
+    """The bytes of the regular file ``path`` (see :func:`open_user_file`)."""
+    with open_user_file(path, max_bytes=max_bytes, what=what, error=error) as fh:
+        size = os.fstat(fh.fileno()).st_size
+        data = fh.read(size + 1)
+    if len(data) != size:
+        raise error(f"{path}: changed while being read: expected a {what} that is not being written to")
+    return data
+
+
+def same_file(a, b) -> bool:
+    """True when ``a`` and ``b`` name the same file: by inode where both exist, else by resolved path."""
+    a, b = Path(a), Path(b)
+    try:
+        if a.exists() and b.exists():
+            return os.path.samefile(a, b)
+    except OSError:
+        pass
+    return a.resolve() == b.resolve()
+
+
+def check_outputs(outputs: dict, inputs: dict | None = None, *, folders: dict | None = None,
+                  overwrite: bool = False, option: str = "--overwrite") -> None:
+    """Refuse (:class:`OutputError`) to write before any work is done, when
+
+    * an output file (``outputs``: label -> path, e.g. ``{"--csv": "out.csv"}``) or an output folder
+      (``folders``: label -> folder the command writes its files into) is one of the ``inputs`` (label -> path),
+    * two outputs are the same file,
+    * an output file exists, or an output folder exists and is not empty, and ``overwrite`` is false.
+
+    ``None`` paths are ignored; ``option`` is how the caller spells the permission (``--overwrite`` or
+    ``overwrite=True``)."""
+    files = {k: Path(v) for k, v in outputs.items() if v is not None}
+    dirs = {k: Path(v) for k, v in (folders or {}).items() if v is not None}
+    sources = {k: Path(v) for k, v in (inputs or {}).items() if v is not None}
+    for label, out in (*files.items(), *dirs.items()):
+        for source_label, source in sources.items():
+            if same_file(out, source):
+                raise OutputError(f"{label} {out}: is the input {source_label} ({source}); an input is never "
+                                  "overwritten: choose another output path")
+    labels = list(files)
+    for i, label in enumerate(labels):
+        for other in labels[i + 1:]:
+            if same_file(files[label], files[other]):
+                raise OutputError(f"{label} {files[label]}: is also the {other} output; choose different paths")
+    for label, out in files.items():
+        if out.is_dir():
+            raise OutputError(f"{label} {out}: is a folder: expected a file path")
+    for label, folder in dirs.items():
+        if folder.exists() and not folder.is_dir():
+            raise OutputError(f"{label} {folder}: is a file: expected a folder (new, or existing)")
+    existing = [f"{label} {out}" for label, out in files.items() if out.exists() or out.is_symlink()]
+    existing += [f"{label} {folder} (a folder that is not empty)" for label, folder in dirs.items()
+                 if folder.is_dir() and any(folder.iterdir())]
+    if existing and not overwrite:
+        raise OutputError(f"{'; '.join(existing)}: exist{'s' if len(existing) == 1 else ''}; pass {option} to "
+                          "replace")
+
+
+def write_atomically(path, data: bytes | str) -> Path:
+    """Write ``data`` (text as UTF-8) to ``path`` through a temporary file in the same folder renamed into
+    place; the new file has the permissions of any new file (0666 less the umask). Returns the path."""
+    path = Path(path)
+    if isinstance(data, str):
+        data = data.encode("utf-8")
+    folder = path.parent
+    tmp = folder / f".{path.name}.{secrets.token_hex(6)}.tmp"
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+    return path
+
+
+def sample_tir(name: str) -> Path:
+    """Path of a sample .tir file shipped with mftyre (``tir_files/`` of the repository), e.g.
+    ``sample_tir("car_205_60R15_mf61.tir")``: package data ``mftyre.tir_files`` when installed (pip install . or a
+    wheel), the repository's folder in a source checkout."""
+    try:  # a folder without __init__.py: a namespace package, whose files() joins to real paths
+        folder = importlib.resources.files("mftyre.tir_files")
+    except ModuleNotFoundError:  # a source checkout on sys.path: the folder sits beside the package
+        folder = Path(__file__).resolve().parents[1] / "tir_files"
+    path = folder.joinpath(name)
+    if not path.is_file():
+        available = sorted(p.name for p in folder.iterdir() if p.name.endswith(".tir")) if folder.is_dir() else []
+        raise FileNotFoundError(f"no sample file {name!r} among the samples shipped with mftyre: "
+                                f"{', '.join(available) or 'none'}")
+    return Path(str(path))

@@ -1,0 +1,74 @@
+"""Checks of the model inputs shared by every evaluator (NumPy :meth:`mftyre.MFModel.evaluate` and the compiled C
+of :mod:`mftyre.compiled`), so that both reject and warn alike:
+
+* every input must be finite (NaN and +-inf raise :class:`ModelInputError` naming the input);
+* the inflation pressure must be positive;
+* with ``limits=True`` the equations saturate fz, kappa, alpha, gamma and p to the ranges of the .tir file
+  (FZMAX, KPUMIN/KPUMAX, ALPMIN/ALPMAX, CAMMIN/CAMMAX, PRESMIN/PRESMAX): values outside them are evaluated at
+  the bound, and one :class:`InputClippedWarning` per call names each such input, its range and how many
+  points lay outside it. ``limits=False`` evaluates the values as given.
+"""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from .errors import InputClippedWarning, ModelInputError
+
+__all__ = ["RANGE_PARAMETERS", "input_ranges", "check_finite", "check_pressure", "count_outside",
+           "warn_outside"]
+
+#: input -> (.tir parameter of the lower bound or None, of the upper bound, unit); Fz < 0 is no contact, not
+#: a range violation.
+RANGE_PARAMETERS = {
+    "fz": (None, "FZMAX", "N"),
+    "kappa": ("KPUMIN", "KPUMAX", "-"),
+    "alpha": ("ALPMIN", "ALPMAX", "rad"),
+    "gamma": ("CAMMIN", "CAMMAX", "rad"),
+    "p": ("PRESMIN", "PRESMAX", "Pa"),
+}
+_MIRRORED = ("alpha", "gamma")  # ranges of the measured side, negated for a tyre mounted on the other side
+
+
+def input_ranges(params, mirrored: bool = False) -> dict:
+    """{input: (lower, upper, description)} in the axes of the caller (a mirrored tyre sees -ALPMAX..-ALPMIN)."""
+    ranges = {}
+    for name, (lo_name, hi_name, unit) in RANGE_PARAMETERS.items():
+        lo = -np.inf if lo_name is None else float(params[lo_name])
+        hi = float(params[hi_name])
+        if mirrored and name in _MIRRORED:
+            lo, hi = -hi, -lo
+        bounds = f"{lo_name}..{hi_name}" if lo_name else hi_name
+        ranges[name] = (lo, hi, f"{bounds} = [{lo:.6g}, {hi:.6g}] {unit}")
+    return ranges
+
+
+def check_finite(name: str, values) -> None:
+    """Raise :class:`ModelInputError` if ``values`` holds NaN or +-inf, naming the input and the first places."""
+    values = np.asarray(values)
+    bad = ~np.isfinite(values)
+    if bad.any():
+        where = np.argwhere(bad)[:5].tolist() if values.ndim else "scalar"
+        raise ModelInputError(f"input {name!r} must be finite; got {values[bad][:3].tolist()} at {where}")
+
+
+def check_pressure(p, name: str = "p") -> None:
+    """Raise :class:`ModelInputError` unless every inflation pressure is positive (in Pa)."""
+    p = np.asarray(p)
+    if np.any(~(p > 0)):
+        raise ModelInputError(f"inflation pressure {name!r} must be positive (in Pa); got minimum {np.min(p)!r}")
+
+
+def count_outside(arrays: dict, ranges: dict) -> dict:
+    """{input: number of values outside its range} for the inputs of ``arrays`` that have a range."""
+    return {name: int(np.count_nonzero((arr < ranges[name][0]) | (arr > ranges[name][1])))
+            for name, arr in arrays.items() if name in ranges}
+
+
+def warn_outside(counts: dict, total: int, ranges: dict, stacklevel: int = 3) -> None:
+    """One :class:`InputClippedWarning` naming every input with points outside its range (none if no such)."""
+    parts = [f"{name} outside {ranges[name][2]} at {n} of {total} point(s)" for name, n in counts.items() if n]
+    if parts:
+        warnings.warn("inputs saturated to the .tir ranges (limits=True; limits=False evaluates them as given): "
+                      + "; ".join(parts), InputClippedWarning, stacklevel=stacklevel)

@@ -1,0 +1,403 @@
+"""Recognise the test programme in measured data before anything is fitted to it.
+
+:func:`recognise` answers what a tyre-test engineer reads off a measurement first: which load, pressure, camber
+(and speed) levels were tested, which channel each test sweeps and in which direction, which rows are steady
+and which are transitions between conditions, and so which effects the data can determine.
+
+Levels (:func:`cluster_levels`) are the modes of the distribution of a condition channel: a histogram of
+bin width set by the channel's own short-term scatter (samples against the running median of their
+neighbours; for a channel that steps every row, the distance to the third-nearest value), smoothed, whose
+peaks are merged only when the valley between them is shallow (above half the lower peak). A level is
+therefore separated from its neighbour by the empty room between them, however close they are relative to
+the largest value (1650 / 2200 / 2750 N with a few percent scatter are three levels), and a slow ramp between
+levels is no level. Samples far from every level (more than 4 robust standard deviations of their nearest
+level, and more than the bin width) are off-level (label -1): ramps, load sweeps, transients. With a handful
+of points (< 50) distinct values whose separations are far below the others (a jump of 8x in the sorted
+separations) are merged: repeated settings that scatter.
+
+Segments and sweeps (:func:`recognise`): a new segment starts where the level of load, pressure or camber
+changes (an off-level run is a segment of its own). Within a segment the held slip channel's levels split it
+further (slip-ratio sweeps at several slip angles). The swept channel of a segment is the one of SA, SL, VX,
+FZ whose range exceeds its sweep threshold (1 deg, 0.02, 3 m/s, a third of the mean load) most and, for SA,
+SL and VX, spans at least half the widest range that channel has in any segment (a shorter move, such as
+steering to the slip angle of a combined-slip test, is a transition); its
+direction (BRANCH +1 up / -1 down) is the sign of the change over a window of 5 % of the sweep's length.
+Segments without a swept channel whose slips and speed stay within the sweep thresholds, held for at least
+the short run below, are steady points; other segments without a swept channel are transitions. The short
+run is 0.2 % of the data (at least 50 samples in a time series, 2 rows otherwise): such a run between two
+runs at the same levels belongs to them (a brief excursion of the scatter), and an on-level run that short
+between off-level runs is a ramp passing through the level.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from .data import TyreData
+
+__all__ = ["cluster_levels", "recognise", "Programme", "SWEEP_THRESHOLD"]
+
+#: range above which a channel counts as swept within a segment (SI units)
+SWEEP_THRESHOLD = {"SA": math.radians(1.0), "SL": 0.02, "VX": 3.0}
+#: the kind of test by swept channel
+_KIND = {"SA": "slip_angle", "SL": "slip_ratio", "VX": "speed", "FZ": "load"}
+
+
+# ------------------------------------------------------------------------------------------------- levels
+def _short_term_scatter(x: np.ndarray) -> float:
+    """Robust standard deviation of the samples about the running median of 5 neighbours (0 when < 20). When
+    that exceeds 5 % of the range, neighbouring rows are not repeated settings (the channel steps every row, as
+    the speeds of a free-rolling test): the median distance to the third-nearest value instead."""
+    if x.size < 20:
+        return 0.0
+    from scipy.ndimage import median_filter
+
+    dev = x - median_filter(x, size=5, mode="nearest")
+    scatter = 1.4826 * float(np.median(np.abs(dev))) * 1.25  # 1.25: the median of 5 itself scatters
+    if scatter <= 0.05 * float(np.ptp(x)):
+        return scatter
+    v = np.sort(x)
+    return float(np.median(np.minimum(v[3:] - v[:-3], np.inf)))
+
+
+def cluster_levels(values, *, scatter: float | None = None):
+    """Cluster the values of a condition channel into levels: (labels, centres).
+
+    ``labels``: level index per value (sorted by centre), -1 for off-level values (ramps, sweeps, transients)
+    and for NaN; ``centres``: the mean of each level's values. ``scatter``: the short-term scatter of the
+    channel (default: estimated from the values in their order; give it for unordered values). See the module
+    text for the rule; no tolerance relative to the largest value is involved.
+    """
+    x = np.asarray(values, dtype=float)
+    labels = np.full(x.size, -1, int)
+    ok = np.isfinite(x)
+    xs = x[ok]
+    if xs.size == 0:
+        return labels, np.zeros(0)
+    span = float(np.ptp(xs))
+    scale = max(float(np.max(np.abs(xs))), 1e-300)
+    if span <= 1e-9 * scale:
+        labels[ok] = 0
+        return labels, np.array([float(np.mean(xs))])
+    s = _short_term_scatter(xs) if scatter is None else float(scatter)
+    h = max(s, 1e-3 * span, 1e-12 * scale)
+    nbins = int(min(max(span / (h / 2.0), 8), 20000))
+    edges = np.linspace(xs.min(), xs.max(), nbins + 1)
+    counts, _ = np.histogram(xs, edges)
+    from scipy.ndimage import gaussian_filter1d
+
+    width_bins = h / (edges[1] - edges[0])
+    dens = gaussian_filter1d(counts.astype(float), max(width_bins, 0.5), mode="constant") if xs.size >= 50 \
+        else counts.astype(float)
+    peaks = _peaks(dens)
+    peaks = _merge_shallow(dens, peaks)
+    # basins: each bin belongs to the peak whose valley bounds enclose it
+    bounds = [0] + [int(np.argmin(dens[a:b + 1]) + a) for a, b in zip(peaks[:-1], peaks[1:])] + [nbins]
+    mass = np.array([counts[lo:hi].sum() for lo, hi in zip(bounds[:-1], bounds[1:])], float)
+    keep = mass >= (1.0 if xs.size < 50 else max(3.0, 0.05 * mass.max()))
+    centres_guess = 0.5 * (edges[np.array(peaks)] + edges[np.array(peaks) + 1])[keep]
+    # centre and spread of each level from the values nearest to it
+    idx = _nearest(xs, centres_guess)
+    centres = np.array([np.median(xs[idx == k]) for k in range(centres_guess.size)])
+    if xs.size < 50 and centres.size > 2:
+        centres = _merge_scatter(xs, centres)
+    idx = _nearest(xs, centres)
+    lab = np.full(xs.size, -1, int)
+    out_centres = []
+    for k in range(centres.size):
+        sel = idx == k
+        dev = xs[sel] - centres[k]
+        sd = 1.4826 * float(np.median(np.abs(dev))) if sel.any() else 0.0
+        near = sel & (np.abs(xs - centres[k]) <= max(4.0 * sd, h, 1e-9 * scale))
+        if near.any():
+            lab[near] = len(out_centres)
+            out_centres.append(float(np.mean(xs[near])))
+    labels[ok] = lab
+    return labels, np.array(out_centres)
+
+
+def _nearest(x, centres):
+    if centres.size == 0:
+        return np.full(x.size, -1, int)
+    return np.argmin(np.abs(x[:, None] - centres[None, :]), axis=1)
+
+
+def _peaks(dens):
+    """Indices of the local maxima of ``dens`` (a plateau counts once, at its middle)."""
+    d = np.diff(np.concatenate([[-1.0], dens, [-1.0]]))
+    up = np.flatnonzero(d[:-1] > 0)
+    peaks = []
+    for i in up:
+        j = i
+        while j + 1 < dens.size and dens[j + 1] == dens[i]:
+            j += 1
+        if j + 1 >= dens.size or dens[j + 1] < dens[i]:
+            peaks.append((i + j) // 2)
+    return sorted(set(p for p in peaks if dens[p] > 0))
+
+
+def _merge_shallow(dens, peaks):
+    """Merge neighbouring peaks whose valley stays above half the lower peak."""
+    peaks = list(peaks)
+    changed = True
+    while changed and len(peaks) > 1:
+        changed = False
+        for i in range(len(peaks) - 1):
+            a, b = peaks[i], peaks[i + 1]
+            valley = float(np.min(dens[a:b + 1]))
+            if valley > 0.5 * min(dens[a], dens[b]):
+                peaks[i:i + 2] = [a if dens[a] >= dens[b] else b]
+                changed = True
+                break
+    return peaks
+
+
+def _merge_scatter(x, centres):
+    """Few values: merge neighbours whose separation is far (8x) below the next larger separation."""
+    centres = np.sort(centres)
+    sep = np.diff(centres)
+    order = np.sort(sep)
+    ratio = order[1:] / np.maximum(order[:-1], 1e-300)
+    k = int(np.argmax(ratio))
+    if ratio[k] < 8.0:
+        return centres
+    limit = order[k]
+    group = np.concatenate([[0], np.cumsum(sep > limit)])  # group of each centre
+    member = group[_nearest(x, centres)]
+    return np.array([float(np.mean(x[member == g])) for g in range(group[-1] + 1)])
+
+
+# -------------------------------------------------------------------------------------------- programme
+@dataclass
+class Programme:
+    """The recognised test programme of a data set (see :func:`recognise`).
+
+    ``levels``: channel -> level centres (FZ, P, IA; VX of the slip tests); ``sweeps``: one row per segment
+    (start, stop row, kind, swept channel, n rows, direction changes, the level centres held, branch counts);
+    ``rows``: per-row DataFrame with SEGMENT, SWEEP (segment number of swept segments, -1 otherwise), KIND,
+    BRANCH (+1 up, -1 down, 0 held), STEADY (bool), FZ_LEVEL, P_LEVEL, IA_LEVEL (index into ``levels``, -1
+    off-level); ``sample_rate`` [Hz] when a TIME channel is present;
+    ``fittable``: stage group -> bool; ``notes``: what cannot be determined and why.
+    """
+
+    levels: dict
+    sweeps: pd.DataFrame
+    rows: pd.DataFrame
+    n_rows: int
+    sample_rate: float | None = None
+    has: dict = field(default_factory=dict)
+    fittable: dict = field(default_factory=dict)
+    notes: list = field(default_factory=list)
+
+    def count(self, kind: str) -> int:
+        """Number of sweeps of a kind (slip_angle, slip_ratio, speed, load, steady)."""
+        return int((self.sweeps["kind"] == kind).sum()) if len(self.sweeps) else 0
+
+    def annotate(self, data: TyreData) -> TyreData:
+        """``data`` with the per-row columns of ``rows`` added (replacing any of the same name)."""
+        frame = data.frame.copy()
+        for c in self.rows.columns:
+            frame[c] = self.rows[c].to_numpy()
+        return data.with_frame(frame, "test programme recognised: " + self.summary(short=True))
+
+    def summary(self, short: bool = False) -> str:
+        """One paragraph: '5 loads 450-2750 N, 3 pressures 0.83-0.97 bar, ...; fittable: ...'."""
+        parts = []
+        for ch, name, fac, unit, digits in (("FZ", "load", 1.0, "N", 0), ("P", "pressure", 1e-5, "bar", 2),
+                                            ("IA", "camber", 180 / math.pi, "deg", 1), ("VX", "speed", 1.0, "m/s", 1)):
+            c = np.round(self.levels.get(ch, np.zeros(0)) * fac, digits) + 0.0  # + 0.0: no "-0.0"
+            if c.size == 0:
+                parts.append(f"no {name} level")
+            elif c.size == 1:
+                parts.append(f"1 {name} {c[0]:.{digits}f} {unit}")
+            else:
+                parts.append(f"{c.size} {name}s {c.min():.{digits}f} to {c.max():.{digits}f} {unit}")
+        for kind, what in (("slip_angle", "slip-angle sweeps"), ("slip_ratio", "slip-ratio sweeps"),
+                           ("speed", "speed sweeps"), ("load", "load sweeps")):
+            k = self.count(kind)
+            parts.append(f"{k} {what}" if k else f"no {what}")
+        steady = self.count("steady")
+        if steady:
+            parts.append(f"{steady} steady segments")
+        if not self.has.get("longitudinal_slip"):
+            parts.append("no longitudinal slip")
+        text = ", ".join(parts)
+        if self.sample_rate:
+            text += f"; sampled at {self.sample_rate:.0f} Hz"
+        if short:
+            return text
+        yes = [k for k, v in self.fittable.items() if v]
+        no = [k for k, v in self.fittable.items() if not v]
+        text += f"; fittable: {', '.join(yes) or 'nothing'}"
+        if no:
+            text += f"; not fittable: {', '.join(no)}"
+        return text
+
+    def __str__(self):
+        return self.summary()
+
+
+def _runs(key: np.ndarray):
+    """(start, stop) of the runs of equal rows of a 2-D integer key."""
+    if len(key) == 0:
+        return []
+    change = np.any(key[1:] != key[:-1], axis=1)
+    starts = np.concatenate([[0], np.flatnonzero(change) + 1])
+    stops = np.concatenate([starts[1:], [len(key)]])
+    return list(zip(starts.tolist(), stops.tolist()))
+
+
+def _direction(x: np.ndarray) -> np.ndarray:
+    """+1 up, -1 down, 0 held per sample: the sign of the change of x over a centred window of 5 % of the run,
+    0 where the change is within the dead band (5 short-term standard deviations, at least 2 % of the range)."""
+    n = x.size
+    w = max(1, int(round(0.025 * n)))
+    padded = np.concatenate([np.full(w, x[0]), x, np.full(w, x[-1])])
+    change = padded[2 * w:] - padded[:-2 * w]
+    band = max(5.0 * _short_term_scatter(x), 0.02 * float(np.ptp(x)))
+    return np.where(np.abs(change) > band, np.sign(change), 0).astype(int)
+
+
+def _reversals(d: np.ndarray) -> int:
+    moving = d[d != 0]
+    return int(np.sum(moving[1:] != moving[:-1])) if moving.size > 1 else 0
+
+
+def recognise(data: TyreData) -> Programme:
+    """Recognise the test programme of ``data`` (rows in measurement order): levels, segments, sweeps with
+    their direction, steady and transient rows, and what is fittable. See the module text for the rules."""
+    n = len(data)
+    cond_ch = ("FZ", "P", "IA")
+    labels, levels = {}, {}
+    for ch in cond_ch:
+        labels[ch], levels[ch] = cluster_levels(data.array(ch))
+    sample_rate = None
+    if "TIME" in data.frame.columns:
+        t = pd.to_numeric(data.frame["TIME"], errors="coerce").to_numpy(float)
+        dt = np.diff(t)
+        dt = dt[np.isfinite(dt) & (dt > 0)]
+        if dt.size:
+            sample_rate = 1.0 / float(np.median(dt))
+    short_run = max(2, int(0.002 * n)) if sample_rate is None or sample_rate < 20 else max(50, int(0.002 * n))
+    key = np.stack([labels[ch] for ch in cond_ch], axis=1) if n else np.zeros((0, 3), int)
+    runs = _runs(key)
+    for i, (start, stop) in enumerate(runs):
+        if not (0 < i < len(runs) - 1 and stop - start < short_run):
+            continue
+        before, after = key[runs[i - 1][0]], key[runs[i + 1][0]]
+        if np.array_equal(before, after) and np.all(before >= 0):
+            key[start:stop] = before  # a brief excursion off a level (scatter) does not end the stay there
+        elif key[start, 0] >= 0 and before[0] < 0 and after[0] < 0:
+            key[start:stop, 0] = -1  # a ramp passing through a level is no stay at that level
+    seg_id = np.full(n, -1, int)
+    sweep_id = np.full(n, -1, int)
+    kind = np.full(n, "transition", object)
+    branch = np.zeros(n, int)
+    rows = []
+    sa, sl, vx, fz = (data.array(c) for c in ("SA", "SL", "VX", "FZ"))
+    n_sweeps = 0
+    pieces = []
+    for start, stop in _runs(key):
+        # split by the held slip channel's levels (slip-ratio sweeps at several slip angles)
+        sub = slice(start, stop)
+        split_by = None
+        for ch, x in (("SA", sa), ("SL", sl)):
+            other = sl if ch == "SA" else sa
+            other_ch = "SL" if ch == "SA" else "SA"
+            if np.ptp(x[sub]) > SWEEP_THRESHOLD[ch] and np.ptp(other[sub]) > SWEEP_THRESHOLD[other_ch]:
+                split_by = "SA" if np.ptp(sl[sub]) / SWEEP_THRESHOLD["SL"] > np.ptp(sa[sub]) / SWEEP_THRESHOLD["SA"] \
+                    else "SL"
+        if split_by is None:
+            pieces.append((start, stop))
+            continue
+        held = sa if split_by == "SA" else sl
+        lab, _ = cluster_levels(held[sub])
+        for a, b in _runs(lab[:, None]):
+            pieces.append((start + a, start + b))
+    widest = {ch: max([np.ptp(x[a:b]) for a, b in pieces] + [0.0]) for ch, x in (("SA", sa), ("SL", sl), ("VX", vx))}
+    for seg, (start, stop) in enumerate(pieces):
+        sub = slice(start, stop)
+        m = stop - start
+        seg_id[sub] = seg
+        off_level = bool(np.any(key[start] < 0))
+        ranges = {"SA": np.ptp(sa[sub]), "SL": np.ptp(sl[sub]), "VX": np.ptp(vx[sub]), "FZ": np.ptp(fz[sub])}
+        thresholds = dict(SWEEP_THRESHOLD, FZ=abs(float(np.mean(fz[sub]))) / 3.0 + 1e-9)
+        # a sweep spans at least half the widest range of its channel; a shorter move (e.g. steering to the
+        # slip angle of a combined-slip test) is a transition
+        score = {ch: ranges[ch] / thresholds[ch] for ch in ranges if ranges[ch] > thresholds[ch]
+                 and (ch == "FZ" or ranges[ch] >= 0.5 * widest[ch])}
+        if not off_level:
+            score.pop("FZ", None)
+        swept = max(score, key=score.get) if score else None
+        moving = any(ranges[ch] > SWEEP_THRESHOLD[ch] for ch in ("SA", "SL", "VX"))
+        if swept is None and (off_level or moving):
+            k = "transition"  # off-level, or a slip or speed changing without being a sweep
+        elif swept is None:
+            k = "steady" if m >= short_run else "transition"  # too brief to be a measured steady point
+        elif off_level and swept != "FZ" and m < short_run:
+            k = "transition"
+        else:
+            k = _KIND[swept]
+        kind[sub] = k
+        d = np.zeros(m, int)
+        if swept is not None and k != "transition":
+            d = _direction((sa, sl, vx, fz)[("SA", "SL", "VX", "FZ").index(swept)][sub])
+            branch[sub] = d
+            sweep_id[sub] = n_sweeps
+            n_sweeps += 1
+        rows.append(dict(segment=seg, start=start, stop=stop, n=m, kind=k, swept=swept,
+                         reversals=_reversals(d),
+                         up=int(np.sum(d > 0)), down=int(np.sum(d < 0)),
+                         FZ=float(np.mean(fz[sub])), P=float(np.mean(data.array("P")[sub])),
+                         IA=float(np.mean(data.array("IA")[sub])), SA=float(np.median(sa[sub])),
+                         SL=float(np.median(sl[sub])), VX=float(np.median(vx[sub]))))
+    sweeps = pd.DataFrame(rows)
+    steady = np.isin(kind, ("steady", "slip_angle", "slip_ratio", "speed", "load"))
+    per_row = pd.DataFrame({"SEGMENT": seg_id, "SWEEP": sweep_id, "KIND": kind, "BRANCH": branch, "STEADY": steady,
+                            **{f"{ch}_LEVEL": key[:, i] for i, ch in enumerate(cond_ch)}})
+    slip_tests = np.isin(kind, ("slip_angle", "slip_ratio", "steady"))
+    levels["VX"] = cluster_levels(vx[slip_tests])[1] if slip_tests.any() else np.zeros(0)
+    def beyond(x, threshold):  # slip applied on purpose: more than a few noise spikes beyond the threshold
+        return bool(np.sum(np.abs(x) > threshold) >= max(10, 0.005 * n))
+
+    has = dict(
+        lateral_slip=beyond(sa, SWEEP_THRESHOLD["SA"]),
+        longitudinal_slip=beyond(sl, SWEEP_THRESHOLD["SL"]),
+        camber=bool(np.any(np.abs(levels["IA"]) > math.radians(0.25))),
+        speed_sweep=bool(np.any(kind == "speed")),
+        loaded_radius=data.has("RL"), effective_radius=data.has("RE"),
+        fx=data.has("FX"), fy=data.has("FY"), mz=data.has("MZ"), mx=data.has("MX"), my=data.has("MY"))
+    prog = Programme(levels=levels, sweeps=sweeps, rows=per_row, n_rows=n, sample_rate=sample_rate, has=has)
+    prog.fittable, prog.notes = _fittable(prog)
+    return prog
+
+
+def _fittable(prog: Programme):
+    h, lv = prog.has, prog.levels
+    n_loads = lv["FZ"].size
+    out, notes = {}, []
+
+    def rule(name, ok, why):
+        out[name] = bool(ok)
+        if not ok:
+            notes.append(f"{name}: {why}")
+
+    rule("pure Fx", h["longitudinal_slip"] and h["fx"], "no longitudinal slip" if not h["longitudinal_slip"]
+         else "no FX channel")
+    rule("pure Fy", h["lateral_slip"] and h["fy"], "no slip angle" if not h["lateral_slip"] else "no FY channel")
+    rule("Mz", h["lateral_slip"] and h["mz"], "no slip angle" if not h["lateral_slip"] else "no MZ channel")
+    combined = bool(len(prog.sweeps)) and bool(((prog.sweeps["kind"] == "slip_ratio")
+                                                & (prog.sweeps["SA"].abs() > SWEEP_THRESHOLD["SA"])).any())
+    rule("combined slip", combined, "no slip-ratio sweep at a non-zero slip angle")
+    rule("load terms", n_loads >= 2, f"{n_loads} load level(s)")
+    rule("pressure terms", lv["P"].size >= 2, f"{lv['P'].size} pressure level(s)")
+    rule("camber terms", h["camber"], "no camber level other than zero")
+    rule("Mx", h["mx"], "no MX channel")
+    rule("My", h["my"], "no MY channel")
+    rule("speed terms", h["speed_sweep"] or lv["VX"].size >= 2, "one speed only")
+    rule("vertical", h["loaded_radius"], "no RL channel")
+    rule("rolling radius", h["effective_radius"], "no RE channel")
+    return out, notes

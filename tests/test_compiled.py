@@ -1,0 +1,383 @@
+"""mftyre.compiled: thread safety, input validation, the disk cache, and compiled derivatives for NLPs."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import threading
+import warnings
+
+import numpy as np
+import pytest
+
+import mftyre
+from conftest import PROJECT, TIR_FILES
+from mftyre.compiled import CacheSecurityError, CompiledFunction, compile_external, compile_model
+from mftyre.errors import InputClippedWarning, MFTyreError, ModelInputError
+
+FILES = {"mf61": "car_205_60R15_mf61.tir", "mf62": "car_205_60R15_mf62_swift.tir"}
+INPUTS = ("fz", "kappa", "alpha", "gamma", "phit", "vx", "p")
+
+
+@pytest.fixture(scope="module")
+def compiled(tmp_path_factory):
+    """Every output of both sample tyres, compiled once for the module."""
+    directory = tmp_path_factory.mktemp("cache")
+    result = {}
+    for tag, name in FILES.items():
+        model = mftyre.load_tir(TIR_FILES / name)
+        result[tag] = model, compile_model(model, directory=directory)
+    return result
+
+
+def _points(model, n, seed):
+    prm = model.params
+    rng = np.random.default_rng(seed)
+    return [rng.uniform(0.3, 1.8, n) * prm.FNOMIN, rng.uniform(-0.2, 0.2, n), rng.uniform(-0.2, 0.2, n),
+            rng.uniform(-0.05, 0.05, n), 0.0, rng.uniform(5, 35, n), rng.uniform(0.9, 1.1, n) * prm.NOMPRES]
+
+
+@pytest.mark.parametrize("tag", FILES)
+def test_eight_threads_give_the_serial_results(compiled, tag):
+    model, f = compiled[tag]
+    data = [_points(model, 2000 + 700 * k, seed=k) for k in range(8)]  # packed (<= 4096) and strided calls
+    serial_batch = [f.batch(*x) for x in data]
+    serial_point = [[f(*(float(np.broadcast_to(v, x[0].shape)[i]) for v in x)) for i in range(40)] for x in data]
+    failures = []
+
+    def work(k):
+        x = data[k]
+        try:
+            for _ in range(4):
+                for got, want in zip(f.batch(*x), serial_batch[k]):
+                    if not np.array_equal(got, want):
+                        failures.append(("batch", k))
+                for i in range(40):
+                    if f(*(float(np.broadcast_to(v, x[0].shape)[i]) for v in x)) != serial_point[k][i]:
+                        failures.append(("point", k, i))
+        except Exception as exc:  # noqa: BLE001  (reported below)
+            failures.append(repr(exc))
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(8)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not failures, failures[:5]
+    # the threaded batch option (4 threads over 20,000 points) gives the same numbers
+    x = _points(model, 20_000, seed=9)
+    for got, want in zip(f.batch(*x, threads=4), f.batch(*x)):
+        np.testing.assert_array_equal(got, want)
+
+
+def test_results_match_numpy_and_broadcast(compiled):
+    model, f = compiled["mf61"]
+    fz = np.array([[3000.0], [5000.0], [7000.0]])  # (3, 1) against (4,): a (3, 4) grid
+    alpha = np.array([-0.1, 0.0, 0.05, 0.1])
+    out = f.batch(fz, 0.02, alpha, 0.01, 0.0, 20.0, 2.1e5)
+    ref = model.evaluate(fz, 0.02, alpha, 0.01, 0.0, vx=20.0, p=2.1e5)
+    for name, value in zip(f.outputs, out):
+        assert value.shape == (3, 4)
+        np.testing.assert_allclose(value, ref[name], rtol=1e-10, atol=1e-6, err_msg=name)
+    # the integer dtype is accepted; the previous call's values are never reused
+    assert f.batch(np.array([4000]), 0, 0, 0, 0, 20, 200000)[1][0] == pytest.approx(
+        float(model.evaluate(4000.0, 0.0, 0.0, vx=20.0, p=2e5).fy), rel=1e-12, abs=1e-9)
+
+
+def test_batch_validates_arity_shapes_and_types(compiled):
+    model, f = compiled["mf61"]
+    x = _points(model, 10, 0)
+    f.batch(*x)
+    with pytest.raises(ModelInputError, match=r"got 5.*missing vx, p"):
+        f.batch(*x[:5])
+    with pytest.raises(ModelInputError, match="got 8"):
+        f.batch(*x, 1.0)
+    with pytest.raises(ModelInputError, match=r"broadcast.*fz \(10,\).*kappa \(3,\)"):
+        f.batch(x[0], np.zeros(3), *x[2:])
+    with pytest.raises(ModelInputError, match="'alpha' must be real numbers"):
+        f.batch(x[0], x[1], np.array(["a"] * 10), *x[3:])
+    with pytest.raises(ModelInputError, match="'kappa' must be real numbers"):
+        f.batch(x[0], x[1] + 0j, *x[2:])
+    with pytest.raises(ModelInputError, match=r"expected 7 inputs.*got 3"):
+        f(4000.0, 0.0, 0.0)
+    with pytest.raises(ModelInputError, match="'gamma' must be a real number"):
+        f(4000.0, 0.0, 0.0, "0.1", 0.0, 20.0, 2e5)  # a numeric string is not a number
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_non_finite_inputs_raise(compiled, bad):
+    model, f = compiled["mf61"]
+    x = _points(model, 50, 1)
+    x[2] = x[2].copy()
+    x[2][7] = bad
+    with pytest.raises(ModelInputError, match="'alpha' must be finite; 1 of 50"):
+        f.batch(*x)
+    with pytest.raises(ModelInputError, match="'vx' must be finite"):
+        f(4000.0, 0.0, 0.0, 0.0, 0.0, bad, 2e5)
+
+
+@pytest.mark.parametrize("p", [0.0, -1e5, np.nan])
+def test_pressure_must_be_positive_not_clipped_to_presmin(compiled, p):
+    model, f = compiled["mf61"]
+    with pytest.raises(ModelInputError, match="'p' must be"):
+        f(4000.0, 0.0, 0.05, 0.0, 0.0, 20.0, p)
+    with pytest.raises(ModelInputError, match="'p' must be"):
+        f.batch(np.full(5, 4000.0), 0.0, 0.05, 0.0, 0.0, 20.0, np.array([2e5, 2e5, p, 2e5, 2e5]))
+
+
+def test_values_outside_the_ranges_warn_like_numpy(compiled, tmp_path):
+    model, f = compiled["mf61"]
+    prm = model.params
+    alpha = np.array([0.0, 0.1, prm.ALPMAX + 0.1, prm.ALPMIN - 0.2])
+    p = np.array([prm.NOMPRES, prm.PRESMIN * 0.9, prm.NOMPRES, prm.NOMPRES])
+    with pytest.warns(InputClippedWarning) as record:
+        out = f.batch(4000.0, 0.0, alpha, 0.0, 0.0, 20.0, p)
+    message = str(record[0].message)
+    assert len(record) == 1
+    assert "alpha outside ALPMIN..ALPMAX" in message and "at 2 of 4" in message
+    assert "p outside PRESMIN..PRESMAX" in message and "at 1 of 4" in message
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ref = model.evaluate(4000.0, 0.0, alpha, 0.0, 0.0, vx=20.0, p=p)
+    np.testing.assert_allclose(out[f.outputs.index("fy")], ref.fy, rtol=1e-11)
+    with pytest.warns(InputClippedWarning, match="gamma outside CAMMIN..CAMMAX"):
+        f(4000.0, 0.0, 0.0, prm.CAMMAX + 0.1, 0.0, 20.0, prm.NOMPRES)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        f(4000.0, 0.0, 0.05, 0.0, 0.0, 20.0, prm.NOMPRES)  # inside: no warning
+        free = compile_model(model, outputs=("fy",), directory=tmp_path, limits=False)
+        fy = free.batch(4000.0, 0.0, alpha, 0.0, 0.0, 20.0, prm.NOMPRES)[0]  # limits off: no warning
+    assert fy[2] == pytest.approx(float(model.evaluate(4000.0, 0.0, alpha[2], limits=False, vx=20.0).fy), rel=1e-11)
+
+
+def test_mirrored_tyre_checks_the_mirrored_range(tmp_path):
+    model = mftyre.load_tir(TIR_FILES / FILES["mf61"])
+    prm = model.params
+    other = model.with_side("left" if model.side == "right" else "right")
+    f = compile_model(other, outputs=("fy",), directory=tmp_path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        f(4000.0, 0.0, -prm.ALPMAX + 1e-3, 0.0, 0.0, 20.0, prm.NOMPRES)
+    with pytest.warns(InputClippedWarning, match="alpha"):
+        f(4000.0, 0.0, -prm.ALPMAX - 1e-3, 0.0, 0.0, 20.0, prm.NOMPRES)
+    with pytest.raises(ModelInputError, match="'p'"):
+        compile_model(model, inputs=("fz", "kappa", "alpha"), outputs=("fy",), directory=tmp_path, fixed={"p": 0.0})
+
+
+# --------------------------------------------------------------------------------------------------- cache
+def _compile_in_subprocess(directory, tir, outputs="fx,fy"):
+    code = ("import sys, warnings; warnings.simplefilter('ignore'); import mftyre; "
+            "from mftyre.compiled import compile_model; "
+            f"f = compile_model(mftyre.load_tir({str(tir)!r}), outputs={outputs.split(',')!r}, "
+            f"directory={str(directory)!r}); print(f.library, f(4000.0, 0.02, 0.03, 0, 0, 20.0, 2.2e5)[1])")
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
+                          env={**os.environ, "PYTHONPATH": str(PROJECT)})
+
+
+def test_truncated_library_is_rebuilt_not_loaded(tmp_path):
+    tir = TIR_FILES / FILES["mf61"]
+    first = _compile_in_subprocess(tmp_path, tir)
+    assert first.returncode == 0, first.stderr
+    library = next(tmp_path.glob("*.so"))
+    size = library.stat().st_size
+    with open(library, "r+b") as fh:  # a library cut short (disk full, a killed copy...)
+        fh.truncate(size // 3)
+    with pytest.raises(MFTyreError, match="damaged"):
+        CompiledFunction(library)
+    model = mftyre.load_tir(tir)
+    f = compile_model(model, outputs=("fx", "fy"), directory=tmp_path)  # rebuilt, no crash
+    assert f.library.stat().st_size == size
+    assert f(4000.0, 0.02, 0.03, 0.0, 0.0, 20.0, 2.2e5)[1] == pytest.approx(
+        float(model.evaluate(4000.0, 0.02, 0.03, vx=20.0, p=2.2e5).fy), rel=1e-12)
+    library.with_suffix(".json").write_text("{not json")  # a damaged description is rebuilt too
+    assert compile_model(model, outputs=("fx", "fy"), directory=tmp_path)(4000.0, 0, 0, 0, 0, 20.0, 2.2e5)
+
+
+def test_libraries_others_could_write_are_refused(tmp_path, monkeypatch):
+    model = mftyre.load_tir(TIR_FILES / FILES["mf61"])
+    cache = tmp_path / "cache"
+    f = compile_model(model, outputs=("fy",), directory=cache)
+    library = f.library
+    library.chmod(0o666)  # planted or altered by someone else: world-writable
+    with pytest.raises(CacheSecurityError, match="writable by group or others"):
+        CompiledFunction(library)
+    with pytest.raises(CacheSecurityError):
+        compile_model(model, outputs=("fy",), directory=cache)
+    library.chmod(0o644)
+    cache.chmod(0o777)
+    monkeypatch.setenv("MFTYRE_CACHE", str(cache))
+    with pytest.raises(CacheSecurityError, match="the folder"):
+        compile_model(model, outputs=("fy",))
+    cache.chmod(0o700)
+    assert compile_model(model, outputs=("fy",)).library == library
+    if os.geteuid() == 0:  # root's own files are trusted: give the library to another user
+        os.chown(library, 4243, -1)
+    else:  # pretend to be another user
+        real_uid = os.geteuid()
+        monkeypatch.setattr(os, "geteuid", lambda: real_uid + 12345)
+    with pytest.raises(CacheSecurityError, match="belongs to user id"):
+        CompiledFunction(library)
+
+
+def test_concurrent_compilation_in_threads_and_processes(tmp_path):
+    tir = TIR_FILES / FILES["mf61"]
+    model = mftyre.load_tir(tir)
+    results, errors = [], []
+
+    def work():
+        try:
+            results.append(compile_model(model, outputs=("fx", "fy"), directory=tmp_path / "threads"))
+        except Exception as exc:  # noqa: BLE001
+            errors.append(repr(exc))
+
+    threads = [threading.Thread(target=work) for _ in range(6)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors and len(results) == 6
+    values = {r(4000.0, 0.02, 0.03, 0.0, 0.0, 20.0, 2.2e5) for r in results}
+    assert len(values) == 1
+    assert not list((tmp_path / "threads").glob(".*"))  # no temporary files left
+    # the same compilation started in two processes at once
+    code = ("import subprocess, sys; cmd = [sys.executable, '-c', sys.argv[1]]; "
+            "ps = [subprocess.Popen(cmd) for _ in range(2)]; sys.exit(sum(p.wait() for p in ps))")
+    inner = ("import warnings; warnings.simplefilter('ignore'); import mftyre; "
+             "from mftyre.compiled import compile_model; "
+             f"f = compile_model(mftyre.load_tir({str(tir)!r}), outputs=['fx', 'fy'], "
+             f"directory={str(tmp_path / 'procs')!r}); assert abs(f(4000.0, 0, 0.03, 0, 0, 20.0, 2.2e5)[1]) > 0")
+    run = subprocess.run([sys.executable, "-c", code, inner], capture_output=True, text=True, timeout=300,
+                         env={**os.environ, "PYTHONPATH": str(PROJECT)})
+    assert run.returncode == 0, run.stderr
+    assert len(list((tmp_path / "procs").glob("*.so"))) >= 1
+
+
+# --------------------------------------------------------------------------------------------- derivatives
+def test_external_derivatives_equal_casadi_and_differences(tmp_path):
+    import casadi as ca
+
+    model = mftyre.load_tir(TIR_FILES / FILES["mf61"])
+    inputs, outputs = ("fz", "kappa", "alpha"), ("fx", "fy", "mz")
+    ext = compile_external(model, inputs, outputs, hessian=True, directory=tmp_path, name="tyre")
+    sym = model.casadi_function(inputs, outputs)
+    x = ca.SX.sym("x", 3)
+    jac = {k: ca.Function("j", [x], [ca.jacobian(ca.vertcat(*f(x[0], x[1], x[2])), x)]) for k, f in
+           (("ext", ext), ("sym", sym))}
+    hess = {k: ca.Function("h", [x], [ca.hessian(f(x[0], x[1], x[2])[1], x)[0]]) for k, f in
+            (("ext", ext), ("sym", sym))}
+    for point in ([4000.0, 0.05, 0.1], [6500.0, -0.1, -0.04], [2500.0, 0.0, 0.2]):
+        j_ext, j_sym = np.array(jac["ext"](point)), np.array(jac["sym"](point))
+        np.testing.assert_allclose(j_ext, j_sym, rtol=1e-12, atol=1e-9)
+        # central differences of the NumPy model
+        steps = np.array([1.0, 1e-6, 1e-6])
+        for i in range(3):
+            hi, lo = np.array(point), np.array(point)
+            hi[i] += steps[i]
+            lo[i] -= steps[i]
+            f_hi, f_lo = (model.evaluate(*v, vx=model.params.LONGVL) for v in (hi, lo))
+            fd = [(f_hi[n] - f_lo[n]) / (2 * steps[i]) for n in outputs]
+            np.testing.assert_allclose(j_ext[:, i], np.ravel(fd), rtol=1e-5, atol=1e-3 * steps[i] ** -1 * 1e-6)
+        np.testing.assert_allclose(np.array(hess["ext"](point)), np.array(hess["sym"](point)), rtol=1e-10,
+                                   atol=1e-6)
+    # the compiled library holds the tyre and its derivatives only: small, and cached
+    assert len(list(tmp_path.glob("*.so"))) == 1
+    assert next(tmp_path.glob("*.so")).stat().st_size < 2_000_000
+    again = compile_external(model, inputs, outputs, hessian=True, directory=tmp_path, name="tyre")
+    assert len(list(tmp_path.glob("*.so"))) == 1 and float(again(4000, 0.05, 0.1)[1]) == float(ext(4000, 0.05, 0.1)[1])
+
+
+def test_external_function_inside_ipopt(tmp_path):
+    import casadi as ca
+
+    model = mftyre.load_tir(TIR_FILES / FILES["mf61"])
+    ext = compile_external(model, ("kappa", "alpha"), ("fx", "fy"), hessian=True, directory=tmp_path,
+                           fixed={"fz": 4000.0}, name="tyre4k")
+    # the combined-slip operating point that gives Fx = 1500 N and Fy = -2500 N with least slip
+    w = ca.MX.sym("w", 2)
+    fx, fy = ext(w[0], w[1])
+    solver = ca.nlpsol("s", "ipopt", {"x": w, "f": w[0] ** 2 + w[1] ** 2, "g": ca.vertcat(fx - 1500.0, fy + 2500.0)},
+                       {"ipopt.print_level": 0, "print_time": 0, "ipopt.hessian_approximation": "exact"})
+    sol = solver(x0=[0.01, 0.01], lbg=0, ubg=0, lbx=[-0.2, -0.2], ubx=[0.2, 0.2])
+    assert solver.stats()["success"]
+    kappa, alpha = np.array(sol["x"]).ravel()
+    out = model.evaluate(4000.0, kappa, alpha)
+    assert float(out.fx) == pytest.approx(1500.0, abs=1e-6) and float(out.fy) == pytest.approx(-2500.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("table, tir", [("mf61_random", "MagicFormula61_Parameters.tir"),
+                                        ("mf62_random", "MagicFormula62_Parameters.tir")])
+def test_compiled_reproduces_reference_tables(mfeval_dir, tmp_path, table, tir):
+    """The vectorised C (vector maths library, no fast-math) against MFeval at the tolerances of
+    tests/test_reference_mfeval.py: 1e-9 relative, floors 1e-9 FNOMIN N, FNOMIN R0 N m, R0 m; MF 6.2 Rl 1e-7 m."""
+    import pandas as pd
+
+    model = mftyre.load_tir(mfeval_dir / tir)
+    prm = model.params
+    df = pd.read_csv(mfeval_dir / f"{table}.csv")
+    assert set(df["useMode"]) == {111} and (df["in_omega"] == 0).all()  # limits on, spin estimated
+    outputs = ("fx", "fy", "mx", "my", "mz", "re", "rl", "kya", "kxk", "mux", "muy")
+    f = compile_model(model, outputs=outputs, directory=tmp_path)
+    p = np.where(df["in_P"] == 0, prm.INFLPRES, df["in_P"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InputClippedWarning)
+        ours = dict(zip(outputs, f.batch(*(df[f"in_{c}"].to_numpy() for c in
+                                            ("Fz", "kappa", "alpha", "gamma", "phit", "Vx")), p)))
+    Fz0, R0 = prm.FNOMIN, prm.UNLOADED_RADIUS
+    columns = {"fx": ("Fx", Fz0), "fy": ("Fy", Fz0), "mx": ("Mx", Fz0 * R0), "my": ("My", Fz0 * R0),
+               "mz": ("Mz", Fz0 * R0), "re": ("Re", R0), "kya": ("Kya", Fz0), "kxk": ("Kxk", Fz0),
+               "mux": ("mux", 1.0), "muy": ("muy", 1.0)}
+    for name, (col, floor) in columns.items():
+        ref = df[col].to_numpy()
+        ok = np.isfinite(ref)
+        np.testing.assert_allclose(ours[name][ok], ref[ok], rtol=1e-9, atol=1e-9 * floor, err_msg=name)
+    ok = np.isfinite(df["Rl"].to_numpy())
+    atol = 1e-7 if "62" in table else 1e-9 * R0
+    np.testing.assert_allclose(ours["rl"][ok], df["Rl"].to_numpy()[ok], rtol=0, atol=atol)
+
+
+def test_compile_c_from_threads_into_one_library(tmp_path):
+    """compile_c (also used by swift) writes under a unique temporary name: no collision between threads."""
+    import ctypes
+
+    from mftyre.compiled import compile_c
+
+    source = tmp_path / "twice.c"
+    source.write_text("double twice(double x) { return 2.0 * x; }\n")
+    library = tmp_path / "twice.so"
+    errors = []
+
+    def work():
+        try:
+            compile_c(source, library)
+        except Exception as exc:  # noqa: BLE001
+            errors.append(repr(exc))
+
+    threads = [threading.Thread(target=work) for _ in range(6)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["twice.c", "twice.so"]  # no temporary files left
+    twice = ctypes.CDLL(str(library)).twice
+    twice.restype, twice.argtypes = ctypes.c_double, [ctypes.c_double]
+    assert twice(1.25) == 2.5
+
+
+def test_shared_range_check_gives_the_compiled_warning(compiled):
+    """mftyre.inputs (for MFModel.evaluate) counts and words the warning exactly as the compiled C does."""
+    from mftyre.inputs import count_outside, input_ranges, warn_outside
+
+    model, f = compiled["mf61"]
+    prm = model.params
+    x = dict(fz=np.array([4000.0, prm.FZMAX + 1.0, 3000.0]), kappa=np.array([0.0, prm.KPUMAX + 0.5, prm.KPUMIN - 1]),
+             alpha=0.0, gamma=0.0, phit=0.0, vx=20.0, p=np.array([prm.NOMPRES, prm.PRESMAX * 2, prm.NOMPRES]))
+    with pytest.warns(InputClippedWarning) as compiled_warning:
+        f.batch(*x.values())
+    ranges = input_ranges(prm, model.mirrored)
+    arrays = {k: np.broadcast_to(v, (3,)) for k, v in x.items()}
+    counts = count_outside(arrays, ranges)
+    assert counts == {"fz": 1, "kappa": 2, "alpha": 0, "gamma": 0, "p": 1}
+    with pytest.warns(InputClippedWarning) as shared_warning:
+        warn_outside(counts, 3, ranges)
+    assert str(shared_warning[0].message) == str(compiled_warning[0].message)

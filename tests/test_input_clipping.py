@@ -1,0 +1,84 @@
+"""Inputs outside the .tir ranges: one InputClippedWarning per input and call (name, range, count), tables and
+plot legends of `mftyre eval` show the values used."""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import mftyre
+from mftyre import cli
+from mftyre.errors import InputClippedWarning
+
+from conftest import TIR_FILES
+
+TIR61 = TIR_FILES / "car_205_60R15_mf61.tir"
+
+
+def _caught(fn):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = fn()
+    return result, [w for w in caught if issubclass(w.category, InputClippedWarning)]
+
+
+def test_one_warning_per_clipped_input_naming_range_and_count():
+    model = mftyre.load_tir(TIR61)
+    prm = model.params
+    p = np.array([1.76e5, 2.2e5, 2.64e5, 3.0e5])
+    kappa = np.array([0.0, 0.1, 5.0, -5.0])
+    out, caught = _caught(lambda: model.evaluate(4000.0, kappa, 0.0, p=p))
+    assert issubclass(InputClippedWarning, UserWarning)
+    messages = sorted(str(w.message) for w in caught)
+    assert len(messages) == 2  # kappa and p, once each
+    kappa_msg, p_msg = messages
+    assert kappa_msg.startswith("kappa: 2 of 4") and f"[{prm.KPUMIN:g}, {prm.KPUMAX:g}]" in kappa_msg
+    assert p_msg.startswith("p: 3 of 4") and "[186000, 255000] Pa" in p_msg and "PRESMIN" in p_msg
+    np.testing.assert_array_equal(out.p, np.clip(p, prm.PRESMIN, prm.PRESMAX))  # outputs carry the used values
+
+
+def test_no_warning_in_range_or_without_limits():
+    model = mftyre.load_tir(TIR61)
+    _, caught = _caught(lambda: model.evaluate(4000.0, 0.1, 0.05, 0.01, p=2.2e5))
+    assert caught == []
+    out, caught = _caught(lambda: model.evaluate(4000.0, 0.0, 0.0, p=1.5e5, limits=False))
+    assert caught == [] and out.p == 1.5e5
+
+
+def test_mirrored_model_warns_in_its_own_axes():
+    """A model mounted on the other side mirrors alpha and gamma, and their ranges with them."""
+    model = mftyre.load_tir(TIR61)
+    other = model.with_side("right" if model.side == "left" else "left")
+    lo, hi = other.input_range("gamma")
+    assert (lo, hi) == (-model.params.CAMMAX, -model.params.CAMMIN)
+    _, caught = _caught(lambda: other.evaluate(4000.0, 0.0, 0.0, np.array([lo - 0.01, hi - 1e-3])))
+    assert len(caught) == 1 and str(caught[0].message).startswith("gamma: 1 of 2")
+
+
+def test_cli_table_and_header_show_the_pressures_used(capsys):
+    assert cli.main(["eval", str(TIR61), "--p", "1.76bar,2.2bar", "--alpha", "0.05"]) == 0
+    captured = capsys.readouterr()
+    assert "p_used [Pa]" in captured.out and "186000" in captured.out
+    assert "outside the .tir range" in captured.err
+    assert cli.main(["eval", str(TIR61), "--p", "2.64bar", "--alpha", "0.05,0.1"]) == 0
+    assert "p = 264000 Pa (used: 255000" in capsys.readouterr().out
+
+
+def test_cli_plot_legend_names_the_pressure_used(tmp_path, monkeypatch):
+    from matplotlib.figure import Figure
+
+    legends = []
+    original = Figure.savefig
+
+    def capture(fig, *args, **kw):
+        for ax in fig.axes:
+            if ax.get_legend() is not None:
+                legends.extend(t.get_text() for t in ax.get_legend().get_texts())
+        return original(fig, *args, **kw)
+
+    monkeypatch.setattr(Figure, "savefig", capture)
+    rc = cli.main(["eval", str(TIR61), "--p", "1.76bar,2.2bar", "--alpha", "-0.1:0.1:5", "--plot",
+                   str(tmp_path / "p.png"), "-q"])
+    assert rc == 0
+    assert legends == ["p = 1.86 bar (asked 1.76 bar)", "p = 2.2 bar"]

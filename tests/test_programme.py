@@ -1,0 +1,163 @@
+"""Test-programme recognition, time-series reduction and the realistic rig generator (issue 11).
+
+Independent evidence: the levels and sweeps the generator was told to run, the relaxation-length hysteresis
+vanishing when relaxation is switched off, the AR(1) rule for the effective sample size, the noise-free model.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import mftyre
+from mftyre.data import levels, trailer_programme
+from mftyre.programme import cluster_levels, recognise
+from mftyre.rig import rig_programme
+from mftyre.timeseries import effective_samples, lag_one_correlation, needs_reduction, reduce_sweeps
+
+from conftest import TIR_FILES
+
+
+@pytest.fixture(scope="module")
+def truth():
+    return mftyre.load_tir(TIR_FILES / "car_205_60R15_mf61.tir")
+
+
+@pytest.fixture(scope="module")
+def rig(truth):
+    return rig_programme(truth, loads=(0.5, 1.0, 1.5), pressures=(1.0,), seed=3)
+
+
+# ----------------------------------------------------------------------------------------------- levels
+def test_close_levels_with_scatter_are_separate_levels():
+    """1650 / 2200 / 2750 N with 4 % scatter: the old rule (tolerance 5 % of the largest value) chained them."""
+    rng = np.random.default_rng(0)
+    x = np.concatenate([rng.normal(c, 0.04 * c, 3000) for c in (1650.0, 2200.0, 2750.0)])
+    rng.shuffle(x)
+    assert len(levels(x)[1]) == 1  # the old rule: one level
+    labels, centres = cluster_levels(x, scatter=0.04 * 1650)
+    np.testing.assert_allclose(centres, [1650, 2200, 2750], rtol=0.01)
+    assert np.mean(labels >= 0) > 0.99
+
+
+def test_five_loads_in_time_order_with_ramps_between():
+    rng = np.random.default_rng(1)
+    parts = []
+    targets = [450.0, 1100.0, 1650.0, 2200.0, 2750.0]
+    for a, b in zip(targets, targets[1:] + [targets[0]]):
+        parts += [a * (1 + 0.02 * rng.normal(size=800)), np.linspace(a, b, 60)]  # hold, then a ramp
+    x = np.concatenate(parts)
+    assert len(levels(x)[1]) == 1  # the old rule: the ramps chain everything into one level
+    labels, centres = cluster_levels(x)
+    np.testing.assert_allclose(centres, targets, rtol=0.01)
+    ramp = np.concatenate([np.zeros(800, bool), np.ones(60, bool)] * 5)
+    assert np.mean(labels[ramp] == -1) > 0.4  # most ramp samples belong to no level
+
+
+def test_few_points_repeated_settings():
+    labels, centres = cluster_levels([10000, 10020, 20000, 20030, 30000, 30010, 40000, 39990.0])
+    np.testing.assert_allclose(centres, [10010, 20015, 30005, 39995])
+    assert list(labels) == [0, 0, 1, 1, 2, 2, 3, 3]
+    assert len(cluster_levels([1.0, 2.0, 3.0, 4.0])[1]) == 4  # evenly spaced: all levels
+
+
+# ------------------------------------------------------------------------------------------- generator
+def test_rig_programme_is_a_realistic_time_series(truth, rig):
+    f = rig.frame
+    assert np.allclose(np.diff(f["TIME"]), 0.01)  # 100 Hz
+    again = rig_programme(truth, loads=(0.5, 1.0, 1.5), pressures=(1.0,), seed=3)
+    assert again.frame.equals(f)  # deterministic
+    # levels are not round numbers
+    lat = f[f["TEST"] == "pure_lateral"]
+    assert all(abs(c / 4000.0 - r) > 0.002 for c, r in zip(cluster_levels(lat["FZ"].to_numpy())[1], (0.5, 1, 1.5)))
+    # noise is autocorrelated (AR(1), 30 ms at 100 Hz: r1 = exp(-1/3) = 0.72) and about realistic in size:
+    # free-rolling samples at a held speed carry the noise of FY
+    quiet = rig_programme(truth, loads=(1.0,), pressures=(1.0,), cambers_deg=(0.0,), longitudinal=False, noise=0.0,
+                          load_scatter=0.0, friction_drift=0.0, seed=3)
+    noisy = rig_programme(truth, loads=(1.0,), pressures=(1.0,), cambers_deg=(0.0,), longitudinal=False,
+                          load_scatter=0.0, friction_drift=0.0, seed=3)
+    e = (noisy.frame["FY"] - quiet.frame["FY"]).to_numpy()
+    assert lag_one_correlation(e) == pytest.approx(math.exp(-1 / 3), abs=0.1)
+    assert np.std(e) > 0.5 * 0.005 * 4000  # at least half the realistic level (0.5 % of FNOMIN)
+    assert {"vertical", "free_rolling", "pure_lateral", "pure_longitudinal", "combined"} <= set(f["TEST"])
+    assert f["VX"].max() > 39.0 and f[f["TEST"] == "free_rolling"]["VX"].min() < 1.5
+    with pytest.raises(ValueError, match="sample_rate must be a positive number"):
+        rig_programme(truth, sample_rate=0.0)
+
+
+# ----------------------------------------------------------------------------------------- programme
+def test_recognise_finds_the_programme_it_was_told(rig):
+    prog = recognise(rig)
+    assert prog.levels["FZ"].size == 3 and prog.levels["P"].size == 1 and prog.levels["IA"].size == 3
+    assert prog.count("slip_angle") == 3 * 3  # loads x cambers
+    assert prog.count("slip_ratio") == 3 * 3  # loads x (pure + two combined angles)
+    assert prog.count("speed") >= 3 and prog.count("load") >= 1
+    assert prog.sample_rate == pytest.approx(100.0)
+    text = prog.summary()
+    assert "3 loads" in text and "3 cambers" in text and "1 pressure" in text and "9 slip-angle sweeps" in text
+    assert "not fittable: pressure terms" in text
+    # sweeps keep their direction: each slip-angle sweep goes up, down and up again
+    sa = prog.sweeps[prog.sweeps["kind"] == "slip_angle"]
+    assert (sa["reversals"] == 2).all() and (sa["up"] > 0).all() and (sa["down"] > 0).all()
+    # recognised kinds agree with the generator's tests on nearly every row
+    rows = prog.rows
+    test = rig.frame["TEST"].to_numpy()
+    for kind, t in (("slip_angle", "pure_lateral"), ("speed", "free_rolling")):
+        assert np.mean(rows["KIND"].to_numpy()[test == t] == kind) > 0.95
+
+
+def test_messages_are_true_of_the_data(truth):
+    data = rig_programme(truth, loads=(0.6, 1.2), pressures=(1.0,), longitudinal=False, seed=4)
+    spikes = data.frame["SL"].to_numpy().copy()
+    spikes[::5000] = 0.05  # a few noise spikes in the slip channel are no longitudinal-slip test
+    data.frame["SL"] = spikes
+    prog = recognise(data)
+    assert "no longitudinal slip" in prog.summary() and not prog.fittable["pure Fx"]
+    assert prog.fittable["camber terms"] and prog.fittable["load terms"]
+
+
+def test_point_data_are_recognised_too(truth):
+    data = trailer_programme(truth, points=15, noise=1.0, seed=7)
+    prog = recognise(data)
+    assert prog.levels["FZ"].size == 3 and prog.levels["P"].size == 3 and prog.levels["IA"].size == 3
+    assert prog.count("slip_angle") == 27 and prog.count("slip_ratio") == 27
+    assert not needs_reduction(data, prog)
+
+
+# ---------------------------------------------------------------------------------------- reduction
+def test_reduction_keeps_branches_and_measures_the_relaxation_hysteresis(truth, rig):
+    red = reduce_sweeps(rig)
+    assert needs_reduction(rig) and len(red.mean) < len(rig) / 10
+    h = red.hysteresis
+    lag = h[(h.kind == "slip_angle") & (h.channel == "FY")]["amplitude"].median()
+    still = rig_programme(truth, loads=(0.5, 1.0, 1.5), pressures=(1.0,), seed=3, relaxation=False)
+    h0 = reduce_sweeps(still).hysteresis
+    no_lag = h0[(h0.kind == "slip_angle") & (h0.channel == "FY")]["amplitude"].median()
+    assert lag > 1.8 * no_lag  # the relaxation length is the largest structure up vs down
+    # the up/down mean cancels the lag: close to the steady-state model at the bin means (no friction drift and
+    # load scatter here: they are not what the branches differ by)
+    plain = rig_programme(truth, loads=(0.5, 1.0, 1.5), pressures=(1.0,), seed=3, friction_drift=0.0,
+                          load_scatter=0.0)
+    red = reduce_sweeps(plain)
+    m = red.mean.frame
+    sel = (m["KIND"] == "slip_angle").to_numpy()
+    sub = red.mean.select(sel)
+    model = truth.evaluate(**sub.inputs())
+    dev_mean = np.sqrt(np.mean((model.fy - sub.array("FY")) ** 2))
+    b = red.branches.select((red.branches.frame["KIND"] == "slip_angle").to_numpy())
+    dev_branch = np.sqrt(np.mean((truth.evaluate(**b.inputs()).fy - b.array("FY")) ** 2))
+    assert dev_mean < 0.7 * dev_branch
+    assert "hysteresis" in red.summary() and "FY" in red.summary()
+
+
+def test_effective_samples_follow_the_ar1_rule():
+    rng = np.random.default_rng(2)
+    from scipy.signal import lfilter
+
+    white = rng.normal(size=20000)
+    assert effective_samples(white) == pytest.approx(20000, rel=0.05)
+    ar = lfilter([1.0], [1.0, -0.8], white)
+    assert effective_samples(ar) == pytest.approx(20000 * 0.2 / 1.8, rel=0.15)
+    groups = np.repeat(np.arange(20), 1000)
+    assert effective_samples(ar, groups) == pytest.approx(20000 * 0.2 / 1.8, rel=0.15)

@@ -1,0 +1,153 @@
+"""The MF 6.2 loaded radius carries its load: property tests of the vertical relation Fz(Rl) = Fz.
+
+Random loads (including the low loads where the camber deflection alone carries more than the load, and high loads
+in turn-slip mode), speeds, pressures, cambers and forces on every MF 6.2 file at hand: wherever the relation has
+a root the returned Rl satisfies it to 1e-9 relative (floor 1e-9 N); where it has none the loaded radius is the
+free radius and no root exists on a fine grid up to R0 above it (a wheel lifted further is not in contact). NumPy and CasADi alike; the CasADi derivative of Rl is the
+implicit one, -(dF/dFz_target)/(dF/dRl).
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import mftyre
+from mftyre.backend import NUMPY
+from mftyre.formula import vertical
+
+from conftest import MFEVAL_DIR, SHARED, TIR_FILES, require_shared
+
+FILES = {
+    "sample_swift": TIR_FILES / "car_205_60R15_mf62_swift.tir",
+    "mfeval_mf62": MFEVAL_DIR / "MagicFormula62_Parameters.tir",
+    "tno_mf62": SHARED / "reference" / "tir" / "TNO_car205_60R15.tir",
+}
+
+
+def _model(key):
+    return mftyre.load_tir(require_shared(FILES[key]))
+
+
+def _carried_or_no_root(model, fz, rl, omega, p, fx, fy, gamma):
+    """Boolean per point: the relation holds at rl, or rl = R_omega and no root exists on a grid up to R0 above it."""
+    prm = model.params
+    back = model.vertical_force(rl, p=p, omega=omega, fx=fx, fy=fy, gamma=gamma)
+    carried = np.abs(back - fz) <= 1e-9 * np.maximum(fz, 1.0)
+    r_omega = vertical.free_radius(prm, omega, NUMPY)
+    ok = carried.copy()
+    for j in np.nonzero(~carried)[0]:
+        grid = r_omega[j] + np.linspace(0.0, prm.UNLOADED_RADIUS, 4001)
+        f = model.vertical_force(grid, p=p[j], omega=omega[j], fx=fx[j], fy=fy[j], gamma=gamma[j]) - fz[j]
+        ok[j] = rl[j] == r_omega[j] and np.all(f > 0)
+    return ok, carried
+
+
+@pytest.mark.parametrize("key", list(FILES))
+def test_loaded_radius_carries_its_load(key):
+    model = _model(key)
+    prm = model.params
+    rng = np.random.default_rng(7)
+    n = 4000
+    fz = rng.uniform(0.0, 4.0 * prm.FNOMIN, n)
+    fz[:1500] = rng.uniform(0.0, 600.0, 1500)  # low loads: the camber deflection may carry more
+    fz[1500:1700] = 0.0
+    omega = rng.uniform(0.0, 250.0, n)
+    p = rng.uniform(prm.PRESMIN, prm.PRESMAX, n)
+    gamma = rng.uniform(prm.CAMMIN, prm.CAMMAX, n)
+    fx, fy = rng.uniform(-1.2, 1.2, (2, n)) * fz
+    rl, _ = model.loaded_radius(fz, p=p, omega=omega, fx=fx, fy=fy, gamma=gamma)
+    ok, carried = _carried_or_no_root(model, fz, rl, omega, p, fx, fy, gamma)
+    assert ok.all(), np.c_[fz, omega, gamma, fy, rl][~ok][:5]
+    r_omega = vertical.free_radius(prm, omega, NUMPY)
+    assert np.all(rl[fz == 0] >= r_omega[fz == 0])
+    if prm.Q_FCY != 0 and prm.Q_FYS3 != 0:  # the lifted roots exist and are found
+        assert np.sum(carried & (rl > r_omega)) > 100
+
+
+@pytest.mark.parametrize("key", ["mfeval_mf62", "tno_mf62"])
+@pytest.mark.parametrize("turn_slip", [False, True])
+def test_evaluate_loaded_radius_carries_load_with_its_own_forces(key, turn_slip):
+    """The relation at the returned Rl, Fx, Fy, spin and pressure gives the load back (15.5 kN with turn slip
+    included)."""
+    model = _model(key)
+    prm = model.params
+    rng = np.random.default_rng(11)
+    n = 1500
+    fz = np.r_[rng.uniform(0.0, 800.0, n // 3), rng.uniform(800.0, 16000.0, n - n // 3 - 1), 15500.0]
+    kappa, alpha = rng.uniform(-0.4, 0.4, (2, n))
+    gamma = rng.uniform(-0.2, 0.2, n)
+    phit = rng.uniform(-0.05, 0.05, n)
+    vx = rng.uniform(1.0, 60.0, n)
+    p = rng.uniform(0.8, 1.2, n) * prm.NOMPRES
+    out = model.evaluate(fz, kappa, alpha, gamma, phit, vx=vx, p=p, turn_slip=turn_slip)
+    gamma_used = np.clip(gamma, prm.CAMMIN, prm.CAMMAX)
+    ok, _ = _carried_or_no_root(model, fz, out.rl, out.omega, out.p, out.fx, out.fy, gamma_used)
+    assert ok.all(), np.c_[fz, gamma, out.rl][~ok][:5]
+
+
+def test_lifted_root_at_zero_load_and_high_speed():
+    """Fz = 0 at 31 m/s with camber on the MF 6.2 sample of the reference evaluator: Rl >= R_omega, and Fz(Rl) = 0
+    (the old solver returned R_omega, where the relation gives hundreds of newtons)."""
+    model = _model("mfeval_mf62")
+    gamma = np.array([-0.05, -0.02, 0.03, 0.08, 0.1])
+    out = model.evaluate(0.0, 0.0, 0.0, gamma, vx=31.0)
+    r_omega = vertical.free_radius(model.params, out.omega, NUMPY)
+    assert np.all(out.rl > r_omega)
+    back = model.vertical_force(out.rl, omega=out.omega, fx=out.fx, fy=out.fy, gamma=gamma)
+    np.testing.assert_allclose(back, 0.0, atol=1e-9)
+
+
+@pytest.mark.parametrize("turn_slip", [False, True])
+def test_casadi_loaded_radius_matches_numpy_and_implicit_derivative(turn_slip):
+    import casadi as ca
+
+    model = _model("mfeval_mf62")
+    prm = model.params
+    rng = np.random.default_rng(3)
+    n = 40
+    fz = np.r_[rng.uniform(0.0, 300.0, n // 2), rng.uniform(300.0, 15000.0, n - n // 2)]
+    kappa, alpha = rng.uniform(-0.2, 0.2, (2, n))
+    gamma = rng.uniform(-0.1, 0.1, n)
+    vx = rng.uniform(2.0, 40.0, n)
+    ins = ("fz", "kappa", "alpha", "gamma", "phit", "vx")
+    f = model.casadi_function(ins, ("rl",), turn_slip=turn_slip)
+    fz_sym = ca.SX.sym("fz")
+    others = [ca.SX.sym(k) for k in ins[1:]]
+    rl_sym = f(fz_sym, *others)
+    drl = ca.Function("drl", [fz_sym, *others], [ca.jacobian(rl_sym, fz_sym)])
+    out = model.evaluate(fz, kappa, alpha, gamma, 0.0, vx=vx, turn_slip=turn_slip)
+    for j in range(n):
+        args = (fz[j], kappa[j], alpha[j], gamma[j], 0.0, vx[j])
+        assert abs(float(f(*args)) - out.rl[j]) <= 1e-9 * prm.UNLOADED_RADIUS
+        slope = float(drl(*args))
+        assert np.isfinite(slope)
+        if fz[j] > 500:  # central difference of the NumPy model (forces and spin follow the load too)
+            h = 1e-3 * fz[j]
+            up, down = (model.evaluate(fz[j] + d, kappa[j], alpha[j], gamma[j], 0.0, vx=vx[j], turn_slip=turn_slip).rl
+                        for d in (h, -h))
+            assert slope == pytest.approx((up - down) / (2 * h), rel=1e-4, abs=1e-12)
+
+
+@pytest.mark.parametrize("path", [TIR_FILES / "car_205_60R15_mf61.tir", TIR_FILES / "car_205_60R15_mf62_swift.tir"],
+                         ids=["mf61", "mf62"])
+def test_vertical_force_is_zero_above_the_free_radius(path):
+    """A lifted tyre carries nothing: Fz(Rl > R_omega) = 0 (it was -6000 N at 0.35 m), NumPy and CasADi."""
+    import casadi as ca
+
+    from mftyre.backend import casadi_backend
+
+    model = mftyre.load_tir(path)
+    prm = model.params
+    r_omega = vertical.free_radius(prm, 0.0, NUMPY)
+    rl = np.array([r_omega, r_omega + 1e-6, 0.33, 0.35, 0.5, 1.0])
+    np.testing.assert_array_equal(model.vertical_force(rl), 0.0)
+    assert np.all(model.vertical_force(rl, fy=3000.0, fx=-2000.0, omega=80.0) >= 0.0)
+    assert model.vertical_force(r_omega - 0.01) > 1000.0  # and a deflected one does
+    x = ca.SX.sym("rl")
+    be = casadi_backend()
+    if prm.version == "62":
+        fz = vertical.vertical_force_62(prm, x, r_omega, 0.0, 0.0, 0.0, 0.0, 0.0, be)
+    else:
+        fz = vertical.vertical_force_61(prm, r_omega - x, r_omega, 0.0, 0.0, 0.0, 0.0, be)
+    f = ca.Function("fz", [x], [fz])
+    assert [float(f(v)) for v in rl] == [0.0] * len(rl)
