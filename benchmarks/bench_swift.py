@@ -1,14 +1,15 @@
 """SWIFT real-time factor: a 2 s cleat run (10 x 50 mm cleat, 40 km/h, fixed axle height, 4 kN) with 1 kHz
 output, on one core, side by side:
 
-    python benchmarks/bench_swift.py [--tir FILE.tir] [--repeat 5] [--against GIT_REF]
+    python benchmarks/bench_swift.py [--tir FILE.tir] [--repeat 5] [--against GIT_REF] [--cpu]
 
 Rows: ``SwiftTyre.run`` (compiled C: the whole loop of steps in one call), the FMU-style loop of single
 ``SwiftTyre.step`` calls (compiled; one StepInputs per step, as a co-simulation master would pass them), and the
 same equations on the CasADi virtual machine (not compiled, a 0.1 s run scaled to 2 s). Real-time factor =
 simulated time / wall time (the static initialisation is included in the rows). ``--against REF``: the same rows
 for the ``swift`` package of git ref REF (e.g. ``main``), timed alternately with the current code in the same run,
-and the speed-up of the current code. Compilation (cached after the first build) is printed separately.
+and the speed-up of the current code. ``--cpu``: thread CPU time instead of wall time (a busy shared machine disturbs
+it far less). Compilation (cached after the first build) is printed separately.
 """
 from __future__ import annotations
 
@@ -48,7 +49,7 @@ def _swift_at(ref: str, directory: Path):
     return importlib.import_module(name)
 
 
-def _rows(swift, model, repeat: int):
+def _rows(swift, model, repeat: int, cpu: bool):
     """Wall times [s]: build, run(), step() loop, CasADi VM run (scaled to T_END), functions to re-time them."""
     rl, _ = model.loaded_radius(4000.0)
     road = swift.Cleat(1.0, 0.05, 0.01)
@@ -64,9 +65,9 @@ def _rows(swift, model, repeat: int):
             s, _ = tyre.step(s, StepInputs(x=V * k * DT, vx=V, z=z, omega=omega), DT)
 
     vm = swift.SwiftTyre(model, road, axle="height", rim="speed", x_range=(0.0, 24.0), compiled=False)
-    t_vm = best_time(lambda: vm.run(0.1, u, DT), 1) * (T_END / 0.1)
-    return t_build, t_vm, (lambda: best_time(lambda: tyre.run(T_END, u, DT), repeat),
-                           lambda: best_time(step_loop, max(1, repeat // 2)))
+    t_vm = best_time(lambda: vm.run(0.1, u, DT), 1, cpu) * (T_END / 0.1)
+    return t_build, t_vm, (lambda: best_time(lambda: tyre.run(T_END, u, DT), repeat, cpu),
+                           lambda: best_time(step_loop, max(1, repeat // 2), cpu))
 
 
 def main(argv=None):
@@ -74,6 +75,7 @@ def main(argv=None):
     ap.add_argument("--tir", default=ROOT / "tir_files" / "car_205_60R15_mf62_swift.tir")
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--against", metavar="GIT_REF", help="also time the swift package of this git ref (e.g. main)")
+    ap.add_argument("--cpu", action="store_true", help="thread CPU time instead of wall time")
     args = ap.parse_args(argv)
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})  # one core
@@ -85,13 +87,13 @@ def main(argv=None):
     with tempfile.TemporaryDirectory() as tmp:
         if args.against:
             variants[args.against] = _swift_at(args.against, Path(tmp))
-        setups = {name: _rows(pkg, model, args.repeat) for name, pkg in variants.items()}
+        setups = {name: _rows(pkg, model, args.repeat, args.cpu) for name, pkg in variants.items()}
         times = {name: [np.inf, np.inf] for name in variants}
         for _ in range(2):  # alternate the variants, keep each one's best
             for name, (_, _, timers) in setups.items():
                 times[name] = [min(a, timer()) for a, timer in zip(times[name], timers)]
     print(f"SWIFT cleat run, {T_END:.0f} s simulated, output every {DT * 1e3:.0f} ms, RK4 with 2 substeps "
-          f"(0.50 ms), one core; real-time factor = simulated time / wall time")
+          f"(0.50 ms), one core; real-time factor = simulated time / {'CPU' if args.cpu else 'wall'} time")
     print(f"{'code':12s} {'build [s]':>9s} {'run() [ms]':>11s} {'run() RTF':>10s} {'step() [ms]':>12s} "
           f"{'step() RTF':>11s} {'VM run RTF':>11s}")
     for name, (t_build, t_vm, _) in setups.items():
