@@ -29,9 +29,9 @@ Step API (for an FMU): ``state_next, outputs = step(state, inputs, dt)``.
 Integration: classical Runge-Kutta (RK4), ``substeps`` per step, all in one compiled CasADi function (C, cached like
 :mod:`mftyre.compiled`, keyed by the parameters and the equations' source); the cam heights come from a window of
 ``window`` samples of the cam-height table around the wheel, passed by pointer (no copy), so one compiled function
-serves any road. The window must cover the wheel's travel in one compiled call plus ``TANDEM_REACH``: a longer
-:meth:`SwiftTyre.step` is split into equal parts, and :meth:`SwiftTyre.run` steps singly where a block of
-``BLOCK`` steps would travel too far, so results do not depend on speed, step size or start position.
+serves any road. The window must cover the wheel's travel in one step plus ``TANDEM_REACH``: a longer step is split
+into equal parts, so results do not depend on speed, step size or start position. :meth:`SwiftTyre.run` runs the
+whole loop of steps in C (:data:`_DRIVER`, the same steps as :meth:`SwiftTyre.step`).
 ``SwiftTyre.step_function`` is the CasADi step itself, for code generation (FMU).
 """
 from __future__ import annotations
@@ -42,12 +42,13 @@ import json
 import math
 import os
 import tempfile
+import threading
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from mftyre.compiled import compile_c, cache_dir  # the core's compiler call and cache folder
+from mftyre.compiled import cache_dir, compile_c  # the core's cache folder and compiler call
 from mftyre.backend import NUMPY
 from mftyre.errors import ModelInputError
 from mftyre.formula import vertical
@@ -60,16 +61,15 @@ from .road import Road
 __all__ = ["StepInputs", "SwiftTyre", "SimResult"]
 
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
+_LSM = _S["lsm"]
 #: The compiled functions' cache key includes the equations' source, so an edit never reuses an old library.
 _SOURCE_HASH = hashlib.sha256(b"".join(Path(__file__).with_name(n).read_bytes()
                                        for n in ("ring.py", "simulate.py"))).hexdigest()
-#: Steps per compiled call in :meth:`SwiftTyre.run`.
-BLOCK = 10
 #: Distance [m] the cam lookups may reach beyond the belt centre: half the tandem base plus the forward shift of
 #: the contact centre (0.1 m each would need a 2a of 0.24 m and a slope of 20 deg).
 TANDEM_REACH = 0.25
-#: Newton passes of the contact solution in the stepper, from the solution of the previous step.
-WARM_PASSES = 2
+#: Newton passes of the contact solution in the stepper, from the solution of the previous RK stage.
+WARM_PASSES = 1
 
 
 @dataclass(frozen=True)
@@ -122,6 +122,7 @@ class SwiftTyre:
         if axle not in ("height", "load") or rim not in ("speed", "torque"):
             raise ModelInputError(f"axle must be 'height' or 'load', rim 'speed' or 'torque'; got {axle!r}, {rim!r}")
         self.model, self.axle, self.rim = model, axle, rim
+        self._p_nominal = model.params.INFLPRES  # the default inflation pressure (the parameters are immutable)
         self.constants = RingConstants.from_model(model, axle_mass, rim_extra_inertia)
         self.cams = Cams.from_params(model.params)
         margin = window * table_dx
@@ -141,45 +142,45 @@ class SwiftTyre:
         self._rhs_window = self._rhs(self.window)
         self._rhs_warm = self._rhs(self.window, warm=True)
         self._step_fn = self._build_step()
-        self._block_fn = self._build_block(self._step_fn)
-        self._compiled = _Compiled(self._step_fn, self._key("step")) if compiled else None
-        self._compiled_block = _Compiled(self._block_fn, self._key("block")) if compiled else None
+        self._compiled = _Compiled(self, self._key("step")) if compiled else None
         self._equilibrium = None  # static equations for initial_state, built on first use
-        for compiled_fn in (self._compiled, self._compiled_block):
-            if compiled_fn is not None:
-                compiled_fn.bind(self._grid, self._h)
 
     # ------------------------------------------------------------------ equations
-    def _rhs(self, n_window, warm=False):
+    def _rhs(self, n_window, warm=False, stage=False):
         """rhs(x, u, x0w, grid, hw, h) -> (dx, out): MX graph, so that the cam-height lookups stay compiled
-        constant-time table accesses (an SX expansion would scan the whole window). ``h``: the integration step
-        that bounds the relaxation rate (0: the exact model). The contact solution: ``CONTACT_PASSES`` Newton
-        passes from an estimate, or (``warm``, the stepper) ``WARM_PASSES`` from the solution stored in the state."""
+        constant-time table accesses (an index computed from x into the window, no search). ``h``: the integration
+        step that bounds the relaxation rate (0: the exact model). The contact solution: ``CONTACT_PASSES`` Newton
+        passes from an estimate, or (``warm``, the stepper) ``WARM_PASSES`` from the solution stored in the state.
+        ``stage`` (an RK stage of the stepper): (dx, the contact solution x_c - x_b, l_s) instead, without the
+        expressions only the outputs need."""
         import casadi as ca
 
         x = ca.MX.sym("x", len(STATE_NAMES))
         u = ca.MX.sym("u", len(INPUT_NAMES))
         x0w, grid, h = ca.MX.sym("x0w"), ca.MX.sym("grid", n_window), ca.MX.sym("h")
         hw = ca.MX.sym("hw", 2 * n_window)  # cam height and road-camber slope, interleaved
-        lookup = ca.interpolant("cam", "linear", [n_window], 2, {"lookup_mode": ["exact"]})
-        xq = ca.MX.sym("xq")
-        hq = lookup(xq, grid, hw)
-        cam_fn = ca.Function("cam_height", [xq, grid, hw], [hq, ca.jacobian(hq, xq)])
 
         # the physics as SX functions (compact C), the table lookups as MX calls between them
         m, c = self.model, self.constants
         xs, us, hs = ca.SX.sym("x", len(STATE_NAMES)), ca.SX.sym("u", len(INPUT_NAMES)), ca.SX.sym("h", 7)
         hstep = ca.SX.sym("hstep")
-        start = ca.Function("contact_start", [xs, us, hs[0]], [ca.vertcat(*contact_start(m, c, xs, us, hs[0]))])
+        start = ca.Function("contact_start", [xs, us, hs[0]], [ca.vertcat(*contact_start(m, c, xs, us, hs[0]))],
+                            {"cse": True})
         geometry = ca.Function("contact_geometry", [xs, us, hs[:6]],
-                               [ca.vertcat(*contact_geometry(m, c, xs, us, *(hs[i] for i in range(6))))])
+                               [ca.vertcat(*contact_geometry(m, c, xs, us, *(hs[i] for i in range(6))))],
+                               {"cse": True})
         dx_sx, out_sx = ring_equations(m, c, xs, us, *(hs[i] for i in range(6)), axle=self.axle, rim=self.rim,
                                        h=hstep, road_camber=ca.atan(hs[6]))
-        physics = ca.Function("ring", [xs, us, hs, hstep], [dx_sx, out_sx])
+        physics = ca.Function("ring", [xs, us, hs, hstep], [dx_sx] if stage else [dx_sx, out_sx], {"cse": True})
 
-        def cam(xc):  # (height, its slope along x, road-camber slope) at xc
-            value, slope = cam_fn(xc - x0w, grid, hw)
-            return value[0], slope[0], value[1]
+        spacing = grid[1] - grid[0]
+
+        def cam(xc):  # (height, its slope along x, road-camber slope) at xc: linear between the uniform samples
+            t = (xc - x0w - grid[0]) / spacing
+            i = ca.fmin(ca.fmax(ca.floor(t), 0), n_window - 2)  # the sample left of xc (the end segments extrapolate)
+            w = t - i
+            h0, h1, c0, c1 = hw[2 * i], hw[2 * i + 2], hw[2 * i + 1], hw[2 * i + 3]
+            return h0 + w * (h1 - h0), (h1 - h0) / spacing, c0 + w * (c1 - c0)
 
         if warm:
             xc, ls, passes = x[_S["xb"]] + x[_S["xcs"]], x[_S["lsm"]], WARM_PASSES
@@ -191,46 +192,38 @@ class SwiftTyre:
             nxt = geometry(x, u, ca.vertcat(hf, dhf, hr, dhr, ls, xc))
             xc, ls = nxt[0], nxt[1]
         (hf, dhf, cf), (hr, dhr, cr) = cam(xc + ls / 2), cam(xc - ls / 2)
-        dx, out = physics(x, u, ca.vertcat(hf, dhf, hr, dhr, ls, xc, (cf + cr) / 2), h)
-        return ca.Function("rhs", [x, u, x0w, grid, hw, h], [dx, out])
+        results = physics.call([x, u, ca.vertcat(hf, dhf, hr, dhr, ls, xc, (cf + cr) / 2), h])
+        if stage:
+            return ca.Function("rhs_stage", [x, u, x0w, grid, hw, h], [results[0], ca.vertcat(xc - x[_S["xb"]], ls)])
+        return ca.Function("rhs", [x, u, x0w, grid, hw, h], results)
 
     def _build_step(self):
         import casadi as ca
 
-        rhs = self._rhs_warm
+        rhs, rhs_stage = self._rhs_warm, self._rhs(self.window, warm=True, stage=True)
         x = ca.MX.sym("x", len(STATE_NAMES))
         u = ca.MX.sym("u", len(INPUT_NAMES))
         dt, x0w = ca.MX.sym("dt"), ca.MX.sym("x0w")
         grid, hw = ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
         h = dt / self.substeps
-        f = lambda s: rhs(s, u, x0w, grid, hw, h)[0]  # noqa: E731
-        xs = x
-        for _ in range(self.substeps):  # classical RK4
-            k1 = f(xs)
-            k2 = f(xs + h / 2 * k1)
-            k3 = f(xs + h / 2 * k2)
-            k4 = f(xs + h * k3)
+
+        def with_memory(s, memory):  # s with its contact solution to start from
+            return ca.vertcat(s[:_S["xcs"]], memory, s[_S["lsm"] + 1:])
+
+        def f(s, memory):  # (dx, the contact solution) at s, its contact solution started from ``memory``
+            return rhs_stage(with_memory(s, memory), u, x0w, grid, hw, h)
+
+        xs, memory = x, x[_S["xcs"]:_S["lsm"] + 1]
+        for _ in range(self.substeps):  # classical RK4; each stage starts from the previous stage's contact
+            k1, memory = f(xs, memory)
+            k2, memory = f(xs + h / 2 * k1, memory)
+            k3, memory = f(xs + h / 2 * k2, memory)
+            k4, memory = f(xs + h * k3, memory)
             xs = xs + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        out = rhs(xs, u, x0w, grid, hw, h)[1]
+        out = rhs(with_memory(xs, memory), u, x0w, grid, hw, h)[1]
         xs = _remember_contact(xs, out)  # the contact solution for the next step
         return ca.Function("swift_step", [x, u, dt, x0w, grid, hw], [xs, out],
                            ["x", "u", "dt", "x0w", "grid", "hw"], ["x_next", "out"])
-
-    def _build_block(self, step):
-        """``BLOCK`` consecutive steps in one call (the run loop): inputs one column per step."""
-        import casadi as ca
-
-        x = ca.MX.sym("x", len(STATE_NAMES))
-        u = ca.MX.sym("u", len(INPUT_NAMES), BLOCK)
-        dt, x0w = ca.MX.sym("dt"), ca.MX.sym("x0w")
-        grid, hw = ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
-        states, outs, xs = [], [], x
-        for k in range(BLOCK):
-            xs, out = step(xs, u[:, k], dt, x0w, grid, hw)
-            states.append(xs)
-            outs.append(out)
-        return ca.Function("swift_block", [x, u, dt, x0w, grid, hw], [ca.horzcat(*states), ca.horzcat(*outs)],
-                           ["x", "u", "dt", "x0w", "grid", "hw"], ["states", "outs"])
 
     @property
     def step_function(self):
@@ -246,8 +239,8 @@ class SwiftTyre:
         prm = self.model.params
         payload = {"p": {k: repr(prm[k]) for k in prm}, "side": self.model.side, "axle": self.axle,
                    "rim": self.rim, "window": self.window, "substeps": self.substeps,
-                   "constants": repr(self.constants), "kind": kind, "block": BLOCK,
-                   "passes": (CONTACT_PASSES, WARM_PASSES),
+                   "constants": repr(self.constants), "kind": kind,
+                   "passes": (CONTACT_PASSES, WARM_PASSES), "cflags": _CFLAGS,
                    "equations": _SOURCE_HASH}
         return "swift_" + hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
@@ -276,10 +269,15 @@ class SwiftTyre:
         return self._rhs_window
 
     # ------------------------------------------------------------------ stepping
-    def _u(self, inputs: StepInputs):  # the order of the ring's input vector (_U_Y: the lateral position)
-        p = self.model.params.INFLPRES if inputs.p is None else inputs.p
-        return np.array([inputs.vx, inputs.load, inputs.torque, p, inputs.y, inputs.vy, inputs.gamma, inputs.psi,
-                         inputs.road_camber], dtype=float)
+    def _row(self, inputs: StepInputs):
+        """One step's inputs for the compiled loop: the ring's input vector (order of INPUT_NAMES), then the imposed
+        axle x, z, vz and rim spin."""
+        p = self._p_nominal if inputs.p is None else inputs.p
+        return (inputs.vx, inputs.load, inputs.torque, p, inputs.y, inputs.vy, inputs.gamma, inputs.psi,
+                inputs.road_camber, inputs.x, inputs.z, inputs.vz, inputs.omega)
+
+    def _u(self, inputs: StepInputs):  # the ring's input vector
+        return np.array(self._row(inputs)[:_NU], dtype=float)
 
     def _impose(self, state, inputs: StepInputs):
         state = np.array(state, dtype=float)
@@ -294,79 +292,72 @@ class SwiftTyre:
 
     def _store_contact(self, state, u):
         """Write the converged contact solution (x_c - x_b, l_s) of ``state`` into its memory entries."""
-        out = np.asarray(self._rhs_window(state, u, *self._rhs_args(state))[1]).ravel()
+        if self._compiled is not None:
+            out = self._compiled.rhs(state, u, self._rhs_args(state)[0], self._window_start(state[_S["xb"]]))[1]
+        else:
+            out = np.asarray(self._rhs_window(state, u, *self._rhs_args(state))[1]).ravel()
         state[_S["xcs"]] = out[OUTPUT_NAMES.index("x_c")] - state[_S["xb"]]
         state[_S["lsm"]] = out[OUTPUT_NAMES.index("ls")]
 
     def _window_start(self, xb):
         i0 = math.floor((xb - self.table.x0) / self.table.dx) - self.window // 2
         if i0 < 0 or i0 + self.window > self.table.h.size:
-            raise ModelInputError(f"wheel at x = {xb:.3f} m is outside the road table "
-                                  f"[{self.table.x0 + self.window // 2 * self.table.dx:.3f}, "
-                                  f"{self.table.x[-1] - self.window // 2 * self.table.dx:.3f}] m (x_range)")
+            raise self._outside_table(xb)
         return i0
+
+    def _outside_table(self, xb):
+        return ModelInputError(f"wheel at x = {xb:.3f} m is outside the road table "
+                               f"[{self.table.x0 + self.window // 2 * self.table.dx:.3f}, "
+                               f"{self.table.x[-1] - self.window // 2 * self.table.dx:.3f}] m (x_range)")
 
     @property
     def _reach(self):
         """Largest wheel travel [m] one compiled call may cover: the window half-width less ``TANDEM_REACH``."""
         return self.window // 2 * self.table.dx - TANDEM_REACH
 
-    def _call_step(self, state, u, dt):
-        i0 = self._window_start(state[_S["xb"]])
-        x0w = self.table.x0 + i0 * self.table.dx
-        if self._compiled is not None:
-            return self._compiled((state, u, dt, x0w), i0)
-        res = self._step_fn(state, u, dt, x0w, self._grid, self._h[2 * i0:2 * (i0 + self.window)])
-        return tuple(np.asarray(r).ravel() for r in res)
-
     def step(self, state, inputs: StepInputs, dt: float):
         """One step of length ``dt``: (state_next, outputs dict). See the module notes for the API. A step over
-        which the wheel would travel further than the cam-height window reaches is split into equal parts."""
+        which the wheel would travel further than the cam-height window reaches is split into equal parts.
+        Compiled: imposing the inputs, the window and the splitting run in C (:data:`_DRIVER`)."""
+        if self._compiled is not None:
+            if not state[_LSM] > 0:  # no contact solution stored yet (a state built by hand)
+                state = self._impose(state, inputs)
+            state, out = self._compiled.step(state, self._row(inputs), dt)
+            return state, dict(zip(OUTPUT_NAMES, out))
         state = self._impose(state, inputs)
         u = self._u(inputs)
         n = max(1, math.ceil(abs(inputs.vx) * dt / self._reach))
         for _ in range(n):
-            state, out = self._call_step(state, u, dt / n)
+            i0 = self._window_start(state[_S["xb"]])
+            x0w = self.table.x0 + i0 * self.table.dx
+            res = self._step_fn(state, u, dt / n, x0w, self._grid, self._h[2 * i0:2 * (i0 + self.window)])
+            state, out = (np.asarray(r).ravel() for r in res)
         return state, dict(zip(OUTPUT_NAMES, out))
 
     def run(self, t_end: float, inputs, dt: float = 1e-3) -> SimResult:
         """Fixed-step run from the static equilibrium. ``inputs``: a :class:`StepInputs` (constant speeds; the
-        imposed positions advance with them) or a callable ``t -> StepInputs``; outputs every ``dt``.
-        Runs ``BLOCK`` steps per compiled call (the same steps as :meth:`step`)."""
-        n_blocks = int(np.ceil(round(t_end / dt) / BLOCK))
-        n = n_blocks * BLOCK
+        imposed positions advance with them) or a callable ``t -> StepInputs``; outputs every ``dt``. Each step
+        is :meth:`step` with the inputs at its start; compiled, the whole loop runs in C."""
+        n = int(round(t_end / dt))
         get = inputs if callable(inputs) else _advancing(inputs)
-        state = self.initial_state(get(0.0))
+        first = get(0.0)
+        state = self.initial_state(first)
         states, outs = np.empty((n + 1, len(STATE_NAMES))), np.empty((n + 1, len(OUTPUT_NAMES)))
-        states[0], outs[0] = state, self.outputs(state, get(0.0))
-        u_const = None if callable(inputs) else np.tile(self._u(inputs)[:, None], BLOCK)
-        for b in range(n_blocks):
-            t0 = b * BLOCK * dt
-            if u_const is None:
-                steps = [get(t0 + k * dt) for k in range(BLOCK)]
-                u, first = np.column_stack([self._u(v) for v in steps]), steps[0]
-            else:  # constant speeds: only the imposed lateral position advances within the block
-                u, first = u_const.copy(), get(t0)
-                u[_U_Y] = inputs.y + inputs.vy * (t0 + dt * np.arange(BLOCK))
-            state = self._impose(state, first)
-            if max(abs(u[0])) * BLOCK * dt > self._reach:  # beyond the window in one call: single steps
-                for k in range(BLOCK):
-                    state, ys = self.step(state, get(t0 + k * dt), dt)
-                    states[1 + b * BLOCK + k], outs[1 + b * BLOCK + k] = state, np.fromiter(ys.values(), float)
-                continue
-            i0 = self._window_start(state[_S["xb"]])
-            x0w = self.table.x0 + i0 * self.table.dx
-            if self._compiled_block is not None:
-                xs, ys = self._compiled_block((state, u, dt, x0w), i0)
-            else:
-                res = self._block_fn(state, u, dt, x0w, self._grid, self._h[2 * i0:2 * (i0 + self.window)])
-                xs, ys = (np.asarray(r) for r in res)
-            xs = xs.reshape(BLOCK, len(STATE_NAMES)) if xs.ndim == 1 else xs.T
-            ys = ys.reshape(BLOCK, len(OUTPUT_NAMES)) if ys.ndim == 1 else ys.T
-            states[1 + b * BLOCK:1 + (b + 1) * BLOCK], outs[1 + b * BLOCK:1 + (b + 1) * BLOCK] = xs, ys
-            state = xs[-1]
-        keep = int(round(t_end / dt)) + 1
-        return SimResult(dt * np.arange(keep), states[:keep], dict(zip(OUTPUT_NAMES, outs[:keep].T)))
+        states[0], outs[0] = state, self.outputs(state, first)
+        if self._compiled is None:
+            for k in range(n):
+                state, out = self.step(state, get(k * dt), dt)
+                states[k + 1], outs[k + 1] = state, list(out.values())
+        else:
+            if callable(inputs):
+                rows = np.array([self._row(get(k * dt)) for k in range(n)], dtype=float).reshape(n, _NI)
+            else:  # constant speeds: the imposed positions advance as in _advancing
+                t = dt * np.arange(n)
+                rows = np.tile(np.array(self._row(inputs), dtype=float), (n, 1))
+                for i, speed in ((_U_Y, inputs.vy), (_NU, inputs.vx), (_NU + 1, inputs.vz)):
+                    rows[:, i] += speed * t
+            states[1:], outs[1:] = self._compiled.run(state, rows, dt)
+        return SimResult(dt * np.arange(n + 1), states, dict(zip(OUTPUT_NAMES, outs.T)))
 
     def outputs(self, state, inputs: StepInputs) -> np.ndarray:
         """Outputs at ``state`` (no time step), in the order of OUTPUT_NAMES."""
@@ -496,14 +487,22 @@ class SwiftTyre:
             d = self._rhs_window(xs, us, x0w, grid, hw, 0.0)[0][eqs]
             self._equilibrium = ca.Function("equilibrium", [xs, us, x0w, grid, hw],
                                             [d, ca.jacobian(d, xs)[:, unknown]])
-        u, window = self._u(inputs), self._rhs_args(s)[:3]
-        for _ in range(iterations):
-            r, jac = (np.asarray(v) for v in self._equilibrium(s, u, *window))
-            r = r.ravel()
-            step = np.linalg.lstsq(jac, -r, rcond=None)[0]
+        u, window, i0 = self._u(inputs), self._rhs_args(s)[:3], self._window_start(s[_S["xb"]])
+        inverse, last = None, np.inf
+        for _ in range(iterations):  # Newton; compiled, the Jacobian is kept while the steps shrink tenfold
+            if inverse is None or self._compiled is None:
+                r, jac = (np.asarray(v) for v in self._equilibrium(s, u, *window))
+                inverse = np.linalg.pinv(jac, rtol=np.finfo(float).eps * max(jac.shape))  # least squares
+            else:
+                r = self._compiled.rhs(s, u, window[0], i0)[0][eqs]
+            step = -inverse @ r.ravel()
             s[unknown] += step
-            if np.max(np.abs(step)) < 1e-13:
+            size = np.max(np.abs(step))
+            if size < 1e-13:
                 break
+            if not size < 0.1 * last:
+                inverse = None
+            last = size
         self._store_contact(s, u)
         return s
 
@@ -516,7 +515,9 @@ def _remember_contact(x, out):
     return ca.vertcat(x[:_S["xcs"]], memory, x[_S["lsm"] + 1:])
 
 
-_U_Y = 4  # index of the lateral position y in the input vector of :meth:`SwiftTyre._u`
+_NU = len(INPUT_NAMES)
+_U_Y = INPUT_NAMES.index("y")  # the lateral position in the input vector
+_NI = _NU + 4  # one row of :meth:`SwiftTyre._row`
 
 
 def _advancing(inputs: StepInputs):
@@ -526,9 +527,60 @@ def _advancing(inputs: StepInputs):
     return get
 
 
-def _compile_mx(function, key: str) -> Path:
-    """C code of the MX ``function`` as it is (no SX expansion: the table lookup stays constant-time),
-    compiled with the system compiler and cached in :func:`mftyre.compiled.cache_dir`."""
+#: The stepping loop around the generated ``swift_step`` (appended to its C file): per step, the imposed axle x,
+#: z, vz and rim spin are written into the state (as :meth:`SwiftTyre._impose`), the step is split into
+#: equal parts where the wheel would travel further than ``reach`` (cfg[3]), and the window of the cam table
+#: (``table``, cfg: x0, dx, samples, reach) starts ``WINDOW / 2`` samples behind the belt centre. ``in``: one row
+#: of NI values per step (:meth:`SwiftTyre._row`); ``scal``: dt, number of steps; all pointers in one array ``p`` (one
+#: argument: the cheapest ctypes call). Returns 0, k + 1 when step k
+#: leaves the table, -1 for a non-finite speed or step, -2 for an evaluation error.
+_DRIVER = """
+#define NX %(nx)d
+#define NY %(ny)d
+#define NU %(nu)d
+#define NI %(ni)d
+#define WINDOW %(window)d
+CASADI_SYMBOL_EXPORT int swift_run(void** p) {
+  const casadi_real *x_init = p[0], *in = p[1], *scal = p[2], *cfg = p[3], *grid = p[4], *table = p[5];
+  casadi_real *xs = p[6], *ys = p[7], *w = p[11], s[NX], dt = scal[0], h, x0w, parts, start;
+  const casadi_real** arg = p[8];
+  casadi_real** res = p[9];
+  casadi_int* iw = p[10];
+  casadi_int n = (casadi_int) scal[1], k, j, m, i;
+  for (i = 0; i < NX; ++i) s[i] = x_init[i];
+  for (k = 0; k < n; ++k) {
+    const casadi_real* u = in + k * NI;
+    s[%(xa)d] = u[NU];
+    if (%(height)d) { s[%(za)d] = u[NU + 1]; s[%(vza)d] = u[NU + 2]; }
+    if (%(speed)d) s[%(oma)d] = u[NU + 3];
+    parts = ceil(fabs(u[0]) * dt / cfg[3]);
+    if (!(parts < 1e6)) return -1;
+    m = parts < 1 ? 1 : (casadi_int) parts;
+    h = dt / m;
+    for (j = 0; j < m; ++j) {
+      start = floor((s[%(xb)d] - cfg[0]) / cfg[1]) - WINDOW / 2;
+      if (!(start >= 0 && start + WINDOW <= cfg[2])) return k + 1;
+      x0w = cfg[0] + start * cfg[1];
+      arg[0] = s; arg[1] = u; arg[2] = &h; arg[3] = &x0w; arg[4] = grid; arg[5] = table + 2 * (casadi_int) start;
+      res[0] = xs + k * NX; res[1] = ys + k * NY;
+      if (swift_step(arg, res, iw, w, 0)) return -2;
+      for (i = 0; i < NX; ++i) s[i] = xs[k * NX + i];
+    }
+  }
+  return 0;
+}
+"""
+
+
+#: Compiler flags of the SWIFT library: ~15 % fewer instructions per step than -O2 (-fno-math-errno: sqrt and
+#: friends inline, errno is never read; gnu89: CasADi's fmax/fmin become inlined comparisons instead of libm calls,
+#: equal for all non-NaN arguments); portable (no -march), as the FMU ships the library.
+_CFLAGS = ("-O3", "-fno-math-errno", "-std=gnu89")
+
+
+def _compile(tyre, key: str) -> Path:
+    """C code of the MX step as it is (no SX expansion) plus :data:`_DRIVER`, compiled with the system compiler
+    and cached in :func:`mftyre.compiled.cache_dir`."""
     import casadi as ca
 
     directory = cache_dir()
@@ -538,47 +590,106 @@ def _compile_mx(function, key: str) -> Path:
         return library
     with tempfile.TemporaryDirectory(dir=directory) as tmp:
         gen = ca.CodeGenerator(f"{key[:40]}.c", {"with_header": False})
-        gen.add(function)
-        compile_c(Path(gen.generate(str(Path(tmp)) + os.sep)), library)
+        for function in (tyre.step_function, tyre.rhs_function):
+            gen.add(function)
+        source = Path(gen.generate(str(Path(tmp)) + os.sep))
+        with source.open("a") as f:
+            f.write(_DRIVER % dict(nx=len(STATE_NAMES), ny=len(OUTPUT_NAMES), nu=_NU, ni=_NI, window=tyre.window,
+                                   height=int(tyre.axle == "height"), speed=int(tyre.rim == "speed"), **_S))
+        compile_c(source, library, flags=(*_CFLAGS, "-fPIC", "-shared"))
     return library
 
 
 class _Compiled:
-    """A compiled step/block function called through ctypes: arguments 0-3 are copied in, the cam-height grid
-    and window (arguments 4, 5) are passed by pointer into the whole table (:meth:`bind`)."""
+    """The compiled step and loop (:data:`_DRIVER`) of one tyre, called through ctypes with buffers of its own;
+    a lock serialises the calls of threads sharing the tyre. The cam grid and table are passed by pointer."""
 
-    def __init__(self, function, key):
-        self._lib = ctypes.CDLL(str(_compile_mx(function, key)))
-        fn, work = getattr(self._lib, function.name()), getattr(self._lib, f"{function.name()}_work")
+    def __init__(self, tyre, key):
+        self._lib = ctypes.CDLL(str(_compile(tyre, key)))
         ll = ctypes.c_longlong
         sz = [ll() for _ in range(4)]
+        work = self._lib.swift_step_work
         work.argtypes = [ctypes.POINTER(ll)] * 4
         work(*(ctypes.byref(v) for v in sz))
         sz_arg, sz_res, sz_iw, sz_w = (v.value for v in sz)
-        self._in = [np.zeros(function.nnz_in(i)) for i in range(4)]
-        self._res_buf = [np.zeros(function.nnz_out(i)) for i in range(2)]
-        self._shapes = [function.size_out(i) for i in range(2)]
-        self._matrix_in = [function.size_in(i)[1] > 1 for i in range(4)]
-        self._arg = (ctypes.c_void_p * max(sz_arg, 6))(*[a.ctypes.data for a in self._in])
-        self._res = (ctypes.c_void_p * max(sz_res, 2))(*[r.ctypes.data for r in self._res_buf])
-        self._iw, self._w = (ll * max(sz_iw, 1))(), (ctypes.c_double * max(sz_w, 1))()
-        fn.argtypes = [ctypes.c_void_p] * 4 + [ctypes.c_int]
-        fn.restype = ctypes.c_int
-        self._fn = fn
-        self._args = (ctypes.addressof(self._arg), ctypes.addressof(self._res), ctypes.addressof(self._iw),
-                      ctypes.addressof(self._w), 0)
+        self._work = ((ctypes.c_void_p * max(sz_arg, 6))(), (ctypes.c_void_p * max(sz_res, 2))(),
+                      (ll * max(sz_iw, 1))(), (ctypes.c_double * max(sz_w, 1))())
+        self._tyre, self._lock = tyre, threading.Lock()
+        self._cfg = np.array([tyre.table.x0, tyre.table.dx, tyre.table.h.size, tyre._reach])
+        self._fn = self._lib.swift_run  # called with one ctypes array of 12 pointers (no argtypes: no conversion)
+        # one step (step()): state in, inputs row + dt + 1, state and outputs out
+        self._x, self._in = np.zeros(len(STATE_NAMES)), (ctypes.c_double * (_NI + 2))()  # ctypes: fastest to fill
+        self._x_next, self._y = np.zeros(len(STATE_NAMES)), np.zeros(len(OUTPUT_NAMES))
+        self._in[_NI + 1] = 1.0
+        at = ctypes.addressof(self._in)
+        self._step_args = self._pointers(self._x.ctypes.data, at, at + 8 * _NI, self._x_next.ctypes.data,
+                                         self._y.ctypes.data)
+        self._rhs = _Generated(self._lib, tyre.rhs_function)
 
-    def bind(self, grid, table):
-        """Point arguments 4 and 5 at the local grid and the whole (interleaved) cam table, once: both arrays must
-        stay alive and unmoved while this function is used (the tyre holds them)."""
-        self._arg[4] = grid.ctypes.data
-        self._table = table.ctypes.data
+    def rhs(self, state, u, x0w, i0):
+        """The right-hand side (:attr:`SwiftTyre.rhs_function`, the exact model: h = 0) on the cam window that
+        starts at sample ``i0`` (x = ``x0w``): (dx, out)."""
+        with self._lock:
+            return self._rhs((state, u, x0w, None, None, 0.0), self._tyre._grid.ctypes.data,
+                             self._tyre._h.ctypes.data + 16 * i0)
 
-    def __call__(self, values, i0):
-        for buf, v, matrix in zip(self._in, values, self._matrix_in):
-            buf[:] = np.ravel(v, order="F") if matrix else v  # CasADi stores column-major
-        self._arg[5] = self._table + 16 * i0  # two interleaved columns per sample
-        if self._fn(*self._args):
+    def _pointers(self, x, rows, scal, xs, ys):  # the driver's argument array (addresses of the buffers)
+        t = self._tyre
+        return (ctypes.c_void_p * 12)(x, rows, scal, self._cfg.ctypes.data, t._grid.ctypes.data, t._h.ctypes.data,
+                                      xs, ys, *(ctypes.addressof(v) for v in self._work))
+
+    def _check(self, code, xb):
+        if code > 0:
+            raise self._tyre._outside_table(xb)
+        if code == -1:
+            raise ModelInputError("the speed vx and the step dt must be finite")
+        if code:
             raise ArithmeticError("compiled SWIFT step reported an evaluation error")
-        return tuple(r.reshape(shape, order="F").copy().squeeze() if shape[1] > 1 else r.copy()
-                     for r, shape in zip(self._res_buf, self._shapes))
+
+    def step(self, state, row, dt):
+        """One step: (state_next, outputs as a list)."""
+        with self._lock:
+            self._x[:] = state
+            self._in[:_NI + 1] = *row, dt
+            code = self._fn(self._step_args)
+            if code:
+                self._check(code, self._x[_S["xb"]])
+            return self._x_next.copy(), self._y.tolist()
+
+    def run(self, state, rows, dt):
+        """``len(rows)`` steps from ``state``: (states, outputs) after each step."""
+        n = len(rows)
+        x, rows = np.array(state, dtype=float), np.ascontiguousarray(rows, dtype=float)
+        xs, ys, scal = np.empty((n, len(STATE_NAMES))), np.empty((n, len(OUTPUT_NAMES))), np.array([dt, n])
+        with self._lock:
+            code = self._fn(self._pointers(*(a.ctypes.data for a in (x, rows, scal, xs, ys))))
+        self._check(code, (xs[code - 2] if code > 1 else x)[_S["xb"]])
+        return xs, ys
+
+
+class _Generated:
+    """A generated function of the tyre's library with buffers of its own (the caller holds the tyre's lock);
+    arguments 3 and 4 (the cam grid and window) are passed by pointer."""
+
+    def __init__(self, lib, function):
+        self._fn = getattr(lib, function.name())
+        self._fn.argtypes = [ctypes.c_void_p] * 4 + [ctypes.c_int]
+        self._fn.restype = ctypes.c_int
+        n_in, n_out = function.n_in(), function.n_out()
+        self._in = [np.zeros(function.nnz_in(i)) for i in range(n_in)]
+        self._out = [np.zeros(function.nnz_out(i)) for i in range(n_out)]
+        self._shapes = [function.size_out(i) for i in range(n_out)]
+        self._arg = (ctypes.c_void_p * max(function.sz_arg(), n_in))(*[a.ctypes.data for a in self._in])
+        self._res = (ctypes.c_void_p * max(function.sz_res(), n_out))(*[r.ctypes.data for r in self._out])
+        self._iw = (ctypes.c_longlong * max(function.sz_iw(), 1))()
+        self._w = (ctypes.c_double * max(function.sz_w(), 1))()
+
+    def __call__(self, args, grid, window):
+        for i, (buf, value) in enumerate(zip(self._in, args)):
+            if i not in (3, 4):
+                buf[:] = value
+        self._arg[3], self._arg[4] = grid, window
+        if self._fn(self._arg, self._res, self._iw, self._w, 0):
+            raise ArithmeticError("compiled SWIFT function reported an evaluation error")
+        return [r.reshape(shape, order="F").copy() if shape[1] > 1 else r.copy()
+                for r, shape in zip(self._out, self._shapes)]

@@ -374,7 +374,7 @@ def export_swift_libraries(model, directory) -> dict:
         for rim in ("speed", "torque"):
             tyre = SwiftTyre(model, Flat(), axle=axle, rim=rim, x_range=(0.0, 1.0), table_dx=SWIFT_TABLE_DX,
                              window=SWIFT_WINDOW, compiled=True)
-            for lib in (tyre._compiled._lib, tyre._compiled_block._lib):
+            for lib in (tyre._compiled._lib,):
                 src = Path(lib._name)
                 shutil.copy2(src, directory / src.name)
                 names.append(src.name)
