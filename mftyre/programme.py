@@ -119,6 +119,21 @@ def cluster_levels(values, *, scatter: float | None = None):
     return labels, np.array(out_centres)
 
 
+def _assign(x, lab, centres):
+    """Labels of all values: those of the held values, and for the others the nearest level when within the
+    spread (4 robust standard deviations, at least the level's own range) of its held values."""
+    out = lab.copy()
+    free = (lab < 0) & np.isfinite(x)
+    if centres.size == 0 or not free.any():
+        return out
+    near = _nearest(x[free], centres)
+    reach = np.array([max(4.0 * 1.4826 * float(np.median(np.abs(x[lab == k] - centres[k]))),
+                          float(np.ptp(x[lab == k]))) if np.any(lab == k) else 0.0 for k in range(centres.size)])
+    ok = np.abs(x[free] - centres[near]) <= reach[near]
+    out[np.flatnonzero(free)[ok]] = near[ok]
+    return out
+
+
 def _nearest(x, centres):
     if centres.size == 0:
         return np.full(x.size, -1, int)
@@ -266,14 +281,60 @@ def _reversals(d: np.ndarray) -> int:
     return int(np.sum(moving[1:] != moving[:-1])) if moving.size > 1 else 0
 
 
+def _local_range(x: np.ndarray, w: int) -> np.ndarray:
+    """Range of ``x`` (median-filtered over w + 1 samples against noise) in the centred window of +-w samples."""
+    from scipy.ndimage import maximum_filter1d, median_filter, minimum_filter1d
+
+    if w > 1:
+        x = median_filter(x, size=w + 1, mode="nearest")
+    size = 2 * w + 1
+    return maximum_filter1d(x, size, mode="nearest") - minimum_filter1d(x, size, mode="nearest")
+
+
+def _held(x: np.ndarray, w: int) -> np.ndarray:
+    """Samples at which ``x`` is held (its local range within 5 short-term standard deviations and 2 % of its
+    range), all samples when fewer than 50 or when under 20 % would be held (point data stepping every row)."""
+    ok = np.isfinite(x)
+    if x.size < 50 or not ok.all() or np.ptp(x) == 0:
+        return ok
+    held = _local_range(x, w) <= max(5.0 * _short_term_scatter(x), 0.02 * float(np.ptp(x)))
+    return held if held.mean() >= 0.2 else ok
+
+
+def _moving_channel(channels: dict, w: int) -> np.ndarray:
+    """Per row: index (1-based, in the order of ``channels``) of the slip or speed channel changing most
+    relative to its sweep threshold over +-w rows (at least a tenth of the threshold), 0 where none moves."""
+    score = np.stack([_local_range(x, w) / SWEEP_THRESHOLD[ch] for ch, x in channels.items()], axis=1)
+    best = np.argmax(score, axis=1)
+    return np.where(score[np.arange(len(best)), best] > 0.1, best + 1, 0)
+
+
+def _merge_gaps(label: np.ndarray, short: int) -> np.ndarray:
+    """Runs of ``label`` between two runs of the same label are absorbed by them when shorter than ``short``
+    (a reversal, a blip of noise) or, when nothing moves in them, shorter than both neighbours (a dwell at the
+    end of a sweep)."""
+    label = label.copy()
+    changed = True
+    while changed:
+        changed = False
+        runs = _runs(label[:, None])
+        for i in range(1, len(runs) - 1):
+            (a0, a1), (b0, b1), (c0, c1) = runs[i - 1], runs[i], runs[i + 1]
+            if label[a0] != label[c0] or label[a0] == 0:
+                continue
+            m = b1 - b0
+            if m < short or (label[b0] == 0 and m <= min(a1 - a0, c1 - c0)):
+                label[b0:b1] = label[a0]
+                changed = True
+                break
+    return label
+
+
 def recognise(data: TyreData) -> Programme:
     """Recognise the test programme of ``data`` (rows in measurement order): levels, segments, sweeps with
     their direction, steady and transient rows, and what is fittable. See the module text for the rules."""
     n = len(data)
     cond_ch = ("FZ", "P", "IA")
-    labels, levels = {}, {}
-    for ch in cond_ch:
-        labels[ch], levels[ch] = cluster_levels(data.array(ch))
     sample_rate = None
     if "TIME" in data.frame.columns:
         t = pd.to_numeric(data.frame["TIME"], errors="coerce").to_numpy(float)
@@ -282,6 +343,20 @@ def recognise(data: TyreData) -> Programme:
         if dt.size:
             sample_rate = 1.0 / float(np.median(dt))
     short_run = max(2, int(0.002 * n)) if sample_rate is None or sample_rate < 20 else max(50, int(0.002 * n))
+    steady_run = short_run if sample_rate is None or sample_rate < 20 else 4 * short_run  # 2 s at 100 Hz
+    w = max(1, short_run // 2)  # half-window of the local change (0.25 s at 100 Hz)
+    labels, levels = {}, {}
+    for ch in cond_ch:
+        x = data.array(ch)
+        held = _held(x, w)
+        lab, centres = cluster_levels(np.where(held, x, np.nan))
+        # rows not held join a level when they lie within its spread, unless most of their run is not held
+        # (a ramp passing through the level)
+        lab = _assign(x, lab, centres)
+        for a, b in _runs(lab[:, None]):
+            if lab[a] >= 0 and held[a:b].mean() < 0.5:
+                lab[a:b] = -1
+        labels[ch], levels[ch] = lab, centres
     key = np.stack([labels[ch] for ch in cond_ch], axis=1) if n else np.zeros((0, 3), int)
     runs = _runs(key)
     for i, (start, stop) in enumerate(runs):
@@ -301,23 +376,23 @@ def recognise(data: TyreData) -> Programme:
     n_sweeps = 0
     pieces = []
     for start, stop in _runs(key):
-        # split by the held slip channel's levels (slip-ratio sweeps at several slip angles)
+        # within a stay at one condition: runs of the channel that moves (slip angle, slip ratio or speed),
+        # each split further by the levels of the slip channel held (slip-ratio sweeps at several slip angles)
         sub = slice(start, stop)
-        split_by = None
-        for ch, x in (("SA", sa), ("SL", sl)):
-            other = sl if ch == "SA" else sa
-            other_ch = "SL" if ch == "SA" else "SA"
-            if np.ptp(x[sub]) > SWEEP_THRESHOLD[ch] and np.ptp(other[sub]) > SWEEP_THRESHOLD[other_ch]:
-                split_by = "SA" if np.ptp(sl[sub]) / SWEEP_THRESHOLD["SL"] > np.ptp(sa[sub]) / SWEEP_THRESHOLD["SA"] \
-                    else "SL"
-        if split_by is None:
-            pieces.append((start, stop))
-            continue
-        held = sa if split_by == "SA" else sl
-        lab, _ = cluster_levels(held[sub])
-        for a, b in _runs(lab[:, None]):
-            pieces.append((start + a, start + b))
+        moving = _merge_gaps(_moving_channel({"SA": sa[sub], "SL": sl[sub], "VX": vx[sub]}, w), short_run)
+        for a, b in _runs(moving[:, None]):
+            held_ch = {1: sl, 2: sa}.get(int(moving[a]))
+            if held_ch is None or b - a < 4:
+                pieces.append((start + a, start + b))
+                continue
+            hx = held_ch[start + a:start + b]
+            thr = SWEEP_THRESHOLD["SL" if held_ch is sl else "SA"]
+            lab = cluster_levels(hx)[0] if np.ptp(hx) > thr else np.zeros(b - a, int)
+            lab = _merge_gaps(lab + 1, short_run)  # 0: off-level
+            for c, d in _runs(lab[:, None]):
+                pieces.append((start + a + c, start + a + d))
     widest = {ch: max([np.ptp(x[a:b]) for a, b in pieces] + [0.0]) for ch, x in (("SA", sa), ("SL", sl), ("VX", vx))}
+    widest["FZ"] = max([np.ptp(fz[a:b]) for a, b in pieces if np.any(key[a] < 0)] + [0.0])
     for seg, (start, stop) in enumerate(pieces):
         sub = slice(start, stop)
         m = stop - start
@@ -328,7 +403,7 @@ def recognise(data: TyreData) -> Programme:
         # a sweep spans at least half the widest range of its channel; a shorter move (e.g. steering to the
         # slip angle of a combined-slip test) is a transition
         score = {ch: ranges[ch] / thresholds[ch] for ch in ranges if ranges[ch] > thresholds[ch]
-                 and (ch == "FZ" or ranges[ch] >= 0.5 * widest[ch])}
+                 and ranges[ch] >= 0.5 * widest[ch]}
         if not off_level:
             score.pop("FZ", None)
         swept = max(score, key=score.get) if score else None
@@ -336,7 +411,7 @@ def recognise(data: TyreData) -> Programme:
         if swept is None and (off_level or moving):
             k = "transition"  # off-level, or a slip or speed changing without being a sweep
         elif swept is None:
-            k = "steady" if m >= short_run else "transition"  # too brief to be a measured steady point
+            k = "steady" if m >= steady_run else "transition"  # too brief to be a measured steady point
         elif off_level and swept != "FZ" and m < short_run:
             k = "transition"
         else:
