@@ -134,6 +134,45 @@ def _assign(x, lab, centres):
     return out
 
 
+def _stays(x, lab, centres, *, penalty, block):
+    """Labels of a time series of a condition channel by its stays at the levels: the sequence of states
+    (a level or off-level, -1) that minimises the misfit, ((x - centre) / spread)^2 / 2 at a level (at most
+    12.5, 5 spreads) and 4.5 off-level (3 spreads), plus ``penalty`` per change of state (Viterbi, on medians of
+    ``block`` samples). A wander of the load scatter towards the next level does not end a stay; a ramp that
+    passes a level quickly does not make one. ``lab``: labels of the held samples (their spread per level)."""
+    n = x.size
+    spread = np.array([1.4826 * float(np.median(np.abs(x[lab == k] - c))) if np.any(lab == k) else 0.0
+                       for k, c in enumerate(centres)])
+    gaps = np.diff(np.sort(centres))
+    spread = np.maximum(spread, 1e-9 * max(float(np.max(np.abs(centres))), 1e-300))
+    if gaps.size:
+        spread = np.maximum(spread, 1e-3 * float(gaps.min()))
+    m = -(-n // block)
+    pad = np.concatenate([x, np.full(m * block - n, np.nan)]).reshape(m, block)
+    with np.errstate(all="ignore"):
+        xm = np.nanmedian(pad, axis=1)
+    cost = np.minimum(0.5 * ((xm[:, None] - centres[None, :]) / spread[None, :]) ** 2, 12.5)
+    cost = np.concatenate([cost, np.full((m, 1), 4.5)], axis=1)
+    cost[~np.isfinite(xm)] = 0.0
+    cost[~np.isfinite(xm), -1] = -1.0  # NaN: off-level
+    cost *= block
+    k = cost.shape[1]
+    back = np.zeros((m, k), np.int32)
+    total = cost[0].copy()
+    for t in range(1, m):
+        best = int(np.argmin(total))
+        switch = total[best] + penalty
+        stay = total <= switch
+        back[t] = np.where(stay, np.arange(k), best)
+        total = np.where(stay, total, switch) + cost[t]
+    state = np.empty(m, np.int32)
+    state[-1] = int(np.argmin(total))
+    for t in range(m - 1, 0, -1):
+        state[t - 1] = back[t, state[t]]
+    out = np.where(state == k - 1, -1, state)
+    return np.repeat(out, block)[:n]
+
+
 def _nearest(x, centres):
     if centres.size == 0:
         return np.full(x.size, -1, int)
@@ -330,6 +369,14 @@ def _merge_gaps(label: np.ndarray, short: int) -> np.ndarray:
     return label
 
 
+def _up_and_down(x: np.ndarray) -> bool:
+    """Whether ``x`` goes up and down (or down and up), each way over at least 3/4 of its range (unloading
+    to change the pressure and loading to the next condition is no load sweep)."""
+    half = 0.75 * float(np.ptp(x))
+    i, j = int(np.argmax(x)), int(np.argmin(x))
+    return any(np.ptp(x[:k + 1]) >= half and np.ptp(x[k:]) >= half for k in (i, j))
+
+
 def recognise(data: TyreData) -> Programme:
     """Recognise the test programme of ``data`` (rows in measurement order): levels, segments, sweeps with
     their direction, steady and transient rows, and what is fittable. See the module text for the rules."""
@@ -343,6 +390,7 @@ def recognise(data: TyreData) -> Programme:
         if dt.size:
             sample_rate = 1.0 / float(np.median(dt))
     short_run = max(2, int(0.002 * n)) if sample_rate is None or sample_rate < 20 else max(50, int(0.002 * n))
+    time_series = sample_rate is not None and sample_rate >= 20
     steady_run = short_run if sample_rate is None or sample_rate < 20 else 4 * short_run  # 2 s at 100 Hz
     w = max(1, short_run // 2)  # half-window of the local change (0.25 s at 100 Hz)
     labels, levels = {}, {}
@@ -350,22 +398,33 @@ def recognise(data: TyreData) -> Programme:
         x = data.array(ch)
         held = _held(x, w)
         lab, centres = cluster_levels(np.where(held, x, np.nan))
-        # rows not held join a level when they lie within its spread, unless most of their run is not held
-        # (a ramp passing through the level)
-        lab = _assign(x, lab, centres)
+        # rows not held join a level when they lie within its spread, unless their run is a ramp passing
+        # through the level: mostly not held, and from its first fifth to its last it crosses half its range
+        if time_series and centres.size:
+            lab = _stays(x, lab, centres, penalty=4.0 * short_run, block=max(1, short_run // 5))
+        else:
+            lab = _assign(x, lab, centres)
         for a, b in _runs(lab[:, None]):
-            if lab[a] >= 0 and held[a:b].mean() < 0.5:
+            fifth = max(1, (b - a) // 5)
+            if lab[a] >= 0 and held[a:b].mean() < 0.5 and abs(np.median(x[b - fifth:b]) - np.median(
+                    x[a:a + fifth])) >= 0.5 * np.ptp(x[a:b]):
                 lab[a:b] = -1
+        # an excursion of the scatter beyond a level's spread that stays nearest to it belongs to the stay
+        runs = _runs(lab[:, None])
+        for (a0, _), (a, b), (c, _) in zip(runs[:-2], runs[1:-1], runs[2:]):
+            if lab[a] < 0 and lab[a0] == lab[c] >= 0 and np.all(_nearest(x[a:b], centres) == lab[a0]):
+                lab[a:b] = lab[a0]
         labels[ch], levels[ch] = lab, centres
     key = np.stack([labels[ch] for ch in cond_ch], axis=1) if n else np.zeros((0, 3), int)
     runs = _runs(key)
+    long_runs = [i for i, (a, b) in enumerate(runs) if b - a >= steady_run]
+    for i, j in zip(long_runs[:-1], long_runs[1:]):
+        before, after = key[runs[i][0]], key[runs[j][0]]
+        if j > i + 1 and np.array_equal(before, after) and np.all(before >= 0):
+            key[runs[i][1]:runs[j][0]] = before  # brief excursions off a level (scatter) do not end the stay
     for i, (start, stop) in enumerate(runs):
-        if not (0 < i < len(runs) - 1 and stop - start < short_run):
-            continue
-        before, after = key[runs[i - 1][0]], key[runs[i + 1][0]]
-        if np.array_equal(before, after) and np.all(before >= 0):
-            key[start:stop] = before  # a brief excursion off a level (scatter) does not end the stay there
-        elif key[start, 0] >= 0 and before[0] < 0 and after[0] < 0:
+        if 0 < i < len(runs) - 1 and stop - start < short_run and key[start, 0] >= 0 \
+                and key[runs[i - 1][0], 0] < 0 and key[runs[i + 1][0], 0] < 0:
             key[start:stop, 0] = -1  # a ramp passing through a level is no stay at that level
     seg_id = np.full(n, -1, int)
     sweep_id = np.full(n, -1, int)
@@ -404,16 +463,18 @@ def recognise(data: TyreData) -> Programme:
         # slip angle of a combined-slip test) is a transition
         score = {ch: ranges[ch] / thresholds[ch] for ch in ranges if ranges[ch] > thresholds[ch]
                  and ranges[ch] >= 0.5 * widest[ch]}
-        if not off_level:
-            score.pop("FZ", None)
+        # slip and speed sweeps run at held conditions; a load sweep goes up and down off the load levels over
+        # at least their span (a one-way load change is the ramp between two conditions, unloading to change
+        # the pressure a dip)
+        score = {ch: v for ch, v in score.items() if (ch == "FZ") == off_level}
+        if "FZ" in score and not (_up_and_down(fz[sub]) and ranges["FZ"] >= np.ptp(levels["FZ"])):
+            score.pop("FZ")
         swept = max(score, key=score.get) if score else None
         moving = any(ranges[ch] > SWEEP_THRESHOLD[ch] for ch in ("SA", "SL", "VX"))
         if swept is None and (off_level or moving):
             k = "transition"  # off-level, or a slip or speed changing without being a sweep
         elif swept is None:
             k = "steady" if m >= steady_run else "transition"  # too brief to be a measured steady point
-        elif off_level and swept != "FZ" and m < short_run:
-            k = "transition"
         else:
             k = _KIND[swept]
         kind[sub] = k
@@ -431,6 +492,15 @@ def recognise(data: TyreData) -> Programme:
                          SL=float(np.median(sl[sub])), VX=float(np.median(vx[sub]))))
     sweeps = pd.DataFrame(rows)
     steady = np.isin(kind, ("steady", "slip_angle", "slip_ratio", "speed", "load"))
+    # the levels of the programme are those at which a test ran (a warm-up or parking load is none)
+    tested = steady & np.all(key >= 0, axis=1)
+    for i, ch in enumerate(cond_ch):
+        used = np.unique(key[tested, i])
+        if levels[ch].size and used.size:
+            remap = np.full(levels[ch].size, -1, int)
+            remap[used] = np.arange(used.size)
+            key[:, i] = np.where(key[:, i] >= 0, remap[np.maximum(key[:, i], 0)], -1)
+            levels[ch] = levels[ch][used]
     per_row = pd.DataFrame({"SEGMENT": seg_id, "SWEEP": sweep_id, "KIND": kind, "BRANCH": branch, "STEADY": steady,
                             **{f"{ch}_LEVEL": key[:, i] for i, ch in enumerate(cond_ch)}})
     slip_tests = np.isin(kind, ("slip_angle", "slip_ratio", "steady"))
