@@ -245,6 +245,7 @@ class Programme:
     has: dict = field(default_factory=dict)
     fittable: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)
+    sl_max: float = 0.0  # largest |SL| in the data: "no longitudinal slip" is said only when it is noise
 
     def count(self, kind: str) -> int:
         """Number of sweeps of a kind (slip_angle, slip_ratio, speed, load, steady)."""
@@ -270,14 +271,16 @@ class Programme:
             else:
                 parts.append(f"{c.size} {name}s {c.min():.{digits}f} to {c.max():.{digits}f} {unit}")
         for kind, what in (("slip_angle", "slip-angle sweeps"), ("slip_ratio", "slip-ratio sweeps"),
-                           ("speed", "speed sweeps"), ("load", "load sweeps")):
+                           ("speed", "speed sweeps"), ("load", "vertical load sweeps")):
             k = self.count(kind)
             parts.append(f"{k} {what}" if k else f"no {what}")
         steady = self.count("steady")
         if steady:
             parts.append(f"{steady} steady segments")
-        if not self.has.get("longitudinal_slip"):
-            parts.append("no longitudinal slip")
+        if self.sl_max <= SWEEP_THRESHOLD["SL"]:
+            parts.append("no longitudinal slip")  # SL zero throughout but for measurement noise
+        elif not self.has.get("longitudinal_slip"):
+            parts.append(f"longitudinal slip in isolated samples only (|SL| up to {self.sl_max:.3g})")
         text = ", ".join(parts)
         if self.sample_rate:
             text += f"; sampled at {self.sample_rate:.0f} Hz"
@@ -369,6 +372,13 @@ def _merge_gaps(label: np.ndarray, short: int) -> np.ndarray:
     return label
 
 
+def _span(x: np.ndarray) -> float:
+    """Range of ``x`` without isolated spikes (after a running median of 5, of 3 under 20 samples)."""
+    from scipy.ndimage import median_filter
+
+    return float(np.ptp(median_filter(x, size=5 if x.size >= 20 else 3, mode="mirror"))) if x.size > 1 else 0.0
+
+
 def _up_and_down(x: np.ndarray) -> bool:
     """Whether ``x`` goes up and down (or down and up), each way over at least 3/4 of its range (unloading
     to change the pressure and loading to the next condition is no load sweep)."""
@@ -450,14 +460,14 @@ def recognise(data: TyreData) -> Programme:
             lab = _merge_gaps(lab + 1, short_run)  # 0: off-level
             for c, d in _runs(lab[:, None]):
                 pieces.append((start + a + c, start + a + d))
-    widest = {ch: max([np.ptp(x[a:b]) for a, b in pieces] + [0.0]) for ch, x in (("SA", sa), ("SL", sl), ("VX", vx))}
-    widest["FZ"] = max([np.ptp(fz[a:b]) for a, b in pieces if np.any(key[a] < 0)] + [0.0])
+    widest = {ch: max([_span(x[a:b]) for a, b in pieces] + [0.0]) for ch, x in (("SA", sa), ("SL", sl), ("VX", vx))}
+    widest["FZ"] = max([_span(fz[a:b]) for a, b in pieces if np.any(key[a] < 0)] + [0.0])
     for seg, (start, stop) in enumerate(pieces):
         sub = slice(start, stop)
         m = stop - start
         seg_id[sub] = seg
         off_level = bool(np.any(key[start] < 0))
-        ranges = {"SA": np.ptp(sa[sub]), "SL": np.ptp(sl[sub]), "VX": np.ptp(vx[sub]), "FZ": np.ptp(fz[sub])}
+        ranges = {ch: _span(x[sub]) for ch, x in (("SA", sa), ("SL", sl), ("VX", vx), ("FZ", fz))}
         thresholds = dict(SWEEP_THRESHOLD, FZ=abs(float(np.mean(fz[sub]))) / 3.0 + 1e-9)
         # a sweep spans at least half the widest range of its channel; a shorter move (e.g. steering to the
         # slip angle of a combined-slip test) is a transition
@@ -515,7 +525,8 @@ def recognise(data: TyreData) -> Programme:
         speed_sweep=bool(np.any(kind == "speed")),
         loaded_radius=data.has("RL"), effective_radius=data.has("RE"),
         fx=data.has("FX"), fy=data.has("FY"), mz=data.has("MZ"), mx=data.has("MX"), my=data.has("MY"))
-    prog = Programme(levels=levels, sweeps=sweeps, rows=per_row, n_rows=n, sample_rate=sample_rate, has=has)
+    prog = Programme(levels=levels, sweeps=sweeps, rows=per_row, n_rows=n, sample_rate=sample_rate, has=has,
+                     sl_max=float(np.nanmax(np.abs(sl))) if n else 0.0)
     prog.fittable, prog.notes = _fittable(prog)
     return prog
 
