@@ -15,18 +15,31 @@ level, and more than the bin width) are off-level (label -1): ramps, load sweeps
 of points (< 50) distinct values whose separations are far below the others (a jump of 8x in the sorted
 separations) are merged: repeated settings that scatter.
 
+In a time series (:func:`recognise`; TIME at 20 Hz or more) the levels are found from the held samples only
+(the local range over +-w samples, w = 0.25 s, within 5 short-term standard deviations and 2 % of the range),
+so that ramps and load sweeps make no level of their own; every sample then gets the level of its stay: the
+sequence of levels (or off-level) with the least misfit plus a penalty per change (Viterbi), so that a wander of
+the load scatter towards the next level does not end a stay and a ramp that passes a level quickly does not make
+one. A run at a level that is mostly not held and crosses half its range from its first fifth to its last is a
+ramp; an off-level excursion between two stays at one level whose samples all lie nearest to it belongs to
+the stay. Only levels at which a test ran (a sweep or steady point) are levels of the programme: a warm-up or
+parking load is none.
+
 Segments and sweeps (:func:`recognise`): a new segment starts where the level of load, pressure or camber
-changes (an off-level run is a segment of its own). Within a segment the held slip channel's levels split it
-further (slip-ratio sweeps at several slip angles). The swept channel of a segment is the one of SA, SL, VX,
-FZ whose range exceeds its sweep threshold (1 deg, 0.02, 3 m/s, a third of the mean load) most and, for SA,
-SL and VX, spans at least half the widest range that channel has in any segment (a shorter move, such as
-steering to the slip angle of a combined-slip test, is a transition); its
-direction (BRANCH +1 up / -1 down) is the sign of the change over a window of 5 % of the sweep's length.
-Segments without a swept channel whose slips and speed stay within the sweep thresholds, held for at least
-the short run below, are steady points; other segments without a swept channel are transitions. The short
-run is 0.2 % of the data (at least 50 samples in a time series, 2 rows otherwise): such a run between two
-runs at the same levels belongs to them (a brief excursion of the scatter), and an on-level run that short
-between off-level runs is a ramp passing through the level.
+changes (an off-level run is a segment of its own; runs shorter than 2 s between two stays at the same levels
+are excursions of the scatter and belong to them). Within a segment, each row is given the channel among SA, SL,
+VX that moves most relative to its sweep threshold (1 deg, 0.02, 3 m/s) over +-w rows; runs of that label are
+the candidate sweeps. A short run (a reversal, a blip) between two runs of the same channel, and a run where
+nothing moves that is shorter than both (a dwell at the end of a sweep), joins them. A slip-ratio run is split
+by the levels of the slip angle held (combined slip at several angles), a slip-angle run by those of the slip
+ratio. A run is a sweep when its range (isolated spikes removed) exceeds the channel's threshold and spans at
+least half the widest range of that channel in any run (a shorter move, such as steering to the slip angle of
+a combined-slip test, is a transition). Slip and speed sweeps run at held conditions; a load sweep is an
+off-level run that goes up and down, each way over 3/4 of its range, and covers at least the span of the load
+levels (unloading to change the pressure is no load sweep). The direction (BRANCH +1 up / -1 down) is the sign
+of the change over a window of 5 % of the sweep's length. Segments where nothing moves beyond the thresholds,
+held for 2 s or more (for point data: the short run below), are steady points; others are transitions. The
+short run is 0.2 % of the data (at least 50 samples in a time series, 2 rows otherwise).
 """
 from __future__ import annotations
 
