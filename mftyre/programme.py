@@ -412,21 +412,21 @@ def recognise(data: TyreData) -> Programme:
         dt = dt[np.isfinite(dt) & (dt > 0)]
         if dt.size:
             sample_rate = 1.0 / float(np.median(dt))
-    short_run = max(2, int(0.002 * n)) if sample_rate is None or sample_rate < 20 else max(50, int(0.002 * n))
     time_series = sample_rate is not None and sample_rate >= 20
-    steady_run = short_run if sample_rate is None or sample_rate < 20 else 4 * short_run  # 2 s at 100 Hz
+    short_run = max(50, int(0.002 * n)) if time_series else max(2, int(0.002 * n))
+    steady_run = 4 * short_run if time_series else short_run  # 2 s at 100 Hz
     w = max(1, short_run // 2)  # half-window of the local change (0.25 s at 100 Hz)
     labels, levels = {}, {}
     for ch in cond_ch:
         x = data.array(ch)
         held = _held(x, w)
-        lab, centres = cluster_levels(np.where(held, x, np.nan))
-        # rows not held join a level when they lie within its spread, unless their run is a ramp passing
-        # through the level: mostly not held, and from its first fifth to its last it crosses half its range
+        lab, centres = cluster_levels(np.where(held, x, np.nan))  # levels from the held samples
         if time_series and centres.size:
             lab = _stays(x, lab, centres, penalty=4.0 * short_run, block=max(1, short_run // 5))
         else:
             lab = _assign(x, lab, centres)
+        # a run at a level that is a ramp passing through it: mostly not held, and from its first fifth to its
+        # last it crosses half its range
         for a, b in _runs(lab[:, None]):
             fifth = max(1, (b - a) // 5)
             if lab[a] >= 0 and held[a:b].mean() < 0.5 and abs(np.median(x[b - fifth:b]) - np.median(
