@@ -172,3 +172,13 @@ def test_recognised_counts_are_the_planned_ones(name):
     np.testing.assert_allclose(np.degrees(hi), 12.0, atol=0.2)
     loads = VARIANTS[name].get("loads", (1620.0, 2230.0, 2790.0))
     np.testing.assert_allclose(prog.levels["FZ"], loads, rtol=0.03)
+    # the summary says what was planned, in words
+    text = prog.summary()
+    c = np.round(prog.levels["FZ"])
+    assert f"{planned['loads']} loads {c.min():.0f} to {c.max():.0f} N" in text
+    assert (f"{planned['pressures']} pressures" if planned["pressures"] > 1 else "1 pressure ") in text
+    assert (f"{planned['cambers']} cambers" if planned["cambers"] > 1 else "1 camber ") in text
+    for kind, words in (("slip_angle", "slip-angle sweeps"), ("slip_ratio", "slip-ratio sweeps"),
+                        ("speed", "speed sweeps"), ("load", "vertical load sweeps")):
+        assert (f"{planned[kind]} {words}" if planned[kind] else f"no {words}") in text
+    assert ("no longitudinal slip" in text) == (planned["slip_ratio"] == 0)
