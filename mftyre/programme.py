@@ -15,18 +15,31 @@ level, and more than the bin width) are off-level (label -1): ramps, load sweeps
 of points (< 50) distinct values whose separations are far below the others (a jump of 8x in the sorted
 separations) are merged: repeated settings that scatter.
 
+In a time series (:func:`recognise`; TIME at 20 Hz or more) the levels are found from the held samples only
+(the local range over +-w samples, w = 0.25 s, within 5 short-term standard deviations and 2 % of the range),
+so that ramps and load sweeps make no level of their own; every sample then gets the level of its stay: the
+sequence of levels (or off-level) with the least misfit plus a penalty per change (Viterbi), so that a wander of
+the load scatter towards the next level does not end a stay and a ramp that passes a level quickly does not make
+one. A run at a level that is mostly not held and crosses half its range from its first fifth to its last is a
+ramp; an off-level excursion between two stays at one level whose samples all lie nearest to it belongs to
+the stay. Only levels at which a test ran (a sweep or steady point) are levels of the programme: a warm-up or
+parking load is none.
+
 Segments and sweeps (:func:`recognise`): a new segment starts where the level of load, pressure or camber
-changes (an off-level run is a segment of its own). Within a segment the held slip channel's levels split it
-further (slip-ratio sweeps at several slip angles). The swept channel of a segment is the one of SA, SL, VX,
-FZ whose range exceeds its sweep threshold (1 deg, 0.02, 3 m/s, a third of the mean load) most and, for SA,
-SL and VX, spans at least half the widest range that channel has in any segment (a shorter move, such as
-steering to the slip angle of a combined-slip test, is a transition); its
-direction (BRANCH +1 up / -1 down) is the sign of the change over a window of 5 % of the sweep's length.
-Segments without a swept channel whose slips and speed stay within the sweep thresholds, held for at least
-the short run below, are steady points; other segments without a swept channel are transitions. The short
-run is 0.2 % of the data (at least 50 samples in a time series, 2 rows otherwise): such a run between two
-runs at the same levels belongs to them (a brief excursion of the scatter), and an on-level run that short
-between off-level runs is a ramp passing through the level.
+changes (an off-level run is a segment of its own; runs shorter than 2 s between two stays at the same levels
+are excursions of the scatter and belong to them). Within a segment, each row is given the channel among SA, SL,
+VX that moves most relative to its sweep threshold (1 deg, 0.02, 3 m/s) over +-w rows; runs of that label are
+the candidate sweeps. A short run (a reversal, a blip) between two runs of the same channel, and a run where
+nothing moves that is shorter than both (a dwell at the end of a sweep), joins them. A slip-ratio run is split
+by the levels of the slip angle held (combined slip at several angles), a slip-angle run by those of the slip
+ratio. A run is a sweep when its range (isolated spikes removed) exceeds the channel's threshold and spans at
+least half the widest range of that channel in any run (a shorter move, such as steering to the slip angle of
+a combined-slip test, is a transition). Slip and speed sweeps run at held conditions; a load sweep is an
+off-level run that goes up and down, each way over 3/4 of its range, and covers at least the span of the load
+levels (unloading to change the pressure is no load sweep). The direction (BRANCH +1 up / -1 down) is the sign
+of the change over a window of 5 % of the sweep's length. Segments where nothing moves beyond the thresholds,
+held for 2 s or more (for point data: the short run below), are steady points; others are transitions. The
+short run is 0.2 % of the data (at least 50 samples in a time series, 2 rows otherwise).
 """
 from __future__ import annotations
 
@@ -119,6 +132,60 @@ def cluster_levels(values, *, scatter: float | None = None):
     return labels, np.array(out_centres)
 
 
+def _assign(x, lab, centres):
+    """Labels of all values: those of the held values, and for the others the nearest level when within the
+    spread (4 robust standard deviations, at least the level's own range) of its held values."""
+    out = lab.copy()
+    free = (lab < 0) & np.isfinite(x)
+    if centres.size == 0 or not free.any():
+        return out
+    near = _nearest(x[free], centres)
+    reach = np.array([max(4.0 * 1.4826 * float(np.median(np.abs(x[lab == k] - centres[k]))),
+                          float(np.ptp(x[lab == k]))) if np.any(lab == k) else 0.0 for k in range(centres.size)])
+    ok = np.abs(x[free] - centres[near]) <= reach[near]
+    out[np.flatnonzero(free)[ok]] = near[ok]
+    return out
+
+
+def _stays(x, lab, centres, *, penalty, block):
+    """Labels of a time series of a condition channel by its stays at the levels: the sequence of states
+    (a level or off-level, -1) that minimises the misfit, ((x - centre) / spread)^2 / 2 at a level (at most
+    12.5, 5 spreads) and 4.5 off-level (3 spreads), plus ``penalty`` per change of state (Viterbi, on medians of
+    ``block`` samples). A wander of the load scatter towards the next level does not end a stay; a ramp that
+    passes a level quickly does not make one. ``lab``: labels of the held samples (their spread per level)."""
+    n = x.size
+    spread = np.array([1.4826 * float(np.median(np.abs(x[lab == k] - c))) if np.any(lab == k) else 0.0
+                       for k, c in enumerate(centres)])
+    gaps = np.diff(np.sort(centres))
+    spread = np.maximum(spread, 1e-9 * max(float(np.max(np.abs(centres))), 1e-300))
+    if gaps.size:
+        spread = np.maximum(spread, 1e-3 * float(gaps.min()))
+    m = -(-n // block)
+    pad = np.concatenate([x, np.full(m * block - n, np.nan)]).reshape(m, block)
+    with np.errstate(all="ignore"):
+        xm = np.nanmedian(pad, axis=1)
+    cost = np.minimum(0.5 * ((xm[:, None] - centres[None, :]) / spread[None, :]) ** 2, 12.5)
+    cost = np.concatenate([cost, np.full((m, 1), 4.5)], axis=1)
+    cost[~np.isfinite(xm)] = 0.0
+    cost[~np.isfinite(xm), -1] = -1.0  # NaN: off-level
+    cost *= block
+    k = cost.shape[1]
+    back = np.zeros((m, k), np.int32)
+    total = cost[0].copy()
+    for t in range(1, m):
+        best = int(np.argmin(total))
+        switch = total[best] + penalty
+        stay = total <= switch
+        back[t] = np.where(stay, np.arange(k), best)
+        total = np.where(stay, total, switch) + cost[t]
+    state = np.empty(m, np.int32)
+    state[-1] = int(np.argmin(total))
+    for t in range(m - 1, 0, -1):
+        state[t - 1] = back[t, state[t]]
+    out = np.where(state == k - 1, -1, state)
+    return np.repeat(out, block)[:n]
+
+
 def _nearest(x, centres):
     if centres.size == 0:
         return np.full(x.size, -1, int)
@@ -191,6 +258,7 @@ class Programme:
     has: dict = field(default_factory=dict)
     fittable: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)
+    sl_max: float = 0.0  # largest |SL| in the data: "no longitudinal slip" is said only when it is noise
 
     def count(self, kind: str) -> int:
         """Number of sweeps of a kind (slip_angle, slip_ratio, speed, load, steady)."""
@@ -216,14 +284,16 @@ class Programme:
             else:
                 parts.append(f"{c.size} {name}s {c.min():.{digits}f} to {c.max():.{digits}f} {unit}")
         for kind, what in (("slip_angle", "slip-angle sweeps"), ("slip_ratio", "slip-ratio sweeps"),
-                           ("speed", "speed sweeps"), ("load", "load sweeps")):
+                           ("speed", "speed sweeps"), ("load", "vertical load sweeps")):
             k = self.count(kind)
             parts.append(f"{k} {what}" if k else f"no {what}")
         steady = self.count("steady")
         if steady:
             parts.append(f"{steady} steady segments")
-        if not self.has.get("longitudinal_slip"):
-            parts.append("no longitudinal slip")
+        if self.sl_max <= SWEEP_THRESHOLD["SL"]:
+            parts.append("no longitudinal slip")  # SL zero throughout but for measurement noise
+        elif not self.has.get("longitudinal_slip"):
+            parts.append(f"longitudinal slip in isolated samples only (|SL| up to {self.sl_max:.3g})")
         text = ", ".join(parts)
         if self.sample_rate:
             text += f"; sampled at {self.sample_rate:.0f} Hz"
@@ -266,14 +336,75 @@ def _reversals(d: np.ndarray) -> int:
     return int(np.sum(moving[1:] != moving[:-1])) if moving.size > 1 else 0
 
 
+def _local_range(x: np.ndarray, w: int) -> np.ndarray:
+    """Range of ``x`` (median-filtered over w + 1 samples against noise) in the centred window of +-w samples."""
+    from scipy.ndimage import maximum_filter1d, median_filter, minimum_filter1d
+
+    if w > 1:
+        x = median_filter(x, size=w + 1, mode="nearest")
+    size = 2 * w + 1
+    return maximum_filter1d(x, size, mode="nearest") - minimum_filter1d(x, size, mode="nearest")
+
+
+def _held(x: np.ndarray, w: int) -> np.ndarray:
+    """Samples at which ``x`` is held (its local range within 5 short-term standard deviations and 2 % of its
+    range), all samples when fewer than 50 or when under 20 % would be held (point data stepping every row)."""
+    ok = np.isfinite(x)
+    if x.size < 50 or not ok.all() or np.ptp(x) == 0:
+        return ok
+    held = _local_range(x, w) <= max(5.0 * _short_term_scatter(x), 0.02 * float(np.ptp(x)))
+    return held if held.mean() >= 0.2 else ok
+
+
+def _moving_channel(channels: dict, w: int) -> np.ndarray:
+    """Per row: index (1-based, in the order of ``channels``) of the slip or speed channel changing most
+    relative to its sweep threshold over +-w rows (at least a tenth of the threshold), 0 where none moves."""
+    score = np.stack([_local_range(x, w) / SWEEP_THRESHOLD[ch] for ch, x in channels.items()], axis=1)
+    best = np.argmax(score, axis=1)
+    return np.where(score[np.arange(len(best)), best] > 0.1, best + 1, 0)
+
+
+def _merge_gaps(label: np.ndarray, short: int) -> np.ndarray:
+    """Runs of ``label`` between two runs of the same label are absorbed by them when shorter than ``short``
+    (a reversal, a blip of noise) or, when nothing moves in them, shorter than both neighbours (a dwell at the
+    end of a sweep)."""
+    label = label.copy()
+    changed = True
+    while changed:
+        changed = False
+        runs = _runs(label[:, None])
+        for i in range(1, len(runs) - 1):
+            (a0, a1), (b0, b1), (c0, c1) = runs[i - 1], runs[i], runs[i + 1]
+            if label[a0] != label[c0] or label[a0] == 0:
+                continue
+            m = b1 - b0
+            if m < short or (label[b0] == 0 and m <= min(a1 - a0, c1 - c0)):
+                label[b0:b1] = label[a0]
+                changed = True
+                break
+    return label
+
+
+def _span(x: np.ndarray) -> float:
+    """Range of ``x`` without isolated spikes (after a running median of 5, of 3 under 20 samples)."""
+    from scipy.ndimage import median_filter
+
+    return float(np.ptp(median_filter(x, size=5 if x.size >= 20 else 3, mode="mirror"))) if x.size > 1 else 0.0
+
+
+def _up_and_down(x: np.ndarray) -> bool:
+    """Whether ``x`` goes up and down (or down and up), each way over at least 3/4 of its range (unloading
+    to change the pressure and loading to the next condition is no load sweep)."""
+    half = 0.75 * float(np.ptp(x))
+    i, j = int(np.argmax(x)), int(np.argmin(x))
+    return any(np.ptp(x[:k + 1]) >= half and np.ptp(x[k:]) >= half for k in (i, j))
+
+
 def recognise(data: TyreData) -> Programme:
     """Recognise the test programme of ``data`` (rows in measurement order): levels, segments, sweeps with
     their direction, steady and transient rows, and what is fittable. See the module text for the rules."""
     n = len(data)
     cond_ch = ("FZ", "P", "IA")
-    labels, levels = {}, {}
-    for ch in cond_ch:
-        labels[ch], levels[ch] = cluster_levels(data.array(ch))
     sample_rate = None
     if "TIME" in data.frame.columns:
         t = pd.to_numeric(data.frame["TIME"], errors="coerce").to_numpy(float)
@@ -281,16 +412,42 @@ def recognise(data: TyreData) -> Programme:
         dt = dt[np.isfinite(dt) & (dt > 0)]
         if dt.size:
             sample_rate = 1.0 / float(np.median(dt))
-    short_run = max(2, int(0.002 * n)) if sample_rate is None or sample_rate < 20 else max(50, int(0.002 * n))
+    time_series = sample_rate is not None and sample_rate >= 20
+    short_run = max(50, int(0.002 * n)) if time_series else max(2, int(0.002 * n))
+    steady_run = 4 * short_run if time_series else short_run  # 2 s at 100 Hz
+    w = max(1, short_run // 2)  # half-window of the local change (0.25 s at 100 Hz)
+    labels, levels = {}, {}
+    for ch in cond_ch:
+        x = data.array(ch)
+        held = _held(x, w)
+        lab, centres = cluster_levels(np.where(held, x, np.nan))  # levels from the held samples
+        if time_series and centres.size:
+            lab = _stays(x, lab, centres, penalty=4.0 * short_run, block=max(1, short_run // 5))
+        else:
+            lab = _assign(x, lab, centres)
+        # a run at a level that is a ramp passing through it: mostly not held, and from its first fifth to its
+        # last it crosses half its range
+        for a, b in _runs(lab[:, None]):
+            fifth = max(1, (b - a) // 5)
+            if lab[a] >= 0 and held[a:b].mean() < 0.5 and abs(np.median(x[b - fifth:b]) - np.median(
+                    x[a:a + fifth])) >= 0.5 * np.ptp(x[a:b]):
+                lab[a:b] = -1
+        # an excursion of the scatter beyond a level's spread that stays nearest to it belongs to the stay
+        runs = _runs(lab[:, None])
+        for (a0, _), (a, b), (c, _) in zip(runs[:-2], runs[1:-1], runs[2:]):
+            if lab[a] < 0 and lab[a0] == lab[c] >= 0 and np.all(_nearest(x[a:b], centres) == lab[a0]):
+                lab[a:b] = lab[a0]
+        labels[ch], levels[ch] = lab, centres
     key = np.stack([labels[ch] for ch in cond_ch], axis=1) if n else np.zeros((0, 3), int)
     runs = _runs(key)
+    long_runs = [i for i, (a, b) in enumerate(runs) if b - a >= steady_run]
+    for i, j in zip(long_runs[:-1], long_runs[1:]):
+        before, after = key[runs[i][0]], key[runs[j][0]]
+        if j > i + 1 and np.array_equal(before, after) and np.all(before >= 0):
+            key[runs[i][1]:runs[j][0]] = before  # brief excursions off a level (scatter) do not end the stay
     for i, (start, stop) in enumerate(runs):
-        if not (0 < i < len(runs) - 1 and stop - start < short_run):
-            continue
-        before, after = key[runs[i - 1][0]], key[runs[i + 1][0]]
-        if np.array_equal(before, after) and np.all(before >= 0):
-            key[start:stop] = before  # a brief excursion off a level (scatter) does not end the stay there
-        elif key[start, 0] >= 0 and before[0] < 0 and after[0] < 0:
+        if 0 < i < len(runs) - 1 and stop - start < short_run and key[start, 0] >= 0 \
+                and key[runs[i - 1][0], 0] < 0 and key[runs[i + 1][0], 0] < 0:
             key[start:stop, 0] = -1  # a ramp passing through a level is no stay at that level
     seg_id = np.full(n, -1, int)
     sweep_id = np.full(n, -1, int)
@@ -301,44 +458,46 @@ def recognise(data: TyreData) -> Programme:
     n_sweeps = 0
     pieces = []
     for start, stop in _runs(key):
-        # split by the held slip channel's levels (slip-ratio sweeps at several slip angles)
+        # within a stay at one condition: runs of the channel that moves (slip angle, slip ratio or speed),
+        # each split further by the levels of the slip channel held (slip-ratio sweeps at several slip angles)
         sub = slice(start, stop)
-        split_by = None
-        for ch, x in (("SA", sa), ("SL", sl)):
-            other = sl if ch == "SA" else sa
-            other_ch = "SL" if ch == "SA" else "SA"
-            if np.ptp(x[sub]) > SWEEP_THRESHOLD[ch] and np.ptp(other[sub]) > SWEEP_THRESHOLD[other_ch]:
-                split_by = "SA" if np.ptp(sl[sub]) / SWEEP_THRESHOLD["SL"] > np.ptp(sa[sub]) / SWEEP_THRESHOLD["SA"] \
-                    else "SL"
-        if split_by is None:
-            pieces.append((start, stop))
-            continue
-        held = sa if split_by == "SA" else sl
-        lab, _ = cluster_levels(held[sub])
-        for a, b in _runs(lab[:, None]):
-            pieces.append((start + a, start + b))
-    widest = {ch: max([np.ptp(x[a:b]) for a, b in pieces] + [0.0]) for ch, x in (("SA", sa), ("SL", sl), ("VX", vx))}
+        moving = _merge_gaps(_moving_channel({"SA": sa[sub], "SL": sl[sub], "VX": vx[sub]}, w), short_run)
+        for a, b in _runs(moving[:, None]):
+            held_ch = {1: sl, 2: sa}.get(int(moving[a]))
+            if held_ch is None or b - a < 4:
+                pieces.append((start + a, start + b))
+                continue
+            hx = held_ch[start + a:start + b]
+            thr = SWEEP_THRESHOLD["SL" if held_ch is sl else "SA"]
+            lab = cluster_levels(hx)[0] if np.ptp(hx) > thr else np.zeros(b - a, int)
+            lab = _merge_gaps(lab + 1, short_run)  # 0: off-level
+            for c, d in _runs(lab[:, None]):
+                pieces.append((start + a + c, start + a + d))
+    widest = {ch: max([_span(x[a:b]) for a, b in pieces] + [0.0]) for ch, x in (("SA", sa), ("SL", sl), ("VX", vx))}
+    widest["FZ"] = max([_span(fz[a:b]) for a, b in pieces if np.any(key[a] < 0)] + [0.0])
     for seg, (start, stop) in enumerate(pieces):
         sub = slice(start, stop)
         m = stop - start
         seg_id[sub] = seg
         off_level = bool(np.any(key[start] < 0))
-        ranges = {"SA": np.ptp(sa[sub]), "SL": np.ptp(sl[sub]), "VX": np.ptp(vx[sub]), "FZ": np.ptp(fz[sub])}
+        ranges = {ch: _span(x[sub]) for ch, x in (("SA", sa), ("SL", sl), ("VX", vx), ("FZ", fz))}
         thresholds = dict(SWEEP_THRESHOLD, FZ=abs(float(np.mean(fz[sub]))) / 3.0 + 1e-9)
         # a sweep spans at least half the widest range of its channel; a shorter move (e.g. steering to the
         # slip angle of a combined-slip test) is a transition
         score = {ch: ranges[ch] / thresholds[ch] for ch in ranges if ranges[ch] > thresholds[ch]
-                 and (ch == "FZ" or ranges[ch] >= 0.5 * widest[ch])}
-        if not off_level:
-            score.pop("FZ", None)
+                 and ranges[ch] >= 0.5 * widest[ch]}
+        # slip and speed sweeps run at held conditions; a load sweep goes up and down off the load levels over
+        # at least their span (a one-way load change is the ramp between two conditions, unloading to change
+        # the pressure a dip)
+        score = {ch: v for ch, v in score.items() if (ch == "FZ") == off_level}
+        if "FZ" in score and not (_up_and_down(fz[sub]) and ranges["FZ"] >= np.ptp(levels["FZ"])):
+            score.pop("FZ")
         swept = max(score, key=score.get) if score else None
         moving = any(ranges[ch] > SWEEP_THRESHOLD[ch] for ch in ("SA", "SL", "VX"))
         if swept is None and (off_level or moving):
             k = "transition"  # off-level, or a slip or speed changing without being a sweep
         elif swept is None:
-            k = "steady" if m >= short_run else "transition"  # too brief to be a measured steady point
-        elif off_level and swept != "FZ" and m < short_run:
-            k = "transition"
+            k = "steady" if m >= steady_run else "transition"  # too brief to be a measured steady point
         else:
             k = _KIND[swept]
         kind[sub] = k
@@ -356,6 +515,15 @@ def recognise(data: TyreData) -> Programme:
                          SL=float(np.median(sl[sub])), VX=float(np.median(vx[sub]))))
     sweeps = pd.DataFrame(rows)
     steady = np.isin(kind, ("steady", "slip_angle", "slip_ratio", "speed", "load"))
+    # the levels of the programme are those at which a test ran (a warm-up or parking load is none)
+    tested = steady & np.all(key >= 0, axis=1)
+    for i, ch in enumerate(cond_ch):
+        used = np.unique(key[tested, i])
+        if levels[ch].size and used.size:
+            remap = np.full(levels[ch].size, -1, int)
+            remap[used] = np.arange(used.size)
+            key[:, i] = np.where(key[:, i] >= 0, remap[np.maximum(key[:, i], 0)], -1)
+            levels[ch] = levels[ch][used]
     per_row = pd.DataFrame({"SEGMENT": seg_id, "SWEEP": sweep_id, "KIND": kind, "BRANCH": branch, "STEADY": steady,
                             **{f"{ch}_LEVEL": key[:, i] for i, ch in enumerate(cond_ch)}})
     slip_tests = np.isin(kind, ("slip_angle", "slip_ratio", "steady"))
@@ -370,7 +538,8 @@ def recognise(data: TyreData) -> Programme:
         speed_sweep=bool(np.any(kind == "speed")),
         loaded_radius=data.has("RL"), effective_radius=data.has("RE"),
         fx=data.has("FX"), fy=data.has("FY"), mz=data.has("MZ"), mx=data.has("MX"), my=data.has("MY"))
-    prog = Programme(levels=levels, sweeps=sweeps, rows=per_row, n_rows=n, sample_rate=sample_rate, has=has)
+    prog = Programme(levels=levels, sweeps=sweeps, rows=per_row, n_rows=n, sample_rate=sample_rate, has=has,
+                     sl_max=float(np.nanmax(np.abs(sl))) if n else 0.0)
     prog.fittable, prog.notes = _fittable(prog)
     return prog
 

@@ -92,7 +92,7 @@ def test_recognise_finds_the_programme_it_was_told(rig):
     assert prog.levels["FZ"].size == 3 and prog.levels["P"].size == 1 and prog.levels["IA"].size == 3
     assert prog.count("slip_angle") == 3 * 3  # loads x cambers
     assert prog.count("slip_ratio") == 3 * 3  # loads x (pure + two combined angles)
-    assert prog.count("speed") >= 3 and prog.count("load") >= 1
+    assert prog.count("speed") == 3 and prog.count("load") == 1  # a speed sweep per load, a load sweep per pressure
     assert prog.sample_rate == pytest.approx(100.0)
     text = prog.summary()
     assert "3 loads" in text and "3 cambers" in text and "1 pressure" in text and "9 slip-angle sweeps" in text
@@ -113,8 +113,36 @@ def test_messages_are_true_of_the_data(truth):
     spikes[::5000] = 0.05  # a few noise spikes in the slip channel are no longitudinal-slip test
     data.frame["SL"] = spikes
     prog = recognise(data)
-    assert "no longitudinal slip" in prog.summary() and not prog.fittable["pure Fx"]
+    text = prog.summary()
+    assert "no slip-ratio sweeps" in text and not prog.fittable["pure Fx"]
+    # SL is not zero throughout: "no longitudinal slip" would be untrue; the spikes are named instead
+    assert "no longitudinal slip" not in text and "longitudinal slip in isolated samples only" in text
+    assert "no longitudinal slip" in recognise(rig_programme(truth, loads=(0.6, 1.2), pressures=(1.0,),
+                                                             longitudinal=False, seed=4)).summary()
     assert prog.fittable["camber terms"] and prog.fittable["load terms"]
+    assert "2 loads" in text and "3 cambers" in text and "1 vertical load sweeps" in text
+    assert "6 slip-angle sweeps" in text and "2 speed sweeps" in text
+
+
+def _counts(prog):
+    return (prog.levels["FZ"].size, prog.levels["P"].size, prog.levels["IA"].size, prog.count("slip_angle"),
+            prog.count("slip_ratio"), prog.count("speed"), prog.count("load"))
+
+
+@pytest.mark.parametrize("options, counts", [
+    # one camber level: the slip-ratio sweeps at the three slip angles were split in two (15-18 instead of 9)
+    (dict(cambers_deg=(0.0,), pressures=(1.0,)), (3, 1, 1, 3, 9, 3, 1)),
+    # lateral sweeps only: a fourth load from the ramps, 11 load sweeps instead of one per pressure
+    (dict(longitudinal=False), (3, 3, 3, 27, 0, 9, 3)),
+    # longitudinal tests on, three cambers: the free-rolling speed sweeps are one per load and pressure
+    (dict(), (3, 3, 3, 27, 27, 9, 3)),
+    (dict(speed=25.0, pressures=(1.0,)), (3, 1, 3, 9, 9, 3, 1)),
+    (dict(sample_rate=200.0, pressures=(1.0,)), (3, 1, 3, 9, 9, 3, 1)),
+])
+def test_recognised_counts_match_the_rig_programme(truth, options, counts):
+    """(loads, pressures, cambers, slip-angle, slip-ratio, speed, load sweeps) exactly as the rig ran them."""
+    data = rig_programme(truth, **{"loads": (0.5, 1.0, 1.5), "seed": 0, **options})
+    assert _counts(recognise(data)) == counts
 
 
 def test_point_data_are_recognised_too(truth):
