@@ -67,8 +67,9 @@ Contact (normal to the effective plane):
     Slip model: the Magic Formula (MF 6.1/6.2, the .tir's own) at F'_z, kappa', alpha_MF and the rim camber
     gamma_a - road camber [chosen]: the MF's camber is the wheel-plane inclination it was measured at, and the
     measured forces contain the belt's static camber deflection (r_c F_y + M'_x)/c_bg; the belt camber would
-    count it twice (car_205_60R15_mf62_swift.tir, 4 kN, 20 m/s: the belt settles 1.4 mrad below a 30 mrad rim camber and the MF
-    at the belt camber gives Fy 13 % lower than at the rim camber, test_camber_slip_is_the_rim_camber). The yaw's
+    count it twice (car_205_60R15_mf62_swift.tir, 4 kN, 20 m/s: the belt settles 1.4 mrad below a 30 mrad rim
+    camber and the MF at the belt camber gives Fy 13 % lower than at the rim camber,
+    test_camber_slip_is_the_rim_camber). The yaw's
     compensation (the static twist added back, below) has no camber counterpart without a camber slip state:
     the deflection depends on the forces it would change. So the belt camber acts on the slip only through the
     geometry (r_c gammadot_b in alpha'). Evaluated at speed max(|V_cx|, VXLOW): the low-speed reduction is not
