@@ -27,6 +27,10 @@ through their lowest points give the effective road height w and forward slope b
 * no cam rotation with the local grade [chosen]: on a constant grade s, beta_y = atan(s) exactly and w carries
   the offset max_xi(s xi - z_c(xi)) (0.06 mm at 5 %).
 * ENV_C1/ENV_C2 (attenuation, formula unpublished) are not modelled: a non-zero value gives a warning.
+* ELLIPS_NLENGTH ("number of ellipsoids at sides of contact patch", TNO comment) is not used: its role in MF-Swift
+  is unpublished (NOTES sec. 3.3, 9.1; Adams' "nlength" for oblique cleats suggests a count of cams or sample
+  positions along the tandem). Here each cam's height is the exact maximum over the profile (breakpoints plus a
+  0.5 mm grid), so no count of cams along the length enters; a value set in the file gives a warning.
 
 Numerics: the max over xi runs over a uniform grid (``dx``, default 0.5 mm) restricted to |xi| <= l_b(H_road),
 with H_road the height range of the profile (outside, z_c > H_road, so no such xi can win: the restriction is
@@ -60,6 +64,20 @@ CURVATURE_STEP = 2e-3
 _CHUNK = 4096
 
 
+def _warn_unmodelled(prm) -> None:
+    """Warn about the [CONTACT_PATCH] parameters of ``prm`` that the enveloping model does not use."""
+    for name in ("ENV_C1", "ENV_C2"):
+        if name in prm and prm[name] != 0:
+            warnings.warn(f"{name} = {prm[name]} is not modelled (its formula is unpublished); treated as 0",
+                          stacklevel=3)
+    if "ELLIPS_NLENGTH" not in prm.missing:
+        line = prm.lines.get("ELLIPS_NLENGTH")
+        where = f"{prm.source or 'parameters'}{f', line {line}' if line else ''}"
+        warnings.warn(f"ELLIPS_NLENGTH = {prm.ELLIPS_NLENGTH} ({where}) is not used: its role in MF-Swift is "
+                      f"unpublished; each cam's height is the exact maximum over the road profile instead",
+                      stacklevel=3)
+
+
 @dataclass(frozen=True)
 class Cams:
     """Cam shape: semi-axes ``ae`` (horizontal), ``be`` (vertical) [m], exponent ``ce``; tandem base factor
@@ -73,13 +91,13 @@ class Cams:
     n_width: int = 10
 
     @classmethod
-    def from_params(cls, prm) -> "Cams":
-        """Cams of a parameter set ([CONTACT_PATCH]: ELLIPS_LENGTH/HEIGHT scaled by UNLOADED_RADIUS)."""
+    def from_params(cls, prm, warn: bool = True) -> "Cams":
+        """Cams of a parameter set ([CONTACT_PATCH]: ELLIPS_LENGTH/HEIGHT scaled by UNLOADED_RADIUS); ``warn``:
+        warn about the parameters that are not modelled (callers that build the cams twice for one model pass
+        False once, so each model warns once)."""
         R0 = prm.UNLOADED_RADIUS
-        for name in ("ENV_C1", "ENV_C2"):
-            if name in prm and prm[name] != 0:
-                warnings.warn(f"{name} = {prm[name]} is not modelled (its formula is unpublished); treated as 0",
-                              stacklevel=2)
+        if warn:
+            _warn_unmodelled(prm)
         return cls(ae=prm.ELLIPS_LENGTH * R0, be=prm.ELLIPS_HEIGHT * R0, ce=prm.ELLIPS_ORDER,
                    shift=prm.ELLIPS_SHIFT, max_step=prm.ELLIPS_MAX_STEP, n_width=int(prm.ELLIPS_NWIDTH))
 

@@ -133,7 +133,7 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
 
     road = parse_road(road)
     prm = model.params
-    cams = Cams.from_params(prm)
+    cams = Cams.from_params(prm, warn=False)  # the tyre below warns
     dx = TABLE_DX
     bps = tuple(road.breakpoints)
     reach = cams.ae + 2 * dx

@@ -41,10 +41,16 @@ heights, :class:`swift.enveloping.CamTable`, plus the input ``road_camber``), ef
 kappa_e = d beta_y/dx = cos^2(beta_y) (h_f' - h_r')/l_s, and
     * the forward shift of the contact point: the tandem is centred at the foot of the normal from the belt centre
       to the effective plane, x_c = x_b + r_c sin(beta_y), r_c = (z_b - w)/cos(beta_y) [chosen: NOTES sec. 3.5];
-    * the effective curvature is an output; the effective rolling radius variation it drives in MF-Swift
-      (Pacejka sec. 10.1.4) has no published relation we could read, and the geometric one (the foot of the
-      normal moves along the road at V_cx + r_c kappa_e xdot_b) is not a slip: the tread slips against the fixed
-      road, not against the moving effective plane. So the slip stays V_cx - Omega_b R_e [open, NOTES sec. 9.4];
+    * the effective curvature is an output only. MF-Swift's fourth/fifth effective inputs, the effective rolling
+      radius variation over an obstacle (Pacejka 2012 sec. 10.1.4, "the five effective road inputs"; Schmeitz
+      2004), are NOT modelled: the relation and its coefficient are in the book and the thesis only, which we
+      could not read (searched: public docs, pages, code and issues corpora; Altair's "3D cam" slip page says
+      only that road curvature enters r_e, without the formula; the shared seeds hold no SWIFT text), and no
+      .tir names the coefficient (TNO_car205_60R15.tir
+      and Pacejka App. 3 have no such [CONTACT_PATCH] entry; Q_RA*/Q_RB* are the contact length and width).
+      The geometric rate of the normal's foot along the road (V_cx + r_c kappa_e xdot_b) is not a substitute:
+      the tread slips against the fixed road, not against the moving effective plane. So the slip stays
+      V_cx - Omega_b R_e; Fx over a cleat lacks the r_e-variation part of its response [open, NOTES sec. 9.4];
     * the tandem base l_s = ELLIPS_SHIFT 2a(F_r) at the current (static part of the) contact load F_r, solved
       together with x_c by ``CONTACT_PASSES`` fixed-point passes [published l_s = p_ls 2a, Zegelaar eq. 4.15].
 Contact (normal to the effective plane):
@@ -59,9 +65,14 @@ Contact (normal to the effective plane):
     cannot make the explicit stepper unstable. Off the road (rho_r <= 0) the slips relax to zero with
     ``AIR_TIME``.
     Slip model: the Magic Formula (MF 6.1/6.2, the .tir's own) at F'_z, kappa', alpha_MF and the rim camber
-    gamma_a - road camber (the belt camber would count the static camber compliance, which the measured MF
-    contains, twice: Mz off by 1 % at 3 % slip; without a slip state for camber it cannot be compensated as the
-    yaw is [chosen]), evaluated at speed max(|V_cx|, VXLOW): the steady-state low-speed reduction is not
+    gamma_a - road camber [chosen]: the MF's camber is the wheel-plane inclination it was measured at, and the
+    measured forces contain the belt's static camber deflection (r_c F_y + M'_x)/c_bg; the belt camber would
+    count it twice (car_205_60R15_mf62_swift.tir, 4 kN, 20 m/s: the belt settles 1.4 mrad below a 30 mrad rim
+    camber and the MF at the belt camber gives Fy 13 % lower than at the rim camber,
+    test_camber_slip_is_the_rim_camber). The yaw's
+    compensation (the static twist added back, below) has no camber counterpart without a camber slip state:
+    the deflection depends on the forces it would change. So the belt camber acts on the slip only through the
+    geometry (r_c gammadot_b in alpha'). Evaluated at speed max(|V_cx|, VXLOW): the low-speed reduction is not
     applied again on top of the transient slips (they already vanish properly at standstill, so the tyre keeps
     its static grip), and the forces keep the sign of the slips in both directions of travel (reversing);
     M'_z follows the direction of travel and M'_y the spin direction (signs linear through standstill).
@@ -289,7 +300,7 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
     rho_r_dot = -(s["vzb"] - dw * s["vxb"]) / cb
     fzc = be.where(contact, be.fmax(f_r + damp * c_rz * rho_r_dot, 0.0), 0.0)
 
-    # slip model: MF at the transient slips, belt camber, no second low-speed reduction
+    # slip model: MF at the transient slips, rim camber (module notes), no second low-speed reduction
     # direction of travel and of spin: +-1, linear through standstill (below 0.1 VXLOW)
     s_v = be.fmin(be.fmax(vcx / (0.1 * prm.VXLOW), -1.0), 1.0)
     s_o = be.fmin(be.fmax(s["omb"] * prm.UNLOADED_RADIUS / (0.1 * prm.VXLOW), -1.0), 1.0)

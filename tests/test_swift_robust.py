@@ -229,3 +229,30 @@ def test_multi_track_road_camber_in_the_ring(model):
     mf = model.evaluate(fz_c, res["kappa"][-1], res["alpha"][-1], gamma=-bank, vx=V, omega=res["omb"][-1])
     assert fy_c == pytest.approx(float(mf.fy), rel=1e-6)
     assert res["fy"][-1] == pytest.approx(fy_c * np.cos(bank) - fz_c * np.sin(bank), rel=1e-3, abs=1.0)
+
+
+def test_unused_ellips_nlength_warns_once_per_model(model, tmp_path):
+    """ELLIPS_NLENGTH has no published role (module notes of swift.enveloping): a value set in the file is reported
+    once per model, naming the parameter, the file and its line (old: silently ignored); a file without it is
+    quiet. The FMU's functions build the cams twice and still warn once."""
+    from swift.fmu_model import swift_functions
+
+    def nlength_warnings(build):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            build()
+        return [str(w.message) for w in caught if "ELLIPS_NLENGTH" in str(w.message)]
+
+    source = TIR_FILES / "car_205_60R15_mf62_swift.tir"
+    line = model.params.lines["ELLIPS_NLENGTH"]
+    for build in (lambda: SwiftTyre(model, Flat(), x_range=(0.0, 1.0)), lambda: swift_functions(model)):
+        found = nlength_warnings(build)
+        assert len(found) == 1
+        assert f"line {line}" in found[0] and source.name in found[0] and "not used" in found[0]
+    text = source.read_text().splitlines(keepends=True)
+    stripped = tmp_path / "no_nlength.tir"
+    stripped.write_text("".join(t for t in text if not t.lstrip().startswith("ELLIPS_NLENGTH")))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        quiet = mftyre.load_tir(stripped)
+    assert nlength_warnings(lambda: SwiftTyre(quiet, Flat(), x_range=(0.0, 1.0))) == []
