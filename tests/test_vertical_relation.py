@@ -164,7 +164,8 @@ def test_casadi_loaded_radius_carries_its_load_at_extreme_inputs(key):
 
     prm = _model(key).params
     be = casadi_backend()
-    fz_s, omega_s, fx_s, fy_s, gamma_s, dpi_s = symbols = [ca.SX.sym(n) for n in ("fz", "omega", "fx", "fy", "gamma", "dpi")]
+    symbols = [ca.SX.sym(n) for n in ("fz", "omega", "fx", "fy", "gamma", "dpi")]
+    fz_s, omega_s, fx_s, fy_s, gamma_s, dpi_s = symbols
     rl_s, _ = vertical.loaded_radius_62(prm, fz_s, vertical.free_radius(prm, omega_s, be), omega_s, fx_s, fy_s,
                                         gamma_s, dpi_s, be)
     rng = np.random.default_rng(5)
