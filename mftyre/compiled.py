@@ -28,14 +28,14 @@ request the Jacobian of that (``jac_jac_<name>``, second derivatives), compiled 
 a small graph, instead of generating C for the whole problem.
 
 Cache. The key is a SHA-256 of everything that defines the function (parameter values, side, options, input and
-output names, the versions of mftyre and CasADi, this module's source, the compiler and platform). The folder is
-``$MFTYRE_CACHE`` or ``~/.cache/mftyre``; it must belong to the current user (or root) and be writable by no one
-else, as must every library loaded, else :class:`CacheSecurityError`. A library is compiled under a unique
-temporary name in that folder and renamed atomically to ``<stem>_<sha-256 of the library>.so``, then its
-description ``<stem>_<sha>.json`` (inputs, outputs, checks, size and SHA-256 of the library) is written the same
-way, so concurrent threads and processes never see half a pair. Before a library is loaded its size and SHA-256 are
-checked against the description: a truncated or altered file is rebuilt (from the cache) or refused. Compiler:
-``$CC`` or ``cc``.
+output names, the versions of mftyre and CasADi, the source of this module, the backend and the equations, the
+compiler and platform). The folder is ``$MFTYRE_CACHE`` or ``~/.cache/mftyre``; it must belong to the current user
+(or root) and be writable by no one else, as must every library loaded, else :class:`CacheSecurityError`. A
+library is compiled under a unique temporary name in that folder and renamed atomically to
+``<stem>_<sha-256 of the library>.so``, then its description ``<stem>_<sha>.json`` (inputs, outputs, checks, size
+and SHA-256 of the library) is written the same way, so concurrent threads and processes never see half a pair.
+Before a library is loaded its size and SHA-256 are checked against the description: a truncated or altered file
+is rebuilt (from the cache) or refused. Compiler: ``$CC`` or ``cc``.
 """
 from __future__ import annotations
 
@@ -70,8 +70,11 @@ _PACKED = 4096  # batches of at most this many points are passed as one packed c
 _FLAG_BITS = 16  # flags of the single-point entry: bit k non-finite input k, 16+k non-positive, 32+k outside
 
 
-#: this module's own hash: part of every cache key, so that a changed generator never meets an old library
-_GENERATOR = hashlib.sha256(Path(__file__).read_bytes()).hexdigest()
+#: the hash of this module, the backend and the equations: part of every cache key, so that a changed generator or
+#: equation (e.g. fewer unrolled solver steps) never meets an old library
+_GENERATOR = hashlib.sha256(b"".join(path.read_bytes() for path in (
+    Path(__file__), Path(__file__).with_name("backend.py"), *sorted(Path(__file__).with_name("formula").glob("*.py"))
+))).hexdigest()
 
 
 class CacheSecurityError(MFTyreError):

@@ -263,7 +263,7 @@ class MFModel:
         beyond its range is exactly zero (and at Fz <= 0 the forces and their derivatives are zero: no contact);
         an optimiser that may step outside the ranges should use ``limits="smooth"`` (1 % of the slope kept
         beyond the ranges, derivatives non-zero) together with ``smooth=1e-6``; False extrapolates.
-        The MF 6.2 loaded radius is solved with up to 8 bracket-widening and 30 Dekker steps and a final
+        The MF 6.2 loaded radius is solved with up to 8 bracket-widening and 16 Dekker steps and a final
         Newton step, so its derivatives are those of the implicit function. Evaluate many points with
         ``f.map(n)``; :mod:`mftyre.compiled` compiles the function to C.
         """

@@ -151,3 +151,44 @@ def test_vertical_force_is_zero_above_the_free_radius(path):
         fz = vertical.vertical_force_61(prm, r_omega - x, r_omega, 0.0, 0.0, 0.0, 0.0, be)
     f = ca.Function("fz", [x], [fz])
     assert [float(f(v)) for v in rl] == [0.0] * len(rl)
+
+
+@pytest.mark.parametrize("key", list(FILES))
+def test_casadi_loaded_radius_carries_its_load_at_extreme_inputs(key):
+    """The unrolled CasADi solver (16 Dekker steps; 14 suffice on these inputs) against the relation itself at zero
+    and low loads up to 250 rad/s (the cambered tyre's root above R_omega), 15 kN with |Fx|, |Fy| up to 1.2 Fz, any
+    pressure and camber in range: Rl carries the load to 1e-9 relative wherever NumPy finds a root, and the two
+    agree."""
+    import casadi as ca
+    from mftyre.backend import casadi_backend
+
+    prm = _model(key).params
+    be = casadi_backend()
+    symbols = [ca.SX.sym(n) for n in ("fz", "omega", "fx", "fy", "gamma", "dpi")]
+    fz_s, omega_s, fx_s, fy_s, gamma_s, dpi_s = symbols
+    rl_s, _ = vertical.loaded_radius_62(prm, fz_s, vertical.free_radius(prm, omega_s, be), omega_s, fx_s, fy_s,
+                                        gamma_s, dpi_s, be)
+    rng = np.random.default_rng(5)
+    n = 3000
+    fz = np.r_[np.zeros(n // 10), rng.uniform(0.0, 600.0, n // 3), np.full(n // 10, 15000.0)]
+    fz = np.r_[fz, rng.uniform(0.0, 4.0 * prm.FNOMIN, n - fz.size)]
+    omega = rng.uniform(0.0, 250.0, n)
+    dpi = rng.uniform(prm.PRESMIN, prm.PRESMAX, n) / prm.NOMPRES - 1.0
+    gamma = rng.uniform(prm.CAMMIN, prm.CAMMAX, n)
+    fx, fy = rng.uniform(-1.2, 1.2, (2, n)) * fz
+    inputs = (fz, omega, fx, fy, gamma, dpi)
+    rl = np.array(ca.Function("rl", symbols, [rl_s]).map(n)(*inputs)).ravel()
+    r_omega = vertical.free_radius(prm, omega, NUMPY)
+    rl_numpy, _ = vertical.loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, NUMPY)
+
+    def carried(r):
+        back = vertical.vertical_force_62(prm, r, r_omega, omega, fx, fy, gamma, dpi, NUMPY)
+        return np.abs(back - fz) <= 1e-9 * np.maximum(fz, 1.0)
+
+    has_root = carried(rl_numpy)
+    assert has_root.sum() > 0.7 * n
+    assert np.all(carried(rl)[has_root]), np.c_[inputs][:, has_root & ~carried(rl)].T[:5]
+    np.testing.assert_array_equal(rl[~has_root], r_omega[~has_root])  # no root: the free radius
+    np.testing.assert_allclose(rl, rl_numpy, rtol=0, atol=1e-9 * prm.UNLOADED_RADIUS)
+    if prm.Q_FCY != 0 and prm.Q_FYS3 != 0:  # the lifted roots are among them
+        assert np.sum(rl[has_root] > r_omega[has_root]) > 50
