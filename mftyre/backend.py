@@ -8,8 +8,8 @@ never call ``numpy`` or ``casadi`` directly. Two backends exist:
 
 Both offer the elementary functions, comparisons folded into :meth:`where`, the MATLAB-style ``sign`` (with
 sign(0) = 0) and the "non-zero" sign used by the Magic Formula's singularity guards (sign(0) = +1), and two
-iteration primitives: :meth:`fixed_point` and :meth:`solve_bracketed`, and the grid scan
-:meth:`first_sign_change`. NumPy iterates until every element has
+iteration primitives: :meth:`fixed_point` and :meth:`solve_bracketed`, with :meth:`bracket` (widening or
+grid scan) that feeds the latter. NumPy iterates until every element has
 converged (with an iteration cap); CasADi unrolls a fixed, documented number of iterations so the resulting
 expression graph is static and differentiable.
 """
@@ -96,18 +96,29 @@ class NumpyBackend:
                               "the range the model was fitted for?")
 
     @staticmethod
-    def first_sign_change(fun, x0, f0, scale, offsets, active):
-        """Scan ``x0 + offsets[k] scale`` (increasing offsets) for the first point where ``fun`` is <= 0, on the elements
-        ``active`` (where ``f0 = fun(x0) > 0``). ``fun(x, idx)`` evaluates the elements ``idx``.
+    def bracket(fun, contact, a, b, fa, fb, widen, x0, f0, scale, offsets, max_iter=100):
+        """Brackets for :meth:`solve_bracketed`, two ways. Where ``contact``: ``widen(a, b, fb, idx) -> b'`` moves
+        ``b`` (only while fa and fb have the same non-zero sign, at most ``max_iter`` times) until [a, b] holds a
+        sign change. Elsewhere, where ``f0 = fun(x0) > 0``: a scan of ``x0 + offsets[k] scale`` (increasing offsets)
+        for the first point where ``fun`` is <= 0. ``fun(x, idx)`` evaluates the elements ``idx`` (a tuple of index
+        arrays, or None for all).
 
-        Returns ``(found, lo, hi, f_lo, f_hi)``: where found, [lo, hi] is the first grid interval with a sign
-        change and f_lo > 0 >= f_hi; elsewhere lo = hi = x0 and f_lo = f_hi = 0.
+        Returns ``(found, a, b, fa, fb)``: found is ``contact`` or a scan that changed sign, whose [a, b] is the first
+        grid interval with f(a) > 0 >= f(b); elsewhere a = b = x0 and fa = fb = 0.
         """
-        x0, f0, scale = (np.atleast_1d(np.array(v, dtype=float)) for v in np.broadcast_arrays(x0, f0, scale))
-        lo, hi = x0.copy(), x0.copy()
-        f_lo, f_hi = np.zeros_like(x0), np.zeros_like(x0)
-        found = np.zeros(x0.shape, dtype=bool)
-        idx = np.nonzero(np.broadcast_to(active, x0.shape) & (f0 > 0))
+        x0, f0, scale, a, b, fa, fb = (np.atleast_1d(np.array(v, dtype=float))
+                                       for v in np.broadcast_arrays(x0, f0, scale, a, b, fa, fb))
+        contact = np.broadcast_to(contact, x0.shape)
+        for _ in range(max_iter):  # widening, in contact
+            idx = np.nonzero(contact & (fa * fb > 0))
+            if idx[0].size == 0:
+                break
+            b[idx] = widen(a[idx], b[idx], fb[idx], idx)
+            fb[idx] = fun(b[idx], idx)
+        lifted = ~contact
+        a[lifted], b[lifted], fa[lifted], fb[lifted] = x0[lifted], x0[lifted], 0.0, 0.0
+        found = contact.copy()
+        idx = np.nonzero(lifted & (f0 > 0))  # the scan
         x_prev, f_prev = x0[idx], f0[idx]
         for offset in offsets:
             if idx[0].size == 0:
@@ -116,14 +127,14 @@ class NumpyBackend:
             f = fun(x, idx)
             hit = f <= 0
             hit_idx = tuple(i[hit] for i in idx)
-            lo[hit_idx], hi[hit_idx], f_lo[hit_idx], f_hi[hit_idx] = x_prev[hit], x[hit], f_prev[hit], f[hit]
+            a[hit_idx], b[hit_idx], fa[hit_idx], fb[hit_idx] = x_prev[hit], x[hit], f_prev[hit], f[hit]
             found[hit_idx] = True
             idx = tuple(i[~hit] for i in idx)
             x_prev, f_prev = x[~hit], f[~hit]
-        return found, lo, hi, f_lo, f_hi
+        return found, a, b, fa, fb
 
     @staticmethod
-    def solve_bracketed(fun, a, b, fa, fb, xtol, widen=None, max_iter=100, unrolled=None, ftol=0.0):
+    def solve_bracketed(fun, a, b, fa, fb, xtol, max_iter=100, unrolled=None, ftol=0.0):
         """Root of ``fun`` between ``a`` and ``b`` (``fa``, ``fb`` of opposite sign or zero), element-wise.
 
         Dekker's method: secant steps from the best point ``b``, bisection whenever the secant leaves
@@ -132,19 +143,12 @@ class NumpyBackend:
         evaluates the elements ``idx`` (a tuple of index arrays) at ``x``. Iterates until |b - a| <= xtol (plus
         4 ulp of b, for roots far from zero)
         or |f(b)| <= ``ftol`` (a scalar or one value per element) for every element. ``idx`` is None while every
-        element is still iterating (no gathering). ``widen(a, b, fb, idx) -> b'``, if given, first moves ``b`` (only where
-        fa and fb have the same non-zero sign, at most ``max_iter`` times) until the bracket holds a root;
-        elements still without a sign change return the end with the smaller |f|.
+        element is still iterating (no gathering). Elements without a sign change return the end with the smaller
+        |f| (see :meth:`bracket`).
         """
         shape = np.shape(a)
         a, b = np.atleast_1d(np.array(a, dtype=float)), np.atleast_1d(np.array(b, dtype=float))
         fa, fb = np.atleast_1d(np.array(fa, dtype=float)), np.atleast_1d(np.array(fb, dtype=float))
-        for _ in range(max_iter if widen is not None else 0):
-            idx = np.nonzero(fa * fb > 0)
-            if idx[0].size == 0:
-                break
-            b[idx] = widen(a[idx], b[idx], fb[idx], idx)
-            fb[idx] = fun(b[idx], idx)
         swap = np.abs(fa) < np.abs(fb)
         a, b, fa, fb = np.where(swap, b, a), np.where(swap, a, b), np.where(swap, fb, fa), np.where(swap, fa, fb)
         c, fc = a.copy(), fa.copy()
@@ -271,32 +275,32 @@ class CasadiBackend:
             x, aux = step(x)
         return x, aux
 
-    def first_sign_change(self, fun, x0, f0, scale, offsets, active):
-        """The scan of :meth:`NumpyBackend.first_sign_change`, one unrolled evaluation per offset."""
+    def bracket(self, fun, contact, a, b, fa, fb, widen, x0, f0, scale, offsets, max_iter=100):
+        """:meth:`NumpyBackend.bracket` in one set of unrolled evaluations, one per offset: each element needs
+        either the widening or the scan, so each evaluation serves the one it needs (len(offsets) widening steps)."""
         ca = self.ca
-        found = ca.logic_and(active, f0 <= 0) * 0  # all False, as an expression
+        found = contact
         lo = hi = x0
         f_lo = f_hi = 0 * f0
         x_prev, f_prev = x0, f0
-        searching = ca.logic_and(active, f0 > 0)
+        searching = ca.logic_and(ca.logic_not(contact), f0 > 0)
         for offset in offsets:
-            x = x0 + offset * scale
+            widening = ca.logic_and(contact, fa * fb > 0)
+            x = ca.if_else(contact, widen(a, b, fb, None), x0 + offset * scale)
             f = fun(x, None)
+            b, fb = ca.if_else(widening, x, b), ca.if_else(widening, f, fb)
             hit = ca.logic_and(ca.logic_and(searching, ca.logic_not(found)), f <= 0)
             lo, hi = ca.if_else(hit, x_prev, lo), ca.if_else(hit, x, hi)
             f_lo, f_hi = ca.if_else(hit, f_prev, f_lo), ca.if_else(hit, f, f_hi)
             found = ca.logic_or(found, hit)
             x_prev, f_prev = x, f
-        return found, lo, hi, f_lo, f_hi
+        return (found, ca.if_else(contact, a, lo), ca.if_else(contact, b, hi), ca.if_else(contact, fa, f_lo),
+                ca.if_else(contact, fb, f_hi))
 
-    def solve_bracketed(self, fun, a, b, fa, fb, xtol, widen=None, max_iter=100, unrolled=40, ftol=0.0):
-        """Up to 8 widening steps, then ``unrolled`` steps of Dekker's method (see
-        :meth:`NumpyBackend.solve_bracketed`; ``ftol`` is not needed: the final Newton step polishes)."""
+    def solve_bracketed(self, fun, a, b, fa, fb, xtol, max_iter=100, unrolled=40, ftol=0.0):
+        """``unrolled`` steps of Dekker's method (see :meth:`NumpyBackend.solve_bracketed`; ``ftol`` is not
+        needed: the final Newton step polishes)."""
         ca = self.ca
-        for _ in range(8 if widen is not None else 0):
-            same_sign = fa * fb > 0
-            b = ca.if_else(same_sign, widen(a, b, fb, None), b)
-            fb = ca.if_else(same_sign, fun(b, None), fb)
 
         def ordered(a, b, fa, fb):
             swap = ca.fabs(fa) < ca.fabs(fb)
@@ -304,10 +308,12 @@ class CasadiBackend:
                     ca.if_else(swap, fa, fb))
 
         a, b, fa, fb = ordered(a, b, fa, fb)
+        # without a sign change the end with the smaller |f| (as NumPy); with one, the steps need no freezing once
+        # converged: a step of xtol/2 beyond a leaves a bracket of at most xtol round the root
+        start, bracketed = b, fa * fb < 0
         c, fc = a, fa
         for _ in range(unrolled):
             tol = xtol + _ULP4 * ca.fabs(b)
-            open_ = ca.logic_and(fa * fb < 0, ca.fabs(b - a) > tol)
             mid = 0.5 * (a + b)
             secant = b - fb * (b - c) / (fb - fc)
             inside = ca.logic_and(fb != fc, (secant - b) * (secant - mid) <= 0)
@@ -315,11 +321,9 @@ class CasadiBackend:
             new = ca.if_else(ca.fabs(new - b) < 0.5 * tol, b + 0.5 * tol * ca.sign(a - b), new)
             fnew = fun(new, None)
             keep_a = fnew * fa < 0
-            a2, fa2 = ca.if_else(keep_a, a, b), ca.if_else(keep_a, fa, fb)
-            a2, b2, fa2, fb2 = ordered(a2, new, fa2, fnew)
-            a, b, fa, fb, c, fc = (ca.if_else(open_, x2, x) for x2, x in
-                                   ((a2, a), (b2, b), (fa2, fa), (fb2, fb), (b, c), (fb, fc)))
-        best = ca.if_else(ca.fabs(fb) <= ca.fabs(fa), b, a)
+            c, fc = b, fb
+            a, b, fa, fb = ordered(ca.if_else(keep_a, a, b), new, ca.if_else(keep_a, fa, fb), fnew)
+        best = ca.if_else(bracketed, ca.if_else(ca.fabs(fb) <= ca.fabs(fa), b, a), start)
         # one Newton step at the converged point: same value, and derivatives that are exactly those of
         # the implicit function (the unrolled bracketing steps alone would differentiate the iteration)
         x = ca.SX.sym("x") if isinstance(best, ca.SX) else ca.MX.sym("x")

@@ -236,17 +236,13 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     # lifted: the free tyre already carries more than fz (camber deflection at a low load); the root, if any,
     # lies above R_omega, where the camber asymmetry S_Fygamma grows with Rl/R_omega: the first sign change on
     # a grid above R_omega brackets the root nearest to the free radius
-    lifted, lo, hi, f_lo, f_hi = be.first_sign_change(residual, r_omega, f_top, prm.UNLOADED_RADIUS + 0.0 * fz,
-                                                      _LIFT_OFFSETS, True)
-    a = be.where(contact, r_omega - rho_1, lo)
-    b = be.where(contact, r_omega - rho_2, hi)
-    f_a = be.where(contact, f_1, be.where(lifted, f_lo, 0.0 * f_1))
-    f_b = be.where(contact, f_2, be.where(lifted, f_hi, 0.0 * f_2))
+    found, a, b, f_a, f_b = be.bracket(residual, contact, r_omega - rho_1, r_omega - rho_2, f_1, f_2, widen,
+                                       r_omega, f_top, prm.UNLOADED_RADIUS + 0.0 * fz, _LIFT_OFFSETS, max_iter=200)
     # stop at 1e-15 m or once the load is matched to 1e-12 relative (floor 1e-12 N); CasADi unrolls 16 Dekker
     # steps (14 carry the load to 1e-9 on 60,000 extreme points of the three MF 6.2 files at hand)
-    rl = be.solve_bracketed(residual, a, b, f_a, f_b, xtol=1e-15, widen=widen, max_iter=200, unrolled=16,
+    rl = be.solve_bracketed(residual, a, b, f_a, f_b, xtol=1e-15, max_iter=200, unrolled=16,
                             ftol=1e-12 * be.fmax(fz, 1.0))
-    rl = be.where(be.logical_or(contact, lifted), rl, r_omega)
+    rl = be.where(found, rl, r_omega)
     return rl, deflection_62(prm, rl, r_omega, args[4], be)
 
 
