@@ -197,7 +197,8 @@ def _relation_62(prm, rl, terms, be):
 
 #: the scan above the free radius for the root of a lifted tyre, in units of R0, up to R_omega + R0 (as the camber
 #: vanishes the root moves up as 1/sqrt(|gamma|), beyond any contact); finer near R_omega, where most roots lie.
-#: Nine points (each one relation evaluation in the unrolled CasADi graph) find the same root as steps of 0.05 R0
+#: Nine points (each one relation evaluation in the unrolled CasADi graph, shared with the nine widening steps
+#: of a tyre in contact) find the same root as steps of 0.05 R0
 #: on the extreme-input property tests of all three MF 6.2 files (test_vertical_relation)
 _LIFT_OFFSETS = (0.01, 0.025, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0)
 
