@@ -404,9 +404,9 @@ def _eval_grid(args, swept: list[str], prm) -> tuple[dict, tuple[int, ...]]:
 
 def _used(args, model, name, values):
     """The values of input ``name`` the model evaluated (saturated to the .tir range unless --no-limits)."""
-    from .model import INPUT_RANGES
+    from .inputs import RANGE_PARAMETERS
 
-    if args.no_limits or name not in INPUT_RANGES:
+    if args.no_limits or name not in RANGE_PARAMETERS:
         return np.asarray(values, dtype=float)
     return model.used_input(name, values)
 

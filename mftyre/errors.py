@@ -18,5 +18,5 @@ class ModelInputError(MFTyreError, ValueError):
 
 
 class InputClippedWarning(UserWarning):
-    """Inputs outside the .tir ranges were saturated to them (``limits=True``); the message names the input, the
-    range and how many points."""
+    """Inputs outside the .tir ranges were saturated to them (``limits=True``); the message names each such input,
+    its range and how many points."""

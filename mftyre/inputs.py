@@ -1,12 +1,18 @@
-"""Checks of the model inputs shared by every evaluator (NumPy :meth:`mftyre.MFModel.evaluate` and the compiled C
-of :mod:`mftyre.compiled`), so that both reject and warn alike:
+"""Checks of the model inputs shared by every evaluator (NumPy :meth:`mftyre.MFModel.evaluate`, the compiled C of
+:mod:`mftyre.compiled` and the tables of ``mftyre eval``), so that all reject, saturate and warn alike:
 
 * every input must be finite (NaN and +-inf raise :class:`ModelInputError` naming the input);
 * the inflation pressure must be positive;
 * with ``limits=True`` the equations saturate fz, kappa, alpha, gamma and p to the ranges of the .tir file
-  (FZMAX, KPUMIN/KPUMAX, ALPMIN/ALPMAX, CAMMIN/CAMMAX, PRESMIN/PRESMAX): values outside them are evaluated at
-  the bound, and one :class:`InputClippedWarning` per call names each such input, its range and how many
-  points lay outside it. ``limits=False`` evaluates the values as given.
+  (:data:`RANGE_PARAMETERS`): values outside them are evaluated at the bound, and one
+  :class:`InputClippedWarning` per call names each such input, its range (parameter names and values) and how
+  many points lay outside it. ``limits=False`` evaluates the values as given.
+
+Fz has an upper bound only. FZMAX saturates the load everywhere. FZMIN is not a bound of the input: loads in
+(0, FZMIN) are evaluated as given, except that the aligning-torque coefficients and the MF 6.1 deflection use
+max(Fz, FZMIN) and Mx, My scale down below FZMIN (the TNO practice the reference evaluator encodes), so they give
+no warning; Fz <= 0 is no contact, not a range violation either. The compiled C counts one interval per input,
+the same as :func:`saturate` here.
 """
 from __future__ import annotations
 
@@ -16,11 +22,10 @@ import numpy as np
 
 from .errors import InputClippedWarning, ModelInputError
 
-__all__ = ["RANGE_PARAMETERS", "input_ranges", "check_finite", "check_pressure", "count_outside",
-           "warn_outside"]
+__all__ = ["RANGE_PARAMETERS", "input_ranges", "saturate", "check_finite", "check_pressure", "warn_outside"]
 
-#: input -> (.tir parameter of the lower bound or None, of the upper bound, unit); Fz < 0 is no contact, not
-#: a range violation.
+#: input -> (.tir parameter of the lower bound or None, of the upper bound, unit): the ranges ``limits=True``
+#: saturates the inputs to (see the module docstring for Fz and FZMIN).
 RANGE_PARAMETERS = {
     "fz": (None, "FZMAX", "N"),
     "kappa": ("KPUMIN", "KPUMAX", "-"),
@@ -32,7 +37,9 @@ _MIRRORED = ("alpha", "gamma")  # ranges of the measured side, negated for a tyr
 
 
 def input_ranges(params, mirrored: bool = False) -> dict:
-    """{input: (lower, upper, description)} in the axes of the caller (a mirrored tyre sees -ALPMAX..-ALPMIN)."""
+    """{input: (lower, upper, description)} in the axes of the caller (a mirrored tyre sees -ALPMAX..-ALPMIN);
+    the description names the parameters, their values and the unit, e.g. 'PRESMIN..PRESMAX = [186000, 255000]
+    Pa'."""
     ranges = {}
     for name, (lo_name, hi_name, unit) in RANGE_PARAMETERS.items():
         lo = -np.inf if lo_name is None else float(params[lo_name])
@@ -42,6 +49,15 @@ def input_ranges(params, mirrored: bool = False) -> dict:
         bounds = f"{lo_name}..{hi_name}" if lo_name else hi_name
         ranges[name] = (lo, hi, f"{bounds} = [{lo:.6g}, {hi:.6g}] {unit}")
     return ranges
+
+
+def saturate(values, bounds) -> tuple[np.ndarray, int]:
+    """(values used by ``limits=True``, number of values outside) for ``bounds`` = (lower, upper, ...) of
+    :func:`input_ranges`."""
+    lo, hi = bounds[0], bounds[1]
+    values = np.asarray(values, dtype=float)
+    outside = int(np.count_nonzero((values < lo) | (values > hi)))
+    return (np.clip(values, lo, hi) if outside else values), outside
 
 
 def check_finite(name: str, values) -> None:
@@ -60,15 +76,9 @@ def check_pressure(p, name: str = "p") -> None:
         raise ModelInputError(f"inflation pressure {name!r} must be positive (in Pa); got minimum {np.min(p)!r}")
 
 
-def count_outside(arrays: dict, ranges: dict) -> dict:
-    """{input: number of values outside its range} for the inputs of ``arrays`` that have a range."""
-    return {name: int(np.count_nonzero((arr < ranges[name][0]) | (arr > ranges[name][1])))
-            for name, arr in arrays.items() if name in ranges}
-
-
 def warn_outside(counts: dict, total: int, ranges: dict, stacklevel: int = 3) -> None:
     """One :class:`InputClippedWarning` naming every input with points outside its range (none if no such)."""
     parts = [f"{name} outside {ranges[name][2]} at {n} of {total} point(s)" for name, n in counts.items() if n]
     if parts:
-        warnings.warn("inputs saturated to the .tir ranges (limits=True; limits=False evaluates them as given): "
+        warnings.warn("inputs outside the .tir ranges, saturated to them (limits=False evaluates them as given): "
                       + "; ".join(parts), InputClippedWarning, stacklevel=stacklevel)

@@ -16,16 +16,16 @@ conicity, the camber-induced shifts) into their mirror images and keeps the symm
 """
 from __future__ import annotations
 
-import warnings
+import functools
 
 import numpy as np
 
-from .errors import InputClippedWarning, ModelInputError
-from .inputs import check_pressure
+from .errors import ModelInputError
+from .inputs import check_finite, check_pressure, input_ranges, saturate, warn_outside
 from .formula import OUTPUT_NAMES, Modes, steady_state, vertical
 from .backend import NUMPY
 
-__all__ = ["MFModel", "MFOutputs", "load_tir", "OUTPUT_UNITS", "INPUT_RANGES"]
+__all__ = ["MFModel", "MFOutputs", "load_tir", "OUTPUT_UNITS"]
 
 #: Unit and meaning of every output.
 OUTPUT_UNITS = {
@@ -60,12 +60,6 @@ OUTPUT_UNITS = {
     "sigmay": ("m", "lateral relaxation length"),
 }
 assert tuple(OUTPUT_UNITS) == OUTPUT_NAMES
-
-#: The .tir ranges that ``limits=True`` saturates the inputs to (Fz: FZMAX saturates; FZMIN raises the load in
-#: the aligning torque and the MF 6.1 deflection only).
-INPUT_RANGES = {"fz": ("FZMIN", "FZMAX"), "kappa": ("KPUMIN", "KPUMAX"), "alpha": ("ALPMIN", "ALPMAX"),
-                "gamma": ("CAMMIN", "CAMMAX"), "p": ("PRESMIN", "PRESMAX")}
-_INPUT_UNITS = {"fz": "N", "kappa": "", "alpha": " rad", "gamma": " rad", "p": " Pa"}
 
 _INPUT_ORDER = ("fz", "kappa", "alpha", "gamma", "phit", "vx", "p", "omega")
 _CHUNK = 16384
@@ -157,10 +151,11 @@ class MFModel:
         ('published' (4.99) or 'mfeval').
 
         ``limits=True`` (default) saturates kappa, alpha, gamma, p and Fz to the .tir ranges (KPUMIN/KPUMAX,
-        ALPMIN/ALPMAX, CAMMIN/CAMMAX, PRESMIN/PRESMAX, FZMAX; FZMIN raises the load in the aligning torque and the
-        deflection) and switches on the low-speed model below VXLOW; one :class:`mftyre.InputClippedWarning` per
-        input and call names the input, the range and how many points were outside it (the outputs kappa,
-        alpha, p carry the values used). ``limits=False`` evaluates the equations at the inputs as given,
+        ALPMIN/ALPMAX, CAMMIN/CAMMAX, PRESMIN/PRESMAX, FZMAX; FZMIN is no bound of the input, it raises the load
+        in the aligning torque and the MF 6.1 deflection only, without a warning, see :mod:`mftyre.inputs`) and
+        switches on the low-speed model below VXLOW; one :class:`mftyre.InputClippedWarning` per call names every
+        input outside its range, the range and how many points were outside it (the outputs kappa, alpha, p
+        carry the values used). ``limits=False`` evaluates the equations at the inputs as given,
         extrapolating beyond the fitted ranges, with no low-speed model. ``limits="smooth"`` saturates with a
         1 % slope left beyond the ranges (for optimisers, see :class:`mftyre.formula.Modes`).
         """
@@ -172,42 +167,25 @@ class MFModel:
         arrays = _as_float_arrays(inputs)
         self._check_pressure(arrays["p"])
         if limits:
-            for name, (count, lo, hi) in self.clipped_inputs(arrays).items():
-                warnings.warn(f"{name}: {count} of {arrays[name].size} point(s) outside the .tir range "
-                              f"[{lo:g}, {hi:g}]{_INPUT_UNITS[name]} ({' to '.join(INPUT_RANGES[name])}) were "
-                              + ("raised to FZMIN in the aligning torque and deflection or saturated at FZMAX"
-                                 if name == "fz" else "saturated to it") + "; limits=False evaluates them as given",
-                              InputClippedWarning, stacklevel=2)
+            ranges = self._input_ranges
+            counts = {name: saturate(arrays[name], ranges[name])[1] for name in ranges}
+            warn_outside(counts, arrays["fz"].size, ranges)
         out = self._evaluate_arrays(arrays, omega is not None, modes)
         _check_finite_outputs(out, arrays)
         return MFOutputs(**out)
 
     def input_range(self, name: str) -> tuple[float, float]:
-        """(lo, hi) that ``limits=True`` saturates input ``name`` to, in the mounted side's axes (a mirrored
-        model's alpha and gamma ranges are mirrored too)."""
-        lo_name, hi_name = INPUT_RANGES[name]
-        lo, hi = float(self._params[lo_name]), float(self._params[hi_name])
-        return (-hi, -lo) if self.mirrored and name in _MIRRORED_INPUTS else (lo, hi)
+        """(lo, hi) that ``limits=True`` saturates input ``name`` to (:mod:`mftyre.inputs`), in the mounted side's
+        axes (a mirrored model's alpha and gamma ranges are mirrored too); Fz: (-inf, FZMAX)."""
+        return self._input_ranges[name][:2]
+
+    @functools.cached_property
+    def _input_ranges(self) -> dict:
+        return input_ranges(self._params, self.mirrored)
 
     def used_input(self, name: str, values):
-        """The values of input ``name`` that ``limits=True`` evaluates (saturated to :meth:`input_range`; Fz at
-        FZMAX only, since FZMIN acts on a few terms)."""
-        lo, hi = self.input_range(name)
-        values = np.asarray(values, dtype=float)
-        return np.minimum(values, hi) if name == "fz" else np.clip(values, lo, hi)
-
-    def clipped_inputs(self, arrays: dict) -> dict:
-        """{input: (points outside the range, lo, hi)} for the inputs of ``arrays`` that ``limits=True`` changes."""
-        out = {}
-        for name in INPUT_RANGES:
-            if name not in arrays or arrays[name] is None:
-                continue
-            v = np.asarray(arrays[name], dtype=float)
-            lo, hi = self.input_range(name)
-            outside = (v > hi) | ((v < lo) & (v > 0) if name == "fz" else (v < lo))
-            if outside.any():
-                out[name] = (int(np.count_nonzero(outside)), lo, hi)
-        return out
+        """The values of input ``name`` that ``limits=True`` evaluates (saturated to :meth:`input_range`)."""
+        return saturate(values, self.input_range(name))[0]
 
     def _evaluate_arrays(self, arrays: dict, omega_given, modes: Modes) -> dict:
         """Evaluate broadcast float arrays (no validation). ``omega_given``: bool or boolean array."""
@@ -421,10 +399,7 @@ def _as_float_arrays(inputs: dict) -> dict:
             arr = np.asarray(value, dtype=float)
         except (TypeError, ValueError) as exc:
             raise ModelInputError(f"input {name!r} must be numeric, got {value!r}") from exc
-        bad = ~np.isfinite(arr)
-        if bad.any():
-            where = np.argwhere(bad)[:5].tolist() if arr.ndim else "(scalar)"
-            raise ModelInputError(f"input {name!r} must be finite, got {arr[bad][0]!r} at {where}")
+        check_finite(name, arr)
         arrays[name] = arr
     try:
         broadcast = np.broadcast_arrays(*arrays.values())

@@ -365,8 +365,8 @@ def test_compile_c_from_threads_into_one_library(tmp_path):
 
 
 def test_shared_range_check_gives_the_compiled_warning(compiled):
-    """mftyre.inputs (for MFModel.evaluate) counts and words the warning exactly as the compiled C does."""
-    from mftyre.inputs import count_outside, input_ranges, warn_outside
+    """mftyre.inputs counts and words the warning of MFModel.evaluate exactly as the compiled C does."""
+    from mftyre.inputs import input_ranges, saturate, warn_outside
 
     model, f = compiled["mf61"]
     prm = model.params
@@ -376,11 +376,14 @@ def test_shared_range_check_gives_the_compiled_warning(compiled):
         f.batch(*x.values())
     ranges = input_ranges(prm, model.mirrored)
     arrays = {k: np.broadcast_to(v, (3,)) for k, v in x.items()}
-    counts = count_outside(arrays, ranges)
+    counts = {name: saturate(arrays[name], ranges[name])[1] for name in ranges}
     assert counts == {"fz": 1, "kappa": 2, "alpha": 0, "gamma": 0, "p": 1}
     with pytest.warns(InputClippedWarning) as shared_warning:
         warn_outside(counts, 3, ranges)
     assert str(shared_warning[0].message) == str(compiled_warning[0].message)
+    with pytest.warns(InputClippedWarning) as numpy_warning:
+        model.evaluate(**x)
+    assert [str(w.message) for w in numpy_warning] == [str(compiled_warning[0].message)]
 
 
 @pytest.mark.parametrize("tag", FILES)

@@ -1,4 +1,4 @@
-"""Inputs outside the .tir ranges: one InputClippedWarning per input and call (name, range, count), tables and
+"""Inputs outside the .tir ranges: one InputClippedWarning per call naming each input, range and count, tables and
 plot legends of `mftyre eval` show the values used."""
 from __future__ import annotations
 
@@ -23,19 +23,33 @@ def _caught(fn):
     return result, [w for w in caught if issubclass(w.category, InputClippedWarning)]
 
 
-def test_one_warning_per_clipped_input_naming_range_and_count():
+def test_one_warning_per_call_naming_each_clipped_input_range_and_count():
     model = mftyre.load_tir(TIR61)
     prm = model.params
     p = np.array([1.76e5, 2.2e5, 2.64e5, 3.0e5])
     kappa = np.array([0.0, 0.1, 5.0, -5.0])
     out, caught = _caught(lambda: model.evaluate(4000.0, kappa, 0.0, p=p))
     assert issubclass(InputClippedWarning, UserWarning)
-    messages = sorted(str(w.message) for w in caught)
-    assert len(messages) == 2  # kappa and p, once each
-    kappa_msg, p_msg = messages
-    assert kappa_msg.startswith("kappa: 2 of 4") and f"[{prm.KPUMIN:g}, {prm.KPUMAX:g}]" in kappa_msg
-    assert p_msg.startswith("p: 3 of 4") and "[186000, 255000] Pa" in p_msg and "PRESMIN" in p_msg
+    assert len(caught) == 1  # kappa and p in one warning
+    message = str(caught[0].message)
+    assert f"kappa outside KPUMIN..KPUMAX = [{prm.KPUMIN:g}, {prm.KPUMAX:g}] - at 2 of 4 point(s)" in message
+    assert "p outside PRESMIN..PRESMAX = [186000, 255000] Pa at 3 of 4 point(s)" in message
+    assert "alpha" not in message and "fz" not in message and "gamma" not in message
     np.testing.assert_array_equal(out.p, np.clip(p, prm.PRESMIN, prm.PRESMAX))  # outputs carry the used values
+
+
+def test_fz_warns_above_fzmax_only():
+    """FZMAX saturates the load; loads in (0, FZMIN) are evaluated as given except in the aligning torque and
+    the deflection (no bound of the input, no warning), Fz <= 0 is no contact."""
+    model = mftyre.load_tir(TIR61)
+    prm = model.params
+    fz = np.array([-100.0, 0.0, 0.5 * prm.FZMIN, 4000.0, prm.FZMAX + 1.0, 2.0 * prm.FZMAX])
+    _, caught = _caught(lambda: model.evaluate(fz, 0.0, 0.05))
+    assert len(caught) == 1
+    assert str(caught[0].message).endswith(f"fz outside FZMAX = [-inf, {prm.FZMAX:g}] N at 2 of 6 point(s)")
+    np.testing.assert_array_equal(model.used_input("fz", fz), np.minimum(fz, prm.FZMAX))
+    _, caught = _caught(lambda: model.evaluate(np.array([0.5 * prm.FZMIN, 0.0]), 0.0, 0.05))
+    assert caught == []
 
 
 def test_no_warning_in_range_or_without_limits():
@@ -53,7 +67,8 @@ def test_mirrored_model_warns_in_its_own_axes():
     lo, hi = other.input_range("gamma")
     assert (lo, hi) == (-model.params.CAMMAX, -model.params.CAMMIN)
     _, caught = _caught(lambda: other.evaluate(4000.0, 0.0, 0.0, np.array([lo - 0.01, hi - 1e-3])))
-    assert len(caught) == 1 and str(caught[0].message).startswith("gamma: 1 of 2")
+    assert len(caught) == 1
+    assert f"gamma outside CAMMIN..CAMMAX = [{lo:g}, {hi:g}] rad at 1 of 2 point(s)" in str(caught[0].message)
 
 
 def test_cli_table_and_header_show_the_pressures_used(capsys):
