@@ -63,31 +63,37 @@ def swift_wheel(models):
         return SwiftWheel(models["62"], CLEAT)
 
 
+def _callbacks(messages: list):
+    """fmpy callbacks whose logger appends (status, message) to ``messages``; the caller keeps them alive. fmpy's
+    logger proxy holds a pointer to the last Python logger registered, so an instance must not log through fmpy's
+    default callbacks once another instance's logger may have been freed."""
+    from fmpy.fmi1 import calloc, free
+    from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
+                           fmi2CallbackLoggerTYPE)
+    from fmpy.logging import addLoggerProxy
+
+    cb = fmi2CallbackFunctions()
+    cb.logger = fmi2CallbackLoggerTYPE(lambda env, inst, status, category, msg: messages.append((status,
+                                                                                                  msg.decode())))
+    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    addLoggerProxy(byref(cb))
+    return cb
+
+
 class Slave:
     """One FMU instance driven call by call through fmpy, its log messages collected."""
 
     def __init__(self, path, tmp_path, name="tyre"):
         from fmpy import extract, read_model_description
-        from fmpy.fmi1 import calloc, free
-        from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-        from fmpy.logging import addLoggerProxy
+        from fmpy.fmi2 import FMU2Slave
 
         self.md = read_model_description(path)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.outputs = [v.name for v in self.md.modelVariables if v.causality == "output"]
         self.unzipped = extract(path, unzipdir=str(tmp_path / f"unz_{name}_{id(self)}"))
         self.messages = []
-
-        def logger(env, inst, status, category, message):
-            self.messages.append((status, message.decode()))
-
-        cb = fmi2CallbackFunctions()
-        cb.logger = fmi2CallbackLoggerTYPE(logger)
-        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        addLoggerProxy(byref(cb))
-        self._cb = cb
+        self._cb = cb = _callbacks(self.messages)
         self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.unzipped,
                              modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
         self.fmu.instantiate(callbacks=cb, loggingOn=True)
@@ -390,28 +396,20 @@ def test_failed_initialisation_is_an_error(fmus, tmp_path, kind, start, text):
 
 
 def test_wrong_guid_is_refused(fmus, tmp_path):
-    """fmi2Instantiate with another GUID returns NULL and logs the cause. The test passes its own logger: fmpy's
-    logger proxy keeps a pointer to the last Python logger registered (by any earlier instance), which may be
-    freed by then, so fmpy's default callbacks cannot be used once another instance logged."""
+    """fmi2Instantiate with another GUID returns NULL and logs the cause (through the test's own logger, see
+    :func:`_callbacks`)."""
     from fmpy import extract, read_model_description
-    from fmpy.fmi1 import calloc, free
-    from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                           fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-    from fmpy.logging import addLoggerProxy
+    from fmpy.fmi2 import FMU2Slave
 
     messages = []
-    cb = fmi2CallbackFunctions()
-    cb.logger = fmi2CallbackLoggerTYPE(lambda env, inst, status, cat, msg: messages.append(msg.decode()))
-    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-    addLoggerProxy(byref(cb))
+    cb = _callbacks(messages)
     md = read_model_description(fmus["steady"])
     fmu = FMU2Slave(guid="{00000000-0000-0000-0000-000000000000}", unzipDirectory=extract(
         fmus["steady"], unzipdir=str(tmp_path / "g")), modelIdentifier=md.coSimulation.modelIdentifier,
         instanceName="x")
     with pytest.raises(Exception):
         fmu.instantiate(callbacks=cb)
-    assert any("GUID {00000000-0000-0000-0000-000000000000} does not match" in m for m in messages), messages
+    assert any("GUID {00000000-0000-0000-0000-000000000000} does not match" in m for _, m in messages), messages
 
 
 @pytest.mark.parametrize("kind", ["steady", "transient", "swift"])
