@@ -35,7 +35,8 @@ library is compiled under a unique temporary name in that folder and renamed ato
 ``<stem>_<sha-256 of the library>.so``, then its description ``<stem>_<sha>.json`` (inputs, outputs, checks, size
 and SHA-256 of the library) is written the same way, so concurrent threads and processes never see half a pair.
 Before a library is loaded its size and SHA-256 are checked against the description: a truncated or altered file
-is rebuilt (from the cache) or refused. Compiler: ``$CC`` or ``cc``.
+is rebuilt (from the cache) or refused. Compiler: ``$CC`` or ``cc``. :func:`cached_library` is this cache for
+every compiled library of the project (the SWIFT stepper of :mod:`swift.simulate` too).
 """
 from __future__ import annotations
 
@@ -60,7 +61,7 @@ from .errors import MFTyreError, ModelInputError
 from .inputs import check_finite, check_pressure, input_ranges, warn_outside
 
 __all__ = ["CompiledFunction", "CacheSecurityError", "compile_model", "compile_function", "compile_external",
-           "compile_c", "cache_dir", "generate_c"]
+           "cached_library", "compile_c", "cache_dir", "generate_c"]
 
 _BLOCK = 256  # points per call of the vectorised kernel (inputs broadcast into stack buffers of this length)
 # -O1 with loop vectorisation runs the straight-line kernel as fast as -O3 and compiles in half the time.
@@ -560,12 +561,14 @@ def _stem(prefix: str, key: str) -> str:
     return f"{prefix}_{hashlib.sha256(build.encode()).hexdigest()[:24]}"
 
 
-def _build(directory: Path, stem: str, write_source, flags, libraries, meta: dict) -> Path:
-    """Compile the C file that ``write_source(folder)`` writes into ``directory`` as ``<stem>_<sha>.so`` and its
-    description ``<stem>_<sha>.json`` (``meta`` plus the library's size and SHA-256), each renamed atomically."""
+def _build(directory: Path, stem: str, generate) -> Path:
+    """Compile the C file that ``generate(folder)`` writes (it returns ``(source, flags, libraries, meta)``) into
+    ``directory`` as ``<stem>_<sha>.so`` and its description ``<stem>_<sha>.json`` (``meta`` plus the library's
+    size and SHA-256), each renamed atomically."""
     with tempfile.TemporaryDirectory(dir=directory) as tmp:
         built = Path(tmp) / f"{stem}.so"
-        compile_c(write_source(Path(tmp)), built, flags, libraries)
+        source, flags, libraries, meta = generate(Path(tmp))
+        compile_c(source, built, flags, libraries)
         data = built.read_bytes()
         sha = hashlib.sha256(data).hexdigest()
         library = directory / f"{stem}_{sha[:16]}.so"
@@ -589,28 +592,45 @@ def _find_cached(directory: Path, stem: str):
     return None
 
 
+def cached_library(prefix: str, key: str, generate, directory: Path | None = None) -> Path:
+    """The one way compiled code enters mftyre: the library for ``key``, verified before it is returned.
+
+    Looks in the cache (``directory`` or :func:`cache_dir`) for ``<prefix>_<stem>_<sha>.so`` whose size and
+    SHA-256 match its description and that, like its folder, belongs to you and is writable by no one else
+    (:class:`CacheSecurityError` otherwise); a truncated or altered library is skipped and rebuilt. When none is
+    found, ``generate(folder)`` writes the C source into a temporary ``folder`` and returns ``(source, flags,
+    libraries, meta)`` (compiler flags, libraries to link, and the description's fields ``inputs``, ``outputs``,
+    ``checks`` and any others); it is compiled under a unique temporary name and renamed atomically with its
+    description, so threads and processes building the same key at once all succeed. ``key`` must name
+    everything else that defines the code: this module's, the backend's and the equations' sources, the
+    compiler and the platform are added here. Load the returned path at once (``ctypes.CDLL``,
+    ``casadi.external``)."""
+    directory = _private_dir(directory) if directory is not None else cache_dir()
+    stem = _stem(prefix, key)
+    found = _find_cached(directory, stem)
+    if found is not None:
+        return found
+    library = _build(directory, stem, generate)
+    _verify(library)
+    return library
+
+
 def compile_function(function, key: str, directory: Path | None = None, output_names=None, checks=None) -> Path:
     """Generate C for the SX ``function`` (scalar inputs and outputs), compile and cache it under ``key``;
     returns the library. ``output_names`` (default: the function's) become :attr:`CompiledFunction.outputs`;
     ``checks``: see :func:`generate_c`. ``function`` may also be a callable returning it (called only when the
     library is not cached)."""
-    directory = _private_dir(directory) if directory is not None else cache_dir()
-    stem = _stem("mftyre", key)
-    found = _find_cached(directory, stem)
-    if found is not None:
-        return found
-    flags, libraries, tag = _toolchain()
-    if not hasattr(function, "n_in"):
-        function = function()
-    checks = checks or [{} for _ in range(function.n_in())]
+    def generate(folder):
+        fn = function if hasattr(function, "n_in") else function()
+        flags, libraries, tag = _toolchain()
+        fn_checks = checks or [{} for _ in range(fn.n_in())]
+        source = folder / "mftyre.c"
+        source.write_text(generate_c(fn, fn_checks))
+        return source, flags, libraries, {"inputs": list(fn.name_in()),
+                                          "outputs": list(output_names or fn.name_out()), "checks": fn_checks,
+                                          "toolchain": tag}
 
-    def write_source(folder):
-        (folder / f"{stem}.c").write_text(generate_c(function, checks))
-        return folder / f"{stem}.c"
-
-    meta = {"inputs": list(function.name_in()), "outputs": list(output_names or function.name_out()),
-            "checks": checks, "toolchain": tag}
-    return _build(directory, stem, write_source, flags, libraries, meta)
+    return cached_library("mftyre", key, generate, directory)
 
 
 def _key(model, options: dict) -> str:
@@ -674,23 +694,19 @@ def compile_external(model, inputs=("fz", "kappa", "alpha"), outputs=("fx", "fy"
     outputs = tuple(outputs or OUTPUT_NAMES)
     key = _key(model, {"external": name, "inputs": list(inputs), "outputs": list(outputs), "hessian": hessian,
                        **options})
-    directory = _private_dir(directory) if directory is not None else cache_dir()
-    stem = _stem("mftyre_ext", key)
-    library = _find_cached(directory, stem)
-    if library is None:
+
+    def generate(folder):
         f = model.casadi_function(inputs, outputs, name=name, **options)
         sx = f.sx_in()
         f = ca.Function(name, sx, f.call(sx), f.name_in(), f.name_out(), {"cse": True})
         jac = f.jacobian()
-
-        def write_source(folder):
-            gen = ca.CodeGenerator(f"{stem}.c", {"with_header": False})
-            for g in (f, jac, jac.jacobian()) if hessian else (f, jac):
-                gen.add(g)
-            return Path(gen.generate(str(folder) + os.sep))
-
+        gen = ca.CodeGenerator("mftyre_ext.c", {"with_header": False})
+        for g in (f, jac, jac.jacobian()) if hessian else (f, jac):
+            gen.add(g)
         meta = {"inputs": list(f.name_in()), "outputs": list(f.name_out()), "checks": [], "toolchain": "casadi",
                 "function": name, "hessian": hessian}
-        library = _build(directory, stem, write_source, ("-O2", "-fPIC", "-shared", "-ffp-contract=off"), ("-lm",),
-                         meta)
+        flags = ("-O2", "-fPIC", "-shared", "-ffp-contract=off")
+        return Path(gen.generate(str(folder) + os.sep)), flags, ("-lm",), meta
+
+    library = cached_library("mftyre_ext", key, generate, directory)
     return ca.external(name, str(library))

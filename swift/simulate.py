@@ -26,8 +26,8 @@ Step API (for an FMU): ``state_next, outputs = step(state, inputs, dt)``.
   ISO-W), contact forces in the effective plane, deflection rho, lever arm rl, effective rolling radius re,
   half contact length a, tandem base ls, effective height w and slope beta, transient slips, contact speed.
 
-Integration: classical Runge-Kutta (RK4), ``substeps`` per step, all in one compiled CasADi function (C, cached like
-:mod:`mftyre.compiled`, keyed by the parameters and the equations' source); the cam heights come from a window of
+Integration: classical Runge-Kutta (RK4), ``substeps`` per step, all in one compiled CasADi function (C, built and
+loaded through :func:`mftyre.compiled.cached_library`: verified, keyed by the parameters and the equations' source); the cam heights come from a window of
 ``window`` samples of the cam-height table around the wheel, passed by pointer (no copy), so one compiled function
 serves any road. The window must cover the wheel's travel in one step plus ``TANDEM_REACH``: a longer step is split
 into equal parts, so results do not depend on speed, step size or start position. :meth:`SwiftTyre.run` runs the
@@ -41,14 +41,13 @@ import hashlib
 import json
 import math
 import os
-import tempfile
 import threading
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from mftyre.compiled import cache_dir, compile_c  # the core's cache folder and compiler call
+from mftyre.compiled import cached_library  # the verified cache of every compiled library
 from mftyre.backend import NUMPY
 from mftyre.errors import ModelInputError
 from mftyre.formula import vertical
@@ -236,13 +235,15 @@ class SwiftTyre:
         return self._step_fn
 
     def _key(self, kind):
+        import casadi as ca
+
         prm = self.model.params
         payload = {"p": {k: repr(prm[k]) for k in prm}, "side": self.model.side, "axle": self.axle,
                    "rim": self.rim, "window": self.window, "substeps": self.substeps,
                    "constants": repr(self.constants), "kind": kind,
                    "passes": (CONTACT_PASSES, WARM_PASSES), "cflags": _CFLAGS,
-                   "equations": _SOURCE_HASH}
-        return "swift_" + hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
+                   "equations": _SOURCE_HASH, "casadi": ca.__version__}
+        return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
     @property
     def cam_pairs(self) -> np.ndarray:
@@ -578,26 +579,24 @@ CASADI_SYMBOL_EXPORT int swift_run(void** p) {
 _CFLAGS = ("-O3", "-fno-math-errno", "-std=gnu89")
 
 
-def _compile(tyre, key: str) -> Path:
-    """C code of the MX step as it is (no SX expansion) plus :data:`_DRIVER`, compiled with the system compiler
-    and cached in :func:`mftyre.compiled.cache_dir`."""
+def _library(tyre, key: str) -> Path:
+    """The tyre's library through :func:`mftyre.compiled.cached_library` (verified before it is loaded, built
+    when missing or damaged): C code of the MX step as it is (no SX expansion) and the right-hand side, plus
+    :data:`_DRIVER`."""
     import casadi as ca
 
-    directory = cache_dir()
-    directory.mkdir(parents=True, exist_ok=True)
-    library = directory / f"{key[:40]}.so"
-    if library.exists():
-        return library
-    with tempfile.TemporaryDirectory(dir=directory) as tmp:
-        gen = ca.CodeGenerator(f"{key[:40]}.c", {"with_header": False})
+    def generate(folder):
+        gen = ca.CodeGenerator("swift.c", {"with_header": False})
         for function in (tyre.step_function, tyre.rhs_function):
             gen.add(function)
-        source = Path(gen.generate(str(Path(tmp)) + os.sep))
+        source = Path(gen.generate(str(folder) + os.sep))
         with source.open("a") as f:
             f.write(_DRIVER % dict(nx=len(STATE_NAMES), ny=len(OUTPUT_NAMES), nu=_NU, ni=_NI, window=tyre.window,
                                    height=int(tyre.axle == "height"), speed=int(tyre.rim == "speed"), **_S))
-        compile_c(source, library, flags=(*_CFLAGS, "-fPIC", "-shared"))
-    return library
+        meta = {"inputs": list(INPUT_NAMES), "outputs": list(OUTPUT_NAMES), "checks": [], "states": list(STATE_NAMES)}
+        return source, (*_CFLAGS, "-fPIC", "-shared"), ("-lm",), meta
+
+    return cached_library("swift", key, generate)
 
 
 class _Compiled:
@@ -605,7 +604,7 @@ class _Compiled:
     a lock serialises the calls of threads sharing the tyre. The cam grid and table are passed by pointer."""
 
     def __init__(self, tyre, key):
-        self._lib = ctypes.CDLL(str(_compile(tyre, key)))
+        self._lib = ctypes.CDLL(str(_library(tyre, key)))
         ll = ctypes.c_longlong
         sz = [ll() for _ in range(4)]
         work = self._lib.swift_step_work

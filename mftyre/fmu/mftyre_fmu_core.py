@@ -374,8 +374,8 @@ def export_swift_libraries(model, directory) -> dict:
         for rim in ("speed", "torque"):
             tyre = SwiftTyre(model, Flat(), axle=axle, rim=rim, x_range=(0.0, 1.0), table_dx=SWIFT_TABLE_DX,
                              window=SWIFT_WINDOW, compiled=True)
-            for lib in (tyre._compiled._lib,):
-                src = Path(lib._name)
+            library = Path(tyre._compiled._lib._name)
+            for src in (library, library.with_suffix(".json")):  # the library and its verified description
                 shutil.copy2(src, directory / src.name)
                 names.append(src.name)
     return {"platform": _platform(), "files": names}
@@ -393,11 +393,12 @@ def install_swift_libraries(directory, entry) -> int:
     cache = cache_dir()
     cache.mkdir(parents=True, exist_ok=True)
     n = 0
-    for name in entry.get("files", ()):
+    for name in entry.get("files", ()):  # each library before its description (mftyre.compiled checks the pair)
         target = cache / name
         if not target.exists() and (Path(directory) / name).is_file():
             tmp = cache / f".{name}.{os.getpid()}.tmp"
-            shutil.copy2(Path(directory) / name, tmp)
+            shutil.copyfile(Path(directory) / name, tmp)
+            os.chmod(tmp, 0o644)
             os.replace(tmp, target)
             n += 1
     return n
