@@ -1,0 +1,154 @@
+"""The SWIFT step library goes through mftyre.compiled's verified cache (cached_library): damaged libraries are
+rebuilt, libraries others could write are refused, every change of what defines the code gives a new library,
+concurrent builds all succeed; separate tyres sharing one library step from threads at once."""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import threading
+import warnings
+
+import numpy as np
+import pytest
+
+import mftyre
+from mftyre.compiled import CacheSecurityError
+from swift import Cleat, StepInputs, SwiftTyre
+from swift import simulate
+
+from conftest import TIR_FILES
+
+V = 40 / 3.6
+
+
+@pytest.fixture(scope="module")
+def model():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # the sample file's unmodelled parameters
+        return mftyre.load_tir(TIR_FILES / "car_205_60R15_mf62_swift.tir")
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    folder = tmp_path / "cache"
+    monkeypatch.setenv("MFTYRE_CACHE", str(folder))
+    return folder
+
+
+def _tyre(model, compiled=False, **kwargs):  # compiled=False: nothing loaded into this process
+    return SwiftTyre(model, Cleat(0.3, 0.05, 0.01), x_range=(0.0, 3.0), compiled=compiled, **kwargs)
+
+
+def _build(tyre):
+    return simulate._library(tyre, tyre._key("step"))
+
+
+def _intact(library):
+    meta = json.loads(library.with_suffix(".json").read_text())
+    data = library.read_bytes()
+    return len(data) == meta["size"] and hashlib.sha256(data).hexdigest() == meta["sha256"]
+
+
+def _steps(tyre, vx=V, n=40):
+    u = StepInputs(x=0.0, vx=vx, z=0.2915, omega=vx / 0.3044)
+    s = tyre.initial_state(u)
+    for k in range(n):
+        s, out = tyre.step(s, StepInputs(x=vx * k * 1e-3, vx=vx, z=0.2915, omega=vx / 0.3044), 1e-3)
+    return np.array(s), dict(out)
+
+
+def test_truncated_or_altered_swift_library_is_rebuilt_not_loaded(model, cache):
+    """(old: any file of the library's name was loaded as it was)"""
+    tyre = _tyre(model)
+    library = _build(tyre)
+    original = library.read_bytes()
+    assert _intact(library) and len(list(cache.glob("swift_*.so"))) == 1
+    with open(library, "r+b") as fh:  # cut short (disk full, a killed copy)
+        fh.truncate(len(original) // 3)
+    rebuilt = _build(tyre)
+    assert _intact(rebuilt) and rebuilt.stat().st_size > len(original) // 3
+    data = bytearray(rebuilt.read_bytes())  # altered, same size
+    data[len(data) // 2] ^= 0xFF
+    rebuilt.write_bytes(bytes(data))
+    again = _build(tyre)
+    assert _intact(again) and again.read_bytes() != bytes(data)
+    # the rebuilt library is the one loaded, and it steps as the CasADi virtual machine does
+    state, out = _steps(_tyre(model, compiled=True), n=5)
+    ref_state, ref_out = _steps(tyre, n=5)
+    np.testing.assert_allclose(state, ref_state, rtol=1e-9, atol=1e-12)
+    assert out["fz"] == pytest.approx(ref_out["fz"], rel=1e-9)
+
+
+def test_swift_library_others_could_write_is_refused(model, cache, monkeypatch):
+    library = _build(_tyre(model))
+    library.chmod(0o666)
+    with pytest.raises(CacheSecurityError, match="writable by group or others"):
+        _tyre(model, compiled=True)
+    library.chmod(0o644)
+    cache.chmod(0o777)
+    with pytest.raises(CacheSecurityError, match="the folder"):
+        _tyre(model, compiled=True)
+    cache.chmod(0o700)
+    if os.geteuid() == 0:  # root's own files are trusted: give the library to another user
+        os.chown(library, 4243, -1)
+    else:  # pretend to be another user
+        real_uid = os.geteuid()
+        monkeypatch.setattr(os, "geteuid", lambda: real_uid + 12345)
+    with pytest.raises(CacheSecurityError, match="belongs to user id"):
+        _tyre(model, compiled=True)
+
+
+def test_every_change_of_the_code_gives_a_new_swift_library(model, cache, monkeypatch):
+    base = _build(_tyre(model))
+    stiffer = _build(_tyre(model.with_params(VERTICAL_STIFFNESS=1.1 * model.params.VERTICAL_STIFFNESS)))
+    monkeypatch.setattr(simulate, "_SOURCE_HASH", hashlib.sha256(b"edited ring.py").hexdigest())
+    edited = _build(_tyre(model))
+    assert len({base, stiffer, edited}) == 3
+    assert all(_intact(p) for p in (base, stiffer, edited))
+    monkeypatch.undo()
+    monkeypatch.setenv("MFTYRE_CACHE", str(cache))
+    assert _build(_tyre(model)) == base  # unchanged: found again, not rebuilt
+
+
+def test_two_threads_building_one_swift_model_both_succeed(model, cache):
+    barrier, results, errors = threading.Barrier(2), [None, None], []
+
+    def work(i):
+        try:
+            barrier.wait()
+            results[i] = _steps(_tyre(model, compiled=True))[0]
+        except Exception as exc:  # noqa: BLE001  (reported below)
+            errors.append(exc)
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors, errors
+    np.testing.assert_array_equal(results[0], results[1])
+    libraries = list(cache.glob("swift_*.so"))
+    assert libraries and all(_intact(p) for p in libraries)
+    assert not [p for p in cache.iterdir() if p.name.startswith(".") or p.is_dir()]  # no temporary leftovers
+
+
+def test_separate_tyres_sharing_one_library_step_from_threads_at_once(model, cache):
+    """Each SwiftTyre has its own buffers; the C releases the GIL, so the threads really run together."""
+    speeds = (V, 0.5 * V, 1.5 * V, 0.8 * V)
+    tyres = [_tyre(model, compiled=True) for _ in speeds]
+    assert len({t._compiled._lib._name for t in tyres}) == 1
+    expected = [_steps(_tyre(model, compiled=True), vx, 200) for vx in speeds]
+    results = [None] * len(speeds)
+
+    def work(i):
+        results[i] = _steps(tyres[i], speeds[i], 200)
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(len(speeds))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for (s, out), (s_ref, out_ref) in zip(results, expected):
+        np.testing.assert_array_equal(s, s_ref)
+        assert out == out_ref
