@@ -41,7 +41,9 @@ import hashlib
 import json
 import math
 import os
+import struct
 import threading
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -57,7 +59,7 @@ from .ring import CONTACT_PASSES, INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, RingCo
     contact_start, ring_equations
 from .road import Road
 
-__all__ = ["StepInputs", "SwiftTyre", "SimResult"]
+__all__ = ["StepInputs", "SwiftTyre", "SimResult", "Outputs"]
 
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
 _LSM = _S["lsm"]
@@ -71,23 +73,32 @@ TANDEM_REACH = 0.25
 WARM_PASSES = 1
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class StepInputs:
-    """Inputs of one step (SI, ISO-W); fields not used by the chosen modes are ignored."""
+    """Inputs of one step (SI, ISO-W); fields not used by the chosen modes are ignored. Immutable; a changed copy:
+    ``dataclasses.replace(inputs, x=...)``."""
 
-    x: float = 0.0
-    vx: float = 10.0
-    z: float = 0.0
-    vz: float = 0.0
-    load: float = 4000.0
-    omega: float = 0.0
-    torque: float = 0.0
-    p: float | None = None
-    y: float = 0.0
-    vy: float = 0.0
-    gamma: float = 0.0
-    psi: float = 0.0
-    road_camber: float = 0.0
+    x: float
+    vx: float
+    z: float
+    vz: float
+    load: float
+    omega: float
+    torque: float
+    p: float | None
+    y: float
+    vy: float
+    gamma: float
+    psi: float
+    road_camber: float
+
+    def __init__(self, x=0.0, vx=10.0, z=0.0, vz=0.0, load=4000.0, omega=0.0, torque=0.0, p=None, y=0.0, vy=0.0,
+                 gamma=0.0, psi=0.0, road_camber=0.0):
+        # written into the instance dict: a third of the cost of a frozen dataclass's setattr per field (a master
+        # builds one per step)
+        d = self.__dict__
+        d["x"], d["vx"], d["z"], d["vz"], d["load"], d["omega"], d["torque"] = x, vx, z, vz, load, omega, torque
+        d["p"], d["y"], d["vy"], d["gamma"], d["psi"], d["road_camber"] = p, y, vy, gamma, psi, road_camber
 
 
 @dataclass
@@ -317,14 +328,20 @@ class SwiftTyre:
         return self.window // 2 * self.table.dx - TANDEM_REACH
 
     def step(self, state, inputs: StepInputs, dt: float):
-        """One step of length ``dt``: (state_next, outputs dict). See the module notes for the API. A step over
-        which the wheel would travel further than the cam-height window reaches is split into equal parts.
-        Compiled: imposing the inputs, the window and the splitting run in C (:data:`_DRIVER`)."""
+        """One step of length ``dt``: (state_next, :class:`Outputs`: the outputs by name). See the module notes for
+        the API. A step over which the wheel would travel further than the cam-height window reaches is split into
+        equal parts. Compiled: one C call (:data:`_DRIVER`) checks the inputs, imposes them, places the window and
+        splits the step; state_next and the outputs are views of preallocated blocks, never overwritten later."""
         if self._compiled is not None:
-            if not state[_LSM] > 0:  # no contact solution stored yet (a state built by hand)
-                state = self._impose(state, inputs)
-            state, out = self._compiled.step(state, self._row(inputs), dt)
-            return state, dict(zip(OUTPUT_NAMES, out))
+            return self._compiled.step(state, inputs, dt)
+        if not (math.isfinite(dt) and dt >= 0):
+            raise ModelInputError(f"the step dt must be finite and >= 0; got dt = {dt!r}")
+        row = self._row(inputs)
+        bad = [name for name, value, used in zip(_ROW, row, _used(self)) if used and not math.isfinite(value)]
+        if bad:
+            raise ModelInputError(f"input {bad[0]!r} must be finite, got {row[_ROW.index(bad[0])]!r}")
+        if not row[INPUT_NAMES.index("p")] > 0:
+            raise ModelInputError(f"input 'p' (inflation pressure) must be positive [Pa], got {inputs.p!r}")
         state = self._impose(state, inputs)
         u = self._u(inputs)
         n = max(1, math.ceil(abs(inputs.vx) * dt / self._reach))
@@ -333,7 +350,7 @@ class SwiftTyre:
             x0w = self.table.x0 + i0 * self.table.dx
             res = self._step_fn(state, u, dt / n, x0w, self._grid, self._h[2 * i0:2 * (i0 + self.window)])
             state, out = (np.asarray(r).ravel() for r in res)
-        return state, dict(zip(OUTPUT_NAMES, out))
+        return state, Outputs(out[None])
 
     def run(self, t_end: float, inputs, dt: float = 1e-3) -> SimResult:
         """Fixed-step run from the static equilibrium. ``inputs``: a :class:`StepInputs` (constant speeds; the
@@ -348,7 +365,7 @@ class SwiftTyre:
         if self._compiled is None:
             for k in range(n):
                 state, out = self.step(state, get(k * dt), dt)
-                states[k + 1], outs[k + 1] = state, list(out.values())
+                states[k + 1], outs[k + 1] = state, out.array
         else:
             if callable(inputs):
                 rows = np.array([self._row(get(k * dt)) for k in range(n)], dtype=float).reshape(n, _NI)
@@ -362,7 +379,7 @@ class SwiftTyre:
 
     def outputs(self, state, inputs: StepInputs) -> np.ndarray:
         """Outputs at ``state`` (no time step), in the order of OUTPUT_NAMES."""
-        return np.array(list(self.step(state, inputs, 0.0)[1].values()))
+        return self.step(state, inputs, 0.0)[1].array.copy()
 
     # ------------------------------------------------------------------ reference and statics
     def _rhs_args(self, state):
@@ -518,7 +535,15 @@ def _remember_contact(x, out):
 
 _NU = len(INPUT_NAMES)
 _U_Y = INPUT_NAMES.index("y")  # the lateral position in the input vector
-_NI = _NU + 4  # one row of :meth:`SwiftTyre._row`
+#: One row of the compiled loop (:meth:`SwiftTyre._row`): the ring's inputs, then the imposed axle x, z, vz, spin.
+_ROW = (*INPUT_NAMES, "x", "z", "vz", "omega")
+_NI = len(_ROW)
+
+
+def _used(tyre):
+    """Per entry of :data:`_ROW`: does the tyre's configuration use it (checked finite)?"""
+    unused = {"height": {"load"}, "load": {"z", "vz"}}[tyre.axle] | {"speed": {"torque"}, "torque": {"omega"}}[tyre.rim]
+    return [name not in unused for name in _ROW]
 
 
 def _advancing(inputs: StepInputs):
@@ -528,19 +553,22 @@ def _advancing(inputs: StepInputs):
     return get
 
 
-#: The stepping loop around the generated ``swift_step`` (appended to its C file): per step, the imposed axle x,
-#: z, vz and rim spin are written into the state (as :meth:`SwiftTyre._impose`), the step is split into
-#: equal parts where the wheel would travel further than ``reach`` (cfg[3]), and the window of the cam table
-#: (``table``, cfg: x0, dx, samples, reach) starts ``WINDOW / 2`` samples behind the belt centre. ``in``: one row
-#: of NI values per step (:meth:`SwiftTyre._row`); ``scal``: dt, number of steps; all pointers in one array ``p`` (one
-#: argument: the cheapest ctypes call). Returns 0, k + 1 when step k
-#: leaves the table, -1 for a non-finite speed or step, -2 for an evaluation error.
+#: The stepping loop around the generated ``swift_step`` (appended to its C file): per step, the inputs the
+#: configuration uses (``USED``) are checked (finite, p > 0), the imposed axle x, z, vz and rim spin are written into
+#: the state (as :meth:`SwiftTyre._impose`), the step is split into equal parts where the wheel would travel
+#: further than ``reach`` (cfg[3]), and the window of the cam table (``table``, cfg: x0, dx, samples, reach) starts
+#: ``WINDOW / 2`` samples behind the belt centre. ``in``: one row of NI values per step (:data:`_ROW`); ``scal``: dt,
+#: number of steps; all pointers in one array ``p`` (one argument: the cheapest ctypes call). Returns 0, k + 1
+#: when step k leaves the table, -1 for a non-finite or negative step or a travel beyond 1e6 windows, -2 for an
+#: evaluation error, -3 for a bad input (:meth:`_Compiled._bad_input` says which), -4 when the state holds no
+#: contact solution. ``swift_step1``: one step of :meth:`SwiftTyre.step` into the rows of preallocated blocks.
 _DRIVER = """
 #define NX %(nx)d
 #define NY %(ny)d
 #define NU %(nu)d
 #define NI %(ni)d
 #define WINDOW %(window)d
+static const int USED[NI] = {%(used)s};
 CASADI_SYMBOL_EXPORT int swift_run(void** p) {
   const casadi_real *x_init = p[0], *in = p[1], *scal = p[2], *cfg = p[3], *grid = p[4], *table = p[5];
   casadi_real *xs = p[6], *ys = p[7], *w = p[11], s[NX], dt = scal[0], h, x0w, parts, start;
@@ -548,9 +576,13 @@ CASADI_SYMBOL_EXPORT int swift_run(void** p) {
   casadi_real** res = p[9];
   casadi_int* iw = p[10];
   casadi_int n = (casadi_int) scal[1], k, j, m, i;
+  if (!(dt >= 0 && dt - dt == 0)) return -1;
   for (i = 0; i < NX; ++i) s[i] = x_init[i];
+  if (!(s[%(lsm)d] > 0)) return -4;
   for (k = 0; k < n; ++k) {
     const casadi_real* u = in + k * NI;
+    for (i = 0; i < NI; ++i) if (USED[i] && !(u[i] - u[i] == 0)) return -3;
+    if (!(u[%(p)d] > 0)) return -3;
     s[%(xa)d] = u[NU];
     if (%(height)d) { s[%(za)d] = u[NU + 1]; s[%(vza)d] = u[NU + 2]; }
     if (%(speed)d) s[%(oma)d] = u[NU + 3];
@@ -569,6 +601,19 @@ CASADI_SYMBOL_EXPORT int swift_run(void** p) {
     }
   }
   return 0;
+}
+/* one step: p as for swift_run, but p[1] = io: the NI inputs, dt, 1, the row of the state in the block p[6]
+   (< 0: the state is p[0]), the row of p[6] and p[7] to write */
+CASADI_SYMBOL_EXPORT int swift_step1(void** p) {
+  void* q[12];
+  casadi_real* io = p[1];
+  casadi_int src = (casadi_int) io[NI + 2], dst = (casadi_int) io[NI + 3], i;
+  for (i = 0; i < 12; ++i) q[i] = p[i];
+  if (src >= 0) q[0] = (casadi_real*) p[6] + src * NX;
+  q[2] = io + NI;
+  q[6] = (casadi_real*) p[6] + dst * NX;
+  q[7] = (casadi_real*) p[7] + dst * NY;
+  return swift_run(q);
 }
 """
 
@@ -592,16 +637,58 @@ def _library(tyre, key: str) -> Path:
         source = Path(gen.generate(str(folder) + os.sep))
         with source.open("a") as f:
             f.write(_DRIVER % dict(nx=len(STATE_NAMES), ny=len(OUTPUT_NAMES), nu=_NU, ni=_NI, window=tyre.window,
-                                   height=int(tyre.axle == "height"), speed=int(tyre.rim == "speed"), **_S))
+                                   height=int(tyre.axle == "height"), speed=int(tyre.rim == "speed"),
+                                   used=", ".join(str(int(u)) for u in _used(tyre)), p=INPUT_NAMES.index("p"), **_S))
         meta = {"inputs": list(INPUT_NAMES), "outputs": list(OUTPUT_NAMES), "checks": [], "states": list(STATE_NAMES)}
         return source, (*_CFLAGS, "-fPIC", "-shared"), ("-lm",), meta
 
     return cached_library("swift", key, generate)
 
 
+#: States and outputs per block of :meth:`_Compiled.step`: the C writes each step's results into the next row.
+_BLOCK_ROWS = 256
+_OUT = {name: i for i, name in enumerate(OUTPUT_NAMES)}
+
+
+class Outputs(Mapping):
+    """The outputs of one step by name (:data:`swift.ring.OUTPUT_NAMES`, floats): a read-only view of row ``row``
+    of ``block`` (no copy; the compiled step never overwrites a row it has returned). ``array``: the row."""
+
+    __slots__ = ("_block", "_row")
+
+    def __init__(self, block, row=0):
+        self._block, self._row = block, row
+
+    @property
+    def array(self) -> np.ndarray:
+        """The outputs as an array in the order of OUTPUT_NAMES (a view: do not modify)."""
+        return self._block[self._row]
+
+    def __getitem__(self, name):
+        return self._block.item(self._row, _OUT[name])
+
+    def __iter__(self):
+        return iter(OUTPUT_NAMES)
+
+    def __len__(self):
+        return len(OUTPUT_NAMES)
+
+    def values(self):
+        """The values in the order of OUTPUT_NAMES (a list of floats)."""
+        return self._block[self._row].tolist()
+
+    def __repr__(self):
+        return f"Outputs({dict(zip(OUTPUT_NAMES, self.values()))})"
+
+
 class _Compiled:
-    """The compiled step and loop (:data:`_DRIVER`) of one tyre, called through ctypes with buffers of its own;
-    a lock serialises the calls of threads sharing the tyre. The cam grid and table are passed by pointer."""
+    """The compiled step and loop (:data:`_DRIVER`) of one tyre, called through ctypes with buffers of its own
+    (tyres sharing the library run at once from threads); a lock serialises the calls of threads sharing the tyre.
+    The cam grid and table are passed by pointer.
+
+    :meth:`step` makes one ctypes call with pre-bound pointers: its inputs are packed into one buffer, the new state
+    and outputs are written by the C into the next rows of preallocated blocks and returned as views (never
+    reused, so earlier results stay valid); the state returned last is read in place (no copy)."""
 
     def __init__(self, tyre, key):
         self._lib = ctypes.CDLL(str(_library(tyre, key)))
@@ -614,16 +701,22 @@ class _Compiled:
         self._work = ((ctypes.c_void_p * max(sz_arg, 6))(), (ctypes.c_void_p * max(sz_res, 2))(),
                       (ll * max(sz_iw, 1))(), (ctypes.c_double * max(sz_w, 1))())
         self._tyre, self._lock = tyre, threading.Lock()
+        self._used = np.array(_used(tyre))
         self._cfg = np.array([tyre.table.x0, tyre.table.dx, tyre.table.h.size, tyre._reach])
         self._fn = self._lib.swift_run  # called with one ctypes array of 12 pointers (no argtypes: no conversion)
-        # one step (step()): state in, inputs row + dt + 1, state and outputs out
-        self._x, self._in = np.zeros(len(STATE_NAMES)), (ctypes.c_double * (_NI + 2))()  # ctypes: fastest to fill
-        self._x_next, self._y = np.zeros(len(STATE_NAMES)), np.zeros(len(OUTPUT_NAMES))
-        self._in[_NI + 1] = 1.0
-        at = ctypes.addressof(self._in)
-        self._step_args = self._pointers(self._x.ctypes.data, at, at + 8 * _NI, self._x_next.ctypes.data,
-                                         self._y.ctypes.data)
+        # one step (step()): the state in (when not the last one returned), inputs + dt + 1 + source/target rows
+        self._fn1 = self._lib.swift_step1
+        self._x, self._io = np.zeros(len(STATE_NAMES)), (ctypes.c_double * (_NI + 4))()
+        self._pack = struct.Struct(f"{_NI + 4}d").pack_into
+        self._p_nominal = tyre._p_nominal
+        self._step_args = self._pointers(self._x.ctypes.data, ctypes.addressof(self._io), 0, 0, 0)
+        self._new_block()
         self._rhs = _Generated(self._lib, tyre.rhs_function)
+
+    def _new_block(self):
+        self._xs, self._ys = np.empty((_BLOCK_ROWS, len(STATE_NAMES))), np.empty((_BLOCK_ROWS, len(OUTPUT_NAMES)))
+        self._step_args[6], self._step_args[7] = self._xs.ctypes.data, self._ys.ctypes.data
+        self._row, self._last = 0, None
 
     def rhs(self, state, u, x0w, i0):
         """The right-hand side (:attr:`SwiftTyre.rhs_function`, the exact model: h = 0) on the cam window that
@@ -637,23 +730,65 @@ class _Compiled:
         return (ctypes.c_void_p * 12)(x, rows, scal, self._cfg.ctypes.data, t._grid.ctypes.data, t._h.ctypes.data,
                                       xs, ys, *(ctypes.addressof(v) for v in self._work))
 
-    def _check(self, code, xb):
+    def _check(self, code, xb, rows, dt):
         if code > 0:
             raise self._tyre._outside_table(xb)
         if code == -1:
-            raise ModelInputError("the speed vx and the step dt must be finite")
+            raise ModelInputError(f"the step dt must be finite and >= 0 and the travel |vx| dt finite; got dt = {dt!r}"
+                                  + (f", vx = {rows[0][0]!r}" if len(rows) else ""))
+        if code == -3:
+            raise self._bad_input(rows, dt)
         if code:
             raise ArithmeticError("compiled SWIFT step reported an evaluation error")
 
-    def step(self, state, row, dt):
-        """One step: (state_next, outputs as a list)."""
+    def _bad_input(self, rows, dt):
+        rows = np.asarray(rows, dtype=float).reshape(-1, _NI)
+        bad = ~np.isfinite(rows) & self._used
+        if bad.any():
+            k, i = np.argwhere(bad)[0]
+            return ModelInputError(f"input {_ROW[i]!r} must be finite, got {rows[k, i]!r}"
+                                   + (f" (step {k}, t = {k * dt:g} s)" if len(rows) > 1 else ""))
+        k = int(np.argmax(~(rows[:, INPUT_NAMES.index("p")] > 0)))
+        return ModelInputError(f"input 'p' (inflation pressure) must be positive [Pa], got {rows[k, 3]!r}"
+                               + (f" (step {k}, t = {k * dt:g} s)" if len(rows) > 1 else ""))
+
+    def step(self, state, inputs, dt):
+        """One step from ``state`` (array) with ``inputs`` (:class:`StepInputs`): (state_next, :class:`Outputs`),
+        views of this tyre's blocks."""
+        p = inputs.p
         with self._lock:
-            self._x[:] = state
-            self._in[:_NI + 1] = *row, dt
-            code = self._fn(self._step_args)
-            if code:
-                self._check(code, self._x[_S["xb"]])
-            return self._x_next.copy(), self._y.tolist()
+            k = self._row
+            if k == _BLOCK_ROWS:
+                self._new_block()
+                k = 0
+            if state is self._last:  # the state returned last: read in place, in its block row
+                src = k - 1
+            else:
+                self._x[:] = state
+                src = -1
+            try:
+                self._pack(self._io, 0, inputs.vx, inputs.load, inputs.torque, self._p_nominal if p is None else p,
+                           inputs.y, inputs.vy, inputs.gamma, inputs.psi, inputs.road_camber, inputs.x, inputs.z,
+                           inputs.vz, inputs.omega, dt, 1.0, src, k)
+            except struct.error:
+                raise self._not_a_number(inputs, dt) from None
+            code = self._fn1(self._step_args)
+            if not code:
+                self._row, self._last = k + 1, self._xs[k]
+                return self._last, Outputs(self._ys, k)
+            if code != -4:
+                self._check(code, self._x[_S["xb"]] if src < 0 else self._xs[src, _S["xb"]], [self._io[:_NI]], dt)
+        # a state without a stored contact solution (built by hand): solved first (outside the lock: it calls rhs)
+        return self.step(self._tyre._impose(state, inputs), inputs, dt)
+
+    @staticmethod
+    def _not_a_number(inputs, dt):
+        for name, value in (*((n, getattr(inputs, n)) for n in _ROW), ("dt", dt)):
+            try:
+                float(value if value is not None or name != "p" else 1.0)
+            except (TypeError, ValueError):
+                return ModelInputError(f"input {name!r} must be a real number, got {value!r}")
+        return ModelInputError(f"inputs must be real numbers: {inputs!r}, dt = {dt!r}")
 
     def run(self, state, rows, dt):
         """``len(rows)`` steps from ``state``: (states, outputs) after each step."""
@@ -662,7 +797,8 @@ class _Compiled:
         xs, ys, scal = np.empty((n, len(STATE_NAMES))), np.empty((n, len(OUTPUT_NAMES))), np.array([dt, n])
         with self._lock:
             code = self._fn(self._pointers(*(a.ctypes.data for a in (x, rows, scal, xs, ys))))
-        self._check(code, (xs[code - 2] if code > 1 else x)[_S["xb"]])
+        if code:
+            self._check(code, (xs[code - 2] if code > 1 else x)[_S["xb"]], rows, dt)
         return xs, ys
 
 
