@@ -67,7 +67,7 @@ def _rows(swift, model, repeat: int, cpu: bool):
     vm = swift.SwiftTyre(model, road, axle="height", rim="speed", x_range=(0.0, 24.0), compiled=False)
     t_vm = best_time(lambda: vm.run(0.1, u, DT), 1, cpu) * (T_END / 0.1)
     return t_build, t_vm, (lambda: best_time(lambda: tyre.run(T_END, u, DT), repeat, cpu),
-                           lambda: best_time(step_loop, max(1, repeat // 2), cpu))
+                           lambda: best_time(step_loop, repeat, cpu))
 
 
 def main(argv=None):

@@ -332,8 +332,36 @@ class SwiftTyre:
         the API. A step over which the wheel would travel further than the cam-height window reaches is split into
         equal parts. Compiled: one C call (:data:`_DRIVER`) checks the inputs, imposes them, places the window and
         splits the step; state_next and the outputs are views of preallocated blocks, never overwritten later."""
-        if self._compiled is not None:
-            return self._compiled.step(state, inputs, dt)
+        c = self._compiled
+        if c is None:
+            return self._step_casadi(state, inputs, dt)
+        p = inputs.p  # the compiled step inline (one Python frame per step); buffers and checks in _Compiled
+        with c.lock:
+            k = c.row
+            if k == _BLOCK_ROWS:
+                c.new_block()
+                k = 0
+            if state is c.last:  # the state returned last: read in place, in its block row
+                src = k - 1
+            else:
+                c.x[:] = state
+                src = -1
+            try:
+                c.pack(c.io, 0, inputs.vx, inputs.load, inputs.torque, self._p_nominal if p is None else p, inputs.y,
+                       inputs.vy, inputs.gamma, inputs.psi, inputs.road_camber, inputs.x, inputs.z, inputs.vz,
+                       inputs.omega, dt, 1.0, src, k)
+            except struct.error:
+                raise _not_a_number(inputs, dt) from None
+            code = c.step1(c.step_args)
+            if not code:
+                c.row, c.last = k + 1, c.xs[k]
+                return c.last, Outputs(c.ys, k)
+            if code != -4:
+                c.check(code, c.x[_S["xb"]] if src < 0 else c.xs[src, _S["xb"]], [c.io[:_NI]], dt)
+        # a state without a stored contact solution (built by hand): solved first (outside the lock: it calls rhs)
+        return self.step(self._impose(state, inputs), inputs, dt)
+
+    def _step_casadi(self, state, inputs: StepInputs, dt: float):
         if not (math.isfinite(dt) and dt >= 0):
             raise ModelInputError(f"the step dt must be finite and >= 0; got dt = {dt!r}")
         row = self._row(inputs)
@@ -650,6 +678,17 @@ _BLOCK_ROWS = 256
 _OUT = {name: i for i, name in enumerate(OUTPUT_NAMES)}
 
 
+def _not_a_number(inputs, dt):
+    for name, value in (*((n, getattr(inputs, n)) for n in _ROW), ("dt", dt)):
+        if value is None and name == "p":
+            continue
+        try:
+            float(value)
+        except (TypeError, ValueError):
+            return ModelInputError(f"input {name!r} must be a real number, got {value!r}")
+    return ModelInputError(f"inputs must be real numbers: {inputs!r}, dt = {dt!r}")
+
+
 class Outputs(Mapping):
     """The outputs of one step by name (:data:`swift.ring.OUTPUT_NAMES`, floats): a read-only view of row ``row``
     of ``block`` (no copy; the compiled step never overwrites a row it has returned). ``array``: the row."""
@@ -683,12 +722,13 @@ class Outputs(Mapping):
 
 class _Compiled:
     """The compiled step and loop (:data:`_DRIVER`) of one tyre, called through ctypes with buffers of its own
-    (tyres sharing the library run at once from threads); a lock serialises the calls of threads sharing the tyre.
-    The cam grid and table are passed by pointer.
+    (tyres sharing the library run at once from threads); ``lock`` serialises the calls of threads sharing the
+    tyre. The cam grid and table are passed by pointer.
 
-    :meth:`step` makes one ctypes call with pre-bound pointers: its inputs are packed into one buffer, the new state
-    and outputs are written by the C into the next rows of preallocated blocks and returned as views (never
-    reused, so earlier results stay valid); the state returned last is read in place (no copy)."""
+    :meth:`SwiftTyre.step` makes one ctypes call (``step1``) with the pre-bound pointers ``step_args``: its inputs
+    packed into ``io`` (``pack``), the state copied into ``x`` unless it is ``last``, the state returned last (read
+    in place in its row); the C writes the new state and outputs into row ``row`` of the blocks ``xs``, ``ys``,
+    which are returned as views (a row is never written twice: earlier results stay valid)."""
 
     def __init__(self, tyre, key):
         self._lib = ctypes.CDLL(str(_library(tyre, key)))
@@ -700,28 +740,27 @@ class _Compiled:
         sz_arg, sz_res, sz_iw, sz_w = (v.value for v in sz)
         self._work = ((ctypes.c_void_p * max(sz_arg, 6))(), (ctypes.c_void_p * max(sz_res, 2))(),
                       (ll * max(sz_iw, 1))(), (ctypes.c_double * max(sz_w, 1))())
-        self._tyre, self._lock = tyre, threading.Lock()
+        self._tyre, self.lock = tyre, threading.Lock()
         self._used = np.array(_used(tyre))
         self._cfg = np.array([tyre.table.x0, tyre.table.dx, tyre.table.h.size, tyre._reach])
         self._fn = self._lib.swift_run  # called with one ctypes array of 12 pointers (no argtypes: no conversion)
-        # one step (step()): the state in (when not the last one returned), inputs + dt + 1 + source/target rows
-        self._fn1 = self._lib.swift_step1
-        self._x, self._io = np.zeros(len(STATE_NAMES)), (ctypes.c_double * (_NI + 4))()
-        self._pack = struct.Struct(f"{_NI + 4}d").pack_into
-        self._p_nominal = tyre._p_nominal
-        self._step_args = self._pointers(self._x.ctypes.data, ctypes.addressof(self._io), 0, 0, 0)
-        self._new_block()
+        self.step1 = self._lib.swift_step1  # one step: inputs, dt, 1, source and target rows in io
+        self.x, self.io = np.zeros(len(STATE_NAMES)), (ctypes.c_double * (_NI + 4))()
+        self.pack = struct.Struct(f"{_NI + 4}d").pack_into
+        self.step_args = self._pointers(self.x.ctypes.data, ctypes.addressof(self.io), 0, 0, 0)
+        self.new_block()
         self._rhs = _Generated(self._lib, tyre.rhs_function)
 
-    def _new_block(self):
-        self._xs, self._ys = np.empty((_BLOCK_ROWS, len(STATE_NAMES))), np.empty((_BLOCK_ROWS, len(OUTPUT_NAMES)))
-        self._step_args[6], self._step_args[7] = self._xs.ctypes.data, self._ys.ctypes.data
-        self._row, self._last = 0, None
+    def new_block(self):
+        """Fresh blocks for the states and outputs of the next steps (the old ones live on in the views)."""
+        self.xs, self.ys = np.empty((_BLOCK_ROWS, len(STATE_NAMES))), np.empty((_BLOCK_ROWS, len(OUTPUT_NAMES)))
+        self.step_args[6], self.step_args[7] = self.xs.ctypes.data, self.ys.ctypes.data
+        self.row, self.last = 0, None
 
     def rhs(self, state, u, x0w, i0):
         """The right-hand side (:attr:`SwiftTyre.rhs_function`, the exact model: h = 0) on the cam window that
         starts at sample ``i0`` (x = ``x0w``): (dx, out)."""
-        with self._lock:
+        with self.lock:
             return self._rhs((state, u, x0w, None, None, 0.0), self._tyre._grid.ctypes.data,
                              self._tyre._h.ctypes.data + 16 * i0)
 
@@ -730,7 +769,8 @@ class _Compiled:
         return (ctypes.c_void_p * 12)(x, rows, scal, self._cfg.ctypes.data, t._grid.ctypes.data, t._h.ctypes.data,
                                       xs, ys, *(ctypes.addressof(v) for v in self._work))
 
-    def _check(self, code, xb, rows, dt):
+    def check(self, code, xb, rows, dt):
+        """Raise the error the driver's return ``code`` stands for (``xb``: the belt's x at the failed step)."""
         if code > 0:
             raise self._tyre._outside_table(xb)
         if code == -1:
@@ -752,53 +792,15 @@ class _Compiled:
         return ModelInputError(f"input 'p' (inflation pressure) must be positive [Pa], got {rows[k, 3]!r}"
                                + (f" (step {k}, t = {k * dt:g} s)" if len(rows) > 1 else ""))
 
-    def step(self, state, inputs, dt):
-        """One step from ``state`` (array) with ``inputs`` (:class:`StepInputs`): (state_next, :class:`Outputs`),
-        views of this tyre's blocks."""
-        p = inputs.p
-        with self._lock:
-            k = self._row
-            if k == _BLOCK_ROWS:
-                self._new_block()
-                k = 0
-            if state is self._last:  # the state returned last: read in place, in its block row
-                src = k - 1
-            else:
-                self._x[:] = state
-                src = -1
-            try:
-                self._pack(self._io, 0, inputs.vx, inputs.load, inputs.torque, self._p_nominal if p is None else p,
-                           inputs.y, inputs.vy, inputs.gamma, inputs.psi, inputs.road_camber, inputs.x, inputs.z,
-                           inputs.vz, inputs.omega, dt, 1.0, src, k)
-            except struct.error:
-                raise self._not_a_number(inputs, dt) from None
-            code = self._fn1(self._step_args)
-            if not code:
-                self._row, self._last = k + 1, self._xs[k]
-                return self._last, Outputs(self._ys, k)
-            if code != -4:
-                self._check(code, self._x[_S["xb"]] if src < 0 else self._xs[src, _S["xb"]], [self._io[:_NI]], dt)
-        # a state without a stored contact solution (built by hand): solved first (outside the lock: it calls rhs)
-        return self.step(self._tyre._impose(state, inputs), inputs, dt)
-
-    @staticmethod
-    def _not_a_number(inputs, dt):
-        for name, value in (*((n, getattr(inputs, n)) for n in _ROW), ("dt", dt)):
-            try:
-                float(value if value is not None or name != "p" else 1.0)
-            except (TypeError, ValueError):
-                return ModelInputError(f"input {name!r} must be a real number, got {value!r}")
-        return ModelInputError(f"inputs must be real numbers: {inputs!r}, dt = {dt!r}")
-
     def run(self, state, rows, dt):
         """``len(rows)`` steps from ``state``: (states, outputs) after each step."""
         n = len(rows)
         x, rows = np.array(state, dtype=float), np.ascontiguousarray(rows, dtype=float)
         xs, ys, scal = np.empty((n, len(STATE_NAMES))), np.empty((n, len(OUTPUT_NAMES))), np.array([dt, n])
-        with self._lock:
+        with self.lock:
             code = self._fn(self._pointers(*(a.ctypes.data for a in (x, rows, scal, xs, ys))))
         if code:
-            self._check(code, (xs[code - 2] if code > 1 else x)[_S["xb"]], rows, dt)
+            self.check(code, (xs[code - 2] if code > 1 else x)[_S["xb"]], rows, dt)
         return xs, ys
 
 
