@@ -648,8 +648,10 @@ CASADI_SYMBOL_EXPORT int swift_step1(void** p) {
 
 #: Compiler flags of the SWIFT library: ~15 % fewer instructions per step than -O2 (-fno-math-errno: sqrt and
 #: friends inline, errno is never read; gnu89: CasADi's fmax/fmin become inlined comparisons instead of libm calls,
-#: equal for all non-NaN arguments); portable (no -march), as the FMU ships the library.
-_CFLAGS = ("-O3", "-fno-math-errno", "-std=gnu89")
+#: equal for all non-NaN arguments); of the fast-math family only mftyre.compiled's two (-fno-trapping-math,
+#: -freciprocal-math: multiplication by a reciprocal, at most 1 ulp per division; ~4 % faster), no reassociation,
+#: no finite-math assumptions; portable (no -march), as the FMU ships the library.
+_CFLAGS = ("-O3", "-fno-math-errno", "-fno-trapping-math", "-freciprocal-math", "-std=gnu89")
 
 
 def _library(tyre, key: str) -> Path:
