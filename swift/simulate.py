@@ -788,10 +788,10 @@ class _Compiled:
         bad = ~np.isfinite(rows) & self._used
         if bad.any():
             k, i = np.argwhere(bad)[0]
-            return ModelInputError(f"input {_ROW[i]!r} must be finite, got {rows[k, i]!r}"
+            return ModelInputError(f"input {_ROW[i]!r} must be finite, got {float(rows[k, i])!r}"
                                    + (f" (step {k}, t = {k * dt:g} s)" if len(rows) > 1 else ""))
         k = int(np.argmax(~(rows[:, INPUT_NAMES.index("p")] > 0)))
-        return ModelInputError(f"input 'p' (inflation pressure) must be positive [Pa], got {rows[k, 3]!r}"
+        return ModelInputError(f"input 'p' (inflation pressure) must be positive [Pa], got {float(rows[k, 3])!r}"
                                + (f" (step {k}, t = {k * dt:g} s)" if len(rows) > 1 else ""))
 
     def run(self, state, rows, dt):
