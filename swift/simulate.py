@@ -7,13 +7,14 @@ SciPy reference, both from the equations of :mod:`swift.ring`.
     tyre = SwiftTyre(model, Cleat(x0=1.0, length=0.05, height=0.01), x_range=(0.0, 25.0))
     u = StepInputs(vx=11.1, z=0.29, omega=11.1 / 0.305)           # axle height fixed, spin imposed
     state = tyre.initial_state(u)                                  # static equilibrium on the road
-    state, out = tyre.step(state, u, 1e-3)                        # one step: state_next, outputs (dict)
+    state, out = tyre.step(state, u, 1e-3)                        # one step: state_next, outputs by name
     res = tyre.run(2.0, u)                                         # 2 s, outputs every 1 ms (SimResult)
     ref = tyre.run_adaptive(0.3, u)                                # scipy DOP853, tight tolerances
 
 Step API (for an FMU): ``state_next, outputs = step(state, inputs, dt)``.
 
-* ``state``: float array, :data:`swift.ring.STATE_NAMES`.
+* ``state``: float array, :data:`swift.ring.STATE_NAMES`. Compiled, ``state_next`` is a view of a row of a
+  preallocated block that no later step writes; passing it back (as a loop does) it is read in place, not copied.
 * ``inputs``: :class:`StepInputs` - axle x position and speed ``x``, ``vx``; axle height ``z``, ``vz`` (mode
   ``axle="height"``) or downward axle force ``load`` (``axle="load"``, with the axle mass of
   :class:`swift.ring.RingConstants`); rim spin ``omega`` (``rim="speed"``) or drive/brake ``torque``
@@ -24,15 +25,21 @@ Step API (for an FMU): ``state_next, outputs = step(state, inputs, dt)``.
   along x: the effective-road sample; the tandem base follows the current load inside the step).
 * ``outputs``: :data:`swift.ring.OUTPUT_NAMES` - forces and moments of the tyre on the rim (wheel centre,
   ISO-W), contact forces in the effective plane, deflection rho, lever arm rl, effective rolling radius re,
-  half contact length a, tandem base ls, effective height w and slope beta, transient slips, contact speed.
+  half contact length a, tandem base ls, effective height w and slope beta, transient slips, contact speed: an
+  :class:`Outputs` mapping (name -> float; ``.array`` the row, a view).
+* Bad inputs: every input the configuration uses must be finite, ``p`` positive, ``dt`` finite and >= 0, else
+  :class:`~mftyre.errors.ModelInputError` naming the input (checked in C on the compiled path).
+* Threads: a tyre may be stepped from several threads (its calls are serialised by a lock); separate tyres, even
+  of one model sharing one compiled library, run at once (each has its own buffers; the C releases the GIL).
 
-Integration: classical Runge-Kutta (RK4), ``substeps`` per step, all in one compiled CasADi function (C, built and
-loaded through :func:`mftyre.compiled.cached_library`: verified, keyed by the parameters and the equations' source); the cam heights come from a window of
-``window`` samples of the cam-height table around the wheel, passed by pointer (no copy), so one compiled function
-serves any road. The window must cover the wheel's travel in one step plus ``TANDEM_REACH``: a longer step is split
-into equal parts, so results do not depend on speed, step size or start position. :meth:`SwiftTyre.run` runs the
-whole loop of steps in C (:data:`_DRIVER`, the same steps as :meth:`SwiftTyre.step`).
-``SwiftTyre.step_function`` is the CasADi step itself, for code generation (FMU).
+Integration: classical Runge-Kutta (RK4), ``substeps`` per step, all in one compiled CasADi function (C, built
+and loaded through :func:`mftyre.compiled.cached_library`: verified before loading, keyed by the parameters and the
+equations' source); the cam heights come from a window of ``window`` samples of the cam-height table around the
+wheel, passed by pointer (no copy), so one compiled function serves any road. The window must cover the wheel's
+travel in one step plus ``TANDEM_REACH``: a longer step is split into equal parts, so results do not depend on
+speed, step size or start position. :meth:`SwiftTyre.run` runs the whole loop of steps in C (:data:`_DRIVER`, the
+same steps as :meth:`SwiftTyre.step`, which makes one ctypes call per step). ``SwiftTyre.step_function`` is the
+CasADi step itself, for code generation (FMU).
 """
 from __future__ import annotations
 
