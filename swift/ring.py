@@ -8,9 +8,10 @@ ISO-W axes (x forward, y left, z up), small angles, forward rolling = positive s
 
 State (``STATE_NAMES``): belt x_b, z_b, y_b [m], velocities; wind-up theta_w = theta_b - theta_a; belt and rim
 spin Omega_b, Omega_a; axle z_a, its velocity, axle x_a; belt camber gamma_b and yaw psi_b with rates; residual
-(patch) deflections u_x, u_y, residual yaw psi_r; transient slips kappa', alpha'; the contact solution of the
-last step, x_c - x_b and l_s (memory, not integrated: the stepper starts its Newton pass there and stores the new
-solution after each step; the exact right-hand side solves from scratch).
+(patch) deflections u_x, u_y, residual yaw psi_r; transient slips kappa', alpha'; the filtered effective slope
+betaf (for the rate at which the effective plane turns, below); the contact solution of the last step, x_c - x_b
+and l_s (memory, not integrated: the stepper starts its Newton pass there and stores the new solution after each
+step; the exact right-hand side solves from scratch).
 
 Sidewall (rim -> belt) [chosen from the parameter comments "undamped frequency / dimensionless damping of the
 ... mode", NOTES sec. 4.2], pressure-aware through this project's own parameters SWIFT_PSTIFF, SWIFT_PDAMP
@@ -41,21 +42,38 @@ heights, :class:`swift.enveloping.CamTable`, plus the input ``road_camber``), ef
 kappa_e = d beta_y/dx = cos^2(beta_y) (h_f' - h_r')/l_s, and
     * the forward shift of the contact point: the tandem is centred at the foot of the normal from the belt centre
       to the effective plane, x_c = x_b + r_c sin(beta_y), r_c = (z_b - w)/cos(beta_y) [chosen: NOTES sec. 3.5];
-    * the effective curvature is an output only. MF-Swift's fourth/fifth effective inputs, the effective rolling
-      radius variation over an obstacle (Pacejka 2012 sec. 10.1.4, "the five effective road inputs"; Schmeitz
-      2004), are NOT modelled: the relation and its coefficient are in the book and the thesis only, which we
-      could not read (searched: public docs, pages, code and issues corpora; Altair's "3D cam" slip page says
-      only that road curvature enters r_e, without the formula; the shared seeds hold no SWIFT text), and no
-      .tir names the coefficient (TNO_car205_60R15.tir
-      and Pacejka App. 3 have no such [CONTACT_PATCH] entry; Q_RA*/Q_RB* are the contact length and width).
-      The geometric rate of the normal's foot along the road (V_cx + r_c kappa_e xdot_b) is not a substitute:
-      the tread slips against the fixed road, not against the moving effective plane. So the slip stays
-      V_cx - Omega_b R_e; Fx over a cleat lacks the r_e-variation part of its response [open, NOTES sec. 9.4];
+    * the effective rolling radius variation [derived here; chosen: the published relation (Pacejka 2012 sec.
+      10.1.4, Schmeitz 2004) could not be read (searched: public docs, pages, code and issues corpora; no .tir
+      names a coefficient)]. Kinematics of the rigid ring with an inextensible belt band: on the flat the band
+      runs at Omega_b R_e relative to the contact (that is what R_e of paper (7) measures). Where the effective
+      plane turns at beta_dot, the band's shape turns with it: the band runs at (Omega_b + beta_dot) R_e
+      relative to that shape, whose contact point (the foot of the normal) moves along the road at V_cx + r_c
+      beta_dot. The tread's speed over the fixed road, the difference, is the slip velocity
+          V_sx = V_cx - Omega_b R_e - SWIFT_REVAR beta_dot (R_e - r_c),
+      zero for a rigid wheel (R_e = r_c rolls without slip on any curve). On a road of constant curvature
+      kappa_s = d beta_y/ds (> 0 concave) the foot moves at V_cx/(1 - r_c kappa_s), beta_dot = kappa_s V_cx /
+      (1 - r_c kappa_s), and free rolling (V_sx = 0) gives
+          r_e = V_cx/Omega_b = R_e (1 - r_c kappa_s)/(1 - R_e kappa_s),  Delta r_e = R_e kappa_s (R_e - r_c) /
+          (1 - R_e kappa_s),
+      i.e. V_sx = (1 - t)(V_cx - Omega_b (R_e + Delta r_e)), t = kappa_s (R_e - r_c)/(1 - r_c kappa_s): the
+      slip of a tyre of rolling radius R_e + Delta r_e. Over a convex crest r_e drops (the belt must spin
+      faster), in a concave dip (entry and exit of a cleat) it grows; at -6/+12 mm over a 10 x 20 mm cleat
+      (4 kN). Output ``dre`` = Delta r_e from the current effective curvature (kappa_s = cos(beta_y) kappa_e; the
+      steady value; 1 - r_c kappa_s and 1 - t floored at 0.2 where a concave corner is tighter than the belt
+      centre distance, e.g. the foot of a 50 mm kerb [chosen guard]). In the slip, beta_dot is the actual rate
+      of the effective slope (with the forward shift and the tandem base moving): the slope filtered over
+      SLOPE_FILTER of travel, state ``betaf``, beta_dot = |V_cx| (beta_y - betaf)/sigma_f, sigma_f = max(
+      SLOPE_FILTER, |V_cx| h/2), which is exact on a constant curvature and keeps the right-hand side
+      continuous where a cam first touches an edge (the slope has a kink there) [chosen]. SWIFT_REVAR (this
+      project's own, [CONTACT_PATCH]) scales the term: 1 (default) = the kinematics above, 0 = off. The default
+      is not neutral on uneven roads (Fx over a 10 x 20 mm cleat, fixed axle, free rim: peak-to-peak 1052 ->
+      1718 N at 30 km/h, 1048 -> 1286 N at 60 km/h); on a flat road or a constant grade Delta r_e = 0 exactly;
     * the tandem base l_s = ELLIPS_SHIFT 2a(F_r) at the current (static part of the) contact load F_r, solved
       together with x_c by ``CONTACT_PASSES`` fixed-point passes [published l_s = p_ls 2a, Zegelaar eq. 4.15].
 Contact (normal to the effective plane):
     rho_r = R_Omega - r_c,  F'_z = max(0, F_r(rho_r) + k_rz d(rho_r)/dt)   (no pull)
-    V_cx = xdot_b cos(beta_y) + zdot_b sin(beta_y),  V_sx = V_cx - Omega_b R_e   (R_e of paper (7))
+    V_cx = xdot_b cos(beta_y) + zdot_b sin(beta_y),  V_sx = V_cx - Omega_b R_e - SWIFT_REVAR beta_dot (R_e - r_c)
+    (R_e of paper (7); the last term: the effective rolling radius variation, above)
     massless patch:  c_rx u_x + k_rx udot_x = F'_x,  c_ry u_y + k_ry udot_y = F'_y,  c_rpsi psi_r + k_rpsi
     psidot_r = M'_z
     sigma_c dkappa'/dt + |V_cx| kappa' = -(V_sx + udot_x)
