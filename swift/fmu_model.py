@@ -84,13 +84,15 @@ OUTPUTS = {  # name -> (unit, description, ring output or state)
     "road_w": ("m", "effective road height (tandem cams)"),
     "road_slope": ("rad", "effective forward road slope beta_y (> 0 rising ahead)"),
     "road_curvature": ("1/m", "effective road curvature d beta_y / dx"),
+    "Re_variation": ("m", "effective rolling radius variation over the curved effective road (free-rolling "
+                             "steady value; 0 on a flat road or a grade)"),
     "road_camber_eff": ("rad", "effective road camber beta_x: the profile's multi-track camber plus road_camber"),
     "x_contact": ("m", "contact centre on the road (x_road plus the forward shift to the foot of the normal)"),
     "x_road": ("m", "wheel-centre position on the road: x_start + integral of vx dt"),
 }
 _RING = {"Fx": "fx", "Fy": "fy", "Fz": "fz", "Mx": "mx", "My": "my", "Mz": "mz", "Fx_c": "fx_c", "Fy_c": "fy_c",
          "Fz_c": "fz_c", "Mz_c": "mz_c", "kappa": "kappa", "alpha": "alpha", "rho": "rho", "Rl": "rl", "Re": "re",
-         "road_slope": "beta", "road_curvature": "curvature", "road_camber_eff": "beta_x", "x_contact": "x_c"}
+         "road_slope": "beta", "road_curvature": "curvature", "Re_variation": "dre", "road_camber_eff": "beta_x", "x_contact": "x_c"}
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
 
 
