@@ -92,7 +92,8 @@ OUTPUTS = {  # name -> (unit, description, ring output or state)
 }
 _RING = {"Fx": "fx", "Fy": "fy", "Fz": "fz", "Mx": "mx", "My": "my", "Mz": "mz", "Fx_c": "fx_c", "Fy_c": "fy_c",
          "Fz_c": "fz_c", "Mz_c": "mz_c", "kappa": "kappa", "alpha": "alpha", "rho": "rho", "Rl": "rl", "Re": "re",
-         "road_slope": "beta", "road_curvature": "curvature", "Re_variation": "dre", "road_camber_eff": "beta_x", "x_contact": "x_c"}
+         "road_slope": "beta", "road_curvature": "curvature", "Re_variation": "dre", "road_camber_eff": "beta_x",
+         "x_contact": "x_c"}
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
 
 

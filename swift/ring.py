@@ -358,7 +358,8 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
     vsx = vcx - s["omb"] * re - prm.SWIFT_REVAR * beta_rate * (re - r_c)
     # reported: the free-rolling radius change on a road of the current effective curvature (steady value)
     kappa_s = curvature * cb  # d beta_y / ds along the effective road
-    turn = prm.SWIFT_REVAR * kappa_s * (re - r_c) / be.fmax(1.0 - r_c * kappa_s, _FOOT_FLOOR)  # beta_dot (R_e - r_c) / V_cx
+    # beta_dot (R_e - r_c) / V_cx on a constant curvature:
+    turn = prm.SWIFT_REVAR * kappa_s * (re - r_c) / be.fmax(1.0 - r_c * kappa_s, _FOOT_FLOOR)
     dre = re * turn / be.fmax(1.0 - turn, _FOOT_FLOOR)  # V_cx / Omega_b = R_e + dre at zero slip
     vcy = s["vyb"] + r_c * s["wgb"] + uydot - vcx * (s["psb"] + s["psr"])
     kappa_dot = be.where(contact, (-(vsx + uxdot) - be.abs(vcx) * s["kappa"]) / sigma_c, -s["kappa"] / AIR_TIME)
@@ -387,7 +388,8 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
         "yb": s["vyb"], "vyb": (-fwy + fy_b) / rc.mb,
         "gb": s["wgb"], "wgb": (-mwx + r_c * fyc + mxc + rc.iby * s["omb"] * s["wpsb"]) / rc.ibx,
         "psb": s["wpsb"], "wpsb": (-mwz + mzc - rc.iby * s["omb"] * s["wgb"]) / rc.ibx,
-        "uy": uydot, "alpha": alpha_dot, "psr": psrdot, "betaf": betaf_dot, "xcs": 0.0 * s["xcs"], "lsm": 0.0 * s["lsm"],
+        "uy": uydot, "alpha": alpha_dot, "psr": psrdot, "betaf": betaf_dot,
+        "xcs": 0.0 * s["xcs"], "lsm": 0.0 * s["lsm"],
     }
     out = dict(fx=fwx - f_bottom * sb, fy=fwy, fz=fwz + f_bottom * cb, mx=mwx, my=mwy, mz=mwz, fx_c=fxc,
                fy_c=fyc, fz_c=fzc, mz_c=mzc, rho=r_omega - r_a, rl=r_c, re=re, a=a, ls=ls, w=w, beta=beta,

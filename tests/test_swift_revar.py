@@ -32,8 +32,8 @@ def test_default_is_on(model):
 
 
 def test_flat_road_no_variation_and_results_unchanged(model):
-    """Flat road, braking torque on a free rim (transient slip, wind-up): Delta r_e = 0 and the filtered slope
-    stay 0 (the filtered slope to the initial Newton's last digits), and every output equals the run with the term switched off."""
+    """Flat road, braking torque on a free rim (transient slip, wind-up): Delta r_e = 0 exactly, the filtered slope
+    0 to the initial Newton's last digits, and every output equals the run with the term switched off."""
     rl, _ = model.loaded_radius(4000.0)
     u = StepInputs(x=1.0, vx=15.0, z=float(rl), omega=15.0 / 0.3044, torque=-300.0)
     res = {on: SwiftTyre(_switched(model, on), Flat(), rim="torque", x_range=(0.0, 4.0)).run(0.2, u)
