@@ -67,7 +67,8 @@ kappa_e = d beta_y/dx = cos^2(beta_y) (h_f' - h_r')/l_s, and
       continuous where a cam first touches an edge (the slope has a kink there) [chosen]. SWIFT_REVAR (this
       project's own, [CONTACT_PATCH]) scales the term: 1 (default) = the kinematics above, 0 = off. The default
       is not neutral on uneven roads (Fx over a 10 x 20 mm cleat, fixed axle, free rim: peak-to-peak 1052 ->
-      1718 N at 30 km/h, 1048 -> 1286 N at 60 km/h); on a flat road or a constant grade Delta r_e = 0 exactly;
+      1718 N at 30 km/h, 1048 -> 1286 N at 60 km/h); on a flat road Delta r_e = 0 exactly, on a constant grade
+      to round-off (1e-14 m);
     * the tandem base l_s = ELLIPS_SHIFT 2a(F_r) at the current (static part of the) contact load F_r, solved
       together with x_c by ``CONTACT_PASSES`` fixed-point passes [published l_s = p_ls 2a, Zegelaar eq. 4.15].
 Contact (normal to the effective plane):

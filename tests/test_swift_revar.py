@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import mftyre
-from swift import CircularBump, Cleat, Flat, StepInputs, SwiftTyre
+from swift import CircularBump, Cleat, Flat, Sampled, StepInputs, SwiftTyre
 from swift.ring import OUTPUT_NAMES, STATE_NAMES
 
 from conftest import TIR_FILES
@@ -42,6 +42,19 @@ def test_flat_road_no_variation_and_results_unchanged(model):
     assert abs(res[True]["fx"][-1]) > 500.0  # the torque is carried through the slip
     for name in OUTPUT_NAMES:  # to round-off (the two are compiled apart)
         np.testing.assert_allclose(res[True][name], res[False][name], rtol=1e-12, atol=1e-12, err_msg=name)
+
+
+def test_constant_grade_no_variation(model):
+    """A 10 % grade, axle load and free rim at 36 km/h: no curvature, Delta r_e and the forces as without the term
+    to round-off."""
+    road = Sampled([-5.0, 10.0], [-0.5, 1.0])
+    u = StepInputs(x=1.0, vx=10.0, load=4000.0, omega=10.0 / 0.3044)
+    res = {on: SwiftTyre(_switched(model, on), road, axle="load", rim="torque", x_range=(0.0, 3.0)).run(0.2, u)
+           for on in (True, False)}
+    assert np.all(res[True]["beta"] == pytest.approx(np.arctan(0.1), abs=1e-9))
+    assert np.max(np.abs(res[True]["dre"])) < 1e-12
+    for name in ("fx", "fz", "my", "kappa"):
+        np.testing.assert_allclose(res[True][name], res[False][name], rtol=1e-9, atol=1e-9, err_msg=name)
 
 
 @pytest.mark.parametrize("V", [5.0, -5.0])
