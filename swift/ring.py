@@ -64,11 +64,13 @@ kappa_e = d beta_y/dx = cos^2(beta_y) (h_f' - h_r')/l_s, and
       of the effective slope (with the forward shift and the tandem base moving): the slope filtered over
       SLOPE_FILTER of travel, state ``betaf``, beta_dot = |V_cx| (beta_y - betaf)/sigma_f, sigma_f = max(
       SLOPE_FILTER, |V_cx| h/2), which is exact on a constant curvature and keeps the right-hand side
-      continuous where a cam first touches an edge (the slope has a kink there) [chosen]. SWIFT_REVAR (this
-      project's own, [CONTACT_PATCH]) scales the term: 1 (default) = the kinematics above, 0 = off. The default
-      is not neutral on uneven roads (Fx over a 10 x 20 mm cleat, fixed axle, free rim: peak-to-peak 1052 ->
-      1718 N at 30 km/h, 1048 -> 1286 N at 60 km/h); on a flat road Delta r_e = 0 exactly, on a constant grade
-      to round-off (1e-14 m);
+      continuous where a cam first touches an edge (the slope has a kink there) [chosen]; the filter runs at a
+      pace of at least 0.1 VXLOW (betaf_dot = max(|V_cx|, 0.1 VXLOW) (beta_y - betaf)/sigma_f), so that the
+      static equilibrium (betaf = beta_y) is defined at standstill and beta_dot fades out linearly below
+      0.1 VXLOW. SWIFT_REVAR (this project's own, [CONTACT_PATCH]) scales the term: 1 (default) = the
+      kinematics above, 0 = off. The default is not neutral on uneven roads (Fx over a 10 x 20 mm cleat, fixed
+      axle, free rim: peak-to-peak 1052 -> 1718 N at 30 km/h, 1048 -> 1286 N at 60 km/h); on a flat road
+      Delta r_e = 0 exactly, on a constant grade to round-off (1e-14 m);
     * the tandem base l_s = ELLIPS_SHIFT 2a(F_r) at the current (static part of the) contact load F_r, solved
       together with x_c by ``CONTACT_PASSES`` fixed-point passes [published l_s = p_ls 2a, Zegelaar eq. 4.15].
 Contact (normal to the effective plane):
@@ -126,8 +128,8 @@ import numpy as np
 from mftyre.errors import ModelInputError
 from mftyre.formula import vertical
 
-__all__ = ["RingConstants", "STATE_NAMES", "INPUT_NAMES", "OUTPUT_NAMES", "CONTACT_PASSES", "AIR_TIME", "SLOPE_FILTER",
-           "residual_vertical", "contact_start", "contact_geometry", "ring_equations"]
+__all__ = ["RingConstants", "STATE_NAMES", "INPUT_NAMES", "OUTPUT_NAMES", "CONTACT_PASSES", "AIR_TIME",
+           "SLOPE_FILTER", "residual_vertical", "contact_start", "contact_geometry", "ring_equations"]
 
 STATE_NAMES = ("xb", "vxb", "zb", "vzb", "thw", "omb", "oma", "za", "vza", "xa",
                "ux", "kappa", "yb", "vyb", "gb", "wgb", "psb", "wpsb", "uy", "alpha", "psr", "betaf", "xcs", "lsm")
@@ -348,9 +350,9 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
     uydot = (fyc - cry * s["uy"]) / (damp * cry)
     psrdot = (mzc - crpsi * s["psr"]) / (damp * crpsi)
     sigma_c = be.fmax(a, be.abs(vcx) * h + 1e-4)
-    # effective rolling radius variation (module notes): relative to the turning plane the belt band runs at
-    # (Omega_b + beta_dot) R_e and the tread at the foot of the normal at V_cx + r_c beta_dot; beta_dot from the
-    # slope filtered over SLOPE_FILTER of travel (at least half a step's travel: stable RK4), at a pace of at least
+    # effective rolling radius variation (module notes): the belt band runs at (Omega_b + beta_dot) R_e relative to
+    # the turning plane, whose contact point moves along the road at V_cx + r_c beta_dot; beta_dot from the slope
+    # filtered over SLOPE_FILTER of travel (at least half a step's travel: stable RK4), the filter paced by at least
     # 0.1 VXLOW (defined at standstill)
     sigma_f = be.fmax(SLOPE_FILTER, be.abs(vcx) * h / 2 + 1e-4)
     lag = beta - s["betaf"]
