@@ -58,7 +58,7 @@ import numpy as np
 
 from .errors import ModelInputError
 
-__all__ = ["WheelFunctions", "wheel_functions", "WheelTyre", "KINDS", "VERTICAL_MODES", "VX_MIN",
+__all__ = ["StateFunctions", "WheelFunctions", "wheel_functions", "WheelTyre", "KINDS", "VERTICAL_MODES", "VX_MIN",
            "input_table", "OUTPUTS", "PARAMETERS", "default_tau_vlow", "kinematic_slips", "slip_speeds",
            "wheel_vertical_force", "contact_load", "wheel_centre_moments"]
 
@@ -173,12 +173,11 @@ def wheel_centre_moments(fx, fy, fz, mx, my, mz, rl, gamma, be):
 
 
 @dataclass(frozen=True)
-class WheelFunctions:
-    """The state equations as CasADi functions (x: state, u: inputs, q: parameters, all column vectors):
-    ``init(u, q) -> x``, ``step(x, u, q, h) -> x_next`` (inputs held over h), ``out(x, u, q) -> y``."""
+class StateFunctions:
+    """A tyre with state as CasADi functions, the form the native FMU is generated from (fmu/native_build.py):
+    ``init``, ``step``, ``out`` (their arguments in the subclasses) and the names and start values of the vectors
+    they take: state x, inputs u, parameters q, outputs y."""
 
-    kind: str
-    vertical: str
     init: object
     step: object
     out: object
@@ -188,6 +187,15 @@ class WheelFunctions:
     output_names: tuple
     parameter_starts: tuple
     input_starts: tuple
+
+
+@dataclass(frozen=True)
+class WheelFunctions(StateFunctions):
+    """The wheel's state equations (x: state, u: inputs, q: parameters, all column vectors):
+    ``init(u, q) -> x``, ``step(x, u, q, h) -> x_next`` (inputs held over h), ``out(x, u, q) -> y``."""
+
+    kind: str
+    vertical: str
 
 
 def wheel_functions(model, kind: str = "steady", vertical: str = "position",
@@ -282,8 +290,9 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
     init = ca.Function("tyre_init", [u, q], [x0], ["u", "q"], ["x0"])
     step = ca.Function("tyre_step", [x, u, q, h], [x_next], ["x", "u", "q", "h"], ["x_next"])
     out = ca.Function("tyre_out", [x, u, q], [y_vec], ["x", "u", "q"], ["y"])
-    return WheelFunctions(kind, vertical, init, step, out, ("u_x", "u_y")[:nx], tuple(table), q_names,
-                          tuple(OUTPUTS), q_starts, tuple(starts))
+    return WheelFunctions(init=init, step=step, out=out, state_names=("u_x", "u_y")[:nx], input_names=tuple(table),
+                          parameter_names=q_names, output_names=tuple(OUTPUTS), parameter_starts=q_starts,
+                          input_starts=tuple(starts), kind=kind, vertical=vertical)
 
 
 class StepError(ModelInputError):

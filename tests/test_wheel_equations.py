@@ -68,3 +68,27 @@ def test_wheel_centre_moments_are_the_cross_product():
         expected = m + np.cross(c_minus_w, f)
         got = wheel_centre_moments(*f, *m, rl, g, NUMPY)
         np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-9)
+
+
+@pytest.mark.parametrize("kind", ["steady", "transient", "swift"])
+def test_state_functions_describe_their_vectors(kind):
+    """The native FMU is generated from any StateFunctions (wheel or SWIFT): the names and start values given
+    match the sizes of the CasADi functions' x, u, q and y."""
+    import warnings
+
+    from mftyre.transient import StateFunctions, wheel_functions
+    from swift.fmu_model import swift_functions
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        if kind == "swift":
+            f = swift_functions(mftyre.load_tir(TIR_FILES / "car_205_60R15_mf62_swift.tir"),
+                                "cleat(x0=2, length=0.05, height=0.01)")
+        else:
+            f = wheel_functions(mftyre.load_tir(TIR_FILES / "car_205_60R15_mf61.tir"), kind)
+    assert isinstance(f, StateFunctions)
+    sizes = {name: f.step.size1_in(i) for i, name in enumerate(f.step.name_in())}
+    assert f.init.size1_out(0) == sizes["x"] == len(f.state_names)
+    assert f.out.size1_out(0) == len(f.output_names)
+    assert sizes["u"] == len(f.input_names) == len(f.input_starts)
+    assert f.init.size1_in(f.init.name_in().index("q")) == len(f.parameter_names) == len(f.parameter_starts)
