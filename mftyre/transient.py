@@ -56,11 +56,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .backend import NUMPY
 from .errors import ModelInputError
 
 __all__ = ["StateFunctions", "WheelFunctions", "wheel_functions", "WheelTyre", "KINDS", "VERTICAL_MODES", "VX_MIN",
            "input_table", "OUTPUTS", "PARAMETERS", "default_tau_vlow", "kinematic_slips", "slip_speeds",
-           "wheel_vertical_force", "contact_load", "wheel_centre_moments"]
+           "wheel_vertical_force", "contact_load", "vertical_couples_forces", "load_at_radius",
+           "wheel_centre_moments"]
 
 KINDS = ("steady", "transient")
 VERTICAL_MODES = ("position", "load")
@@ -165,6 +167,33 @@ def contact_load(fz, rl, r_omega, be):
     return be.where(rl < r_omega, be.fmax(fz, 0.0), 0.0)
 
 
+def vertical_couples_forces(prm) -> bool:
+    """Whether the .tir's vertical force depends on Fx and Fy (Q_FCX, Q_FCY non-zero; true when it has no such
+    parameters to say otherwise)."""
+    return bool(prm["Q_FCX"] != 0 or prm["Q_FCY"] != 0) if "Q_FCX" in prm else True
+
+
+def load_at_radius(vertical, rolling, rl, coupled: bool, tol: float, passes: int = 30):
+    """The road load with the wheel centre at the loaded radius ``rl`` (floats): the vertical force there with its
+    lift-off (:func:`contact_load`), and where it depends on Fx and Fy (``coupled``, see
+    :func:`vertical_couples_forces`) the fixed point Fz = Fz(Rl, Fx(Fz), Fy(Fz)), iterated from Fx = Fy = 0 until
+    it moves by at most ``tol`` [N] (at most ``passes`` passes).
+
+    ``vertical(fx, fy) -> (Fz, R_omega)`` at ``rl``; ``rolling(load) -> (fx, fy, result)``: the tyre at that load.
+    Returns (load, R_omega, result of the last ``rolling``)."""
+    fx = fy = 0.0
+    for _ in range(passes):
+        fz, r_omega = vertical(fx, fy)
+        load = float(contact_load(fz, rl, r_omega, NUMPY))
+        fx_new, fy_new, result = rolling(load)
+        if not coupled:
+            break
+        if abs(float(contact_load(vertical(fx_new, fy_new)[0], rl, r_omega, NUMPY)) - load) <= tol:
+            break
+        fx, fy = fx_new, fy_new
+    return load, r_omega, result
+
+
 def wheel_centre_moments(fx, fy, fz, mx, my, mz, rl, gamma, be):
     """Moments about the wheel centre W of the loads at the contact point C (module notes): M_W = M_C + (C - W) x F
     with C -> W = Rl (0, -sin g, cos g), ISO-W components."""
@@ -212,7 +241,7 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
         raise ModelInputError(f"vertical input must be one of {', '.join(VERTICAL_MODES)}; got {vertical!r}")
     prm = model.params
     be = casadi_backend()
-    if vertical == "position" and (prm["Q_FCX"] != 0 or prm["Q_FCY"] != 0):
+    if vertical == "position" and vertical_couples_forces(prm):
         warnings.warn("Q_FCX/Q_FCY (Fx/Fy influence on the vertical stiffness) are not included in the wheel "
                       "model's vertical force", stacklevel=2)
     table = input_table(vertical, turn_slip)

@@ -92,3 +92,29 @@ def test_state_functions_describe_their_vectors(kind):
     assert f.out.size1_out(0) == len(f.output_names)
     assert sizes["u"] == len(f.input_names) == len(f.input_starts)
     assert f.init.size1_in(f.init.name_in().index("q")) == len(f.parameter_names) == len(f.parameter_starts)
+
+
+def test_load_at_radius_is_the_fixed_point_of_the_coupled_vertical_force():
+    """A vertical force k (R - Rl) (1 + c Fx) with Fx = mu Fz: Fz = k d / (1 - c mu k d) (d = R - Rl); without
+    coupling the first pass, k d; above the free radius no load."""
+    from mftyre.transient import load_at_radius
+
+    k, r_free, c, mu = 2.0e5, 0.31, 2e-5, 1.1
+    calls = []
+
+    def vertical(fx, fy):
+        return k * (r_free - rl) * (1.0 + c * fx), r_free
+
+    def rolling(load):
+        calls.append(load)
+        return mu * load, 0.0, ("at", load)
+
+    rl = 0.29
+    d = r_free - rl
+    load, r_omega, result = load_at_radius(vertical, rolling, rl, True, 1e-9)
+    assert load == pytest.approx(k * d / (1.0 - c * mu * k * d), rel=1e-12) and r_omega == r_free
+    assert result == ("at", load) and len(calls) > 3
+    calls.clear()
+    assert load_at_radius(vertical, rolling, rl, False, 1e-9)[0] == pytest.approx(k * d) and len(calls) == 1
+    rl = 0.32
+    assert load_at_radius(vertical, rolling, rl, True, 1e-9)[0] == 0.0

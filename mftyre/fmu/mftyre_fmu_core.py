@@ -26,7 +26,7 @@ the FMU's modes onto them:
 * vehicle mode, ``fz`` given: the load (negative values mean no contact, Fz = 0); Rl is the model's loaded radius.
 * vehicle mode, ``height`` given (wheel-centre height above the road, along the road normal): Rl = height /
   cos(gamma) and the load is the vertical force at Rl, lifted off above the free radius; where the .tir couples
-  Fz to Fx/Fy (Q_FCX, Q_FCY != 0) the load is solved by fixed-point iteration.
+  Fz to Fx/Fy (Q_FCX, Q_FCY != 0) the load is solved by fixed-point iteration (mftyre.transient.load_at_radius).
 * rig mode: the MF at the given slips and load (spin estimated from kappa and vx).
 * The MF is evaluated with the given spin (no re-estimation), the .tir limits and its low-speed model (below
   VXLOW the slips are faded out: the steady model has no standstill force; use SWIFT for that). Unlike the
@@ -247,7 +247,7 @@ class SteadyTyre:
         self.wheel, self.be = transient, NUMPY  # the wheel's equations, on floats
         prm = model.params
         self.path, self.fn = load_evaluators(model, evaluator, functions_dir, index, log)
-        self.fcoupled = bool(prm["Q_FCX"] != 0 or prm["Q_FCY"] != 0) if "Q_FCX" in prm else True
+        self.fcoupled = transient.vertical_couples_forces(prm)
         self.fnomin = float(prm.FNOMIN)
 
     # --------------------------------------------------------------------------------------------- modes
@@ -261,18 +261,14 @@ class SteadyTyre:
             mf = fn.mf(load, kappa, alpha, gamma, vx, p, omega)
             return self._outputs(mf, kappa, alpha, gamma, vx, rl_lever=None, rho=None)
         rl = height / math.cos(gamma)
-        fx = fy = 0.0
-        for _ in range(30):  # the load at Rl depends on Fx, Fy where the .tir couples them (Q_FCX, Q_FCY)
-            fz_v, r_omega = fn.vertical(rl, p, omega, fx, fy, gamma)
-            load = float(wheel.contact_load(fz_v, rl, r_omega, be))
+
+        def rolling(load):
             kappa, alpha = _floats(wheel.kinematic_slips(vx, vy, omega, fn.re(load, gamma, vx, p, omega)[0], be))
             mf = fn.mf(load, kappa, alpha, gamma, vx, p, omega)
-            if not self.fcoupled:
-                break
-            fz_check = float(wheel.contact_load(fn.vertical(rl, p, omega, mf[0], mf[1], gamma)[0], rl, r_omega, be))
-            if abs(fz_check - load) <= 1e-11 * self.fnomin:
-                break
-            fx, fy = mf[0], mf[1]
+            return mf[0], mf[1], (mf, kappa, alpha)
+
+        _, r_omega, (mf, kappa, alpha) = wheel.load_at_radius(lambda fx, fy: fn.vertical(rl, p, omega, fx, fy, gamma),
+                                                              rolling, rl, self.fcoupled, 1e-11 * self.fnomin)
         return self._outputs(mf, kappa, alpha, gamma, vx, rl_lever=rl, rho=max(r_omega - rl, 0.0))
 
     def step_rig(self, fz, kappa, alpha, gamma, vx, p):
