@@ -61,7 +61,7 @@ from .errors import MFTyreError, ModelInputError
 from .inputs import check_finite, check_pressure, input_ranges, warn_outside
 
 __all__ = ["CompiledFunction", "CacheSecurityError", "compile_model", "compile_function", "compile_external",
-           "cached_library", "compile_c", "cache_dir", "generate_c"]
+           "cached_library", "compile_c", "cache_dir", "generate_c", "CASADI_LOCK"]
 
 _BLOCK = 256  # points per call of the vectorised kernel (inputs broadcast into stack buffers of this length)
 # -O1 with loop vectorisation runs the straight-line kernel as fast as -O3 and compiles in half the time.
@@ -79,6 +79,13 @@ _FLAG_BITS = 16  # flags of the single-point entry: bit k non-finite input k, 16
 _GENERATOR = hashlib.sha256(b"".join(path.read_bytes() for path in (
     Path(__file__), Path(__file__).with_name("backend.py"), *sorted(Path(__file__).with_name("formula").glob("*.py"))
 ))).hexdigest()
+
+
+#: CasADi's symbolic expressions share reference-counted nodes (constants, symbols) whose counts are not atomic, and
+#: its Python calls release the GIL: two threads building graphs or generating C at once can corrupt them (seen as
+#: crashes when two SWIFT tyres were built at once). Every such step in mftyre holds this lock; evaluating a
+#: finished Function numerically does not need it.
+CASADI_LOCK = threading.RLock()
 
 
 class CacheSecurityError(MFTyreError):
@@ -567,7 +574,8 @@ def _build(directory: Path, stem: str, generate) -> Path:
     size and SHA-256), each renamed atomically."""
     with tempfile.TemporaryDirectory(dir=directory) as tmp:
         built = Path(tmp) / f"{stem}.so"
-        source, flags, libraries, meta = generate(Path(tmp))
+        with CASADI_LOCK:  # the graph and the C source; the compilers may run at once
+            source, flags, libraries, meta = generate(Path(tmp))
         compile_c(source, built, flags, libraries)
         data = built.read_bytes()
         sha = hashlib.sha256(data).hexdigest()

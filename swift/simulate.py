@@ -29,8 +29,8 @@ Step API (for an FMU): ``state_next, outputs = step(state, inputs, dt)``.
   :class:`Outputs` mapping (name -> float; ``.array`` the row, a view).
 * Bad inputs: every input the configuration uses must be finite, ``p`` positive, ``dt`` finite and >= 0, else
   :class:`~mftyre.errors.ModelInputError` naming the input (checked in C on the compiled path).
-* Threads: a tyre may be stepped from several threads (its calls are serialised by a lock); separate tyres, even
-  of one model sharing one compiled library, run at once (each has its own buffers; the C releases the GIL).
+* Threads: tyres (also several of one model sharing one compiled library) and one tyre may be stepped from several
+  threads at once: each call works on buffers of its own (a pool per tyre), and the C releases the GIL.
 
 Integration: classical Runge-Kutta (RK4), ``substeps`` per step, all in one compiled CasADi function (C, built
 and loaded through :func:`mftyre.compiled.cached_library`: verified before loading, keyed by the parameters and the
@@ -44,6 +44,7 @@ CasADi step itself, for code generation (FMU).
 from __future__ import annotations
 
 import ctypes
+import functools
 import hashlib
 import json
 import math
@@ -56,7 +57,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mftyre.compiled import cached_library  # the verified cache of every compiled library
+from mftyre.compiled import CASADI_LOCK, cached_library  # the verified cache of every compiled library
 from mftyre.backend import NUMPY
 from mftyre.errors import ModelInputError
 from mftyre.formula import vertical
@@ -78,6 +79,15 @@ _SOURCE_HASH = hashlib.sha256(b"".join(Path(__file__).with_name(n).read_bytes()
 TANDEM_REACH = 0.25
 #: Newton passes of the contact solution in the stepper, from the solution of the previous RK stage.
 WARM_PASSES = 1
+
+
+def _symbolic(method):
+    """``method`` builds CasADi graphs: under :data:`mftyre.compiled.CASADI_LOCK` (one thread at a time)."""
+    @functools.wraps(method)
+    def locked(*args, **kwargs):
+        with CASADI_LOCK:
+            return method(*args, **kwargs)
+    return locked
 
 
 @dataclass(frozen=True, init=False)
@@ -163,6 +173,7 @@ class SwiftTyre:
         self._equilibrium = None  # static equations for initial_state, built on first use
 
     # ------------------------------------------------------------------ equations
+    @_symbolic
     def _rhs(self, n_window, warm=False, stage=False):
         """rhs(x, u, x0w, grid, hw, h) -> (dx, out): MX graph, so that the cam-height lookups stay compiled
         constant-time table accesses (an index computed from x into the window, no search). ``h``: the integration
@@ -214,6 +225,7 @@ class SwiftTyre:
             return ca.Function("rhs_stage", [x, u, x0w, grid, hw, h], [results[0], ca.vertcat(xc - x[_S["xb"]], ls)])
         return ca.Function("rhs", [x, u, x0w, grid, hw, h], results)
 
+    @_symbolic
     def _build_step(self):
         import casadi as ca
 
@@ -270,6 +282,7 @@ class SwiftTyre:
         return self._h
 
     @property
+    @_symbolic
     def output_function(self):
         """The outputs :meth:`step` reports at a state, as a CasADi function ``(x, u, x0w, grid, hw) -> out``
         (= ``step_function`` with dt = 0 at a quarter of the cost: the contact solution from the state's memory);
@@ -342,30 +355,36 @@ class SwiftTyre:
         c = self._compiled
         if c is None:
             return self._step_casadi(state, inputs, dt)
-        p = inputs.p  # the compiled step inline (one Python frame per step); buffers and checks in _Compiled
-        with c.lock:
-            k = c.row
+        try:  # the compiled step inline (one Python frame per step): buffers from the tyre's pool
+            b = c.free.pop()
+        except IndexError:  # another thread is stepping this tyre: buffers of its own
+            b = _StepBuffers(c)
+        try:
+            k = b.row
             if k == _BLOCK_ROWS:
-                c.new_block()
+                b.new_block()
                 k = 0
-            if state is c.last:  # the state returned last: read in place, in its block row
+            if state is b.last:  # the state returned last: read in place, in its block row
                 src = k - 1
             else:
-                c.x[:] = state
+                b.x[:] = state
                 src = -1
+            p = inputs.p
             try:
-                c.pack(c.io, 0, inputs.vx, inputs.load, inputs.torque, self._p_nominal if p is None else p, inputs.y,
+                c.pack(b.io, 0, inputs.vx, inputs.load, inputs.torque, self._p_nominal if p is None else p, inputs.y,
                        inputs.vy, inputs.gamma, inputs.psi, inputs.road_camber, inputs.x, inputs.z, inputs.vz,
                        inputs.omega, dt, 1.0, src, k)
             except struct.error:
                 raise _not_a_number(inputs, dt) from None
-            code = c.step1(c.step_args)
+            code = c.step1(b.args)
             if not code:
-                c.row, c.last = k + 1, c.xs[k]
-                return c.last, Outputs(c.ys, k)
+                b.row, b.last = k + 1, b.xs[k]
+                return b.last, Outputs(b.ys, k)
             if code != -4:
-                c.check(code, c.x[_S["xb"]] if src < 0 else c.xs[src, _S["xb"]], [c.io[:_NI]], dt)
-        # a state without a stored contact solution (built by hand): solved first (outside the lock: it calls rhs)
+                c.check(code, b.x[_S["xb"]] if src < 0 else b.xs[src, _S["xb"]], [b.io[:_NI]], dt)
+        finally:
+            c.free.append(b)
+        # a state without a stored contact solution (built by hand): solved first
         return self.step(self._impose(state, inputs), inputs, dt)
 
     def _step_casadi(self, state, inputs: StepInputs, dt: float):
@@ -443,6 +462,7 @@ class SwiftTyre:
         outs = np.array([np.asarray(self._rhs_window(s, u, *self._rhs_args(s))[1]).ravel() for s in sol.y.T])
         return SimResult(sol.t, sol.y.T, dict(zip(OUTPUT_NAMES, outs.T)))
 
+    @_symbolic
     def jacobian(self, state, inputs: StepInputs):
         """d(state derivative)/d(state) at ``state``: the linearised model (eigenvalues, stability)."""
         import casadi as ca
@@ -468,6 +488,7 @@ class SwiftTyre:
             eqs += [_S["oma"], _S["thw"]]
         return unknown, eqs
 
+    @_symbolic
     def equilibrium_function(self, iterations: int = 30):
         """:meth:`initial_state` with the axle height imposed as one CasADi function for code generation (FMU):
         ``(xa, za, vza, omega, u, x0w, grid, hw) -> x`` at the axle position ``xa``, height ``za`` (above the cam
@@ -536,12 +557,8 @@ class SwiftTyre:
         s[_S["yb"]] = inputs.y
         s[_S["gb"]], s[_S["psb"]] = inputs.gamma, inputs.psi
         unknown, eqs = self.equilibrium_unknowns
-        if self._equilibrium is None:  # built once: the static equations and their Jacobian in the unknowns
-            xs, us = ca.MX.sym("x", len(STATE_NAMES)), ca.MX.sym("u", len(INPUT_NAMES))
-            x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
-            d = self._rhs_window(xs, us, x0w, grid, hw, 0.0)[0][eqs]
-            self._equilibrium = ca.Function("equilibrium", [xs, us, x0w, grid, hw],
-                                            [d, ca.jacobian(d, xs)[:, unknown]])
+        if self._equilibrium is None:
+            self._build_equilibrium(unknown, eqs)
         u, window, i0 = self._u(inputs), self._rhs_args(s)[:3], self._window_start(s[_S["xb"]])
         inverse, last = None, np.inf
         for _ in range(iterations):  # Newton; compiled, the Jacobian is kept while the steps shrink tenfold
@@ -560,6 +577,19 @@ class SwiftTyre:
             last = size
         self._store_contact(s, u)
         return s
+
+
+    @_symbolic
+    def _build_equilibrium(self, unknown, eqs):
+        """The static equations and their Jacobian in the unknowns, built once (for :meth:`initial_state`)."""
+        import casadi as ca
+
+        if self._equilibrium is None:
+            xs, us = ca.MX.sym("x", len(STATE_NAMES)), ca.MX.sym("u", len(INPUT_NAMES))
+            x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
+            d = self._rhs_window(xs, us, x0w, grid, hw, 0.0)[0][eqs]
+            self._equilibrium = ca.Function("equilibrium", [xs, us, x0w, grid, hw],
+                                            [d, ca.jacobian(d, xs)[:, unknown]])
 
 
 def _remember_contact(x, out):
@@ -732,14 +762,10 @@ class Outputs(Mapping):
 
 
 class _Compiled:
-    """The compiled step and loop (:data:`_DRIVER`) of one tyre, called through ctypes with buffers of its own
-    (tyres sharing the library run at once from threads); ``lock`` serialises the calls of threads sharing the
-    tyre. The cam grid and table are passed by pointer.
-
-    :meth:`SwiftTyre.step` makes one ctypes call (``step1``) with the pre-bound pointers ``step_args``: its inputs
-    packed into ``io`` (``pack``), the state copied into ``x`` unless it is ``last``, the state returned last (read
-    in place in its row); the C writes the new state and outputs into row ``row`` of the blocks ``xs``, ``ys``,
-    which are returned as views (a row is never written twice: earlier results stay valid)."""
+    """The compiled step and loop (:data:`_DRIVER`) of one tyre, called through ctypes. The cam grid and table are
+    passed by pointer. Every call works on buffers of its own (:class:`_StepBuffers`, taken from the pool ``free``
+    and put back: threads stepping one tyre at once each take their own, and the C releases the GIL); the
+    right-hand side (:meth:`rhs`, statics only) is serialised by ``lock``."""
 
     def __init__(self, tyre, key):
         self._lib = ctypes.CDLL(str(_library(tyre, key)))
@@ -748,25 +774,15 @@ class _Compiled:
         work = self._lib.swift_step_work
         work.argtypes = [ctypes.POINTER(ll)] * 4
         work(*(ctypes.byref(v) for v in sz))
-        sz_arg, sz_res, sz_iw, sz_w = (v.value for v in sz)
-        self._work = ((ctypes.c_void_p * max(sz_arg, 6))(), (ctypes.c_void_p * max(sz_res, 2))(),
-                      (ll * max(sz_iw, 1))(), (ctypes.c_double * max(sz_w, 1))())
+        self.work_sizes = tuple(v.value for v in sz)
         self._tyre, self.lock = tyre, threading.Lock()
         self._used = np.array(_used(tyre))
         self._cfg = np.array([tyre.table.x0, tyre.table.dx, tyre.table.h.size, tyre._reach])
         self._fn = self._lib.swift_run  # called with one ctypes array of 12 pointers (no argtypes: no conversion)
         self.step1 = self._lib.swift_step1  # one step: inputs, dt, 1, source and target rows in io
-        self.x, self.io = np.zeros(len(STATE_NAMES)), (ctypes.c_double * (_NI + 4))()
         self.pack = struct.Struct(f"{_NI + 4}d").pack_into
-        self.step_args = self._pointers(self.x.ctypes.data, ctypes.addressof(self.io), 0, 0, 0)
-        self.new_block()
+        self.free = [_StepBuffers(self)]
         self._rhs = _Generated(self._lib, tyre.rhs_function)
-
-    def new_block(self):
-        """Fresh blocks for the states and outputs of the next steps (the old ones live on in the views)."""
-        self.xs, self.ys = np.empty((_BLOCK_ROWS, len(STATE_NAMES))), np.empty((_BLOCK_ROWS, len(OUTPUT_NAMES)))
-        self.step_args[6], self.step_args[7] = self.xs.ctypes.data, self.ys.ctypes.data
-        self.row, self.last = 0, None
 
     def rhs(self, state, u, x0w, i0):
         """The right-hand side (:attr:`SwiftTyre.rhs_function`, the exact model: h = 0) on the cam window that
@@ -775,10 +791,16 @@ class _Compiled:
             return self._rhs((state, u, x0w, None, None, 0.0), self._tyre._grid.ctypes.data,
                              self._tyre._h.ctypes.data + 16 * i0)
 
-    def _pointers(self, x, rows, scal, xs, ys):  # the driver's argument array (addresses of the buffers)
+    def pointers(self, x, rows, scal, xs, ys, work):  # the driver's argument array (addresses of the buffers)
         t = self._tyre
         return (ctypes.c_void_p * 12)(x, rows, scal, self._cfg.ctypes.data, t._grid.ctypes.data, t._h.ctypes.data,
-                                      xs, ys, *(ctypes.addressof(v) for v in self._work))
+                                      xs, ys, *(ctypes.addressof(v) for v in work))
+
+    def work(self):
+        """Fresh work arrays of the generated step (arg, res, iw, w)."""
+        sz_arg, sz_res, sz_iw, sz_w = self.work_sizes
+        return ((ctypes.c_void_p * max(sz_arg, 6))(), (ctypes.c_void_p * max(sz_res, 2))(),
+                (ctypes.c_longlong * max(sz_iw, 1))(), (ctypes.c_double * max(sz_w, 1))())
 
     def check(self, code, xb, rows, dt):
         """Raise the error the driver's return ``code`` stands for (``xb``: the belt's x at the failed step)."""
@@ -808,11 +830,32 @@ class _Compiled:
         n = len(rows)
         x, rows = np.array(state, dtype=float), np.ascontiguousarray(rows, dtype=float)
         xs, ys, scal = np.empty((n, len(STATE_NAMES))), np.empty((n, len(OUTPUT_NAMES))), np.array([dt, n])
-        with self.lock:
-            code = self._fn(self._pointers(*(a.ctypes.data for a in (x, rows, scal, xs, ys))))
+        work = self.work()  # its own work arrays (referenced until the call returns)
+        code = self._fn(self.pointers(*(a.ctypes.data for a in (x, rows, scal, xs, ys)), work))
         if code:
             self.check(code, (xs[code - 2] if code > 1 else x)[_S["xb"]], rows, dt)
         return xs, ys
+
+
+class _StepBuffers:
+    """One caller's buffers for :meth:`SwiftTyre.step`: ``x`` (the state copied in unless it is ``last``, the state
+    returned last, read in place in its block row), ``io`` (inputs, dt, 1, source and target rows), the generated
+    step's work arrays, and the blocks ``xs``, ``ys`` into whose row ``row`` the C writes the new state and outputs;
+    they are returned as views (a row is never written twice: earlier results stay valid). ``args``: the pointers,
+    bound once."""
+
+    __slots__ = ("x", "io", "args", "xs", "ys", "row", "last", "_work")
+
+    def __init__(self, compiled):
+        self.x, self.io, self._work = np.zeros(len(STATE_NAMES)), (ctypes.c_double * (_NI + 4))(), compiled.work()
+        self.args = compiled.pointers(self.x.ctypes.data, ctypes.addressof(self.io), 0, 0, 0, self._work)
+        self.new_block()
+
+    def new_block(self):
+        """Fresh blocks for the states and outputs of the next steps (the old ones live on in the views)."""
+        self.xs, self.ys = np.empty((_BLOCK_ROWS, len(STATE_NAMES))), np.empty((_BLOCK_ROWS, len(OUTPUT_NAMES)))
+        self.args[6], self.args[7] = self.xs.ctypes.data, self.ys.ctypes.data
+        self.row, self.last = 0, None
 
 
 class _Generated:

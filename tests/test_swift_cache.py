@@ -112,12 +112,17 @@ def test_every_change_of_the_code_gives_a_new_swift_library(model, cache, monkey
 
 
 def test_two_threads_building_one_swift_model_both_succeed(model, cache):
+    """Compiled into one library at once; and the CasADi graphs built at once, three times over (old: CasADi's
+    shared nodes were corrupted now and then, a crash)."""
     barrier, results, errors = threading.Barrier(2), [None, None], []
 
     def work(i):
         try:
             barrier.wait()
             results[i] = _steps(_tyre(model, compiled=True))[0]
+            for _ in range(3):
+                barrier.wait()
+                _tyre(model).output_function
         except Exception as exc:  # noqa: BLE001  (reported below)
             errors.append(exc)
 
