@@ -70,7 +70,6 @@ from .road import Road
 __all__ = ["StepInputs", "SwiftTyre", "SimResult", "Outputs"]
 
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
-_LSM = _S["lsm"]
 #: The compiled functions' cache key includes the equations' source, so an edit never reuses an old library.
 _SOURCE_HASH = hashlib.sha256(b"".join(Path(__file__).with_name(n).read_bytes()
                                        for n in ("ring.py", "simulate.py"))).hexdigest()
@@ -391,7 +390,10 @@ class SwiftTyre:
         if not (math.isfinite(dt) and dt >= 0):
             raise ModelInputError(f"the step dt must be finite and >= 0; got dt = {dt!r}")
         row = self._row(inputs)
-        bad = [name for name, value, used in zip(_ROW, row, _used(self)) if used and not math.isfinite(value)]
+        try:
+            bad = [name for name, value, used in zip(_ROW, row, _used(self)) if used and not math.isfinite(value)]
+        except TypeError:
+            raise _not_a_number(inputs, dt) from None
         if bad:
             raise ModelInputError(f"input {bad[0]!r} must be finite, got {row[_ROW.index(bad[0])]!r}")
         if not row[INPUT_NAMES.index("p")] > 0:
@@ -577,7 +579,6 @@ class SwiftTyre:
             last = size
         self._store_contact(s, u)
         return s
-
 
     @_symbolic
     def _build_equilibrium(self, unknown, eqs):

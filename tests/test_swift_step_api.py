@@ -106,9 +106,10 @@ def test_other_bad_inputs(tyres, compiled):
     for dt in (-1e-3, float("nan"), float("inf")):
         with pytest.raises(ModelInputError, match="dt must be finite and >= 0"):
             tyre.step(s, _inputs(0), dt)
-    if compiled:  # the CasADi path raises on its own conversion (TypeError)
-        with pytest.raises(ModelInputError, match="input 'vx' must be a real number, got 'fast'"):
-            tyre.step(s, _inputs(0, vx="fast"), 1e-3)
+    with pytest.raises(ModelInputError, match="input 'vx' must be a real number, got 'fast'"):
+        tyre.step(s, _inputs(0, vx="fast"), 1e-3)
+    with pytest.raises(ModelInputError, match="input 'p' must be a real number, got 'high'"):
+        tyre.step(s, _inputs(0, p="high"), 1e-3)
     # inputs the mode ignores (axle height imposed, spin imposed) are not checked
     ok, _ = tyre.step(s, _inputs(0, load=float("nan"), torque=float("nan")), 1e-3)
     assert np.all(np.isfinite(ok))
