@@ -100,6 +100,11 @@ def main(argv=None):
         t_run, t_step = times[name]
         print(f"{name:12s} {t_build:9.2f} {t_run * 1e3:11.1f} {T_END / t_run:10.1f} {t_step * 1e3:12.1f} "
               f"{T_END / t_step:11.1f} {T_END / t_vm:11.2f}")
+    n_steps = T_END / DT
+    for name in setups:
+        t_run, t_step = times[name]
+        print(f"{name}: per step (initialisation included) run() {t_run / n_steps * 1e6:.2f} us, step() loop "
+              f"{t_step / n_steps * 1e6:.2f} us")
     if args.against:
         (new_run, new_step), (old_run, old_step) = times["current"], times[args.against]
         print(f"speed-up of the current code over {args.against}: run() {old_run / new_run:.2f}x, "
