@@ -81,10 +81,10 @@ _GENERATOR = hashlib.sha256(b"".join(path.read_bytes() for path in (
 ))).hexdigest()
 
 
-#: CasADi's symbolic expressions share reference-counted nodes (constants, symbols) whose counts are not atomic, and
-#: its Python calls release the GIL: two threads building graphs or generating C at once can corrupt them (seen as
-#: crashes when two SWIFT tyres were built at once). Every such step in mftyre holds this lock; evaluating a
-#: finished Function numerically does not need it.
+#: CasADi's expressions and sparsity patterns are shared, reference-counted and cached without atomic counts or
+#: locks, and its Python calls release the GIL: two threads building graphs, generating C or creating CasADi
+#: matrices at once can corrupt them (seen as crashes when two SWIFT tyres were built at once). Every CasADi call
+#: of the compile cache and of :mod:`swift.simulate` holds this lock (the compiled C never needs it).
 CASADI_LOCK = threading.RLock()
 
 
@@ -717,4 +717,5 @@ def compile_external(model, inputs=("fz", "kappa", "alpha"), outputs=("fx", "fy"
         return Path(gen.generate(str(folder) + os.sep)), flags, ("-lm",), meta
 
     library = cached_library("mftyre_ext", key, generate, directory)
-    return ca.external(name, str(library))
+    with CASADI_LOCK:
+        return ca.external(name, str(library))

@@ -30,7 +30,9 @@ Step API (for an FMU): ``state_next, outputs = step(state, inputs, dt)``.
 * Bad inputs: every input the configuration uses must be finite, ``p`` positive, ``dt`` finite and >= 0, else
   :class:`~mftyre.errors.ModelInputError` naming the input (checked in C on the compiled path).
 * Threads: tyres (also several of one model sharing one compiled library) and one tyre may be stepped from several
-  threads at once: each call works on buffers of its own (a pool per tyre), and the C releases the GIL.
+  threads at once: each call works on buffers of its own (a pool per tyre), and the C releases the GIL. Whatever
+  calls CasADi (building a tyre, the initial state, ``compiled=False``) runs one thread at a time
+  (:data:`mftyre.compiled.CASADI_LOCK`).
 
 Integration: classical Runge-Kutta (RK4), ``substeps`` per step, all in one compiled CasADi function (C, built
 and loaded through :func:`mftyre.compiled.cached_library`: verified before loading, keyed by the parameters and the
@@ -80,8 +82,9 @@ TANDEM_REACH = 0.25
 WARM_PASSES = 1
 
 
-def _symbolic(method):
-    """``method`` builds CasADi graphs: under :data:`mftyre.compiled.CASADI_LOCK` (one thread at a time)."""
+def _with_casadi(method):
+    """``method`` calls CasADi (builds graphs or evaluates on its virtual machine): under
+    :data:`mftyre.compiled.CASADI_LOCK`, one thread at a time. The compiled step never needs it."""
     @functools.wraps(method)
     def locked(*args, **kwargs):
         with CASADI_LOCK:
@@ -172,7 +175,7 @@ class SwiftTyre:
         self._equilibrium = None  # static equations for initial_state, built on first use
 
     # ------------------------------------------------------------------ equations
-    @_symbolic
+    @_with_casadi
     def _rhs(self, n_window, warm=False, stage=False):
         """rhs(x, u, x0w, grid, hw, h) -> (dx, out): MX graph, so that the cam-height lookups stay compiled
         constant-time table accesses (an index computed from x into the window, no search). ``h``: the integration
@@ -224,7 +227,7 @@ class SwiftTyre:
             return ca.Function("rhs_stage", [x, u, x0w, grid, hw, h], [results[0], ca.vertcat(xc - x[_S["xb"]], ls)])
         return ca.Function("rhs", [x, u, x0w, grid, hw, h], results)
 
-    @_symbolic
+    @_with_casadi
     def _build_step(self):
         import casadi as ca
 
@@ -281,7 +284,7 @@ class SwiftTyre:
         return self._h
 
     @property
-    @_symbolic
+    @_with_casadi
     def output_function(self):
         """The outputs :meth:`step` reports at a state, as a CasADi function ``(x, u, x0w, grid, hw) -> out``
         (= ``step_function`` with dt = 0 at a quarter of the cost: the contact solution from the state's memory);
@@ -321,6 +324,7 @@ class SwiftTyre:
             self._store_contact(state, self._u(inputs))
         return state
 
+    @_with_casadi
     def _store_contact(self, state, u):
         """Write the converged contact solution (x_c - x_b, l_s) of ``state`` into its memory entries."""
         if self._compiled is not None:
@@ -386,6 +390,7 @@ class SwiftTyre:
         # a state without a stored contact solution (built by hand): solved first
         return self.step(self._impose(state, inputs), inputs, dt)
 
+    @_with_casadi
     def _step_casadi(self, state, inputs: StepInputs, dt: float):
         if not (math.isfinite(dt) and dt >= 0):
             raise ModelInputError(f"the step dt must be finite and >= 0; got dt = {dt!r}")
@@ -442,11 +447,13 @@ class SwiftTyre:
         i0 = self._window_start(state[_S["xb"]])
         return self.table.x0 + i0 * self.table.dx, self._grid, self._h[2 * i0:2 * (i0 + self.window)], 0.0
 
+    @_with_casadi
     def derivative(self, state, inputs: StepInputs):
         """State derivative (CasADi VM on the same right-hand side): for the reference run and checks."""
         state = self._impose(state, inputs)
         return np.asarray(self._rhs_window(state, self._u(inputs), *self._rhs_args(state))[0]).ravel()
 
+    @_with_casadi
     def run_adaptive(self, t_end: float, inputs: StepInputs, dt: float = 1e-3, rtol: float = 1e-8,
                      atol: float = 1e-10) -> SimResult:
         """Accuracy reference: scipy ``solve_ivp`` (DOP853, tight tolerances) on the same right-hand side,
@@ -464,7 +471,7 @@ class SwiftTyre:
         outs = np.array([np.asarray(self._rhs_window(s, u, *self._rhs_args(s))[1]).ravel() for s in sol.y.T])
         return SimResult(sol.t, sol.y.T, dict(zip(OUTPUT_NAMES, outs.T)))
 
-    @_symbolic
+    @_with_casadi
     def jacobian(self, state, inputs: StepInputs):
         """d(state derivative)/d(state) at ``state``: the linearised model (eigenvalues, stability)."""
         import casadi as ca
@@ -490,7 +497,7 @@ class SwiftTyre:
             eqs += [_S["oma"], _S["thw"]]
         return unknown, eqs
 
-    @_symbolic
+    @_with_casadi
     def equilibrium_function(self, iterations: int = 30):
         """:meth:`initial_state` with the axle height imposed as one CasADi function for code generation (FMU):
         ``(xa, za, vza, omega, u, x0w, grid, hw) -> x`` at the axle position ``xa``, height ``za`` (above the cam
@@ -534,6 +541,7 @@ class SwiftTyre:
         return ca.Function("swift_equilibrium", [xa, za, vza, omega, u, x0w, grid, hw], [xi],
                            ["xa", "za", "vza", "omega", "u", "x0w", "grid", "hw"], ["x"])
 
+    @_with_casadi
     def initial_state(self, inputs: StepInputs, iterations: int = 30) -> np.ndarray:
         """Static equilibrium (steady rolling at the input speeds) at the axle position of ``inputs``: Newton
         on the accelerations and patch rates, from the steady-state model's deflection. With ``rim="torque"`` the
@@ -580,7 +588,7 @@ class SwiftTyre:
         self._store_contact(s, u)
         return s
 
-    @_symbolic
+    @_with_casadi
     def _build_equilibrium(self, unknown, eqs):
         """The static equations and their Jacobian in the unknowns, built once (for :meth:`initial_state`)."""
         import casadi as ca
