@@ -136,6 +136,7 @@ def deflection_61(prm, fz, r_omega, omega, fx, fy, dpi, be):
 
 
 _RHO_FLOOR = 1e-12  # m, the smallest MF 6.2 deflection
+_NEWTON_STEPS = 10  # unrolled (CasADi) Newton steps of the MF 6.2 loaded radius
 
 
 def deflection_62(prm, rl, r_omega, gamma, be):
@@ -155,13 +156,18 @@ def _camber_terms_62(prm, r_omega, gamma, be):
     return free_share, camber
 
 
-def _deflection_62(prm, rl, r_omega, free_share, camber, be):
+def _deflection_62(prm, rl, r_omega, free_share, camber, be, slope=False):
     """rho = (R_omega - Rl)+ (1 - Q_CAM3 |gamma|) + growth^2 (W/8) |tan gamma|, growth = (Q_CAM1 Rl + Q_CAM2 Rl^2)
-    / (Q_CAM1 R_omega + Q_CAM2 R_omega^2)."""
+    / (Q_CAM1 R_omega + Q_CAM2 R_omega^2); with ``slope``: (rho, d rho/d Rl)."""
     rho = be.fmax(r_omega - rl, 0.0) * free_share
+    drho = be.where(rl < r_omega, -free_share, 0.0)
     if prm.Q_CAM1 != 0.0 or prm.Q_CAM2 != 0.0:
-        rho = rho + (prm.Q_CAM1 * rl + prm.Q_CAM2 * rl**2) ** 2 * camber
-    return be.fmax(rho, _RHO_FLOOR)
+        growth = prm.Q_CAM1 * rl + prm.Q_CAM2 * rl**2
+        rho = rho + growth**2 * camber
+        drho = drho + 2.0 * growth * (prm.Q_CAM1 + 2.0 * prm.Q_CAM2 * rl) * camber
+    if not slope:
+        return be.fmax(rho, _RHO_FLOOR)
+    return be.fmax(rho, _RHO_FLOOR), be.where(rho > _RHO_FLOOR, drho, 0.0)
 
 
 def vertical_force_62(prm, rl, r_omega, omega, fx, fy, gamma, dpi, be):
@@ -179,28 +185,34 @@ def _relation_terms_62(prm, r_omega, omega, fx, fy, gamma, dpi, be) -> tuple:
     return r_omega, free_share, camber, correction, stiffness, fy, gamma
 
 
-def _relation_62(prm, rl, terms, be):
+def _relation_62(prm, rl, terms, be, slope=False):
     """The MF 6.2 load-radius relation, negative where the side-force term exceeds the rest (terms whose
-    parameters are zero are skipped). Its sign change above R_omega is a lifted tyre's loaded radius."""
+    parameters are zero are skipped). Its sign change above R_omega is a lifted tyre's loaded radius. With
+    ``slope``: (Fz, dFz/dRl), the derivative written out term by term (the relation is explicit in rho)."""
     r_omega, free_share, camber, correction, stiffness, fy, gamma = terms
     R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
-    rho = _deflection_62(prm, rl, r_omega, free_share, camber, be)
-    x = rho / R0
+    rho, drho = _deflection_62(prm, rl, r_omega, free_share, camber, be, slope=True)
+    x, dx = rho / R0, drho / R0
     x_load = be.where(rho > _RHO_FLOOR, x, 0.0)  # no deflection, no load (the floor only keeps x^Q_FCY2 finite)
+    dcorrection = 0.0
     if prm.Q_FCY != 0.0:  # side force, with the camber asymmetry S_Fygamma and the deflection dependency
         ratio = rl / r_omega
         s_fygamma = (prm.Q_FYS1 + prm.Q_FYS2 * ratio + prm.Q_FYS3 * ratio**2) * gamma
-        correction = correction - (x ** prm.Q_FCY2 * prm.Q_FCY * (fy - s_fygamma) / Fz0) ** 2
-    fz = correction * stiffness * (_q_fz1(prm, be) * x_load + prm.Q_FZ2 * x_load**2)
-    return fz + _bottoming_force(prm, rl, be)
-
-
-#: the scan above the free radius for the root of a lifted tyre, in units of R0, up to R_omega + R0 (as the camber
-#: vanishes the root moves up as 1/sqrt(|gamma|), beyond any contact); finer near R_omega, where most roots lie.
-#: Nine points (each one relation evaluation in the unrolled CasADi graph, shared with the nine widening steps
-#: of a tyre in contact) find the same root as steps of 0.05 R0
-#: on the extreme-input property tests of all three MF 6.2 files (test_vertical_relation)
-_LIFT_OFFSETS = (0.01, 0.025, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0)
+        power = x ** prm.Q_FCY2
+        side = power * prm.Q_FCY * (fy - s_fygamma) / Fz0
+        correction = correction - side**2
+        if slope:  # d side/d Rl: through x^Q_FCY2 and through S_Fygamma(Rl/R_omega)
+            ds_fygamma = (prm.Q_FYS2 + 2.0 * prm.Q_FYS3 * ratio) * gamma / r_omega
+            dside = side * prm.Q_FCY2 * dx / x - power * prm.Q_FCY * ds_fygamma / Fz0
+            dcorrection = -2.0 * side * dside
+    q_fz1 = _q_fz1(prm, be)
+    load = stiffness * (q_fz1 * x_load + prm.Q_FZ2 * x_load**2)
+    fz = correction * load + _bottoming_force(prm, rl, be)
+    if not slope:
+        return fz
+    dload = stiffness * (q_fz1 + 2.0 * prm.Q_FZ2 * x_load) * dx
+    dbottoming = be.where(rl < prm.RIM_RADIUS + prm.BOTTOM_OFFST, -prm.BOTTOM_STIFF, 0.0)
+    return fz, dcorrection * load + correction * dload + dbottoming
 
 
 def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
@@ -209,42 +221,35 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     fz, *args = be.broadcast(fz, *args)  # the residual below evaluates subsets of the elements
     terms = be.broadcast(*_relation_terms_62(prm, *args, be))
 
-    def residual(rl, idx):
+    def residual(rl, idx):  # (Fz(Rl) - fz, its slope)
         sub = terms if idx is None else [v[idx] for v in terms]
-        target = fz if idx is None else fz[idx]
-        return _relation_62(prm, rl, sub, be) - target
+        value, slope = _relation_62(prm, rl, sub, be, slope=True)
+        return value - (fz if idx is None else fz[idx]), slope
 
-    r_omega = args[0]
-    f_top = residual(r_omega, None)  # < 0 when the free tyre carries less than fz
+    r_omega, gamma = args[0], args[4]
+    f_top, df_top = residual(r_omega, None)  # < 0 when the free tyre carries less than fz
     contact = f_top < 0
-    # first point: the deflection of the MF 6.1 relation without the side-force term, less the camber
-    # deflection (a lower bound without camber); second point: the linear extrapolation of the load from zero
-    # deflection through the first point, an upper bound since Fz/rho grows with rho, moved 0.5 % further;
-    # widen if that still fails to bracket
+    # in contact: Newton from the deflection of the MF 6.1 relation without the side-force term, less the camber
+    # deflection, inside [0, R_omega] (Fz is taken to exceed any load at Rl = 0, deep in bottoming).
+    # Lifted (the free tyre already carries more than fz: camber deflection at a low load): the root lies above
+    # R_omega, where the camber asymmetry S_Fygamma grows with Rl/R_omega; Newton from R_omega inside
+    # [R_omega, R_omega + R0] when the load is gone at R_omega + R0, else no root: Rl = R_omega.
     rho_61 = deflection_61(prm, fz, r_omega, omega, fx, 0.0 * fy, dpi, be)
-    camber_share = rho_61 - deflection_62(prm, r_omega - rho_61, r_omega, args[4], be)
-    rho_1 = be.fmax(rho_61 + camber_share / (1.0 - prm.Q_CAM3 * be.abs(args[4])), 0.1 * rho_61)
-    f_1 = residual(r_omega - rho_1, None)
-    load_1 = f_1 + fz
-    ratio = be.where(load_1 > 0, fz / be.where(load_1 > 0, load_1, 1.0), 2.0)
-    rho_2 = rho_1 * be.clip(ratio, 0.25, 4.0) * be.where(ratio > 1, 1.005, 0.995) + 1e-9
-    f_2 = residual(r_omega - rho_2, None)
-
-    def widen(rl_1, rl_2, f_2, idx):  # more deflection while the load is short, less while it is exceeded
-        top = r_omega if idx is None else r_omega[idx]
-        return top - (top - rl_2) * be.where(f_2 < 0, 1.5, 0.5)
-
-    # lifted: the free tyre already carries more than fz (camber deflection at a low load); the root, if any,
-    # lies above R_omega, where the camber asymmetry S_Fygamma grows with Rl/R_omega: the first sign change on
-    # a grid above R_omega brackets the root nearest to the free radius
-    found, a, b, f_a, f_b = be.bracket(residual, contact, r_omega - rho_1, r_omega - rho_2, f_1, f_2, widen,
-                                       r_omega, f_top, prm.UNLOADED_RADIUS + 0.0 * fz, _LIFT_OFFSETS, max_iter=200)
-    # stop at 1e-15 m or once the load is matched to 1e-12 relative (floor 1e-12 N); CasADi unrolls 16 Dekker
-    # steps (14 carry the load to 1e-9 on 60,000 extreme points of the three MF 6.2 files at hand)
-    rl = be.solve_bracketed(residual, a, b, f_a, f_b, xtol=1e-15, max_iter=200, unrolled=16,
-                            ftol=1e-12 * be.fmax(fz, 1.0))
+    camber_share = rho_61 - deflection_62(prm, r_omega - rho_61, r_omega, gamma, be)
+    rho_1 = be.fmax(rho_61 + camber_share / (1.0 - prm.Q_CAM3 * be.abs(gamma)), 0.1 * rho_61)
+    top = r_omega + prm.UNLOADED_RADIUS
+    x_2 = be.where(contact, r_omega - rho_1, top)
+    f_2, df_2 = residual(x_2, None)
+    found = be.logical_or(contact, be.logical_and(f_top > 0, f_2 <= 0))
+    x, df = be.where(contact, x_2, r_omega), be.where(contact, df_2, df_top)
+    f = be.where(contact, f_2, be.where(found, f_top, 0.0))  # no root: stay at R_omega
+    lo, hi = be.where(contact, 0.0 * fz, r_omega), be.where(contact, r_omega, x_2)
+    # stop at steps below 1e-15 m or once the load is matched to 1e-12 relative (floor 1e-12 N); CasADi unrolls
+    # a fixed number of steps (see solve_newton)
+    rl = be.solve_newton(residual, x, f, df, lo, hi, xtol=1e-15, ftol=1e-12 * be.fmax(fz, 1.0), max_iter=200,
+                         unrolled=_NEWTON_STEPS)
     rl = be.where(found, rl, r_omega)
-    return rl, deflection_62(prm, rl, r_omega, args[4], be)
+    return rl, deflection_62(prm, rl, r_omega, gamma, be)
 
 
 def contact_patch(prm, fz, dpi, be):
