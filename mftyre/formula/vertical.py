@@ -136,7 +136,7 @@ def deflection_61(prm, fz, r_omega, omega, fx, fy, dpi, be):
 
 
 _RHO_FLOOR = 1e-12  # m, the smallest MF 6.2 deflection
-_NEWTON_STEPS = 10  # unrolled (CasADi) Newton steps of the MF 6.2 loaded radius
+_NEWTON_STEPS = 8  # unrolled (CasADi) Newton steps of the MF 6.2 loaded radius
 
 
 def deflection_62(prm, rl, r_omega, gamma, be):
@@ -185,34 +185,46 @@ def _relation_terms_62(prm, r_omega, omega, fx, fy, gamma, dpi, be) -> tuple:
     return r_omega, free_share, camber, correction, stiffness, fy, gamma
 
 
-def _relation_62(prm, rl, terms, be, slope=False):
+def _relation_62(prm, rl, terms, be, target=None):
     """The MF 6.2 load-radius relation, negative where the side-force term exceeds the rest (terms whose
-    parameters are zero are skipped). Its sign change above R_omega is a lifted tyre's loaded radius. With
-    ``slope``: (Fz, dFz/dRl), the derivative written out term by term (the relation is explicit in rho)."""
+    parameters are zero are skipped). Its sign change above R_omega is a lifted tyre's loaded radius.
+
+    With a ``target`` load: (Fz - target, dFz/dRl, lift slope), the derivative written out term by term (the
+    relation is explicit in rho). The lift slope serves the root above R_omega, where Fz - target =
+    -(A + B) load (A - B) with A = |side-force term|, B = sqrt(correction - target/load): the slope of that with
+    (A + B) load held fixed, i.e. a Newton step on A - B, whose shape is nearly that of S_Fygamma, quadratic in Rl
+    (Fz itself falls there like a quartic, and Newton on it creeps)."""
     r_omega, free_share, camber, correction, stiffness, fy, gamma = terms
     R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
     rho, drho = _deflection_62(prm, rl, r_omega, free_share, camber, be, slope=True)
     x, dx = rho / R0, drho / R0
     x_load = be.where(rho > _RHO_FLOOR, x, 0.0)  # no deflection, no load (the floor only keeps x^Q_FCY2 finite)
-    dcorrection = 0.0
+    q_fz1 = _q_fz1(prm, be)
+    load = stiffness * (q_fz1 * x_load + prm.Q_FZ2 * x_load**2)
+    net = correction
     if prm.Q_FCY != 0.0:  # side force, with the camber asymmetry S_Fygamma and the deflection dependency
         ratio = rl / r_omega
         s_fygamma = (prm.Q_FYS1 + prm.Q_FYS2 * ratio + prm.Q_FYS3 * ratio**2) * gamma
         power = x ** prm.Q_FCY2
         side = power * prm.Q_FCY * (fy - s_fygamma) / Fz0
-        correction = correction - side**2
-        if slope:  # d side/d Rl: through x^Q_FCY2 and through S_Fygamma(Rl/R_omega)
-            ds_fygamma = (prm.Q_FYS2 + 2.0 * prm.Q_FYS3 * ratio) * gamma / r_omega
-            dside = side * prm.Q_FCY2 * dx / x - power * prm.Q_FCY * ds_fygamma / Fz0
-            dcorrection = -2.0 * side * dside
-    q_fz1 = _q_fz1(prm, be)
-    load = stiffness * (q_fz1 * x_load + prm.Q_FZ2 * x_load**2)
-    fz = correction * load + _bottoming_force(prm, rl, be)
-    if not slope:
+        net = correction - side**2
+    fz = net * load + _bottoming_force(prm, rl, be)
+    if target is None:
         return fz
     dload = stiffness * (q_fz1 + 2.0 * prm.Q_FZ2 * x_load) * dx
     dbottoming = be.where(rl < prm.RIM_RADIUS + prm.BOTTOM_OFFST, -prm.BOTTOM_STIFF, 0.0)
-    return fz, dcorrection * load + correction * dload + dbottoming
+    slope = net * dload + dbottoming
+    if prm.Q_FCY == 0.0:
+        return fz - target, slope, slope
+    # d side/d Rl: through x^Q_FCY2 and through S_Fygamma(Rl/R_omega)
+    ds_fygamma = (prm.Q_FYS2 + 2.0 * prm.Q_FYS3 * ratio) * gamma / r_omega
+    dside = side * prm.Q_FCY2 * dx / x - power * prm.Q_FCY * ds_fygamma / Fz0
+    slope = slope - 2.0 * side * dside * load
+    safe_load = be.where(load > 0, load, 1.0)
+    b = be.sqrt(be.fmax(correction - target / safe_load, 0.0))
+    db = target * dload / (2.0 * safe_load**2 * be.where(b > 0, b, 1.0))
+    lift_slope = -(be.abs(side) + b) * load * (be.sign_nz(side) * dside - db)
+    return fz - target, slope, lift_slope
 
 
 def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
@@ -220,30 +232,29 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     args = (r_omega, omega, fx, fy, gamma, dpi)
     fz, *args = be.broadcast(fz, *args)  # the residual below evaluates subsets of the elements
     terms = be.broadcast(*_relation_terms_62(prm, *args, be))
-
-    def residual(rl, idx):  # (Fz(Rl) - fz, its slope)
-        sub = terms if idx is None else [v[idx] for v in terms]
-        value, slope = _relation_62(prm, rl, sub, be, slope=True)
-        return value - (fz if idx is None else fz[idx]), slope
-
     r_omega, gamma = args[0], args[4]
-    f_top, df_top = residual(r_omega, None)  # < 0 when the free tyre carries less than fz
+    f_top = _relation_62(prm, r_omega, terms, be) - fz  # < 0 when the free tyre carries less than fz
     contact = f_top < 0
+
+    def residual(rl, idx):  # (Fz(Rl) - fz, the slope for the Newton step: in contact dFz/dRl, else the lift slope)
+        sub = terms if idx is None else [v[idx] for v in terms]
+        value, slope, lift_slope = _relation_62(prm, rl, sub, be, target=fz if idx is None else fz[idx])
+        return value, be.where(contact if idx is None else contact[idx], slope, lift_slope)
+
     # in contact: Newton from the deflection of the MF 6.1 relation without the side-force term, less the camber
     # deflection, inside [0, R_omega] (Fz is taken to exceed any load at Rl = 0, deep in bottoming).
     # Lifted (the free tyre already carries more than fz: camber deflection at a low load): the root lies above
-    # R_omega, where the camber asymmetry S_Fygamma grows with Rl/R_omega; Newton from R_omega inside
-    # [R_omega, R_omega + R0] when the load is gone at R_omega + R0, else no root: Rl = R_omega.
+    # R_omega, where the camber asymmetry S_Fygamma grows with Rl/R_omega; Newton from R_omega + R0 inside
+    # [R_omega, R_omega + R0] when the load is gone there, else no root: Rl = R_omega.
     rho_61 = deflection_61(prm, fz, r_omega, omega, fx, 0.0 * fy, dpi, be)
     camber_share = rho_61 - deflection_62(prm, r_omega - rho_61, r_omega, gamma, be)
     rho_1 = be.fmax(rho_61 + camber_share / (1.0 - prm.Q_CAM3 * be.abs(gamma)), 0.1 * rho_61)
     top = r_omega + prm.UNLOADED_RADIUS
-    x_2 = be.where(contact, r_omega - rho_1, top)
-    f_2, df_2 = residual(x_2, None)
-    found = be.logical_or(contact, be.logical_and(f_top > 0, f_2 <= 0))
-    x, df = be.where(contact, x_2, r_omega), be.where(contact, df_2, df_top)
-    f = be.where(contact, f_2, be.where(found, f_top, 0.0))  # no root: stay at R_omega
-    lo, hi = be.where(contact, 0.0 * fz, r_omega), be.where(contact, r_omega, x_2)
+    x = be.where(contact, r_omega - rho_1, top)
+    f, df = residual(x, None)
+    found = be.logical_or(contact, be.logical_and(f_top > 0, f <= 0))
+    f = be.where(found, f, 0.0)  # no root: stay (Rl = R_omega below)
+    lo, hi = be.where(contact, 0.0 * fz, r_omega), be.where(contact, r_omega, top)
     # stop at steps below 1e-15 m or once the load is matched to 1e-12 relative (floor 1e-12 N); CasADi unrolls
     # a fixed number of steps (see solve_newton)
     rl = be.solve_newton(residual, x, f, df, lo, hi, xtol=1e-15, ftol=1e-12 * be.fmax(fz, 1.0), max_iter=200,
