@@ -129,13 +129,11 @@ class NumpyBackend:
             if done.all():
                 return result.reshape(shape)
             keep = ~done
-            if idx is None and done.any():
-                sub = np.nonzero(keep)
-            elif idx is not None:
-                sub = tuple(i[keep] for i in idx)
-            else:
+            if idx is None and not done.any():
                 sub = None
-            new, loi, hii = new[keep], loi[keep], hii[keep]
+            else:
+                sub = np.nonzero(keep) if idx is None else tuple(i[keep] for i in idx)
+                new, loi, hii = new[keep], loi[keep], hii[keep]
             fnew, dfnew = fun(new, sub)
             if sub is None:
                 x, f, df, lo, hi = new, fnew, dfnew, loi, hii
