@@ -19,16 +19,22 @@ Equations: Besselink, Schmeitz & Pacejka (2010), paper (1)-(10); Pacejka (2012) 
 Loaded radius from the load. MF 6.1: the quadratic in rho/R0 is solved in the cancellation-free form
 x = 2c / (B + sqrt(B^2 + 4 A c)), finite also for Q_FZ2 = 0 (linear tyre) where the textbook root formula
 divides by zero. MF 6.2: the relation is not monotone near zero deflection (Q_FCY2 < 0 makes the side-force
-term grow without bound as rho -> 0), so a secant started near R0 can diverge. mftyre brackets the root
-between the free radius and a deflection where the load is exceeded, then refines with Dekker's method (secant with
-bisection safeguard) to 1e-15 m; whenever a root with Rl <= R_omega exists it is found. When even zero free
-deflection already gives more than the requested load (a cambered tyre at almost no load: the camber deflection
-rho_zgamma alone carries more), the relation's root lies above R_omega, where the camber asymmetry S_Fygamma,
-growing with Rl/R_omega, brings the load down: a grid scan above R_omega (nine points, 0.01 R0 to R0 above it)
-brackets the root nearest to the free radius, refined as above (this is the root the reference evaluator reports, e.g. Rl = 0.4737 m
-for Fz = 0 at 31 m/s on its MF 6.2 sample file). Where the relation has no root there (no camber, no S_Fygamma,
-or a camber so small that the root lies more than R0 above the free radius: a wheel lifted by more than its own
-radius is not in contact) the loaded radius is R_omega, where the camber deflection carries a small load.
+term grow without bound as rho -> 0), so an unguarded iteration started near R0 can diverge. mftyre solves it by
+Newton's method with the relation's analytic slope, kept inside a bracket (bisection where a step would leave it),
+to 1e-15 m or 1e-12 relative in the load. In contact (the free tyre carries less than the load) it starts from
+the MF 6.1 deflection without the side-force term, corrected for the camber deflection, inside [0, R_omega].
+When even zero free deflection already gives more than the requested load (a cambered tyre at almost no load: the
+camber deflection rho_zgamma alone carries more), the relation's root lies above R_omega, where the camber
+asymmetry S_Fygamma, growing with Rl/R_omega, brings the load down: if the load is gone at R_omega + R0, Newton
+from there inside [R_omega, R_omega + R0] finds the root (this is the root the reference evaluator reports, e.g.
+Rl = 0.4737 m for Fz = 0 at 31 m/s on its MF 6.2 sample file); its steps are those of Newton on A - B, the
+side-force term A = |x^Q_FCY2 Q_FCY (Fy - S_Fygamma)/Fz0| against B = sqrt(correction - Fz/load), nearly
+quadratic in Rl where Fz itself falls like a quartic. Where the relation has no root there (no camber, no
+S_Fygamma, or a camber so small that the root lies more than R0 above the free radius: a wheel lifted by more than
+its own radius is not in contact) the loaded radius is R_omega, where the camber deflection carries a small load.
+CasADi (and so the compiled C) unrolls 8 steps, 10 relation evaluations in all: 8 carry the load to 1e-9 at all
+140,000 extreme points per file tried (of the kind in tests/test_vertical_relation, three MF 6.2 files), 7 missed
+one of them.
 """
 from __future__ import annotations
 
@@ -136,7 +142,7 @@ def deflection_61(prm, fz, r_omega, omega, fx, fy, dpi, be):
 
 
 _RHO_FLOOR = 1e-12  # m, the smallest MF 6.2 deflection
-_NEWTON_STEPS = 8  # unrolled (CasADi) Newton steps of the MF 6.2 loaded radius
+_NEWTON_STEPS = 8  # unrolled (CasADi) Newton steps of the MF 6.2 loaded radius, see the module notes
 
 
 def deflection_62(prm, rl, r_omega, gamma, be):
