@@ -33,8 +33,8 @@ quadratic in Rl where Fz itself falls like a quartic. Where the relation has no 
 S_Fygamma, or a camber so small that the root lies more than R0 above the free radius: a wheel lifted by more than
 its own radius is not in contact) the loaded radius is R_omega, where the camber deflection carries a small load.
 CasADi (and so the compiled C) unrolls 8 steps, 10 relation evaluations in all: 8 carry the load to 1e-9 at all
-140,000 extreme points per file tried (of the kind in tests/test_vertical_relation, three MF 6.2 files), 7 missed
-one of them.
+140,000 extreme points per file tried (of the kind in tests/test_vertical_relation, three MF 6.2 files), 7 miss
+one of them (in that test).
 """
 from __future__ import annotations
 
