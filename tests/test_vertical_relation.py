@@ -3,8 +3,9 @@
 Random loads (including the low loads where the camber deflection alone carries more than the load, and high loads
 in turn-slip mode), speeds, pressures, cambers and forces on every MF 6.2 file at hand: wherever the relation has
 a root the returned Rl satisfies it to 1e-9 relative (floor 1e-9 N); where it has none the loaded radius is the
-free radius and no root exists on a fine grid up to R0 above it (a wheel lifted further is not in contact). NumPy and CasADi alike; the CasADi derivative of Rl is the
-implicit one, -(dF/dFz_target)/(dF/dRl).
+free radius and no root exists on a fine grid up to R0 above it (a wheel lifted further is not in contact); a root
+above the free radius is the first one. NumPy and CasADi alike; the CasADi derivative of Rl is the implicit one,
+-(dF/dFz_target)/(dF/dRl). The solver's slopes against finite differences.
 """
 from __future__ import annotations
 
@@ -162,10 +163,10 @@ def test_vertical_force_is_zero_above_the_free_radius(path):
 
 @pytest.mark.parametrize("key", list(FILES))
 def test_casadi_loaded_radius_carries_its_load_at_extreme_inputs(key):
-    """The unrolled CasADi solver (8 safeguarded Newton steps; with 7 one of these 60,000 points falls short) against the relation itself at zero
-    and low loads up to 250 rad/s (the cambered tyre's root above R_omega), 15 kN with |Fx|, |Fy| up to 1.2 Fz, any
-    pressure and camber in range: Rl carries the load to 1e-9 relative wherever NumPy finds a root, and the two
-    agree."""
+    """The unrolled CasADi solver (8 safeguarded Newton steps; with 7 one of these 60,000 points falls short) against
+    the relation itself at zero, few-newton and low loads up to 250 rad/s (the cambered tyre's root above R_omega),
+    15 kN with |Fx|, |Fy| up to 1.2 Fz, any pressure and camber in range: Rl carries the load to 1e-9 relative
+    wherever NumPy finds a root, and the two agree."""
     import casadi as ca
     from mftyre.backend import casadi_backend
 
@@ -177,7 +178,8 @@ def test_casadi_loaded_radius_carries_its_load_at_extreme_inputs(key):
                                         gamma_s, dpi_s, be)
     rng = np.random.default_rng(5)
     n = 60000
-    fz = np.r_[np.zeros(n // 10), rng.uniform(0.0, 600.0, n // 3), np.full(n // 10, 15000.0), rng.uniform(0, 5, n // 10)]
+    fz = np.r_[np.zeros(n // 10), rng.uniform(0.0, 600.0, n // 3), np.full(n // 10, 15000.0),
+               rng.uniform(0.0, 5.0, n // 10)]
     fz = np.r_[fz, rng.uniform(0.0, 4.0 * prm.FNOMIN, n - fz.size)]
     omega = rng.uniform(0.0, 250.0, n)
     dpi = rng.uniform(prm.PRESMIN, prm.PRESMAX, n) / prm.NOMPRES - 1.0
