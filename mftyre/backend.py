@@ -9,8 +9,8 @@ never call ``numpy`` or ``casadi`` directly. Two backends exist:
 Both offer the elementary functions, comparisons folded into :meth:`where`, the MATLAB-style ``sign`` (with
 sign(0) = 0) and the "non-zero" sign used by the Magic Formula's singularity guards (sign(0) = +1), and two
 iteration primitives: :meth:`fixed_point` and :meth:`solve_newton` (safeguarded Newton in a bracket). NumPy
-iterates until every element has converged (with an iteration cap); CasADi unrolls a fixed, documented number of iterations so the resulting
-expression graph is static and differentiable.
+iterates until every element has converged (with an iteration cap); CasADi unrolls a fixed, documented number
+of iterations so the resulting expression graph is static and differentiable.
 """
 from __future__ import annotations
 
