@@ -74,7 +74,10 @@ class NumpyBackend:
 
     @staticmethod
     def broadcast(*values):
-        """The values as float arrays of one common shape, at least 1-D (writable copies)."""
+        """The values as float arrays of one common shape, at least 1-D (writable copies); scalars alone stay
+        scalars (one point: scalar arithmetic, several times faster than arrays of one element)."""
+        if all(np.ndim(v) == 0 for v in values):
+            return [np.float64(v) for v in values]
         return [np.atleast_1d(np.array(v, dtype=float)) for v in np.broadcast_arrays(*values)]
 
     @staticmethod
@@ -106,28 +109,29 @@ class NumpyBackend:
         element; the result is the last point moved by its Newton step where that stays in the bracket. An element
         given ``f = 0`` returns ``x``. Raises ModelInputError if not converged in ``max_iter`` steps.
         """
-        shape = np.shape(x)
-        x, f, df, lo, hi = (np.atleast_1d(np.array(v, dtype=float)) for v in np.broadcast_arrays(x, f, df, lo, hi))
-        ftol = np.broadcast_to(ftol, x.shape)
-        result = x.copy()
+        where = NumpyBackend.where  # one point (scalars): Python choices, no arrays
+        scalar = all(np.ndim(v) == 0 for v in (x, f, df, lo, hi, ftol))
+        if not scalar:
+            x, f, df, lo, hi = (np.array(v, dtype=float) for v in np.broadcast_arrays(x, f, df, lo, hi))
+            ftol = np.broadcast_to(ftol, x.shape)
         idx = None
         for _ in range(max_iter):
             xi, fi, dfi, loi, hii = (v if idx is None else v[idx] for v in (x, f, df, lo, hi))
             ftoli = ftol if idx is None else ftol[idx]
             falling = fi > 0
-            loi, hii = np.where(falling, xi, loi), np.where(falling, hii, xi)
-            step = fi / np.where(dfi < 0, dfi, -1.0)
+            loi, hii = where(falling, xi, loi), where(falling, hii, xi)
+            step = fi / where(dfi < 0, dfi, -1.0)
             newton = xi - step
             ok = (dfi < 0) & (newton >= loi) & (newton <= hii)
             tol = xtol + _ULP4 * np.abs(xi)
             done = (np.abs(fi) <= ftoli) | (ok & (np.abs(step) <= tol)) | (hii - loi <= tol)
-            new = np.where(ok, newton, 0.5 * (loi + hii))
+            new = where(ok, newton, 0.5 * (loi + hii))
             if idx is None:
-                result = np.where(ok, newton, xi)
+                result = where(ok, newton, xi)
             else:
                 result[idx] = np.where(ok, newton, xi)
             if done.all():
-                return result.reshape(shape)
+                return result
             keep = ~done
             if idx is None and not done.any():
                 sub = None
