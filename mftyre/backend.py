@@ -107,7 +107,8 @@ class NumpyBackend:
         that is not negative) is replaced by bisection. Iterates until |f| <= ``ftol`` (a scalar or one value per
         element), the Newton step is at most ``xtol`` (plus 4 ulp of x) or the bracket is that narrow, for every
         element; the result is the last point moved by its Newton step where that stays in the bracket. An element
-        given ``f = 0`` returns ``x``. Raises ModelInputError if not converged in ``max_iter`` steps.
+        given ``f = 0`` returns ``x``. Scalars (one point) stay scalars. Raises ModelInputError if not converged in
+        ``max_iter`` steps.
         """
         where = NumpyBackend.where  # one point (scalars): Python choices, no arrays
         scalar = all(np.ndim(v) == 0 for v in (x, f, df, lo, hi, ftol))
