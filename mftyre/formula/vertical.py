@@ -25,16 +25,19 @@ to 1e-15 m or 1e-12 relative in the load. In contact (the free tyre carries less
 the MF 6.1 deflection without the side-force term, corrected for the camber deflection, inside [0, R_omega].
 When even zero free deflection already gives more than the requested load (a cambered tyre at almost no load: the
 camber deflection rho_zgamma alone carries more), the relation's root lies above R_omega, where the camber
-asymmetry S_Fygamma, growing with Rl/R_omega, brings the load down: if the load is gone at R_omega + R0, Newton
-from there inside [R_omega, R_omega + R0] finds the root (this is the root the reference evaluator reports, e.g.
-Rl = 0.4737 m for Fz = 0 at 31 m/s on its MF 6.2 sample file); its steps are those of Newton on A - B, the
-side-force term A = |x^Q_FCY2 Q_FCY (Fy - S_Fygamma)/Fz0| against B = sqrt(correction - Fz/load), nearly
-quadratic in Rl where Fz itself falls like a quartic. Where the relation has no root there (no camber, no
-S_Fygamma, or a camber so small that the root lies more than R0 above the free radius: a wheel lifted by more than
-its own radius is not in contact) the loaded radius is R_omega, where the camber deflection carries a small load.
-CasADi (and so the compiled C) unrolls 8 steps, 10 relation evaluations in all: 8 carry the load to 1e-9 at all
-140,000 extreme points per file tried (of the kind in tests/test_vertical_relation, three MF 6.2 files), 7 miss
-one of them (in that test).
+asymmetry S_Fygamma, growing with Rl/R_omega, brings the load down. There the side-force term takes what the load
+leaves, |Fy - S_Fygamma| = sqrt(correction - Fz/load) Fz0 / (|Q_FCY| x^Q_FCY2), which grows with Rl; taken at
+R_omega + R0 it turns the quadratic S_Fygamma(Rl/R_omega) into an upper bound of every root (where Q_FCY2 <= 0,
+Q_CAM1, Q_CAM2, Q_FZ2 >= 0 and S_Fygamma is monotone, as in the files at hand; else the bound is R_omega + R0). If
+the load is gone at the bound, Newton from there inside [R_omega, bound] finds the root (the one the reference
+evaluator reports, e.g. Rl = 0.4737 m for Fz = 0 at 31 m/s on its MF 6.2 sample file); its steps are those of
+Newton on A - B, the side-force term A = |x^Q_FCY2 Q_FCY (Fy - S_Fygamma)/Fz0| against B = sqrt(correction -
+Fz/load), nearly quadratic in Rl where Fz itself falls like a quartic. Where the relation has no root there (no
+camber, no S_Fygamma, or a camber so small that the root lies more than R0 above the free radius: a wheel lifted by
+more than its own radius is not in contact) the loaded radius is R_omega, where the camber deflection carries a
+small load. CasADi (and so the compiled C) unrolls 7 steps, 9 relation evaluations in all: 6 carry the load to
+1e-9 at all 180,000 extreme points per file tried (of the kind in tests/test_vertical_relation, three MF 6.2 files),
+5 miss one in 60,000; without the bound 8 steps (7 miss some).
 """
 from __future__ import annotations
 
@@ -142,7 +145,8 @@ def deflection_61(prm, fz, r_omega, omega, fx, fy, dpi, be):
 
 
 _RHO_FLOOR = 1e-12  # m, the smallest MF 6.2 deflection
-_NEWTON_STEPS = 8  # unrolled (CasADi) Newton steps of the MF 6.2 loaded radius, see the module notes
+_NEWTON_STEPS = 7  # unrolled (CasADi) Newton steps of the MF 6.2 loaded radius, see the module notes
+_NEWTON_STEPS_FROM_TOP = 8  # the same where the lifted roots have no bound below R_omega + R0
 
 
 def deflection_62(prm, rl, r_omega, gamma, be):
@@ -233,6 +237,42 @@ def _relation_62(prm, rl, terms, be, target=None):
     return fz - target, slope, lift_slope
 
 
+def _growing_load_62(prm) -> bool:
+    """Whether the camber deflection and the load grow with Rl above R_omega (Q_CAM1, Q_CAM2, Q_FZ2 >= 0)."""
+    return prm.Q_CAM1 >= 0.0 and prm.Q_CAM2 >= 0.0 and prm.Q_FZ2 >= 0.0
+
+
+def _lift_bound_applies(prm) -> bool:
+    """Whether :func:`_lift_bound_62` bounds the lifted roots: a growing load, a side-force term that weakens as
+    the deflection grows (Q_FCY2 <= 0) and S_Fygamma monotone in Rl/R_omega over [1, 3] (R_omega above R0/2)."""
+    monotone = all(prm.Q_FYS2 + 2.0 * prm.Q_FYS3 * r > 0 for r in (1.0, 3.0))
+    return prm.Q_FCY != 0.0 and prm.Q_FCY2 <= 0.0 and _growing_load_62(prm) and monotone
+
+
+def _lift_bound_62(prm, fz, terms, top, be):
+    """An upper bound of a lifted tyre's root, below ``top`` = R_omega + R0 (else ``top``), see
+    :func:`_lift_bound_applies`. At a root above R_omega the side-force term takes what the load leaves:
+    |Fy - S_Fygamma| = M = sqrt(correction - fz/load) Fz0 / (|Q_FCY| x^Q_FCY2), and S_Fygamma moves away from Fy
+    in the direction of gamma: S_Fygamma = Fy + sign(gamma) M. M grows with Rl (so does x), so with M taken at
+    ``top`` the quadratic S_Fygamma(Rl/R_omega) = Fy + sign(gamma) M(top) has its root at or beyond every root."""
+    r_omega, free_share, camber, correction, stiffness, fy, gamma = terms
+    R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
+    x = _deflection_62(prm, top, r_omega, free_share, camber, be) / R0
+    load = stiffness * (_q_fz1(prm, be) * x + prm.Q_FZ2 * x**2)
+    usable = be.logical_and(load > 0, gamma != 0)
+    leaves = be.fmax(correction - fz / be.where(usable, load, 1.0), 0.0)
+    side = be.sqrt(leaves) * Fz0 / abs(prm.Q_FCY) * x ** (-prm.Q_FCY2)
+    # Q_FYS3 r^2 + Q_FYS2 r + c = 0, the root where S_Fygamma grows with r (cancellation-free either sign of Q_FYS2)
+    a, b = prm.Q_FYS3, prm.Q_FYS2
+    c = prm.Q_FYS1 - (fy + be.sign_nz(gamma) * side) / be.where(usable, gamma, 1.0)
+    root_d = be.sqrt(be.fmax(b * b - 4.0 * a * c, 0.0))
+    ratio = -2.0 * c / (b + root_d) if b >= 0 else (-b + root_d) / (2.0 * a)
+    bound = ratio * r_omega
+    inside = be.logical_and(usable, be.logical_and(b * b - 4.0 * a * c >= 0, be.logical_and(bound > r_omega,
+                                                                                           bound < top)))
+    return be.where(inside, bound, top)
+
+
 def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     """Inverse of :func:`vertical_force_62`: (Rl, rho_z) carrying ``fz``, see the module notes."""
     args = (r_omega, omega, fx, fy, gamma, dpi)
@@ -250,12 +290,17 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     # in contact: Newton from the deflection of the MF 6.1 relation without the side-force term, less the camber
     # deflection, inside [0, R_omega] (Fz is taken to exceed any load at Rl = 0, deep in bottoming).
     # Lifted (the free tyre already carries more than fz: camber deflection at a low load): the root lies above
-    # R_omega, where the camber asymmetry S_Fygamma grows with Rl/R_omega; Newton from R_omega + R0 inside
-    # [R_omega, R_omega + R0] when the load is gone there, else no root: Rl = R_omega.
+    # R_omega, where the camber asymmetry S_Fygamma grows with Rl/R_omega; Newton from an upper bound of the
+    # roots (at most R_omega + R0) inside [R_omega, bound] when the load is gone there, else no root: Rl = R_omega.
     rho_61 = deflection_61(prm, fz, r_omega, omega, fx, 0.0 * fy, dpi, be)
     camber_share = rho_61 - deflection_62(prm, r_omega - rho_61, r_omega, gamma, be)
     rho_1 = be.fmax(rho_61 + camber_share / (1.0 - prm.Q_CAM3 * be.abs(gamma)), 0.1 * rho_61)
     top = r_omega + prm.UNLOADED_RADIUS
+    steps = _NEWTON_STEPS
+    if _lift_bound_applies(prm):
+        top = _lift_bound_62(prm, fz, terms, top, be)
+    elif prm.Q_FCY != 0.0 or not _growing_load_62(prm):  # lifted roots possible, Newton from R_omega + R0
+        steps = _NEWTON_STEPS_FROM_TOP
     x = be.where(contact, r_omega - rho_1, top)
     f, df = residual(x, None)
     found = be.logical_or(contact, be.logical_and(f_top > 0, f <= 0))
@@ -264,7 +309,7 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     # stop at steps below 1e-15 m or once the load is matched to 1e-12 relative (floor 1e-12 N); CasADi unrolls
     # a fixed number of steps (see solve_newton)
     rl = be.solve_newton(residual, x, f, df, lo, hi, xtol=1e-15, ftol=1e-12 * be.fmax(fz, 1.0), max_iter=200,
-                         unrolled=_NEWTON_STEPS)
+                         unrolled=steps)
     rl = be.where(found, rl, r_omega)
     return rl, deflection_62(prm, rl, r_omega, gamma, be)
 
