@@ -195,12 +195,12 @@ def _relation_terms_62(prm, r_omega, omega, fx, fy, gamma, dpi, be) -> tuple:
     return r_omega, free_share, camber, correction, stiffness, fy, gamma
 
 
-def _relation_62(prm, rl, terms, be, target=None):
+def _relation_62(prm, rl, terms, be, target=None, lift=True):
     """The MF 6.2 load-radius relation, negative where the side-force term exceeds the rest (terms whose
     parameters are zero are skipped). Its sign change above R_omega is a lifted tyre's loaded radius.
 
-    With a ``target`` load: (Fz - target, dFz/dRl, lift slope), the derivative written out term by term (the
-    relation is explicit in rho). The lift slope serves the root above R_omega, where Fz - target =
+    With a ``target`` load: (Fz - target, dFz/dRl, lift slope or, without ``lift``, dFz/dRl again), the derivative
+    written out term by term (the relation is explicit in rho). The lift slope serves the root above R_omega, where Fz - target =
     -(A + B) load (A - B) with A = |side-force term|, B = sqrt(correction - target/load): the slope of that with
     (A + B) load held fixed, i.e. a Newton step on A - B, whose shape is nearly that of S_Fygamma, quadratic in Rl
     (Fz itself falls there like a quartic, and Newton on it creeps)."""
@@ -230,6 +230,8 @@ def _relation_62(prm, rl, terms, be, target=None):
     ds_fygamma = (prm.Q_FYS2 + 2.0 * prm.Q_FYS3 * ratio) * gamma / r_omega
     dside = side * prm.Q_FCY2 * dx / x - power * prm.Q_FCY * ds_fygamma / Fz0
     slope = slope - 2.0 * side * dside * load
+    if not lift:
+        return fz - target, slope, slope
     safe_load = be.where(load > 0, load, 1.0)
     b = be.sqrt(be.fmax(correction - target / safe_load, 0.0))
     db = target * dload / (2.0 * safe_load**2 * be.where(b > 0, b, 1.0))
@@ -281,10 +283,11 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     r_omega, gamma = args[0], args[4]
     f_top = _relation_62(prm, r_omega, terms, be) - fz  # < 0 when the free tyre carries less than fz
     contact = f_top < 0
+    lifting = be.any(f_top > 0)  # NumPy skips the lifted tyre's work where no element needs it
 
     def residual(rl, idx):  # (Fz(Rl) - fz, the slope for the Newton step: in contact dFz/dRl, else the lift slope)
         sub = terms if idx is None else [v[idx] for v in terms]
-        value, slope, lift_slope = _relation_62(prm, rl, sub, be, target=fz if idx is None else fz[idx])
+        value, slope, lift_slope = _relation_62(prm, rl, sub, be, fz if idx is None else fz[idx], lifting)
         return value, be.where(contact if idx is None else contact[idx], slope, lift_slope)
 
     # in contact: Newton from the deflection of the MF 6.1 relation without the side-force term, less the camber
@@ -297,10 +300,11 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     rho_1 = be.fmax(rho_61 + camber_share / (1.0 - prm.Q_CAM3 * be.abs(gamma)), 0.1 * rho_61)
     top = r_omega + prm.UNLOADED_RADIUS
     steps = _NEWTON_STEPS
-    if _lift_bound_applies(prm):
+    if not _lift_bound_applies(prm):
+        if prm.Q_FCY != 0.0 or not _growing_load_62(prm):  # lifted roots possible: Newton from R_omega + R0
+            steps = _NEWTON_STEPS_FROM_TOP
+    elif lifting:
         top = _lift_bound_62(prm, fz, terms, top, be)
-    elif prm.Q_FCY != 0.0 or not _growing_load_62(prm):  # lifted roots possible, Newton from R_omega + R0
-        steps = _NEWTON_STEPS_FROM_TOP
     x = be.where(contact, r_omega - rho_1, top)
     f, df = residual(x, None)
     found = be.logical_or(contact, be.logical_and(f_top > 0, f <= 0))
