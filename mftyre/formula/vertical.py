@@ -200,10 +200,10 @@ def _relation_62(prm, rl, terms, be, target=None, lift=True):
     parameters are zero are skipped). Its sign change above R_omega is a lifted tyre's loaded radius.
 
     With a ``target`` load: (Fz - target, dFz/dRl, lift slope or, without ``lift``, dFz/dRl again), the derivative
-    written out term by term (the relation is explicit in rho). The lift slope serves the root above R_omega, where Fz - target =
-    -(A + B) load (A - B) with A = |side-force term|, B = sqrt(correction - target/load): the slope of that with
-    (A + B) load held fixed, i.e. a Newton step on A - B, whose shape is nearly that of S_Fygamma, quadratic in Rl
-    (Fz itself falls there like a quartic, and Newton on it creeps)."""
+    written out term by term (the relation is explicit in rho). The lift slope serves the root above R_omega,
+    where Fz - target = -(A + B) load (A - B) with A = |side-force term|, B = sqrt(correction - target/load): the
+    slope of that with (A + B) load held fixed, i.e. a Newton step on A - B, whose shape is nearly that of
+    S_Fygamma, quadratic in Rl (Fz itself falls there like a quartic, and Newton on it creeps)."""
     r_omega, free_share, camber, correction, stiffness, fy, gamma = terms
     R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
     rho, drho = _deflection_62(prm, rl, r_omega, free_share, camber, be, slope=True)
