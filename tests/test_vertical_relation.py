@@ -252,3 +252,53 @@ def test_relation_slopes_match_finite_differences(key):
     regular = (rl > r_omega) & (zeta != 0) & (np.abs(zeta_slope) > 1e-3) & (b_squared > 1e-6)
     np.testing.assert_allclose((value / lift_slope)[regular], (zeta / zeta_slope)[regular], rtol=1e-4, atol=1e-9)
     assert regular.sum() > n // 4
+
+
+@pytest.mark.parametrize("key", ["mfeval_mf62", "tno_mf62"])
+def test_casadi_loaded_radius_derivatives_are_implicit_ones(key):
+    """dRl/d(Fz, Fy, gamma) of the unrolled CasADi solve against central differences of the NumPy solve, for
+    tyres in contact and lifted ones (root above R_omega, where the Newton steps use the lift slope): the final
+    Newton step makes them the implicit function's derivatives either way. And finite everywhere, also at extreme
+    inputs (an unused branch's infinite partial derivative times zero gave NaN)."""
+    import casadi as ca
+    from mftyre.backend import casadi_backend
+
+    prm = _model(key).params
+    be = casadi_backend()
+    symbols = [ca.SX.sym(n) for n in ("fz", "omega", "fx", "fy", "gamma", "dpi")]
+    rl_s, _ = vertical.loaded_radius_62(prm, symbols[0], vertical.free_radius(prm, symbols[1], be), *symbols[1:], be)
+    wrt = ca.vertcat(symbols[0], symbols[3], symbols[4])
+    f = ca.Function("rl", symbols, [rl_s, ca.jacobian(rl_s, wrt)])
+    rng = np.random.default_rng(17)
+    n = 300
+    fz = np.r_[rng.uniform(20.0, 400.0, n // 2), rng.uniform(1000.0, 12000.0, n - n // 2)]
+    omega = rng.uniform(0.0, 200.0, n)
+    dpi = rng.uniform(-0.2, 0.2, n)
+    gamma = rng.choice([-1.0, 1.0], n) * rng.uniform(0.03, 0.1, n)
+    fx, fy = rng.uniform(-0.8, 0.8, (2, n)) * fz
+    rl, jac = (np.array(v) for v in f.map(n)(fz, omega, fx, fy, gamma, dpi))
+    rl, jac = rl.ravel(), jac.reshape(n, 3).T
+    r_omega = vertical.free_radius(prm, omega, NUMPY)
+    lifted = rl > r_omega
+    assert 30 < lifted.sum() < n - 30
+
+    def numpy_rl(fz, fy, gamma):
+        return vertical.loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, NUMPY)[0]
+
+    for k, (name, h) in enumerate([("fz", 1e-4 * fz), ("fy", 1e-2), ("gamma", 1e-6)]):
+        step = [np.zeros(n)] * 3
+        step[k] = h + np.zeros(n)
+        numeric = (numpy_rl(fz + step[0], fy + step[1], gamma + step[2])
+                   - numpy_rl(fz - step[0], fy - step[1], gamma - step[2])) / (2 * step[k])
+        np.testing.assert_allclose(jac[k], numeric, rtol=1e-4, atol=1e-12, err_msg=f"d rl / d {name}")
+
+    rng = np.random.default_rng(19)
+    n = 20000
+    fz = np.r_[np.zeros(n // 10), rng.uniform(0.0, 5.0, n // 10), rng.uniform(0.0, 600.0, n // 3),
+               rng.uniform(0.0, 4.0 * prm.FNOMIN, n - n // 10 - n // 10 - n // 3)]
+    omega = rng.uniform(0.0, 250.0, n)
+    dpi = rng.uniform(prm.PRESMIN, prm.PRESMAX, n) / prm.NOMPRES - 1.0
+    gamma = rng.uniform(prm.CAMMIN, prm.CAMMAX, n)
+    fx, fy = rng.uniform(-1.2, 1.2, (2, n)) * fz
+    everything = ca.Function("drl", symbols, [ca.jacobian(rl_s, ca.vertcat(*symbols))])
+    assert np.all(np.isfinite(np.array(everything.map(n)(fz, omega, fx, fy, gamma, dpi))))

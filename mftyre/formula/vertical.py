@@ -105,6 +105,13 @@ def _q_fz1(prm, be):
     return be.sqrt((prm.VERTICAL_STIFFNESS * prm.UNLOADED_RADIUS / prm.FNOMIN) ** 2 - 4.0 * prm.Q_FZ2)
 
 
+def _sqrt_positive(u, be):
+    """sqrt(max(u, 0)) whose derivative stays finite (zero) where u <= 0: a derivative through the solver's
+    unused branches must not turn 0 * inf into NaN (CasADi)."""
+    positive = u > 0
+    return be.where(positive, be.sqrt(be.where(positive, u, 1.0)), 0.0)
+
+
 def _bottoming_force(prm, rl, be):
     return prm.BOTTOM_STIFF * be.fmax(prm.RIM_RADIUS + prm.BOTTOM_OFFST - rl, 0.0)
 
@@ -233,7 +240,7 @@ def _relation_62(prm, rl, terms, be, target=None, lift=True):
     if not lift:
         return fz - target, slope, slope
     safe_load = be.where(load > 0, load, 1.0)
-    b = be.sqrt(be.fmax(correction - target / safe_load, 0.0))
+    b = _sqrt_positive(correction - target / safe_load, be)
     db = target * dload / (2.0 * safe_load**2 * be.where(b > 0, b, 1.0))
     lift_slope = -(be.abs(side) + b) * load * (be.sign_nz(side) * dside - db)
     return fz - target, slope, lift_slope
@@ -262,12 +269,11 @@ def _lift_bound_62(prm, fz, terms, top, be):
     x = _deflection_62(prm, top, r_omega, free_share, camber, be) / R0
     load = stiffness * (_q_fz1(prm, be) * x + prm.Q_FZ2 * x**2)
     usable = be.logical_and(load > 0, gamma != 0)
-    leaves = be.fmax(correction - fz / be.where(usable, load, 1.0), 0.0)
-    side = be.sqrt(leaves) * Fz0 / abs(prm.Q_FCY) * x ** (-prm.Q_FCY2)
+    side = _sqrt_positive(correction - fz / be.where(usable, load, 1.0), be) * Fz0 / abs(prm.Q_FCY) * x ** (-prm.Q_FCY2)
     # Q_FYS3 r^2 + Q_FYS2 r + c = 0, the root where S_Fygamma grows with r (cancellation-free either sign of Q_FYS2)
     a, b = prm.Q_FYS3, prm.Q_FYS2
     c = prm.Q_FYS1 - (fy + be.sign_nz(gamma) * side) / be.where(usable, gamma, 1.0)
-    root_d = be.sqrt(be.fmax(b * b - 4.0 * a * c, 0.0))
+    root_d = _sqrt_positive(b * b - 4.0 * a * c, be)
     ratio = -2.0 * c / (b + root_d) if b >= 0 else (-b + root_d) / (2.0 * a)
     bound = ratio * r_omega
     inside = be.logical_and(usable, be.logical_and(b * b - 4.0 * a * c >= 0, be.logical_and(bound > r_omega,
