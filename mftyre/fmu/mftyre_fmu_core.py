@@ -532,7 +532,9 @@ class SwiftCore:
         S = self.S
         fzc = float(o["fz_c"])
         kappa, alpha, vcx = float(o["kappa"]), float(o["alpha"]), float(o["vcx"])
-        mf = self.fn.mf(max(fzc, 1e-3), kappa, alpha, u["gamma"], vcx, u["p"], float(state[S["omb"]]))
+        # the MF's extras at the ring's slip state, its slip -Vsx / |Vcx| given as the wheel's (mf_slip: reversing)
+        kappa_mf = float(self.wheel.mf_slip(kappa, vcx, self.be))
+        mf = self.fn.mf(max(fzc, 1e-3), kappa_mf, alpha, u["gamma"], vcx, u["p"], float(state[S["omb"]]))
         _, _, _, mx_c, my_c, _, _, _, _, _, _, b, t, mux, muy = mf
         beta = float(o["beta"])
         vsx, vsy = _floats(self.wheel.slip_speeds(kappa, alpha, abs(vcx), self.be))  # the ring's MF speed
