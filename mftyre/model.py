@@ -150,6 +150,13 @@ class MFModel:
         (4.E3-4.E4), the .tir limits and low-speed model, and the form of the turn-slip K_zgamma,r0
         ('published' (4.99) or 'mfeval').
 
+        Slips: alpha is ISO-W's atan(Vsy / |Vx|); kappa is the slip relative to the direction of travel,
+        -Vsx / Vx = (omega Re - vx) / vx with the signed speed, as MFeval: -1 is a locked wheel and > 0 a wheel
+        driven in the direction of travel, also for vx < 0 (rolling backwards), where Fx0 turns round with vx:
+        Fx(-vx, kappa) = -Fx(vx, kappa), so a locked wheel brakes the motion either way (Fx > 0 reversing). The
+        ISO-W slip -Vsx / |Vx| is sign(vx) kappa; a wheel model converts it with :func:`mftyre.transient.mf_slip`
+        (both FMUs do). The omega estimated is (1 + kappa) vx / Re.
+
         ``limits=True`` (default) saturates kappa, alpha, gamma, p and Fz to the .tir ranges (KPUMIN/KPUMAX,
         ALPMIN/ALPMAX, CAMMIN/CAMMAX, PRESMIN/PRESMAX, FZMAX; FZMIN is no bound of the input, it raises the load
         in the aligning torque and the MF 6.1 deflection only, without a warning, see :mod:`mftyre.inputs`) and
