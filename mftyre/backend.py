@@ -24,6 +24,13 @@ __all__ = ["NumpyBackend", "CasadiBackend", "NUMPY", "CASADI", "casadi_backend"]
 _ULP4 = 4.0 * np.finfo(float).eps  # the root searches' relative floor: 4 units in the last place
 
 
+def _whole(chosen, cond, other) -> bool:
+    """Whether ``np.where(cond, ...)`` choosing ``chosen`` everywhere would give ``chosen``'s values unchanged: an
+    array condition, ``chosen`` a float64 array of its shape, the other side a number or of the same shape."""
+    return (type(cond) is np.ndarray and type(chosen) is np.ndarray and chosen.dtype == np.float64
+            and chosen.shape == cond.shape and np.shape(other) in ((), chosen.shape))
+
+
 class NumpyBackend:
     """Element-wise operations on NumPy float64 arrays."""
 
@@ -60,14 +67,26 @@ class NumpyBackend:
     def where(cond, a, b):
         if type(cond) is np.bool_:  # one point (scalars): a Python choice, np.where costs microseconds
             return a if cond else b
+        # the same side for every element (most guards hold nowhere or everywhere): that side as it is, without
+        # the selection pass (which costs as much as several arithmetic operations)
+        if _whole(b, cond, a) and not cond.any():
+            return b
+        if _whole(a, cond, b) and cond.all():
+            return a
         return np.where(cond, a, b)
 
     @staticmethod
     def sign_nz(x):
-        """sign(x) with sign(0) = +1: the guard used in the Magic Formula's epsilon terms."""
+        """sign(x) with sign(0) = +1: the guard used in the Magic Formula's epsilon terms (a plain number where
+        every element has the same sign)."""
         if type(x) is np.float64:
             return -1.0 if x < 0 else 1.0
-        return np.where(x < 0, -1.0, 1.0)
+        negative = x < 0
+        if not negative.any():
+            return 1.0
+        if negative.all():
+            return -1.0
+        return np.where(negative, -1.0, 1.0)
 
     @staticmethod
     def clip(x, lo, hi):
