@@ -61,7 +61,7 @@ class NumpyBackend:
     @staticmethod
     def any(cond) -> bool:
         """Whether any element meets ``cond``: equations skip a case no element is in (CasADi: always True)."""
-        return bool(np.any(cond))
+        return bool(cond) if type(cond) is np.bool_ else bool(np.any(cond))
 
     @staticmethod
     def where(cond, a, b):
@@ -90,7 +90,9 @@ class NumpyBackend:
 
     @staticmethod
     def clip(x, lo, hi):
-        return np.minimum(np.maximum(x, lo), hi)
+        if type(x) is np.ndarray:
+            return np.clip(x, lo, hi)  # min(max(x, lo), hi) in one pass
+        return np.minimum(np.maximum(x, lo), hi)  # (np.clip costs more on numbers)
 
     @staticmethod
     def broadcast(*values):

@@ -170,9 +170,7 @@ class MFModel:
             ranges = self._input_ranges
             counts = {name: saturate(arrays[name], ranges[name])[1] for name in ranges}
             warn_outside(counts, arrays["fz"].size, ranges)
-        out = self._evaluate_arrays(arrays, omega is not None, modes)
-        _check_finite_outputs(out, arrays)
-        return MFOutputs(**out)
+        return MFOutputs(**self._evaluate_arrays(arrays, omega is not None, modes, check_finite=True))
 
     def input_range(self, name: str) -> tuple[float, float]:
         """(lo, hi) that ``limits=True`` saturates input ``name`` to (:mod:`mftyre.inputs`), in the mounted side's
@@ -187,13 +185,15 @@ class MFModel:
         """The values of input ``name`` that ``limits=True`` evaluates (saturated to :meth:`input_range`)."""
         return saturate(values, self.input_range(name))[0]
 
-    def _evaluate_arrays(self, arrays: dict, omega_given, modes: Modes) -> dict:
-        """Evaluate float arrays of one shape (no validation; broadcast views are fine, they are only read).
-        ``omega_given``: bool or boolean array.
+    def _evaluate_arrays(self, arrays: dict, omega_given, modes: Modes, check_finite: bool = False) -> dict:
+        """Evaluate float arrays of one shape (no validation of the inputs; broadcast views are fine, they are only
+        read). ``omega_given``: bool or boolean array. ``check_finite``: raise where the outputs are not finite
+        (see :func:`_check_finite_outputs`).
 
         Batches larger than :data:`_CHUNK` points are evaluated chunk by chunk: the equations make hundreds of
         temporary arrays per point, and a chunk's temporaries stay in the CPU cache; the results go straight into
-        one block of fresh memory for all outputs (one allocation instead of one per output and chunk)."""
+        one block of fresh memory for all outputs (one allocation instead of one per output and chunk), checked
+        for non-finite values while still in the cache."""
         shape = arrays["fz"].shape
         flat = {k: v.reshape(-1) for k, v in arrays.items()}
         if not isinstance(omega_given, bool):
@@ -215,6 +215,7 @@ class MFModel:
         else:
             block = np.empty((len(OUTPUT_NAMES), n))
             out = dict(zip(OUTPUT_NAMES, block))  # rows of one block: no output overlaps another
+            finite = True
             size = -(-n // -(-n // _CHUNK))  # chunks of equal size (none much smaller than the others)
             for start in range(0, n, size):
                 part = slice(start, min(start + size, n))
@@ -224,7 +225,12 @@ class MFModel:
                 for k, v in values.items():
                     out[k][part] = v
                 self._mirror_outputs(out, part)
-        return {k: v.reshape(shape) for k, v in out.items()}
+                finite = finite and bool(np.isfinite(block[:, part]).all())
+            check_finite = check_finite and not finite
+        out = {k: v.reshape(shape) for k, v in out.items()}
+        if check_finite:
+            _check_finite_outputs(out, arrays)
+        return out
 
     def _mirrored_input(self, name: str) -> bool:
         return self.mirrored and name in _MIRRORED_INPUTS

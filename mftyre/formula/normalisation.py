@@ -31,7 +31,8 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
     if modes.limits:
         VXLOW = prm.VXLOW
         s.low_speed = be.abs(vx) <= VXLOW
-        phit = phit * be.cos(alpha)
+        if be.any(phit != 0):  # (NumPy skips this without turn slip)
+            phit = phit * be.cos(alpha)
         if be.any(s.low_speed):  # (NumPy skips this when no point is that slow; the factors would all be 1)
             reduction_linear = be.where(s.low_speed, be.abs(vx / VXLOW), 1.0)
             s.reduction_smooth = be.where(s.low_speed, 1.0 - 0.5 * (1.0 + be.cos(be.pi * vx / VXLOW)), 1.0)
