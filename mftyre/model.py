@@ -413,9 +413,10 @@ def _check_finite_outputs(out: dict, arrays: dict) -> None:
     for k in bad:
         mask |= ~np.isfinite(out[k])
     i = np.unravel_index(np.argmax(mask), mask.shape) if mask.ndim else ()
+    index = "" if not i else f" {int(i[0])}" if len(i) == 1 else f" {tuple(int(j) for j in i)}"
     at = ", ".join(f"{k}={np.broadcast_to(v, mask.shape)[i]:.6g}" for k, v in arrays.items())
     raise ModelInputError(f"the equations give non-finite {', '.join(bad)} at {int(mask.sum())} of {mask.size} "
-                          f"point(s), first at {at}: the .tir parameters have no finite solution there "
+                          f"point(s), first at point{index}: {at}: the .tir parameters have no finite solution there "
                           "(check the speed terms Q_V1, Q_V2 and the vertical parameters)")
 
 
