@@ -28,7 +28,7 @@ def _whole(chosen, cond, other) -> bool:
     """Whether ``np.where(cond, ...)`` choosing ``chosen`` everywhere would give ``chosen``'s values unchanged: an
     array condition, ``chosen`` a float64 array of its shape, the other side a number or of the same shape."""
     return (type(cond) is np.ndarray and type(chosen) is np.ndarray and chosen.dtype == np.float64
-            and chosen.shape == cond.shape and np.shape(other) in ((), chosen.shape))
+            and chosen.shape == cond.shape and getattr(other, "shape", ()) in ((), chosen.shape))
 
 
 class NumpyBackend:
@@ -61,7 +61,9 @@ class NumpyBackend:
     @staticmethod
     def any(cond) -> bool:
         """Whether any element meets ``cond``: equations skip a case no element is in (CasADi: always True)."""
-        return bool(cond) if type(cond) is np.bool_ else bool(np.any(cond))
+        if type(cond) is np.ndarray:
+            return np.count_nonzero(cond) > 0
+        return bool(np.any(cond))
 
     @staticmethod
     def where(cond, a, b):
@@ -69,10 +71,12 @@ class NumpyBackend:
             return a if cond else b
         # the same side for every element (most guards hold nowhere or everywhere): that side as it is, without
         # the selection pass (which costs as much as several arithmetic operations)
-        if _whole(b, cond, a) and not cond.any():
-            return b
-        if _whole(a, cond, b) and cond.all():
-            return a
+        if type(cond) is np.ndarray:
+            chosen = np.count_nonzero(cond)  # (faster than any() and all())
+            if chosen == 0 and _whole(b, cond, a):
+                return b
+            if chosen == cond.size and _whole(a, cond, b):
+                return a
         return np.where(cond, a, b)
 
     @staticmethod
@@ -82,9 +86,10 @@ class NumpyBackend:
         if type(x) is np.float64:
             return -1.0 if x < 0 else 1.0
         negative = x < 0
-        if not negative.any():
+        count = np.count_nonzero(negative)
+        if count == 0:
             return 1.0
-        if negative.all():
+        if count == negative.size:
             return -1.0
         return np.where(negative, -1.0, 1.0)
 

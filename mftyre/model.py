@@ -394,9 +394,10 @@ def _own_arrays(values: dict, n: int, inputs: list) -> dict:
     equations made (it owns its memory) is kept, anything else (an input passed through, a view, a scalar) copied."""
     out, seen = {}, set(map(id, inputs))
     for k, v in values.items():
-        if (not isinstance(v, np.ndarray) or v.shape != (n,) or v.dtype != np.float64 or v.base is not None
+        if (type(v) is not np.ndarray or v.shape != (n,) or v.dtype != np.float64 or v.base is not None
                 or id(v) in seen):
-            v = np.array(np.broadcast_to(v, (n,)), dtype=float)
+            v, value = np.empty(n), v
+            v[...] = value
         seen.add(id(v))
         out[k] = v
     return out
