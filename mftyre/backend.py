@@ -114,7 +114,8 @@ class NumpyBackend:
         x = x0
         for _ in range(max_iter):
             x_new, aux = step(x)
-            done = np.all((np.abs(x_new - x) <= tol) | ~np.isfinite(x_new))
+            close = np.abs(x_new - x) <= tol
+            done = close.all() or bool(np.all(close | ~np.isfinite(x_new)))
             x = x_new
             if done:
                 return x, aux
