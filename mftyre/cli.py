@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .files import OutputError, check_outputs
+from .grid_results import check_request, format_table, grid_frame, plot_grid, sweep_grid, write_results
 
 __all__ = ["main", "build_parser"]
 
@@ -330,20 +330,12 @@ def _cmd_eval(args) -> int:
     parser = args.parser
     given = [n for n in (args.sweep_order or [])]
     swept = [n for n in given if getattr(args, n).values.size > 1]
-    try:
-        check_outputs({"--csv": args.csv, "--plot": args.plot}, {"FILE.tir": args.file}, overwrite=args.overwrite)
-    except OutputError as exc:
-        parser.error(str(exc))
+    check_request(parser, args, swept, plot_example="--alpha -10deg:10deg:41")
     points = math.prod(getattr(args, n).values.size for n in swept)
     if points > MAX_POINTS:
         parser.error(f"the grid of {' x '.join(str(getattr(args, n).values.size) for n in swept)} = {points:,} points "
                      f"({', '.join('--' + n for n in swept)}) is more than the {MAX_POINTS:,} points mftyre eval "
                      "evaluates in one call; for more, call MFModel.evaluate from Python in chunks")
-    if args.plot is not None and not swept:
-        parser.error("argument --plot: nothing to plot; sweep at least one input over several values "
-                     "(e.g. --alpha -10deg:10deg:41)")
-    if args.x is not None and args.x not in swept:
-        parser.error(f"argument --x: {args.x!r} is not swept; swept inputs: {', '.join(swept) or 'none'}")
     if args.p is not None and args.p.plain and np.any(np.abs(args.p.values) < 1e3):
         print(f"mftyre eval: warning: --p {args.p.values.min():g} Pa is below 1 kPa: a plain number is pascal; "
               "write e.g. 2.2bar or 220kPa", file=sys.stderr)
@@ -361,17 +353,9 @@ def _cmd_eval(args) -> int:
         table_cols = args.outputs or _DEFAULT_OUTPUTS
         if not args.quiet:
             print(_eval_header(args, model, given, swept, shape))
-            print(_format_table(_eval_frame(args, out, swept, shape, table_cols, model)))
-        for target in (args.csv, args.plot):
-            if target is not None:
-                Path(target).parent.mkdir(parents=True, exist_ok=True)
-        if args.csv is not None:
-            frame = _eval_frame(args, out, swept, shape, args.outputs or tuple(out.keys()), model)
-            frame.to_csv(args.csv, index=False)
-            print(f"wrote {args.csv} ({len(frame)} rows, {frame.shape[1]} columns)", file=sys.stderr)
-        if args.plot is not None:
-            _eval_plot(args, model, out, swept, shape, args.outputs or _DEFAULT_OUTPUTS)
-            print(f"wrote {args.plot}", file=sys.stderr)
+            print(format_table(_eval_frame(args, out, swept, shape, table_cols, model)))
+        write_results(args, lambda: _eval_frame(args, out, swept, shape, args.outputs or tuple(out.keys()), model),
+                      lambda: _eval_plot(args, model, out, swept, shape, args.outputs or _DEFAULT_OUTPUTS))
     except MFTyreError as exc:
         print(f"mftyre eval: error: {exc}", file=sys.stderr)
         return 1
@@ -383,9 +367,7 @@ def _cmd_eval(args) -> int:
 
 def _eval_grid(args, swept: list[str], prm) -> tuple[dict, tuple[int, ...]]:
     """The evaluate() inputs: swept inputs as an outer-product grid (command-line order, 'ij'), others scalar."""
-    grids = np.meshgrid(*(getattr(args, n).values for n in swept), indexing="ij") if swept else []
-    grid_of = dict(zip(swept, grids))
-    shape = tuple(getattr(args, n).values.size for n in swept)
+    grid_of, shape = sweep_grid(args, swept)
     inputs = {}
     for name in _SWEEPS:
         sweep = getattr(args, name)
@@ -411,29 +393,13 @@ def _used(args, model, name, values):
     return model.used_input(name, values)
 
 
-def _eval_frame(args, out, swept: list[str], shape, outputs, model=None):
+def _eval_frame(args, out, swept: list[str], shape, outputs, model):
     """Swept inputs as given (and as used, where the .tir ranges saturated them), then the outputs; column names
     'name [SI unit]'."""
-    import pandas as pd
-
     from .model import OUTPUT_UNITS
 
-    n = int(np.prod(shape)) if shape else 1
-    cols = {}
-    grids = np.meshgrid(*(getattr(args, s).values for s in swept), indexing="ij") if swept else []
-    for name, grid in zip(swept, grids):
-        cols[f"{name} [{_SWEEPS[name][0]}]"] = grid.ravel()
-        used = grid.ravel() if model is None else _used(args, model, name, grid.ravel())
-        if not np.array_equal(used, grid.ravel()) and name not in outputs:
-            cols[f"{name}_used [{_SWEEPS[name][0]}]"] = used
-    for name in outputs:
-        label = f"{name}_used" if name in swept else name
-        cols[f"{label} [{OUTPUT_UNITS[name][0]}]"] = np.broadcast_to(out[name], shape).reshape(n)
-    return pd.DataFrame(cols)
-
-
-def _format_table(frame) -> str:
-    return frame.to_string(index=False, float_format=lambda v: f"{v:.6g}")
+    return grid_frame(args, out, swept, shape, outputs, input_units={n: unit for n, (unit, _) in _SWEEPS.items()},
+                      output_units=OUTPUT_UNITS, used=lambda name, values: _used(args, model, name, values))
 
 
 def _used_note(args, model, name, value) -> str:
@@ -471,54 +437,14 @@ def _eval_header(args, model, given, swept, shape) -> str:
 
 
 def _eval_plot(args, model, out, swept, shape, outputs) -> None:
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
     from .model import OUTPUT_UNITS
 
-    if args.x is not None:
-        xname = args.x
-    else:  # the swept input with the most values; the first on the command line on ties
-        xname = max(swept, key=lambda n: (shape[swept.index(n)], -swept.index(n)))
-    ix = swept.index(xname)
-    xs = getattr(args, xname)
-    others = [n for n in swept if n != xname]
-    other_shape = tuple(shape[swept.index(n)] for n in others)
-    combos = list(np.ndindex(*other_shape)) if others else [()]
     def legend(n, value):  # the value used, and the one asked for where the .tir range saturated it
         sweep, used = getattr(args, n), float(_used(args, model, n, value))
         return sweep.label(used) + ("" if used == value else f" (asked {sweep.label(value).split(' = ')[1]})")
 
-    labels = [", ".join(legend(n, getattr(args, n).values[i]) for n, i in zip(others, c)) for c in combos]
-
-    nout = len(outputs)
-    ncols = 1 if nout <= 2 else 2
-    nrows = math.ceil(nout / ncols)
-    fig = Figure(figsize=(5.0 * ncols, 2.6 * nrows + 0.6), dpi=100, layout="constrained")
-    FigureCanvasAgg(fig)
-    axes = fig.subplots(nrows, ncols, sharex=True, squeeze=False).ravel()
-    x = xs.values / xs.factor
-    xunit = xs.unit
-    for k, name in enumerate(outputs):
-        ax = axes[k]
-        y = np.moveaxis(np.broadcast_to(out[name], shape), ix, -1).reshape(-1, x.size)
-        for row, label in zip(y, labels):
-            ax.plot(x, row, label=label or None, lw=1.2)
-        unit, meaning = OUTPUT_UNITS[name]
-        ax.set_ylabel(f"{name} [{unit}]")
-        ax.set_title(meaning, fontsize=9)
-        ax.grid(True, lw=0.3)
-        if k >= nout - ncols:
-            ax.set_xlabel(f"{xname} [{xunit}]")
-        ax.tick_params(labelbottom=True)
-    for ax in axes[nout:]:
-        ax.set_visible(False)
-    if others and len(combos) <= 12:
-        axes[0].legend(fontsize=7)
-    fig.suptitle(f"{Path(args.file).name} (FITTYP {model.params.fittyp}, {model.side})", fontsize=10)
-    path = Path(args.plot)
-    fmt = path.suffix[1:].lower() if path.suffix[1:].lower() in fig.canvas.get_supported_filetypes() else "png"
-    fig.savefig(path, format=fmt)
+    plot_grid(args, out, swept, shape, outputs, output_units=OUTPUT_UNITS, legend=legend,
+              title=f"{Path(args.file).name} (FITTYP {model.params.fittyp}, {model.side})")
 
 
 # ------------------------------------------------------------------------------------------ (more)

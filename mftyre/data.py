@@ -87,7 +87,7 @@ from .tir import UNIT_FACTORS
 __all__ = [
     "CHANNELS", "REQUIRED", "INPUTS", "OUTPUTS", "UNITS", "TyreData", "read_csv", "read_tydex", "write_tydex",
     "unit_to_si", "levels", "split_conditions", "split_sweeps", "bin_sweeps", "resample_sweeps",
-    "reject_outliers", "trailer_programme", "NOISE",
+    "reject_outliers", "trailer_programme", "NOISE", "noise_scales", "record_outputs", "synthetic_data",
 ]
 
 #: channel -> (physical kind, meaning)
@@ -861,6 +861,29 @@ NOISE = {"FX": 0.005, "FY": 0.005, "FZ": 0.0025, "MX": 4e-4, "MY": 2e-4, "MZ": 4
          "RE": 1e-4}
 
 
+def noise_scales(prm) -> dict:
+    """What the fractions of :data:`NOISE` are of, per channel: FNOMIN, FNOMIN x UNLOADED_RADIUS or 1 m."""
+    fz0, r0 = prm.FNOMIN, prm.UNLOADED_RADIUS
+    return {"FX": fz0, "FY": fz0, "FZ": fz0, "MX": fz0 * r0, "MY": fz0 * r0, "MZ": fz0 * r0, "RL": 1.0, "RHO": 1.0,
+            "RE": 1.0}
+
+
+def record_outputs(frame: pd.DataFrame, outputs) -> None:
+    """Write the model's ``outputs`` (MFOutputs or a dict of arrays, lower-case names) into the measured output
+    channels :data:`OUTPUTS` of ``frame``."""
+    for ch in OUTPUTS:
+        frame[ch] = np.asarray(outputs[ch.lower()], float)
+
+
+def synthetic_data(frame: pd.DataFrame, prm, speed: float, source: str, note: str) -> TyreData:
+    """Measurements made up from a model (parameters ``prm``) as TyreData: the channels in SI units, the .tir's
+    constants (FNOMIN, NOMPRES, RFREE, NOMWIDTH) and the test ``speed`` (LONGVEL), ``note`` as its history."""
+    consts = {"FNOMIN": float(prm.FNOMIN), "NOMPRES": float(prm.NOMPRES), "RFREE": float(prm.UNLOADED_RADIUS),
+              "NOMWIDTH": float(prm.WIDTH), "LONGVEL": float(speed)}
+    return TyreData(frame, tyre=Path(str(prm.source or "model")).stem, source=source,
+                    units={c: _SI_NAME[CHANNELS[c][0]] for c in CHANNELS}, constants=consts, history=[note])
+
+
 def trailer_programme(model, *, loads=(0.5, 1.0, 1.5), pressures=(0.85, 1.0, 1.15), cambers_deg=(-3.0, 0.0, 3.0),
                       speed: float | None = None, alpha_max_deg: float = 12.0, kappa_max: float = 0.25,
                       combined_alpha_deg=(3.0, 6.0), points: int = 41, free_rolling_speeds=(5.0, 10.0, 20.0, 30.0),
@@ -884,7 +907,7 @@ def trailer_programme(model, *, loads=(0.5, 1.0, 1.5), pressures=(0.85, 1.0, 1.1
     sweep amplitude, opposite on the way out and back.
     """
     prm = model.params
-    fz0, p0, r0 = prm.FNOMIN, prm.NOMPRES, prm.UNLOADED_RADIUS
+    fz0, p0 = prm.FNOMIN, prm.NOMPRES
     vx0 = prm.LONGVL if speed is None else float(speed)
     half = max(points // 2, 2)
     outward = np.linspace(-1, 1, half + 1)
@@ -922,14 +945,11 @@ def trailer_programme(model, *, loads=(0.5, 1.0, 1.5), pressures=(0.85, 1.0, 1.1
     res = model.evaluate(frame["FZ"].to_numpy(), true_kappa, true_alpha, frame["IA"].to_numpy(), 0.0,
                          frame["VX"].to_numpy(), frame["P"].to_numpy())
     frame["PHIT"] = 0.0
-    for ch, name in (("FX", "fx"), ("FY", "fy"), ("MX", "mx"), ("MY", "my"), ("MZ", "mz"), ("OMEGA", "omega"),
-                     ("RL", "rl"), ("RHO", "rho"), ("RE", "re")):
-        frame[ch] = np.asarray(res[name], float)
+    record_outputs(frame, res)
     frame["SWEEP"] = sweep
     rng = np.random.default_rng(seed)
     if noise:
-        scale = {"FX": fz0, "FY": fz0, "FZ": fz0, "MX": fz0 * r0, "MY": fz0 * r0, "MZ": fz0 * r0, "RL": 1.0,
-                 "RHO": 1.0, "RE": 1.0}
+        scale = noise_scales(prm)
         for ch, sd in NOISE.items():
             frame[ch] = frame[ch] + rng.normal(0.0, noise * sd * scale[ch], len(frame))
     for ch, value in (offsets or {}).items():
@@ -940,7 +960,4 @@ def trailer_programme(model, *, loads=(0.5, 1.0, 1.5), pressures=(0.85, 1.0, 1.1
     note = (f"trailer_programme: {len(frame)} points, loads {list(loads)} x FNOMIN, pressures {list(pressures)} x "
             f"NOMPRES, cambers {list(cambers_deg)} deg, noise {noise:g}, offsets {offsets or {}}, "
             f"hysteresis {hysteresis:g}, seed {seed}")
-    consts = {"FNOMIN": float(fz0), "NOMPRES": float(p0), "RFREE": float(r0), "NOMWIDTH": float(prm.WIDTH),
-              "LONGVEL": float(vx0)}
-    return TyreData(frame[order], tyre=Path(str(prm.source or "model")).stem, source="trailer_programme",
-                    units={c: _SI_NAME[CHANNELS[c][0]] for c in CHANNELS}, constants=consts, history=[note])
+    return synthetic_data(frame[order], prm, vx0, "trailer_programme", note)

@@ -264,6 +264,8 @@ _TABLE: dict[str, list[tuple]] = {
         ("ELLIPS_NLENGTH", 10, "integer", "6", "Number of ellipsoids at sides of contact patch"),
         ("ENV_C1", 0.0, "-", "6", "Effective height attenuation (enveloping)", True),
         ("ENV_C2", 0.0, "-", "6", "Effective plane angle attenuation (enveloping)", True),
+        ("SWIFT_REVAR", 1.0, "-", "6", "SWIFT ring (mftyre): scale factor of the effective rolling radius variation "
+         "over the curved effective road (1 = the belt-band kinematics of swift.ring, 0 = no variation)", True),
     ],
     "INFLATION_PRESSURE_RANGE": [
         ("PRESMIN", 10000.0, "pressure", "6", "Minimum valid tyre inflation pressure"),

@@ -28,12 +28,11 @@ The run is deterministic for a given ``seed``. Recorded channels: TIME [s], TEST
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from .data import _SI_NAME, CHANNELS, NOISE, TyreData
+from .data import CHANNELS, NOISE, TyreData, noise_scales, record_outputs, synthetic_data
 
 __all__ = ["rig_programme"]
 
@@ -104,7 +103,7 @@ def rig_programme(model, *, loads=(0.45, 0.8, 1.15, 1.5), pressures=(0.86, 1.0, 
             raise ValueError(f"rig_programme: {name} must be a number >= 0, got {value!r}")
     rng = np.random.default_rng(seed)
     prm = model.params
-    fz0, p0, r0 = prm.FNOMIN, prm.NOMPRES, prm.UNLOADED_RADIUS
+    fz0, p0 = prm.FNOMIN, prm.NOMPRES
     vx0 = prm.LONGVL if speed is None else float(speed)
     dt = 1.0 / float(sample_rate)
     load_levels = [f * fz0 * (1 + rng.uniform(-0.03, 0.03)) for f in loads]
@@ -170,14 +169,11 @@ def rig_programme(model, *, loads=(0.45, 0.8, 1.15, 1.5), pressures=(0.86, 1.0, 
             out[k][sel] = np.asarray(res[k], float)
     rec = pd.DataFrame({"TIME": time, "TEST": tests})
     rec["FZ"] = fz_true
-    for ch, name in (("FX", "fx"), ("FY", "fy"), ("MX", "mx"), ("MY", "my"), ("MZ", "mz"), ("OMEGA", "omega"),
-                     ("RL", "rl"), ("RHO", "rho"), ("RE", "re")):
-        rec[ch] = out[name]
+    record_outputs(rec, out)
     rec["SL"], rec["SA"], rec["IA"], rec["PHIT"], rec["VX"], rec["P"] = kappa_cmd, alpha_cmd, gamma, 0.0, vx, p
     if noise:
         phi = math.exp(-dt / noise_time) if noise_time > 0 else 0.0
-        scale = {"FX": fz0, "FY": fz0, "FZ": fz0, "MX": fz0 * r0, "MY": fz0 * r0, "MZ": fz0 * r0, "RL": 1.0,
-                 "RHO": 1.0, "RE": 1.0}
+        scale = noise_scales(prm)
         for ch, sd in NOISE.items():
             rec[ch] = rec[ch] + noise * sd * scale[ch] * _ar1(rng, n, phi)
         # the rig's own inputs are measured too, with small white noise
@@ -189,7 +185,4 @@ def rig_programme(model, *, loads=(0.45, 0.8, 1.15, 1.5), pressures=(0.86, 1.0, 
             f"{[round(x) for x in press_levels]} Pa, cambers {[round(math.degrees(g), 2) for g in camber_levels]} deg, "
             f"noise {noise:g} (AR(1), {noise_time * 1e3:g} ms), load scatter {load_scatter:g}, friction drift "
             f"{friction_drift:g}, relaxation {relaxation}, seed {seed}")
-    consts = {"FNOMIN": float(fz0), "NOMPRES": float(p0), "RFREE": float(r0), "NOMWIDTH": float(prm.WIDTH),
-              "LONGVEL": float(vx0)}
-    return TyreData(rec[order], tyre=Path(str(prm.source or "model")).stem, source="rig_programme",
-                    units={c: _SI_NAME[CHANNELS[c][0]] for c in CHANNELS}, constants=consts, history=[note])
+    return synthetic_data(rec[order], prm, vx0, "rig_programme", note)

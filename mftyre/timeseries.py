@@ -25,7 +25,7 @@ import pandas as pd
 from .data import TyreData
 from .programme import Programme, recognise
 
-__all__ = ["reduce_sweeps", "Reduction", "hysteresis", "effective_samples", "needs_reduction",
+__all__ = ["reduce_sweeps", "Reduction", "hysteresis", "both_ways", "effective_samples", "needs_reduction",
            "lag_one_correlation"]
 
 _SWEPT = {"slip_angle": "SA", "slip_ratio": "SL", "speed": "VX", "load": "FZ"}
@@ -143,21 +143,28 @@ def hysteresis(branches) -> pd.DataFrame:
     if not len(frame) or "BRANCH" not in frame:
         return pd.DataFrame(columns=["sweep", "kind", "channel", "amplitude", "peak", "bins"])
     for s, grp in frame.groupby("SWEEP"):
-        up = grp[grp["BRANCH"] == 1].set_index("BIN")
-        down = grp[grp["BRANCH"] == -1].set_index("BIN")
-        common = up.index.intersection(down.index)
-        if len(common) < 3:
+        up, down = both_ways(grp)
+        if len(up) < 3:
             continue
         for ch in _RESPONSE:
             if ch not in grp or not np.isfinite(grp[ch]).any():
                 continue
-            d = 0.5 * (up.loc[common, ch].to_numpy(float) - down.loc[common, ch].to_numpy(float))
+            d = 0.5 * (up[ch].to_numpy(float) - down[ch].to_numpy(float))
             d = d[np.isfinite(d)]
             if d.size:
                 out.append(dict(sweep=int(s), kind=grp["KIND"].iloc[0], channel=ch,
                                 amplitude=float(np.sqrt(np.mean(d**2))), peak=float(np.max(np.abs(d))),
                                 bins=int(d.size)))
     return pd.DataFrame(out, columns=["sweep", "kind", "channel", "amplitude", "peak", "bins"])
+
+
+def both_ways(sweep: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The bins of one sweep's branch means (rows of ``Reduction.branches`` with one SWEEP) measured both ways:
+    (up, down), the BRANCH +1 and -1 rows indexed by BIN, each restricted to the bins the other has too."""
+    up = sweep[sweep["BRANCH"] == 1].set_index("BIN")
+    down = sweep[sweep["BRANCH"] == -1].set_index("BIN")
+    common = up.index.intersection(down.index)
+    return up.loc[common], down.loc[common]
 
 
 def lag_one_correlation(x) -> float:

@@ -56,10 +56,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .backend import NUMPY
 from .errors import ModelInputError
 
-__all__ = ["WheelFunctions", "wheel_functions", "WheelTyre", "KINDS", "VERTICAL_MODES", "VX_MIN",
-           "input_table", "OUTPUTS", "PARAMETERS", "default_tau_vlow"]
+__all__ = ["StateFunctions", "WheelFunctions", "wheel_functions", "WheelTyre", "KINDS", "VERTICAL_MODES", "VX_MIN",
+           "input_table", "OUTPUTS", "PARAMETERS", "default_tau_vlow", "kinematic_slips", "slip_speeds",
+           "wheel_vertical_force", "contact_load", "vertical_couples_forces", "load_at_radius",
+           "wheel_centre_moments"]
 
 KINDS = ("steady", "transient")
 VERTICAL_MODES = ("position", "load")
@@ -127,13 +130,83 @@ def default_tau_vlow(model) -> float:
     return 2.0 * math.sqrt(prm.FNOMIN / 9.81 / c)
 
 
-@dataclass(frozen=True)
-class WheelFunctions:
-    """The state equations as CasADi functions (x: state, u: inputs, q: parameters, all column vectors):
-    ``init(u, q) -> x``, ``step(x, u, q, h) -> x_next`` (inputs held over h), ``out(x, u, q) -> y``."""
+# ------------------------------------------------------------------------------ the wheel's equations
+# Backend-neutral (``be``: mftyre.backend), shared by the wheel model below and the pythonfmu FMU's steady tyre.
+def _atan2(be):
+    return np.arctan2 if be.name == "numpy" else be.ca.atan2
 
-    kind: str
-    vertical: str
+
+def kinematic_slips(vx, vy, omega, re, be):
+    """Steady kinematic slips (module notes): kappa = -Vsx / max(|vx|, VX_MIN) with Vsx = vx - omega Re, and
+    alpha = atan2(Vsy, |vx|) with Vsy = vy."""
+    vsx, vsy = vx - omega * re, vy
+    return -vsx / be.fmax(be.abs(vx), VX_MIN), _atan2(be)(vsy, be.abs(vx))
+
+
+def slip_speeds(kappa, alpha, vx, be):
+    """The contact point's slip speeds (Vsx, Vsy) = (-kappa |vx|, tan(alpha) |vx|) of the slips given to the MF."""
+    return -kappa * be.abs(vx), be.tan(alpha) * be.abs(vx)
+
+
+def wheel_vertical_force(model, rl, p, omega, fx, fy, gamma, be):
+    """(Fz, R_omega): the .tir's vertical force at the loaded radius ``rl`` (MF 6.1 (A3.3) with rho = R_omega -
+    Rl, or the MF 6.2 relation with camber and Fx/Fy terms) on the mounted side, as MFModel.vertical_force, and the
+    free radius R_omega at the spin; see :func:`contact_load` for the lift-off."""
+    from .formula import vertical as vert
+
+    prm = model.params
+    fy, gamma = (-fy, -gamma) if model.mirrored else (fy, gamma)
+    r_omega, dpi = vert.free_radius(prm, omega, be), (p - prm.NOMPRES) / prm.NOMPRES
+    if prm.version == "62":
+        return vert.vertical_force_62(prm, rl, r_omega, omega, fx, fy, gamma, dpi, be), r_omega
+    return vert.vertical_force_61(prm, r_omega - rl, r_omega, omega, fx, fy, dpi, be), r_omega
+
+
+def contact_load(fz, rl, r_omega, be):
+    """The load on the road: the vertical force, >= 0, while Rl < R_omega; 0 above (the wheel has lifted off)."""
+    return be.where(rl < r_omega, be.fmax(fz, 0.0), 0.0)
+
+
+def vertical_couples_forces(prm) -> bool:
+    """Whether the .tir's vertical force depends on Fx and Fy (Q_FCX, Q_FCY non-zero; true when it has no such
+    parameters to say otherwise)."""
+    return bool(prm["Q_FCX"] != 0 or prm["Q_FCY"] != 0) if "Q_FCX" in prm else True
+
+
+def load_at_radius(vertical, rolling, rl, coupled: bool, tol: float, passes: int = 30):
+    """The road load with the wheel centre at the loaded radius ``rl`` (floats): the vertical force there with its
+    lift-off (:func:`contact_load`), and where it depends on Fx and Fy (``coupled``, see
+    :func:`vertical_couples_forces`) the fixed point Fz = Fz(Rl, Fx(Fz), Fy(Fz)), iterated from Fx = Fy = 0 until
+    it moves by at most ``tol`` [N] (at most ``passes`` passes).
+
+    ``vertical(fx, fy) -> (Fz, R_omega)`` at ``rl``; ``rolling(load) -> (fx, fy, result)``: the tyre at that load.
+    Returns (load, R_omega, result of the last ``rolling``)."""
+    fx = fy = 0.0
+    for _ in range(passes):
+        fz, r_omega = vertical(fx, fy)
+        load = float(contact_load(fz, rl, r_omega, NUMPY))
+        fx_new, fy_new, result = rolling(load)
+        if not coupled:
+            break
+        if abs(float(contact_load(vertical(fx_new, fy_new)[0], rl, r_omega, NUMPY)) - load) <= tol:
+            break
+        fx, fy = fx_new, fy_new
+    return load, r_omega, result
+
+
+def wheel_centre_moments(fx, fy, fz, mx, my, mz, rl, gamma, be):
+    """Moments about the wheel centre W of the loads at the contact point C (module notes): M_W = M_C + (C - W) x F
+    with C -> W = Rl (0, -sin g, cos g), ISO-W components."""
+    cg, sg = be.cos(gamma), be.sin(gamma)
+    return mx + rl * (fy * cg + fz * sg), my - rl * fx * cg, mz - rl * fx * sg
+
+
+@dataclass(frozen=True)
+class StateFunctions:
+    """A tyre with state as CasADi functions, the form the native FMU is generated from (fmu/native_build.py):
+    ``init``, ``step``, ``out`` (their arguments in the subclasses) and the names and start values of the vectors
+    they take: state x, inputs u, parameters q, outputs y."""
+
     init: object
     step: object
     out: object
@@ -145,6 +218,15 @@ class WheelFunctions:
     input_starts: tuple
 
 
+@dataclass(frozen=True)
+class WheelFunctions(StateFunctions):
+    """The wheel's state equations (x: state, u: inputs, q: parameters, all column vectors):
+    ``init(u, q) -> x``, ``step(x, u, q, h) -> x_next`` (inputs held over h), ``out(x, u, q) -> y``."""
+
+    kind: str
+    vertical: str
+
+
 def wheel_functions(model, kind: str = "steady", vertical: str = "position",
                     tau_vlow: float | None = None, turn_slip: bool = False) -> WheelFunctions:
     """CasADi functions of the ``kind`` ("steady" or "transient") tyre with the ``vertical`` input mode;
@@ -152,7 +234,6 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
     import casadi as ca
 
     from .backend import casadi_backend
-    from .formula import vertical as vert
 
     if kind not in KINDS:
         raise ModelInputError(f"model must be one of {', '.join(KINDS)}; got {kind!r}")
@@ -160,7 +241,7 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
         raise ModelInputError(f"vertical input must be one of {', '.join(VERTICAL_MODES)}; got {vertical!r}")
     prm = model.params
     be = casadi_backend()
-    if vertical == "position" and (prm["Q_FCX"] != 0 or prm["Q_FCY"] != 0):
+    if vertical == "position" and vertical_couples_forces(prm):
         warnings.warn("Q_FCX/Q_FCY (Fx/Fy influence on the vertical stiffness) are not included in the wheel "
                       "model's vertical force", stacklevel=2)
     table = input_table(vertical, turn_slip)
@@ -188,21 +269,15 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
     # vertical load
     if vertical == "position":
         rl_geo = (U["z"] - U["road_z"]) / be.cos(gamma)
-        ro, dpi = vert.free_radius(prm, omega, be), (p - prm.NOMPRES) / prm.NOMPRES
-        gm = -gamma if model.mirrored else gamma
-        if prm.version == "62":
-            fz_v = vert.vertical_force_62(prm, rl_geo, ro, omega, 0.0, 0.0, gm, dpi, be)
-        else:
-            fz_v = vert.vertical_force_61(prm, ro - rl_geo, ro, omega, 0.0, 0.0, dpi, be)
-        fz = be.where(rl_geo < ro, be.fmax(fz_v, 0.0), 0.0)
+        fz_v, ro = wheel_vertical_force(model, rl_geo, p, omega, 0.0, 0.0, gamma, be)
+        fz = contact_load(fz_v, rl_geo, ro, be)
     else:
         fz = be.fmax(U["Fz_in"], 0.0)
     re, sigx, sigy = free(fz, gamma, vx, p, omega, lmux, lmuy)
     vsx, vsy = vx - omega * re, vy
 
     if kind == "steady":
-        kappa = -vsx / be.fmax(be.abs(vx), VX_MIN)
-        alpha = ca.atan2(vsy, be.abs(vx))
+        kappa, alpha = kinematic_slips(vx, vy, omega, re, be)
         vx_mf = vx
         ux = uy = 0.0 * vx
         x0 = ca.SX(0, 1)
@@ -235,18 +310,18 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
     fx, fy, mx, my, mz, _, rho, rl_mf, a, t, mux, muy = mf(fz, kappa, alpha, gamma, phit, vx_mf, p, omega, lmux,
                                                            lmuy)
     rl = rl_geo if vertical == "position" else rl_mf
-    cg, sg = be.cos(gamma), be.sin(gamma)
-    y = {"Fx": fx, "Fy": fy, "Fz": fz,
-         "Mx": mx + rl * (fy * cg + fz * sg), "My": my - rl * fx * cg, "Mz": mz - rl * fx * sg,
+    mx_w, my_w, mz_w = wheel_centre_moments(fx, fy, fz, mx, my, mz, rl, gamma, be)
+    y = {"Fx": fx, "Fy": fy, "Fz": fz, "Mx": mx_w, "My": my_w, "Mz": mz_w,
          "Mx_c": mx, "My_c": my, "Mz_c": mz, "kappa": kappa, "alpha": alpha, "Rl": rl, "Re": re,
-         "rho": rho if vertical == "load" else be.where(fz > 0, vert.free_radius(prm, omega, be) - rl_geo, 0.0),
+         "rho": rho if vertical == "load" else be.where(fz > 0, ro - rl_geo, 0.0),
          "contact_length": 2.0 * a, "trail": t, "mux": mux, "muy": muy, "u_x": ux, "u_y": uy}
     y_vec = ca.vertcat(*(y[n] for n in OUTPUTS))
     init = ca.Function("tyre_init", [u, q], [x0], ["u", "q"], ["x0"])
     step = ca.Function("tyre_step", [x, u, q, h], [x_next], ["x", "u", "q", "h"], ["x_next"])
     out = ca.Function("tyre_out", [x, u, q], [y_vec], ["x", "u", "q"], ["y"])
-    return WheelFunctions(kind, vertical, init, step, out, ("u_x", "u_y")[:nx], tuple(table), q_names,
-                          tuple(OUTPUTS), q_starts, tuple(starts))
+    return WheelFunctions(init=init, step=step, out=out, state_names=("u_x", "u_y")[:nx], input_names=tuple(table),
+                          parameter_names=q_names, output_names=tuple(OUTPUTS), parameter_starts=q_starts,
+                          input_starts=tuple(starts), kind=kind, vertical=vertical)
 
 
 class StepError(ModelInputError):

@@ -4,7 +4,7 @@
 * :mod:`swift.enveloping`  tandem elliptical cams -> effective road height, slope, curvature, road camber;
                            the quasi-static tyre over an obstacle (fixed axle height or constant load)
 * :mod:`swift.ring`        rigid-ring equations (belt, sidewall, residual springs, contact-patch slip with the
-                           Magic Formula)
+                           Magic Formula, effective rolling radius variation over the curved effective road)
 * :mod:`swift.simulate`    compiled fixed-step stepper ``step(state, inputs, dt)`` and an adaptive reference
 
 Every modelling choice the literature leaves open is stated, with its equation, in the module docstrings.

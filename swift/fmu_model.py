@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mftyre.errors import ModelInputError
+from mftyre.transient import StateFunctions
 
 from .enveloping import Cams
 from .ring import INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES
@@ -84,35 +85,30 @@ OUTPUTS = {  # name -> (unit, description, ring output or state)
     "road_w": ("m", "effective road height (tandem cams)"),
     "road_slope": ("rad", "effective forward road slope beta_y (> 0 rising ahead)"),
     "road_curvature": ("1/m", "effective road curvature d beta_y / dx"),
+    "Re_variation": ("m", "effective rolling radius variation over the curved effective road (free-rolling "
+                             "steady value; 0 on a flat road or a grade)"),
     "road_camber_eff": ("rad", "effective road camber beta_x: the profile's multi-track camber plus road_camber"),
     "x_contact": ("m", "contact centre on the road (x_road plus the forward shift to the foot of the normal)"),
     "x_road": ("m", "wheel-centre position on the road: x_start + integral of vx dt"),
 }
 _RING = {"Fx": "fx", "Fy": "fy", "Fz": "fz", "Mx": "mx", "My": "my", "Mz": "mz", "Fx_c": "fx_c", "Fy_c": "fy_c",
          "Fz_c": "fz_c", "Mz_c": "mz_c", "kappa": "kappa", "alpha": "alpha", "rho": "rho", "Rl": "rl", "Re": "re",
-         "road_slope": "beta", "road_curvature": "curvature", "road_camber_eff": "beta_x", "x_contact": "x_c"}
+         "road_slope": "beta", "road_curvature": "curvature", "Re_variation": "dre", "road_camber_eff": "beta_x",
+         "x_contact": "x_c"}
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
 
 
 @dataclass(frozen=True)
-class SwiftFunctions:
-    """CasADi functions (window arguments ``x0w``, ``grid``, ``hw``: the table window, see module notes; ``hw``
-    holds (cam height, road-camber slope) pairs, interleaved, as ``table_h``): ``init(u, q, x0w, grid, hw) -> x``,
-    ``step(x, u, dt, x0w, grid, hw) -> x_next`` (one RK4 step), ``out(x, u, x0w, grid, hw) -> y``."""
+class SwiftFunctions(StateFunctions):
+    """The SWIFT wheel's CasADi functions (window arguments ``x0w``, ``grid``, ``hw``: the table window, see module
+    notes; ``hw`` holds (cam height, road-camber slope) pairs, interleaved, as ``table_h``):
+    ``init(u, q, x0w, grid, hw) -> x``, ``step(x, u, dt, x0w, grid, hw) -> x_next`` (one RK4 step),
+    ``out(x, u, x0w, grid, hw) -> y``; the road table and the C definitions (``config_extra``) of the native glue."""
 
-    init: object
-    step: object
-    out: object
     table_x0: float
     table_dx: float
     table_h: np.ndarray
     grid: np.ndarray
-    state_names: tuple
-    input_names: tuple
-    parameter_names: tuple
-    output_names: tuple
-    parameter_starts: tuple
-    input_starts: tuple
     output_dependencies: list
     config_extra: str
 
@@ -184,9 +180,11 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
              + "static const double ROAD_H[2 * ROAD_N] = {" + ",".join(repr(float(v)) for v in h) + "};\n"
              + "static const double ROAD_GRID[ROAD_WINDOW] = {" + ",".join(repr(float(v)) for v in grid_v) + "};\n")
     starts = tuple(prm.INFLPRES if n == "p" else v[1] for n, v in INPUTS.items())
-    return SwiftFunctions(init, step, outw, float(table.x0), float(table.dx), h, grid_v, STATE_NAMES,
-                          tuple(INPUTS), tuple(PARAMETERS), tuple(OUTPUTS), (float(x_start), 1e-3), starts, deps,
-                          extra)
+    return SwiftFunctions(init=init, step=step, out=outw, state_names=STATE_NAMES, input_names=tuple(INPUTS),
+                          parameter_names=tuple(PARAMETERS), output_names=tuple(OUTPUTS),
+                          parameter_starts=(float(x_start), 1e-3), input_starts=starts, table_x0=float(table.x0),
+                          table_dx=float(table.dx), table_h=h, grid=grid_v, output_dependencies=deps,
+                          config_extra=extra)
 
 
 class SwiftWheel:

@@ -403,8 +403,10 @@ class SwiftTyre:
     def equilibrium_unknowns(self):
         """(unknowns, equations) of the static equilibrium: state indices solved for and the derivatives (in the
         order of STATE_NAMES) that vanish there, for :meth:`initial_state` and the FMU's initialisation."""
-        unknown = [_S[n] for n in ("xb", "zb", "thw", "yb", "gb", "psb", "ux", "uy", "kappa", "alpha", "psr")]
-        eqs = [_S[n] for n in ("vxb", "vzb", "omb", "vyb", "wgb", "wpsb", "ux", "uy", "kappa", "alpha", "psr")]
+        unknown = [_S[n] for n in ("xb", "zb", "thw", "yb", "gb", "psb", "ux", "uy", "kappa", "alpha", "psr",
+                                   "betaf")]
+        eqs = [_S[n] for n in ("vxb", "vzb", "omb", "vyb", "wgb", "wpsb", "ux", "uy", "kappa", "alpha", "psr",
+                               "betaf")]
         if self.axle == "load":
             unknown.append(_S["za"])
             eqs.append(_S["vza"])

@@ -214,3 +214,25 @@ def test_tyredata_validation():
         TyreData(frame.drop(columns="P"))
     assert set(CHANNELS) >= {"FX", "FY", "FZ", "MX", "MY", "MZ", "SL", "SA", "IA", "PHIT", "VX", "P", "OMEGA",
                              "RL", "RHO", "RE"}
+
+
+def test_synthetic_programmes_record_alike(model):
+    """The trailer and the rig generator share one home for what they record (mftyre.data.synthetic_data): the
+    model's outputs in the output channels, SI units, the .tir's constants and the test speed."""
+    from mftyre.data import OUTPUTS
+    from mftyre.rig import rig_programme
+
+    prm = model.params
+    trailer = trailer_programme(model, loads=(1.0,), pressures=(1.0,), cambers_deg=(0.0,), speed=15.0)
+    rig = rig_programme(model, loads=(1.0,), pressures=(1.0,), cambers_deg=(0.0,), speed=15.0, noise=0.0,
+                        load_scatter=0.0, friction_drift=0.0, relaxation=False)
+    expected = {"FNOMIN": prm.FNOMIN, "NOMPRES": prm.NOMPRES, "RFREE": prm.UNLOADED_RADIUS, "NOMWIDTH": prm.WIDTH,
+                "LONGVEL": 15.0}
+    for data in (trailer, rig):
+        assert data.constants == expected and data.units == trailer.units and data.units["MZ"] == "N*m"
+        f = data.frame
+        ref = model.evaluate(f["FZ"].to_numpy(), f["SL"].to_numpy(), f["SA"].to_numpy(), f["IA"].to_numpy(), 0.0,
+                             f["VX"].to_numpy(), f["P"].to_numpy())
+        for ch in OUTPUTS:
+            np.testing.assert_allclose(f[ch], ref[ch.lower()], rtol=1e-12, atol=1e-9, err_msg=ch)
+    assert (trailer.source, rig.source) == ("trailer_programme", "rig_programme")

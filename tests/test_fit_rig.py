@@ -52,6 +52,13 @@ def test_verify_rejects_invented_asymmetry(truth):
     problems = verify_tir(truth.with_params(PVX1=0.55, PHX1=-0.03))
     assert any("Fx asymmetry" in p for p in problems)
     assert any("wrong sign" in p for p in verify_tir(truth.with_params(PKY1=abs(truth.params.PKY1))))
+    # the lateral check is the same rule (fit/verify._worst_asymmetry): a shift of a third of the force at alpha
+    # = 3 deg makes |Fy(+3 deg)| / |Fy(-3 deg)| about 2 (> 1.5), and the message names the worst ratio
+    fy3 = abs(float(truth.evaluate(truth.params.FNOMIN, 0.0, math.radians(3.0)).fy))
+    shift = 0.33 * fy3 / truth.params.FNOMIN
+    problems = [p for p in verify_tir(truth.with_params(PVY1=shift)) if "Fy asymmetry" in p]
+    assert len(problems) == 1 and "at alpha = -/+3 deg" in problems[0], problems
+    assert verify_tir(truth.with_params(PVY1=0.05 * shift)) == []  # a small shift is within the bound
 
 
 def test_a_failing_parameter_set_is_not_written(truth, tmp_path, rig_fit):

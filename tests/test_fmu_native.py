@@ -661,6 +661,50 @@ def test_calls_out_of_order_are_errors_not_crashes(fmus, tmp_path):
     s.fmu.freeInstance()
 
 
+def test_get_set_and_status_calls_share_one_check(fmus, tmp_path):
+    """Every get/set call checks its arrays and value references the same way (fmi2_tyre.c: var_kind,
+    arrays_given): null arrays and references of the wrong kind are logged errors naming the call, never a
+    crash; the status calls answer the last successful time and 'not terminated', Discard otherwise."""
+    from fmpy.fmi2 import fmi2Boolean, fmi2Integer, fmi2Real, fmi2Status
+
+    s = Slave(fmus["transient"], tmp_path)
+    s.initialise(vx=10.0, omega=10.0 / RE0, z=0.29)
+    s.step()
+    inst, none = s.fmu.component, None
+    for name in ("fmi2GetReal", "fmi2SetReal", "fmi2GetInteger", "fmi2SetInteger", "fmi2GetBoolean",
+                 "fmi2SetBoolean", "fmi2GetString", "fmi2SetString"):
+        s.messages.clear()
+        assert getattr(s.fmu.dll, name)(inst, none, 1, none) == 3, name  # fmi2Error, no crash
+        assert s.messages == [(3, f"{name}: null value reference or value array for 1 variables")]
+    for name in ("fmi2GetInteger", "fmi2SetInteger", "fmi2GetBoolean", "fmi2SetBoolean"):
+        assert getattr(s.fmu.dll, name)(inst, none, 0, none) == 0, name  # nothing asked: OK
+    vr = s.vr
+    assert s.fmu.getReal([vr["tau_vlow"], vr["vx"], vr["Fx"]])[1] == 10.0  # one call reads q, u and y
+    s.messages.clear()
+    from fmpy.fmi1 import FMICallException
+
+    with pytest.raises(FMICallException):
+        s.fmu.setReal([vr["Fx"]], [1.0])  # an output
+    with pytest.raises(FMICallException):
+        s.fmu.getDirectionalDerivative([vr["vx"]], [vr["vx"]], [1.0])  # an input as the unknown
+    with pytest.raises(FMICallException):
+        s.fmu.getDirectionalDerivative([vr["Fx"]], [vr["Fx"]], [1.0])  # an output as the known
+    assert [m for _, m in s.messages] == [
+        f"fmi2SetReal: value reference {vr['Fx']} is not a parameter or an input",
+        f"fmi2GetDirectionalDerivative: unknown {vr['vx']} is not an output",
+        f"fmi2GetDirectionalDerivative: known {vr['Fx']} is not an input"]
+    real, boolean, status = fmi2Real(), fmi2Boolean(), fmi2Status()
+    assert s.fmu.dll.fmi2GetRealStatus(inst, 2, byref(real)) == 0 and real.value == pytest.approx(1e-3)
+    assert s.fmu.dll.fmi2GetBooleanStatus(inst, 3, byref(boolean)) == 0 and boolean.value == 0
+    s.messages.clear()
+    assert s.fmu.dll.fmi2GetStatus(inst, 0, byref(status)) == 2  # fmi2Discard: no asynchronous step
+    assert s.fmu.dll.fmi2GetIntegerStatus(inst, 0, byref(fmi2Integer())) == 2
+    assert s.fmu.dll.fmi2GetRealStatus(inst, 0, byref(real)) == 2
+    assert [m for _, m in s.messages] == [f"{f}: no asynchronous step is running; no status to report"
+                                          for f in ("fmi2GetStatus", "fmi2GetIntegerStatus", "fmi2GetRealStatus")]
+    s.close()
+
+
 def test_turn_slip_from_the_yaw_rate(models, tmp_path):
     """--turn-slip: the yaw_rate input gives the MF's turn slip phit = -yaw_rate / Vc; the native FMU equals
     MFModel.evaluate with that phit (steady) and the Python twin (transient)."""

@@ -189,3 +189,19 @@ def test_effective_samples_follow_the_ar1_rule():
     assert effective_samples(ar) == pytest.approx(20000 * 0.2 / 1.8, rel=0.15)
     groups = np.repeat(np.arange(20), 1000)
     assert effective_samples(ar, groups) == pytest.approx(20000 * 0.2 / 1.8, rel=0.15)
+
+
+def test_both_ways_pairs_the_bins_measured_up_and_down():
+    """One home for pairing a sweep's branches (hysteresis and the gap finder's relaxation check): the bins both
+    branches have, in the same order, whatever order the rows come in."""
+    import pandas as pd
+
+    from mftyre.timeseries import both_ways, hysteresis
+
+    sweep = pd.DataFrame({"SWEEP": 0, "KIND": "slip_angle", "BRANCH": [1, 1, 1, 1, -1, -1, -1, -1],
+                          "BIN": [0, 1, 2, 3, 4, 3, 2, 1], "FY": [0.0, 10.0, 20.0, 30.0, 45.0, 36.0, 26.0, 16.0]})
+    up, down = both_ways(sweep)
+    assert list(up.index) == list(down.index) == [1, 2, 3]
+    assert list(up["FY"]) == [10.0, 20.0, 30.0] and list(down["FY"]) == [16.0, 26.0, 36.0]
+    row = hysteresis(sweep).iloc[0]
+    assert row["bins"] == 3 and row["amplitude"] == pytest.approx(3.0) and row["peak"] == pytest.approx(3.0)

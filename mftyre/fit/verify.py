@@ -39,6 +39,15 @@ def check_speeds(prm, data_ranges=None) -> np.ndarray:
     return np.linspace(1.0, max(1.25 * top, 40.0, 1.25 * prm.LONGVL), 9)
 
 
+def _worst_asymmetry(up, down):
+    """(ratio, i): |up| / |down| of a force under opposite pure slips at the two smaller slip levels (last axis),
+    and the index of its worst point when some ratio lies outside 1/_ASYMMETRY.._ASYMMETRY (else None)."""
+    ratio = np.abs(up[..., :2]) / np.maximum(np.abs(down[..., :2]), 1e-9)
+    if np.any((ratio > _ASYMMETRY) | (ratio < 1 / _ASYMMETRY)):
+        return ratio, np.unravel_index(np.argmax(np.abs(np.log(ratio))), ratio.shape)
+    return ratio, None
+
+
 def _data_top_speed(data_ranges) -> float:
     if data_ranges is None:
         return 0.0
@@ -110,9 +119,8 @@ def verify_tir(model, data_ranges=None) -> list[str]:
         if np.any(up.fx <= 0) or np.any(down.fx >= 0):
             problems.append(f"Fx has the wrong sign under pure longitudinal slip (Fx {np.min(up.fx):.0f} N at "
                             f"kappa > 0, {np.max(down.fx):.0f} N at kappa < 0): expected Fx > 0 for kappa > 0")
-        ratio = np.abs(up.fx[..., :2]) / np.maximum(np.abs(down.fx[..., :2]), 1e-9)
-        if np.any((ratio > _ASYMMETRY) | (ratio < 1 / _ASYMMETRY)):
-            i = np.unravel_index(np.argmax(np.abs(np.log(ratio))), ratio.shape)
+        ratio, i = _worst_asymmetry(up.fx, down.fx)
+        if i is not None:
             problems.append(f"Fx asymmetry: Fx = {down.fx[..., :2][i]:.0f} / {up.fx[..., :2][i]:.0f} N at kappa = "
                             f"-/+{Kl[..., :2][i]:.3g}, Fz {Fl[..., :2][i]:.0f} N (ratio {ratio[i]:.2f}, expected "
                             f"within 1/{_ASYMMETRY}..{_ASYMMETRY}; shifts PHX*/PVX*)")
@@ -122,9 +130,8 @@ def verify_tir(model, data_ranges=None) -> list[str]:
         if np.any(up.fy >= 0) or np.any(down.fy <= 0):
             problems.append(f"Fy has the wrong sign under pure slip angle (Fy {np.max(up.fy):.0f} N at alpha > 0, "
                             f"{np.min(down.fy):.0f} N at alpha < 0): expected Fy < 0 for alpha > 0 (ISO-W)")
-        ratio = np.abs(up.fy[..., :2]) / np.maximum(np.abs(down.fy[..., :2]), 1e-9)
-        if np.any((ratio > _ASYMMETRY) | (ratio < 1 / _ASYMMETRY)):
-            i = np.unravel_index(np.argmax(np.abs(np.log(ratio))), ratio.shape)
+        ratio, i = _worst_asymmetry(up.fy, down.fy)
+        if i is not None:
             problems.append(f"Fy asymmetry at camber 0: ratio {ratio[i]:.2f} at alpha = -/+"
                             f"{math.degrees(Aa[..., :2][i]):.3g} deg, Fz {Fa[..., :2][i]:.0f} N (expected within "
                             f"1/{_ASYMMETRY}..{_ASYMMETRY}; shifts PHY*/PVY*)")

@@ -15,8 +15,11 @@ FMI behaviour
   static equilibrium at the initial inputs and is advanced over each communication step (any step size; split
   into internal steps of at most ``max_step``).
 * A failed initialisation (bad parameter, unreadable .tir, bad road) is logged with status fmi2Error (category
-  logStatusError) and raised, so fmi2ExitInitializationMode fails (pythonfmu answers fmi2Fatal for an exception,
-  its only failure status there) instead of claiming OK. During stepping no exception leaves this class: a
+  logStatusError) as "initialisation failed: <cause>", the cause naming the parameter or file as the native FMU
+  does (a traceback follows only for unexpected errors), and raised, so fmi2ExitInitializationMode fails instead
+  of claiming OK. Its status is fmi2Fatal, not the fmi2Error the native FMU returns and FMI 2.0 intends for a
+  user error: pythonfmu's binary (0.7.0, PySlaveInstance::handle_py_exception) turns every Python exception into
+  fmi2Fatal and has no other failure status for this call. During stepping no exception leaves this class: a
   non-finite input, p <= 0 or a step size that is not positive and finite makes fmi2DoStep return fmi2Discard and
   leaves the outputs (and the swift state) at their last valid values; the ``status`` output says why (0 ok, 1
   input or step rejected).
@@ -72,6 +75,14 @@ _REAL_PARAMETERS = {  # name -> (unit, default, description)
     "max_step": ("s", 1e-3, "swift: longest internal step (a communication step is split into equal steps)"),
     "axle_mass": ("kg", 30.0, "swift, vertical_input=load: mass of the axle the Fz_in input pushes down"),
 }
+
+
+def _user_error(exc) -> bool:
+    """A problem of the parameters or the .tir file that the user can mend (logged without a traceback)."""
+    errors = sys.modules.get("mftyre.errors"), sys.modules.get("mftyre_fmu_core")
+    kinds = tuple(k for k in (getattr(errors[0], "MFTyreError", None), getattr(errors[1], "TyreFMUError", None))
+                  if k is not None)
+    return isinstance(exc, (ValueError, *kinds))
 
 
 class MFTyre(Fmi2Slave):
@@ -176,8 +187,9 @@ class MFTyre(Fmi2Slave):
                 self._compute()
             for w in caught:
                 self.log(f"{w.category.__name__}: {w.message}", Fmi2Status.warning)
-        except Exception as exc:  # logged with its cause; pythonfmu turns the exception into fmi2Error
-            self._fail(f"initialisation failed: {exc}\n{traceback.format_exc(limit=3)}")
+        except Exception as exc:  # logged with its cause (as the native FMU words it), then raised: see the notes
+            detail = "" if _user_error(exc) else "\n" + traceback.format_exc(limit=3)
+            self._fail(f"initialisation failed: {exc}{detail}")
             raise RuntimeError(f"initialisation failed: {exc}") from None
 
     def _fail(self, message):

@@ -18,37 +18,19 @@ Axes and units: ISO-W (TYDEX W), SI. The x axis is the wheel heading projected o
 the origin of the MF quantities is the contact point C. ``vx`` and ``vy`` are the velocity components of the wheel
 centre in these axes (the road is at rest).
 
-Kinematics (vehicle mode)
--------------------------
-* Effective rolling radius Re(Fz, p, omega): the model's own (the MF ``re`` output at kappa = alpha = 0).
-* Longitudinal slip  kappa = (omega Re - vx) / max(|vx|, VX_MIN): the slip speed of the contact point is
-  Vsx = vx - omega Re, and kappa = -Vsx/|vx|; kappa > 0 (driving, wheel faster than the road) gives Fx > 0.
-* Slip angle  alpha = atan2(vy, |vx|): tan(alpha) = Vsy/|Vx| with Vsy = vy, the model's relation (Vsy = tan(alpha)
-  |Vx|). The wheel sliding to the left (vy > 0) gives alpha > 0 and, ISO-W, Fy < 0 (the road pushes back).
-* The MF is then evaluated with the given spin omega (no re-estimation), the .tir limits and its low-speed model
-  (below VXLOW the slips are faded out: the steady model has no standstill force; use SWIFT for that).
+The tyre's equations are mftyre's: the kinematic slips, the vertical force with its lift-off and the
+wheel-centre moments are those of :mod:`mftyre.transient` (its module notes; the native FMU's steady tyre), the
+MF is :class:`mftyre.MFModel`, SWIFT is :class:`swift.SwiftTyre`. This module chooses the evaluators and maps
+the FMU's modes onto them:
 
-Vertical (vehicle mode)
------------------------
-* ``fz`` given: used as the load (negative values mean no contact, Fz = 0).
-* ``height`` given (wheel-centre height above the road, along the road normal): the loaded radius, measured in
-  the wheel plane, is Rl = height / cos(gamma) and Fz = max(0, model.vertical_force(Rl, p, omega, Fx, Fy,
-  gamma)) while Rl < R_omega (the free radius at the spin; above it the wheel has lifted off: Fz = 0, also for
-  MF 6.2, whose camber term would otherwise give a load at any height). When the .tir couples Fz to Fx/Fy (Q_FCX, Q_FCY != 0) this is solved by fixed-point iteration.
-
-Wheel-centre loads
-------------------
-The wheel centre W lies in the wheel plane at distance Rl from C: C -> W = Rl (0, -sin(gamma), cos(gamma)) in
-ISO-W axes (the wheel plane is the x-z plane turned by gamma about x). The forces are the same at W; the moments
-about W are M_W = M_C + (C - W) x F:
-
-    Mx_W = Mx + Rl (Fy cos(gamma) + Fz sin(gamma))
-    My_W = My - Rl Fx cos(gamma)
-    Mz_W = Mz - Rl Fx sin(gamma)
-
-(components still in the ISO-W axes, not in wheel-carrier axes). E.g. a driving force Fx > 0 at the contact point
-gives My_W = -Rl Fx: the road turns the wheel backwards about its axle (the drive torque balances it).
-In load mode Rl is the model's loaded radius; in position mode the geometric one.
+* vehicle mode, ``fz`` given: the load (negative values mean no contact, Fz = 0); Rl is the model's loaded radius.
+* vehicle mode, ``height`` given (wheel-centre height above the road, along the road normal): Rl = height /
+  cos(gamma) and the load is the vertical force at Rl, lifted off above the free radius; where the .tir couples
+  Fz to Fx/Fy (Q_FCX, Q_FCY != 0) the load is solved by fixed-point iteration (mftyre.transient.load_at_radius).
+* rig mode: the MF at the given slips and load (spin estimated from kappa and vx).
+* The MF is evaluated with the given spin (no re-estimation), the .tir limits and its low-speed model (below
+  VXLOW the slips are faded out: the steady model has no standstill force; use SWIFT for that). Unlike the
+  native FMU's wheel, the slip is not re-signed when rolling backwards (kept as it was).
 """
 from __future__ import annotations
 
@@ -57,10 +39,6 @@ import json
 import math
 import os
 from pathlib import Path
-
-#: Below this |vx| [m/s] the longitudinal slip is computed with VX_MIN in the denominator (finite at standstill;
-#: the model's low-speed fade-out, active below VXLOW, multiplies it by |vx|/VXLOW anyway).
-VX_MIN = 1e-3
 
 #: MF outputs taken from the model (names of :data:`mftyre.model.OUTPUT_UNITS`).
 MF_OUTPUTS = ("fx", "fy", "fz", "mx", "my", "mz", "omega", "re", "rho", "rl", "a", "b", "t", "mux", "muy")
@@ -114,7 +92,7 @@ def casadi_functions(model) -> dict:
     """
     import casadi as ca
     from mftyre.backend import casadi_backend
-    from mftyre.formula import vertical
+    from mftyre.transient import wheel_vertical_force
 
     mf = model.casadi_function(inputs=("fz", "kappa", "alpha", "gamma", "vx", "p", "omega"), outputs=MF_OUTPUTS,
                                name="mf")
@@ -123,16 +101,8 @@ def casadi_functions(model) -> dict:
     re = model.casadi_function(inputs=("fz", "gamma", "vx", "p", "omega"), outputs=("re",),
                                fixed=dict(kappa=0.0, alpha=0.0), name="re")
     # the vertical force exactly as MFModel.vertical_force (mirroring, unclipped pressure, bottoming)
-    be = casadi_backend()
-    prm = model.params
     rl, p, omega, fx, fy, gamma = (ca.SX.sym(n) for n in ("rl", "p", "omega", "fx", "fy", "gamma"))
-    fy_m, gamma_m = (-fy, -gamma) if model.mirrored else (fy, gamma)
-    dpi = (p - prm.NOMPRES) / prm.NOMPRES
-    r_omega = vertical.free_radius(prm, omega, be)
-    if prm.version == "62":
-        fz = vertical.vertical_force_62(prm, rl, r_omega, omega, fx, fy_m, gamma_m, dpi, be)
-    else:
-        fz = vertical.vertical_force_61(prm, r_omega - rl, r_omega, omega, fx, fy_m, dpi, be)
+    fz, r_omega = wheel_vertical_force(model, rl, p, omega, fx, fy, gamma, casadi_backend())
     vert = ca.Function("vertical", [rl, p, omega, fx, fy, gamma], [fz, r_omega],
                        ["rl", "p", "omega", "fx", "fy", "gamma"], ["fz_v", "r_omega"])
     return {"mf": mf, "rig": rig, "re": re, "vertical": vert}
@@ -215,7 +185,7 @@ def load_evaluators(model, evaluator="auto", functions_dir=None, index=None, log
     ``auto``: compiled, falling back to casadi."""
     log = log or (lambda msg: None)
     if evaluator not in EVALUATORS:
-        raise TyreFMUError(f"evaluator must be one of {', '.join(EVALUATORS)}; got {evaluator!r}")
+        raise TyreFMUError(f"parameter evaluator must be one of {', '.join(EVALUATORS)}; got {evaluator!r}")
     if evaluator == "numpy":
         return "numpy", _NumpyEvaluators(model)
     names = ("mf", "rig", "re", "vertical")
@@ -270,39 +240,35 @@ class SteadyTyre:
     """The steady-state Magic Formula tyre with the FMU's kinematics, vertical model and wheel-centre loads."""
 
     def __init__(self, model, evaluator="auto", functions_dir=None, index=None, log=None):
+        from mftyre import transient
+        from mftyre.backend import NUMPY
+
         self.model = model
+        self.wheel, self.be = transient, NUMPY  # the wheel's equations, on floats
         prm = model.params
         self.path, self.fn = load_evaluators(model, evaluator, functions_dir, index, log)
-        self.fcoupled = bool(prm["Q_FCX"] != 0 or prm["Q_FCY"] != 0) if "Q_FCX" in prm else True
+        self.fcoupled = transient.vertical_couples_forces(prm)
         self.fnomin = float(prm.FNOMIN)
 
     # --------------------------------------------------------------------------------------------- modes
     def step_vehicle(self, vx, vy, omega, gamma, p, fz=None, height=None):
         """Vehicle mode: wheel-centre velocity, spin, inclination, pressure, and either the load ``fz`` or the
         wheel-centre ``height`` above the road. Returns a dict of :data:`OUTPUTS`."""
-        fn = self.fn
-        denom = max(abs(vx), VX_MIN)
-        alpha = math.atan2(vy, abs(vx))
+        fn, wheel, be = self.fn, self.wheel, self.be
         if height is None:
             load = max(fz, 0.0)
-            re = fn.re(load, gamma, vx, p, omega)[0]
-            kappa = (omega * re - vx) / denom
+            kappa, alpha = _floats(wheel.kinematic_slips(vx, vy, omega, fn.re(load, gamma, vx, p, omega)[0], be))
             mf = fn.mf(load, kappa, alpha, gamma, vx, p, omega)
             return self._outputs(mf, kappa, alpha, gamma, vx, rl_lever=None, rho=None)
         rl = height / math.cos(gamma)
-        fx = fy = 0.0
-        for _ in range(30):
-            fz_v, r_omega = fn.vertical(rl, p, omega, fx, fy, gamma)
-            load = max(fz_v, 0.0) if rl < r_omega else 0.0  # lift-off at the free radius
-            re = fn.re(load, gamma, vx, p, omega)[0]
-            kappa = (omega * re - vx) / denom
+
+        def rolling(load):
+            kappa, alpha = _floats(wheel.kinematic_slips(vx, vy, omega, fn.re(load, gamma, vx, p, omega)[0], be))
             mf = fn.mf(load, kappa, alpha, gamma, vx, p, omega)
-            if not self.fcoupled:
-                break
-            fz_check = max(fn.vertical(rl, p, omega, mf[0], mf[1], gamma)[0], 0.0) if rl < r_omega else 0.0
-            if abs(fz_check - load) <= 1e-11 * self.fnomin:
-                break
-            fx, fy = mf[0], mf[1]
+            return mf[0], mf[1], (mf, kappa, alpha)
+
+        _, r_omega, (mf, kappa, alpha) = wheel.load_at_radius(lambda fx, fy: fn.vertical(rl, p, omega, fx, fy, gamma),
+                                                              rolling, rl, self.fcoupled, 1e-11 * self.fnomin)
         return self._outputs(mf, kappa, alpha, gamma, vx, rl_lever=rl, rho=max(r_omega - rl, 0.0))
 
     def step_rig(self, fz, kappa, alpha, gamma, vx, p):
@@ -311,22 +277,23 @@ class SteadyTyre:
         return self._outputs(mf, kappa, alpha, gamma, vx, rl_lever=None, rho=None)
 
     # -------------------------------------------------------------------------------------------- helpers
-    @staticmethod
-    def _outputs(mf, kappa, alpha, gamma, vx, rl_lever, rho):
+    def _outputs(self, mf, kappa, alpha, gamma, vx, rl_lever, rho):
         fx, fy, fz, mx, my, mz, omega, re, rho_mf, rl, a, b, t, mux, muy = mf
         lever = rl if rl_lever is None else rl_lever
-        s, c = math.sin(gamma), math.cos(gamma)
+        mx_w, my_w, mz_w = _floats(self.wheel.wheel_centre_moments(fx, fy, fz, mx, my, mz, lever, gamma, self.be))
+        vsx, vsy = _floats(self.wheel.slip_speeds(kappa, alpha, vx, self.be))
         return {
-            "Fx": fx, "Fy": fy, "Fz": fz,
-            "Mx": mx + lever * (fy * c + fz * s),
-            "My": my - lever * fx * c,
-            "Mz": mz - lever * fx * s,
+            "Fx": fx, "Fy": fy, "Fz": fz, "Mx": mx_w, "My": my_w, "Mz": mz_w,
             "Mx_c": mx, "My_c": my, "Mz_c": mz,
-            "kappa": kappa, "alpha": alpha, "Vsx": -kappa * abs(vx), "Vsy": math.tan(alpha) * abs(vx),
+            "kappa": kappa, "alpha": alpha, "Vsx": vsx, "Vsy": vsy,
             "omega_used": omega,
             "rho": rho_mf if rho is None else rho, "Rl": lever, "Re": re,
             "contact_length": 2.0 * a, "contact_width": 2.0 * b, "trail": t, "mux": mux, "muy": muy,
         }
+
+
+def _floats(values):
+    return tuple(float(v) for v in values)
 
 
 # ------------------------------------------------------------------------------------------ SWIFT (rigid ring)
@@ -428,19 +395,23 @@ class SwiftCore:
     def __init__(self, model, road="", *, vertical="load", rim="speed", x_start=0.0, max_step=1e-3,
                  axle_mass=30.0, evaluator="auto", functions_dir=None, index=None, log=None, base_dir=None):
         import numpy as np
+        from mftyre import transient
+        from mftyre.backend import NUMPY
         from swift import Cams, SwiftTyre
         from swift.ring import STATE_NAMES
 
+        self.wheel, self.be = transient, NUMPY  # the wheel's equations, on floats
+
         log = log or (lambda msg: None)
         if vertical not in ("load", "position"):
-            raise TyreFMUError(f"vertical_input must be load or position, got {vertical!r}")
+            raise TyreFMUError(f"parameter vertical_input must be load or position, got {vertical!r}")
         if rim not in ("speed", "torque"):
-            raise TyreFMUError(f"rim must be speed or torque, got {rim!r}")
+            raise TyreFMUError(f"parameter rim must be speed or torque, got {rim!r}")
         for name, value in (("max_step", max_step), ("axle_mass", axle_mass)):
             if not (math.isfinite(value) and value > 0):
-                raise TyreFMUError(f"{name} must be positive, got {value!r}")
+                raise TyreFMUError(f"parameter {name} must be positive, got {value!r}")
         if not math.isfinite(x_start):
-            raise TyreFMUError(f"x_start must be finite, got {x_start!r}")
+            raise TyreFMUError(f"parameter x_start must be finite, got {x_start!r}")
         self.model, self.vertical, self.rim = model, vertical, rim
         self.max_step = float(max_step)
         self.road = parse_road(road, base_dir)
@@ -559,11 +530,12 @@ class SwiftCore:
         mf = self.fn.mf(max(fzc, 1e-3), kappa, alpha, u["gamma"], vcx, u["p"], float(state[S["omb"]]))
         _, _, _, mx_c, my_c, _, _, _, _, _, _, b, t, mux, muy = mf
         beta = float(o["beta"])
+        vsx, vsy = _floats(self.wheel.slip_speeds(kappa, alpha, vcx, self.be))
         return {
             "Fx": float(o["fx"]), "Fy": float(o["fy"]), "Fz": float(o["fz"]),
             "Mx": float(o["mx"]), "My": float(o["my"]), "Mz": float(o["mz"]),
             "Mx_c": mx_c, "My_c": my_c, "Mz_c": float(o["mz_c"]),
-            "kappa": kappa, "alpha": alpha, "Vsx": -kappa * abs(vcx), "Vsy": math.tan(alpha) * abs(vcx),
+            "kappa": kappa, "alpha": alpha, "Vsx": vsx, "Vsy": vsy,
             "omega_used": float(state[S["oma"]]),
             "rho": float(o["rho"]), "Rl": (float(state[S["za"]]) - float(o["w"])) * math.cos(beta),
             "Re": float(o["re"]), "contact_length": 2.0 * float(o["a"]), "contact_width": 2.0 * b, "trail": t,

@@ -20,6 +20,8 @@ import math
 import numpy as np
 from scipy import stats
 
+from ..timeseries import both_ways
+
 __all__ = ["sweep_hysteresis"]
 
 #: (kind of sweep, channel, swept column, model output of the relaxation length, .tir parameters)
@@ -57,14 +59,12 @@ def sweep_hysteresis(reduction, raw, model, sigma: dict, alpha: float = 1e-3) ->
         sub = br[br["KIND"] == kind]
         h_all, chi2, dof, lengths, model_lengths, peaks = [], 0.0, 0, [], [], []
         for sw, grp in sub.groupby("SWEEP"):
-            up = grp[grp["BRANCH"] == 1].set_index("BIN")
-            down = grp[grp["BRANCH"] == -1].set_index("BIN")
-            common = up.index.intersection(down.index)
-            if len(common) < 5:
+            up, down = both_ways(grp)
+            if len(up) < 5:
                 continue
-            h = 0.5 * (up.loc[common, ch].to_numpy(float) - down.loc[common, ch].to_numpy(float))
-            x = 0.5 * (up.loc[common, col].to_numpy(float) + down.loc[common, col].to_numpy(float))
-            f = 0.5 * (up.loc[common, ch].to_numpy(float) + down.loc[common, ch].to_numpy(float))
+            h = 0.5 * (up[ch].to_numpy(float) - down[ch].to_numpy(float))
+            x = 0.5 * (up[col].to_numpy(float) + down[col].to_numpy(float))
+            f = 0.5 * (up[ch].to_numpy(float) + down[ch].to_numpy(float))
             ok = np.isfinite(h) & np.isfinite(x) & np.isfinite(f)
             h, x, f = h[ok], x[ok], f[ok]
             if h.size < 5:

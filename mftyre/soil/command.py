@@ -12,8 +12,6 @@ import math
 import sys
 from pathlib import Path
 
-import numpy as np
-
 __all__ = ["register", "run"]
 
 #: sweep option -> (unit option of `mftyre eval` whose units it takes, help)
@@ -106,25 +104,14 @@ swept input with the most values (or --x). Existing output files need --overwrit
 
 def run(args) -> int:
     from ..errors import MFTyreError
-    from ..tir import same_file
+    from ..grid_results import check_request, format_table, sweep_grid, write_results
     from .equations import OUTPUTS
 
     parser = args.parser
     swept = [n for n in (args.sweep_order or []) if getattr(args, n).values.size > 1]
-    targets = [(opt, t) for opt, t in (("--csv", args.csv), ("--plot", args.plot)) if t is not None]
-    for opt, target in targets:
-        if same_file(Path(target), Path(args.file)):
-            parser.error(f"argument {opt}: {target!r} is the input .tir file; choose another output file")
-        if Path(target).exists() and not args.overwrite:
-            parser.error(f"argument {opt}: {target!r} exists; pass --overwrite to replace it")
-    if len(targets) == 2 and same_file(Path(args.csv), Path(args.plot)):
-        parser.error("argument --plot: it is also the --csv file; choose two different files")
-    if args.plot is not None and not swept:
-        parser.error("argument --plot: nothing to plot; sweep at least one input (e.g. --slip 0%:60%:31)")
+    check_request(parser, args, swept, plot_example="--slip 0%:60%:31")
     if args.towed and args.slip is not None:
         parser.error("argument --towed: the towed wheel's slip is solved, not given; drop --slip")
-    if args.x is not None and args.x not in swept:
-        parser.error(f"argument --x: {args.x!r} is not swept; swept inputs: {', '.join(swept) or 'none'}")
     try:
         from .model import SoftSoilTyre
         from .soils import soil
@@ -133,8 +120,7 @@ def run(args) -> int:
                             bulldozing_depth=args.bulldozing_depth)
         prm = tyre.params
         defaults = dict(fz=prm.FNOMIN, slip=0.15, alpha=0.0, p=prm.INFLPRES, vx=prm.LONGVL)
-        grids = dict(zip(swept, np.meshgrid(*(getattr(args, n).values for n in swept), indexing="ij")))
-        shape = tuple(getattr(args, n).values.size for n in swept)
+        grids, shape = sweep_grid(args, swept)
         inputs = {n: grids[n] if n in grids else (float(getattr(args, n).values[0]) if getattr(args, n) is not None
                                                   else defaults[n]) for n in _SWEEPS}
         if args.towed:
@@ -149,17 +135,9 @@ def run(args) -> int:
                 fixed.append("towed (zero driving torque)")
             print(f"# {args.file} on {tyre.soil.name} ({tyre.soil.source}); {max(1, math.prod(shape))} point(s)")
             print("# " + "; ".join(fixed))
-            print(_frame(args, out, swept, shape, columns, OUTPUTS).to_string(
-                index=False, float_format=lambda v: f"{v:.6g}"))
-        for _, target in targets:
-            Path(target).parent.mkdir(parents=True, exist_ok=True)
-        if args.csv is not None:
-            frame = _frame(args, out, swept, shape, args.outputs or tuple(OUTPUTS), OUTPUTS)
-            frame.to_csv(args.csv, index=False)
-            print(f"wrote {args.csv} ({len(frame)} rows, {frame.shape[1]} columns)", file=sys.stderr)
-        if args.plot is not None:
-            _plot(args, tyre, out, swept, shape, columns, OUTPUTS)
-            print(f"wrote {args.plot}", file=sys.stderr)
+            print(format_table(_frame(args, out, swept, shape, columns)))
+        write_results(args, lambda: _frame(args, out, swept, shape, args.outputs or tuple(OUTPUTS)),
+                      lambda: _plot(args, tyre, out, swept, shape, columns))
     except MFTyreError as exc:
         print(f"mftyre soil: error: {exc}", file=sys.stderr)
         return 1
@@ -175,51 +153,17 @@ def _unit(name):
     return EVAL_SWEEPS[_SWEEPS[name][0]][0]
 
 
-def _frame(args, out, swept, shape, outputs, units):
-    import pandas as pd
+def _frame(args, out, swept, shape, outputs):
+    from ..grid_results import grid_frame
+    from .equations import OUTPUTS
 
-    size = max(1, math.prod(shape))
-    cols = {}
-    grids = np.meshgrid(*(getattr(args, s).values for s in swept), indexing="ij") if swept else []
-    for name, grid in zip(swept, grids):
-        cols[f"{name} [{_unit(name)}]"] = grid.ravel()
-    for name in outputs:
-        label = f"{name}_out" if name in swept else name
-        cols[f"{label} [{units[name][0]}]"] = np.broadcast_to(out[name], shape).reshape(size)
-    return pd.DataFrame(cols)
+    return grid_frame(args, out, swept, shape, outputs, input_units={n: _unit(n) for n in _SWEEPS},
+                      output_units=OUTPUTS, repeated="_out")
 
 
-def _plot(args, tyre, out, swept, shape, outputs, units):
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
+def _plot(args, tyre, out, swept, shape, outputs):
+    from ..grid_results import plot_grid
+    from .equations import OUTPUTS
 
-    xname = args.x or max(swept, key=lambda n: (shape[swept.index(n)], -swept.index(n)))
-    ix = swept.index(xname)
-    xs = getattr(args, xname)
-    others = [n for n in swept if n != xname]
-    combos = list(np.ndindex(*(shape[swept.index(n)] for n in others))) if others else [()]
-    labels = [", ".join(getattr(args, n).label(getattr(args, n).values[i]) for n, i in zip(others, c))
-              for c in combos]
-    ncols = 1 if len(outputs) <= 2 else 2
-    nrows = math.ceil(len(outputs) / ncols)
-    fig = Figure(figsize=(5.0 * ncols, 2.6 * nrows + 0.6), dpi=100, layout="constrained")
-    FigureCanvasAgg(fig)
-    axes = fig.subplots(nrows, ncols, sharex=True, squeeze=False).ravel()
-    x = xs.values / xs.factor
-    for k, name in enumerate(outputs):
-        y = np.moveaxis(np.broadcast_to(out[name], shape), ix, -1).reshape(-1, x.size)
-        for row, label in zip(y, labels):
-            axes[k].plot(x, row, label=label or None, lw=1.2)
-        axes[k].set_ylabel(f"{name} [{units[name][0]}]")
-        axes[k].set_title(units[name][1], fontsize=9)
-        axes[k].grid(True, lw=0.3)
-        axes[k].set_xlabel(f"{xname} [{xs.unit}]")
-        axes[k].tick_params(labelbottom=True)
-    for ax in axes[len(outputs):]:
-        ax.set_visible(False)
-    if others and len(combos) <= 12:
-        axes[0].legend(fontsize=7)
-    fig.suptitle(f"{Path(args.file).name} on {tyre.soil.name}", fontsize=10)
-    path = Path(args.plot)
-    fmt = path.suffix[1:].lower() if path.suffix[1:].lower() in fig.canvas.get_supported_filetypes() else "png"
-    fig.savefig(path, format=fmt)
+    plot_grid(args, out, swept, shape, outputs, output_units=OUTPUTS,
+              title=f"{Path(args.file).name} on {tyre.soil.name}")

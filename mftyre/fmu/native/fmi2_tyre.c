@@ -257,22 +257,51 @@ fmi2Status fmi2Reset(fmi2Component c) {
 }
 
 /* ------------------------------------------------------------------------------------------ get / set */
+typedef enum { VAR_PARAMETER, VAR_INPUT, VAR_OUTPUT, VAR_UNKNOWN } VarKind;
+
+/* What value reference r names, and through *index its place in q, u or y. */
+static VarKind var_kind(fmi2ValueReference r, size_t *index) {
+    if (r < TYRE_NQ) {
+        *index = r;
+        return VAR_PARAMETER;
+    }
+    if (r < TYRE_NQ + TYRE_NU) {
+        *index = r - TYRE_NQ;
+        return VAR_INPUT;
+    }
+    if (r < N_VARS) {
+        *index = r - TYRE_NQ - TYRE_NU;
+        return VAR_OUTPUT;
+    }
+    return VAR_UNKNOWN;
+}
+
+/* The arrays of a get/set call: vr and value must be given when nvr > 0 (else an error naming fn). */
+static int arrays_given(Instance *inst, const char *fn, size_t nvr, const void *vr, const void *value) {
+    if (nvr > 0 && (!vr || !value)) {
+        LOG_ERROR(inst, "%s: null value reference or value array for %lu variables", fn, (unsigned long)nvr);
+        return 0;
+    }
+    return 1;
+}
+
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
     fmi2Status status = fmi2OK;
+    size_t k;
     CHECK_INSTANCE(c, "fmi2GetReal")
-    if (nvr > 0 && (!vr || !value)) return fmi2Error;
+    if (!arrays_given(inst, "fmi2GetReal", nvr, vr, value)) return fmi2Error;
     for (size_t i = 0; i < nvr; i++)
-        if (vr[i] >= TYRE_NQ + TYRE_NU && vr[i] < N_VARS && inst->s.phase != PHASE_ERROR) {
+        if (var_kind(vr[i], &k) == VAR_OUTPUT && inst->s.phase != PHASE_ERROR) {
             status = update_outputs(inst, "fmi2GetReal");
             break;
         }
     for (size_t i = 0; i < nvr; i++) {
-        fmi2ValueReference r = vr[i];
-        if (r < TYRE_NQ) value[i] = inst->s.q[r];
-        else if (r < TYRE_NQ + TYRE_NU) value[i] = inst->s.u[r - TYRE_NQ];
-        else if (r < N_VARS) value[i] = inst->s.y[r - TYRE_NQ - TYRE_NU];
-        else {
-            LOG_ERROR(inst, "fmi2GetReal: unknown value reference %u", (unsigned)r);
+        switch (var_kind(vr[i], &k)) {
+        case VAR_PARAMETER: value[i] = inst->s.q[k]; break;
+        case VAR_INPUT: value[i] = inst->s.u[k]; break;
+        case VAR_OUTPUT: value[i] = inst->s.y[k]; break;
+        default:
+            LOG_ERROR(inst, "fmi2GetReal: unknown value reference %u", (unsigned)vr[i]);
             return fmi2Error;
         }
     }
@@ -280,20 +309,21 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 }
 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
+    size_t k;
     CHECK_INSTANCE(c, "fmi2SetReal")
-    if (nvr > 0 && (!vr || !value)) return fmi2Error;
+    if (!arrays_given(inst, "fmi2SetReal", nvr, vr, value)) return fmi2Error;
     for (size_t i = 0; i < nvr; i++) {
-        fmi2ValueReference r = vr[i];
-        if (r < TYRE_NQ) {
+        switch (var_kind(vr[i], &k)) {
+        case VAR_PARAMETER:
             if (inst->s.phase != PHASE_INSTANTIATED && inst->s.phase != PHASE_INIT) {
-                LOG_ERROR(inst, "fmi2SetReal: parameter %s is fixed after initialisation", TYRE_Q_NAMES[r]);
+                LOG_ERROR(inst, "fmi2SetReal: parameter %s is fixed after initialisation", TYRE_Q_NAMES[k]);
                 return fmi2Error;
             }
-            inst->s.q[r] = value[i];
-        } else if (r < TYRE_NQ + TYRE_NU) {
-            inst->s.u[r - TYRE_NQ] = value[i];
-        } else {
-            LOG_ERROR(inst, "fmi2SetReal: value reference %u is not a parameter or an input", (unsigned)r);
+            inst->s.q[k] = value[i];
+            break;
+        case VAR_INPUT: inst->s.u[k] = value[i]; break;
+        default:
+            LOG_ERROR(inst, "fmi2SetReal: value reference %u is not a parameter or an input", (unsigned)vr[i]);
             return fmi2Error;
         }
         inst->s.outputs_valid = 0;
@@ -304,7 +334,7 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 #define NO_VARIABLES(fn, type)                                                                                     \
     fmi2Status fn(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, type value[]) {                    \
         CHECK_INSTANCE(c, #fn)                                                                                     \
-        (void)value;                                                                                               \
+        if (!arrays_given(inst, #fn, nvr, vr, value)) return fmi2Error;                                           \
         if (nvr == 0) return fmi2OK;                                                                               \
         LOG_ERROR(inst, #fn ": unknown value reference %u (the FMU has only Real variables)", (unsigned)vr[0]); \
         return fmi2Error;                                                                                          \
@@ -401,6 +431,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
                                         const fmi2ValueReference vKnown_ref[], size_t nKnown,
                                         const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
     double du[ARR(TYRE_NU)] = {0}, dy[ARR(TYRE_NY)];
+    size_t k;
     CHECK_INSTANCE(c, "fmi2GetDirectionalDerivative")
     if ((nKnown > 0 && (!vKnown_ref || !dvKnown)) || (nUnknown > 0 && (!vUnknown_ref || !dvUnknown))) {
         LOG_ERROR(inst, "fmi2GetDirectionalDerivative: null argument");
@@ -415,15 +446,14 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
         return fmi2Error;
     }
     for (size_t i = 0; i < nKnown; i++) {
-        fmi2ValueReference r = vKnown_ref[i];
-        if (r < TYRE_NQ || r >= TYRE_NQ + TYRE_NU) {
-            LOG_ERROR(inst, "fmi2GetDirectionalDerivative: known %u is not an input", (unsigned)r);
+        if (var_kind(vKnown_ref[i], &k) != VAR_INPUT) {
+            LOG_ERROR(inst, "fmi2GetDirectionalDerivative: known %u is not an input", (unsigned)vKnown_ref[i]);
             return fmi2Error;
         }
-        du[r - TYRE_NQ] += dvKnown[i];
+        du[k] += dvKnown[i];
     }
     for (size_t i = 0; i < nUnknown; i++)
-        if (vUnknown_ref[i] < TYRE_NQ + TYRE_NU || vUnknown_ref[i] >= N_VARS) {
+        if (var_kind(vUnknown_ref[i], &k) != VAR_OUTPUT) {
             LOG_ERROR(inst, "fmi2GetDirectionalDerivative: unknown %u is not an output", (unsigned)vUnknown_ref[i]);
             return fmi2Error;
         }
@@ -431,7 +461,10 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
         LOG_ERROR(inst, "fmi2GetDirectionalDerivative: evaluation failed");
         return fmi2Error;
     }
-    for (size_t i = 0; i < nUnknown; i++) dvUnknown[i] = dy[vUnknown_ref[i] - TYRE_NQ - TYRE_NU];
+    for (size_t i = 0; i < nUnknown; i++) {
+        var_kind(vUnknown_ref[i], &k);
+        dvUnknown[i] = dy[k];
+    }
     return fmi2OK;
 }
 
@@ -480,68 +513,37 @@ fmi2Status fmi2CancelStep(fmi2Component c) {
     return fmi2Error;
 }
 
-fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                       const fmi2Integer order[], const fmi2Real value[]) {
-    CHECK_INSTANCE(c, "fmi2SetRealInputDerivatives")
-    (void)vr;
-    (void)order;
-    (void)value;
-    if (nvr == 0) return fmi2OK;
-    LOG_ERROR(inst, "fmi2SetRealInputDerivatives: inputs are held constant over a step (canInterpolateInputs = false)");
-    return fmi2Error;
-}
-
-fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                        const fmi2Integer order[], fmi2Real value[]) {
-    CHECK_INSTANCE(c, "fmi2GetRealOutputDerivatives")
-    (void)vr;
-    (void)order;
-    (void)value;
-    if (nvr == 0) return fmi2OK;
-    LOG_ERROR(inst, "fmi2GetRealOutputDerivatives: not provided (MaxOutputDerivativeOrder = 0)");
-    return fmi2Error;
-}
-
-static fmi2Status no_status(Instance *inst, const char *fn) {
-    LOG_DISCARD(inst, "%s: no asynchronous step is running; no status to report", fn);
-    return fmi2Discard;
-}
-
-fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
-    CHECK_INSTANCE(c, "fmi2GetStatus")
-    (void)s;
-    (void)value;
-    return no_status(inst, "fmi2GetStatus");
-}
-
-fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
-    CHECK_INSTANCE(c, "fmi2GetRealStatus")
-    if (s == fmi2LastSuccessfulTime && value) {
-        *value = inst->s.time;
-        return fmi2OK;
+/* The calls for what this FMU does not provide (FMI 2.0 capability flags false): a non-empty request is an error. */
+#define NOT_PROVIDED(fn, type, why)                                                                                \
+    fmi2Status fn(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer order[],         \
+                  type value[]) {                                                                                  \
+        CHECK_INSTANCE(c, #fn)                                                                                     \
+        (void)vr;                                                                                                  \
+        (void)order;                                                                                               \
+        (void)value;                                                                                               \
+        if (nvr == 0) return fmi2OK;                                                                               \
+        LOG_ERROR(inst, #fn ": " why);                                                                             \
+        return fmi2Error;                                                                                          \
     }
-    return no_status(inst, "fmi2GetRealStatus");
-}
+NOT_PROVIDED(fmi2SetRealInputDerivatives, const fmi2Real,
+             "inputs are held constant over a step (canInterpolateInputs = false)")
+NOT_PROVIDED(fmi2GetRealOutputDerivatives, fmi2Real, "not provided (MaxOutputDerivativeOrder = 0)")
 
-fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
-    CHECK_INSTANCE(c, "fmi2GetIntegerStatus")
-    (void)s;
-    (void)value;
-    return no_status(inst, "fmi2GetIntegerStatus");
-}
-
-fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
-    CHECK_INSTANCE(c, "fmi2GetBooleanStatus")
-    if (s == fmi2Terminated && value) {
-        *value = fmi2False;
-        return fmi2OK;
+/* Status of an asynchronous step: there is none (canRunAsynchronuously = false), except the last successful time
+ * and the terminated flag, which a co-simulation master may ask for at any time. */
+#define STATUS(fn, type, kind, answer)                                                                             \
+    fmi2Status fn(fmi2Component c, const fmi2StatusKind s, type *value) {                                          \
+        CHECK_INSTANCE(c, #fn)                                                                                     \
+        if (s == (kind) && value) {                                                                                \
+            *value = (answer);                                                                                     \
+            return fmi2OK;                                                                                         \
+        }                                                                                                          \
+        LOG_DISCARD(inst, #fn ": no asynchronous step is running; no status to report");                          \
+        return fmi2Discard;                                                                                        \
     }
-    return no_status(inst, "fmi2GetBooleanStatus");
-}
-
-fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
-    CHECK_INSTANCE(c, "fmi2GetStringStatus")
-    (void)s;
-    (void)value;
-    return no_status(inst, "fmi2GetStringStatus");
-}
+#define NO_KIND ((fmi2StatusKind)-1)
+STATUS(fmi2GetStatus, fmi2Status, NO_KIND, fmi2OK)
+STATUS(fmi2GetRealStatus, fmi2Real, fmi2LastSuccessfulTime, inst->s.time)
+STATUS(fmi2GetIntegerStatus, fmi2Integer, NO_KIND, 0)
+STATUS(fmi2GetBooleanStatus, fmi2Boolean, fmi2Terminated, fmi2False)
+STATUS(fmi2GetStringStatus, fmi2String, NO_KIND, NULL)

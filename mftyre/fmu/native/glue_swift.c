@@ -60,6 +60,16 @@ static long window_start(double xb) {
     return (long)i0;
 }
 
+/* The window arguments of the functions from position `first` on: the window's start x0w (kept in *x0w), the
+ * grid and the interleaved (height, camber slope) pairs of the window around xb. */
+static void set_window(GlueWork *g, int first, double xb, double *x0w) {
+    long i0 = window_start(xb);
+    *x0w = ROAD_X0 + i0 * ROAD_DX;
+    g->arg[first] = x0w;
+    g->arg[first + 1] = ROAD_GRID;
+    g->arg[first + 2] = ROAD_H + 2 * i0;
+}
+
 int glue_validate(const double *q, const double *u, char *msg, size_t n) {
     if (!(u[TYRE_U_P] > 0.0)) {
         snprintf(msg, n, "input p (inflation pressure) must be positive, got %g Pa", u[TYRE_U_P]);
@@ -73,13 +83,10 @@ int glue_validate(const double *q, const double *u, char *msg, size_t n) {
 }
 
 int glue_init(GlueWork *g, const double *u, const double *q, double *x, char *msg, size_t n) {
-    long i0 = window_start(q[TYRE_Q_X_START]);
-    double x0w = ROAD_X0 + i0 * ROAD_DX;
+    double x0w;
     g->arg[0] = u;
     g->arg[1] = q;
-    g->arg[2] = &x0w;
-    g->arg[3] = ROAD_GRID;
-    g->arg[4] = ROAD_H + 2 * i0; /* interleaved (height, camber slope) pairs */
+    set_window(g, 2, q[TYRE_Q_X_START], &x0w);
     g->res[0] = x;
     if (swift_init(g->arg, g->res, g->iw, g->w, 0)) {
         snprintf(msg, n, "the static equilibrium could not be evaluated");
@@ -105,15 +112,11 @@ int glue_step(GlueWork *g, double *x, const double *u, const double *q, double h
     x[S_VZA] = u[TYRE_U_VZ];
     x[S_OMA] = u[TYRE_U_OMEGA];
     for (long k = 0; k < n; k++) {
-        double dt = h / (double)n;
-        long i0 = window_start(x[S_XB]);
-        double x0w = ROAD_X0 + i0 * ROAD_DX;
+        double dt = h / (double)n, x0w;
         g->arg[0] = x;
         g->arg[1] = u;
         g->arg[2] = &dt;
-        g->arg[3] = &x0w;
-        g->arg[4] = ROAD_GRID;
-        g->arg[5] = ROAD_H + 2 * i0; /* interleaved (height, camber slope) pairs */
+        set_window(g, 3, x[S_XB], &x0w);
         g->res[0] = x_next;
         if (swift_substep(g->arg, g->res, g->iw, g->w, 0)) return 1;
         for (int i = 0; i < TYRE_NX; i++) x[i] = x_next[i];
@@ -122,14 +125,11 @@ int glue_step(GlueWork *g, double *x, const double *u, const double *q, double h
 }
 
 int glue_out(GlueWork *g, const double *x, const double *u, const double *q, double *y) {
-    long i0 = window_start(x[S_XB]);
-    double x0w = ROAD_X0 + i0 * ROAD_DX;
+    double x0w;
     (void)q;
     g->arg[0] = x;
     g->arg[1] = u;
-    g->arg[2] = &x0w;
-    g->arg[3] = ROAD_GRID;
-    g->arg[4] = ROAD_H + 2 * i0; /* interleaved (height, camber slope) pairs */
+    set_window(g, 2, x[S_XB], &x0w);
     g->res[0] = y;
     return swift_out(g->arg, g->res, g->iw, g->w, 0);
 }
