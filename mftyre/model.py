@@ -73,7 +73,9 @@ _SIDES = ("left", "right")
 
 
 class MFOutputs:
-    """Every output of one evaluation as named NumPy arrays (see :data:`OUTPUT_UNITS`)."""
+    """Every output of one evaluation as named NumPy arrays (see :data:`OUTPUT_UNITS`). No array shares memory with
+    another or with an input; those of a batch above 16 384 points are rows of one block (keeping one array keeps
+    the block: ``out.fx.copy()`` keeps Fx alone)."""
 
     __slots__ = OUTPUT_NAMES
 
