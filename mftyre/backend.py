@@ -71,6 +71,8 @@ class NumpyBackend:
 
     @staticmethod
     def where(cond, a, b):
+        """``a`` where ``cond``, else ``b``; may return ``a`` or ``b`` itself (not a copy): write into the result
+        only after copying it."""
         if type(cond) is np.bool_:  # one point (scalars): a Python choice, np.where costs microseconds
             return a if cond else b
         # the same side for every element (most guards hold nowhere or everywhere): that side as it is, without
