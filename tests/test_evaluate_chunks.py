@@ -131,3 +131,19 @@ def test_threads_sharing_one_model_get_the_serial_results(monkeypatch):
     for i, expected in enumerate(serial):
         for got in results[i]:
             _assert_same(got, expected)
+
+
+@pytest.mark.parametrize("fill", ["none", "all", "some"])
+def test_numpy_where_and_sign_nz_shortcuts_give_np_where_values(fill):
+    """The NumPy backend skips the selection pass where one side holds everywhere: values, shape and dtype as
+    np.where gives them, for array and number operands and operands that broadcast."""
+    from mftyre.backend import NUMPY
+
+    x = np.array([-2.0, -0.0, 0.0, 3.0, 5.0])
+    cond = {"none": np.zeros(5, bool), "all": np.ones(5, bool), "some": x > 1}[fill]
+    for a, b in [(x, 2 * x), (x, 7.0), (7.0, x), (x, np.array([1.0])), (x[:, None], x), (1, 2)]:
+        got, expected = NUMPY.where(cond, a, b), np.where(cond, a, b)
+        assert np.shape(got) == expected.shape and np.result_type(got) == expected.dtype
+        np.testing.assert_array_equal(got, expected)
+    for v in (x, np.abs(x) + 1.0, -np.abs(x) - 1.0):
+        np.testing.assert_array_equal(np.broadcast_to(NUMPY.sign_nz(v), v.shape), np.where(v < 0, -1.0, 1.0))
