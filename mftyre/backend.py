@@ -67,7 +67,7 @@ class NumpyBackend:
         """Whether any element meets ``cond``: equations skip a case no element is in (CasADi: always True)."""
         if type(cond) is np.ndarray:
             return np.count_nonzero(cond) > 0
-        return bool(np.any(cond))
+        return bool(cond) if type(cond) is np.bool_ else bool(np.any(cond))
 
     @staticmethod
     def where(cond, a, b):
