@@ -23,6 +23,13 @@ __all__ = ["NumpyBackend", "CasadiBackend", "NUMPY", "CASADI", "casadi_backend"]
 _ULP4 = 4.0 * np.finfo(float).eps  # the root searches' relative floor: 4 units in the last place
 
 
+def _whole(chosen, cond, other) -> bool:
+    """Whether ``np.where(cond, ...)`` choosing ``chosen`` everywhere would give ``chosen``'s values unchanged: an
+    array condition, ``chosen`` a float64 array of its shape, the other side a number or of the same shape."""
+    return (type(cond) is np.ndarray and type(chosen) is np.ndarray and chosen.dtype == np.float64
+            and chosen.shape == cond.shape and getattr(other, "shape", ()) in ((), chosen.shape))
+
+
 class NumpyBackend:
     """Element-wise operations on NumPy float64 arrays."""
 
@@ -48,29 +55,55 @@ class NumpyBackend:
     @staticmethod
     def cos_atan(x):
         """cos(atan(x)) = 1 / sqrt(1 + x^2), without the two transcendental functions."""
+        if type(x) is np.ndarray and x.dtype == np.float64:  # in place: one temporary instead of four
+            value = x * x
+            value += 1.0
+            np.sqrt(value, out=value)
+            return np.divide(1.0, value, out=value)
         return 1.0 / np.sqrt(1.0 + x * x)
 
     @staticmethod
     def any(cond) -> bool:
         """Whether any element meets ``cond``: equations skip a case no element is in (CasADi: always True)."""
-        return bool(np.any(cond))
+        if type(cond) is np.ndarray:
+            return np.count_nonzero(cond) > 0
+        return bool(cond) if type(cond) is np.bool_ else bool(np.any(cond))
 
     @staticmethod
     def where(cond, a, b):
+        """``a`` where ``cond``, else ``b``; may return ``a`` or ``b`` itself (not a copy): write into the result
+        only after copying it."""
         if type(cond) is np.bool_:  # one point (scalars): a Python choice, np.where costs microseconds
             return a if cond else b
+        # the same side for every element (most guards hold nowhere or everywhere): that side as it is, without
+        # the selection pass (which costs as much as several arithmetic operations)
+        if type(cond) is np.ndarray:
+            chosen = np.count_nonzero(cond)  # (faster than any() and all())
+            if chosen == 0 and _whole(b, cond, a):
+                return b
+            if chosen == cond.size and _whole(a, cond, b):
+                return a
         return np.where(cond, a, b)
 
     @staticmethod
     def sign_nz(x):
-        """sign(x) with sign(0) = +1: the guard used in the Magic Formula's epsilon terms."""
+        """sign(x) with sign(0) = +1: the guard used in the Magic Formula's epsilon terms (a plain number where
+        every element has the same sign)."""
         if type(x) is np.float64:
             return -1.0 if x < 0 else 1.0
-        return np.where(x < 0, -1.0, 1.0)
+        negative = x < 0
+        count = np.count_nonzero(negative)
+        if count == 0:
+            return 1.0
+        if count == negative.size:
+            return -1.0
+        return np.where(negative, -1.0, 1.0)
 
     @staticmethod
     def clip(x, lo, hi):
-        return np.minimum(np.maximum(x, lo), hi)
+        if type(x) is np.ndarray:
+            return np.clip(x, lo, hi)  # min(max(x, lo), hi) in one pass
+        return np.minimum(np.maximum(x, lo), hi)  # (np.clip costs more on numbers)
 
     @staticmethod
     def broadcast(*values):
@@ -90,7 +123,8 @@ class NumpyBackend:
         x = x0
         for _ in range(max_iter):
             x_new, aux = step(x)
-            done = np.all((np.abs(x_new - x) <= tol) | ~np.isfinite(x_new))
+            close = np.abs(x_new - x) <= tol
+            done = close.all() or bool(np.all(close | ~np.isfinite(x_new)))
             x = x_new
             if done:
                 return x, aux
