@@ -8,10 +8,9 @@ never call ``numpy`` or ``casadi`` directly. Two backends exist:
 
 Both offer the elementary functions, comparisons folded into :meth:`where`, the MATLAB-style ``sign`` (with
 sign(0) = 0) and the "non-zero" sign used by the Magic Formula's singularity guards (sign(0) = +1), and two
-iteration primitives: :meth:`fixed_point` and :meth:`solve_bracketed`, with :meth:`bracket` (widening or
-grid scan) that feeds the latter. NumPy iterates until every element has
-converged (with an iteration cap); CasADi unrolls a fixed, documented number of iterations so the resulting
-expression graph is static and differentiable.
+iteration primitives: :meth:`fixed_point` and :meth:`solve_newton` (safeguarded Newton in a bracket). NumPy
+iterates until every element has converged (with an iteration cap); CasADi unrolls a fixed, documented number
+of iterations so the resulting expression graph is static and differentiable.
 """
 from __future__ import annotations
 
@@ -22,6 +21,13 @@ from .errors import ModelInputError
 __all__ = ["NumpyBackend", "CasadiBackend", "NUMPY", "CASADI", "casadi_backend"]
 
 _ULP4 = 4.0 * np.finfo(float).eps  # the root searches' relative floor: 4 units in the last place
+
+
+def _whole(chosen, cond, other) -> bool:
+    """Whether ``np.where(cond, ...)`` choosing ``chosen`` everywhere would give ``chosen``'s values unchanged: an
+    array condition, ``chosen`` a float64 array of its shape, the other side a number or of the same shape."""
+    return (type(cond) is np.ndarray and type(chosen) is np.ndarray and chosen.dtype == np.float64
+            and chosen.shape == cond.shape and getattr(other, "shape", ()) in ((), chosen.shape))
 
 
 class NumpyBackend:
@@ -49,33 +55,62 @@ class NumpyBackend:
     @staticmethod
     def cos_atan(x):
         """cos(atan(x)) = 1 / sqrt(1 + x^2), without the two transcendental functions."""
+        if type(x) is np.ndarray and x.dtype == np.float64:  # in place: one temporary instead of four
+            value = x * x
+            value += 1.0
+            np.sqrt(value, out=value)
+            return np.divide(1.0, value, out=value)
         return 1.0 / np.sqrt(1.0 + x * x)
 
     @staticmethod
     def any(cond) -> bool:
         """Whether any element meets ``cond``: equations skip a case no element is in (CasADi: always True)."""
-        return bool(np.any(cond))
+        if type(cond) is np.ndarray:
+            return np.count_nonzero(cond) > 0
+        return bool(cond) if type(cond) is np.bool_ else bool(np.any(cond))
 
     @staticmethod
     def where(cond, a, b):
+        """``a`` where ``cond``, else ``b``; may return ``a`` or ``b`` itself (not a copy): write into the result
+        only after copying it."""
         if type(cond) is np.bool_:  # one point (scalars): a Python choice, np.where costs microseconds
             return a if cond else b
+        # the same side for every element (most guards hold nowhere or everywhere): that side as it is, without
+        # the selection pass (which costs as much as several arithmetic operations)
+        if type(cond) is np.ndarray:
+            chosen = np.count_nonzero(cond)  # (faster than any() and all())
+            if chosen == 0 and _whole(b, cond, a):
+                return b
+            if chosen == cond.size and _whole(a, cond, b):
+                return a
         return np.where(cond, a, b)
 
     @staticmethod
     def sign_nz(x):
-        """sign(x) with sign(0) = +1: the guard used in the Magic Formula's epsilon terms."""
+        """sign(x) with sign(0) = +1: the guard used in the Magic Formula's epsilon terms (a plain number where
+        every element has the same sign)."""
         if type(x) is np.float64:
             return -1.0 if x < 0 else 1.0
-        return np.where(x < 0, -1.0, 1.0)
+        negative = x < 0
+        count = np.count_nonzero(negative)
+        if count == 0:
+            return 1.0
+        if count == negative.size:
+            return -1.0
+        return np.where(negative, -1.0, 1.0)
 
     @staticmethod
     def clip(x, lo, hi):
-        return np.minimum(np.maximum(x, lo), hi)
+        if type(x) is np.ndarray:
+            return np.clip(x, lo, hi)  # min(max(x, lo), hi) in one pass
+        return np.minimum(np.maximum(x, lo), hi)  # (np.clip costs more on numbers)
 
     @staticmethod
     def broadcast(*values):
-        """The values as float arrays of one common shape, at least 1-D (writable copies)."""
+        """The values as float arrays of one common shape, at least 1-D (writable copies); scalars alone stay
+        scalars (one point: scalar arithmetic, several times faster than arrays of one element)."""
+        if all(np.ndim(v) == 0 for v in values):
+            return [np.float64(v) for v in values]
         return [np.atleast_1d(np.array(v, dtype=float)) for v in np.broadcast_arrays(*values)]
 
     @staticmethod
@@ -88,7 +123,8 @@ class NumpyBackend:
         x = x0
         for _ in range(max_iter):
             x_new, aux = step(x)
-            done = np.all((np.abs(x_new - x) <= tol) | ~np.isfinite(x_new))
+            close = np.abs(x_new - x) <= tol
+            done = close.all() or bool(np.all(close | ~np.isfinite(x_new)))
             x = x_new
             if done:
                 return x, aux
@@ -96,99 +132,55 @@ class NumpyBackend:
                               "the range the model was fitted for?")
 
     @staticmethod
-    def bracket(fun, contact, a, b, fa, fb, widen, x0, f0, scale, offsets, max_iter=100):
-        """Brackets for :meth:`solve_bracketed`, two ways. Where ``contact``: ``widen(a, b, fb, idx) -> b'`` moves
-        ``b`` (only while fa and fb have the same non-zero sign, at most ``max_iter`` times) until [a, b] holds a
-        sign change. Elsewhere, where ``f0 = fun(x0) > 0``: a scan of ``x0 + offsets[k] scale`` (increasing offsets)
-        for the first point where ``fun`` is <= 0. ``fun(x, idx)`` evaluates the elements ``idx`` (a tuple of index
-        arrays, or None for all).
+    def solve_newton(fun, x, f, df, lo, hi, xtol, ftol=0.0, max_iter=100, unrolled=None):
+        """Root of ``fun`` in [lo, hi], element-wise, where fun(lo) > 0 >= fun(hi) (a function falling through its
+        root; lo < hi), from ``x`` with ``f = fun(x)`` and slope ``df``. ``fun(x, idx) -> (value, slope)``
+        evaluates the elements ``idx`` (a tuple of index arrays, None while every element is still iterating).
 
-        Returns ``(found, a, b, fa, fb)``: found is ``contact`` or a scan that changed sign, whose [a, b] is the first
-        grid interval with f(a) > 0 >= f(b); elsewhere a = b = x0 and fa = fb = 0.
+        Safeguarded Newton: each evaluated point narrows the bracket; a Newton step that would leave it (or a slope
+        that is not negative) is replaced by bisection. Iterates until |f| <= ``ftol`` (a scalar or one value per
+        element), the Newton step is at most ``xtol`` (plus 4 ulp of x) or the bracket is that narrow, for every
+        element; the result is the last point moved by its Newton step where that stays in the bracket. An element
+        given ``f = 0`` returns ``x``. Scalars (one point) stay scalars. Raises ModelInputError if not converged in
+        ``max_iter`` steps.
         """
-        x0, f0, scale, a, b, fa, fb = (np.atleast_1d(np.array(v, dtype=float))
-                                       for v in np.broadcast_arrays(x0, f0, scale, a, b, fa, fb))
-        contact = np.broadcast_to(contact, x0.shape)
-        for _ in range(max_iter):  # widening, in contact
-            idx = np.nonzero(contact & (fa * fb > 0))
-            if idx[0].size == 0:
-                break
-            b[idx] = widen(a[idx], b[idx], fb[idx], idx)
-            fb[idx] = fun(b[idx], idx)
-        lifted = ~contact
-        a[lifted], b[lifted], fa[lifted], fb[lifted] = x0[lifted], x0[lifted], 0.0, 0.0
-        found = contact.copy()
-        idx = np.nonzero(lifted & (f0 > 0))  # the scan
-        x_prev, f_prev = x0[idx], f0[idx]
-        for offset in offsets:
-            if idx[0].size == 0:
-                break
-            x = x0[idx] + offset * scale[idx]
-            f = fun(x, idx)
-            hit = f <= 0
-            hit_idx = tuple(i[hit] for i in idx)
-            a[hit_idx], b[hit_idx], fa[hit_idx], fb[hit_idx] = x_prev[hit], x[hit], f_prev[hit], f[hit]
-            found[hit_idx] = True
-            idx = tuple(i[~hit] for i in idx)
-            x_prev, f_prev = x[~hit], f[~hit]
-        return found, a, b, fa, fb
-
-    @staticmethod
-    def solve_bracketed(fun, a, b, fa, fb, xtol, max_iter=100, unrolled=None, ftol=0.0):
-        """Root of ``fun`` between ``a`` and ``b`` (``fa``, ``fb`` of opposite sign or zero), element-wise.
-
-        Dekker's method: secant steps from the best point ``b``, bisection whenever the secant leaves
-        the half of the bracket next to ``b``, steps of at least xtol/2; the bracket [a, b] always holds a
-        sign change. ``fun(x, idx)``
-        evaluates the elements ``idx`` (a tuple of index arrays) at ``x``. Iterates until |b - a| <= xtol (plus
-        4 ulp of b, for roots far from zero)
-        or |f(b)| <= ``ftol`` (a scalar or one value per element) for every element. ``idx`` is None while every
-        element is still iterating (no gathering). Elements without a sign change return the end with the smaller
-        |f| (see :meth:`bracket`).
-        """
-        shape = np.shape(a)
-        a, b = np.atleast_1d(np.array(a, dtype=float)), np.atleast_1d(np.array(b, dtype=float))
-        fa, fb = np.atleast_1d(np.array(fa, dtype=float)), np.atleast_1d(np.array(fb, dtype=float))
-        swap = np.abs(fa) < np.abs(fb)
-        a, b, fa, fb = np.where(swap, b, a), np.where(swap, a, b), np.where(swap, fb, fa), np.where(swap, fa, fb)
-        c, fc = a.copy(), fa.copy()
-        ftol = np.broadcast_to(ftol, a.shape)
-        active = (fa * fb < 0) & (np.abs(b - a) > xtol + _ULP4 * np.abs(b)) & (np.abs(fb) > ftol)
+        where = NumpyBackend.where  # one point (scalars): Python choices, no arrays
+        scalar = all(np.ndim(v) == 0 for v in (x, f, df, lo, hi, ftol))
+        if not scalar:
+            x, f, df, lo, hi = (np.array(v, dtype=float) for v in np.broadcast_arrays(x, f, df, lo, hi))
+            ftol = np.broadcast_to(ftol, x.shape)
+        idx = None
         for _ in range(max_iter):
-            if not active.any():
-                break
-            idx = None if active.all() else np.nonzero(active)
+            xi, fi, dfi, loi, hii = (v if idx is None else v[idx] for v in (x, f, df, lo, hi))
+            ftoli = ftol if idx is None else ftol[idx]
+            falling = fi > 0
+            loi, hii = where(falling, xi, loi), where(falling, hii, xi)
+            step = fi / where(dfi < 0, dfi, -1.0)
+            newton = xi - step
+            ok = (dfi < 0) & (newton >= loi) & (newton <= hii)
+            tol = xtol + _ULP4 * np.abs(xi)
+            done = (np.abs(fi) <= ftoli) | (ok & (np.abs(step) <= tol)) | (hii - loi <= tol)
+            new = where(ok, newton, 0.5 * (loi + hii))
             if idx is None:
-                ai, bi, ci, fai, fbi, fci, ftoli = a, b, c, fa, fb, fc, ftol
+                result = where(ok, newton, xi)
             else:
-                ai, bi, ci, fai, fbi, fci, ftoli = a[idx], b[idx], c[idx], fa[idx], fb[idx], fc[idx], ftol[idx]
-            mid = 0.5 * (ai + bi)
-            secant = bi - fbi * (bi - ci) / (fbi - fci)
-            inside = (fbi != fci) & ((secant - bi) * (secant - mid) <= 0)
-            new = np.where(inside, secant, mid)
-            # a step shorter than xtol/2 is lengthened to xtol/2 towards a: once b is that close to the
-            # root the next point lands beyond it and the bracket collapses (as in Brent's method)
-            tol = xtol + _ULP4 * np.abs(bi)
-            new = np.where(np.abs(new - bi) < 0.5 * tol, bi + 0.5 * tol * np.sign(ai - bi), new)
-            fnew = fun(new, idx)
-            keep_a = fnew * fai < 0
-            ai, fai = np.where(keep_a, ai, bi), np.where(keep_a, fai, fbi)
-            ci, fci = bi, fbi
-            bi, fbi = new, fnew
-            swap = np.abs(fai) < np.abs(fbi)
-            ai, bi = np.where(swap, bi, ai), np.where(swap, ai, bi)
-            fai, fbi = np.where(swap, fbi, fai), np.where(swap, fai, fbi)
-            still = (np.abs(fbi) > ftoli) & (np.abs(bi - ai) > xtol + _ULP4 * np.abs(bi))
-            if idx is None:
-                a, b, c, fa, fb, fc, active = ai, bi, ci, fai, fbi, fci, still
+                result[idx] = np.where(ok, newton, xi)
+            if done.all():
+                return result
+            keep = ~done
+            if idx is None and not done.any():
+                sub = None
             else:
-                a[idx], b[idx], c[idx], fa[idx], fb[idx], fc[idx] = ai, bi, ci, fai, fbi, fci
-                active[idx] = still
-        else:
-            if active.any():
-                raise ModelInputError(f"bracketed root search did not converge in {max_iter} iterations: inputs far "
-                                      "outside the range the model was fitted for?")
-        return np.where(np.abs(fb) <= np.abs(fa), b, a).reshape(shape)
+                sub = np.nonzero(keep) if idx is None else tuple(i[keep] for i in idx)
+                new, loi, hii = new[keep], loi[keep], hii[keep]
+            fnew, dfnew = fun(new, sub)
+            if sub is None:
+                x, f, df, lo, hi = new, fnew, dfnew, loi, hii
+            else:
+                x[sub], f[sub], df[sub], lo[sub], hi[sub] = new, fnew, dfnew, loi, hii
+            idx = sub
+        raise ModelInputError(f"Newton root search did not converge in {max_iter} iterations: inputs far outside the "
+                              "range the model was fitted for?")
 
 
 class CasadiBackend:
@@ -275,62 +267,24 @@ class CasadiBackend:
             x, aux = step(x)
         return x, aux
 
-    def bracket(self, fun, contact, a, b, fa, fb, widen, x0, f0, scale, offsets, max_iter=100):
-        """:meth:`NumpyBackend.bracket` in one set of unrolled evaluations, one per offset: each element needs
-        either the widening or the scan, so each evaluation serves the one it needs (len(offsets) widening steps)."""
-        ca = self.ca
-        found = contact
-        lo = hi = x0
-        f_lo = f_hi = 0 * f0
-        x_prev, f_prev = x0, f0
-        searching = ca.logic_and(ca.logic_not(contact), f0 > 0)
-        for offset in offsets:
-            widening = ca.logic_and(contact, fa * fb > 0)
-            x = ca.if_else(contact, widen(a, b, fb, None), x0 + offset * scale)
-            f = fun(x, None)
-            b, fb = ca.if_else(widening, x, b), ca.if_else(widening, f, fb)
-            hit = ca.logic_and(ca.logic_and(searching, ca.logic_not(found)), f <= 0)
-            lo, hi = ca.if_else(hit, x_prev, lo), ca.if_else(hit, x, hi)
-            f_lo, f_hi = ca.if_else(hit, f_prev, f_lo), ca.if_else(hit, f, f_hi)
-            found = ca.logic_or(found, hit)
-            x_prev, f_prev = x, f
-        return (found, ca.if_else(contact, a, lo), ca.if_else(contact, b, hi), ca.if_else(contact, fa, f_lo),
-                ca.if_else(contact, fb, f_hi))
-
-    def solve_bracketed(self, fun, a, b, fa, fb, xtol, max_iter=100, unrolled=40, ftol=0.0):
-        """``unrolled`` steps of Dekker's method (see :meth:`NumpyBackend.solve_bracketed`; ``ftol`` is not
-        needed: the final Newton step polishes)."""
+    def solve_newton(self, fun, x, f, df, lo, hi, xtol, ftol=0.0, max_iter=100, unrolled=12):
+        """``unrolled`` steps of :meth:`NumpyBackend.solve_newton` (no stopping test: at the root a Newton step
+        stays put), then the final Newton step, whose derivatives are those of the implicit function."""
         ca = self.ca
 
-        def ordered(a, b, fa, fb):
-            swap = ca.fabs(fa) < ca.fabs(fb)
-            return (ca.if_else(swap, b, a), ca.if_else(swap, a, b), ca.if_else(swap, fb, fa),
-                    ca.if_else(swap, fa, fb))
+        def step(x, f, df, lo, hi):
+            falling = f > 0
+            lo, hi = ca.if_else(falling, x, lo), ca.if_else(falling, hi, x)
+            newton = x - f / ca.if_else(df < 0, df, -1.0)
+            ok = ca.logic_and(df < 0, ca.logic_and(newton >= lo, newton <= hi))
+            return newton, ok, lo, hi
 
-        a, b, fa, fb = ordered(a, b, fa, fb)
-        # without a sign change the end with the smaller |f| (as NumPy); with one, the steps need no freezing once
-        # converged: a step of xtol/2 beyond a leaves a bracket of at most xtol round the root
-        start, bracketed = b, fa * fb < 0
-        c, fc = a, fa
         for _ in range(unrolled):
-            tol = xtol + _ULP4 * ca.fabs(b)
-            mid = 0.5 * (a + b)
-            secant = b - fb * (b - c) / (fb - fc)
-            inside = ca.logic_and(fb != fc, (secant - b) * (secant - mid) <= 0)
-            new = ca.if_else(inside, secant, mid)
-            new = ca.if_else(ca.fabs(new - b) < 0.5 * tol, b + 0.5 * tol * ca.sign(a - b), new)
-            fnew = fun(new, None)
-            keep_a = fnew * fa < 0
-            c, fc = b, fb
-            a, b, fa, fb = ordered(ca.if_else(keep_a, a, b), new, ca.if_else(keep_a, fa, fb), fnew)
-        best = ca.if_else(bracketed, ca.if_else(ca.fabs(fb) <= ca.fabs(fa), b, a), start)
-        # one Newton step at the converged point: same value, and derivatives that are exactly those of
-        # the implicit function (the unrolled bracketing steps alone would differentiate the iteration)
-        x = ca.SX.sym("x") if isinstance(best, ca.SX) else ca.MX.sym("x")
-        fx = fun(x, None)
-        slope = ca.substitute(ca.jacobian(fx, x), x, best)
-        f_best = ca.substitute(fx, x, best)
-        return best - ca.if_else(slope != 0, f_best / slope, 0.0)
+            newton, ok, lo, hi = step(x, f, df, lo, hi)
+            x = ca.if_else(ok, newton, 0.5 * (lo + hi))
+            f, df = fun(x, None)
+        newton, ok, _, _ = step(x, f, df, lo, hi)
+        return ca.if_else(ok, newton, x)
 
 
 NUMPY = NumpyBackend()

@@ -292,11 +292,12 @@ command line.""",
     group = p.add_argument_group("inputs (value, list V1,V2,... or range START:STOP:COUNT; units allowed)")
     helps = {
         "fz": "vertical load [N]; kN allowed (default FNOMIN)",
-        "kappa": "longitudinal slip [-]; %% allowed (default 0)",
+        "kappa": "longitudinal slip [-], (omega Re - vx)/vx: -1 = locked wheel also for vx < 0; %% allowed "
+                 "(default 0)",
         "alpha": "slip angle [rad]; deg allowed (default 0)",
         "gamma": "inclination angle [rad]; deg allowed (default 0)",
         "phit": "turn slip [1/m] (default 0)",
-        "vx": "forward speed [m/s]; km/h, mph allowed (default LONGVL)",
+        "vx": "forward speed [m/s], negative rolling backwards; km/h, mph allowed (default LONGVL)",
         "p": "inflation pressure [Pa]; bar, kPa, MPa, psi allowed (default INFLPRES)",
         "omega": "wheel spin [rad/s]; rpm allowed (default: estimated from kappa and vx)",
     }

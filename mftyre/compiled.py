@@ -65,9 +65,11 @@ __all__ = ["CompiledFunction", "CacheSecurityError", "compile_model", "compile_f
 
 _BLOCK = 256  # points per call of the vectorised kernel (inputs broadcast into stack buffers of this length)
 # -O1 with loop vectorisation runs the straight-line kernel as fast as -O3 and compiles in half the time.
-# -fno-tree-dominator-opts: gcc 12's dominator pass folds the 0/1 masks of the unrolled MF 6.2 loaded-radius
-# solver into boolean chains of mixed precision that its vectoriser rejects ("relevant stmt not supported:
-# patt = patt ? _ : 0"), leaving the whole kernel scalar (MF 6.2 batch 920 -> 270 ns/point with the flag)
+# -fno-tree-dominator-opts: gcc 12's dominator pass folded the 0/1 masks of the unrolled MF 6.2 loaded-radius
+# solver (Dekker's method, before the Newton solver) into boolean chains of mixed precision that its vectoriser
+# rejects ("relevant stmt not supported: patt = patt ? _ : 0"), leaving the whole kernel scalar (MF 6.2 batch
+# 920 -> 270 ns/point with the flag). The Newton solver vectorises either way at the same speed; the flag stays
+# as a guard for other masks (tests/test_compiled.py checks the loop is vectorised)
 _FLAGS = ("-O1", "-ftree-loop-vectorize", "-fno-tree-dominator-opts", "-fPIC", "-shared", "-fno-math-errno", "-fno-trapping-math",
           "-freciprocal-math", "-ffp-contract=off", "-fopenmp-simd")
 _PACKED = 4096  # batches of at most this many points are passed as one packed copy of the inputs

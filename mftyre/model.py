@@ -62,6 +62,10 @@ OUTPUT_UNITS = {
 assert tuple(OUTPUT_UNITS) == OUTPUT_NAMES
 
 _INPUT_ORDER = ("fz", "kappa", "alpha", "gamma", "phit", "vx", "p", "omega")
+#: points per chunk of a large batch (see MFModel._evaluate_arrays). Measured (bench_casadi.py, 1e5 points, one core):
+#: 6 000 to 34 000 points per chunk take the same time within the noise; smaller chunks pay the ~0.5 ms of Python and
+#: NumPy call overhead of the ~830 array operations of one evaluation more often (2 048: +40 %), larger ones leave
+#: the cache (50 000: +10 %; unchunked 1e5 MF 6.2: +40 %). 16 384 also keeps a 1e4 batch in a single call.
 _CHUNK = 16384
 _MIRRORED_INPUTS = ("alpha", "gamma", "phit")
 _MIRRORED_OUTPUTS = ("fy", "mx", "mz", "mzr", "alpha", "gamma", "phit")
@@ -69,7 +73,9 @@ _SIDES = ("left", "right")
 
 
 class MFOutputs:
-    """Every output of one evaluation as named NumPy arrays (see :data:`OUTPUT_UNITS`)."""
+    """Every output of one evaluation as named NumPy arrays (see :data:`OUTPUT_UNITS`). No array shares memory with
+    another or with an input; those of a batch above 16 384 points are rows of one block (keeping one array keeps
+    the block: ``out.fx.copy()`` keeps Fx alone)."""
 
     __slots__ = OUTPUT_NAMES
 
@@ -150,6 +156,13 @@ class MFModel:
         (4.E3-4.E4), the .tir limits and low-speed model, and the form of the turn-slip K_zgamma,r0
         ('published' (4.99) or 'mfeval').
 
+        Slips: alpha is ISO-W's atan(Vsy / |Vx|); kappa is the slip relative to the direction of travel,
+        -Vsx / Vx = (omega Re - vx) / vx with the signed speed, as MFeval: -1 is a locked wheel and > 0 a wheel
+        driven in the direction of travel, also for vx < 0 (rolling backwards), where Fx0 turns round with vx:
+        Fx(-vx, kappa) = -Fx(vx, kappa), so a locked wheel brakes the motion either way (Fx > 0 reversing). The
+        ISO-W slip -Vsx / |Vx| is sign(vx) kappa; a wheel model converts it with :func:`mftyre.transient.mf_slip`
+        (both FMUs do). The omega estimated is (1 + kappa) vx / Re.
+
         ``limits=True`` (default) saturates kappa, alpha, gamma, p and Fz to the .tir ranges (KPUMIN/KPUMAX,
         ALPMIN/ALPMAX, CAMMIN/CAMMAX, PRESMIN/PRESMAX, FZMAX; FZMIN is no bound of the input, it raises the load
         in the aligning torque and the MF 6.1 deflection only, without a warning, see :mod:`mftyre.inputs`) and
@@ -164,15 +177,13 @@ class MFModel:
         inputs = dict(fz=fz, kappa=kappa, alpha=alpha, gamma=gamma, phit=phit,
                       vx=prm.LONGVL if vx is None else vx, p=prm.INFLPRES if p is None else p,
                       omega=0.0 if omega is None else omega)
-        arrays = _as_float_arrays(inputs)
+        arrays = _as_float_arrays(inputs, copy=False)
         self._check_pressure(arrays["p"])
         if limits:
             ranges = self._input_ranges
             counts = {name: saturate(arrays[name], ranges[name])[1] for name in ranges}
             warn_outside(counts, arrays["fz"].size, ranges)
-        out = self._evaluate_arrays(arrays, omega is not None, modes)
-        _check_finite_outputs(out, arrays)
-        return MFOutputs(**out)
+        return MFOutputs(**self._evaluate_arrays(arrays, omega is not None, modes, check_finite=True))
 
     def input_range(self, name: str) -> tuple[float, float]:
         """(lo, hi) that ``limits=True`` saturates input ``name`` to (:mod:`mftyre.inputs`), in the mounted side's
@@ -187,37 +198,67 @@ class MFModel:
         """The values of input ``name`` that ``limits=True`` evaluates (saturated to :meth:`input_range`)."""
         return saturate(values, self.input_range(name))[0]
 
-    def _evaluate_arrays(self, arrays: dict, omega_given, modes: Modes) -> dict:
-        """Evaluate broadcast float arrays (no validation). ``omega_given``: bool or boolean array."""
+    def _evaluate_arrays(self, arrays: dict, omega_given, modes: Modes, check_finite: bool = False) -> dict:
+        """Evaluate float arrays of one shape (no validation of the inputs; broadcast views are fine, they are only
+        read). ``omega_given``: bool or boolean array. ``check_finite``: raise where the outputs are not finite
+        (see :func:`_check_finite_outputs`).
+
+        Batches larger than :data:`_CHUNK` points are evaluated chunk by chunk (the equations make hundreds of
+        temporary arrays; a chunk's stay small and in the cache) into one block holding every output: one
+        allocation per call (29 separate output arrays of a 1e5 batch cost ~110 ns/point in page faults), checked
+        for non-finite values chunk by chunk while still in the cache."""
         shape = arrays["fz"].shape
-        flat = {k: (-v if self.mirrored and k in _MIRRORED_INPUTS else v).ravel() for k, v in arrays.items()}
+        flat = {k: v.reshape(-1) for k, v in arrays.items()}
         if not isinstance(omega_given, bool):
-            omega_given = np.ravel(omega_given)
+            omega_given = np.broadcast_to(omega_given, shape).reshape(-1)
         n = flat["fz"].size
         if n == 1:  # one point: NumPy scalars (operations on them cost a fraction of those on arrays)
             given = omega_given if isinstance(omega_given, bool) else omega_given[0]
+            point = [-flat[k][0] if self._mirrored_input(k) else flat[k][0] for k in _INPUT_ORDER]
             with np.errstate(all="ignore"):
-                values = steady_state(self._plain, *(flat[k][0] for k in _INPUT_ORDER), given, modes, NUMPY)
+                values = steady_state(self._plain, *point, given, modes, NUMPY)
             out = {k: np.array(v, dtype=float).reshape(1) for k, v in values.items()}
+            self._mirror_outputs(out, slice(None))
         elif n <= _CHUNK:  # one chunk: the results are the outputs (no copy)
+            chunk = self._chunk_inputs(flat, slice(None))
             with np.errstate(all="ignore"):
-                values = steady_state(self._plain, *(flat[k] for k in _INPUT_ORDER), omega_given, modes, NUMPY)
-            out = _own_arrays(values, n, list(flat.values()))
+                values = steady_state(self._plain, *chunk, omega_given, modes, NUMPY)
+            out = _own_arrays(values, n, chunk)
+            self._mirror_outputs(out, slice(None))
         else:
-            out = {k: np.empty(n) for k in OUTPUT_NAMES}
-            # large batches in chunks: the temporaries of one chunk stay in the CPU cache
-            for start in range(0, n, _CHUNK):
-                part = slice(start, min(start + _CHUNK, n))
+            block = np.empty((len(OUTPUT_NAMES), n))
+            out = dict(zip(OUTPUT_NAMES, block))  # rows of one block: no output overlaps another
+            finite = True
+            chunks = -(-n // _CHUNK)
+            size = -(-n // chunks)  # chunks of equal size (none much smaller than the others)
+            for start in range(0, n, size):
+                part = slice(start, min(start + size, n))
                 given = omega_given if isinstance(omega_given, bool) else omega_given[part]
                 with np.errstate(all="ignore"):
-                    values = steady_state(self._plain, *(flat[k][part] for k in _INPUT_ORDER), given, modes,
-                                          NUMPY)
+                    values = steady_state(self._plain, *self._chunk_inputs(flat, part), given, modes, NUMPY)
                 for k, v in values.items():
                     out[k][part] = v
+                self._mirror_outputs(out, part)
+                finite = finite and bool(np.isfinite(block[:, part]).all())
+            check_finite = check_finite and not finite
         out = {k: v.reshape(shape) for k, v in out.items()}
-        if self.mirrored:
-            out = {k: (-v if k in _MIRRORED_OUTPUTS else v) for k, v in out.items()}
+        if check_finite:
+            _check_finite_outputs(out, arrays)
         return out
+
+    def _mirrored_input(self, name: str) -> bool:
+        return self.mirrored and name in _MIRRORED_INPUTS
+
+    def _chunk_inputs(self, flat: dict, part: slice) -> list:
+        """The inputs of the points ``part`` in equation order, contiguous, on the measured side's axes."""
+        return [-flat[k][part] if self._mirrored_input(k) else np.ascontiguousarray(flat[k][part])
+                for k in _INPUT_ORDER]
+
+    def _mirror_outputs(self, out: dict, part: slice) -> None:
+        """Lateral outputs of the points ``part`` to the mounted side's axes, in place (arrays owned by ``out``)."""
+        if self.mirrored:
+            for k in _MIRRORED_OUTPUTS:
+                np.negative(out[k][part], out=out[k][part])
 
     # ------------------------------------------------------------------------------------------ casadi
     def casadi_function(self, inputs=("fz", "kappa", "alpha", "gamma", "phit", "vx", "p"), outputs=OUTPUT_NAMES,
@@ -363,12 +404,14 @@ class _SymbolicParameters:
 
 
 def _own_arrays(values: dict, n: int, inputs: list) -> dict:
-    """The outputs as arrays of n elements that share memory with no input and no other output."""
-    out, seen = {}, set()
+    """The outputs as arrays of n elements that share memory with no input and no other output: an array the
+    equations made (it owns its memory) is kept, anything else (an input passed through, a view, a scalar) copied."""
+    out, seen = {}, set(map(id, inputs))
     for k, v in values.items():
-        if not isinstance(v, np.ndarray) or v.shape != (n,) or id(v) in seen \
-                or any(np.may_share_memory(v, x) for x in inputs):
-            v = np.array(np.broadcast_to(v, (n,)), dtype=float)
+        if (type(v) is not np.ndarray or v.shape != (n,) or v.dtype != np.float64 or v.base is not None
+                or id(v) in seen):
+            v, value = np.empty(n), v
+            v[...] = value
         seen.add(id(v))
         out[k] = v
     return out
@@ -385,14 +428,16 @@ def _check_finite_outputs(out: dict, arrays: dict) -> None:
     for k in bad:
         mask |= ~np.isfinite(out[k])
     i = np.unravel_index(np.argmax(mask), mask.shape) if mask.ndim else ()
+    index = "" if not i else f" {int(i[0])}" if len(i) == 1 else f" {tuple(int(j) for j in i)}"
     at = ", ".join(f"{k}={np.broadcast_to(v, mask.shape)[i]:.6g}" for k, v in arrays.items())
     raise ModelInputError(f"the equations give non-finite {', '.join(bad)} at {int(mask.sum())} of {mask.size} "
-                          f"point(s), first at {at}: the .tir parameters have no finite solution there "
+                          f"point(s), first at point{index}: {at}: the .tir parameters have no finite solution there "
                           "(check the speed terms Q_V1, Q_V2 and the vertical parameters)")
 
 
-def _as_float_arrays(inputs: dict) -> dict:
-    """Broadcast the inputs to one shape as float arrays; NaN, +-inf or non-numeric -> ModelInputError."""
+def _as_float_arrays(inputs: dict, copy: bool = True) -> dict:
+    """Broadcast the inputs to one shape as float arrays (writable copies, or with ``copy=False`` read-only
+    broadcast views); NaN, +-inf or non-numeric -> ModelInputError."""
     arrays = {}
     for name, value in inputs.items():
         try:
@@ -406,4 +451,4 @@ def _as_float_arrays(inputs: dict) -> dict:
     except ValueError as exc:
         shapes = {k: v.shape for k, v in arrays.items()}
         raise ModelInputError(f"inputs cannot be broadcast to one shape: {shapes}") from exc
-    return {k: np.array(v) for k, v in zip(arrays, broadcast)}
+    return {k: np.array(v) if copy else v for k, v in zip(arrays, broadcast)}

@@ -18,10 +18,16 @@ Kinematics (both models)
   Re = the MF effective rolling radius at kappa = alpha = 0; slip speeds of the contact point
   Vsx = vx - omega Re, Vsy = vy.
 Steady
-  kappa = -Vsx / max(|vx|, VX_MIN), alpha = atan2(Vsy, |vx|) and the MF with its own low-speed fade-out below
-  VXLOW (no force at standstill). The MF's slip is signed with the travel direction (kappa_MF = -Vsx / Vx:
-  Fx(-Vx, -kappa) = Fx(Vx, kappa)), so reversing the MF gets -kappa (both models; output ``kappa`` as given to
-  the MF).
+  kappa = -Vsx / max(|vx|, VX_MIN) (ISO-W), alpha = atan2(Vsy, |vx|) and the MF with its own low-speed fade-out
+  below VXLOW (no force at standstill).
+Reversing (both models, and every importer of this tyre: :func:`mf_slip` is the one rule)
+  The ISO-W slip -Vsx / |Vx| is > 0 when the contact point slips backwards relative to the road, and the road then
+  pushes the tyre forwards: Fx has the sign of the ISO-W kappa in either direction of travel (a locked wheel,
+  Omega = 0, brakes the motion both ways; a wheel spun forwards while the vehicle reverses pulls forwards). The
+  MF (MFModel.evaluate, as MFeval; shared/reference/mfeval mf61_reverse) takes its slip relative to the direction
+  of travel instead, kappa_MF = -Vsx / Vx with the signed speed (-1 = locked wheel either way), and turns Fx0 round
+  for Vx < 0; so the MF gets kappa_MF = sign(Vx) kappa (ISO-W), which makes Fx(-Vx, -Omega) = -Fx(Vx, Omega).
+  Output ``kappa``: the slip as given to the MF (kappa_MF; transient: of kappa').
 Transient [Pacejka 2012 sec. 7.2 and 8.5 (contact-point deflections u, v with relaxation lengths
 sigma_kappa, sigma_alpha); relaxation lengths the MF's ``sigmax``/``sigmay`` (PTX*, PTY*) at the current load]
   du/dt = -Vsx - |vx| u / sigma_kappa                (7.9 with the contact deflection u)
@@ -60,7 +66,7 @@ from .backend import NUMPY
 from .errors import ModelInputError
 
 __all__ = ["StateFunctions", "WheelFunctions", "wheel_functions", "WheelTyre", "KINDS", "VERTICAL_MODES", "VX_MIN",
-           "input_table", "OUTPUTS", "PARAMETERS", "default_tau_vlow", "kinematic_slips", "slip_speeds",
+           "input_table", "OUTPUTS", "PARAMETERS", "default_tau_vlow", "kinematic_slips", "mf_slip", "slip_speeds",
            "wheel_vertical_force", "contact_load", "vertical_couples_forces", "load_at_radius",
            "wheel_centre_moments"]
 
@@ -137,15 +143,22 @@ def _atan2(be):
 
 
 def kinematic_slips(vx, vy, omega, re, be):
-    """Steady kinematic slips (module notes): kappa = -Vsx / max(|vx|, VX_MIN) with Vsx = vx - omega Re, and
-    alpha = atan2(Vsy, |vx|) with Vsy = vy."""
+    """Steady kinematic slips, ISO-W (module notes): kappa = -Vsx / max(|vx|, VX_MIN) with Vsx = vx - omega Re, and
+    alpha = atan2(Vsy, |vx|) with Vsy = vy. The MF takes ``mf_slip(kappa, vx, be)`` and alpha."""
     vsx, vsy = vx - omega * re, vy
     return -vsx / be.fmax(be.abs(vx), VX_MIN), _atan2(be)(vsy, be.abs(vx))
 
 
+def mf_slip(kappa, vx, be):
+    """The longitudinal slip the MF takes at the speed ``vx`` (module notes, Reversing) from the ISO-W slip
+    ``kappa`` = -Vsx / |vx| (kinematic or transient): kappa_MF = -Vsx / Vx = sign(vx) kappa (+ at vx = 0)."""
+    return be.where(vx < 0, -kappa, kappa)
+
+
 def slip_speeds(kappa, alpha, vx, be):
-    """The contact point's slip speeds (Vsx, Vsy) = (-kappa |vx|, tan(alpha) |vx|) of the slips given to the MF."""
-    return -kappa * be.abs(vx), be.tan(alpha) * be.abs(vx)
+    """The contact point's slip speeds (Vsx, Vsy) = (-kappa vx, tan(alpha) |vx|) of the slips given to the MF at
+    the speed ``vx`` (kappa_MF = -Vsx / Vx, :func:`mf_slip`)."""
+    return -kappa * vx, be.tan(alpha) * be.abs(vx)
 
 
 def wheel_vertical_force(model, rl, p, omega, fx, fy, gamma, be):
@@ -302,9 +315,7 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
         ref = be.fmax(speed, prm.VXLOW)
         x0 = ca.vertcat(-vsx * sigx / ref, vsy * sigy / ref)
 
-    # the MF's longitudinal slip is -Vsx / Vx with the signed speed (Fx(-Vx, -kappa) = Fx(Vx, kappa)), the
-    # lateral one uses |Vx|: reversing, kappa changes sign so that a locked wheel still brakes the motion
-    kappa = be.where(vx_mf >= 0, kappa, -kappa)
+    kappa = mf_slip(kappa, vx_mf, be)  # the MF's slip is relative to the direction of travel (module notes)
     # turn slip (4.75): psi_dot = -phit Vc', Vc' = max(Vc, VXLOW); not relaxed in the transient model [chosen]
     phit = -U["yaw_rate"] / be.fmax(be.sqrt(vx**2 + vy**2), prm.VXLOW) if turn_slip else 0.0 * vx
     fx, fy, mx, my, mz, _, rho, rl_mf, a, t, mux, muy = mf(fz, kappa, alpha, gamma, phit, vx_mf, p, omega, lmux,

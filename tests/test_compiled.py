@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import mftyre
-from conftest import PROJECT, TIR_FILES
+from conftest import PROJECT, SHARED, TIR_FILES, require_shared
 from mftyre.compiled import CacheSecurityError, CompiledFunction, compile_external, compile_model
 from mftyre.errors import InputClippedWarning, MFTyreError, ModelInputError
 
@@ -386,17 +386,20 @@ def test_shared_range_check_gives_the_compiled_warning(compiled):
     assert [str(w.message) for w in numpy_warning] == [str(compiled_warning[0].message)]
 
 
-@pytest.mark.parametrize("tag", FILES)
+@pytest.mark.parametrize("tag", [*FILES, "mf62_fy_term"])
 def test_gcc_vectorises_the_kernel_loop(tag, tmp_path):
     """The batch kernel runs SIMD: gcc reports its loop vectorised (with the default flags gcc 12 left the MF 6.2
-    kernel scalar, 3.5x slower: the unrolled loaded-radius solver's masks defeated the vectoriser)."""
+    kernel scalar, 3.5x slower: the unrolled loaded-radius solver's masks defeated the vectoriser). Also on the
+    shared MF 6.2 file whose vertical relation uses the side-force term (x^Q_FCY2 in every solver step)."""
     from mftyre.compiled import _toolchain, generate_c
 
     flags, _, kind = _toolchain()
     version = subprocess.run([os.environ.get("CC", "cc"), "--version"], capture_output=True, text=True).stdout
     if kind != "libmvec" or "Free Software Foundation" not in version:  # gcc
         pytest.skip("checks gcc with libmvec (the vectorised build); this toolchain builds the scalar kernel")
-    model = mftyre.load_tir(TIR_FILES / FILES[tag])
+    path = (require_shared(SHARED / "reference" / "tir" / "TNO_car205_60R15.tir") if tag == "mf62_fy_term"
+            else TIR_FILES / FILES[tag])
+    model = mftyre.load_tir(path)
     source = tmp_path / "kernel.c"
     source.write_text(generate_c(model.casadi_function(INPUTS)))
     lines = source.read_text().split("\n")
@@ -409,3 +412,28 @@ def test_gcc_vectorises_the_kernel_loop(tag, tmp_path):
     vectorised = [int(line.split("kernel.c:")[1].split(":")[0]) for line in run.stderr.splitlines()
                   if "loop vectorized" in line]
     assert any(number in loop for number in vectorised), run.stderr[-2000:]
+
+
+def test_mf62_with_side_force_term_matches_numpy_at_low_loads(tmp_path):
+    """The compiled MF 6.2 loaded-radius solve (fixed Newton steps) on a file whose vertical relation uses the
+    side-force term, at low loads where a cambered tyre's root lies above the free radius and up to twice the
+    nominal load: every output equals NumPy's (adaptive iteration) at the tolerances above."""
+    from mftyre.backend import NUMPY
+    from mftyre.formula import vertical
+
+    model = mftyre.load_tir(require_shared(SHARED / "reference" / "tir" / "TNO_car205_60R15.tir"))
+    prm = model.params
+    rng = np.random.default_rng(21)
+    n = 3000
+    fz = np.r_[np.zeros(100), rng.uniform(0.0, 600.0, n // 2), rng.uniform(600.0, 2.0 * prm.FNOMIN, n // 2 - 100)]
+    kappa, alpha = rng.uniform(-0.2, 0.2, (2, n))
+    gamma = rng.uniform(prm.CAMMIN, prm.CAMMAX, n)
+    vx = rng.uniform(1.0, 50.0, n)
+    p = rng.uniform(prm.PRESMIN, prm.PRESMAX, n)
+    f = compile_model(model, directory=tmp_path)
+    out = f.batch(fz, kappa, alpha, gamma, 0.0, vx, p)
+    ref = model.evaluate(fz, kappa, alpha, gamma, 0.0, vx=vx, p=p)
+    r_omega = vertical.free_radius(prm, ref.omega, NUMPY)
+    assert np.sum(ref.rl > r_omega) > 200  # lifted roots among them
+    for name, value in zip(f.outputs, out):
+        np.testing.assert_allclose(value, ref[name], rtol=1e-10, atol=1e-6, err_msg=name)

@@ -42,6 +42,17 @@ def fmus(tmp_path_factory):
     return paths
 
 
+@pytest.fixture(scope="module")
+def native61(tmp_path_factory):
+    """The native (default backend) steady FMU of the same tyre and vertical input as ``fmus["61"]``."""
+    path = tmp_path_factory.mktemp("native") / "tyre61_native.fmu"
+    parser = argparse.ArgumentParser(prog="mftyre")
+    register(parser.add_subparsers(dest="command"))
+    ns = parser.parse_args(["fmu", "build", str(TIR61), "-o", str(path), "--vertical", "load"])
+    assert ns.func(ns) == 0
+    return path
+
+
 class Slave:
     """An FMU instance driven call by call (fmpy FMU2Slave), with its log messages collected."""
 
@@ -167,8 +178,10 @@ def test_vehicle_load_mode_equals_evaluate(fmus, tmp_path):
         assert out["Fz"] == max(fz, 0.0) == out["Fz_c"]
         assert out["x_road"] == pytest.approx(x_road, rel=1e-12) and out["road_w"] == out["road_slope"] == 0.0
         _compare_with_evaluate(model, out, gamma, vx, p, omega)
-        # the slips, written out: kappa = (omega Re - vx)/|vx|, tan(alpha) = vy/|vx|
-        assert out["kappa"] == pytest.approx((omega * out["Re"] - vx) / max(abs(vx), 1e-3), rel=1e-12, abs=1e-12)
+        # the slips, written out: kappa given to the MF = (omega Re - vx)/vx (relative to the travel direction;
+        # ISO-W's (omega Re - vx)/|vx| times sign(vx)), tan(alpha) = vy/|vx|
+        assert out["kappa"] == pytest.approx((omega * out["Re"] - vx) / math.copysign(max(abs(vx), 1e-3), vx),
+                                             rel=1e-12, abs=1e-12)
         assert math.tan(out["alpha"]) == pytest.approx(vy / abs(vx), rel=1e-12)
     assert fmu.status() == 0
     fmu.close()
@@ -193,6 +206,48 @@ def test_slip_signs_and_wheel_centre_moment(fmus, tmp_path):
         re = side["Re"]
     assert abs(side["kappa"]) < 1e-9 and side["alpha"] > 0 and side["Fy"] < 0
     fmu.close()
+
+
+#: Reversing at 10 m/s, 4 kN: the wheel's spin as omega Re / vx (0 locked, 1 free rolling, 0.9 spinning backwards
+#: slower than it rolls: ISO-W kappa = +0.1, -0.5 spun forwards, 1.1 spinning backwards faster: kappa = -0.1).
+REVERSING = {"locked": 0.0, "free": 1.0, "spin excess": 0.9, "driven forwards": -0.5, "spun backwards": 1.1}
+
+
+def _reversing(path, tmp_path, spin, vy=0.0, vx=-10.0):
+    """The FMU's outputs at vx with omega = spin vx / Re (Re from the FMU at that point, a few passes)."""
+    fmu = Slave(path, tmp_path)
+    re, t = 0.3, 0.0
+    for _ in range(4):
+        fmu.set(vx=vx, vy=vy, omega=spin * vx / re, gamma=0.0, Fz_in=4000.0)
+        fmu.fmu.doStep(t, 1e-3)
+        t += 1e-3
+        out = fmu.get("Fx", "Fy", "Fz", "Mx", "My", "Mz", "kappa", "Re")
+        re = out["Re"]
+    fmu.close()
+    return out
+
+
+def test_reversing_forces_oppose_the_slip_and_equal_the_native_fmu(fmus, native61, tmp_path):
+    """vx < 0: Fx has the sign of the ISO-W slip (omega Re - vx)/|vx| (a locked wheel brakes the backwards motion,
+    Fx > 0; a wheel spun forwards pulls forwards), free rolling gives only the rolling-resistance shift, the
+    forces are those forwards with everything mirrored (Fx(-vx, -omega) = -Fx(vx, omega)), and the pythonfmu and
+    native FMUs of the same tyre give the same Fx, Fy, Fz, Mx, My, Mz (they disagreed in sign before)."""
+    for name, spin in REVERSING.items():
+        py = _reversing(fmus["61"], tmp_path, spin)
+        iso_kappa = (spin * -10.0 - -10.0) / 10.0  # (omega Re - vx) / |vx|
+        assert py["kappa"] == pytest.approx(-iso_kappa, abs=1e-9), name  # relative to the travel direction
+        if name == "free":
+            assert abs(py["Fx"]) < 0.01 * py["Fz"], name
+        else:
+            assert math.copysign(1.0, py["Fx"]) == math.copysign(1.0, iso_kappa), name
+            assert abs(py["Fx"]) > 0.5 * py["Fz"], name
+        forwards = _reversing(fmus["61"], tmp_path, spin, vx=10.0)  # the same wheel, mirrored fore and aft
+        assert py["Fx"] == pytest.approx(-forwards["Fx"], rel=1e-9, abs=1e-6), name
+        for vy in (0.0, 0.5):
+            py = _reversing(fmus["61"], tmp_path, spin, vy)
+            nat = _reversing(native61, tmp_path, spin, vy)
+            for k in ("Fx", "Fy", "Fz", "Mx", "My", "Mz", "kappa"):
+                assert py[k] == pytest.approx(nat[k], rel=1e-9, abs=1e-6), (name, vy, k)
 
 
 def test_position_mode_right_side_mf62(fmus, tmp_path):

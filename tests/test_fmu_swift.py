@@ -65,9 +65,11 @@ def _assert_close(model, fmu_out, ref_out, names, rel=1e-9, where="", same=False
 
 
 def _check_mf_extras(model, out, ref_out, ref_state, gamma, p):
-    """Mx_c, My_c, contact width, trail, mu: the MF at the contact-patch state of the reference."""
-    mf = model.evaluate(max(float(ref_out["fz_c"]), 1e-3), float(ref_out["kappa"]), float(ref_out["alpha"]), gamma,
-                        0.0, float(ref_out["vcx"]), p, float(ref_state[S["omb"]]))
+    """Mx_c, My_c, contact width, trail, mu: the MF at the contact-patch state of the reference (its slip
+    -Vsx/|Vcx| given to the MF relative to the direction of travel, (omega Re - Vcx)/Vcx: sign(Vcx) kappa)."""
+    vcx = float(ref_out["vcx"])
+    mf = model.evaluate(max(float(ref_out["fz_c"]), 1e-3), math.copysign(1.0, vcx) * float(ref_out["kappa"]),
+                        float(ref_out["alpha"]), gamma, 0.0, vcx, p, float(ref_state[S["omb"]]))
     for name, key, factor in (("Mx_c", "mx", 1), ("My_c", "my", 1), ("Mz_c", "mz", 1), ("contact_width", "b", 2),
                               ("trail", "t", 1), ("mux", "mux", 1), ("muy", "muy", 1)):
         assert out[name] == pytest.approx(factor * float(mf[key]), rel=1e-8, abs=1e-9 * _scale(model, name)), name
@@ -155,6 +157,32 @@ def test_load_mode_torque_and_road_height_equal_swift_step(model, swift_fmu, tmp
         assert out["Rl"] == pytest.approx((state[S["za"]] - r["w"]) * math.cos(r["beta"]), abs=1e-9)
     assert out["Fx"] > 0 and out["omega_used"] > vx / 0.305  # driven: spins up, pushes forwards
     fmu.close()
+
+
+def test_reversing_mf_extras_follow_the_wheel_rule(swift_fmu, tmp_path):
+    """Reversing at 10 m/s (load mode, spin imposed): a locked wheel brakes the motion (Fx > 0) and, as forwards,
+    has no rolling-resistance moment (My_c = 0: the MF's extras get the slip relative to the direction of travel,
+    -1 = locked, as the steady FMUs; it was 10 N m with the ring's -Vsx/|Vcx| = +1 given at the signed speed); a
+    free-rolling wheel's My_c opposes the motion (minus the forward one), Mx_c as forwards."""
+    out = {}
+    for vx in (10.0, -10.0):
+        for spin in (0.0, 1.0):
+            start = {"vertical_input": "load", "rim": "speed", "axle_mass": 25.0, "vx": vx, "Fz_in": 4000.0,
+                     "omega": spin * vx / 0.305}
+            fmu = Slave(swift_fmu, tmp_path, start=start)
+            for k in range(200):
+                fmu.fmu.doStep(k * 1e-3, 1e-3)
+            out[vx, spin] = fmu.get(*OUT)
+            assert fmu.status() == 0, fmu.messages
+            fmu.close()
+    back, fwd = out[-10.0, 0.0], out[10.0, 0.0]
+    assert back["Fx"] > 0.5 * back["Fz"] and back["Fx"] == pytest.approx(-fwd["Fx"], rel=1e-3)
+    assert back["Vsx"] == pytest.approx(-10.0, rel=1e-6) and fwd["Vsx"] == pytest.approx(10.0, rel=1e-6)
+    for spin in (0.0, 1.0):
+        back, fwd = out[-10.0, spin], out[10.0, spin]
+        assert abs(back["My_c"] + fwd["My_c"]) < 1e-3 * max(abs(fwd["My_c"]), 1.0), spin
+        assert back["Mx_c"] == pytest.approx(fwd["Mx_c"], rel=1e-3), spin
+    assert out[10.0, 1.0]["My_c"] < -1.0 < 1.0 < out[-10.0, 1.0]["My_c"]
 
 
 def _run(fmu, steps, inputs=lambda t: {}):

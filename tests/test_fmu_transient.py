@@ -30,6 +30,36 @@ def test_steady_state_equals_steady_model(model):
         assert b[k] == pytest.approx(a[k], rel=1e-9, abs=1e-6), k
 
 
+@pytest.mark.parametrize("spin", [0.0, 1.0, 0.9, -0.5, 1.1])  # omega Re / vx: locked, free, +-0.1 slip, spun fwd
+def test_reversing_wheel_brakes_the_motion_and_mirrors_forwards(model, spin):
+    """vx = -10 m/s: the steady and the transient wheel (in its steady state) give Fx with the sign of the ISO-W
+    slip (omega Re - vx)/|vx| (locked: Fx > 0, against the motion), and exactly minus the force of the same wheel
+    driven forwards with vx and omega mirrored: fore and aft mirrored, the same vy gives the same Fy, and the
+    aligning moment turns round with the trail (Mz -> -Mz)."""
+    out = {}
+    for kind in ("steady", "transient"):
+        for vx in (-10.0, 10.0):
+            tyre = WheelTyre(model, kind, vertical="load")
+            re = 0.3
+            for _ in range(3):
+                tyre.set_inputs(vx=vx, vy=0.4, omega=spin * vx / re, Fz_in=4000.0)
+                tyre.initialise()
+                re = tyre.outputs()["Re"]
+            for _ in range(200 if kind == "transient" else 1):
+                tyre.step(1e-2)
+            out[kind, vx] = tyre.outputs()
+    iso_kappa = 1.0 - spin
+    for kind in ("steady", "transient"):
+        back, fwd = out[kind, -10.0], out[kind, 10.0]
+        assert back["Fx"] == pytest.approx(-fwd["Fx"], rel=1e-9, abs=1e-6), kind
+        assert (back["Fy"], back["Mz_c"]) == pytest.approx((fwd["Fy"], -fwd["Mz_c"]), rel=1e-9, abs=1e-6), kind
+        if spin == 1.0:
+            assert abs(back["Fx"]) < 0.01 * 4000.0
+        else:
+            assert np.sign(back["Fx"]) == np.sign(iso_kappa) and abs(back["Fx"]) > 1000.0, kind
+        assert back["Fx"] == pytest.approx(out["steady", -10.0]["Fx"], rel=1e-6, abs=1e-3), kind
+
+
 def test_lateral_force_lags_by_the_relaxation_length(model):
     """A small step in vy at 20 m/s: the slip angle builds up as 1 - exp(-s / sigma_alpha) over the distance s
     travelled (Pacejka (7.12)), sigma_alpha the evaluator's sigmay at this load."""

@@ -514,6 +514,29 @@ def test_alpha_star_reverse_running(name):
     assert np.all(np.sign(back.fy[nz]) == -np.sign(np.broadcast_to(alpha, back.fy.shape)[nz]))
 
 
+@pytest.mark.parametrize("name", SAMPLE_FILES)
+def test_longitudinal_slip_is_relative_to_the_direction_of_travel(name):
+    """evaluate's kappa is -Vsx / Vx with the signed speed (as MFeval, whose mf61_reverse table the reference
+    tests hold): the spin it estimates is omega = (1 + kappa) Vx / Re (kappa = -1: omega = 0, locked, also
+    reversing), and Fx0 turns round with Vx, so running backwards is the fore-aft reflection
+    Fx(-Vx, kappa) = -Fx(Vx, kappa): a locked wheel brakes the motion in both directions (Fx > 0 for Vx < 0),
+    a wheel driven in the direction of travel (kappa > 0) pulls backwards. A wheel model gives it the ISO-W slip
+    -Vsx / |Vx| times sign(Vx) (mftyre.transient.mf_slip)."""
+    model = _sample(name)
+    kappa = np.array([-1.0, -0.3, -0.05, 0.0, 0.05, 0.3, 1.0])
+    for limits in (True, False):
+        back = model.evaluate(4000.0, kappa, 0.0, vx=-12.0, limits=limits)
+        fwd = model.evaluate(4000.0, kappa, 0.0, vx=12.0, limits=limits)
+        np.testing.assert_allclose(back.fx, -fwd.fx, rtol=1e-12, atol=1e-9)
+        np.testing.assert_allclose((back.omega * back.re + 12.0) / -12.0, kappa, atol=1e-6)
+        assert back.omega[0] == pytest.approx(0.0, abs=1e-6) and back.fx[0] > 0.5 * 4000.0
+        assert np.all(np.sign(back.fx[[0, 1, 2, 4, 5, 6]]) == -np.sign(kappa[[0, 1, 2, 4, 5, 6]]))
+        # the spin given: the locked wheel, and a wheel spinning forwards while the car reverses (ISO-W slip > 1)
+        given = model.evaluate(4000.0, (np.array([0.0, 5.0]) * back.re[3] + 12.0) / -12.0, 0.0, vx=-12.0,
+                               omega=np.array([0.0, 5.0]), limits=limits)
+        assert np.all(given.fx > 0.5 * 4000.0)
+
+
 # ------------------------------------------------------------------------------------- broadcasting
 @pytest.mark.parametrize("name", SAMPLE_FILES)
 def test_broadcasting_matches_scalar_evaluation(name):

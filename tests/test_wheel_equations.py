@@ -12,7 +12,7 @@ import mftyre
 from conftest import TIR_FILES
 from mftyre.backend import NUMPY, casadi_backend
 from mftyre.formula.vertical import free_radius
-from mftyre.transient import (VX_MIN, contact_load, kinematic_slips, slip_speeds, wheel_centre_moments,
+from mftyre.transient import (VX_MIN, contact_load, kinematic_slips, mf_slip, slip_speeds, wheel_centre_moments,
                               wheel_vertical_force)
 
 
@@ -44,7 +44,8 @@ def test_contact_load_lifts_off_above_the_free_radius():
 
 def test_kinematic_slips_and_slip_speeds():
     """kappa = (omega Re - vx) / |vx| (> 0 driving), alpha = atan2(vy, |vx|) (> 0 sliding left), finite at
-    standstill; the slip speeds given back are Vsx = vx - omega Re, Vsy = vy (|vx| >= VX_MIN)."""
+    standstill; the MF gets (omega Re - vx) / vx; the slip speeds given back from the MF's slips are
+    Vsx = vx - omega Re, Vsy = vy (|vx| >= VX_MIN)."""
     re = 0.3
     kappa, alpha = kinematic_slips(20.0, 1.0, 22.0 / re, re, NUMPY)
     assert kappa == pytest.approx(0.1, rel=1e-14) and alpha == pytest.approx(math.atan(1.0 / 20.0), rel=1e-15)
@@ -53,7 +54,9 @@ def test_kinematic_slips_and_slip_speeds():
     kappa, alpha = kinematic_slips(0.0, 0.0, 1.0, re, NUMPY)
     assert kappa == pytest.approx(re / VX_MIN) and alpha == 0.0
     vx, vy, omega = np.array([15.0, -7.0, 0.2]), np.array([0.5, -0.3, 0.0]), np.array([48.0, -25.0, 0.1])
-    vsx, vsy = slip_speeds(*kinematic_slips(vx, vy, omega, re, NUMPY), vx, NUMPY)
+    kappa, alpha = kinematic_slips(vx, vy, omega, re, NUMPY)
+    np.testing.assert_allclose(mf_slip(kappa, vx, NUMPY), (omega * re - vx) / vx, rtol=1e-13)
+    vsx, vsy = slip_speeds(mf_slip(kappa, vx, NUMPY), alpha, vx, NUMPY)
     np.testing.assert_allclose(vsx, vx - omega * re, rtol=1e-13)
     np.testing.assert_allclose(vsy, vy, rtol=1e-13)
 

@@ -29,8 +29,11 @@ the FMU's modes onto them:
   Fz to Fx/Fy (Q_FCX, Q_FCY != 0) the load is solved by fixed-point iteration (mftyre.transient.load_at_radius).
 * rig mode: the MF at the given slips and load (spin estimated from kappa and vx).
 * The MF is evaluated with the given spin (no re-estimation), the .tir limits and its low-speed model (below
-  VXLOW the slips are faded out: the steady model has no standstill force; use SWIFT for that). Unlike the
-  native FMU's wheel, the slip is not re-signed when rolling backwards (kept as it was).
+  VXLOW the slips are faded out: the steady model has no standstill force; use SWIFT for that).
+* Reversing (vx < 0): the MF gets the native wheel's slip, kappa_MF = -Vsx / Vx (mftyre.transient.mf_slip and its
+  module notes), so a locked wheel brakes the motion in both directions and both FMUs give the same forces; the
+  output ``kappa`` is that slip. In rig mode ``kappa`` is taken as kappa_MF (-1 = locked either way, as
+  MFModel.evaluate and MFeval).
 """
 from __future__ import annotations
 
@@ -54,9 +57,11 @@ OUTPUTS = {
     "Mx_c": ("N.m", "overturning moment at the contact point (MF output)"),
     "My_c": ("N.m", "rolling-resistance moment at the contact point (MF output)"),
     "Mz_c": ("N.m", "self-aligning moment at the contact point (MF output)"),
-    "kappa": ("1", "longitudinal slip given to the MF (kinematic, or the rig input)"),
+    "kappa": ("1", "longitudinal slip given to the MF, -Vsx / Vx (kinematic or the rig input: relative to the "
+                   "direction of travel, -1 = locked wheel; swift: the transient slip -Vsx / |Vcx|, its MF runs at "
+                   "|Vcx|)"),
     "alpha": ("rad", "slip angle given to the MF (kinematic, or the rig input)"),
-    "Vsx": ("m/s", "longitudinal slip speed of the contact point, -kappa |vx|"),
+    "Vsx": ("m/s", "longitudinal slip speed of the contact point, -kappa vx (swift: -kappa |Vcx|)"),
     "Vsy": ("m/s", "lateral slip speed of the contact point, tan(alpha) |vx|"),
     "omega_used": ("rad/s", "spin speed used (the input; in rig mode estimated from kappa and vx)"),
     "rho": ("m", "vertical tyre deflection"),
@@ -254,19 +259,19 @@ class SteadyTyre:
     def step_vehicle(self, vx, vy, omega, gamma, p, fz=None, height=None):
         """Vehicle mode: wheel-centre velocity, spin, inclination, pressure, and either the load ``fz`` or the
         wheel-centre ``height`` above the road. Returns a dict of :data:`OUTPUTS`."""
-        fn, wheel, be = self.fn, self.wheel, self.be
-        if height is None:
-            load = max(fz, 0.0)
-            kappa, alpha = _floats(wheel.kinematic_slips(vx, vy, omega, fn.re(load, gamma, vx, p, omega)[0], be))
-            mf = fn.mf(load, kappa, alpha, gamma, vx, p, omega)
-            return self._outputs(mf, kappa, alpha, gamma, vx, rl_lever=None, rho=None)
-        rl = height / math.cos(gamma)
+        fn, wheel = self.fn, self.wheel
 
         def rolling(load):
-            kappa, alpha = _floats(wheel.kinematic_slips(vx, vy, omega, fn.re(load, gamma, vx, p, omega)[0], be))
+            re = fn.re(load, gamma, vx, p, omega)[0]
+            kappa, alpha = wheel.kinematic_slips(vx, vy, omega, re, self.be)
+            kappa, alpha = _floats((wheel.mf_slip(kappa, vx, self.be), alpha))  # the native wheel's slips
             mf = fn.mf(load, kappa, alpha, gamma, vx, p, omega)
             return mf[0], mf[1], (mf, kappa, alpha)
 
+        if height is None:
+            _, _, (mf, kappa, alpha) = rolling(max(fz, 0.0))
+            return self._outputs(mf, kappa, alpha, gamma, vx, rl_lever=None, rho=None)
+        rl = height / math.cos(gamma)
         _, r_omega, (mf, kappa, alpha) = wheel.load_at_radius(lambda fx, fy: fn.vertical(rl, p, omega, fx, fy, gamma),
                                                               rolling, rl, self.fcoupled, 1e-11 * self.fnomin)
         return self._outputs(mf, kappa, alpha, gamma, vx, rl_lever=rl, rho=max(r_omega - rl, 0.0))
@@ -528,10 +533,12 @@ class SwiftCore:
         S = self.S
         fzc = float(o["fz_c"])
         kappa, alpha, vcx = float(o["kappa"]), float(o["alpha"]), float(o["vcx"])
-        mf = self.fn.mf(max(fzc, 1e-3), kappa, alpha, u["gamma"], vcx, u["p"], float(state[S["omb"]]))
+        # the MF's extras at the ring's slip state, its slip -Vsx / |Vcx| given as the wheel's (mf_slip: reversing)
+        kappa_mf = float(self.wheel.mf_slip(kappa, vcx, self.be))
+        mf = self.fn.mf(max(fzc, 1e-3), kappa_mf, alpha, u["gamma"], vcx, u["p"], float(state[S["omb"]]))
         _, _, _, mx_c, my_c, _, _, _, _, _, _, b, t, mux, muy = mf
         beta = float(o["beta"])
-        vsx, vsy = _floats(self.wheel.slip_speeds(kappa, alpha, vcx, self.be))
+        vsx, vsy = _floats(self.wheel.slip_speeds(kappa, alpha, abs(vcx), self.be))  # the ring's MF speed
         return {
             "Fx": float(o["fx"]), "Fy": float(o["fy"]), "Fz": float(o["fz"]),
             "Mx": float(o["mx"]), "My": float(o["my"]), "Mz": float(o["mz"]),

@@ -37,8 +37,10 @@ def overturning_moment(prm, s, fy, be):
     if first_set and second_set:  # draft paper eq. 49
         return (R0 * Fz * prm.LMX * (core - prm.QSX12 * g * be.abs(g))
                 + R0 * fy * prm.LMX * (prm.QSX13 + prm.QSX14 * be.abs(g)))
-    return (R0 * Fz * prm.LMX * core
-            + R0 * prm.LMX * (fy * (prm.QSX13 + prm.QSX14 * be.abs(g)) - Fz * prm.QSX12 * g * be.abs(g)))
+    mx = R0 * Fz * prm.LMX * core
+    if second_set:  # (QSX12-QSX14 are zero in most files: no term)
+        mx = mx + R0 * prm.LMX * (fy * (prm.QSX13 + prm.QSX14 * be.abs(g)) - Fz * prm.QSX12 * g * be.abs(g))
+    return mx
 
 
 def rolling_resistance_moment(prm, s, fx, be):

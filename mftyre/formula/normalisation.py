@@ -31,7 +31,8 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
     if modes.limits:
         VXLOW = prm.VXLOW
         s.low_speed = be.abs(vx) <= VXLOW
-        phit = phit * be.cos(alpha)
+        if be.any(phit != 0):  # (NumPy skips this without turn slip)
+            phit = phit * be.cos(alpha)
         if be.any(s.low_speed):  # (NumPy skips this when no point is that slow; the factors would all be 1)
             reduction_linear = be.where(s.low_speed, be.abs(vx / VXLOW), 1.0)
             s.reduction_smooth = be.where(s.low_speed, 1.0 - 0.5 * (1.0 + be.cos(be.pi * vx / VXLOW)), 1.0)
@@ -77,8 +78,9 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
         s.alpha_star, s.gamma_star = alpha, gamma
 
     # slip and contact-centre velocities, ISO-W signs: Vsy = tan(alpha) |Vx| (2.12, 4.E5)
-    vsx = -kappa * be.abs(vx)
-    vsy = s.tan_alpha * be.abs(vx)
+    speed = be.abs(vx)
+    vsx = -kappa * speed
+    vsy = s.tan_alpha * speed
     vs = be.sqrt(vsx**2 + vsy**2)
     vc = be.sqrt(vx**2 + vsy**2)
     vc_prime = vc + 1e-6  # (4.E6a), Vc >= 0 so sign(Vc) = +1
@@ -86,8 +88,9 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
 
     # friction decaying with slip speed (4.E7) and the digressive factor (4.E8) with A_mu = 1: the
     # reference evaluator found A_mu = 1 matches MF-Tyre; lambda'_mu = lambda*_mu then.
-    s.LMUX_star = prm.LMUX / (1.0 + prm.LMUV * vs / prm.LONGVL)
-    s.LMUY_star = prm.LMUY / (1.0 + prm.LMUV * vs / prm.LONGVL)
+    friction_decay = 1.0 + prm.LMUV * vs / prm.LONGVL
+    s.LMUX_star = prm.LMUX / friction_decay
+    s.LMUY_star = prm.LMUY / friction_decay
     s.LMUX_prime, s.LMUY_prime = s.LMUX_star, s.LMUY_star
     return s
 

@@ -19,16 +19,25 @@ Equations: Besselink, Schmeitz & Pacejka (2010), paper (1)-(10); Pacejka (2012) 
 Loaded radius from the load. MF 6.1: the quadratic in rho/R0 is solved in the cancellation-free form
 x = 2c / (B + sqrt(B^2 + 4 A c)), finite also for Q_FZ2 = 0 (linear tyre) where the textbook root formula
 divides by zero. MF 6.2: the relation is not monotone near zero deflection (Q_FCY2 < 0 makes the side-force
-term grow without bound as rho -> 0), so a secant started near R0 can diverge. mftyre brackets the root
-between the free radius and a deflection where the load is exceeded, then refines with Dekker's method (secant with
-bisection safeguard) to 1e-15 m; whenever a root with Rl <= R_omega exists it is found. When even zero free
-deflection already gives more than the requested load (a cambered tyre at almost no load: the camber deflection
-rho_zgamma alone carries more), the relation's root lies above R_omega, where the camber asymmetry S_Fygamma,
-growing with Rl/R_omega, brings the load down: a grid scan above R_omega (nine points, 0.01 R0 to R0 above it)
-brackets the root nearest to the free radius, refined as above (this is the root the reference evaluator reports, e.g. Rl = 0.4737 m
-for Fz = 0 at 31 m/s on its MF 6.2 sample file). Where the relation has no root there (no camber, no S_Fygamma,
-or a camber so small that the root lies more than R0 above the free radius: a wheel lifted by more than its own
-radius is not in contact) the loaded radius is R_omega, where the camber deflection carries a small load.
+term grow without bound as rho -> 0), so an unguarded iteration started near R0 can diverge. mftyre solves it by
+Newton's method with the relation's analytic slope, kept inside a bracket (bisection where a step would leave it),
+to 1e-15 m or 1e-12 relative in the load. In contact (the free tyre carries less than the load) it starts from
+the MF 6.1 deflection without the side-force term, corrected for the camber deflection, inside [0, R_omega].
+When even zero free deflection already gives more than the requested load (a cambered tyre at almost no load: the
+camber deflection rho_zgamma alone carries more), the relation's root lies above R_omega, where the camber
+asymmetry S_Fygamma, growing with Rl/R_omega, brings the load down. There the side-force term takes what the load
+leaves, |Fy - S_Fygamma| = sqrt(correction - Fz/load) Fz0 / (|Q_FCY| x^Q_FCY2), which grows with Rl; taken at
+R_omega + R0 it turns the quadratic S_Fygamma(Rl/R_omega) into an upper bound of every root (where Q_FCY2 <= 0,
+Q_CAM1, Q_CAM2, Q_FZ2 >= 0 and S_Fygamma is monotone, as in the files at hand; else the bound is R_omega + R0). If
+the load is gone at the bound, Newton from there inside [R_omega, bound] finds the root (the one the reference
+evaluator reports, e.g. Rl = 0.4737 m for Fz = 0 at 31 m/s on its MF 6.2 sample file); its steps are those of
+Newton on A - B, the side-force term A = |x^Q_FCY2 Q_FCY (Fy - S_Fygamma)/Fz0| against B = sqrt(correction -
+Fz/load), nearly quadratic in Rl where Fz itself falls like a quartic. Where the relation has no root there (no
+camber, no S_Fygamma, or a camber so small that the root lies more than R0 above the free radius: a wheel lifted by
+more than its own radius is not in contact) the loaded radius is R_omega, where the camber deflection carries a
+small load. CasADi (and so the compiled C) unrolls 7 steps, 9 relation evaluations in all: 6 carry the load to
+1e-9 at all 180,000 extreme points per file tried (of the kind in tests/test_vertical_relation, three MF 6.2 files),
+5 miss one in 60,000; without the bound 8 steps (7 miss some).
 """
 from __future__ import annotations
 
@@ -96,6 +105,13 @@ def _q_fz1(prm, be):
     return be.sqrt((prm.VERTICAL_STIFFNESS * prm.UNLOADED_RADIUS / prm.FNOMIN) ** 2 - 4.0 * prm.Q_FZ2)
 
 
+def _sqrt_positive(u, be):
+    """sqrt(max(u, 0)) whose derivative stays finite (zero) where u <= 0: a derivative through the solver's
+    unused branches must not turn 0 * inf into NaN (CasADi)."""
+    positive = u > 0
+    return be.where(positive, be.sqrt(be.where(positive, u, 1.0)), 0.0)
+
+
 def _bottoming_force(prm, rl, be):
     return prm.BOTTOM_STIFF * be.fmax(prm.RIM_RADIUS + prm.BOTTOM_OFFST - rl, 0.0)
 
@@ -136,6 +152,8 @@ def deflection_61(prm, fz, r_omega, omega, fx, fy, dpi, be):
 
 
 _RHO_FLOOR = 1e-12  # m, the smallest MF 6.2 deflection
+_NEWTON_STEPS = 7  # unrolled (CasADi) Newton steps of the MF 6.2 loaded radius, see the module notes
+_NEWTON_STEPS_FROM_TOP = 8  # the same where the lifted roots have no bound below R_omega + R0
 
 
 def deflection_62(prm, rl, r_omega, gamma, be):
@@ -155,13 +173,18 @@ def _camber_terms_62(prm, r_omega, gamma, be):
     return free_share, camber
 
 
-def _deflection_62(prm, rl, r_omega, free_share, camber, be):
+def _deflection_62(prm, rl, r_omega, free_share, camber, be, slope=False):
     """rho = (R_omega - Rl)+ (1 - Q_CAM3 |gamma|) + growth^2 (W/8) |tan gamma|, growth = (Q_CAM1 Rl + Q_CAM2 Rl^2)
-    / (Q_CAM1 R_omega + Q_CAM2 R_omega^2)."""
+    / (Q_CAM1 R_omega + Q_CAM2 R_omega^2); with ``slope``: (rho, d rho/d Rl)."""
     rho = be.fmax(r_omega - rl, 0.0) * free_share
+    drho = be.where(rl < r_omega, -free_share, 0.0)
     if prm.Q_CAM1 != 0.0 or prm.Q_CAM2 != 0.0:
-        rho = rho + (prm.Q_CAM1 * rl + prm.Q_CAM2 * rl**2) ** 2 * camber
-    return be.fmax(rho, _RHO_FLOOR)
+        growth = prm.Q_CAM1 * rl + prm.Q_CAM2 * rl**2
+        rho = rho + growth**2 * camber
+        drho = drho + 2.0 * growth * (prm.Q_CAM1 + 2.0 * prm.Q_CAM2 * rl) * camber
+    if not slope:
+        return be.fmax(rho, _RHO_FLOOR)
+    return be.fmax(rho, _RHO_FLOOR), be.where(rho > _RHO_FLOOR, drho, 0.0)
 
 
 def vertical_force_62(prm, rl, r_omega, omega, fx, fy, gamma, dpi, be):
@@ -179,28 +202,83 @@ def _relation_terms_62(prm, r_omega, omega, fx, fy, gamma, dpi, be) -> tuple:
     return r_omega, free_share, camber, correction, stiffness, fy, gamma
 
 
-def _relation_62(prm, rl, terms, be):
+def _relation_62(prm, rl, terms, be, target=None, lift=True):
     """The MF 6.2 load-radius relation, negative where the side-force term exceeds the rest (terms whose
-    parameters are zero are skipped). Its sign change above R_omega is a lifted tyre's loaded radius."""
+    parameters are zero are skipped). Its sign change above R_omega is a lifted tyre's loaded radius.
+
+    With a ``target`` load: (Fz - target, dFz/dRl, lift slope or, without ``lift``, dFz/dRl again), the derivative
+    written out term by term (the relation is explicit in rho). The lift slope serves the root above R_omega,
+    where Fz - target = -(A + B) load (A - B) with A = |side-force term|, B = sqrt(correction - target/load): the
+    slope of that with (A + B) load held fixed, i.e. a Newton step on A - B, whose shape is nearly that of
+    S_Fygamma, quadratic in Rl (Fz itself falls there like a quartic, and Newton on it creeps)."""
     r_omega, free_share, camber, correction, stiffness, fy, gamma = terms
     R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
-    rho = _deflection_62(prm, rl, r_omega, free_share, camber, be)
-    x = rho / R0
+    rho, drho = _deflection_62(prm, rl, r_omega, free_share, camber, be, slope=True)
+    x, dx = rho / R0, drho / R0
     x_load = be.where(rho > _RHO_FLOOR, x, 0.0)  # no deflection, no load (the floor only keeps x^Q_FCY2 finite)
+    q_fz1 = _q_fz1(prm, be)
+    load = stiffness * (q_fz1 * x_load + prm.Q_FZ2 * x_load**2)
+    net = correction
     if prm.Q_FCY != 0.0:  # side force, with the camber asymmetry S_Fygamma and the deflection dependency
         ratio = rl / r_omega
         s_fygamma = (prm.Q_FYS1 + prm.Q_FYS2 * ratio + prm.Q_FYS3 * ratio**2) * gamma
-        correction = correction - (x ** prm.Q_FCY2 * prm.Q_FCY * (fy - s_fygamma) / Fz0) ** 2
-    fz = correction * stiffness * (_q_fz1(prm, be) * x_load + prm.Q_FZ2 * x_load**2)
-    return fz + _bottoming_force(prm, rl, be)
+        power = x ** prm.Q_FCY2
+        side = power * prm.Q_FCY * (fy - s_fygamma) / Fz0
+        net = correction - side**2
+    fz = net * load + _bottoming_force(prm, rl, be)
+    if target is None:
+        return fz
+    dload = stiffness * (q_fz1 + 2.0 * prm.Q_FZ2 * x_load) * dx
+    dbottoming = be.where(rl < prm.RIM_RADIUS + prm.BOTTOM_OFFST, -prm.BOTTOM_STIFF, 0.0)
+    slope = net * dload + dbottoming
+    if prm.Q_FCY == 0.0:
+        return fz - target, slope, slope
+    # d side/d Rl: through x^Q_FCY2 and through S_Fygamma(Rl/R_omega)
+    ds_fygamma = (prm.Q_FYS2 + 2.0 * prm.Q_FYS3 * ratio) * gamma / r_omega
+    dside = side * prm.Q_FCY2 * dx / x - power * prm.Q_FCY * ds_fygamma / Fz0
+    slope = slope - 2.0 * side * dside * load
+    if not lift:
+        return fz - target, slope, slope
+    safe_load = be.where(load > 0, load, 1.0)
+    b = _sqrt_positive(correction - target / safe_load, be)
+    db = target * dload / (2.0 * safe_load**2 * be.where(b > 0, b, 1.0))
+    lift_slope = -(be.abs(side) + b) * load * (be.sign_nz(side) * dside - db)
+    return fz - target, slope, lift_slope
 
 
-#: the scan above the free radius for the root of a lifted tyre, in units of R0, up to R_omega + R0 (as the camber
-#: vanishes the root moves up as 1/sqrt(|gamma|), beyond any contact); finer near R_omega, where most roots lie.
-#: Nine points (each one relation evaluation in the unrolled CasADi graph, shared with the nine widening steps
-#: of a tyre in contact) find the same root as steps of 0.05 R0
-#: on the extreme-input property tests of all three MF 6.2 files (test_vertical_relation)
-_LIFT_OFFSETS = (0.01, 0.025, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0)
+def _growing_load_62(prm) -> bool:
+    """Whether the camber deflection and the load grow with Rl above R_omega (Q_CAM1, Q_CAM2, Q_FZ2 >= 0)."""
+    return prm.Q_CAM1 >= 0.0 and prm.Q_CAM2 >= 0.0 and prm.Q_FZ2 >= 0.0
+
+
+def _lift_bound_applies(prm) -> bool:
+    """Whether :func:`_lift_bound_62` bounds the lifted roots: a growing load, a side-force term that weakens as
+    the deflection grows (Q_FCY2 <= 0) and S_Fygamma monotone in Rl/R_omega over [1, 3] (R_omega above R0/2)."""
+    monotone = all(prm.Q_FYS2 + 2.0 * prm.Q_FYS3 * r > 0 for r in (1.0, 3.0))
+    return prm.Q_FCY != 0.0 and prm.Q_FCY2 <= 0.0 and _growing_load_62(prm) and monotone
+
+
+def _lift_bound_62(prm, fz, terms, top, be):
+    """An upper bound of a lifted tyre's root, below ``top`` = R_omega + R0 (else ``top``), see
+    :func:`_lift_bound_applies`. At a root above R_omega the side-force term takes what the load leaves:
+    |Fy - S_Fygamma| = M = sqrt(correction - fz/load) Fz0 / (|Q_FCY| x^Q_FCY2), and S_Fygamma moves away from Fy
+    in the direction of gamma: S_Fygamma = Fy + sign(gamma) M. M grows with Rl (so does x), so with M taken at
+    ``top`` the quadratic S_Fygamma(Rl/R_omega) = Fy + sign(gamma) M(top) has its root at or beyond every root."""
+    r_omega, free_share, camber, correction, stiffness, fy, gamma = terms
+    R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
+    x = _deflection_62(prm, top, r_omega, free_share, camber, be) / R0
+    load = stiffness * (_q_fz1(prm, be) * x + prm.Q_FZ2 * x**2)
+    usable = be.logical_and(load > 0, gamma != 0)
+    side = _sqrt_positive(correction - fz / be.where(usable, load, 1.0), be) * Fz0 / abs(prm.Q_FCY) * x ** (-prm.Q_FCY2)
+    # Q_FYS3 r^2 + Q_FYS2 r + c = 0, the root where S_Fygamma grows with r (cancellation-free either sign of Q_FYS2)
+    a, b = prm.Q_FYS3, prm.Q_FYS2
+    c = prm.Q_FYS1 - (fy + be.sign_nz(gamma) * side) / be.where(usable, gamma, 1.0)
+    root_d = _sqrt_positive(b * b - 4.0 * a * c, be)
+    ratio = -2.0 * c / (b + root_d) if b >= 0 else (-b + root_d) / (2.0 * a)
+    bound = ratio * r_omega
+    inside = be.logical_and(usable, be.logical_and(b * b - 4.0 * a * c >= 0, be.logical_and(bound > r_omega,
+                                                                                           bound < top)))
+    return be.where(inside, bound, top)
 
 
 def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
@@ -208,43 +286,42 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     args = (r_omega, omega, fx, fy, gamma, dpi)
     fz, *args = be.broadcast(fz, *args)  # the residual below evaluates subsets of the elements
     terms = be.broadcast(*_relation_terms_62(prm, *args, be))
-
-    def residual(rl, idx):
-        sub = terms if idx is None else [v[idx] for v in terms]
-        target = fz if idx is None else fz[idx]
-        return _relation_62(prm, rl, sub, be) - target
-
-    r_omega = args[0]
-    f_top = residual(r_omega, None)  # < 0 when the free tyre carries less than fz
+    r_omega, gamma = args[0], args[4]
+    f_top = _relation_62(prm, r_omega, terms, be) - fz  # < 0 when the free tyre carries less than fz
     contact = f_top < 0
-    # first point: the deflection of the MF 6.1 relation without the side-force term, less the camber
-    # deflection (a lower bound without camber); second point: the linear extrapolation of the load from zero
-    # deflection through the first point, an upper bound since Fz/rho grows with rho, moved 0.5 % further;
-    # widen if that still fails to bracket
+    lifting = be.any(f_top > 0)  # NumPy skips the lifted tyre's work where no element needs it
+
+    def residual(rl, idx):  # (Fz(Rl) - fz, the slope for the Newton step: in contact dFz/dRl, else the lift slope)
+        sub = terms if idx is None else [v[idx] for v in terms]
+        value, slope, lift_slope = _relation_62(prm, rl, sub, be, fz if idx is None else fz[idx], lifting)
+        return value, be.where(contact if idx is None else contact[idx], slope, lift_slope)
+
+    # in contact: Newton from the deflection of the MF 6.1 relation without the side-force term, less the camber
+    # deflection, inside [0, R_omega] (Fz is taken to exceed any load at Rl = 0, deep in bottoming).
+    # Lifted (the free tyre already carries more than fz: camber deflection at a low load): the root lies above
+    # R_omega, where the camber asymmetry S_Fygamma grows with Rl/R_omega; Newton from an upper bound of the
+    # roots (at most R_omega + R0) inside [R_omega, bound] when the load is gone there, else no root: Rl = R_omega.
     rho_61 = deflection_61(prm, fz, r_omega, omega, fx, 0.0 * fy, dpi, be)
-    camber_share = rho_61 - deflection_62(prm, r_omega - rho_61, r_omega, args[4], be)
-    rho_1 = be.fmax(rho_61 + camber_share / (1.0 - prm.Q_CAM3 * be.abs(args[4])), 0.1 * rho_61)
-    f_1 = residual(r_omega - rho_1, None)
-    load_1 = f_1 + fz
-    ratio = be.where(load_1 > 0, fz / be.where(load_1 > 0, load_1, 1.0), 2.0)
-    rho_2 = rho_1 * be.clip(ratio, 0.25, 4.0) * be.where(ratio > 1, 1.005, 0.995) + 1e-9
-    f_2 = residual(r_omega - rho_2, None)
-
-    def widen(rl_1, rl_2, f_2, idx):  # more deflection while the load is short, less while it is exceeded
-        top = r_omega if idx is None else r_omega[idx]
-        return top - (top - rl_2) * be.where(f_2 < 0, 1.5, 0.5)
-
-    # lifted: the free tyre already carries more than fz (camber deflection at a low load); the root, if any,
-    # lies above R_omega, where the camber asymmetry S_Fygamma grows with Rl/R_omega: the first sign change on
-    # a grid above R_omega brackets the root nearest to the free radius
-    found, a, b, f_a, f_b = be.bracket(residual, contact, r_omega - rho_1, r_omega - rho_2, f_1, f_2, widen,
-                                       r_omega, f_top, prm.UNLOADED_RADIUS + 0.0 * fz, _LIFT_OFFSETS, max_iter=200)
-    # stop at 1e-15 m or once the load is matched to 1e-12 relative (floor 1e-12 N); CasADi unrolls 16 Dekker
-    # steps (14 carry the load to 1e-9 on 60,000 extreme points of the three MF 6.2 files at hand)
-    rl = be.solve_bracketed(residual, a, b, f_a, f_b, xtol=1e-15, max_iter=200, unrolled=16,
-                            ftol=1e-12 * be.fmax(fz, 1.0))
+    camber_share = rho_61 - deflection_62(prm, r_omega - rho_61, r_omega, gamma, be)
+    rho_1 = be.fmax(rho_61 + camber_share / (1.0 - prm.Q_CAM3 * be.abs(gamma)), 0.1 * rho_61)
+    top = r_omega + prm.UNLOADED_RADIUS
+    steps = _NEWTON_STEPS
+    if not _lift_bound_applies(prm):
+        if prm.Q_FCY != 0.0 or not _growing_load_62(prm):  # lifted roots possible: Newton from R_omega + R0
+            steps = _NEWTON_STEPS_FROM_TOP
+    elif lifting:
+        top = _lift_bound_62(prm, fz, terms, top, be)
+    x = be.where(contact, r_omega - rho_1, top)
+    f, df = residual(x, None)
+    found = be.logical_or(contact, be.logical_and(f_top > 0, f <= 0))
+    f = be.where(found, f, 0.0)  # no root: stay (Rl = R_omega below)
+    lo, hi = be.where(contact, 0.0 * fz, r_omega), be.where(contact, r_omega, top)
+    # stop at steps below 1e-15 m or once the load is matched to 1e-12 relative (floor 1e-12 N); CasADi unrolls
+    # a fixed number of steps (see solve_newton)
+    rl = be.solve_newton(residual, x, f, df, lo, hi, xtol=1e-15, ftol=1e-12 * be.fmax(fz, 1.0), max_iter=200,
+                         unrolled=steps)
     rl = be.where(found, rl, r_omega)
-    return rl, deflection_62(prm, rl, r_omega, args[4], be)
+    return rl, deflection_62(prm, rl, r_omega, gamma, be)
 
 
 def contact_patch(prm, fz, dpi, be):
