@@ -399,6 +399,9 @@ def _eval_frame(args, out, swept: list[str], shape, outputs, model):
     'name [SI unit]'."""
     from .model import OUTPUT_UNITS
 
+    # a swept input that is also an output is shown as NAME_used: the model echoes kappa, alpha, gamma and fz as
+    # asked (before the .tir ranges), so saturate the echo as the equations did
+    out = {k: (_used(args, model, k, out[k]) if k in swept else out[k]) for k in out.keys()}
     return grid_frame(args, out, swept, shape, outputs, input_units={n: unit for n, (unit, _) in _SWEEPS.items()},
                       output_units=OUTPUT_UNITS, used=lambda name, values: _used(args, model, name, values))
 

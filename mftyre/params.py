@@ -540,8 +540,8 @@ def invalid_values(prm) -> list[tuple[str, str]]:
     """(parameter, what is wrong and what is expected) for every value no tyre can have.
 
     The one rule shared by the .tir reader (a TirError naming file, line and parameter), the writer and
-    ``check_tir``: positive scales and dimensions, radii in order, ranges not inverted, a real Q_FZ1, a
-    known tyre side.
+    ``check_tir``: positive scales and dimensions, slip stiffness scales not negative, radii in order, ranges not
+    inverted, a real Q_FZ1, a known tyre side.
     """
     out = []
     for name, meaning in _POSITIVE.items():
@@ -550,6 +550,10 @@ def invalid_values(prm) -> list[tuple[str, str]]:
     if not 0 <= prm["RIM_RADIUS"] < prm["UNLOADED_RADIUS"]:
         out.append(("RIM_RADIUS", f"must be at least 0 and smaller than UNLOADED_RADIUS "
                                   f"{prm['UNLOADED_RADIUS']!r}, got {prm['RIM_RADIUS']!r}"))
+    for name, force in (("LKX", "Fx"), ("LKY", "Fy")):  # scales of the slip stiffnesses Kxk (4.E15), Kya (4.E25)
+        if prm[name] < 0:
+            out.append((name, f"must not be negative (the scale factor of the slip stiffness: a negative one turns "
+                              f"{force} along the slip instead of against it), got {prm[name]!r}"))
     if prm["BOTTOM_STIFF"] < 0:
         out.append(("BOTTOM_STIFF", f"must not be negative, got {prm['BOTTOM_STIFF']!r}"))
     for lo, hi in (("PRESMIN", "PRESMAX"), ("FZMIN", "FZMAX"), ("KPUMIN", "KPUMAX"), ("ALPMIN", "ALPMAX"),

@@ -7,6 +7,7 @@ FMI call sequences (initialisation, reset, variable steps, error statuses).
 from __future__ import annotations
 
 import argparse
+import os
 import math
 from ctypes import byref
 from pathlib import Path
@@ -325,8 +326,11 @@ def test_errors_reported_through_status_and_log(fmus, tmp_path):
     # native FMU words it (tests/test_fmu_native.py): "initialisation failed: parameter NAME ...", no traceback.
     # The status is fmi2Fatal, not fmi2Error: pythonfmu 0.7.0's binary maps every Python exception to fmi2Fatal
     # (MFTyre.py notes); should pythonfmu ever answer fmi2Error, this fails and the notes need updating.
-    missing = tmp_path / "none.tir"
+    missing, fifo = tmp_path / "none.tir", tmp_path / "fifo.tir"
+    os.mkfifo(fifo)  # exists, but is no regular file (old: reported as "no such file")
     for params, text in (({"side": "up"}, "parameter side must be 'left' or 'right', got 'up'"),
+                         ({"tir_file": str(fifo)}, f"{fifo}: not a regular file (a device, FIFO or socket): "
+                                                   "expected a .tir property file"),
                          ({"model": "rigid"}, "parameter model must be 'steady' or 'swift', got 'rigid'"),
                          ({"tir_file": str(missing)}, f"parameter tir_file: no such file {str(missing)!r}"),
                          ({"evaluator": "fast"}, "parameter evaluator must be one of auto, compiled, casadi, numpy; "

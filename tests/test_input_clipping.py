@@ -97,3 +97,28 @@ def test_cli_plot_legend_names_the_pressure_used(tmp_path, monkeypatch):
                    str(tmp_path / "p.png"), "-q"])
     assert rc == 0
     assert legends == ["p = 1.86 bar (asked 1.76 bar)", "p = 2.2 bar"]
+
+
+def test_cli_used_columns_of_swept_inputs_are_the_values_used(tmp_path):
+    """A swept input that is also an output (kappa, alpha, gamma, fz) is labelled NAME_used: it must hold the value
+    the model evaluated, saturated to the .tir range, and the forces must equal evaluate() at those values (old:
+    the model's echo of the value asked, e.g. gamma_used 0.3 rad where CAMMAX 0.105 rad was used)."""
+    import pandas as pd
+
+    model = mftyre.load_tir(TIR61)
+    prm = model.params
+    csv = tmp_path / "out.csv"
+    for option, values, name, unit in (("--gamma", [0.0, 0.15, 0.3, -0.3], "gamma", "rad"),
+                                       ("--kappa", [0.5, 1.75, 3.0, -3.0], "kappa", "-"),
+                                       ("--alpha", [0.1, 1.2, -1.5], "alpha", "rad"),
+                                       ("--fz", [1000.0, 2.0 * prm.FZMAX], "fz", "N")):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", InputClippedWarning)
+            assert cli.main(["eval", str(TIR61), option, ",".join(map(str, values)), "--outputs", f"fx,fy,{name}",
+                             "--csv", str(csv), "--overwrite", "-q"]) == 0
+            used = model.used_input(name, np.array(values))
+            ref = model.evaluate(**{"fz": 4000.0, "kappa": 0.0, "alpha": 0.0, name: used})
+        df = pd.read_csv(csv)
+        assert not np.array_equal(used, values)
+        np.testing.assert_array_equal(df[f"{name}_used [{unit}]"], used)
+        np.testing.assert_allclose(df["fy [N]"], np.ravel(ref.fy), rtol=1e-12, atol=1e-9)

@@ -34,7 +34,7 @@ def _with_value(tmp_path, source, name, value):
 
 BAD_VALUES = [("FNOMIN", "0"), ("LFZO", "0"), ("LFZO", "-1"), ("LONGVL", "0"), ("NOMPRES", "0"),
               ("UNLOADED_RADIUS", "-0.3"), ("VERTICAL_STIFFNESS", "0"), ("VXLOW", "0"), ("RIM_RADIUS", "0.5"),
-              ("TYRESIDE", "'SYMMETRIC'"), ("PRESMIN", "900000")]
+              ("TYRESIDE", "'SYMMETRIC'"), ("PRESMIN", "900000"), ("LKX", "-1"), ("LKY", "-1")]
 
 
 @pytest.mark.parametrize("source", [TIR61, TIR62], ids=["mf61", "mf62"])

@@ -227,7 +227,7 @@ class MFTyre(Fmi2Slave):
         tir = self.tir_file.strip()
         embedded = not tir
         path = os.path.join(resources, cfg.get("tir", "tyre.tir")) if embedded else tir
-        if not os.path.isfile(path):
+        if not os.path.exists(path):  # a FIFO or device exists: load_tir refuses it as not a regular file
             raise ValueError(f"parameter tir_file: no such file {path!r}")
         model = mftyre.load_tir(path, side=side)
         shipped = embedded and model.side == cfg.get("side")
