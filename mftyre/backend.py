@@ -138,47 +138,51 @@ class NumpyBackend:
         evaluates the elements ``idx`` (a tuple of index arrays, None while every element is still iterating).
 
         Safeguarded Newton: each evaluated point narrows the bracket; a Newton step that would leave it (or a slope
-        that is not negative) is replaced by bisection. Iterates until |f| <= ``ftol`` (a scalar or one value per
-        element), the Newton step is at most ``xtol`` (plus 4 ulp of x) or the bracket is that narrow, for every
-        element; the result is the last point moved by its Newton step where that stays in the bracket. An element
-        given ``f = 0`` returns ``x``. Scalars (one point) stay scalars. Raises ModelInputError if not converged in
-        ``max_iter`` steps.
+        that is not negative) is replaced by bisection. An element has converged when |f| <= ``ftol`` (a scalar or
+        one value per element), when its Newton step is at most ``xtol`` (plus 4 ulp of x) or the bracket is that
+        narrow, or when the error left after its Newton step, estimated from two successive Newton steps s0, s1 as
+        |s1|^3 / s0^2 (quadratic convergence), is at most that; the result is the last point moved by its Newton
+        step where that stays in the bracket. All elements iterate until fewer than a quarter of them are left,
+        then only those (the others, converged, would barely move). An element given ``f = 0`` returns ``x``.
+        Scalars (one point) stay scalars. Raises ModelInputError if not converged in ``max_iter`` steps.
         """
         where = NumpyBackend.where  # one point (scalars): Python choices, no arrays
         scalar = all(np.ndim(v) == 0 for v in (x, f, df, lo, hi, ftol))
         if not scalar:
-            x, f, df, lo, hi = (np.array(v, dtype=float) for v in np.broadcast_arrays(x, f, df, lo, hi))
+            x, f, df, lo, hi = np.broadcast_arrays(x, f, df, lo, hi)
             ftol = np.broadcast_to(ftol, x.shape)
-        idx = None
+            result = np.empty(x.shape)
+        idx, previous = None, 0.0  # the elements iterating (None: all), their last Newton steps (0: none)
         for _ in range(max_iter):
-            xi, fi, dfi, loi, hii = (v if idx is None else v[idx] for v in (x, f, df, lo, hi))
-            ftoli = ftol if idx is None else ftol[idx]
-            falling = fi > 0
-            loi, hii = where(falling, xi, loi), where(falling, hii, xi)
-            step = fi / where(dfi < 0, dfi, -1.0)
-            newton = xi - step
-            ok = (dfi < 0) & (newton >= loi) & (newton <= hii)
-            tol = xtol + _ULP4 * np.abs(xi)
-            done = (np.abs(fi) <= ftoli) | (ok & (np.abs(step) <= tol)) | (hii - loi <= tol)
-            new = where(ok, newton, 0.5 * (loi + hii))
-            if idx is None:
-                result = where(ok, newton, xi)
+            falling = f > 0
+            lo, hi = where(falling, x, lo), where(falling, hi, x)
+            descending = df < 0
+            step = f / where(descending, df, -1.0)
+            newton = x - step
+            ok = descending & (newton >= lo) & (newton <= hi)
+            size = np.abs(step)
+            tol = xtol + _ULP4 * np.abs(x)
+            done = ((np.abs(f) <= ftol) | (hi - lo <= tol)
+                    | (ok & ((size <= tol) | (size * size * size <= tol * previous * previous))))
+            moved = where(ok, newton, x)
+            if scalar:
+                if done:
+                    return moved
+            elif idx is None:
+                result[...] = moved
             else:
-                result[idx] = np.where(ok, newton, xi)
-            if done.all():
+                result[idx] = moved
+            left = None if scalar else np.count_nonzero(~done)
+            if left == 0:
                 return result
-            keep = ~done
-            if idx is None and not done.any():
-                sub = None
-            else:
-                sub = np.nonzero(keep) if idx is None else tuple(i[keep] for i in idx)
-                new, loi, hii = new[keep], loi[keep], hii[keep]
-            fnew, dfnew = fun(new, sub)
-            if sub is None:
-                x, f, df, lo, hi = new, fnew, dfnew, loi, hii
-            else:
-                x[sub], f[sub], df[sub], lo[sub], hi[sub] = new, fnew, dfnew, loi, hii
-            idx = sub
+            new = where(ok, newton, 0.5 * (lo + hi))
+            previous = where(ok, size, 0.0)
+            if left is not None and 4 * left <= done.size:  # iterate on the few left only
+                keep = np.nonzero(~done)
+                idx = keep if idx is None else tuple(i[keep] for i in idx)
+                new, lo, hi, previous, ftol = new[keep], lo[keep], hi[keep], previous[keep], ftol[keep]
+            x = new
+            f, df = fun(x, idx)
         raise ModelInputError(f"Newton root search did not converge in {max_iter} iterations: inputs far outside the "
                               "range the model was fitted for?")
 

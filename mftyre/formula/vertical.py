@@ -283,10 +283,9 @@ def _lift_bound_62(prm, fz, terms, top, be):
 
 def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     """Inverse of :func:`vertical_force_62`: (Rl, rho_z) carrying ``fz``, see the module notes."""
-    args = (r_omega, omega, fx, fy, gamma, dpi)
-    fz, *args = be.broadcast(fz, *args)  # the residual below evaluates subsets of the elements
-    terms = be.broadcast(*_relation_terms_62(prm, *args, be))
-    r_omega, gamma = args[0], args[4]
+    # the residual below evaluates subsets of the elements: the load and the terms as arrays of one shape
+    fz, *terms = be.broadcast(fz, *_relation_terms_62(prm, r_omega, omega, fx, fy, gamma, dpi, be))
+    r_omega, free_share, camber = terms[:3]
     f_top = _relation_62(prm, r_omega, terms, be) - fz  # < 0 when the free tyre carries less than fz
     contact = f_top < 0
     lifting = be.any(f_top > 0)  # NumPy skips the lifted tyre's work where no element needs it
@@ -302,8 +301,8 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     # R_omega, where the camber asymmetry S_Fygamma grows with Rl/R_omega; Newton from an upper bound of the
     # roots (at most R_omega + R0) inside [R_omega, bound] when the load is gone there, else no root: Rl = R_omega.
     rho_61 = deflection_61(prm, fz, r_omega, omega, fx, 0.0 * fy, dpi, be)
-    camber_share = rho_61 - deflection_62(prm, r_omega - rho_61, r_omega, gamma, be)
-    rho_1 = be.fmax(rho_61 + camber_share / (1.0 - prm.Q_CAM3 * be.abs(gamma)), 0.1 * rho_61)
+    camber_share = rho_61 - _deflection_62(prm, r_omega - rho_61, r_omega, free_share, camber, be)
+    rho_1 = be.fmax(rho_61 + camber_share / free_share, 0.1 * rho_61)
     top = r_omega + prm.UNLOADED_RADIUS
     steps = _NEWTON_STEPS
     if not _lift_bound_applies(prm):
@@ -321,7 +320,7 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     rl = be.solve_newton(residual, x, f, df, lo, hi, xtol=1e-15, ftol=1e-12 * be.fmax(fz, 1.0), max_iter=200,
                          unrolled=steps)
     rl = be.where(found, rl, r_omega)
-    return rl, deflection_62(prm, rl, r_omega, gamma, be)
+    return rl, _deflection_62(prm, rl, r_omega, free_share, camber, be)
 
 
 def contact_patch(prm, fz, dpi, be):
