@@ -141,9 +141,9 @@ class NumpyBackend:
         that is not negative) is replaced by bisection. An element has converged when |f| <= ``ftol`` (a scalar or
         one value per element), when its Newton step is at most ``xtol`` (plus 4 ulp of x) or the bracket is that
         narrow, or when the error left after its Newton step, estimated from two successive Newton steps s0, s1 as
-        |s1|^3 / s0^2 (quadratic convergence), is at most that; the result is the last point moved by its Newton
-        step where that stays in the bracket. All elements iterate until fewer than a quarter of them are left,
-        then only those (the others, converged, would barely move). An element given ``f = 0`` returns ``x``.
+        |s1|^3 / s0^2 (quadratic convergence: the next step), is that small; the result is the last point moved by its Newton step where that stays in the bracket. All elements iterate
+        until at most a quarter of them are left, then only those (the others, converged, would barely move). An
+        element given ``f = 0`` returns ``x``.
         Scalars (one point) stay scalars. Raises ModelInputError if not converged in ``max_iter`` steps.
         """
         where = NumpyBackend.where  # one point (scalars): Python choices, no arrays
@@ -152,7 +152,7 @@ class NumpyBackend:
             x, f, df, lo, hi = np.broadcast_arrays(x, f, df, lo, hi)
             ftol = np.broadcast_to(ftol, x.shape)
             result = np.empty(x.shape)
-        idx, previous = None, 0.0  # the elements iterating (None: all), their last Newton steps (0: none)
+        idx, previous = None, None  # the elements iterating (None: all), the squares of their last Newton steps
         for _ in range(max_iter):
             falling = f > 0
             lo, hi = where(falling, x, lo), where(falling, hi, x)
@@ -162,8 +162,9 @@ class NumpyBackend:
             ok = descending & (newton >= lo) & (newton <= hi)
             size = np.abs(step)
             tol = xtol + _ULP4 * np.abs(x)
-            done = ((np.abs(f) <= ftol) | (hi - lo <= tol)
-                    | (ok & ((size <= tol) | (size * size * size <= tol * previous * previous))))
+            done = (np.abs(f) <= ftol) | (hi - lo <= tol) | (ok & (size <= tol))
+            if previous is not None:  # quadratic convergence: the step after this one is about |s1|^3 / s0^2
+                done |= ok & (size * size * size <= tol * previous)
             moved = where(ok, newton, x)
             if scalar:
                 if done:
@@ -172,11 +173,12 @@ class NumpyBackend:
                 result[...] = moved
             else:
                 result[idx] = moved
-            left = None if scalar else np.count_nonzero(~done)
+            left = None if scalar else done.size - np.count_nonzero(done)
             if left == 0:
                 return result
-            new = where(ok, newton, 0.5 * (lo + hi))
-            previous = where(ok, size, 0.0)
+            all_newton = ok if scalar else ok.all()
+            new = newton if all_newton else where(ok, newton, 0.5 * (lo + hi))
+            previous = size * size if all_newton else where(ok, size * size, 0.0)
             if left is not None and 4 * left <= done.size:  # iterate on the few left only
                 keep = np.nonzero(~done)
                 idx = keep if idx is None else tuple(i[keep] for i in idx)
