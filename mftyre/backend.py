@@ -137,13 +137,15 @@ class NumpyBackend:
         root; lo < hi), from ``x`` with ``f = fun(x)`` and slope ``df``. ``fun(x, idx) -> (value, slope)``
         evaluates the elements ``idx`` (a tuple of index arrays, None while every element is still iterating).
 
-        Safeguarded Newton: each evaluated point narrows the bracket; a Newton step that would leave it (or a slope
-        that is not negative) is replaced by bisection. An element has converged when |f| <= ``ftol`` (a scalar or
-        one value per element), when its Newton step is at most ``xtol`` (plus 4 ulp of x) or the bracket is that
-        narrow, or when the error left after its Newton step, estimated from two successive Newton steps s0, s1 as
-        |s1|^3 / s0^2 (quadratic convergence: the next step), is that small; the result is the last point moved by its Newton step where that stays in the bracket. All elements iterate
-        until at most a quarter of them are left, then only those (the others, converged, would barely move). An
-        element given ``f = 0`` returns ``x``.
+        Safeguarded Newton: a Newton step that would leave the bracket (or a slope that is not negative) is replaced
+        by bisection of the bracket narrowed by the evaluated points (narrowed on the steps where some element
+        bisects: a Newton step inside the bracket stays inside the narrowed one too). An element has converged when
+        |f| <= ``ftol`` (a scalar or one value per element), when its Newton step is at most ``xtol`` (plus 4 ulp of
+        x) or the bracket is that narrow, or when the error left after its Newton step, estimated from two successive
+        Newton steps s0, s1 as |s1|^3 / s0^2 (quadratic convergence: the next step), is that small; the result is the
+        last point moved by its Newton step where that stays in the bracket. All elements iterate until at most a
+        quarter of them are left, then only those (the others, converged, would barely move). An element given
+        ``f = 0`` returns ``x``.
         Scalars (one point) stay scalars. Raises ModelInputError if not converged in ``max_iter`` steps.
         """
         where = NumpyBackend.where  # one point (scalars): Python choices, no arrays
@@ -154,12 +156,14 @@ class NumpyBackend:
             result = np.empty(x.shape)
         idx, previous = None, None  # the elements iterating (None: all), the squares of their last Newton steps
         for _ in range(max_iter):
-            falling = f > 0
-            lo, hi = where(falling, x, lo), where(falling, hi, x)
             descending = df < 0
             step = f / where(descending, df, -1.0)
             newton = x - step
-            ok = descending & (newton >= lo) & (newton <= hi)
+            ok = descending & (newton >= lo) & (newton <= hi)  # the same in the bracket narrowed by x
+            all_newton = ok if scalar else ok.all()
+            if not all_newton:  # x narrows the bracket (only needed for bisection: a mixed where is dear)
+                falling = f > 0
+                lo, hi = where(falling, x, lo), where(falling, hi, x)
             size = np.abs(step)
             tol = xtol + _ULP4 * np.abs(x)
             done = (np.abs(f) <= ftol) | (hi - lo <= tol) | (ok & (size <= tol))
@@ -176,7 +180,6 @@ class NumpyBackend:
             left = None if scalar else done.size - np.count_nonzero(done)
             if left == 0:
                 return result
-            all_newton = ok if scalar else ok.all()
             new = newton if all_newton else where(ok, newton, 0.5 * (lo + hi))
             previous = size * size if all_newton else where(ok, size * size, 0.0)
             if left is not None and 4 * left <= done.size:  # iterate on the few left only
