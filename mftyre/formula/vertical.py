@@ -137,6 +137,12 @@ def deflection_61(prm, fz, r_omega, omega, fx, fy, dpi, be):
     R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
     correction = (1.0 + prm.Q_V2 * (R0 / prm.LONGVL) * be.abs(omega) - (prm.Q_FCX * fx / Fz0) ** 2
                   - (prm.Q_FCY * fy / Fz0) ** 2) * (1.0 + prm.PFZ1 * dpi)
+    return _deflection_61(prm, fz, r_omega, correction, be)
+
+
+def _deflection_61(prm, fz, r_omega, correction, be):
+    """:func:`deflection_61` from its force factor ``correction`` (speed, Fx, Fy and pressure)."""
+    R0, Fz0 = prm.UNLOADED_RADIUS, prm.FNOMIN
     correction = be.fmax(correction, 1e-3)
     A, B = prm.Q_FZ2 * correction * Fz0, _q_fz1(prm, be) * correction * Fz0
 
@@ -146,9 +152,10 @@ def deflection_61(prm, fz, r_omega, omega, fx, fy, dpi, be):
     x = be.fmax(root(A, B, fz), 0.0)
     # past the bottoming deflection the rim adds BOTTOM_STIFF (R0 x - rho_b)
     rho_b = r_omega - prm.RIM_RADIUS - prm.BOTTOM_OFFST
-    Kb = prm.BOTTOM_STIFF * R0
-    x_b = root(A, B + Kb, fz + prm.BOTTOM_STIFF * rho_b)
-    return be.where(x * R0 > rho_b, x_b, x) * R0
+    bottoming = x * R0 > rho_b
+    if be.any(bottoming):  # NumPy skips the root where no element bottoms
+        x = be.where(bottoming, root(A, B + prm.BOTTOM_STIFF * R0, fz + prm.BOTTOM_STIFF * rho_b), x)
+    return x * R0
 
 
 _RHO_FLOOR = 1e-12  # m, the smallest MF 6.2 deflection
@@ -225,12 +232,17 @@ def _relation_62(prm, rl, terms, be, target=None, lift=True):
         power = x ** prm.Q_FCY2
         side = power * prm.Q_FCY * (fy - s_fygamma) / Fz0
         net = correction - side**2
-    fz = net * load + _bottoming_force(prm, rl, be)
+    fz = net * load
+    bottoming = rl < prm.RIM_RADIUS + prm.BOTTOM_OFFST
+    bottoming_any = be.any(bottoming)  # NumPy skips the rim's terms where no element bottoms
+    if bottoming_any:
+        fz = fz + _bottoming_force(prm, rl, be)
     if target is None:
         return fz
     dload = stiffness * (q_fz1 + 2.0 * prm.Q_FZ2 * x_load) * dx
-    dbottoming = be.where(rl < prm.RIM_RADIUS + prm.BOTTOM_OFFST, -prm.BOTTOM_STIFF, 0.0)
-    slope = net * dload + dbottoming
+    slope = net * dload
+    if bottoming_any:
+        slope = slope + be.where(bottoming, -prm.BOTTOM_STIFF, 0.0)
     if prm.Q_FCY == 0.0:
         return fz - target, slope, slope
     # d side/d Rl: through x^Q_FCY2 and through S_Fygamma(Rl/R_omega)
@@ -300,7 +312,8 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     # Lifted (the free tyre already carries more than fz: camber deflection at a low load): the root lies above
     # R_omega, where the camber asymmetry S_Fygamma grows with Rl/R_omega; Newton from an upper bound of the
     # roots (at most R_omega + R0) inside [R_omega, bound] when the load is gone there, else no root: Rl = R_omega.
-    rho_61 = deflection_61(prm, fz, r_omega, omega, fx, 0.0 * fy, dpi, be)
+    correction, stiffness = terms[3:5]
+    rho_61 = _deflection_61(prm, fz, r_omega, correction * (stiffness / prm.FNOMIN), be)
     camber_share = rho_61 - _deflection_62(prm, r_omega - rho_61, r_omega, free_share, camber, be)
     rho_1 = be.fmax(rho_61 + camber_share / free_share, 0.1 * rho_61)
     top = r_omega + prm.UNLOADED_RADIUS
