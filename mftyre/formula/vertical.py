@@ -297,10 +297,19 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     """Inverse of :func:`vertical_force_62`: (Rl, rho_z) carrying ``fz``, see the module notes."""
     # the residual below evaluates subsets of the elements: the load and the terms as arrays of one shape
     fz, *terms = be.broadcast(fz, *_relation_terms_62(prm, r_omega, omega, fx, fy, gamma, dpi, be))
-    r_omega, free_share, camber = terms[:3]
-    f_top = _relation_62(prm, r_omega, terms, be) - fz  # < 0 when the free tyre carries less than fz
-    contact = f_top < 0
-    lifting = be.any(f_top > 0)  # NumPy skips the lifted tyre's work where no element needs it
+    r_omega, free_share, camber, correction, stiffness = terms[:5]
+    # in contact where the free tyre (Rl = R_omega) carries less than fz; what it carries without the side-force
+    # term (which only takes load away) bounds that from above: NumPy evaluates the relation at R_omega only where
+    # some load is not above the bound, and skips the lifted tyre's work where no element is lifted
+    x_free = _deflection_62(prm, r_omega, r_omega, free_share, camber, be) / prm.UNLOADED_RADIUS
+    free_load = stiffness * (_q_fz1(prm, be) * x_free + prm.Q_FZ2 * x_free**2)
+    free_bound = correction * free_load + _bottoming_force(prm, r_omega, be)
+    contact = be.logical_and(free_load >= 0, fz > free_bound)
+    lifting = False
+    if be.any(be.logical_or(free_load < 0, fz <= free_bound)):
+        f_top = _relation_62(prm, r_omega, terms, be) - fz
+        contact, lifted = f_top < 0, f_top > 0
+        lifting = be.any(lifted)
 
     def residual(rl, idx):  # (Fz(Rl) - fz, the slope for the Newton step: in contact dFz/dRl, else the lift slope)
         sub = terms if idx is None else [v[idx] for v in terms]
@@ -312,7 +321,6 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     # Lifted (the free tyre already carries more than fz: camber deflection at a low load): the root lies above
     # R_omega, where the camber asymmetry S_Fygamma grows with Rl/R_omega; Newton from an upper bound of the
     # roots (at most R_omega + R0) inside [R_omega, bound] when the load is gone there, else no root: Rl = R_omega.
-    correction, stiffness = terms[3:5]
     rho_61 = _deflection_61(prm, fz, r_omega, correction * (stiffness / prm.FNOMIN), be)
     camber_share = rho_61 - _deflection_62(prm, r_omega - rho_61, r_omega, free_share, camber, be)
     rho_1 = be.fmax(rho_61 + camber_share / free_share, 0.1 * rho_61)
@@ -325,7 +333,7 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
         top = _lift_bound_62(prm, fz, terms, top, be)
     x = be.where(contact, r_omega - rho_1, top)
     f, df = residual(x, None)
-    found = be.logical_or(contact, be.logical_and(f_top > 0, f <= 0))
+    found = be.logical_or(contact, be.logical_and(lifted, f <= 0)) if lifting else contact
     f = be.where(found, f, 0.0)  # no root: stay (Rl = R_omega below)
     lo, hi = be.where(contact, 0.0 * fz, r_omega), be.where(contact, r_omega, top)
     # stop at steps below 1e-15 m or once the load is matched to 1e-12 relative (floor 1e-12 N); CasADi unrolls
