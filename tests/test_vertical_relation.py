@@ -302,3 +302,32 @@ def test_casadi_loaded_radius_derivatives_are_implicit_ones(key):
     fx, fy = rng.uniform(-1.2, 1.2, (2, n)) * fz
     everything = ca.Function("drl", symbols, [ca.jacobian(rl_s, ca.vertcat(*symbols))])
     assert np.all(np.isfinite(np.array(everything.map(n)(fz, omega, fx, fy, gamma, dpi))))
+
+
+@pytest.mark.parametrize("key", list(FILES))
+def test_numpy_loaded_radius_same_alone_in_a_batch_and_per_point(key):
+    """NumPy's shortcuts (the relation at R_omega only where a load is not above what the free tyre carries without
+    the side-force term, no lifted-tyre work where none is lifted, Newton on the few points left) decide per call:
+    loads just above and below the free tyre's own load, alone, in a mixed batch and one by one, give one Rl."""
+    prm = _model(key).params
+    rng = np.random.default_rng(5)
+    n = 600
+    omega = rng.uniform(0.0, 250.0, n)
+    dpi = rng.uniform(prm.PRESMIN, prm.PRESMAX, n) / prm.NOMPRES - 1.0
+    gamma = rng.uniform(prm.CAMMIN, prm.CAMMAX, n)
+    fy = rng.uniform(-1.0, 1.0, n) * prm.FNOMIN
+    fx = rng.uniform(-0.5, 0.5, n) * prm.FNOMIN
+    r_omega = vertical.free_radius(prm, omega, NUMPY)
+    free = vertical.vertical_force_62(prm, r_omega, r_omega, omega, fx, fy, gamma, dpi, NUMPY)
+    fz = free * rng.choice([1.0 - 1e-3, 1.0 - 1e-9, 1.0 + 1e-9, 1.0 + 1e-3, 1.5, 3.0], n)
+    fz[: n // 3] = rng.uniform(0.5, 3.0, n // 3) * prm.FNOMIN  # in contact for sure
+    args = (r_omega, omega, fx, fy, gamma, dpi)
+    batch, _ = vertical.loaded_radius_62(prm, fz, *args, NUMPY)
+    sure = np.arange(n // 3)
+    alone, _ = vertical.loaded_radius_62(prm, fz[sure], *(v[sure] for v in args), NUMPY)
+    assert alone.shape == sure.shape
+    np.testing.assert_allclose(alone, batch[sure], rtol=0, atol=1e-12)
+    single = [vertical.loaded_radius_62(prm, fz[j], *(v[j] for v in args), NUMPY)[0] for j in range(0, n, 3)]
+    np.testing.assert_allclose(single, batch[::3], rtol=0, atol=1e-12)
+    back = vertical.vertical_force_62(prm, batch, *args, NUMPY)
+    assert np.all((np.abs(back - fz) <= 1e-9 * np.maximum(fz, 1.0)) | (batch == r_omega))
