@@ -184,13 +184,16 @@ def _deflection_62(prm, rl, r_omega, free_share, camber, be, slope=False):
     """rho = (R_omega - Rl)+ (1 - Q_CAM3 |gamma|) + growth^2 (W/8) |tan gamma|, growth = (Q_CAM1 Rl + Q_CAM2 Rl^2)
     / (Q_CAM1 R_omega + Q_CAM2 R_omega^2); with ``slope``: (rho, d rho/d Rl)."""
     rho = be.fmax(r_omega - rl, 0.0) * free_share
-    drho = be.where(rl < r_omega, -free_share, 0.0)
+    growth_camber = 0.0
     if prm.Q_CAM1 != 0.0 or prm.Q_CAM2 != 0.0:
-        growth = prm.Q_CAM1 * rl + prm.Q_CAM2 * rl**2
-        rho = rho + growth**2 * camber
-        drho = drho + 2.0 * growth * (prm.Q_CAM1 + 2.0 * prm.Q_CAM2 * rl) * camber
+        growth = (prm.Q_CAM1 + prm.Q_CAM2 * rl) * rl
+        growth_camber = growth * camber
+        rho = rho + growth * growth_camber
     if not slope:
         return be.fmax(rho, _RHO_FLOOR)
+    drho = be.where(rl < r_omega, -free_share, 0.0)
+    if prm.Q_CAM1 != 0.0 or prm.Q_CAM2 != 0.0:
+        drho = drho + 2.0 * growth_camber * (prm.Q_CAM1 + 2.0 * prm.Q_CAM2 * rl)
     return be.fmax(rho, _RHO_FLOOR), be.where(rho > _RHO_FLOOR, drho, 0.0)
 
 
@@ -224,13 +227,13 @@ def _relation_62(prm, rl, terms, be, target=None, lift=True):
     x, dx = rho / R0, drho / R0
     x_load = be.where(rho > _RHO_FLOOR, x, 0.0)  # no deflection, no load (the floor only keeps x^Q_FCY2 finite)
     q_fz1 = _q_fz1(prm, be)
-    load = stiffness * (q_fz1 * x_load + prm.Q_FZ2 * x_load**2)
+    load = stiffness * x_load * (q_fz1 + prm.Q_FZ2 * x_load)
     net = correction
     if prm.Q_FCY != 0.0:  # side force, with the camber asymmetry S_Fygamma and the deflection dependency
         ratio = rl / r_omega
-        s_fygamma = (prm.Q_FYS1 + prm.Q_FYS2 * ratio + prm.Q_FYS3 * ratio**2) * gamma
+        s_fygamma = (prm.Q_FYS1 + (prm.Q_FYS2 + prm.Q_FYS3 * ratio) * ratio) * gamma
         power = x ** prm.Q_FCY2
-        side = power * prm.Q_FCY * (fy - s_fygamma) / Fz0
+        side = power * (fy - s_fygamma) * (prm.Q_FCY / Fz0)
         net = correction - side**2
     fz = net * load
     bottoming = rl < prm.RIM_RADIUS + prm.BOTTOM_OFFST
@@ -247,7 +250,7 @@ def _relation_62(prm, rl, terms, be, target=None, lift=True):
         return fz - target, slope, slope
     # d side/d Rl: through x^Q_FCY2 and through S_Fygamma(Rl/R_omega)
     ds_fygamma = (prm.Q_FYS2 + 2.0 * prm.Q_FYS3 * ratio) * gamma / r_omega
-    dside = side * prm.Q_FCY2 * dx / x - power * prm.Q_FCY * ds_fygamma / Fz0
+    dside = side * (dx / x) * prm.Q_FCY2 - power * ds_fygamma * (prm.Q_FCY / Fz0)
     slope = slope - 2.0 * side * dside * load
     if not lift:
         return fz - target, slope, slope
