@@ -296,6 +296,29 @@ def _lift_bound_62(prm, fz, terms, top, be):
     return be.where(inside, bound, top)
 
 
+def _with_side_force_62(prm, fz, rho, free_deflection, terms, be):
+    """The start ``free_deflection`` (R_omega - Rl) of the loaded-radius search, whose deflection ``rho`` carries
+    ``fz`` without the side-force term, moved by one Newton step on the relation in rho with the side-force term
+    (S_Fygamma and the camber deflection held at the start): an analytic step much cheaper than one of the search."""
+    r_omega, free_share, _, correction, stiffness, fy, gamma = terms
+    R0 = prm.UNLOADED_RADIUS
+    deflected = rho > 0
+    x = be.where(deflected, rho, R0) / R0  # no deflection: no step (and finite derivatives through it, CasADi)
+    ratio = (r_omega - free_deflection) / r_omega
+    s_fygamma = (prm.Q_FYS1 + (prm.Q_FYS2 + prm.Q_FYS3 * ratio) * ratio) * gamma
+    side2 = (x ** prm.Q_FCY2 * (fy - s_fygamma) * (prm.Q_FCY / prm.FNOMIN)) ** 2
+    q_fz1 = _q_fz1(prm, be)
+    load = stiffness * x * (q_fz1 + prm.Q_FZ2 * x)
+    net = correction - side2
+    # d/dx of net load: net dload/dx - 2 Q_FCY2 side^2 load / x
+    slope = net * stiffness * (q_fz1 + 2.0 * prm.Q_FZ2 * x) - 2.0 * prm.Q_FCY2 * side2 * load / x
+    rising = be.logical_and(slope > 0, deflected)
+    step = (fz - net * load) / be.where(rising, slope, 1.0) * R0 / free_share
+    # a correction, not a new start: kept where the relation rises and the step is at most half the deflection
+    return be.where(be.logical_and(rising, be.abs(step) <= 0.5 * free_deflection), free_deflection + step,
+                    free_deflection)
+
+
 def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     """Inverse of :func:`vertical_force_62`: (Rl, rho_z) carrying ``fz``, see the module notes."""
     # the residual below evaluates subsets of the elements: the load and the terms as arrays of one shape
@@ -327,6 +350,8 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     rho_61 = _deflection_61(prm, fz, r_omega, correction * (stiffness / prm.FNOMIN), be)
     camber_share = rho_61 - _deflection_62(prm, r_omega - rho_61, r_omega, free_share, camber, be)
     rho_1 = be.fmax(rho_61 + camber_share / free_share, 0.1 * rho_61)
+    if prm.Q_FCY != 0.0:
+        rho_1 = _with_side_force_62(prm, fz, rho_61, rho_1, terms, be)
     top = r_omega + prm.UNLOADED_RADIUS
     steps = _NEWTON_STEPS
     if not _lift_bound_applies(prm):
