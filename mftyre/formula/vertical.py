@@ -21,8 +21,11 @@ x = 2c / (B + sqrt(B^2 + 4 A c)), finite also for Q_FZ2 = 0 (linear tyre) where 
 divides by zero. MF 6.2: the relation is not monotone near zero deflection (Q_FCY2 < 0 makes the side-force
 term grow without bound as rho -> 0), so an unguarded iteration started near R0 can diverge. mftyre solves it by
 Newton's method with the relation's analytic slope, kept inside a bracket (bisection where a step would leave it),
-to 1e-15 m or 1e-12 relative in the load. In contact (the free tyre carries less than the load) it starts from
-the MF 6.1 deflection without the side-force term, corrected for the camber deflection, inside [0, R_omega].
+to 1e-15 m (a step, or the error left after the last step as two successive steps estimate it) or 1e-12
+relative in the load. In contact (the free tyre carries less than the load) it starts from the MF 6.1 deflection
+without the side-force term, corrected for the camber deflection and, where the relation has the side-force term,
+by one Newton step in rho on it with S_Fygamma and the camber deflection held, inside [0, R_omega]. NumPy on the
+sample files: one step of the search after the start's evaluation, two on the TNO 205/60 R15 file (Q_FCY).
 When even zero free deflection already gives more than the requested load (a cambered tyre at almost no load: the
 camber deflection rho_zgamma alone carries more), the relation's root lies above R_omega, where the camber
 asymmetry S_Fygamma, growing with Rl/R_omega, brings the load down. There the side-force term takes what the load
@@ -343,7 +346,8 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
         return value, be.where(contact if idx is None else contact[idx], slope, lift_slope)
 
     # in contact: Newton from the deflection of the MF 6.1 relation without the side-force term, less the camber
-    # deflection, inside [0, R_omega] (Fz is taken to exceed any load at Rl = 0, deep in bottoming).
+    # deflection, corrected for the side-force term, inside [0, R_omega] (Fz is taken to exceed any load at Rl = 0,
+    # deep in bottoming).
     # Lifted (the free tyre already carries more than fz: camber deflection at a low load): the root lies above
     # R_omega, where the camber asymmetry S_Fygamma grows with Rl/R_omega; Newton from an upper bound of the
     # roots (at most R_omega + R0) inside [R_omega, bound] when the load is gone there, else no root: Rl = R_omega.
@@ -364,8 +368,8 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     found = be.logical_or(contact, be.logical_and(lifted, f <= 0)) if lifting else contact
     f = be.where(found, f, 0.0)  # no root: stay (Rl = R_omega below)
     lo, hi = be.where(contact, 0.0 * fz, r_omega), be.where(contact, r_omega, top)
-    # stop at steps below 1e-15 m or once the load is matched to 1e-12 relative (floor 1e-12 N); CasADi unrolls
-    # a fixed number of steps (see solve_newton)
+    # stop at steps below 1e-15 m (or an error estimated that small after the step) or once the load is matched to
+    # 1e-12 relative (floor 1e-12 N); CasADi unrolls a fixed number of steps (see solve_newton)
     rl = be.solve_newton(residual, x, f, df, lo, hi, xtol=1e-15, ftol=1e-12 * be.fmax(fz, 1.0), max_iter=200,
                          unrolled=steps)
     rl = be.where(found, rl, r_omega)
