@@ -141,11 +141,11 @@ class NumpyBackend:
         by bisection of the bracket narrowed by the evaluated points (narrowed on the steps where some element
         bisects: a Newton step inside the bracket stays inside the narrowed one too). An element has converged when
         |f| <= ``ftol`` (a scalar or one value per element), when its Newton step is at most ``xtol`` (plus 4 ulp of
-        x) or the bracket is that narrow, or when the error left after its Newton step, estimated from two successive
-        Newton steps s0, s1 as |s1|^3 / s0^2 (quadratic convergence: the next step), is that small; the result is the
-        last point moved by its Newton step where that stays in the bracket. All elements iterate until at most a
-        quarter of them are left, then only those (the others, converged, would barely move). An element given
-        ``f = 0`` returns ``x``.
+        x) or the bracket is that narrow, or when the error left after its Newton step s1, |f''/(2 f')| s1^2 with
+        f'' from the change of the slope over the Newton step s0 before, is estimated at a quarter of that at most;
+        the result is the last point moved by its Newton step where that stays in the bracket. All elements iterate
+        until at most a quarter of them are left, then only those (a gather costs more than a few needless
+        evaluations; the results of the converged ones are kept). An element given ``f = 0`` returns ``x``.
         Scalars (one point) stay scalars. Raises ModelInputError if not converged in ``max_iter`` steps.
         """
         where = NumpyBackend.where  # one point (scalars): Python choices, no arrays
@@ -154,7 +154,9 @@ class NumpyBackend:
             x, f, df, lo, hi = np.broadcast_arrays(x, f, df, lo, hi)
             ftol = np.broadcast_to(ftol, x.shape)
             result = np.empty(x.shape)
-        idx, previous = None, None  # the elements iterating (None: all), the squares of their last Newton steps
+        # the elements iterating (None: all), the sizes of their last Newton steps (0: bisection) and the slopes before
+        # them, those of them already converged (None: none; they iterate on with the others, their results kept)
+        idx, previous, df_previous, converged = None, None, None, None
         for _ in range(max_iter):
             descending = df < 0
             step = f / where(descending, df, -1.0)
@@ -167,12 +169,19 @@ class NumpyBackend:
             size = np.abs(step)
             tol = xtol + _ULP4 * np.abs(x)
             done = (np.abs(f) <= ftol) | (hi - lo <= tol) | (ok & (size <= tol))
-            if previous is not None:  # quadratic convergence: the step after this one is about |s1|^3 / s0^2
-                done |= ok & (size * size * size <= tol * previous)
+            if previous is not None:  # the error left after this step: (f''/2f') s1^2, f'' from the slopes' change
+                left_after = 2.0 * np.abs(df - df_previous) * size * size  # times 1 / (|df| previous): 4x the error
+                done |= ok & (previous > 0) & (left_after <= np.abs(df) * previous * tol)
             moved = where(ok, newton, x)
             if scalar:
                 if done:
                     return moved
+            elif converged is not None:
+                if idx is None:
+                    np.copyto(result, moved, where=~converged)
+                else:
+                    result[idx] = np.where(converged, result[idx], moved)
+                done |= converged
             elif idx is None:
                 result[...] = moved
             else:
@@ -181,11 +190,15 @@ class NumpyBackend:
             if left == 0:
                 return result
             new = newton if all_newton else where(ok, newton, 0.5 * (lo + hi))
-            previous = size * size if all_newton else where(ok, size * size, 0.0)
+            previous = size if all_newton else where(ok, size, 0.0)
+            df_previous = df
             if left is not None and 4 * left <= done.size:  # iterate on the few left only
                 keep = np.nonzero(~done)
                 idx = keep if idx is None else tuple(i[keep] for i in idx)
-                new, lo, hi, previous, ftol = new[keep], lo[keep], hi[keep], previous[keep], ftol[keep]
+                new, lo, hi, previous, df_previous, ftol = (v[keep] for v in (new, lo, hi, previous, df, ftol))
+                converged = None
+            elif left is not None and left < done.size:
+                converged = done
             x = new
             f, df = fun(x, idx)
         raise ModelInputError(f"Newton root search did not converge in {max_iter} iterations: inputs far outside the "
