@@ -75,9 +75,8 @@ def spin_and_radius(prm, s, omega_in, omega_given, be):
     With (1) and (7), Re = c + d / Re^2 where c = R0 Q_RE0 - (R_omega - Re) and d = R0 Q_V1 (omega Re R0/V0)^2,
     i.e. the cubic f(Re) = Re^3 - c Re^2 - d = 0, which has exactly one positive root, above max(c, 0). Newton's
     method from the upper bound min(c + d/c^2, max(c, 0) + d^(1/3)) (where d <= 0.01 c^3 two fixed-point iterates
-    closer, still above the root) descends to it monotonically (f is convex there) and quadratically, at any speed
-    and slip (a plain fixed-point iteration diverges once 2 Q_V1 (omega R0/V0)^2 > 1, above about 840 m/s or
-    kappa = 52).
+    closer, still above the root) descends to it monotonically (f is convex there) and quadratically, at any speed and slip (a plain fixed-point iteration diverges once
+    2 Q_V1 (omega R0/V0)^2 > 1, above about 840 m/s or kappa = 52).
     """
     reduction = rolling_radius_reduction(prm, s.uFz, s.dpi, be)
     wheel_speed = (1.0 + s.ukappa) * s.vx  # omega Re (2.5)
