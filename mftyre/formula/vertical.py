@@ -74,8 +74,8 @@ def spin_and_radius(prm, s, omega_in, omega_given, be):
     Where the spin is not given it follows from the longitudinal slip: omega = (1 + kappa) Vx / Re (2.5).
     With (1) and (7), Re = c + d / Re^2 where c = R0 Q_RE0 - (R_omega - Re) and d = R0 Q_V1 (omega Re R0/V0)^2,
     i.e. the cubic f(Re) = Re^3 - c Re^2 - d = 0, which has exactly one positive root, above max(c, 0). Newton's
-    method from the upper bound min(c + d/c^2, max(c, 0) + d^(1/3)) (where d <= 0.01 c^3 two fixed-point iterates
-    closer, still above the root) descends to it monotonically (f is convex there) and quadratically, at any speed and slip (a plain fixed-point iteration diverges once
+    method from the upper bound min(c + d/c^2, max(c, 0) + d^(1/3)) descends to it monotonically (f is convex
+    there) and quadratically, at any speed and slip (a plain fixed-point iteration diverges once
     2 Q_V1 (omega R0/V0)^2 > 1, above about 840 m/s or kappa = 52).
     """
     reduction = rolling_radius_reduction(prm, s.uFz, s.dpi, be)
@@ -91,12 +91,6 @@ def spin_and_radius(prm, s, omega_in, omega_given, be):
         cube_bound = c_pos + d ** (1.0 / 3.0)
         re0 = be.where(c > 0, be.fmin(c + d / be.where(c > 0, c, 1.0) ** 2, cube_bound), cube_bound)
         re0 = be.where(d == 0, c, re0)  # no spin: Re = c
-        # where the spin adds little (d <= 0.01 c^3: road speeds), two fixed-point iterates Re = c + d/Re^2 more
-        # (each contracting by 2 d/Re^3 <= 0.02) bring the start far closer, still an upper bound: Newton stops a
-        # step earlier
-        near = be.logical_and(c > 0, d <= 0.01 * c**3)
-        for _ in range(2):
-            re0 = be.where(near, c + d / be.where(near, re0, 1.0) ** 2, re0)
 
         def newton(re):
             slope = 3.0 * re**2 - 2.0 * c * re
