@@ -137,48 +137,70 @@ class NumpyBackend:
         root; lo < hi), from ``x`` with ``f = fun(x)`` and slope ``df``. ``fun(x, idx) -> (value, slope)``
         evaluates the elements ``idx`` (a tuple of index arrays, None while every element is still iterating).
 
-        Safeguarded Newton: each evaluated point narrows the bracket; a Newton step that would leave it (or a slope
-        that is not negative) is replaced by bisection. Iterates until |f| <= ``ftol`` (a scalar or one value per
-        element), the Newton step is at most ``xtol`` (plus 4 ulp of x) or the bracket is that narrow, for every
-        element; the result is the last point moved by its Newton step where that stays in the bracket. An element
-        given ``f = 0`` returns ``x``. Scalars (one point) stay scalars. Raises ModelInputError if not converged in
-        ``max_iter`` steps.
+        Safeguarded Newton: a Newton step that would leave the bracket (or a slope that is not negative) is replaced
+        by bisection of the bracket narrowed by the evaluated points (narrowed on the steps where some element
+        bisects: a Newton step inside the bracket stays inside the narrowed one too). An element has converged when
+        |f| <= ``ftol`` (a scalar or one value per element), when its Newton step is at most ``xtol`` (plus 4 ulp of
+        x) or the bracket is that narrow, or when the error left after its Newton step s1, |f''/(2 f')| s1^2 with
+        f'' from the change of the slope over the Newton step s0 before, is estimated at a quarter of that at most;
+        the result is the last point moved by its Newton step where that stays in the bracket. All elements iterate
+        until at most a quarter of them are left, then only those (a gather costs more than a few needless
+        evaluations; the results of the converged ones are kept). An element given ``f = 0`` returns ``x``.
+        Scalars (one point) stay scalars. Raises ModelInputError if not converged in ``max_iter`` steps.
         """
         where = NumpyBackend.where  # one point (scalars): Python choices, no arrays
         scalar = all(np.ndim(v) == 0 for v in (x, f, df, lo, hi, ftol))
         if not scalar:
-            x, f, df, lo, hi = (np.array(v, dtype=float) for v in np.broadcast_arrays(x, f, df, lo, hi))
+            x, f, df, lo, hi = np.broadcast_arrays(x, f, df, lo, hi)
             ftol = np.broadcast_to(ftol, x.shape)
-        idx = None
+            result = np.empty(x.shape)
+        # the elements iterating (None: all), the sizes of their last Newton steps (0: bisection) and the slopes before
+        # them, those of them already converged (None: none; they iterate on with the others, their results kept)
+        idx, previous, df_previous, converged = None, None, None, None
         for _ in range(max_iter):
-            xi, fi, dfi, loi, hii = (v if idx is None else v[idx] for v in (x, f, df, lo, hi))
-            ftoli = ftol if idx is None else ftol[idx]
-            falling = fi > 0
-            loi, hii = where(falling, xi, loi), where(falling, hii, xi)
-            step = fi / where(dfi < 0, dfi, -1.0)
-            newton = xi - step
-            ok = (dfi < 0) & (newton >= loi) & (newton <= hii)
-            tol = xtol + _ULP4 * np.abs(xi)
-            done = (np.abs(fi) <= ftoli) | (ok & (np.abs(step) <= tol)) | (hii - loi <= tol)
-            new = where(ok, newton, 0.5 * (loi + hii))
-            if idx is None:
-                result = where(ok, newton, xi)
+            descending = df < 0
+            step = f / where(descending, df, -1.0)
+            newton = x - step
+            ok = descending & (newton >= lo) & (newton <= hi)  # the same in the bracket narrowed by x
+            all_newton = ok if scalar else ok.all()
+            if not all_newton:  # x narrows the bracket (only needed for bisection: a mixed where is dear)
+                falling = f > 0
+                lo, hi = where(falling, x, lo), where(falling, hi, x)
+            size = np.abs(step)
+            tol = xtol + _ULP4 * np.abs(x)
+            done = (np.abs(f) <= ftol) | (hi - lo <= tol) | (ok & (size <= tol))
+            if previous is not None:  # the error left after this step: (f''/2f') s1^2, f'' from the slopes' change
+                left_after = 2.0 * np.abs(df - df_previous) * size * size  # times 1 / (|df| previous): 4x the error
+                done |= ok & (previous > 0) & (left_after <= np.abs(df) * previous * tol)
+            moved = where(ok, newton, x)
+            if scalar:
+                if done:
+                    return moved
+            elif converged is not None:
+                if idx is None:
+                    np.copyto(result, moved, where=~converged)
+                else:
+                    result[idx] = np.where(converged, result[idx], moved)
+                done |= converged
+            elif idx is None:
+                result[...] = moved
             else:
-                result[idx] = np.where(ok, newton, xi)
-            if done.all():
+                result[idx] = moved
+            left = None if scalar else done.size - np.count_nonzero(done)
+            if left == 0:
                 return result
-            keep = ~done
-            if idx is None and not done.any():
-                sub = None
-            else:
-                sub = np.nonzero(keep) if idx is None else tuple(i[keep] for i in idx)
-                new, loi, hii = new[keep], loi[keep], hii[keep]
-            fnew, dfnew = fun(new, sub)
-            if sub is None:
-                x, f, df, lo, hi = new, fnew, dfnew, loi, hii
-            else:
-                x[sub], f[sub], df[sub], lo[sub], hi[sub] = new, fnew, dfnew, loi, hii
-            idx = sub
+            new = newton if all_newton else where(ok, newton, 0.5 * (lo + hi))
+            previous = size if all_newton else where(ok, size, 0.0)
+            df_previous = df
+            if left is not None and 4 * left <= done.size:  # iterate on the few left only
+                keep = np.nonzero(~done)
+                idx = keep if idx is None else tuple(i[keep] for i in idx)
+                new, lo, hi, previous, df_previous, ftol = (v[keep] for v in (new, lo, hi, previous, df, ftol))
+                converged = None
+            elif left is not None and left < done.size:
+                converged = done
+            x = new
+            f, df = fun(x, idx)
         raise ModelInputError(f"Newton root search did not converge in {max_iter} iterations: inputs far outside the "
                               "range the model was fitted for?")
 
