@@ -503,7 +503,8 @@ class SwiftTyre:
         ``(xa, za, vza, omega, u, x0w, grid, hw) -> x`` at the axle position ``xa``, height ``za`` (above the cam
         table's road), vertical speed ``vza`` and spin ``omega`` (with ``rim="torque"`` its first guess), ring
         inputs ``u`` (INPUT_NAMES) and the window of :attr:`step_function`: the same start (the steady-state load
-        at the deflection under the axle), ``iterations`` Newton steps (QR solves) on :attr:`equilibrium_unknowns`,
+        at the deflection under the axle), ``iterations`` Newton steps (:func:`_newton_inverse`, as initial_state) on
+        :attr:`equilibrium_unknowns`,
         then the contact solution stored in the memory entries."""
         import casadi as ca
 
@@ -529,7 +530,7 @@ class SwiftTyre:
         unknown, eqs = self.equilibrium_unknowns
         s = ca.MX.sym("s", len(STATE_NAMES))
         r = self._rhs_window(s, u, x0w, grid, hw, 0.0)[0][eqs]
-        delta = ca.solve(ca.jacobian(r, s)[:, unknown], -r, "qr")
+        delta = -ca.mtimes(_newton_inverse(ca.jacobian(r, s)[:, unknown]), r)
         parts = ca.vertsplit(s)
         for k, i in enumerate(unknown):
             parts[i] = parts[i] + delta[k]
@@ -573,8 +574,7 @@ class SwiftTyre:
         inverse, last = None, np.inf
         for _ in range(iterations):  # Newton; compiled, the Jacobian is kept while the steps shrink tenfold
             if inverse is None or self._compiled is None:
-                r, jac = (np.asarray(v) for v in self._equilibrium(s, u, *window))
-                inverse = np.linalg.pinv(jac, rtol=np.finfo(float).eps * max(jac.shape))  # least squares
+                r, inverse = (np.asarray(v) for v in self._equilibrium(s, u, *window))
             else:
                 r = self._compiled.rhs(s, u, window[0], i0)[0][eqs]
             step = -inverse @ r.ravel()
@@ -598,7 +598,30 @@ class SwiftTyre:
             x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
             d = self._rhs_window(xs, us, x0w, grid, hw, 0.0)[0][eqs]
             self._equilibrium = ca.Function("equilibrium", [xs, us, x0w, grid, hw],
-                                            [d, ca.jacobian(d, xs)[:, unknown]])
+                                            [d, _newton_inverse(ca.jacobian(d, xs)[:, unknown])])
+
+
+#: Tikhonov weight of the static Newton step on the equilibrated Jacobian (rows and columns of unit norm): far below
+#: the squared singular values of a determined direction (>= 1e-6 in the cases tested), far above the round-off of
+#: the normal equations (condition <= 1 + n / 1e-12).
+_TIKHONOV = 1e-12
+
+
+def _newton_inverse(jac):
+    """M with the static Newton step = -M r (CasADi, the one home of the step of :meth:`SwiftTyre.initial_state`
+    and :meth:`SwiftTyre.equilibrium_function`): regularised least squares (Levenberg-Marquardt with a fixed small
+    weight) on the Jacobian scaled to rows and columns of unit norm. At standstill the Jacobian is singular (the
+    slip states and patch deflections are undetermined: any preload the static grip holds is an equilibrium);
+    the step then has no component in its null space, so those states keep their start (no slip, no deflection)
+    where a plain solve fails (old: QR, "no static equilibrium found" at vx = 0)."""
+    import casadi as ca
+
+    rows = 1.0 / ca.fmax(ca.sqrt(ca.sum2(jac**2)), 1e-300)
+    scaled = ca.mtimes(ca.diag(rows), jac)
+    cols = 1.0 / ca.fmax(ca.sqrt(ca.sum1(scaled**2)), 1e-300).T
+    scaled = ca.mtimes(scaled, ca.diag(cols))
+    normal = ca.mtimes(scaled.T, scaled) + _TIKHONOV * ca.DM.eye(jac.shape[1])
+    return ca.mtimes(ca.diag(cols), ca.mtimes(ca.solve(normal, scaled.T, "qr"), ca.diag(rows)))
 
 
 def _remember_contact(x, out):
