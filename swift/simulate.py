@@ -39,7 +39,8 @@ and loaded through :func:`mftyre.compiled.cached_library`: verified before loadi
 equations' source); the cam heights come from a window of ``window`` samples of the cam-height table around the
 wheel, passed by pointer (no copy), so one compiled function serves any road. The window must cover the wheel's
 travel in one step plus ``TANDEM_REACH``: a longer step is split into equal parts, so results do not depend on
-speed, step size or start position. :meth:`SwiftTyre.run` runs the whole loop of steps in C (:data:`_DRIVER`, the
+speed, step size or start position; so is a step longer than ``substeps`` RK4 steps of :data:`MAX_RK4_STEP` (the
+stiff patch and slip states at standstill). :meth:`SwiftTyre.run` runs the whole loop of steps in C (:data:`_DRIVER`, the
 same steps as :meth:`SwiftTyre.step`, which makes one ctypes call per step). ``SwiftTyre.step_function`` is the
 CasADi step itself, for code generation (FMU).
 """
@@ -78,6 +79,12 @@ _SOURCE_HASH = hashlib.sha256(b"".join(Path(__file__).with_name(n).read_bytes()
 #: Distance [m] the cam lookups may reach beyond the belt centre: half the tandem base plus the forward shift of
 #: the contact centre (0.1 m each would need a 2a of 0.24 m and a slope of 20 deg).
 TANDEM_REACH = 0.25
+#: Longest RK4 step [s]. At standstill the patch deflections and transient slips form a stiff loop (the lateral one
+#: (alpha', u_y with the belt's lateral and camber motion) decays at up to ~1700 1/s on the sample file parked on a
+#: 0-15 % grade, a rate the speed-based relaxation length does not bound); classical RK4 is stable for |lambda| h < 2.78,
+#: so 2.5 ms steps (5 ms calls of 2 substeps) grew it from round-off into mm of drift. 1 ms keeps a margin of 1.6;
+#: a longer step is split into equal parts (1 ms output steps are never split).
+MAX_RK4_STEP = 1e-3
 #: Newton passes of the contact solution in the stepper, from the solution of the previous RK stage.
 WARM_PASSES = 1
 
@@ -350,11 +357,16 @@ class SwiftTyre:
         """Largest wheel travel [m] one compiled call may cover: the window half-width less ``TANDEM_REACH``."""
         return self.window // 2 * self.table.dx - TANDEM_REACH
 
+    @property
+    def _max_call(self):
+        """Longest step [s] one compiled call may cover: ``substeps`` RK4 steps of at most :data:`MAX_RK4_STEP`."""
+        return self.substeps * MAX_RK4_STEP
+
     def step(self, state, inputs: StepInputs, dt: float):
         """One step of length ``dt``: (state_next, :class:`Outputs`: the outputs by name). See the module notes for
         the API. A step over which the wheel would travel further than the cam-height window reaches is split into
         equal parts. Compiled: one C call (:data:`_DRIVER`) checks the inputs, imposes them, places the window and
-        splits the step; state_next and the outputs are views of preallocated blocks, never overwritten later."""
+        splits the step (travel, :data:`MAX_RK4_STEP`); state_next and the outputs are views of preallocated blocks, never overwritten later."""
         c = self._compiled
         if c is None:
             return self._step_casadi(state, inputs, dt)
@@ -405,7 +417,7 @@ class SwiftTyre:
             raise ModelInputError(f"input 'p' (inflation pressure) must be positive [Pa], got {inputs.p!r}")
         state = self._impose(state, inputs)
         u = self._u(inputs)
-        n = max(1, math.ceil(abs(inputs.vx) * dt / self._reach))
+        n = max(1, math.ceil(abs(inputs.vx) * dt / self._reach), math.ceil(dt / self._max_call - 1e-9))
         for _ in range(n):
             i0 = self._window_start(state[_S["xb"]])
             x0w = self.table.x0 + i0 * self.table.dx
@@ -655,7 +667,8 @@ def _advancing(inputs: StepInputs):
 #: The stepping loop around the generated ``swift_step`` (appended to its C file): per step, the inputs the
 #: configuration uses (``USED``) are checked (finite, p > 0), the imposed axle x, z, vz and rim spin are written into
 #: the state (as :meth:`SwiftTyre._impose`), the step is split into equal parts where the wheel would travel
-#: further than ``reach`` (cfg[3]), and the window of the cam table (``table``, cfg: x0, dx, samples, reach) starts
+#: further than ``reach`` (cfg[3]) or the step is longer than ``substeps`` RK4 steps of MAX_RK4_STEP (cfg[4]), and
+#: the window of the cam table (``table``, cfg: x0, dx, samples, reach, longest call) starts
 #: ``WINDOW / 2`` samples behind the belt centre. ``in``: one row of NI values per step (:data:`_ROW`); ``scal``: dt,
 #: number of steps; all pointers in one array ``p`` (one argument: the cheapest ctypes call). Returns 0, k + 1
 #: when step k leaves the table, -1 for a non-finite or negative step or a travel beyond 1e6 windows, -2 for an
@@ -685,7 +698,7 @@ CASADI_SYMBOL_EXPORT int swift_run(void** p) {
     s[%(xa)d] = u[NU];
     if (%(height)d) { s[%(za)d] = u[NU + 1]; s[%(vza)d] = u[NU + 2]; }
     if (%(speed)d) s[%(oma)d] = u[NU + 3];
-    parts = ceil(fabs(u[0]) * dt / cfg[3]);
+    parts = fmax(ceil(fabs(u[0]) * dt / cfg[3]), ceil(dt / cfg[4] - 1e-9));
     if (!(parts < 1e6)) return -1;
     m = parts < 1 ? 1 : (casadi_int) parts;
     h = dt / m;
@@ -809,7 +822,7 @@ class _Compiled:
         self.work_sizes = tuple(v.value for v in sz)
         self._tyre, self.lock = tyre, threading.Lock()
         self._used = np.array(_used(tyre))
-        self._cfg = np.array([tyre.table.x0, tyre.table.dx, tyre.table.h.size, tyre._reach])
+        self._cfg = np.array([tyre.table.x0, tyre.table.dx, tyre.table.h.size, tyre._reach, tyre._max_call])
         self._fn = self._lib.swift_run  # called with one ctypes array of 12 pointers (no argtypes: no conversion)
         self.step1 = self._lib.swift_step1  # one step: inputs, dt, 1, source and target rows in io
         self.pack = struct.Struct(f"{_NI + 4}d").pack_into
