@@ -40,8 +40,8 @@ equations' source); the cam heights come from a window of ``window`` samples of 
 wheel, passed by pointer (no copy), so one compiled function serves any road. The window must cover the wheel's
 travel in one step plus ``TANDEM_REACH``: a longer step is split into equal parts, so results do not depend on
 speed, step size or start position; so is a step longer than ``substeps`` RK4 steps of :data:`MAX_RK4_STEP` (the
-stiff patch and slip states at standstill). :meth:`SwiftTyre.run` runs the whole loop of steps in C (:data:`_DRIVER`, the
-same steps as :meth:`SwiftTyre.step`, which makes one ctypes call per step). ``SwiftTyre.step_function`` is the
+stiff patch and slip states at standstill). :meth:`SwiftTyre.run` runs the whole loop of steps in C (:data:`_DRIVER`,
+the same steps as :meth:`SwiftTyre.step`, which makes one ctypes call per step). ``SwiftTyre.step_function`` is the
 CasADi step itself, for code generation (FMU).
 """
 from __future__ import annotations
@@ -81,9 +81,9 @@ _SOURCE_HASH = hashlib.sha256(b"".join(Path(__file__).with_name(n).read_bytes()
 TANDEM_REACH = 0.25
 #: Longest RK4 step [s]. At standstill the patch deflections and transient slips form a stiff loop (the lateral one
 #: (alpha', u_y with the belt's lateral and camber motion) decays at up to ~1700 1/s on the sample file parked on a
-#: 0-15 % grade, a rate the speed-based relaxation length does not bound); classical RK4 is stable for |lambda| h < 2.78,
-#: so 2.5 ms steps (5 ms calls of 2 substeps) grew it from round-off into mm of drift. 1 ms keeps a margin of 1.6;
-#: a longer step is split into equal parts (1 ms output steps are never split).
+#: 0-15 % grade, a rate the speed-based relaxation length does not bound); classical RK4 is stable for
+#: |lambda| h < 2.78, so 2.5 ms steps (5 ms calls of 2 substeps) grew it from round-off into mm of drift. 1 ms
+#: keeps a margin of 1.6; a longer step is split into equal parts (1 ms output steps are never split).
 MAX_RK4_STEP = 1e-3
 #: Newton passes of the contact solution in the stepper, from the solution of the previous RK stage.
 WARM_PASSES = 1
@@ -366,7 +366,8 @@ class SwiftTyre:
         """One step of length ``dt``: (state_next, :class:`Outputs`: the outputs by name). See the module notes for
         the API. A step over which the wheel would travel further than the cam-height window reaches is split into
         equal parts. Compiled: one C call (:data:`_DRIVER`) checks the inputs, imposes them, places the window and
-        splits the step (travel, :data:`MAX_RK4_STEP`); state_next and the outputs are views of preallocated blocks, never overwritten later."""
+        splits the step (travel, :data:`MAX_RK4_STEP`); state_next and the outputs are views of preallocated blocks,
+        never overwritten later."""
         c = self._compiled
         if c is None:
             return self._step_casadi(state, inputs, dt)
@@ -613,9 +614,9 @@ class SwiftTyre:
                                             [d, _newton_inverse(ca.jacobian(d, xs)[:, unknown])])
 
 
-#: Tikhonov weight of the static Newton step on the equilibrated Jacobian (rows and columns of unit norm): far below
-#: the squared singular values of a determined direction (>= 1e-6 in the cases tested), far above the round-off of
-#: the normal equations (condition <= 1 + n / 1e-12).
+#: Tikhonov weight of the static Newton step on the equilibrated Jacobian (rows and columns of unit norm): small
+#: against the squared singular values of the determined directions (away from standstill the step is Newton's: the
+#: equilibrium converges to round-off), large against the round-off of the normal equations (condition <= n / 1e-12).
 _TIKHONOV = 1e-12
 
 
