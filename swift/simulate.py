@@ -39,8 +39,9 @@ and loaded through :func:`mftyre.compiled.cached_library`: verified before loadi
 equations' source); the cam heights come from a window of ``window`` samples of the cam-height table around the
 wheel, passed by pointer (no copy), so one compiled function serves any road. The window must cover the wheel's
 travel in one step plus ``TANDEM_REACH``: a longer step is split into equal parts, so results do not depend on
-speed, step size or start position. :meth:`SwiftTyre.run` runs the whole loop of steps in C (:data:`_DRIVER`, the
-same steps as :meth:`SwiftTyre.step`, which makes one ctypes call per step). ``SwiftTyre.step_function`` is the
+speed, step size or start position; so is a step longer than ``substeps`` RK4 steps of :data:`MAX_RK4_STEP` (the
+stiff patch and slip states at standstill). :meth:`SwiftTyre.run` runs the whole loop of steps in C (:data:`_DRIVER`,
+the same steps as :meth:`SwiftTyre.step`, which makes one ctypes call per step). ``SwiftTyre.step_function`` is the
 CasADi step itself, for code generation (FMU).
 """
 from __future__ import annotations
@@ -78,6 +79,12 @@ _SOURCE_HASH = hashlib.sha256(b"".join(Path(__file__).with_name(n).read_bytes()
 #: Distance [m] the cam lookups may reach beyond the belt centre: half the tandem base plus the forward shift of
 #: the contact centre (0.1 m each would need a 2a of 0.24 m and a slope of 20 deg).
 TANDEM_REACH = 0.25
+#: Longest RK4 step [s]. At standstill the patch deflections and transient slips form a stiff loop (the lateral one
+#: (alpha', u_y with the belt's lateral and camber motion) decays at up to ~1700 1/s on the sample file parked on a
+#: 0-15 % grade, a rate the speed-based relaxation length does not bound); classical RK4 is stable for
+#: |lambda| h < 2.78, so 2.5 ms steps (5 ms calls of 2 substeps) grew it from round-off into mm of drift. 1 ms
+#: keeps a margin of 1.6; a longer step is split into equal parts (1 ms output steps are never split).
+MAX_RK4_STEP = 1e-3
 #: Newton passes of the contact solution in the stepper, from the solution of the previous RK stage.
 WARM_PASSES = 1
 
@@ -350,11 +357,17 @@ class SwiftTyre:
         """Largest wheel travel [m] one compiled call may cover: the window half-width less ``TANDEM_REACH``."""
         return self.window // 2 * self.table.dx - TANDEM_REACH
 
+    @property
+    def _max_call(self):
+        """Longest step [s] one compiled call may cover: ``substeps`` RK4 steps of at most :data:`MAX_RK4_STEP`."""
+        return self.substeps * MAX_RK4_STEP
+
     def step(self, state, inputs: StepInputs, dt: float):
         """One step of length ``dt``: (state_next, :class:`Outputs`: the outputs by name). See the module notes for
         the API. A step over which the wheel would travel further than the cam-height window reaches is split into
         equal parts. Compiled: one C call (:data:`_DRIVER`) checks the inputs, imposes them, places the window and
-        splits the step; state_next and the outputs are views of preallocated blocks, never overwritten later."""
+        splits the step (travel, :data:`MAX_RK4_STEP`); state_next and the outputs are views of preallocated blocks,
+        never overwritten later."""
         c = self._compiled
         if c is None:
             return self._step_casadi(state, inputs, dt)
@@ -405,7 +418,7 @@ class SwiftTyre:
             raise ModelInputError(f"input 'p' (inflation pressure) must be positive [Pa], got {inputs.p!r}")
         state = self._impose(state, inputs)
         u = self._u(inputs)
-        n = max(1, math.ceil(abs(inputs.vx) * dt / self._reach))
+        n = max(1, math.ceil(abs(inputs.vx) * dt / self._reach), math.ceil(dt / self._max_call - 1e-9))
         for _ in range(n):
             i0 = self._window_start(state[_S["xb"]])
             x0w = self.table.x0 + i0 * self.table.dx
@@ -503,7 +516,8 @@ class SwiftTyre:
         ``(xa, za, vza, omega, u, x0w, grid, hw) -> x`` at the axle position ``xa``, height ``za`` (above the cam
         table's road), vertical speed ``vza`` and spin ``omega`` (with ``rim="torque"`` its first guess), ring
         inputs ``u`` (INPUT_NAMES) and the window of :attr:`step_function`: the same start (the steady-state load
-        at the deflection under the axle), ``iterations`` Newton steps (QR solves) on :attr:`equilibrium_unknowns`,
+        at the deflection under the axle), ``iterations`` Newton steps (:func:`_newton_inverse`, as initial_state) on
+        :attr:`equilibrium_unknowns`,
         then the contact solution stored in the memory entries."""
         import casadi as ca
 
@@ -529,7 +543,7 @@ class SwiftTyre:
         unknown, eqs = self.equilibrium_unknowns
         s = ca.MX.sym("s", len(STATE_NAMES))
         r = self._rhs_window(s, u, x0w, grid, hw, 0.0)[0][eqs]
-        delta = ca.solve(ca.jacobian(r, s)[:, unknown], -r, "qr")
+        delta = -ca.mtimes(_newton_inverse(ca.jacobian(r, s)[:, unknown]), r)
         parts = ca.vertsplit(s)
         for k, i in enumerate(unknown):
             parts[i] = parts[i] + delta[k]
@@ -573,8 +587,7 @@ class SwiftTyre:
         inverse, last = None, np.inf
         for _ in range(iterations):  # Newton; compiled, the Jacobian is kept while the steps shrink tenfold
             if inverse is None or self._compiled is None:
-                r, jac = (np.asarray(v) for v in self._equilibrium(s, u, *window))
-                inverse = np.linalg.pinv(jac, rtol=np.finfo(float).eps * max(jac.shape))  # least squares
+                r, inverse = (np.asarray(v) for v in self._equilibrium(s, u, *window))
             else:
                 r = self._compiled.rhs(s, u, window[0], i0)[0][eqs]
             step = -inverse @ r.ravel()
@@ -598,7 +611,30 @@ class SwiftTyre:
             x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
             d = self._rhs_window(xs, us, x0w, grid, hw, 0.0)[0][eqs]
             self._equilibrium = ca.Function("equilibrium", [xs, us, x0w, grid, hw],
-                                            [d, ca.jacobian(d, xs)[:, unknown]])
+                                            [d, _newton_inverse(ca.jacobian(d, xs)[:, unknown])])
+
+
+#: Tikhonov weight of the static Newton step on the equilibrated Jacobian (rows and columns of unit norm): small
+#: against the squared singular values of the determined directions (away from standstill the step is Newton's: the
+#: equilibrium converges to round-off), large against the round-off of the normal equations (condition <= n / 1e-12).
+_TIKHONOV = 1e-12
+
+
+def _newton_inverse(jac):
+    """M with the static Newton step = -M r (CasADi, the one home of the step of :meth:`SwiftTyre.initial_state`
+    and :meth:`SwiftTyre.equilibrium_function`): regularised least squares (Levenberg-Marquardt with a fixed small
+    weight) on the Jacobian scaled to rows and columns of unit norm. At standstill the Jacobian is singular (the
+    slip states and patch deflections are undetermined: any preload the static grip holds is an equilibrium);
+    the step then has no component in its null space, so those states keep their start (no slip, no deflection)
+    where a plain solve fails (old: QR, "no static equilibrium found" at vx = 0)."""
+    import casadi as ca
+
+    rows = 1.0 / ca.fmax(ca.sqrt(ca.sum2(jac**2)), 1e-300)
+    scaled = ca.mtimes(ca.diag(rows), jac)
+    cols = 1.0 / ca.fmax(ca.sqrt(ca.sum1(scaled**2)), 1e-300).T
+    scaled = ca.mtimes(scaled, ca.diag(cols))
+    normal = ca.mtimes(scaled.T, scaled) + _TIKHONOV * ca.DM.eye(jac.shape[1])
+    return ca.mtimes(ca.diag(cols), ca.mtimes(ca.solve(normal, scaled.T, "qr"), ca.diag(rows)))
 
 
 def _remember_contact(x, out):
@@ -632,7 +668,8 @@ def _advancing(inputs: StepInputs):
 #: The stepping loop around the generated ``swift_step`` (appended to its C file): per step, the inputs the
 #: configuration uses (``USED``) are checked (finite, p > 0), the imposed axle x, z, vz and rim spin are written into
 #: the state (as :meth:`SwiftTyre._impose`), the step is split into equal parts where the wheel would travel
-#: further than ``reach`` (cfg[3]), and the window of the cam table (``table``, cfg: x0, dx, samples, reach) starts
+#: further than ``reach`` (cfg[3]) or the step is longer than ``substeps`` RK4 steps of MAX_RK4_STEP (cfg[4]), and
+#: the window of the cam table (``table``, cfg: x0, dx, samples, reach, longest call) starts
 #: ``WINDOW / 2`` samples behind the belt centre. ``in``: one row of NI values per step (:data:`_ROW`); ``scal``: dt,
 #: number of steps; all pointers in one array ``p`` (one argument: the cheapest ctypes call). Returns 0, k + 1
 #: when step k leaves the table, -1 for a non-finite or negative step or a travel beyond 1e6 windows, -2 for an
@@ -662,7 +699,7 @@ CASADI_SYMBOL_EXPORT int swift_run(void** p) {
     s[%(xa)d] = u[NU];
     if (%(height)d) { s[%(za)d] = u[NU + 1]; s[%(vza)d] = u[NU + 2]; }
     if (%(speed)d) s[%(oma)d] = u[NU + 3];
-    parts = ceil(fabs(u[0]) * dt / cfg[3]);
+    parts = fmax(ceil(fabs(u[0]) * dt / cfg[3]), ceil(dt / cfg[4] - 1e-9));
     if (!(parts < 1e6)) return -1;
     m = parts < 1 ? 1 : (casadi_int) parts;
     h = dt / m;
@@ -786,7 +823,7 @@ class _Compiled:
         self.work_sizes = tuple(v.value for v in sz)
         self._tyre, self.lock = tyre, threading.Lock()
         self._used = np.array(_used(tyre))
-        self._cfg = np.array([tyre.table.x0, tyre.table.dx, tyre.table.h.size, tyre._reach])
+        self._cfg = np.array([tyre.table.x0, tyre.table.dx, tyre.table.h.size, tyre._reach, tyre._max_call])
         self._fn = self._lib.swift_run  # called with one ctypes array of 12 pointers (no argtypes: no conversion)
         self.step1 = self._lib.swift_step1  # one step: inputs, dt, 1, source and target rows in io
         self.pack = struct.Struct(f"{_NI + 4}d").pack_into

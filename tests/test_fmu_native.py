@@ -274,6 +274,45 @@ def test_native_equals_python_swift(fmus, swift_wheel, tmp_path, scenario):
     nat.close()
 
 
+def test_native_swift_starts_at_standstill(fmus, models, swift_wheel):
+    """vx = 0, omega = 0 (old: "no static equilibrium found" from the FMU, CasADi "Evaluation failed" from
+    SwiftWheel: the equilibrium's QR solve met the Jacobian that is singular at standstill): the native FMU and its
+    Python twin start from swift.SwiftTyre.initial_state's static state, Fz is the contact load plus the belt's
+    weight and nothing moves over 1 s (5 ms communication steps)."""
+    from swift import CamTable, StepInputs, SwiftTyre
+    from swift.ring import OUTPUT_NAMES, RingConstants
+
+    z, x0 = 0.29, 2.3  # on the flat before the cleat, within the wheel's cam table
+    res = fmpy.simulate_fmu(str(fmus["swift"]), stop_time=1.0, output_interval=5e-3,
+                            start_values=dict(vx=0.0, omega=0.0, z=z, x_start=x0))
+    f = swift_wheel.functions
+    table = CamTable(f.table_x0, f.table_dx, f.table_h[0::2], f.table_h[1::2])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ref = SwiftTyre(models["62"], table, substeps=1)
+    u = StepInputs(x=x0, vx=0.0, z=z, omega=0.0)
+    out = dict(zip(OUTPUT_NAMES, ref.outputs(ref.initial_state(u), u)))
+    prm = models["62"].params
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        belt_weight = RingConstants.from_model(models["62"], 30.0, 0.3).mb * prm.GRAVITY
+    # Fx: the undetermined slip/deflection of standstill stays at its start up to the frozen-Jacobian steps of
+    # initial_state (1.5e-5 N apart)
+    assert res["Fz"][0] == pytest.approx(out["fz"], rel=1e-9) and res["Fx"][0] == pytest.approx(out["fx"], abs=1e-4)
+    assert res["Fz"][0] == pytest.approx(res["Fz_c"][0] + belt_weight, rel=1e-12)
+    assert res["Fz"][0] > 0.8 * float(models["62"].vertical_force(z))  # loaded, near the static relation
+    assert np.ptp(res["Fz"]) < 1e-6 and np.ptp(res["Fx"]) < 1e-6 and np.ptp(res["x_road"]) == 0.0
+    swift_wheel.set_inputs(**dict(zip(f.input_names, f.input_starts)))  # the fixture is shared: start values
+    swift_wheel.set_inputs(vx=0.0, omega=0.0, z=z)
+    swift_wheel.set_parameters(x_start=x0)
+    swift_wheel.initialise()
+    for _ in range(20):
+        swift_wheel.step(5e-3)
+    twin = swift_wheel.outputs()
+    for name in ("Fx", "Fy", "Fz", "My", "Mz"):
+        assert twin[name] == pytest.approx(res[name][20], rel=1e-9, abs=1e-9), name
+
+
 def test_native_swift_road_inputs_equal_swift_tyre(fmus, models, swift_wheel, tmp_path):
     """road_z and road_camber mean what modelDescription says: the FMU = swift.SwiftTyre.step on the same cam table
     with the axle height taken above the lifted road (z - road_z) and the ring's road_camber input."""

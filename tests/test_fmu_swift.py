@@ -339,3 +339,24 @@ def test_obstacle_met_where_it_is_for_far_starts(swift_fmu, tmp_path):
         assert rows[i][1]["x_road"] == pytest.approx(xs + 10.0 * rows[i][0], abs=1e-9)
         fmu.close()
     assert peaks[1] - peaks[0] == pytest.approx(0.26, abs=1.5e-3)
+
+
+def test_standstill_start_and_rest(model, swift_fmu, tmp_path):
+    """vx = 0, omega = 0, 5 ms communication steps for 1 s: the FMU starts from SwiftTyre.initial_state's static
+    state, equals SwiftTyre.step and does not move (Fz, Fx constant)."""
+    z = 0.29
+    fmu = Slave(swift_fmu, tmp_path, start={"road": CLEAT, "vx": 0.0, "omega": 0.0, "z": z})
+    assert fmu.status() == 0, fmu.messages
+    ref = SwiftTyre(model, Cleat(x0=1.0, length=0.05, height=0.01), axle="height", rim="speed",
+                    x_range=(-2.0, 8.0))
+    u = StepInputs(x=0.0, vx=0.0, z=z, omega=0.0)
+    state = ref.initial_state(u)
+    _assert_close(model, fmu.get(*OUT), ref.step(state, u, 0.0)[1], MAPPED, where="after initialisation")
+    rows = _run(fmu, [5e-3] * 200)
+    for _ in range(200):
+        state, r = ref.step(state, u, 5e-3)
+    _assert_close(model, rows[-1][1], r, MAPPED, where="after 1 s")
+    fz = [o["Fz"] for _, o in rows]
+    assert np.ptp(fz) < 1e-6 and fz[0] > 0.8 * float(model.vertical_force(z))
+    assert np.ptp([o["Fx"] for _, o in rows]) < 1e-6 and rows[-1][1]["x_road"] == 0.0
+    fmu.close()
