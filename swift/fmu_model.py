@@ -16,7 +16,8 @@ step), spin imposed (``omega``); the road is the profile lifted by ``road_z`` (h
 ``x_start`` on the road (x_road = x_start + integral of vx dt: obstacles are met where they are, whatever the
 start) in static equilibrium (the Newton iteration of
 :meth:`swift.simulate.SwiftTyre.equilibrium_function`, 30 steps). A step of length h is split into
-n = max(ceil(h / max_step), ceil(|vx| h / MAX_TRAVEL)) equal RK4 steps (``SUBSTEPS``); before each the
+n = max(ceil(h / min(max_step, MAX_RK4_STEP)), ceil(|vx| h / MAX_TRAVEL)) equal RK4 steps (``SUBSTEPS``; RK4 steps
+above MAX_RK4_STEP = 1 ms let a parked tyre drift, see swift.simulate); before each the
 cam-height window (``WINDOW`` samples of the table, step ``TABLE_DX``) is placed around the belt, clamped to the table, whose
 ends are constant road (the table spans the obstacles plus the cam reach plus a window on each side), so any
 distance can be driven. The rim's lateral position is the frame origin (the belt's y is moved back by vy dt
@@ -36,6 +37,7 @@ from mftyre.transient import StateFunctions
 from .enveloping import Cams
 from .ring import INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES
 from .road import parse_road
+from .simulate import MAX_RK4_STEP
 
 __all__ = ["SwiftWheel", "swift_functions", "INPUTS", "OUTPUTS", "PARAMETERS", "TABLE_DX", "WINDOW"]
 
@@ -63,7 +65,8 @@ INPUTS = {  # name -> (unit, start, description)
 }
 PARAMETERS = {
     "x_start": ("m", "wheel-centre position on the road profile at the start"),
-    "max_step": ("s", "longest internal RK4 step"),
+    "max_step": ("s", "longest internal RK4 step (steps are never longer than swift.simulate.MAX_RK4_STEP = 1 ms, "
+                 "the longest a parked tyre is stable with)"),
 }
 OUTPUTS = {  # name -> (unit, description, ring output or state)
     "Fx": ("N", "force on the rim along ISO-W x, at the wheel centre"),
@@ -175,6 +178,7 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
     grid_v = np.ascontiguousarray(table.dx * np.arange(WINDOW))
     extra = (f"#define ROAD_N {table.h.size}\n#define ROAD_WINDOW {WINDOW}\n#define ROAD_X0 {table.x0!r}\n"
              f"#define ROAD_DX {table.dx!r}\n#define SWIFT_MAX_TRAVEL {MAX_TRAVEL!r}\n"
+             f"#define SWIFT_MAX_RK4_STEP {MAX_RK4_STEP!r}\n"
              + "".join(f"#define S_{n.upper()} {i}\n" for i, n in enumerate(STATE_NAMES))
              + "/* cam height and road-camber slope per sample, interleaved */\n"
              + "static const double ROAD_H[2 * ROAD_N] = {" + ",".join(repr(float(v)) for v in h) + "};\n"
@@ -228,7 +232,7 @@ class SwiftWheel:
         U = dict(zip(self.functions.input_names, self.u))
         x = self.state.copy()
         x[_S["za"]], x[_S["vza"]], x[_S["oma"]] = U["z"], U["vz"], U["omega"]
-        n = max(1, math.ceil(h / self.q[1] - 1e-9), math.ceil(abs(U["vx"]) * h / MAX_TRAVEL))
+        n = max(1, math.ceil(h / min(self.q[1], MAX_RK4_STEP) - 1e-9), math.ceil(abs(U["vx"]) * h / MAX_TRAVEL))
         for _ in range(n):
             x = np.asarray(self.functions.step(x, self.u, h / n, *self._window(x[_S["xb"]])), dtype=float).ravel()
         self.state = x

@@ -313,6 +313,33 @@ def test_native_swift_starts_at_standstill(fmus, models, swift_wheel):
         assert twin[name] == pytest.approx(res[name][20], rel=1e-9, abs=1e-9), name
 
 
+def test_native_swift_rk4_step_never_above_the_stable_limit(fmus, swift_wheel):
+    """max_step above swift.simulate.MAX_RK4_STEP (1 ms) still steps RK4 at <= 1 ms: a 5 ms max_step gives the
+    1 ms run exactly (old: RK4 steps of 5 ms, at which a parked tyre on a 5-15 % grade drifts by millimetres), in
+    the native FMU and in its Python twin alike."""
+    from swift.simulate import MAX_RK4_STEP
+
+    runs = {m: fmpy.simulate_fmu(str(fmus["swift"]), stop_time=0.3, output_interval=5e-3,
+                                 start_values=dict(vx=10.0, omega=10.0 / 0.3, x_start=2.3, max_step=m))
+            for m in (MAX_RK4_STEP, 5 * MAX_RK4_STEP)}
+    for name in ("Fx", "Fz", "My"):
+        np.testing.assert_array_equal(runs[MAX_RK4_STEP][name], runs[5 * MAX_RK4_STEP][name], err_msg=name)
+    f = swift_wheel.functions
+    twins = {}
+    for m in (MAX_RK4_STEP, 5 * MAX_RK4_STEP):
+        swift_wheel.set_inputs(**dict(zip(f.input_names, f.input_starts)))  # the fixture is shared: start values
+        swift_wheel.set_inputs(vx=10.0, omega=10.0 / 0.3)
+        swift_wheel.set_parameters(x_start=2.3, max_step=m)
+        swift_wheel.initialise()
+        for _ in range(20):
+            swift_wheel.step(5e-3)
+        twins[m] = swift_wheel.outputs()
+    swift_wheel.set_parameters(max_step=MAX_RK4_STEP)
+    for name in ("Fx", "Fz"):
+        assert twins[5 * MAX_RK4_STEP][name] == twins[MAX_RK4_STEP][name], name
+        assert twins[MAX_RK4_STEP][name] == pytest.approx(runs[MAX_RK4_STEP][name][20], rel=1e-9, abs=1e-9), name
+
+
 def test_native_swift_road_inputs_equal_swift_tyre(fmus, models, swift_wheel, tmp_path):
     """road_z and road_camber mean what modelDescription says: the FMU = swift.SwiftTyre.step on the same cam table
     with the axle height taken above the lifted road (z - road_z) and the ring's road_camber input."""

@@ -103,7 +103,9 @@ int glue_init(GlueWork *g, const double *u, const double *q, double *x, char *ms
 
 int glue_step(GlueWork *g, double *x, const double *u, const double *q, double h) {
     double x_next[TYRE_NX];
-    double n1 = ceil(h / q[TYRE_Q_MAX_STEP] - 1e-9), n2 = ceil(fabs(u[TYRE_U_VX]) * h / SWIFT_MAX_TRAVEL);
+    /* RK4 steps of at most max_step and never above SWIFT_MAX_RK4_STEP (stability of the parked tyre) */
+    double n1 = ceil(h / fmin(q[TYRE_Q_MAX_STEP], SWIFT_MAX_RK4_STEP) - 1e-9);
+    double n2 = ceil(fabs(u[TYRE_U_VX]) * h / SWIFT_MAX_TRAVEL);
     double nd = n1 > n2 ? n1 : n2;
     long n;
     if (!(nd < 1e7)) return 1; /* a step that would need more than 1e7 internal steps is refused */
