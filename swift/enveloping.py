@@ -263,43 +263,121 @@ class QuasiStatic:
     road: EffectiveRoad
 
 
+def _bisect(fun, lo, hi, steps):
+    """Bisection of the increasing-or-decreasing sign of ``fun`` between the arrays ``lo`` and ``hi`` (fun(lo) and
+    fun(hi) of opposite signs, or either zero), ``steps`` halvings; returns the midpoints."""
+    f_lo = fun(lo)
+    for _ in range(steps):
+        mid = 0.5 * (lo + hi)
+        f_mid = fun(mid)
+        left = np.sign(f_mid) == np.sign(f_lo)
+        lo, f_lo = np.where(left, mid, lo), np.where(left, f_mid, f_lo)
+        hi = np.where(left, hi, mid)
+    return 0.5 * (lo + hi)
+
+
 def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mode: str = "fixed_axle",
-                 dx: float = 5e-4, iterations: int = 12) -> QuasiStatic:
-    """The tyre rolling slowly over ``road`` at wheel positions ``x``.
+                 dx: float = 5e-4, iterations: int = 40, table_step: float = 1e-4, tol: float = 1e-6) \
+        -> QuasiStatic:
+    """The tyre rolling slowly over ``road`` at wheel positions ``x`` (visited in the given order).
 
     ``mode="fixed_axle"``: axle height fixed where the flat road at the height of ``x[0]`` carries ``fz0``;
     ``mode="constant_load"``: the vertical wheel-centre force stays ``fz0`` and the axle follows.
-    The tandem base and the contact centre depend on the load and the load on the effective road: solved
-    together by ``iterations`` passes (substitution on l_s, Newton on the centre).
+
+    The contact load F'_z, the tandem base l_s = ELLIPS_SHIFT 2a(F'_z) and the contact centre x_c (foot of the
+    normal, x_c = x + d sin(beta_y)) depend on each other; where a cam meets an edge the load raises l_s, which
+    pushes the cam further onto the obstacle, and the consistent solution can fold (several roots; the one being
+    followed can vanish and the load jump). Solved as a bracketed problem in F'_z: for a load F, l_s(F) and x_c
+    by bisection of the foot-of-normal equation over x +- R_Omega; the load residual F'(F) - F changes sign
+    between F = 0 and the load at the deepest possible deflection, so a root always exists. Every sign change on a
+    grid of loads is refined by bisection (``iterations`` halvings of each bracket) and, at each x, the root
+    nearest the previous point's load is taken (continuation along x, as a tyre creeping forward follows its
+    branch). Cam heights from a table at ``table_step`` (cam heights exact at ``dx`` resolution, linear between);
+    raises :class:`ModelInputError` if a consistency residual exceeds ``tol`` (relative to the load and to R0).
     """
     if mode not in ("fixed_axle", "constant_load"):
         raise ModelInputError(f"mode must be 'fixed_axle' or 'constant_load', got {mode!r}")
+    if not iterations >= 30:
+        raise ModelInputError(f"iterations (bisection halvings) must be >= 30 for a converged solution, got "
+                              f"{iterations}")
     prm = model.params
     p = prm.INFLPRES if p is None else float(p)
     dpi = (p - prm.NOMPRES) / prm.NOMPRES
     cams = Cams.from_params(prm)
     x = np.asarray(x, dtype=float)
-    rl0, rho0 = model.loaded_radius(fz0, p=p)
+    shape, xs = x.shape, x.ravel()
+    rl0, _ = model.loaded_radius(fz0, p=p)
     r_omega = float(vertical.free_radius(prm, 0.0, NUMPY))
-    z_axle = float(road.height(x.flat[0])) + float(rl0)
-    fzn = np.full(x.shape, float(fz0))
-    xc = x.copy()
-    for _ in range(iterations):  # contact centre (foot of the normal) and tandem base at the load, together
-        ls = tandem_base(prm, fzn, dpi)
-        eff = effective_road(road, xc, ls, cams, dx=dx)
-        cosb = np.cos(eff.beta)
+    z_axle = float(road.height(xs[0])) + float(rl0)
+    hi_road = road.height_range()[1]
+    if mode == "fixed_axle":  # the deepest deflection: the plane cannot rise above the highest road point
+        f_max = float(model.vertical_force(min(z_axle - hi_road, r_omega), p=p))
+    else:
+        f_max = float(fz0) / np.cos(np.radians(80.0))
+    l_max = float(tandem_base(prm, f_max, dpi))
+    reach = 1.05 * r_omega + l_max
+    x0 = xs.min() - reach - 2 * table_step
+    samples = x0 + table_step * np.arange(int(np.ceil((xs.max() - xs.min() + 2 * reach) / table_step)) + 5)
+    table = CamTable(float(x0), float(table_step), cam_height(road, samples, cams, dx=min(dx, 5e-4)))
+
+    def plane(xc, ls):  # (w, beta, cos beta) of the tandem centred at xc
+        hf, hr = table(xc + ls / 2), table(xc - ls / 2)
+        beta = np.arctan((hf - hr) / np.maximum(ls, 1e-9))
+        return (hf + hr) / 2, beta, np.cos(beta)
+
+    def distance(w, cosb, f):  # normal distance wheel centre - plane (fixed axle) or the loaded radius at f
         if mode == "fixed_axle":
-            d = (z_axle - eff.w) / cosb  # normal distance wheel centre - effective plane
-            fzn = np.maximum(model.vertical_force(np.minimum(d, r_omega), p=p), 0.0)
-            dz = np.zeros_like(x)
-        else:
-            fzn = fz0 / cosb  # vertical component fz0, free rolling
-            d, _ = model.loaded_radius(fzn, p=p)
-            dz = eff.w + d / cosb - z_axle
-        # Newton step on x_c = x + d sin(beta) (plain substitution barely contracts over short obstacles), with
-        # dw/dx ~ tan(beta) for the derivative of d along x
-        sinb, dbeta = np.sin(eff.beta), eff.curvature
-        slope = (-np.tan(eff.beta) / cosb + d * np.tan(eff.beta) * dbeta) * (mode == "fixed_axle")
-        xc = xc - (xc - x - d * sinb) / (1.0 - slope * sinb - d * cosb * dbeta)
-    rho = r_omega - d
-    return QuasiStatic(x, -fzn * np.sin(eff.beta), fzn * cosb, fzn, dz, rho, ls, eff)
+            return np.minimum((z_axle - w) / cosb, r_omega)
+        return model.loaded_radius(f, p=p)[0]
+
+    def centre(xw, f):  # x_c solving x_c = x + d sin(beta) at the load f (tandem base l_s(f))
+        ls = tandem_base(prm, f, dpi)
+
+        def foot(xc):
+            w, beta, cosb = plane(xc, ls)
+            return xc - xw - distance(w, cosb, f) * np.sin(beta)
+        return _bisect(foot, xw - 1.05 * r_omega, xw + 1.05 * r_omega, iterations + 10), ls
+
+    def load(xc, ls, f):  # (load of the plane at the solution for f, d, w, beta)
+        w, beta, cosb = plane(xc, ls)
+        d = distance(w, cosb, f)
+        if mode == "fixed_axle":
+            return np.maximum(model.vertical_force(d, p=p), 0.0), d, w, beta
+        return fz0 / cosb, d, w, beta
+
+    def residual(xw, f):
+        xc, ls = centre(xw, f)
+        return load(xc, ls, f)[0] - f
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the vertical relation's range warnings on the trial loads
+        grid = np.linspace(0.0, f_max, 161)
+        r = residual(xs[:, None] + 0 * grid, grid[None, :] + 0 * xs[:, None])
+        change = np.sign(r[:, :-1]) != np.sign(r[:, 1:])
+        change[:, -1] |= r[:, -1] == 0.0
+        roots = np.full((xs.size, 4), np.nan)
+        for k in range(roots.shape[1]):  # up to four roots per position, in order of load
+            first = np.argmax(change, axis=1)
+            has = change[np.arange(xs.size), first]
+            if not has.any():
+                break
+            f_root = _bisect(lambda f: residual(xs, f), grid[first], grid[first + 1], iterations)
+            roots[has, k] = f_root[has]
+            change[np.arange(xs.size), first] = False
+        f = np.empty(xs.size)
+        previous = float(fz0)
+        for i in range(xs.size):  # continuation: the root nearest the previous load
+            cand = roots[i][np.isfinite(roots[i])]
+            previous = f[i] = cand[np.argmin(np.abs(cand - previous))]
+        xc, ls = centre(xs, f)
+        fzn, d, w, beta = load(xc, ls, f)
+        foot_res = np.abs(xc - xs - d * np.sin(beta))
+    if np.any(np.abs(fzn - f) > tol * max(fz0, 1.0) * 10) or np.any(foot_res > tol * prm.UNLOADED_RADIUS):
+        i = int(np.argmax(np.abs(fzn - f)))
+        raise ModelInputError(f"quasi-static contact solution did not converge at x = {xs[i]:.4f} m: load residual "
+                              f"{fzn[i] - f[i]:.3g} N, foot residual {foot_res[i]:.3g} m")
+    eff = effective_road(road, xc, ls, cams, dx=dx)
+    cosb = np.cos(beta)
+    dz = np.zeros_like(xs) if mode == "fixed_axle" else w + d / cosb - z_axle
+    rs = lambda a: np.reshape(a, shape)  # noqa: E731
+    return QuasiStatic(x, rs(-f * np.sin(beta)), rs(f * cosb), rs(f), rs(dz), rs(r_omega - d), rs(ls), eff)
