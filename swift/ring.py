@@ -142,6 +142,8 @@ OUTPUT_NAMES = ("fx", "fy", "fz", "mx", "my", "mz",            # forces and mome
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
 #: Newton passes of the (contact centre, tandem base) solution (quadratic convergence from the start estimate).
 CONTACT_PASSES = 3
+#: Floors of the contact solution's slopes (x_c equation, reduced l_s equation), :func:`contact_geometry`.
+_SLOPE_FLOOR = (0.2, 0.1)
 #: Time constant [s] with which the transient slips relax to zero while the tyre is off the road.
 AIR_TIME = 5e-3
 #: Load floor [N] of the slip model and contact length: keeps derivatives finite off the road (sqrt(Fz) at 0).
@@ -288,8 +290,17 @@ def contact_geometry(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x
     jac = (ca.jacobian(res, ca.vertcat(xc_, ls_)) + ca.jacobian(res, hf_) @ ca.horzcat(dhf, dhf / 2)
            + ca.jacobian(res, hr_) @ ca.horzcat(dhr, -dhr / 2))
     res, jac = ca.substitute([res, jac], [xc_, ls_, hf_, hr_], [x_c, ls, hf, hr])
-    step = ca.solve(jac, res)
-    return x_c - step[0], be.fmax(ls - step[1], 1e-6)
+    # Newton by block elimination, the x_c equation first: its slope d(res_1)/dx_c = 1 - d(r_c sin beta)/dx_c
+    # (in [1, 2] except in concave corners tighter than r_c) and the reduced slope of the l_s equation along its
+    # solution, 1 - dl_s(F)/dl_s (< 0 where the load's feedback on the tandem base runs away: past a fold, where
+    # the root being followed has vanished) floored, so that every pass moves l_s toward the root in the direction
+    # its residual says (l_s - 2a p_ls < 0 at small l_s, > 0 at large l_s): exact Newton wherever the slopes are
+    # above their floors, and never held at (or sent away from) a root that has vanished [chosen]
+    j11 = be.fmax(jac[0, 0], _SLOPE_FLOOR[0])
+    reduced = be.fmax(jac[1, 1] - jac[1, 0] * jac[0, 1] / j11, _SLOPE_FLOOR[1])
+    d_ls = -(res[1] - jac[1, 0] * res[0] / j11) / reduced
+    d_xc = -(res[0] + jac[0, 1] * d_ls) / j11
+    return x_c + d_xc, be.fmax(ls + d_ls, 1e-6)
 
 
 def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c=None, *, axle: str, rim: str,
