@@ -366,9 +366,20 @@ def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mo
             change[np.arange(xs.size), first] = False
         f = np.empty(xs.size)
         previous = float(fz0)
+        walk = np.concatenate(([0.0], 1e-4 * fz0 * 1.25 ** np.arange(80)))  # 0 .. ~5e3 fz0
         for i in range(xs.size):  # continuation: the root nearest the previous load
             cand = roots[i][np.isfinite(roots[i])]
-            previous = f[i] = cand[np.argmin(np.abs(cand - previous))]
+            f[i] = cand[np.argmin(np.abs(cand - previous))]
+            if abs(f[i] - previous) > 0.02 * fz0:  # a jump, or two roots in one grid cell (near a fold): walk
+                # from the previous load in the direction its residual points to the first sign change
+                side = np.sign(residual(xs[i:i + 1], np.array([previous]))[0])
+                trial = np.clip(previous + side * walk, 0.0, f_max)
+                r_walk = residual(np.full(trial.size, xs[i]), trial)
+                k = int(np.argmax(np.sign(r_walk[1:]) != np.sign(r_walk[0]))) if side != 0 else -1
+                if k >= 0 and np.sign(r_walk[k + 1]) != np.sign(r_walk[0]):
+                    f[i] = _bisect(lambda q: residual(xs[i:i + 1], q), trial[k:k + 1], trial[k + 1:k + 2],
+                                   iterations)[0]
+            previous = f[i]
         xc, ls = centre(xs, f)
         fzn, d, w, beta = load(xc, ls, f)
         foot_res = np.abs(xc - xs - d * np.sin(beta))
