@@ -330,13 +330,32 @@ def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mo
             return np.minimum((z_axle - w) / cosb, r_omega)
         return model.loaded_radius(f, p=p)[0]
 
-    def centre(xw, f):  # x_c solving x_c = x + d sin(beta) at the load f (tandem base l_s(f))
+    def first_change(fun, start, side, span, bounds=(-np.inf, np.inf)):
+        """Bracket (lo, hi, found) of the first sign change of ``fun`` walking from ``start`` (arrays) by ``side``
+        (+-1) in geometric steps up to ``span``, within ``bounds``."""
+        steps = np.concatenate(([0.0], span * 1e-7 * 1.25 ** np.arange(73)))  # 0, 1e-7 .. ~1.1 span
+        trial = np.clip(start[..., None] + side[..., None] * steps, *bounds)
+        value = fun(trial)
+        change = np.sign(value[..., 1:]) != np.sign(value[..., :1])
+        k = np.argmax(change, axis=-1)[..., None]
+        lo, hi = np.take_along_axis(trial, k, -1)[..., 0], np.take_along_axis(trial, k + 1, -1)[..., 0]
+        return lo, hi, np.take_along_axis(change, k, -1)[..., 0]
+
+    def centre(xw, f, start=None):
+        """(x_c, l_s) solving x_c = x + d sin(beta) at the load f (tandem base l_s(f)): anywhere in x +- R_Omega,
+        or (``start``) the root reached from ``start`` in the direction of its residual (the foot of the normal is
+        not unique in concave corners tighter than the belt; continuation follows one)."""
         ls = tandem_base(prm, f, dpi)
 
         def foot(xc):
-            w, beta, cosb = plane(xc, ls)
-            return xc - xw - distance(w, cosb, f) * np.sin(beta)
-        return _bisect(foot, xw - 1.05 * r_omega, xw + 1.05 * r_omega, iterations + 10), ls
+            xw_, f_, ls_ = (np.asarray(v)[..., None] if np.ndim(xc) > np.ndim(v) else v for v in (xw, f, ls))
+            w, beta, cosb = plane(xc, ls_)
+            return xc - xw_ - distance(w, cosb, f_) * np.sin(beta)
+        if start is None:
+            return _bisect(foot, xw - 1.05 * r_omega, xw + 1.05 * r_omega, iterations + 10), ls
+        side = np.where(foot(start) > 0, -1.0, 1.0)
+        lo, hi, _ = first_change(foot, start, side, 1.05 * r_omega)
+        return _bisect(foot, lo, hi, iterations + 10), ls
 
     def load(xc, ls, f):  # (load of the plane at the solution for f, d, w, beta)
         w, beta, cosb = plane(xc, ls)
@@ -345,8 +364,8 @@ def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mo
             return np.maximum(model.vertical_force(d, p=p), 0.0), d, w, beta
         return fz0 / cosb, d, w, beta
 
-    def residual(xw, f):
-        xc, ls = centre(xw, f)
+    def residual(xw, f, start=None):
+        xc, ls = centre(xw, f, start)
         return load(xc, ls, f)[0] - f
 
     with warnings.catch_warnings():
@@ -364,23 +383,27 @@ def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mo
             f_root = _bisect(lambda f: residual(xs, f), grid[first], grid[first + 1], iterations)
             roots[has, k] = f_root[has]
             change[np.arange(xs.size), first] = False
-        f = np.empty(xs.size)
-        previous = float(fz0)
-        walk = np.concatenate(([0.0], 1e-4 * fz0 * 1.25 ** np.arange(80)))  # 0 .. ~5e3 fz0
+        found = np.isfinite(roots)
+        centres = np.full(roots.shape, np.nan)
+        centres[found] = centre(np.broadcast_to(xs[:, None], roots.shape)[found], roots[found])[0]
+        f, xc = np.empty(xs.size), np.empty(xs.size)
         for i in range(xs.size):  # continuation: the root nearest the previous load
-            cand = roots[i][np.isfinite(roots[i])]
-            f[i] = cand[np.argmin(np.abs(cand - previous))]
-            if abs(f[i] - previous) > 0.02 * fz0:  # a jump, or two roots in one grid cell (near a fold): walk
-                # from the previous load in the direction its residual points to the first sign change
-                side = np.sign(residual(xs[i:i + 1], np.array([previous]))[0])
-                trial = np.clip(previous + side * walk, 0.0, f_max)
-                r_walk = residual(np.full(trial.size, xs[i]), trial)
-                k = int(np.argmax(np.sign(r_walk[1:]) != np.sign(r_walk[0]))) if side != 0 else -1
-                if k >= 0 and np.sign(r_walk[k + 1]) != np.sign(r_walk[0]):
-                    f[i] = _bisect(lambda q: residual(xs[i:i + 1], q), trial[k:k + 1], trial[k + 1:k + 2],
-                                   iterations)[0]
-            previous = f[i]
-        xc, ls = centre(xs, f)
+            k = np.nanargmin(np.abs(roots[i] - (f[i - 1] if i else fz0)))
+            f[i], xc[i] = roots[i, k], centres[i, k]
+            if i and (abs(f[i] - f[i - 1]) > 0.02 * fz0 or abs(xc[i] - xs[i] - xc[i - 1] + xs[i - 1]) > 2e-3):
+                # a jump of the load or of the contact centre: follow the previous solution where it continues
+                # (two roots in one grid cell near a fold, or another foot of the normal), walking from the
+                # previous load in the direction of its residual to the first sign change
+                x_i, start = xs[i:i + 1], xc[i - 1:i] + xs[i] - xs[i - 1]
+                local = lambda q: residual(np.broadcast_to(x_i, q.shape), q, np.broadcast_to(start, q.shape))  # noqa
+                side = np.where(local(f[i - 1:i]) > 0, 1.0, -1.0)
+                lo, hi, found = first_change(local, f[i - 1:i], side, f_max, (0.0, f_max))
+                if found[0]:
+                    f_loc = _bisect(local, np.minimum(lo, hi), np.maximum(lo, hi), iterations)
+                    xc_loc = centre(x_i, f_loc, start)[0]
+                    if abs(load(xc_loc, tandem_base(prm, f_loc, dpi), f_loc)[0][0] - f_loc[0]) < tol * fz0:
+                        f[i], xc[i] = f_loc[0], xc_loc[0]
+        ls = tandem_base(prm, f, dpi)
         fzn, d, w, beta = load(xc, ls, f)
         foot_res = np.abs(xc - xs - d * np.sin(beta))
     if np.any(np.abs(fzn - f) > tol * max(fz0, 1.0) * 10) or np.any(foot_res > tol * prm.UNLOADED_RADIUS):
