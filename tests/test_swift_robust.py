@@ -289,39 +289,42 @@ def test_quasi_static_converged_on_mfeval_file():
     assert a.fz[np.argmin(np.abs(x - 0.511))] > 4500.0
 
 
-def _creep(model, road, x0=0.15, t_end=4.0):
+def _creep_errors(model, road, x0=0.15, t_end=5.5):
+    """0.1 m/s, fixed axle, free rim, 2 ms steps (the errors are the same at 0.5 ms): (Fz error away from the jumps
+    of the quasi-static solution, its maximum anywhere, l_s error away from the jumps, the quasi-static peak)."""
     rl, _ = model.loaded_radius(4000.0)
     tyre = SwiftTyre(model, road, rim="torque", x_range=(-0.5, 1.2))
     res = tyre.run(t_end, StepInputs(x=x0, vx=0.1, z=float(rl), omega=0.1 / model.params.UNLOADED_RADIUS), dt=2e-3)
     qs = quasi_static(model, road, res.x, 4000.0)
-    dyn, ref = res["fz"] - res["fz"][0], qs.fz - qs.fz[0]
-    return res, qs, dyn, ref, np.max(ref)
+    peak = np.max(qs.fz - qs.fz[0])
+    err = np.abs((res["fz"] - res["fz"][0]) - (qs.fz - qs.fz[0]))
+    # where the consistent solution folds (the load raises l_s, which pushes a cam further onto the edge) the load
+    # jumps; the belt follows within ~1 mm of travel and rings for a few mm (its 80 Hz mode, 10 ms per mm)
+    jumps = res.x[1:][np.abs(np.diff(qs.fz)) > 0.05 * peak]
+    away = np.all((res.x[:, None] < jumps - 1e-3) | (res.x[:, None] > jumps + 5e-3), axis=1)
+    return err[away].max(), err.max(), np.max(np.abs(res["ls"] - qs.ls)[away]), peak
 
 
-@pytest.mark.parametrize("road", [Cleat(0.4, 0.02, 0.01), Cleat(0.4, 0.02, 0.015)], ids=["20x10", "20x15"])
-def test_creep_equals_quasi_static_sample_file(model, road):
-    """0.1 m/s, fixed axle, free rim: Fz within 5 % of the peak of the converged quasi-static model (20 x 15 mm, old:
-    18 %: the contact solution stayed on a root that had vanished)."""
-    res, qs, dyn, ref, peak = _creep(model, road)
-    assert np.max(np.abs(dyn - ref)) < 0.05 * peak
-    assert np.max(np.abs(res["ls"] - qs.ls)) < 3e-3
+_CLEATS = {"20x10": Cleat(0.4, 0.02, 0.01), "20x15": Cleat(0.4, 0.02, 0.015), "10x20": Cleat(0.4, 0.01, 0.02),
+           "20x20": Cleat(0.4, 0.02, 0.02), "50x20": Cleat(0.4, 0.05, 0.02), "step20": Step(0.4, 0.02),
+           "step50": Step(0.4, 0.05)}
 
 
-def test_creep_equals_quasi_static_tno_file():
+@pytest.mark.parametrize("name", list(_CLEATS))
+def test_creep_equals_converged_quasi_static(model, name):
+    """Creep over cleats and steps up to 20 x 20 mm and 50 mm equals the converged quasi-static model within 5 % of
+    the peak away from the jumps of the quasi-static solution (1 mm before to 5 mm after), l_s within 1 mm there,
+    and within 30 % at the jumps (old: 18-41 % anywhere and l_s up to 2.15 m: the contact solution stayed on a root
+    that had vanished)."""
+    away, anywhere, ls, peak = _creep_errors(model, _CLEATS[name])
+    assert away < 0.05 * peak and ls < 1e-3 and anywhere < 0.3 * peak
+
+
+@pytest.mark.parametrize("where", [("reference", "tir", "TNO_car205_60R15.tir"),
+                                   ("reference", "mfeval", "MagicFormula62_Parameters.tir")], ids=["tno", "mfeval"])
+def test_creep_equals_converged_quasi_static_other_files(where):
+    """The 20 x 10 mm cleat on the TNO and MFeval MF 6.2 files (MFeval old: 48 %, the reference not converged)."""
     from conftest import SHARED, require_shared
-    m = mftyre.load_tir(require_shared(SHARED / "reference" / "tir" / "TNO_car205_60R15.tir"))
-    res, qs, dyn, ref, peak = _creep(m, Cleat(0.4, 0.02, 0.01))
-    assert np.max(np.abs(dyn - ref)) < 0.05 * peak
-
-
-@pytest.mark.parametrize("road", [Cleat(0.4, 0.02, 0.02), Step(0.4, 0.05)], ids=["20x20", "step50"])
-def test_creep_contact_solution_follows_the_fold(model, road):
-    """Where the load's feedback on the tandem base folds the contact solution (front cam meeting a 20 mm edge) the
-    dynamic contact solution jumps to the remaining root with the quasi-static one (old: l_s 2.15 m, Fz 37 % of the
-    peak off). Fz is compared allowing 1 mm of travel (10 ms) for the belt to follow the jump."""
-    res, qs, dyn, ref, peak = _creep(model, road)
-    d = np.abs(dyn[:, None] - ref[None, :])
-    near = np.abs(res.x[:, None] - res.x[None, :]) <= 1e-3
-    assert np.max(np.min(np.where(near, d, np.inf), axis=1)) < 0.15 * peak
-    jumped = np.abs(np.diff(qs.ls)) < 5e-3  # away from the jumps of the solution
-    assert np.max(np.abs(res["ls"] - qs.ls)[1:][jumped]) < 3e-3
+    m = mftyre.load_tir(require_shared(SHARED.joinpath(*where)))
+    away, anywhere, ls, peak = _creep_errors(m, _CLEATS["20x10"])
+    assert away < 0.05 * peak and ls < 1e-3 and anywhere < 0.3 * peak
