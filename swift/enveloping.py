@@ -41,7 +41,9 @@ Quasi-static tyre (:func:`quasi_static`): the MF vertical spring Fz(rho, p) norm
 rho = R_Omega - d with d the normal distance from the wheel centre to the plane, the tandem centred at the foot
 of that normal, x_c = x + d sin(beta_y) (the forward shift of the contact point, as in :mod:`swift.ring`), free
 rolling (in-plane force F'_x = 0), so the wheel-centre forces are Fx = -F'_z sin(beta_y), Fz = F'_z cos(beta_y)
-(NOTES sec. 3.5). ``QuasiStatic.road`` holds the effective road at the contact centres.
+(NOTES sec. 3.5). ``QuasiStatic.road`` holds the effective road at the contact centres. Load, tandem base and
+contact centre are solved to convergence (bracketed; the solution can fold and jump where a cam meets an edge; it
+is continued along x, see :func:`quasi_static`), with a residual check.
 """
 from __future__ import annotations
 
@@ -277,7 +279,7 @@ def _bisect(fun, lo, hi, steps):
 
 
 def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mode: str = "fixed_axle",
-                 dx: float = 5e-4, iterations: int = 40, table_step: float = 1e-4, tol: float = 1e-6) \
+                 dx: float = 5e-4, iterations: int = 40, table_step: float = 1e-4, tol: float = 1e-5) \
         -> QuasiStatic:
     """The tyre rolling slowly over ``road`` at wheel positions ``x`` (visited in the given order).
 
@@ -292,8 +294,12 @@ def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mo
     between F = 0 and the load at the deepest possible deflection, so a root always exists. Every sign change on a
     grid of loads is refined by bisection (``iterations`` halvings of each bracket) and, at each x, the root
     nearest the previous point's load is taken (continuation along x, as a tyre creeping forward follows its
-    branch). Cam heights from a table at ``table_step`` (cam heights exact at ``dx`` resolution, linear between);
-    raises :class:`ModelInputError` if a consistency residual exceeds ``tol`` (relative to the load and to R0).
+    branch); where that jumps (in load or contact centre), the previous solution is followed where it continues: from
+    the previous x_c and load, each walked in the direction of its residual to the first sign change (two roots in
+    one grid cell near a fold; the foot of the normal is not unique in concave corners tighter than the belt). Cam
+    heights from a table at ``table_step`` (cam heights exact at ``dx`` resolution, linear between);
+    raises :class:`ModelInputError` if a consistency residual exceeds ``tol`` (load: relative to ``fz0``; contact
+    centre: relative to R0).
     """
     if mode not in ("fixed_axle", "constant_load"):
         raise ModelInputError(f"mode must be 'fixed_axle' or 'constant_load', got {mode!r}")
@@ -325,10 +331,8 @@ def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mo
         beta = np.arctan((hf - hr) / np.maximum(ls, 1e-9))
         return (hf + hr) / 2, beta, np.cos(beta)
 
-    def distance(w, cosb, f):  # normal distance wheel centre - plane (fixed axle) or the loaded radius at f
-        if mode == "fixed_axle":
-            return np.minimum((z_axle - w) / cosb, r_omega)
-        return model.loaded_radius(f, p=p)[0]
+    def distance(w, cosb, radius):  # normal distance wheel centre - plane: fixed axle, or the loaded radius
+        return np.minimum((z_axle - w) / cosb, r_omega) if mode == "fixed_axle" else radius
 
     def first_change(fun, start, side, span, bounds=(-np.inf, np.inf)):
         """Bracket (lo, hi, found) of the first sign change of ``fun`` walking from ``start`` (arrays) by ``side``
@@ -346,11 +350,12 @@ def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mo
         or (``start``) the root reached from ``start`` in the direction of its residual (the foot of the normal is
         not unique in concave corners tighter than the belt; continuation follows one)."""
         ls = tandem_base(prm, f, dpi)
+        radius = model.loaded_radius(f, p=p)[0] if mode == "constant_load" else 0.0
 
         def foot(xc):
-            xw_, f_, ls_ = (np.asarray(v)[..., None] if np.ndim(xc) > np.ndim(v) else v for v in (xw, f, ls))
+            xw_, r_, ls_ = (np.asarray(v)[..., None] if np.ndim(xc) > np.ndim(v) else v for v in (xw, radius, ls))
             w, beta, cosb = plane(xc, ls_)
-            return xc - xw_ - distance(w, cosb, f_) * np.sin(beta)
+            return xc - xw_ - distance(w, cosb, r_) * np.sin(beta)
         if start is None:
             return _bisect(foot, xw - 1.05 * r_omega, xw + 1.05 * r_omega, iterations + 10), ls
         side = np.where(foot(start) > 0, -1.0, 1.0)
@@ -359,7 +364,7 @@ def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mo
 
     def load(xc, ls, f):  # (load of the plane at the solution for f, d, w, beta)
         w, beta, cosb = plane(xc, ls)
-        d = distance(w, cosb, f)
+        d = distance(w, cosb, model.loaded_radius(f, p=p)[0] if mode == "constant_load" else 0.0)
         if mode == "fixed_axle":
             return np.maximum(model.vertical_force(d, p=p), 0.0), d, w, beta
         return fz0 / cosb, d, w, beta
@@ -383,9 +388,9 @@ def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mo
             f_root = _bisect(lambda f: residual(xs, f), grid[first], grid[first + 1], iterations)
             roots[has, k] = f_root[has]
             change[np.arange(xs.size), first] = False
-        found = np.isfinite(roots)
+        some = np.isfinite(roots)
         centres = np.full(roots.shape, np.nan)
-        centres[found] = centre(np.broadcast_to(xs[:, None], roots.shape)[found], roots[found])[0]
+        centres[some] = centre(np.broadcast_to(xs[:, None], roots.shape)[some], roots[some])[0]
         f, xc = np.empty(xs.size), np.empty(xs.size)
         for i in range(xs.size):  # continuation: the root nearest the previous load
             k = np.nanargmin(np.abs(roots[i] - (f[i - 1] if i else fz0)))
@@ -406,8 +411,9 @@ def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mo
         ls = tandem_base(prm, f, dpi)
         fzn, d, w, beta = load(xc, ls, f)
         foot_res = np.abs(xc - xs - d * np.sin(beta))
-    if np.any(np.abs(fzn - f) > tol * max(fz0, 1.0) * 10) or np.any(foot_res > tol * prm.UNLOADED_RADIUS):
-        i = int(np.argmax(np.abs(fzn - f)))
+    bad = np.maximum(np.abs(fzn - f) / max(fz0, 1.0), foot_res / prm.UNLOADED_RADIUS)
+    if np.any(bad > tol):
+        i = int(np.argmax(bad))
         raise ModelInputError(f"quasi-static contact solution did not converge at x = {xs[i]:.4f} m: load residual "
                               f"{fzn[i] - f[i]:.3g} N, foot residual {foot_res[i]:.3g} m")
     eff = effective_road(road, xc, ls, cams, dx=dx)
