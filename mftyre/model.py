@@ -131,6 +131,7 @@ class MFModel:
         self.side = side
         self.mirrored = side != file_side
         self._plain = _PlainParameters(params)
+        self._plain_arrays = _PlainParameters(params, exact=True)  # zero terms and unit factors skipped on arrays
 
     @property
     def params(self):
@@ -222,7 +223,7 @@ class MFModel:
         elif n <= _CHUNK:  # one chunk: the results are the outputs (no copy)
             chunk = self._chunk_inputs(flat, slice(None))
             with np.errstate(all="ignore"):
-                values = steady_state(self._plain, *chunk, omega_given, modes, NUMPY)
+                values = steady_state(self._plain_arrays, *chunk, omega_given, modes, NUMPY)
             out = _own_arrays(values, n, chunk)
             self._mirror_outputs(out, slice(None))
         else:
@@ -235,7 +236,7 @@ class MFModel:
                 part = slice(start, min(start + size, n))
                 given = omega_given if isinstance(omega_given, bool) else omega_given[part]
                 with np.errstate(all="ignore"):
-                    values = steady_state(self._plain, *self._chunk_inputs(flat, part), given, modes, NUMPY)
+                    values = steady_state(self._plain_arrays, *self._chunk_inputs(flat, part), given, modes, NUMPY)
                 for k, v in values.items():
                     out[k][part] = v
                 self._mirror_outputs(out, part)
@@ -371,8 +372,9 @@ class _PlainParameters:
     """The values of a parameter set as plain attributes (the equations read hundreds of them per evaluation;
     TyreParameters' mapping lookup costs more than a single-point evaluation's arithmetic)."""
 
-    def __init__(self, params):
-        self.__dict__.update(params.to_dict())
+    def __init__(self, params, exact: bool = False):
+        values = params.to_dict()
+        self.__dict__.update(NUMPY.known_coefficients(values) if exact else values)
         self.version, self.fittyp = params.version, params.fittyp
 
     def __getitem__(self, name):
