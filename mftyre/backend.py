@@ -18,7 +18,7 @@ import numpy as np
 
 from .errors import ModelInputError
 
-__all__ = ["ExactCoefficient", "NumpyBackend", "CasadiBackend", "NUMPY", "CASADI", "casadi_backend"]
+__all__ = ["ExactCoefficient", "NumpyBackend", "CasadiBackend", "NUMPY", "NUMPY_FOLDING", "CASADI", "casadi_backend"]
 
 _ULP4 = 4.0 * np.finfo(float).eps  # the root searches' relative floor: 4 units in the last place
 
@@ -133,9 +133,13 @@ def _fold(ufunc, a, b):
 
 
 class NumpyBackend:
-    """Element-wise operations on NumPy float64 arrays."""
+    """Element-wise operations on NumPy float64 arrays. ``fold``: :meth:`exact` gives numbers whose identity
+    operations on arrays are skipped (see :class:`ExactCoefficient`; worth its Python dispatch on large arrays)."""
 
     name = "numpy"
+
+    def __init__(self, fold: bool = False):
+        self.fold = fold
     pi = np.pi
     sin = staticmethod(np.sin)
     cos = staticmethod(np.cos)
@@ -153,6 +157,11 @@ class NumpyBackend:
     fmax = staticmethod(np.maximum)
     logical_and = staticmethod(np.logical_and)
     logical_or = staticmethod(np.logical_or)
+
+    def exact(self, value: float):
+        """``value`` as a number the arithmetic may fold (with ``fold``: an :class:`ExactCoefficient` where it is 0
+        or 1)."""
+        return _exact(float(value)) if self.fold else float(value)
 
     @staticmethod
     def known_coefficients(values: dict) -> dict:
@@ -340,6 +349,11 @@ class CasadiBackend:
     def log10(self, x):
         return self.ca.log(x) / np.log(10.0)
 
+    @staticmethod
+    def exact(value: float) -> float:
+        """``value`` (CasADi folds 0 and 1 itself)."""
+        return float(value)
+
     def cos_atan(self, x):
         """cos(atan(x)) = 1 / sqrt(1 + x^2)."""
         return 1.0 / self.ca.sqrt(1.0 + x * x)
@@ -396,6 +410,8 @@ class CasadiBackend:
 
 
 NUMPY = NumpyBackend()
+#: NumPy with folding, for large arrays with parameters from :meth:`NumpyBackend.known_coefficients`
+NUMPY_FOLDING = NumpyBackend(fold=True)
 _CASADI = None
 
 
