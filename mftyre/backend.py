@@ -18,7 +18,7 @@ import numpy as np
 
 from .errors import ModelInputError
 
-__all__ = ["NumpyBackend", "CasadiBackend", "NUMPY", "CASADI", "casadi_backend"]
+__all__ = ["ExactCoefficient", "NumpyBackend", "CasadiBackend", "NUMPY", "NUMPY_FOLDING", "CASADI", "casadi_backend"]
 
 _ULP4 = 4.0 * np.finfo(float).eps  # the root searches' relative floor: 4 units in the last place
 
@@ -30,10 +30,116 @@ def _whole(chosen, cond, other) -> bool:
             and chosen.shape == cond.shape and getattr(other, "shape", ()) in ((), chosen.shape))
 
 
+class ExactCoefficient(float):
+    """A .tir coefficient that is exactly 0 or 1 (a scaling factor lambda = 1, an unused term's coefficient 0), for
+    :meth:`NumpyBackend.known_coefficients`: arithmetic with it skips the array operation it would be an identity
+    in (x + 0, x - 0, x * 1, x / 1 give x; 0 * x and 0 / x give 0, 0 - x gives -x), so that the equations keep
+    their published form while a file's absent terms cost nothing. Arithmetic between numbers stays exact and
+    keeps the result an ExactCoefficient where it is 0 or 1 (1 + 0 * x is 1); every other operation is the plain
+    float one. A folded 0 * x is 0 also where x is not finite (the term is absent from the equation)."""
+
+    __slots__ = ()
+
+    def __array_ufunc__(self, ufunc, method, *inputs, **kwargs):
+        if method == "__call__" and not kwargs and len(inputs) == 2:
+            folded = _fold(ufunc, *inputs)
+            if folded is not None:
+                return folded
+        plain = [float(v) if type(v) is ExactCoefficient else v for v in inputs]
+        return _exact(getattr(ufunc, method)(*plain, **kwargs))
+
+    def __add__(self, other):
+        return _binary(np.add, self, other)
+
+    def __radd__(self, other):
+        return _binary(np.add, other, self)
+
+    def __sub__(self, other):
+        return _binary(np.subtract, self, other)
+
+    def __rsub__(self, other):
+        return _binary(np.subtract, other, self)
+
+    def __mul__(self, other):
+        return _binary(np.multiply, self, other)
+
+    def __rmul__(self, other):
+        return _binary(np.multiply, other, self)
+
+    def __truediv__(self, other):
+        return _binary(np.divide, self, other)
+
+    def __rtruediv__(self, other):
+        return _binary(np.divide, other, self)
+
+    def __pow__(self, other):
+        return _exact(float(self) ** other)
+
+    def __neg__(self):
+        return _exact(-float(self))
+
+
+_ZERO, _ONE = ExactCoefficient(0.0), ExactCoefficient(1.0)
+
+
+def _exact(value):
+    """``value`` as an ExactCoefficient where it is a number equal to 0 or 1, else unchanged."""
+    if type(value) in (float, np.float64, ExactCoefficient):
+        if value == 0.0:
+            return _ZERO
+        if value == 1.0:
+            return _ONE
+    return value
+
+
+_FLOAT_OPERATORS = {np.add: float.__add__, np.subtract: float.__sub__, np.multiply: float.__mul__,
+                    np.divide: float.__truediv__}
+
+
+def _binary(ufunc, a, b):
+    """``ufunc(a, b)`` where a or b is an ExactCoefficient: folded with an array, exact between numbers."""
+    if type(a) is np.ndarray or type(b) is np.ndarray:
+        folded = _fold(ufunc, a, b)
+        return folded if folded is not None else ufunc(float(a) if type(a) is ExactCoefficient else a,
+                                                        float(b) if type(b) is ExactCoefficient else b)
+    if isinstance(a, (int, float)) and isinstance(b, (int, float)):
+        return _exact(_FLOAT_OPERATORS[ufunc](float(a), float(b)))
+    return NotImplemented
+
+
+def _fold(ufunc, a, b):
+    """The result of ``ufunc(a, b)`` without computing it where one of them is an ExactCoefficient in which it is an
+    identity (or zero), else None (NumPy: compute)."""
+    if ufunc is np.multiply:
+        for x, y in ((a, b), (b, a)):
+            if type(x) is ExactCoefficient:
+                return y if x == 1.0 else _ZERO
+    elif ufunc is np.add:
+        if type(a) is ExactCoefficient and a == 0.0:
+            return b
+        if type(b) is ExactCoefficient and b == 0.0:
+            return a
+    elif ufunc is np.subtract:
+        if type(b) is ExactCoefficient and b == 0.0:
+            return a
+        if type(a) is ExactCoefficient and a == 0.0:
+            return -b
+    elif ufunc is np.divide:
+        if type(b) is ExactCoefficient and b == 1.0:
+            return a
+        if type(a) is ExactCoefficient and a == 0.0:
+            return _ZERO
+    return None
+
+
 class NumpyBackend:
-    """Element-wise operations on NumPy float64 arrays."""
+    """Element-wise operations on NumPy float64 arrays. ``fold``: :meth:`exact` gives numbers whose identity
+    operations on arrays are skipped (see :class:`ExactCoefficient`; worth its Python dispatch on large arrays)."""
 
     name = "numpy"
+
+    def __init__(self, fold: bool = False):
+        self.fold = fold
     pi = np.pi
     sin = staticmethod(np.sin)
     cos = staticmethod(np.cos)
@@ -51,6 +157,17 @@ class NumpyBackend:
     fmax = staticmethod(np.maximum)
     logical_and = staticmethod(np.logical_and)
     logical_or = staticmethod(np.logical_or)
+
+    def exact(self, value: float):
+        """``value`` as a number the arithmetic may fold (with ``fold``: an :class:`ExactCoefficient` where it is 0
+        or 1)."""
+        return _exact(float(value)) if self.fold else float(value)
+
+    @staticmethod
+    def known_coefficients(values: dict) -> dict:
+        """``values`` with every float equal to 0 or 1 as an :class:`ExactCoefficient` (for array evaluations: a
+        file's unit scaling factors and zero coefficients then cost no array operation)."""
+        return {k: _exact(v) if type(v) is float else v for k, v in values.items()}
 
     @staticmethod
     def cos_atan(x):
@@ -254,6 +371,11 @@ class CasadiBackend:
     def log10(self, x):
         return self.ca.log(x) / np.log(10.0)
 
+    @staticmethod
+    def exact(value: float) -> float:
+        """``value`` (CasADi folds 0 and 1 itself)."""
+        return float(value)
+
     def cos_atan(self, x):
         """cos(atan(x)) = 1 / sqrt(1 + x^2)."""
         return 1.0 / self.ca.sqrt(1.0 + x * x)
@@ -310,6 +432,8 @@ class CasadiBackend:
 
 
 NUMPY = NumpyBackend()
+#: NumPy with folding, for large arrays with parameters from :meth:`NumpyBackend.known_coefficients`
+NUMPY_FOLDING = NumpyBackend(fold=True)
 _CASADI = None
 
 

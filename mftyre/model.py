@@ -23,7 +23,7 @@ import numpy as np
 from .errors import ModelInputError
 from .inputs import check_finite, check_pressure, input_ranges, saturate, warn_outside
 from .formula import OUTPUT_NAMES, Modes, steady_state, vertical
-from .backend import NUMPY
+from .backend import NUMPY, NUMPY_FOLDING
 
 __all__ = ["MFModel", "MFOutputs", "load_tir", "OUTPUT_UNITS"]
 
@@ -67,6 +67,10 @@ _INPUT_ORDER = ("fz", "kappa", "alpha", "gamma", "phit", "vx", "p", "omega")
 #: NumPy call overhead of the ~830 array operations of one evaluation more often (2 048: +40 %), larger ones leave
 #: the cache (50 000: +10 %; unchunked 1e5 MF 6.2: +40 %). 16 384 also keeps a 1e4 batch in a single call.
 _CHUNK = 16384
+#: from this many points on, array evaluations fold the .tir coefficients that are exactly 0 or 1 (see
+#: mftyre.backend.ExactCoefficient). Measured (one core, MF 6.1 sample file): 1e3 points +5 %, 3e3 -2 %, 1e5 -12 %:
+#: below it the Python dispatch of the folding costs more than the array operations it saves.
+_FOLD_POINTS = 2048
 _MIRRORED_INPUTS = ("alpha", "gamma", "phit")
 _MIRRORED_OUTPUTS = ("fy", "mx", "mz", "mzr", "alpha", "gamma", "phit")
 _SIDES = ("left", "right")
@@ -131,6 +135,7 @@ class MFModel:
         self.side = side
         self.mirrored = side != file_side
         self._plain = _PlainParameters(params)
+        self._plain_folding = _PlainParameters(params, exact=True)  # for NUMPY_FOLDING (large arrays)
 
     @property
     def params(self):
@@ -221,8 +226,9 @@ class MFModel:
             self._mirror_outputs(out, slice(None))
         elif n <= _CHUNK:  # one chunk: the results are the outputs (no copy)
             chunk = self._chunk_inputs(flat, slice(None))
+            prm, be = (self._plain_folding, NUMPY_FOLDING) if n >= _FOLD_POINTS else (self._plain, NUMPY)
             with np.errstate(all="ignore"):
-                values = steady_state(self._plain, *chunk, omega_given, modes, NUMPY)
+                values = steady_state(prm, *chunk, omega_given, modes, be)
             out = _own_arrays(values, n, chunk)
             self._mirror_outputs(out, slice(None))
         else:
@@ -235,7 +241,8 @@ class MFModel:
                 part = slice(start, min(start + size, n))
                 given = omega_given if isinstance(omega_given, bool) else omega_given[part]
                 with np.errstate(all="ignore"):
-                    values = steady_state(self._plain, *self._chunk_inputs(flat, part), given, modes, NUMPY)
+                    values = steady_state(self._plain_folding, *self._chunk_inputs(flat, part), given, modes,
+                                          NUMPY_FOLDING)
                 for k, v in values.items():
                     out[k][part] = v
                 self._mirror_outputs(out, part)
@@ -371,8 +378,9 @@ class _PlainParameters:
     """The values of a parameter set as plain attributes (the equations read hundreds of them per evaluation;
     TyreParameters' mapping lookup costs more than a single-point evaluation's arithmetic)."""
 
-    def __init__(self, params):
-        self.__dict__.update(params.to_dict())
+    def __init__(self, params, exact: bool = False):
+        values = params.to_dict()
+        self.__dict__.update(NUMPY.known_coefficients(values) if exact else values)
         self.version, self.fittyp = params.version, params.fittyp
 
     def __getitem__(self, name):

@@ -38,11 +38,11 @@ def aligning_coefficients(prm, s, lat, gyk, modes, be) -> SimpleNamespace:
     c.alpha_t = s.alpha_star + SHt  # (4.E34)
     zeta5 = s.zeta5 if modes.turn_slip else 1.0
     c.Dt = ((prm.QDZ1 + prm.QDZ2 * dfz) * (1.0 - prm.PPZ1 * dpi)
-            * (1.0 + prm.QDZ3 * s.gamma + prm.QDZ4 * s.gamma**2) * Fz * (R0 / s.Fz0p) * prm.LTR * zeta5)  # paper A60
-    c.Bt = ((prm.QBZ1 + prm.QBZ2 * dfz + prm.QBZ3 * dfz**2) * (1.0 + prm.QBZ4 * s.gamma + prm.QBZ5 * be.abs(s.gamma))
+            * (1.0 + prm.QDZ3 * s.gamma + prm.QDZ4 * s.gamma2) * Fz * (R0 / s.Fz0p) * prm.LTR * zeta5)  # paper A60
+    c.Bt = ((prm.QBZ1 + prm.QBZ2 * dfz + prm.QBZ3 * s.dfz2) * (1.0 + prm.QBZ4 * s.gamma + prm.QBZ5 * be.abs(s.gamma))
             * prm.LKY / s.LMUY_star)  # paper A58
     c.Ct = prm.QCZ1  # (4.E41)
-    c.Et = ((prm.QEZ1 + prm.QEZ2 * dfz + prm.QEZ3 * dfz**2)
+    c.Et = ((prm.QEZ1 + prm.QEZ2 * dfz + prm.QEZ3 * s.dfz2)
             * (1.0 + (prm.QEZ4 + prm.QEZ5 * gs) * (2.0 / be.pi) * be.atan(c.Bt * c.Ct * c.alpha_t)))  # (4.E44)
     if modes.limits:
         c.Et = be.fmin(c.Et, 1.0)

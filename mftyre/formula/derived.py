@@ -16,8 +16,8 @@ __all__ = ["carcass_stiffness_and_relaxation"]
 def carcass_stiffness_and_relaxation(prm, s, kxk, kya, be):
     """(Cx, Cy, sigma_x, sigma_y) at the limited load and pressure."""
     dfz, dpi = s.dfz, s.dpi
-    cx = prm.LONGITUDINAL_STIFFNESS * (1.0 + prm.PCFX1 * dfz + prm.PCFX2 * dfz**2) * (1.0 + prm.PCFX3 * dpi)
-    cy = prm.LATERAL_STIFFNESS * (1.0 + prm.PCFY1 * dfz + prm.PCFY2 * dfz**2) * (1.0 + prm.PCFY3 * dpi)
+    cx = prm.LONGITUDINAL_STIFFNESS * (1.0 + prm.PCFX1 * dfz + prm.PCFX2 * s.dfz2) * (1.0 + prm.PCFX3 * dpi)
+    cy = prm.LATERAL_STIFFNESS * (1.0 + prm.PCFY1 * dfz + prm.PCFY2 * s.dfz2) * (1.0 + prm.PCFY3 * dpi)
     if prm.version == "52":
         R0 = prm.UNLOADED_RADIUS
         sigma_x = (prm.PTX1 + prm.PTX2 * dfz) * be.exp(-prm.PTX3 * dfz) * prm.LSGKP * R0 * s.Fz / prm.FNOMIN

@@ -13,23 +13,24 @@ from .turnslip import lateral_shift_turn_slip
 __all__ = ["pure_lateral", "combined_lateral"]
 
 
-def _cornering_stiffness(prm, s, gamma_star, zeta3, be):
-    """Kya (4.E25) at inclination gamma_star."""
+def _cornering_stiffness(prm, s, gamma_star, gamma_star2, zeta3, be):
+    """Kya (4.E25) at inclination gamma_star (gamma_star2 = gamma_star^2)."""
     return (prm.PKY1 * s.Fz0p * (1.0 + prm.PPY1 * s.dpi) * (1.0 - prm.PKY3 * be.abs(gamma_star))
             * be.sin(prm.PKY4 * be.atan((s.Fz / s.Fz0p)
-                                        / ((prm.PKY2 + prm.PKY5 * gamma_star**2) * (1.0 + prm.PPY2 * s.dpi))))
+                                        / ((prm.PKY2 + prm.PKY5 * gamma_star2) * (1.0 + prm.PPY2 * s.dpi))))
             * zeta3 * prm.LKY)
 
 
 def pure_lateral(prm, s, gamma_star, modes, be) -> SimpleNamespace:
     """Fy0 and its coefficients at inclination ``gamma_star`` (the evaluation also needs gamma = 0)."""
     dfz, dpi, Fz = s.dfz, s.dpi, s.Fz
+    gamma_star2 = gamma_star**2
     mf52 = prm.version == "52"
     if modes.turn_slip:
         zeta2, zeta3 = s.zeta2, s.zeta3
     else:
         zeta2 = zeta3 = 1.0
-    Kya = _cornering_stiffness(prm, s, gamma_star, zeta3, be)
+    Kya = _cornering_stiffness(prm, s, gamma_star, gamma_star2, zeta3, be)
     SVyg = Fz * (prm.PVY3 + prm.PVY4 * dfz) * gamma_star * prm.LKYC * s.LMUY_prime * zeta2  # (4.E28)
     if mf52:
         kya0_52 = prm.PKY1 * s.Fz0p * be.sin(prm.PKY4 * be.atan(Fz / (prm.PKY2 * s.Fz0p))) * prm.LKYC
@@ -38,7 +39,7 @@ def pure_lateral(prm, s, gamma_star, modes, be) -> SimpleNamespace:
         Kyg0 = Fz * (prm.PKY6 + prm.PKY7 * dfz) * (1.0 + prm.PPY5 * dpi) * prm.LKYC  # (4.E30)
 
     if modes.turn_slip:
-        kya0 = _cornering_stiffness(prm, s, 0.0, zeta3, be)
+        kya0 = _cornering_stiffness(prm, s, 0.0, 0.0, zeta3, be)
         zeta4 = lateral_shift_turn_slip(prm, s, Kya, kya0, Kyg0, SVyg, modes.limits, be)
         zeta0 = 0.0
     else:
@@ -54,11 +55,11 @@ def pure_lateral(prm, s, gamma_star, modes, be) -> SimpleNamespace:
 
     alpha_y = s.alpha_star + SHy  # (4.E20)
     Cy = prm.PCY1 * prm.LCY  # (4.E21)
-    muy = ((prm.PDY1 + prm.PDY2 * dfz) * (1.0 + prm.PPY3 * dpi + prm.PPY4 * dpi**2)
-           * (1.0 - prm.PDY3 * gamma_star**2) * s.LMUY_star)  # (4.E23)
+    muy = ((prm.PDY1 + prm.PDY2 * dfz) * (1.0 + prm.PPY3 * dpi + prm.PPY4 * s.dpi2)
+           * (1.0 - prm.PDY3 * gamma_star2) * s.LMUY_star)  # (4.E23)
     Dy = muy * Fz * zeta2  # (4.E22)
     Ey = ((prm.PEY1 + prm.PEY2 * dfz)
-          * (1.0 + prm.PEY5 * gamma_star**2 - (prm.PEY3 + prm.PEY4 * gamma_star) * be.sign_nz(alpha_y))
+          * (1.0 + prm.PEY5 * gamma_star2 - (prm.PEY3 + prm.PEY4 * gamma_star) * be.sign_nz(alpha_y))
           * prm.LEY)  # (4.E24)
     if modes.limits:
         Ey = be.fmin(Ey, 1.0)
@@ -83,7 +84,7 @@ def combined_lateral(prm, s, fy0, muy, modes, be):
     if modes.limits:
         Eyk = be.fmin(Eyk, 1.0)
     Cyk = prm.RCY1  # (4.E63)
-    Byk = (prm.RBY1 + prm.RBY4 * s.gamma_star**2) * be.cos_atan(prm.RBY2 * (s.alpha_star - prm.RBY3)) * prm.LYKA  # (4.E62)
+    Byk = (prm.RBY1 + prm.RBY4 * s.gamma_star2) * be.cos_atan(prm.RBY2 * (s.alpha_star - prm.RBY3)) * prm.LYKA  # (4.E62)
     kappa_s = s.kappa + SHyk  # (4.E61)
 
     def weight(x):

@@ -10,20 +10,20 @@ __all__ = ["pure_longitudinal", "combined_longitudinal"]
 
 def pure_longitudinal(prm, s, modes, be) -> SimpleNamespace:
     """Fx0, the friction coefficient mux and the slip stiffness Kxk."""
-    dfz, dpi, Fz = s.dfz, s.dpi, s.Fz
+    dfz, dfz2, dpi, dpi2, Fz = s.dfz, s.dfz2, s.dpi, s.dpi2, s.Fz  # dfz2 = dfz^2, dpi2 = dpi^2
     zeta1 = s.zeta1 if modes.turn_slip else 1.0
     Cx = prm.PCX1 * prm.LCX  # (4.E11)
-    mux = ((prm.PDX1 + prm.PDX2 * dfz) * (1.0 + prm.PPX3 * dpi + prm.PPX4 * dpi**2)
-           * (1.0 - prm.PDX3 * s.gamma**2) * s.LMUX_star)  # (4.E13)
+    mux = ((prm.PDX1 + prm.PDX2 * dfz) * (1.0 + prm.PPX3 * dpi + prm.PPX4 * dpi2)
+           * (1.0 - prm.PDX3 * s.gamma2) * s.LMUX_star)  # (4.E13)
     mux = be.where(Fz == 0, 0.0, mux)
     Dx = mux * Fz * zeta1  # (4.E12)
     Kxk = (Fz * (prm.PKX1 + prm.PKX2 * dfz) * be.exp(prm.PKX3 * dfz)
-           * (1.0 + prm.PPX1 * dpi + prm.PPX2 * dpi**2) * prm.LKX)  # (4.E15)
+           * (1.0 + prm.PPX1 * dpi + prm.PPX2 * dpi2) * prm.LKX)  # (4.E15)
     Bx = Kxk / (Cx * Dx + 1e-6 * be.sign_nz(Dx))  # (4.E16)
     SHx = smooth_low_speed(s, (prm.PHX1 + prm.PHX2 * dfz) * prm.LHX, be)  # (4.E17)
     SVx = smooth_low_speed(s, Fz * (prm.PVX1 + prm.PVX2 * dfz) * prm.LVX * s.LMUX_prime * zeta1, be)  # (4.E18)
     kappa_x = s.kappa + SHx  # (4.E10)
-    Ex = (prm.PEX1 + prm.PEX2 * dfz + prm.PEX3 * dfz**2) * (1.0 - prm.PEX4 * be.sign(kappa_x)) * prm.LEX  # (4.E14)
+    Ex = (prm.PEX1 + prm.PEX2 * dfz + prm.PEX3 * dfz2) * (1.0 - prm.PEX4 * be.sign(kappa_x)) * prm.LEX  # (4.E14)
     if modes.limits:
         Ex = be.fmin(Ex, 1.0)
     bk = Bx * kappa_x
@@ -39,7 +39,7 @@ def combined_longitudinal(prm, s, fx0, modes, be):
     if modes.limits:
         Exa = be.fmin(Exa, 1.0)
     SHxa = prm.RHX1  # (4.E57)
-    Bxa = (prm.RBX1 + prm.RBX3 * s.gamma_star**2) * be.cos_atan(prm.RBX2 * s.kappa) * prm.LXAL  # (4.E54)
+    Bxa = (prm.RBX1 + prm.RBX3 * s.gamma_star2) * be.cos_atan(prm.RBX2 * s.kappa) * prm.LXAL  # (4.E54)
     alpha_s = s.alpha_star + SHxa  # (4.E53)
 
     def weight(x):

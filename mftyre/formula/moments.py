@@ -53,7 +53,7 @@ def rolling_resistance_moment(prm, s, fx, be):
     if prm.version == "52":
         my = -R0 * Fz * prm.LMY * speed_terms
     else:
-        my = (-R0 * Fz0 * prm.LMY * (speed_terms + (prm.QSY5 + prm.QSY6 * Fz / Fz0) * s.gamma**2)
+        my = (-R0 * Fz0 * prm.LMY * (speed_terms + (prm.QSY5 + prm.QSY6 * Fz / Fz0) * s.gamma2)
               * ((be.fmax(Fz, 1e-300) / Fz0) ** prm.QSY7 * (s.p / prm.NOMPRES) ** prm.QSY8))  # paper A48
         # (the floor keeps the derivative of Fz^QSY7 finite at zero load: 0 times a finite slope)
     my = be.where(vx < 0, -my, my)

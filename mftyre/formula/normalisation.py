@@ -70,12 +70,15 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
     s.Fz0p = prm.LFZO * prm.FNOMIN  # Fz0' (4.E1)
     s.dfz = (Fz - s.Fz0p) / s.Fz0p  # (4.E2a)
     s.dpi = (p - prm.NOMPRES) / prm.NOMPRES  # (4.E2b)
+    s.dfz2, s.dpi2 = s.dfz**2, s.dpi**2  # (their squares, shared by the equations)
 
     if modes.alpha_star:
         s.alpha_star = s.tan_alpha * be.sign(vx)  # (4.E3)
         s.gamma_star = be.sin(gamma)  # (4.E4)
     else:
         s.alpha_star, s.gamma_star = alpha, gamma
+    s.gamma2 = gamma**2
+    s.gamma_star2 = s.gamma2 if s.gamma_star is gamma else s.gamma_star**2
 
     # slip and contact-centre velocities, ISO-W signs: Vsy = tan(alpha) |Vx| (2.12, 4.E5)
     speed = be.abs(vx)

@@ -32,7 +32,7 @@ def steady_state(prm, fz, kappa, alpha, gamma, phit, vx, p, omega, omega_given, 
     fy, gyk, svyk = lateral.combined_lateral(prm, s, lat.Fy0, lat.muy, modes, be)
 
     coeffs = aligning.aligning_coefficients(prm, s, lat, gyk, modes, be)
-    fy0_gamma0 = None if prm.version == "52" else lateral.pure_lateral(prm, s, 0.0, modes, be).Fy0
+    fy0_gamma0 = None if prm.version == "52" else lateral.pure_lateral(prm, s, be.exact(0.0), modes, be).Fy0
     mz, t, mzr = aligning.aligning_torque(prm, s, coeffs, lon.Kxk, fx, fy, svyk, fy0_gamma0, gyk, modes, be)
     mx = moments.overturning_moment(prm, s, fy, be)
     my = moments.rolling_resistance_moment(prm, s, fx, be)
