@@ -45,6 +45,7 @@ import functools
 import hashlib
 import json
 import math
+import numbers
 import os
 import platform
 import shutil
@@ -462,6 +463,8 @@ class CompiledFunction:
     def batch(self, *arrays, threads: int = 1):
         """Many points: one array (or number) per input, broadcast together; one array per output.
         ``threads``: how many threads share the points (0: one per available core)."""
+        if isinstance(threads, bool) or not isinstance(threads, numbers.Integral) or threads < 0:
+            raise ModelInputError(f"threads must be 0 (one per available core) or a positive integer, got {threads!r}")
         if len(arrays) != len(self.inputs):
             raise ModelInputError(self._arity_message(len(arrays)))
         values = [self._as_array(name, a) for name, a in zip(self.inputs, arrays)]

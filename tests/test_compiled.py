@@ -84,6 +84,14 @@ def test_results_match_numpy_and_broadcast(compiled):
         float(model.evaluate(4000.0, 0.0, 0.0, vx=20.0, p=2e5).fy), rel=1e-12, abs=1e-9)
 
 
+@pytest.mark.parametrize("threads", [-1, 1.5, "2", None, True])
+def test_batch_refuses_a_thread_count_that_is_not_a_count(compiled, threads):
+    """threads=-1 ran silently on one thread before; only 0 (every core) and positive integers are counts."""
+    _, f = compiled["mf61"]
+    with pytest.raises(ModelInputError, match=r"threads must be 0 .* or a positive integer, got"):
+        f.batch(*([np.full(3, v) for v in (4000.0, 0.0, 0.0, 0.0, 0.0, 10.0, 2.2e5)]), threads=threads)
+
+
 def test_batch_validates_arity_shapes_and_types(compiled):
     model, f = compiled["mf61"]
     x = _points(model, 10, 0)
