@@ -172,8 +172,9 @@ class MFModel:
         ALPMIN/ALPMAX, CAMMIN/CAMMAX, PRESMIN/PRESMAX, FZMAX; FZMIN is no bound of the input, it raises the load
         in the aligning torque and the MF 6.1 deflection only, without a warning, see :mod:`mftyre.inputs`) and
         switches on the low-speed model below VXLOW; one :class:`mftyre.InputClippedWarning` per call names every
-        input outside its range, the range and how many points were outside it (the outputs kappa, alpha, p
-        carry the values used). ``limits=False`` evaluates the equations at the inputs as given,
+        input outside its range, the range and how many points were outside it (as MFeval reports them, the
+        output p is the pressure used, kappa and alpha the low-speed-scaled slips before saturation, gamma and
+        fz as given: see OUTPUT_UNITS; ``mftyre eval``'s NAME_used columns show the saturated values). ``limits=False`` evaluates the equations at the inputs as given,
         extrapolating beyond the fitted ranges, with no low-speed model. ``limits="smooth"`` saturates with a
         1 % slope left beyond the ranges (for optimisers, see :class:`mftyre.formula.Modes`).
         """
