@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 from scipy.integrate import quad
+from scipy.optimize import brentq
 
 from conftest import TIR_FILES
 from mftyre.backend import NUMPY
@@ -14,10 +15,11 @@ from mftyre.errors import DataError, ModelInputError
 from mftyre.model import load_tir
 from mftyre.soil import Ground, SinkageError, Soil, SoftSoilTyre, builtin_soils, read_soils, soil
 from mftyre.soil.equations import (bulldozing_coefficients, compaction_resistance, critical_pressure,
-                                   rigid_wheel_sinkage)
+                                   hard_ground_footprint, rigid_wheel_sinkage)
 
 AGRI = TIR_FILES / "agri_460_85R34_mf61.tir"
 AGRI_SMALL = TIR_FILES / "agri_420_85R24_mf61.tir"
+AGRI_TYRE_WIDTH = 0.46  # WIDTH of the 460/85 R34 file
 CAR = TIR_FILES / "car_205_60R15_mf61.tir"
 PADDY = soil("paddy_soil")
 # seed 003's flotation tyre (29x12.50-15): diameter and width
@@ -71,175 +73,269 @@ def test_seed003_sinkage_grows_with_load_against_fe():
     assert np.log(z[-1] / z[0]) / np.log(loads[-1] / loads[0]) == pytest.approx(2 / (2 * PADDY.n + 1), rel=1e-9)
 
 
-def test_seed003_thrust_formula_and_what_the_model_does_instead():
-    """Seed 003, eq. 5: F = (c b L + W tan phi)(1 - exp(-i L / k)) = 2.14 kN at i = 0.14, W = 3.5 kN, L = 0.55 m,
-    with the paddy constants of our table (c 6.25 kPa, phi 30.2 deg, k = K 0.065 m). That form takes the shear
-    displacement at the rear end of the contact (i L) for the whole contact. The model integrates the
-    Janosi-Hanamoto stress along the contact instead (Wong's form, 1.28 kN with the same L), and a rolling rigid
-    wheel touches the soil only on its front arc (0.27 m, not the seed's static chord 0.55 m), with Bekker's
-    normal stress there: 0.68 kN for a 0.73 m x 0.305 m tyre at 68.95 kPa (rigid mode, as the seed says)."""
+def test_seed003_sinkage_and_thrust_of_the_flotation_tyre():
+    """Seed 003's flotation tyre (29x12.50-15 at 68.95 kPa) on its paddy soil at W = 3.5 kN. The seed treats it as
+    a rigid wheel (Bekker's closed form: 0.1230 m, above). In the model the tyre flattens a little (the flat part
+    carries ~20 % of the load, the .tir's deflection relation of a car tyre scaled to the seed's size) and the
+    whole contact is balanced exactly (the circle, not Bekker's parabola and first-order expansion): 0.1256 m,
+    2 % from Bekker's 0.1230 m and 0.5 % from the seed's rounded 0.125 m (as a rigid wheel the exact balance
+    needs 0.144 m, see the next test; the small flat part takes that back). The thrust at i = 0.14, 1.47 kN,
+    lies between Wong's closed form with the seed's static chord (1.28 kN) and the seed's eq. 5 (2.14 kN, the
+    shear displacement i L taken over the whole contact)."""
     c, phi, K = PADDY.c, PADDY.phi, PADDY.K
     W, L, i, b = 3.5e3, 0.55, 0.14, SEED_B
     seed = (c * b * L + W * math.tan(phi)) * (1 - math.exp(-i * L / K))
     assert seed == pytest.approx(2.14e3, rel=0.005)
     wong = (c * b * L + W * math.tan(phi)) * (1 - K / (i * L) * (1 - math.exp(-i * L / K)))
     assert wong == pytest.approx(1.28e3, rel=0.01)
-    seed_tyre = load_tir(CAR).with_params(UNLOADED_RADIUS=SEED_D / 2, WIDTH=SEED_B, Q_RE0=1.0, INFLPRES=68.95e3,
-                                          NOMPRES=68.95e3, PRESMIN=5e4)
-    out = SoftSoilTyre(seed_tyre, PADDY).evaluate(fz=W, slip=i)
-    assert float(out.flexible) == 0.0
-    assert float(out.contact_length) == pytest.approx(math.sqrt(SEED_D * 0.12295 - 0.12295**2), rel=1e-3)
-    assert 0.25 * seed < float(out.gross_traction) < 0.6 * wong
+    out = SoftSoilTyre(_seed_tyre(), PADDY).evaluate(fz=W, slip=i)
+    assert float(out.sinkage) == pytest.approx(0.1230, rel=0.03)
+    assert float(out.sinkage) == pytest.approx(0.125, rel=0.01)
+    assert 0.1 < float(out.flat_load) / W < 0.3
+    assert wong < float(out.gross_traction) < seed
+
+
+def _seed_tyre():
+    return load_tir(CAR).with_params(UNLOADED_RADIUS=SEED_D / 2, WIDTH=SEED_B, Q_RE0=1.0, INFLPRES=68.95e3,
+                                     NOMPRES=68.95e3, PRESMIN=5e4)
+
+
+def _rigid_wheel_sinkage_exact(s, fz, r, b):
+    """The sinkage at which Bekker's normal stress on the front arc of a rigid circle carries fz (scipy)."""
+    k = s.modulus(b)
+
+    def carried(z):
+        end = math.sqrt(r * r - (r - z) ** 2)
+        return b * quad(lambda x: k * max(math.sqrt(r * r - x * x) - (r - z), 0.0) ** s.n, 0, end, limit=200)[0]
+
+    return brentq(lambda z: carried(z) - fz, 1e-6, r)
+
+
+def test_stiff_tyre_is_the_rigid_wheel_of_the_exact_balance():
+    """A tyre far stiffer than the soil (Cz x 1e4) carries (almost) nothing on a flat part: its sinkage is that of
+    the rigid circle whose front arc carries the load (an independent scipy solve), its compaction resistance
+    Bekker's rut work b k z^(n+1)/(n+1) at that depth, and Bekker's closed-form rigid-wheel sinkage (a parabola
+    and a first-order expansion) is 8-14 % shallower than that exact balance."""
+    base = load_tir(AGRI)
+    tyre = SoftSoilTyre(base.with_params(VERTICAL_STIFFNESS=base.params.VERTICAL_STIFFNESS * 1e4), "paddy_soil")
+    prm, s = tyre.params, tyre.soil
+    W = np.array([5e3, 10e3, 15e3])
+    out = tyre.evaluate(fz=W, slip=0.1)
+    assert np.all(out.flat_load < 1e-3 * W)
+    r, b = prm.UNLOADED_RADIUS * prm.Q_RE0, prm.WIDTH
+    exact = np.array([_rigid_wheel_sinkage_exact(s, w, r, b) for w in W])
+    np.testing.assert_allclose(out.sinkage, exact, rtol=2e-3)
+    np.testing.assert_allclose(out.motion_resistance, compaction_resistance(s, out.sinkage, b, NUMPY), rtol=1e-12)
+    bekker = rigid_wheel_sinkage(s, W, 2 * r, b, NUMPY)
+    assert np.all((bekker / exact > 0.84) & (bekker / exact < 0.94)), bekker / exact
 
 
 # ------------------------------------------------------------------------------------------ analytic checks
-def _tread_slip(out, vx):
-    return 1.0 - vx / (out.omega * out.rolling_radius)
+def _rebuilt(tyre, out, vx, alpha):
+    """The documented stress distribution rebuilt from the outputs, integrated by scipy's adaptive quadrature:
+    (vertical normal force, H, torque without hysteresis, Fy, shear-slip power)."""
+    prm, s = tyre.params, tyre.soil
+    r, B = prm.UNLOADED_RADIUS * prm.Q_RE0, prm.WIDTH
+    z, a = float(out.sinkage), 0.5 * float(out.flat_length)
+    k, tan_phi = s.modulus(B), math.tan(s.phi)
+    c = math.sqrt(r * r - a * a)
+    theta_e, theta_f = math.acos((c - z) / r), math.atan(a / c)
+    omega, r_f = float(out.omega), float(out.rolling_radius)
+    ratio, vy = vx / omega, vx * math.tan(alpha)
+
+    def tau(jx, jy, sigma):
+        j = math.hypot(jx, jy)
+        strength = (s.c + sigma * tan_phi) * (1 - math.exp(-j / s.K)) / j if j > 0 else 0.0
+        return strength * jx, strength * jy
+
+    def arc(theta):
+        sigma = k * max(r * math.cos(theta) - (c - z), 0.0) ** s.n
+        jx = r * (theta_e - theta) - ratio * (math.sin(theta_e) - math.sin(theta))
+        tx, ty = tau(jx, vy / omega * (theta_e - theta), sigma)
+        return sigma, tx, ty, omega * r - vx * math.cos(theta)
+
+    jx_f = r * (theta_e - theta_f) - ratio * (math.sin(theta_e) - math.sin(theta_f))
+    jy_f = vy / omega * (theta_e - theta_f)
+    sigma_f = float(out.ground_pressure)
+
+    def flat(x):
+        return tau(jx_f + (1 - ratio / r_f) * x, jy_f + vy / (omega * r_f) * x, sigma_f)
+
+    def integral(f, lo, hi):
+        return quad(f, lo, hi, epsabs=0.0, epsrel=1e-10, limit=400)[0]
+
+    vertical = B * r * integral(lambda t: arc(t)[0] * math.cos(t), theta_f, theta_e) + sigma_f * 2 * a * B
+    h = B * (r * integral(lambda t: arc(t)[1] * math.cos(t), theta_f, theta_e) + integral(lambda x: flat(x)[0], 0, 2 * a))
+    torque = B * (r * r * integral(lambda t: arc(t)[1], theta_f, theta_e) + r_f * integral(lambda x: flat(x)[0], 0, 2 * a))
+    fy = -B * (r * integral(lambda t: arc(t)[2], theta_f, theta_e) + integral(lambda x: flat(x)[1], 0, 2 * a))
+    loss = B * (r * integral(lambda t: arc(t)[1] * arc(t)[3] + arc(t)[2] * vy, theta_f, theta_e)
+                + integral(lambda x: flat(x)[0] * (omega * r_f - vx) + flat(x)[1] * vy, 0, 2 * a))
+    return vertical, h, torque, fy, loss
 
 
-def _arc_extent(tyre, out):
-    """Horizontal extent of the front arc, r (sin theta_e - sin theta_f), from the outputs."""
-    r = tyre.params.UNLOADED_RADIUS * tyre.params.Q_RE0
-    cos_f = (r - out.deflection) / r
-    cos_e = cos_f - out.sinkage / r
-    return r * (np.sqrt(1 - cos_e**2) - np.sqrt(1 - cos_f**2)), r
-
-
-@pytest.mark.parametrize("soil_name, p", [("sandy_loam", 1.2e5), ("paddy_soil", 1.6e5)])
-def test_thrust_equals_janosi_hanamoto_closed_form_for_uniform_strength(soil_name, p):
-    """With phi = 0 the shear strength is c everywhere and the thrust has a closed form. Rigid mode (paddy):
-    Wong's H = sign(i) c b L [1 - K/(|i| L)(1 - exp(-|i| L / K))] with the arc's tread slip i = 1 - V/(omega r).
-    Flexible mode (sandy loam): the arc (length X, tread slip i_a = 1 - V/(omega r)) is followed by the flat part
-    (length 2a, tread slip i_f = 1 - V/(omega Re)) with j = i_a X + i_f s there, so
-    H / (c b) = X - K/|i_a| (1 - e^(-|i_a| X/K)) + 2a - K/|i_f| e^(-|i_a| X/K) (1 - e^(-2a |i_f|/K))
-    (signs as the slips; at these slips both parts shear the same way)."""
-    base = soil(soil_name)
-    cohesive = Soil("cohesive", base.n, base.k_c, base.k_phi, 5e3, 0.0, base.K)
-    tyre = SoftSoilTyre(AGRI, cohesive)
-    slip = np.array([-0.3, 0.02, 0.1, 0.3, 0.7])
-    out = tyre.evaluate(fz=20e3, slip=slip, p=p, vx=2.0)
-    arc, r = _arc_extent(tyre, out)
-    flat = out.contact_length - arc
-    i_a, i_f = 1 - 2.0 / (out.omega * r), _tread_slip(out, 2.0)
-    assert np.all(np.sign(i_a) == np.sign(i_f))
-    K, b = cohesive.K, out.contact_width
-    with np.errstate(all="ignore"):
-        on_arc = arc - K / np.abs(i_a) * (1 - np.exp(-np.abs(i_a) * arc / K))
-        on_flat = np.where(flat > 0, flat - K / np.abs(i_f) * np.exp(-np.abs(i_a) * arc / K)
-                           * (1 - np.exp(-np.abs(i_f) * flat / K)), 0.0)
-    closed = np.sign(i_a) * cohesive.c * b * (on_arc + on_flat)
-    np.testing.assert_allclose(out.gross_traction, closed, rtol=1e-8)
-    assert set(out.flexible) == ({1.0} if soil_name == "sandy_loam" else {0.0})
-    if soil_name == "paddy_soil":  # no flat part: Wong's one-slip form
-        L, u = out.contact_length, np.abs(i_a) * out.contact_length / K
-        np.testing.assert_allclose(out.gross_traction, np.sign(i_a) * cohesive.c * b * L * (1 - (1 - np.exp(-u)) / u),
-                                   rtol=1e-8)
-
-
-@pytest.mark.parametrize("soil_name, p", [("sandy_loam", 1.2e5), ("paddy_soil", 1.6e5), ("dry_sand", 1.0e5)])
-def test_thrust_and_lateral_force_against_adaptive_quadrature(soil_name, p):
-    """The Gauss sums against scipy's adaptive quadrature of the same integrand, rebuilt from the documented
-    equations and the outputs (sinkage, deflection, contact length): tau = (c + sigma tan phi)(1 - exp(-j/K))
-    along (j_x, j_y), sigma = k (r (cos theta - cos theta_e))^n on the arc and k z^n on the flat part, with the
-    arc's tread slip i_a = 1 - V/(omega r) and the flat part's i_f = 1 - V/(omega Re) (j_x = i_a X + i_f (x - X)
-    there); and the torque about the axle r H_arc + (r - delta) H_flat."""
-    s = soil(soil_name)
-    tyre = SoftSoilTyre(AGRI, s)
-    prm = tyre.params
-    r = prm.UNLOADED_RADIUS * prm.Q_RE0
+@pytest.mark.parametrize("tir, soil_name, fz, p", [(AGRI, "sandy_loam", 25e3, 1.2e5), (AGRI, "paddy_soil", 15e3, 1.6e5),
+                                                   (AGRI, "dry_sand", 25e3, 1.0e5), (CAR, "clayey_soil", 4e3, 2.4e5)])
+def test_forces_balance_and_losses_against_adaptive_quadrature(tir, soil_name, fz, p):
+    """Vertical equilibrium and every integral against scipy's adaptive quadrature of the documented stresses
+    (rebuilt from the outputs: sinkage, flat length, ground pressure, rolling radius, spin): the normal stress over
+    the whole contact equals Fz (1e-5), and H, the torque, Fy and the shear-slip loss agree (2e-4). This fails on
+    the earlier model: its front arc added 7-15 % of the load in normal stress on top of the flat part's full load."""
+    tyre = SoftSoilTyre(tir, soil_name)
     for slip, alpha in ((0.15, 0.0), (0.4, 0.05), (-0.2, -0.1)):
-        out = tyre.evaluate(fz=25e3, slip=slip, alpha=alpha, p=p, vx=2.0)
-        z, delta, L, b = (float(out[k]) for k in ("sinkage", "deflection", "contact_length", "contact_width"))
-        i_f, i_a = float(_tread_slip(out, 2.0)), float(1 - 2.0 / (out.omega * r))
-        k = s.modulus(b)
-        cos_f, cos_e = (r - delta) / r, (r - delta - z) / r
-        arc = r * (math.sqrt(1 - cos_e**2) - math.sqrt(1 - cos_f**2))
-
-        def sigma(x):
-            if x >= arc:
-                return k * z**s.n
-            sin_t = math.sqrt(1 - cos_e**2) - x / r
-            return k * max(r * (math.sqrt(1 - sin_t**2) - cos_e), 0.0) ** s.n
-
-        def tau(x, component):
-            on_arc, on_flat = min(x, arc), max(x - arc, 0.0)
-            jx = i_a * on_arc + i_f * on_flat
-            jy = ((1 - i_a) * on_arc + (1 - i_f) * on_flat) * math.tan(alpha)
-            j = math.hypot(jx, jy)
-            return (s.c + sigma(x) * math.tan(s.phi)) * (1 - math.exp(-j / s.K)) * (jx, jy)[component] / j
-
-        h_arc, h_flat = (b * quad(tau, lo, hi, args=(0,), epsabs=1e-10, limit=200)[0] for lo, hi in ((0, arc), (arc, L)))
-        h = h_arc + h_flat
-        assert float(out.torque) == pytest.approx(r * h_arc + (r - delta) * h_flat, rel=2e-4)
-        fy = -b * sum(quad(tau, lo, hi, args=(1,), epsabs=1e-10, limit=200)[0] for lo, hi in ((0, arc), (arc, L)))
+        out = tyre.evaluate(fz=fz, slip=slip, alpha=alpha, p=p, vx=2.0)
+        vertical, h, torque, fy, loss = _rebuilt(tyre, out, 2.0, alpha)
+        assert vertical == pytest.approx(fz, rel=1e-5)
         assert float(out.gross_traction) == pytest.approx(h, rel=2e-4)
+        assert float(out.torque - out.hysteresis_moment) == pytest.approx(torque, rel=2e-4)
+        assert float(out.slip_power) == pytest.approx(loss, rel=2e-4)
         if alpha:
             assert float(out.fy) == pytest.approx(fy, rel=2e-4)
             assert np.sign(float(out.fy)) == -np.sign(alpha)  # ISO-W: Fy opposes the slip angle
 
 
-def test_rigid_wheel_limit_matches_bekker_closed_forms():
-    """A tyre far stiffer than the soil (p_g >> p_cr) is a rigid wheel: its sinkage is Bekker's rigid-wheel
-    sinkage, its compaction resistance Bekker's closed form in W,
-    R_c = (3W/sqrt(D))^((2n+2)/(2n+1)) / [(3-n)^((2n+2)/(2n+1)) (n+1) (k_c + b k_phi)^(1/(2n+1))],
-    and the vertical reaction of the front arc, b int k (r(cos theta - cos theta_e))^n dx, carries the load to
-    within Bekker's approximation (7-10 % here: his formula replaces the circle by a parabola and expands
-    (z - x^2/D)^n to first order)."""
-    tyre = SoftSoilTyre(load_tir(AGRI).with_params(INFLPRES=2.4e5), "paddy_soil")
-    prm, s = tyre.params, tyre.soil
-    W = np.array([5e3, 10e3, 15e3])
-    out = tyre.evaluate(fz=W, slip=0.1)
-    assert np.all(out.flexible == 0) and np.all(out.deflection == 0)
-    D, b, n = 2 * prm.UNLOADED_RADIUS * prm.Q_RE0, prm.WIDTH, s.n
-    e = (2 * n + 2) / (2 * n + 1)
-    bekker = (3 * W / np.sqrt(D)) ** e / ((3 - n) ** e * (n + 1) * (s.k_c + b * s.k_phi) ** (1 / (2 * n + 1)))
-    np.testing.assert_allclose(out.motion_resistance, bekker, rtol=1e-10)
-    np.testing.assert_allclose(out.sinkage, rigid_wheel_sinkage(s, W, D, b, NUMPY), rtol=1e-12)
-    np.testing.assert_allclose(out.ground_pressure, out.critical_pressure, rtol=1e-12)
-    r = D / 2
-    for w, z, L in zip(W, out.sinkage, out.contact_length):
-        carried = b * quad(lambda x: s.modulus(b) * (np.sqrt(r**2 - x**2) - (r - z)) ** n, 0, L)[0]
-        assert carried == pytest.approx(w, rel=0.12)
+_ENERGY_SOILS = ("dry_sand", "sandy_loam", "clayey_soil", "clayey_soil_wet", "heavy_clay", "heavy_clay_wet",
+                 "lean_clay_wet", "lete_sand", "paddy_soil")
+
+
+@pytest.mark.parametrize("tir", [AGRI, AGRI_SMALL, CAR], ids=lambda p: p.name)
+def test_power_balance_over_soils_pressures_slips_loads(tir):
+    """Energy: T omega - Fy V tan(alpha) = DP V + (R_c + R_b) V + P_slip + M_h omega to 1e-6 of the input power
+    on every built-in soil the tyre does not sink into, at 4 pressures x 4 loads x 9 slips x 2 slip angles, and
+    the tractive efficiency stays below 1 - i wherever the wheel is driven (T omega > 0 and DP > 0). (The
+    shear-slip loss is not positive at every point: Janosi-Hanamoto's stress follows the displacement, not its
+    rate, so where the tread's slip velocity reverses along the contact near i = 0 the soil gives a little back.)"""
+    model = load_tir(tir)
+    prm = model.params
+    p = np.linspace(prm.PRESMIN, prm.PRESMAX, 4)[:, None, None, None]
+    fz = np.linspace(0.4, 1.4, 4)[None, :, None, None] * prm.FNOMIN
+    slip = np.array([-0.5, -0.1, -0.01, 0.0, 0.02, 0.05, 0.15, 0.4, 0.8])[None, None, :, None]
+    alpha = np.array([0.0, 0.08])[None, None, None, :]
+    vx = 2.5
+    tested = 0
+    for name in _ENERGY_SOILS:
+        tyre = SoftSoilTyre(model, name, bulldozing_depth=0.02 if name == "paddy_soil" else math.inf)
+        try:
+            out = tyre.evaluate(fz=fz, slip=slip, alpha=alpha, p=p, vx=vx)
+        except SinkageError:
+            continue
+        tested += 1
+        lhs = out.torque * out.omega - out.fy * vx * np.tan(alpha)
+        rhs = out.drawbar_pull * vx + out.motion_resistance * vx + out.slip_power + out.hysteresis_moment * out.omega
+        scale = np.abs(out.torque * out.omega) + np.abs(out.drawbar_pull * vx) + 1e-9
+        assert np.max(np.abs(lhs - rhs) / scale) < 1e-6, name
+        driven = (out.power > 0) & (out.drawbar_pull > 0)
+        assert np.all(out.efficiency[driven] <= 1 - np.broadcast_to(slip, out.efficiency.shape)[driven] + 1e-12), name
+    assert tested >= 6
+
+
+def test_efficiency_never_exceeds_one_minus_slip():
+    """The review's case (issue 20): the 460/85 R34 at 25 kN reached an efficiency of 0.996 at 2 % slip on LETE
+    sand (bound 0.98) and 1.041 on heavy clay at 1.0 bar: the flat part's shear acted on the lever r - delta while
+    its tread moved at omega Re. Only outputs the earlier model had are used here."""
+    slip = np.linspace(0.005, 0.6, 120)
+    for name in ("lete_sand", "heavy_clay", "sandy_loam", "clayey_soil"):
+        for p in (1.0e5, 1.6e5):
+            out = SoftSoilTyre(AGRI, name).evaluate(fz=25e3, slip=slip, p=p, vx=2.0)
+            ok = out.power > 0
+            assert np.all(out.efficiency[ok] <= 1 - slip[ok]), (name, p)
 
 
 # ---------------------------------------------------------------------------------------------- trends
-def test_lower_pressure_less_sinkage_and_resistance_once_flexible():
-    """Seed 001 (driven FE tyre) and Wong: once the tyre flattens, lower pressure -> larger footprint -> lower
-    ground pressure -> less sinkage and less compaction resistance; at the same slip more drawbar pull."""
-    for tir in (AGRI, AGRI_SMALL):
-        for name in ("sandy_loam", "clayey_soil"):
-            tyre = SoftSoilTyre(tir, name)
-            p = np.array([1.0e5, 1.2e5, 1.4e5, 1.6e5])
-            out = tyre.evaluate(fz=0.8 * tyre.params.FNOMIN, slip=0.15, p=p)
-            assert np.all(out.flexible > 0.9), (tir.name, name)  # flexible (one point just inside the switch band)
-            for key in ("sinkage", "motion_resistance", "ground_pressure"):
-                assert np.all(np.diff(out[key]) > 0), (tir.name, name, key)
-            assert np.all(np.diff(out.deflection) < 0)
+@pytest.mark.parametrize("tir", [AGRI, AGRI_SMALL, CAR], ids=lambda p: p.name)
+def test_pressure_acts_for_every_tyre_on_every_soil(tir):
+    """The tyre deflects as its .tir says under the soil's pressure-sinkage response: on every built-in soil
+    (the car tyre on clays too, which Wong's rigid/flexible switch left rigid at every pressure) lower pressure
+    gives less sinkage and less compaction resistance, and the flat part carries more of the load."""
+    model = load_tir(tir)
+    prm = model.params
+    p = np.linspace(prm.PRESMIN, prm.PRESMAX, 6)
+    for name in builtin_soils():
+        tyre = SoftSoilTyre(model, name)
+        try:
+            out = tyre.evaluate(fz=0.6 * prm.FNOMIN, slip=0.15, p=p)
+        except SinkageError:
+            assert name == "sandy_loam_wet"        # the one soil every tyre here sinks into
+            continue
+        assert np.all(np.diff(out.sinkage) > 0), (name, out.sinkage)
+        assert np.all(np.diff(out.motion_resistance) > 0), name
+        assert np.all(np.diff(out.flat_load) < 0), name
 
 
-def test_rigid_mode_is_independent_of_pressure():
-    """Above the critical pressure the tyre is a rigid wheel: pressure no longer changes sinkage or resistance."""
-    tyre = SoftSoilTyre(AGRI, "paddy_soil")
-    out = tyre.evaluate(fz=30e3, slip=0.2, p=np.array([1.0e5, 1.6e5, 2.4e5]))
-    assert np.all(out.flexible == 0)
-    assert np.ptp(out.sinkage) == 0 and np.ptp(out.motion_resistance) == 0
+def test_seed001_trends_car_tyre_on_cohesive_soil():
+    """Seed 001 (FE P235/75R17 on a cohesive soil, 120-242 kPa, 10 km/h): (a) driven at a fixed wheel speed
+    (7.46 rad/s) the tyre sinks deeper and, self-propelled (DP = 0), travels slower at higher pressure (its
+    Fig. 14); (b) more load, more sinkage (Fig. 15); (c) the towed wheel meets more resistance at higher pressure
+    and more load (lower pressure spreads the load: Figs. 12-13), and turns slower than on hard ground. The car
+    tyre of tir_files on the cohesive soils of the table (the seed's FE soil has no Bekker constants): signs
+    only, FE with Drucker-Prager soil is not Bekker. Fails on the earlier model: the car tyre stayed rigid."""
+    model = load_tir(CAR)
+    p = np.array([1.2e5, 1.6e5, 2.0e5, 2.42e5])
+    v = 10 / 3.6
+    slip = np.linspace(-0.3, 0.6, 451)
+    for name in ("clayey_soil", "clayey_soil_wet", "heavy_clay_wet", "lean_clay_wet"):
+        tyre = SoftSoilTyre(model, name)
+        speed = []
+        for pi in p:
+            out = tyre.evaluate(fz=3e3, slip=slip, p=pi, vx=v)
+            assert np.all(np.diff(out.drawbar_pull) > 0)
+            self_propelled = np.interp(0.0, out.drawbar_pull, slip)
+            r_e = v / ((1 - slip[0]) * out.omega[0])
+            speed.append(7.46 * (1 - self_propelled) * r_e)
+        assert np.all(np.diff(speed) < 0), (name, speed)
+        loads = np.array([2e3, 3e3, 5e3])[:, None]
+        out = tyre.evaluate(fz=loads, slip=0.1, p=p[None, :], vx=v)
+        assert np.all(np.diff(out.sinkage, axis=0) > 0) and np.all(np.diff(out.sinkage, axis=1) > 0), name
+        towed = tyre.towed(fz=loads, p=p[None, :], vx=v)
+        resistance = -towed.drawbar_pull
+        assert np.all(np.diff(resistance, axis=0) > 0) and np.all(np.diff(resistance, axis=1) > 0), name
+        hard = model.evaluate(fz=loads, kappa=0.0, alpha=0.0, vx=v, p=p[None, :])
+        assert np.all(towed.omega < hard.omega), name
+
+
+def test_tyre_hysteresis_on_soil():
+    """The .tir's rolling-resistance moment is carried on soil at the load the carcass carries on its flat part:
+    M_h = -My(F_t) (MFModel.evaluate at that load, free rolling), and on a soil almost as firm as a road (heavy
+    clay at 25 % moisture: the rut is microns deep) the towed wheel meets the hard-ground rolling resistance
+    -My / Re within 2 %. Fails on the earlier model, which left My out on soil."""
+    model = load_tir(AGRI)
+    tyre = SoftSoilTyre(model, "heavy_clay")
+    p = np.array([1.0e5, 1.6e5])
+    towed = tyre.towed(fz=25e3, p=p, vx=3.0)
+    hard = model.evaluate(fz=25e3, kappa=0.0, alpha=0.0, vx=3.0, p=p)
+    assert np.all(towed.sinkage < 1e-4)
+    np.testing.assert_allclose(-towed.drawbar_pull, -hard.my / hard.re, rtol=0.02)
+    soft = SoftSoilTyre(model, "sandy_loam").evaluate(fz=25e3, slip=0.1, p=p, vx=3.0)
+    at_flat = model.evaluate(fz=soft.flat_load, kappa=0.0, alpha=0.0, vx=3.0, p=p)
+    np.testing.assert_allclose(soft.hysteresis_moment, -at_flat.my, rtol=1e-9)
+
+
+@pytest.mark.parametrize("tir", [AGRI, AGRI_SMALL], ids=lambda p: p.name)
+def test_agricultural_contact_width_and_carcass_pressure(tir):
+    """Issue 20: the 420/85 R24's contact width on hard ground was 426 mm at 1.0 bar (section 420 mm) and its
+    carcass pressure p_c = Fz/(4ab) - p_i was 0 at half load and 1.6 bar, negative below. Over 0.25-2 FNOMIN and
+    PRESMIN-PRESMAX the files' contact width now stays within the section width and p_c > 0; on soil the contact
+    width is the section width."""
+    model = load_tir(tir)
+    prm = model.params
+    fz = np.linspace(0.25, 2.0, 15)[:, None] * prm.FNOMIN
+    p = np.linspace(prm.PRESMIN, prm.PRESMAX, 10)[None, :]
+    _, a, b = hard_ground_footprint(prm, fz, p, NUMPY)
+    assert np.all(2 * b <= prm.WIDTH)
+    out = SoftSoilTyre(model, "lete_sand").evaluate(fz=fz, slip=0.1, p=p)
+    assert np.all(out.carcass_pressure > 0)
+    np.testing.assert_allclose(out.carcass_pressure, fz / (4 * a * b) - p, rtol=1e-12)
+    assert np.all(out.contact_width == prm.WIDTH)
 
 
 def test_drawbar_pull_rises_with_slip_to_a_saturating_maximum():
-    """DP(i) rises monotonically, concave, and saturates at the Mohr-Coulomb limit less the resistance,
-    b int (c + sigma tan phi) dx - R_c, less the K/(iL) shortfall of the Janosi-Hanamoto integral. (That limit
-    exceeds c A + W tan(phi) by the front arc's normal stress, which the model does not add to the load balance;
-    see the module notes.)"""
+    """DP(i) rises monotonically and saturates at the Mohr-Coulomb limit less the resistance (the limit: the
+    same model with K -> 0, tau = tau_max everywhere); the efficiency peaks at a moderate slip; no slip sinkage
+    unless asked."""
     tyre = SoftSoilTyre(AGRI, "sandy_loam")
     slip = np.linspace(0.0, 0.95, 96)
     out = tyre.evaluate(fz=25e3, slip=slip, p=1.2e5)
     dp = out.drawbar_pull
-    towed = tyre.towed(fz=25e3, p=1.2e5)
-    assert float(towed.slip) < 0 and float(towed.drawbar_pull) < 0
-    # DP rises through zero between the towed slip and 0: against the hard-ground Re the self-propelled point
-    # is a small skid here, because the front arc runs at omega r > omega Re (see the module notes)
-    assert float(tyre.evaluate(fz=25e3, slip=float(towed.slip), p=1.2e5).drawbar_pull) < 0 < dp[0]
-    assert np.all(np.diff(dp) > 0) and np.all(np.diff(dp, 2) < 0)
+    assert np.all(np.diff(dp) > 0)
     gain_late = dp[-1] - dp[60]                      # i 0.6 -> 0.95
     gain_early = dp[60] - dp[0]                      # i 0 -> 0.6
     assert gain_late < 0.1 * gain_early
@@ -247,62 +343,32 @@ def test_drawbar_pull_rises_with_slip_to_a_saturating_maximum():
     rigid_plastic = SoftSoilTyre(AGRI, Soil("stiff", s.n, s.k_c, s.k_phi, s.c, s.phi, 1e-9))  # K -> 0: tau = tau_max
     limit = float(rigid_plastic.evaluate(fz=25e3, slip=0.5, p=1.2e5).drawbar_pull)
     assert 0.9 * limit < dp[-1] < limit
-    assert np.nanargmax(out.efficiency) < 30           # efficiency peaks at a moderate slip
-    assert np.all(np.diff(out.sinkage) == 0)           # no slip sinkage in this model (documented)
+    assert np.nanargmax(out.efficiency) < 30
+    assert np.all(np.diff(out.sinkage) == 0)
 
 
 def test_sinkage_grows_with_load():
-    """Sinkage and compaction resistance grow with load, in the flexible mode (sandy loam) and in the rigid mode
-    (paddy soil: z ~ W^(2/(2n+1)))."""
-    out = SoftSoilTyre(AGRI, "sandy_loam").evaluate(fz=np.linspace(10e3, 40e3, 13), slip=0.1, p=1.2e5)
-    assert np.all(out.flexible > 0.9)  # flexible (the lightest load just inside the switch band)
-    assert np.all(np.diff(out.sinkage) > 0) and np.all(np.diff(out.motion_resistance) > 0)
-    out = SoftSoilTyre(AGRI, "paddy_soil").evaluate(fz=np.linspace(5e3, 40e3, 15), slip=0.1, p=1.2e5)
-    assert np.all(out.flexible == 0)
-    assert np.all(np.diff(out.sinkage) > 0) and np.all(np.diff(out.motion_resistance) > 0)
+    for name in ("sandy_loam", "paddy_soil", "clayey_soil"):
+        out = SoftSoilTyre(AGRI, name).evaluate(fz=np.linspace(5e3, 30e3, 11), slip=0.1, p=1.2e5)
+        assert np.all(np.diff(out.sinkage) > 0) and np.all(np.diff(out.motion_resistance) > 0), name
 
 
-def test_towed_wheel_on_soft_soil_turns_slower_than_on_hard_ground():
-    """Seed 001 (FE P235/75R17 at 242 kPa, towed at 10 km/h on soft cohesive soil): the towed wheel turns slower
-    on the soil than on the rigid road (its Fig. 12, until it stops turning). The model: zero torque
-    r H_arc + (r - delta) H_flat = 0 (solved by SoftSoilTyre.towed). Rigid mode (the car tyre on wet heavy clay):
-    the wheel turns at V / r, slower than V / Re. Flexible mode (the agricultural tyre on sandy loam): the
-    front arc runs at omega r > omega Re, so the flat part must skid (slip < 0) to balance it: slower than on hard
-    ground too. This failed before: the flexible towed wheel turned exactly at V / Re."""
-    car = load_tir(CAR)
-    v = 10 / 3.6
-    hard = car.evaluate(fz=5e3, kappa=0.0, alpha=0.0, vx=v, p=2.42e5)
-    towed = SoftSoilTyre(car, "heavy_clay_wet").towed(5e3, p=2.42e5, vx=v)
-    assert float(towed.flexible) == 0.0
-    assert abs(float(towed.torque)) < 1e-9 * 5e3
-    assert float(towed.omega) < float(hard.omega)
-    assert float(towed.omega) == pytest.approx(v / (car.params.UNLOADED_RADIUS * car.params.Q_RE0), rel=1e-12)
-
+def test_towed_wheel_turns_slower_than_on_hard_ground_and_skids_less_at_lower_pressure():
+    """Seed 001 (FE tyre towed on soft soil): the towed wheel turns slower than on the road (its Fig. 12) and
+    the tyre at lower pressure keeps turning longer (Fig. 13). The steady model: zero torque needs the flat part to
+    skid against the front arc (slip < 0), less so at lower pressure (a shorter arc against a longer flat part).
+    Seed 001's FE wheel ends up not turning at all; this steady model has no soil flow ahead of the wheel."""
     agri = load_tir(AGRI)
-    p = np.array([1.0e5, 1.2e5, 1.4e5, 1.6e5])
-    towed = SoftSoilTyre(agri, "sandy_loam").towed(20e3, p=p, vx=2.0)
-    hard = agri.evaluate(fz=20e3, kappa=0.0, alpha=0.0, vx=2.0, p=p)
-    assert np.all(towed.flexible == 1)
-    np.testing.assert_allclose(towed.torque, 0.0, atol=1e-9 * 20e3 * agri.params.UNLOADED_RADIUS)
-    assert np.all(towed.slip < -0.005)
-    assert np.all(towed.omega < hard.omega)
-    # the torque really changes sign across the solution (a root, not a flat spot)
-    soft = SoftSoilTyre(agri, "sandy_loam")
-    assert np.all(soft.evaluate(fz=20e3, slip=towed.slip - 1e-3, p=p, vx=2.0).torque < 0)
-    assert np.all(soft.evaluate(fz=20e3, slip=towed.slip + 1e-3, p=p, vx=2.0).torque > 0)
-
-
-def test_towed_wheel_skids_less_at_lower_pressure():
-    """Seed 001, Fig. 13: at 200 kPa the towed tyre travels farther on the soil before it stops turning than at
-    242 kPa (larger footprint, lower ground pressure). The model's steady towed wheel (the agricultural tyre on
-    sandy loam and on clayey soil, flexible mode): lower pressure -> less sinkage -> shorter front arc against a
-    longer flat part -> less skid (slip closer to 0). Seed 001's FE wheel ends up not turning at all; the model has
-    no soil flow ahead of the wheel and cannot stop it: only the trend is compared."""
     p = np.array([1.0e5, 1.15e5, 1.3e5, 1.45e5])
     for name in ("sandy_loam", "clayey_soil"):
-        towed = SoftSoilTyre(AGRI, name).towed(20e3, p=p, vx=2.0)
-        assert np.all(towed.flexible > 0.9), name
+        soft = SoftSoilTyre(agri, name)
+        towed = soft.towed(20e3, p=p, vx=2.0)
+        hard = agri.evaluate(fz=20e3, kappa=0.0, alpha=0.0, vx=2.0, p=p)
+        np.testing.assert_allclose(towed.torque, 0.0, atol=1e-9 * 20e3 * agri.params.UNLOADED_RADIUS)
+        assert np.all(towed.omega < hard.omega) and np.all(towed.slip < 0)
         assert np.all(np.diff(towed.slip) < 0), (name, towed.slip)
+        assert np.all(soft.evaluate(fz=20e3, slip=towed.slip - 1e-3, p=p, vx=2.0).torque < 0)
+        assert np.all(soft.evaluate(fz=20e3, slip=towed.slip + 1e-3, p=p, vx=2.0).torque > 0)
 
 
 # ---------------------------------------------------------------------------------------------- casadi
@@ -320,6 +386,8 @@ def test_casadi_matches_numpy(tir, soil_name):
     pts = _points(np.random.default_rng(1), 40)
     if tyre.params.FNOMIN < 1e4:  # the car tyre: car loads and pressures
         pts = dict(pts, fz=pts["fz"] / 5, p=pts["p"] + 1e5)
+    if soil_name == "paddy_soil":  # a soft soil: loads the tyre does not sink into to its axle
+        pts = dict(pts, fz=pts["fz"] / 2)
     out = tyre.evaluate(**pts)
     got = f.map(40)(*(pts[k][None, :] for k in ("fz", "slip", "alpha", "p")))
     names = f.name_out()
@@ -434,7 +502,7 @@ def test_sinkage_beyond_the_radius_is_a_typed_error():
     tyre = SoftSoilTyre(CAR, "paddy_soil")
     tyre.evaluate(fz=4e3, slip=0.1)  # deep but possible
     with pytest.raises(SinkageError, match=r"fz = 8000 N.*reaches the axle.*index 1"):
-        tyre.evaluate(fz=[4e3, 8e3, 9e3], slip=0.1)
+        tyre.evaluate(fz=[4e3, 8e3, 9e3], slip=0.1, p=2.2e5)
     assert issubclass(SinkageError, ModelInputError)
 
 
@@ -458,65 +526,46 @@ def test_compaction_resistance_is_the_rut_work():
     assert compaction_resistance(s, z, b, NUMPY) == pytest.approx(work, rel=1e-10)
 
 
-# ------------------------------------------------------------------------------ rigid/flexible switch: continuity
-def _switch_sweep(size):
-    """The 420/85 R24 on clayey soil at 0.8 FNOMIN crosses p_cr near 1.6 bar: pressures across the switch band."""
+# ------------------------------------------------------------------------------ continuity in pressure
+def test_outputs_continuous_and_smooth_in_pressure():
+    """No switch: over a fine pressure sweep (the 420/85 R24 on clayey soil at 0.8 FNOMIN, where Wong's switch
+    jumped by 0.2 m of contact length near 1.6 bar) every output changes by at most a few times its mean step
+    between neighbours, and the second differences stay small (no kink)."""
     tyre = SoftSoilTyre(AGRI_SMALL, "clayey_soil")
-    return tyre, 0.8 * tyre.params.FNOMIN, np.linspace(1.3e5, 2.2e5, size)
-
-
-def test_switch_is_continuous_in_pressure():
-    """Wong's switch is a step (rigid: no flat part, width WIDTH; flexible: flat part 2a, deflection rho):
-    before the blend the contact length jumped by about 0.2 m and the traction by kN between two pressures
-    1 Pa apart. Now every output is continuous: over a fine pressure sweep through the band the largest change
-    between neighbours is of the order of the mean change (no step), and the band is crossed (w from 1 to 0)."""
-    tyre, fz, p = _switch_sweep(4001)
-    out = tyre.evaluate(fz=fz, slip=0.15, alpha=0.02, p=p)
-    assert out.flexible[0] == 1.0 and out.flexible[-1] == 0.0
-    assert np.all(np.diff(out.flexible) <= 0)
-    for key in ("contact_length", "contact_width", "sinkage", "deflection", "gross_traction", "drawbar_pull",
-                "torque", "fy", "motion_resistance", "rolling_radius", "ground_pressure"):
-        steps = np.abs(np.diff(out[key]))
+    p = np.linspace(0.8e5, 2.4e5, 2001)
+    out = tyre.evaluate(fz=0.8 * tyre.params.FNOMIN, slip=0.15, alpha=0.02, p=p)
+    for key in ("contact_length", "flat_length", "sinkage", "deflection", "gross_traction", "drawbar_pull",
+                "torque", "fy", "motion_resistance", "rolling_radius", "ground_pressure", "flat_load"):
+        steps = np.diff(out[key])
         mean = abs(out[key][-1] - out[key][0]) / (p.size - 1) + 1e-12 * np.abs(out[key]).max()
-        assert steps.max() < 60 * mean, (key, steps.max(), mean)
-    # at the band's edges the blend meets Wong's modes exactly: just outside them w is exactly 0 or 1
-    ratio = (out.critical_pressure - out.carcass_pressure - p) / out.critical_pressure  # 1 - p_g / p_cr
-    assert np.all(out.flexible[ratio >= 0.05] == 1.0) and np.all(out.flexible[ratio <= -0.05] == 0.0)
-    inside = np.abs(ratio) < 0.045
-    assert np.all((out.flexible[inside] > 0) & (out.flexible[inside] < 1))
+        assert np.abs(steps).max() < 5 * mean, (key, np.abs(steps).max(), mean)
+        assert np.abs(np.diff(steps)).max() < 0.05 * np.abs(steps).max() + 1e-9 * np.abs(out[key]).max(), key
 
 
-def test_casadi_derivatives_finite_and_right_across_the_switch():
-    """d(outputs)/dp from CasADi at pressures in and at the edges of the switch band: finite and equal to central
-    differences of the NumPy model (the blend is C1, so even at the band's edges the one-sided slopes agree)."""
+def test_casadi_derivatives_in_pressure():
+    """d(outputs)/dp from CasADi (through the unrolled vertical balance and its last Newton step) against central
+    differences of the NumPy model, and their integral over a pressure range against the change of the outputs."""
     import casadi as ca
 
-    tyre, fz, _ = _switch_sweep(2)
+    tyre = SoftSoilTyre(AGRI_SMALL, "clayey_soil")
+    fz = 0.8 * tyre.params.FNOMIN
     keys = ("contact_length", "drawbar_pull", "torque", "sinkage")
     f = tyre.casadi_function(inputs=("p",), outputs=keys, fixed=dict(fz=fz, slip=0.15, alpha=0.02))
     x = ca.SX.sym("p")
     jac = ca.Function("d", [x], [ca.jacobian(ca.vertcat(*f(x)), x)])
-    # the band edges: p_g / p_cr = 1 +- 0.05, located on the NumPy model by bisection of the flexible fraction
-    p = np.linspace(1.3e5, 2.2e5, 20001)
-    w = tyre.evaluate(fz=fz, slip=0.15, alpha=0.02, p=p).flexible
-    edges = [p[np.argmax(w < 1)], p[np.argmax(w == 0)]]
-    for point in (edges[0], 0.5 * (edges[0] + edges[1]), edges[1], 0.3 * edges[0] + 0.7 * edges[1]):
+    for point in (0.9e5, 1.3e5, 1.7e5, 2.3e5):
         analytic = np.ravel(jac(point).full())
-        assert np.all(np.isfinite(analytic))
-        h = 0.5
+        h = 1.0
         hi, lo = (tyre.evaluate(fz=fz, slip=0.15, alpha=0.02, p=point + d) for d in (h, -h))
         fd = np.array([(hi[k] - lo[k]) / (2 * h) for k in keys], dtype=float).ravel()
-        np.testing.assert_allclose(analytic, fd, rtol=2e-3, atol=1e-6 * np.abs(fd).max() + 1e-12)
-        assert np.any(analytic != 0)
-    # the derivatives account for the whole change across the band (no step that they cannot see): the
-    # trapezoidal integral of dX/dp from below to above the band equals X(p_b) - X(p_a)
-    grid = np.linspace(edges[0] - 2e3, edges[1] + 2e3, 2001)
+        np.testing.assert_allclose(analytic, fd, rtol=2e-4, atol=1e-6 * np.abs(fd).max() + 1e-12)
+    grid = np.linspace(1.0e5, 2.0e5, 401)
     slopes = np.array([np.ravel(jac(q).full()) for q in grid])
     values = tyre.evaluate(fz=fz, slip=0.15, alpha=0.02, p=grid)
     for col, key in enumerate(keys):
         change = values[key][-1] - values[key][0]
         integral = np.sum(0.5 * (slopes[1:, col] + slopes[:-1, col]) * np.diff(grid))
-        assert integral == pytest.approx(change, rel=2e-3, abs=1e-9), key
+        assert integral == pytest.approx(change, rel=1e-4, abs=1e-9), key
 
 
 # ------------------------------------------------------------------------------------- optional effects
@@ -532,21 +581,25 @@ def test_neutral_effect_parameters_give_identical_outputs():
 
 
 def test_slip_sinkage_follows_lyasko_and_deepens_the_rut():
-    """s_j = 1: z(i) = z(0) (1 + i)/(1 - 0.5 i) for driving slip (Lyasko), none for braking; the compaction
-    resistance grows as z^(n+1); the load-bearing ground pressure does not change; s_j = 0.5 is the square root."""
+    """s_j = 1: Lyasko's factor f = (1 + i)/(1 - 0.5 i) for driving slip, none for braking. The dug part of the rut
+    carries nothing (sigma = k (d/f)^n), so the balance shifts load to the longer front arc: the sinkage grows with
+    the slip by less than f, the compaction resistance R_c = B k f^-n z^(n+1)/(n+1) grows, the pull falls at high
+    slip; s_j = 0.5 lies in between; braking changes nothing."""
     slip = np.array([-0.3, 0.0, 0.1, 0.3, 0.6])
     kw = dict(fz=25e3, slip=slip, p=1.2e5)
     static = SoftSoilTyre(AGRI, "sandy_loam").evaluate(**kw)
     lyasko = SoftSoilTyre(AGRI, "sandy_loam", slip_sinkage=1.0).evaluate(**kw)
     half = SoftSoilTyre(AGRI, "sandy_loam", slip_sinkage=0.5).evaluate(**kw)
     factor = np.where(slip > 0, (1 + slip) / (1 - 0.5 * slip), 1.0)
-    np.testing.assert_allclose(lyasko.sinkage / static.sinkage, factor, rtol=1e-12)
-    np.testing.assert_allclose(half.sinkage / static.sinkage, np.sqrt(factor), rtol=1e-12)
-    n = soil("sandy_loam").n
-    np.testing.assert_allclose(lyasko.motion_resistance / static.motion_resistance, factor ** (n + 1), rtol=1e-12)
-    np.testing.assert_allclose(lyasko.ground_pressure, static.ground_pressure, rtol=1e-14)
-    assert np.all(np.diff(lyasko.sinkage[1:]) > 0)
-    assert np.all(lyasko.contact_length[2:] > static.contact_length[2:])
+    ratio = lyasko.sinkage / static.sinkage
+    np.testing.assert_array_equal(ratio[:2], 1.0)
+    assert np.all((ratio[2:] > 1) & (ratio[2:] < factor[2:])) and np.all(np.diff(ratio[1:]) > 0)
+    assert np.all((half.sinkage[2:] > static.sinkage[2:]) & (half.sinkage[2:] < lyasko.sinkage[2:]))
+    n, B = soil("sandy_loam").n, AGRI_TYRE_WIDTH
+    k = soil("sandy_loam").modulus(B)
+    np.testing.assert_allclose(lyasko.compaction_resistance,
+                               B * k * factor ** -n * lyasko.sinkage ** (n + 1) / (n + 1), rtol=1e-12)
+    assert np.all(np.diff(lyasko.motion_resistance[1:]) > 0)
     assert lyasko.drawbar_pull[-1] < static.drawbar_pull[-1]   # the deeper rut costs pull at high slip
 
 

@@ -2,7 +2,7 @@
 
 * :mod:`~mftyre.soil.soils`: soil property sets (Bekker n, k_c, k_phi; Mohr-Coulomb c, phi; Janosi-Hanamoto K)
   as data, built-in (``soils.csv``, with sources) or from a user CSV file;
-* :mod:`~mftyre.soil.equations`: the semi-empirical flexible-tyre-on-soil model (Bekker, Janosi-Hanamoto, Wong),
+* :mod:`~mftyre.soil.equations`: the semi-empirical tyre-on-soil model (Bekker, Janosi-Hanamoto, Wong),
   backend-neutral, sharing the .tir's vertical relation and contact patch;
 * :class:`SoftSoilTyre`: NumPy evaluation, the towed wheel (zero-torque slip solved), the slip-sinkage and
   bulldozing options, a CasADi function;

@@ -23,7 +23,7 @@ _SWEEPS = {
     "vx": ("vx", "forward speed [m/s]; km/h allowed (default LONGVL)"),
 }
 _DEFAULT_OUTPUTS = ("sinkage", "contact_length", "motion_resistance", "drawbar_pull", "torque", "efficiency",
-                    "flexible")
+                    "flat_load")
 
 
 def _sweep_type(name):
@@ -61,11 +61,12 @@ class _SweepAction(argparse.Action):
 def register(subparsers) -> argparse.ArgumentParser:
     """Add the ``soil`` command to an argparse subparsers object."""
     p = subparsers.add_parser(
-        "soil", help="evaluate the tyre on soft soil (Bekker/Janosi-Hanamoto, flexible tyre) on a grid",
+        "soil", help="evaluate the tyre on soft soil (Bekker/Janosi-Hanamoto, deflecting tyre) on a grid",
         formatter_class=argparse.RawDescriptionHelpFormatter,
         description="""\
 Evaluate the tyre of a .tir file on soft soil (mftyre.soil: Bekker pressure-sinkage, Janosi-Hanamoto shear,
-Mohr-Coulomb strength, rigid or flexible tyre by the critical-pressure switch) on a grid of operating points.
+Mohr-Coulomb strength; the tyre deflects as its .tir says under the soil's pressure, the normal stress carries the
+load and the shear works at the tread's slip velocity: energy-consistent) on a grid of operating points.
 
 Values as in `mftyre eval`: a value, a comma list or START:STOP:COUNT, with units (kN, %, deg, bar, km/h...);
 a negative first value needs '=': --slip=-0.2:0.6:9. The grid is every combination in command-line order.

@@ -67,18 +67,43 @@ class SoftSoilTyre:
     (Bekker's bulldozing resistance on the rut depth beyond z_bd; needs the soil's unit weight gamma).
     """
 
-    def __init__(self, tyre, soil, *, slip_sinkage=0.0, bulldozing_depth=math.inf):
+    def __init__(self, tyre, soil, *, slip_sinkage=0.0, bulldozing_depth=math.inf, rut=0.0, unloading=None):
         self.tyre = tyre if isinstance(tyre, MFModel) else load_tir(tyre)
         self.soil = soil if isinstance(soil, Soil) else named_soil(soil)
-        for name, value in (("slip_sinkage", slip_sinkage), ("bulldozing_depth", bulldozing_depth)):
+        for name, value in (("slip_sinkage", slip_sinkage), ("bulldozing_depth", bulldozing_depth), ("rut", rut)):
             if not (isinstance(value, (int, float)) and value >= 0):
                 raise ModelInputError(f"{name} must be a number >= 0, got {value!r}")
-        if not math.isfinite(slip_sinkage):
-            raise ModelInputError(f"slip_sinkage must be finite, got {slip_sinkage!r}")
+        for name, value in (("slip_sinkage", slip_sinkage), ("rut", rut)):
+            if not math.isfinite(value):
+                raise ModelInputError(f"{name} must be finite, got {value!r}")
         if math.isfinite(bulldozing_depth) and math.isnan(self.soil.gamma):
             raise ModelInputError(f"bulldozing_depth = {bulldozing_depth!r} m needs the unit weight gamma of soil "
                                   f"{self.soil.name!r} (column gamma of the soil file, kN/m^3); it is unknown")
-        self.effects = SoilEffects(float(slip_sinkage), float(bulldozing_depth))
+        if unloading is not None and not (
+                len(unloading) == 2 and all(isinstance(v, (int, float)) and math.isfinite(v) and v >= 0
+                                            for v in unloading) and unloading[0] + unloading[1] > 0):
+            raise ModelInputError(f"unloading must be (k_0 [N/m^3], A_u [N/m^4]), finite numbers >= 0, not both 0; "
+                                  f"got {unloading!r}")
+        if rut > 0:
+            if unloading is None:
+                raise ModelInputError(f"rut = {rut!r} m needs unloading=(k_0 [N/m^3], A_u [N/m^4]), the constants of "
+                                      f"Wong's unloading slope k_u = k_0 + A_u z_1 for soil {self.soil.name!r}")
+            if slip_sinkage:
+                raise ModelInputError("slip_sinkage and rut cannot be combined (the slip-sinkage factor is defined "
+                                      "for virgin soil)")
+        self.effects = SoilEffects(float(slip_sinkage), float(bulldozing_depth), float(rut),
+                                   tuple(float(v) for v in (unloading or (0.0, 0.0))))
+
+    def following(self, front) -> "SoftSoilTyre":
+        """This tyre running in the rut of ``front`` (a front tyre's :class:`SoilOutputs` at one operating point):
+        multi-pass with Wong's repetitive loading, this tyre's ``unloading`` constants."""
+        depth = np.ravel(front.sinkage)
+        if depth.size != 1:
+            raise ModelInputError(f"following: expected the front tyre's outputs at one point, got {depth.size}")
+        if self.effects.unloading == (0.0, 0.0):
+            raise ModelInputError("following() needs unloading=(k_0, A_u) given to this SoftSoilTyre")
+        return SoftSoilTyre(self.tyre, self.soil, bulldozing_depth=self.effects.bulldozing_depth,
+                            rut=float(depth[0]), unloading=self.effects.unloading)
 
     @property
     def params(self):
@@ -122,12 +147,10 @@ class SoftSoilTyre:
     def towed(self, fz, alpha=0.0, p=None, vx=None, *, tol=1e-9) -> SoilOutputs:
         """All outputs of the towed wheel (zero driving torque) at the operating points; its slip is ``.slip``.
 
-        The torque T(i) = r H_arc + (r - delta) H_flat rises with the slip i; the zero is bracketed by
-        i = 1 - r / Re (the arc's tread slip is zero, the flat part skids: T <= 0) and i = 0 (both treads at or
-        ahead of the ground: T >= 0) and found by the Illinois variant of regula falsi, vectorised, to
-        |T| <= tol x Fz x r (or a bracket narrower than 1e-15). In the rigid mode the root is i = 1 - r / Re (the
-        wheel turns at V / r); in the flexible mode the flat part skids against the arc (see
-        :mod:`mftyre.soil.equations`): the towed wheel turns slower than on hard ground, V / Re.
+        The torque T(i) rises with the slip i; the zero is bracketed by i = -1 (the wheel turns at half the
+        free-rolling speed: every tread skids, T < 0) and i = 0.5 (T > 0), and found by the Illinois variant of
+        regula falsi, vectorised, to |T| <= tol x Fz x r (or a bracket narrower than 1e-15). Raises
+        :class:`ModelInputError` where the bracket does not hold.
         """
         prm = self.params
         values = dict(fz=fz, alpha=alpha, p=prm.INFLPRES if p is None else p, vx=prm.LONGVL if vx is None else vx)
@@ -137,15 +160,17 @@ class SoftSoilTyre:
             raise ModelInputError(f"towed: inputs must be numeric and broadcast to one shape, got {values!r}") from None
         if not np.all(args["vx"] > 0):
             raise ModelInputError("towed: vx must be > 0 (the slip of a wheel standing still is undefined)")
-        probe = self.evaluate(slip=0.0, **args)                 # checks the inputs; omega = V / Re
         r = float(vertical.free_radius(prm, 0.0, NUMPY))
-        lo, hi = 1.0 - r * probe.omega / args["vx"], np.zeros(probe.omega.shape)
-        t_lo, t_hi = self.evaluate(slip=lo, **args).torque, probe.torque
+        shape = np.shape(args["fz"])
+        lo, hi = np.full(shape, -1.0), np.full(shape, 0.5)
+        t_lo, t_hi = self.evaluate(slip=lo, **args).torque, self.evaluate(slip=hi, **args).torque
+        if not (np.all(t_lo < 0) and np.all(t_hi > 0)):
+            raise ModelInputError("towed: the driving torque does not change sign between slip -1 and 0.5 at some "
+                                  "operating points (the soil cannot turn the wheel)")
         scale = tol * args["fz"] * r
-        low_root = np.abs(t_lo) <= scale
-        slip, torque = np.where(low_root, lo, hi), np.where(low_root, t_lo, t_hi)
-        side = np.zeros(slip.shape)                             # Illinois: +1 the low end moved last, -1 the high
-        for _ in range(100):
+        slip, torque = hi.copy(), t_hi.copy()
+        side = np.zeros(shape)                                  # Illinois: +1 the low end moved last, -1 the high
+        for _ in range(200):
             active = (np.abs(torque) > scale) & (hi - lo > 1e-15)
             if not np.any(active):
                 break
@@ -165,8 +190,8 @@ class SoftSoilTyre:
                         name="soft_soil"):
         """A ``casadi.Function`` of the same equations (SX). ``inputs``: any of fz slip alpha p vx, symbolic
         in the order given; the others take ``fixed`` values or their defaults (alpha 0, p INFLPRES, vx LONGVL;
-        fz and slip must be given). The rigid/flexible switch is blended over a narrow band of p_g / p_cr
-        (continuously differentiable; see :mod:`mftyre.soil.equations`). No sinkage check is made:
+        fz and slip must be given). The vertical balance is a fixed number of Newton steps (see
+        :func:`mftyre.soil.equations.flat_load`). No sinkage check is made:
         evaluate with :meth:`evaluate` to be told when the soil reaches the axle."""
         import casadi as ca
         from ..backend import casadi_backend
@@ -192,14 +217,16 @@ class SoftSoilTyre:
         return ca.Function(name, [symbols[k] for k in inputs], [ca.SX(out[k]) for k in outputs], list(inputs), names)
 
     def _check_sinkage(self, out, flat):
-        too_deep = ~(out["sinkage"] + out["deflection"] < self.params.UNLOADED_RADIUS)
+        r = self.params.UNLOADED_RADIUS * self.params.Q_RE0
+        axle_height = np.sqrt(np.maximum(r * r - (0.5 * out["flat_length"]) ** 2, 0.0))
+        too_deep = ~(out["sinkage"] < axle_height)
         if np.any(too_deep):
             i = int(np.argmax(too_deep))
             raise SinkageError(
                 f"soil {self.soil.name!r}: at fz = {flat['fz'][i]:g} N, p = {flat['p'][i]:g} Pa the sinkage "
-                f"{out['sinkage'][i]:.3g} m plus deflection {out['deflection'][i]:.3g} m reaches the axle "
-                f"(UNLOADED_RADIUS {self.params.UNLOADED_RADIUS:g} m) at {int(too_deep.sum())} point(s), first at "
-                f"index {i}: the wheel is buried; expected a smaller load, a lower pressure or a firmer soil")
+                f"{out['sinkage'][i]:.3g} m reaches the axle (height {axle_height[i]:.3g} m above the rut bottom) at "
+                f"{int(too_deep.sum())} point(s), first at index {i}: the wheel is buried; expected a smaller load, "
+                f"a lower pressure or a firmer soil")
 
     def __repr__(self):
         return f"SoftSoilTyre({self.tyre!r}, soil={self.soil.name!r})"
