@@ -691,3 +691,92 @@ def test_agricultural_header_names_exactly_the_placeholders(tir):
             assert line.startswith("$") and "PLACEHOLDER" in line, lines[i + 1]
     # the file still loads and checks clean (the marks are comments)
     assert load_tir(tir).params.FNOMIN > 2e4
+
+
+# ------------------------------------------------------------------------------------------------ multi-pass
+# Wong's unloading slope k_u = k_0 + A_u z_u: sandy terrain k_0 = 0, A_u = 503 MN/m^4 (the value as recalled from
+# Wong's text; the tests use it as an input, they do not check it)
+SANDY_UNLOADING = (0.0, 503e6)
+
+
+def test_rear_tyre_in_the_front_rut_repetitive_loading():
+    """Multi-pass: the rear tyre (same load and pressure) in the front tyre's rut meets soil that rebounded along
+    Wong's unloading line and reloads along it: it sinks further than the front (repetitive loading deepens the
+    rut) but by less than the front's rut, and meets less compaction resistance; the rut work is the integral of
+    the piecewise stress over depth (scipy); with rut=0 nothing changes, bit for bit; a stiffer unloading line
+    (less rebound) leaves less to re-compress."""
+    model = load_tir(AGRI)
+    front_tyre = SoftSoilTyre(model, "sandy_loam", unloading=SANDY_UNLOADING)
+    front = front_tyre.evaluate(fz=25e3, slip=0.15, p=1.2e5)
+    plain = SoftSoilTyre(model, "sandy_loam").evaluate(fz=25e3, slip=0.15, p=1.2e5)
+    for key in front.keys():
+        np.testing.assert_array_equal(front[key], plain[key], err_msg=key)
+    rear_tyre = front_tyre.following(front)
+    rear = rear_tyre.evaluate(fz=25e3, slip=0.15, p=1.2e5)
+    z_1, z_2 = float(front.sinkage), float(rear.sinkage)
+    assert z_1 < z_2 < 2 * z_1
+    assert float(rear.compaction_resistance) < 0.5 * float(front.compaction_resistance)
+    s, B = soil("sandy_loam"), model.params.WIDTH
+    k = s.modulus(B)
+    sigma_1, k_u = k * z_1**s.n, SANDY_UNLOADING[1] * z_1
+
+    def stress(d):
+        return max(k_u * (d - z_1) + sigma_1, 0.0) if d < z_1 else k * d**s.n
+
+    work = B * quad(stress, 0.0, z_2, points=[z_1 - sigma_1 / k_u, z_1], limit=200)[0]
+    assert float(rear.compaction_resistance) == pytest.approx(work, rel=1e-10)
+    stiffer = SoftSoilTyre(model, "sandy_loam", unloading=(0.0, 10 * SANDY_UNLOADING[1])).following(front)
+    assert float(stiffer.evaluate(fz=25e3, slip=0.15, p=1.2e5).compaction_resistance) < float(rear.compaction_resistance)
+    out = rear_tyre.evaluate(fz=25e3, slip=np.array([0.05, 0.3]), alpha=0.05, p=1.2e5, vx=2.0)   # energy in the rut
+    lhs = out.torque * out.omega - out.fy * 2.0 * np.tan(0.05)
+    rhs = (out.drawbar_pull + out.motion_resistance) * 2.0 + out.slip_power + out.hysteresis_moment * out.omega
+    np.testing.assert_allclose(lhs, rhs, rtol=1e-9)
+
+
+def test_multi_pass_bad_input():
+    with pytest.raises(ModelInputError, match="needs unloading"):
+        SoftSoilTyre(AGRI, "sandy_loam", rut=0.03)
+    with pytest.raises(ModelInputError, match="unloading must be"):
+        SoftSoilTyre(AGRI, "sandy_loam", unloading=(0.0, -1.0))
+    with pytest.raises(ModelInputError, match="cannot be combined"):
+        SoftSoilTyre(AGRI, "sandy_loam", rut=0.03, unloading=SANDY_UNLOADING, slip_sinkage=1.0)
+    front = SoftSoilTyre(AGRI, "sandy_loam").evaluate(fz=[20e3, 25e3], slip=0.1)
+    with pytest.raises(ModelInputError, match="one point"):
+        SoftSoilTyre(AGRI, "sandy_loam", unloading=SANDY_UNLOADING).following(front)
+
+
+# ------------------------------------------------------------------------------------------------ cone index
+def test_cone_index_model_follows_brixius():
+    """Brixius (1987; ASAE D497): the outputs against the published equations evaluated here by hand from the
+    mobility number B_n = (CI b d/W)(1 + 5 delta/h)/(1 + 3 b/d); the power balance T omega = DP V + MR V + slip
+    loss; the towed wheel's closed-form slip has zero torque; a higher cone index (firmer soil) gives more pull
+    and less resistance; and Ground runs it like the Bekker-Wong model."""
+    from mftyre.soil import ConeIndexTyre
+    from mftyre.soil.cone_index import mobility_number
+
+    model = load_tir(AGRI)
+    prm = model.params
+    tyre = ConeIndexTyre(model, cone_index=1.2e6)
+    slip = np.array([0.0, 0.05, 0.15, 0.3])
+    out = tyre.evaluate(fz=25e3, slip=slip, p=1.2e5, vx=2.0)
+    rho, _, _ = hard_ground_footprint(prm, 25e3, 1.2e5, NUMPY)
+    h, b, d = prm.UNLOADED_RADIUS - prm.RIM_RADIUS, prm.WIDTH, 2 * prm.UNLOADED_RADIUS
+    bn = 1.2e6 * b * d / 25e3 * (1 + 5 * rho / h) / (1 + 3 * b / d)
+    assert mobility_number(1.2e6, b, d, 25e3, rho, h) == pytest.approx(bn, rel=1e-14)
+    gtr = 0.88 * (1 - np.exp(-0.1 * bn)) * (1 - np.exp(-7.5 * slip)) + 0.04
+    mrr = 1 / bn + 0.04 + 0.5 * slip / np.sqrt(bn)
+    np.testing.assert_allclose(out.gross_traction / 25e3, gtr, rtol=1e-12)
+    np.testing.assert_allclose(out.motion_resistance / 25e3, mrr, rtol=1e-12)
+    np.testing.assert_allclose(out.drawbar_pull / 25e3, gtr - mrr, rtol=1e-12)
+    np.testing.assert_allclose(out.torque * out.omega,
+                               out.drawbar_pull * 2.0 + out.motion_resistance * 2.0 + out.slip_power, rtol=1e-12)
+    ok = out.power > 0
+    assert np.all(out.efficiency[ok] <= 1 - slip[ok])
+    towed = tyre.towed(25e3, p=1.2e5, vx=2.0)
+    assert abs(float(towed.torque)) < 1e-9 * 25e3 and float(towed.slip) < 0 and float(towed.drawbar_pull) < 0
+    firmer = ConeIndexTyre(model, cone_index=2.4e6).evaluate(fz=25e3, slip=slip, p=1.2e5, vx=2.0)
+    assert np.all(firmer.drawbar_pull > out.drawbar_pull) and np.all(firmer.motion_resistance < out.motion_resistance)
+    forces = Ground(model, tyre).forces(fz=25e3, kappa=slip / (1 - slip), vx=2.0, p=1.2e5)
+    np.testing.assert_allclose(forces.fx, out.drawbar_pull, rtol=1e-12)
+    with pytest.raises(ModelInputError, match="cone_index must be a positive number"):
+        ConeIndexTyre(model, cone_index=-1.0)

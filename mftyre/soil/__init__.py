@@ -6,12 +6,15 @@
   backend-neutral, sharing the .tir's vertical relation and contact patch;
 * :class:`SoftSoilTyre`: NumPy evaluation, the towed wheel (zero-torque slip solved), the slip-sinkage and
   bulldozing options, a CasADi function;
+* :class:`ConeIndexTyre`: the cone-index route (Brixius's mobility number), a simpler model behind the same
+  interface (``evaluate``, ``towed``, the same outputs);
 * :class:`Ground`: one interface for a vehicle model: hard ground (Magic Formula), soft soil, or a blend.
 """
 from .soils import Soil, builtin_soils, read_soils, soil
 from .model import SinkageError, SoftSoilTyre, SoilOutputs
 from .equations import OUTPUTS
+from .cone_index import ConeIndexTyre
 from .ground import Ground, GroundForces
 
 __all__ = ["Soil", "builtin_soils", "read_soils", "soil", "SoftSoilTyre", "SoilOutputs", "SinkageError", "OUTPUTS",
-           "Ground", "GroundForces"]
+           "Ground", "GroundForces", "ConeIndexTyre"]

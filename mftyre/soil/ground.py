@@ -18,6 +18,7 @@ import numpy as np
 
 from ..errors import ModelInputError
 from ..model import MFModel, load_tir
+from .cone_index import ConeIndexTyre
 from .model import SoftSoilTyre
 
 __all__ = ["Ground", "GroundForces"]
@@ -35,11 +36,19 @@ class GroundForces:
 
 
 class Ground:
-    """A tyre on hard ground (``soil=None`` or ``blend=0``), soft soil (``blend=1``) or a blend in between."""
+    """A tyre on hard ground (``soil=None`` or ``blend=0``), soft soil (``blend=1``) or a blend in between.
+
+    ``soil``: a soil name or :class:`Soil` (the Bekker-Wong model, :class:`SoftSoilTyre` of this tyre), or a soil
+    model of this tyre already built (a :class:`SoftSoilTyre` with its options, or a :class:`ConeIndexTyre`)."""
 
     def __init__(self, tyre, soil=None, blend=None):
         self.tyre = tyre if isinstance(tyre, MFModel) else load_tir(tyre)
-        self.soft = None if soil is None else SoftSoilTyre(self.tyre, soil)
+        if isinstance(soil, (SoftSoilTyre, ConeIndexTyre)):
+            if soil.tyre is not self.tyre:
+                raise ModelInputError("Ground: the soil model must be built on the same tyre (MFModel) as Ground")
+            self.soft = soil
+        else:
+            self.soft = None if soil is None else SoftSoilTyre(self.tyre, soil)
         blend = (0.0 if soil is None else 1.0) if blend is None else blend
         blend = np.asarray(blend, dtype=float)
         if not np.all((blend >= 0) & (blend <= 1)):
