@@ -81,7 +81,12 @@ Multi-pass (option ``rut``: the front tyre's rut depth z_1): the soil the rear t
 sigma_1 = k z_1^n and rebounded along Wong's unloading line of slope k_u = k_0 + A_u z_1 (repetitive loading [W];
 k_0, A_u soil constants): it carries nothing above z_1 - sigma_1 / k_u, reloads along that line down to z_1 and
 follows the virgin curve below:  sigma(d) = k_u (d - z_1 + sigma_1 / k_u)  for d in [z_1 - sigma_1 / k_u, z_1],
-k d^n below.
+k d^n below. The rear tyre's front arc starts at that rebounded rut bottom; R_c is the integral of this stress over
+the depth (closed form), the rest as above; no slip sinkage in a rut. Wong gives k_0 and A_u for a few terrains
+(for a sandy terrain k_0 = 0, A_u = 503 MN/m^4, as recalled here: check the book before relying on it); they are
+inputs, not built-in soil constants. The rear tyre sinks further than the front at the same load (repetitive
+loading), by less than the front's rut, with less compaction resistance; the soil's strength (c, phi) is not
+raised by the first pass.
 """
 from __future__ import annotations
 

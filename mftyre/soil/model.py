@@ -63,8 +63,10 @@ class SoftSoilTyre:
     """A tyre (a :class:`~mftyre.model.MFModel` or a .tir path) on a soil (a :class:`Soil` or a built-in name).
 
     Optional effects (see :mod:`mftyre.soil.equations`), absent at their defaults: ``slip_sinkage`` s_j >= 0
-    (Lyasko's slip-sinkage factor [(1 + i)/(1 - 0.5 i)]^s_j, 1 = Lyasko) and ``bulldozing_depth`` z_bd >= 0 [m]
-    (Bekker's bulldozing resistance on the rut depth beyond z_bd; needs the soil's unit weight gamma).
+    (Lyasko's slip-sinkage factor [(1 + i)/(1 - 0.5 i)]^s_j, 1 = Lyasko), ``bulldozing_depth`` z_bd >= 0 [m]
+    (Bekker's bulldozing resistance on the rut depth beyond z_bd; needs the soil's unit weight gamma) and ``rut``
+    z_1 >= 0 [m] with ``unloading`` = (k_0 [N/m^3], A_u [N/m^4]): the tyre runs in a rut of depth z_1 left by the
+    tyre ahead (multi-pass, Wong's repetitive loading; :meth:`following` builds it from the front tyre's outputs).
     """
 
     def __init__(self, tyre, soil, *, slip_sinkage=0.0, bulldozing_depth=math.inf, rut=0.0, unloading=None):
