@@ -783,3 +783,14 @@ def test_cone_index_model_follows_brixius():
     np.testing.assert_allclose(forces.fx, out.drawbar_pull, rtol=1e-12)
     with pytest.raises(ModelInputError, match="cone_index must be a positive number"):
         ConeIndexTyre(model, cone_index=-1.0)
+
+
+def test_balance_without_a_root_in_the_bracket_is_a_typed_error():
+    """A tyre absurdly stiff (Cz x 1e30) would need a flat load below 1e-30 Fz: an error, not a silent clip;
+    Cz x 1e8 still balances (the rigid-wheel limit)."""
+    model = load_tir(AGRI)
+    stiff = model.with_params(VERTICAL_STIFFNESS=model.params.VERTICAL_STIFFNESS * 1e8)
+    assert float(SoftSoilTyre(stiff, "paddy_soil").evaluate(fz=10e3, slip=0.1).flat_load) < 1e-3
+    absurd = model.with_params(VERTICAL_STIFFNESS=model.params.VERTICAL_STIFFNESS * 1e30)
+    with pytest.raises(ModelInputError, match="flat load below 1e-30 Fz"):
+        SoftSoilTyre(absurd, "paddy_soil").evaluate(fz=10e3, slip=0.1)

@@ -288,6 +288,9 @@ def flat_load(prm, soil, fz, k, dpi, factor, effects, be):
     for _ in range(_BALANCE_STEPS if casadi else 80):
         new, lo, hi, size = newton(u, lo, hi, g, slope)
         if not casadi and not np.any(size > 1e-13):
+            if np.any(new <= bottom + 1e-9):        # the root lies below the bracket: not a silent clip
+                raise ModelInputError("soft soil: the vertical balance needs a flat load below 1e-30 Fz (a tyre "
+                                      "stiffer than any the model is meant for, e.g. VERTICAL_STIFFNESS far too large)")
             return be.exp(new)
         g_new = residual(new)
         # secant slopes after the first step (one evaluation a step); where the step was tiny, the slope is kept
