@@ -42,7 +42,8 @@ SOURCE = ("W.W. Brixius, Traction prediction equations for bias ply tires, ASAE 
 
 def mobility_number(cone_index, width, diameter, load, deflection, section_height):
     """Brixius's B_n = (CI b d / W) (1 + 5 delta/h) / (1 + 3 b/d)."""
-    return (cone_index * width * diameter / load) * (1.0 + 5.0 * deflection / section_height) / (1.0 + 3.0 * width / diameter)
+    shape = (1.0 + 5.0 * deflection / section_height) / (1.0 + 3.0 * width / diameter)
+    return cone_index * width * diameter / load * shape
 
 
 class ConeIndexTyre:
@@ -51,7 +52,8 @@ class ConeIndexTyre:
     def __init__(self, tyre, cone_index):
         self.tyre = tyre if isinstance(tyre, MFModel) else load_tir(tyre)
         if not (isinstance(cone_index, (int, float)) and math.isfinite(cone_index) and cone_index > 0):
-            raise ModelInputError(f"cone_index must be a positive number in Pa (e.g. 1.0e6 for 1 MPa), got {cone_index!r}")
+            raise ModelInputError(f"cone_index must be a positive number in Pa (e.g. 1.0e6 for 1 MPa), "
+                                  f"got {cone_index!r}")
         self.cone_index = float(cone_index)
         prm = self.params
         if not prm.RIM_RADIUS < prm.UNLOADED_RADIUS:
@@ -90,8 +92,9 @@ class ConeIndexTyre:
             efficiency = np.where(power > 0, drawbar * vx / np.where(power > 0, power, 1.0), np.nan)
         nan = np.full(fz.shape, np.nan)
         zero = np.zeros(fz.shape)
-        out = dict(sinkage=nan, contact_length=nan, flat_length=nan, contact_width=zero + prm.WIDTH, ground_pressure=nan,
-                   flat_load=nan, carcass_pressure=fz / (4.0 * a_h * b_h) - p, deflection=rho, rolling_radius=r_e,
+        out = dict(sinkage=nan, contact_length=nan, flat_length=nan, contact_width=zero + prm.WIDTH,
+                   ground_pressure=nan, flat_load=nan, carcass_pressure=fz / (4.0 * a_h * b_h) - p, deflection=rho,
+                   rolling_radius=r_e,
                    compaction_resistance=resistance, bulldozing_resistance=zero, motion_resistance=resistance,
                    gross_traction=gross, drawbar_pull=drawbar, hysteresis_moment=zero, torque=torque, fy=nan,
                    omega=omega, power=power, slip_power=gross * (omega * r_e - vx), efficiency=efficiency, slip=s)

@@ -105,8 +105,10 @@ __all__ = ["SoilEffects", "rigid_wheel_sinkage", "critical_pressure", "compactio
 
 #: Gauss-Legendre nodes on the front arc (in s, theta = theta_e - (theta_e - theta_f) s^m) and on the flat part
 ARC_NODES, FLAT_NODES = 10, 12
-_ARC_S, _ARC_W = (0.5 * (v + 1.0) if i == 0 else 0.5 * v for i, v in enumerate(np.polynomial.legendre.leggauss(ARC_NODES)))
-_FLAT_S, _FLAT_W = (0.5 * (v + 1.0) if i == 0 else 0.5 * v for i, v in enumerate(np.polynomial.legendre.leggauss(FLAT_NODES)))
+_ARC_X, _ARC_WX = np.polynomial.legendre.leggauss(ARC_NODES)
+_FLAT_X, _FLAT_WX = np.polynomial.legendre.leggauss(FLAT_NODES)
+_ARC_S, _ARC_W = 0.5 * (_ARC_X + 1.0), 0.5 * _ARC_WX                  # on [0, 1]
+_FLAT_S, _FLAT_W = 0.5 * (_FLAT_X + 1.0), 0.5 * _FLAT_WX
 #: Newton steps CasADi unrolls for the vertical balance (NumPy iterates to convergence; see flat_load)
 _BALANCE_STEPS = 14
 _LOG_STEP = 1e-6  # step in ln F_t of the difference slope of the balance
@@ -127,7 +129,7 @@ OUTPUTS = {
     "motion_resistance": ("N", "soil motion resistance R_c + R_b"),
     "gross_traction": ("N", "gross traction (thrust) H from the shear"),
     "drawbar_pull": ("N", "drawbar pull DP = H - R_c - R_b (net longitudinal force)"),
-    "hysteresis_moment": ("N m", "tyre hysteresis moment M_h = -My of the .tir at the flat load (>= 0 rolling forward)"),
+    "hysteresis_moment": ("N m", "tyre hysteresis moment M_h = -My of the .tir at the flat load (>= 0 forward)"),
     "torque": ("N m", "driving torque on the wheel: the shear at each tread's speed plus M_h"),
     "fy": ("N", "lateral force (ISO-W, shear only)"),
     "omega": ("rad/s", "wheel spin V / ((1 - i) Re)"),
