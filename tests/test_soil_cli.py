@@ -79,3 +79,22 @@ def test_towed_and_effect_options(tmp_path, capsys):
     assert "drop --slip" in capsys.readouterr().err
     assert main(["soil", AGRI, "--soil", "sandy_loam", "--bulldozing-depth", "0.05"]) == 1
     assert "needs the unit weight gamma" in capsys.readouterr().err
+
+
+def test_cone_index_route_on_the_command_line(tmp_path, capsys):
+    """--cone-index runs Brixius's model (the same table and CSV), alone or towed; the Bekker-Wong options and a
+    --soil with it are refused."""
+    from mftyre.soil import ConeIndexTyre
+
+    csv = tmp_path / "ci.csv"
+    assert main(["soil", AGRI, "--cone-index", "1.2MPa", "--fz", "25kN", "--slip", "0%:30%:4", "--p", "1.2bar",
+                 "--csv", str(csv)]) == 0
+    assert "cone index 1.2e+06 Pa (Brixius)" in capsys.readouterr().out
+    expected = ConeIndexTyre(AGRI, 1.2e6).evaluate(fz=25e3, slip=np.linspace(0, 0.3, 4), p=1.2e5)
+    np.testing.assert_allclose(pd.read_csv(csv)["drawbar_pull [N]"], expected.drawbar_pull, rtol=1e-12)
+    assert main(["soil", AGRI, "--cone-index", "800kPa", "--towed", "-q"]) == 0
+    assert main(["soil", AGRI, "--cone-index", "1.2MPa", "--slip-sinkage", "1"]) == 2
+    assert "belong to the Bekker-Wong model" in capsys.readouterr().err
+    assert main(["soil", AGRI, "--cone-index", "1.2MPa", "--soil", "sandy_loam"]) == 2
+    assert main(["soil", AGRI, "--cone-index=-3kPa"]) == 2
+    assert "must be positive" in capsys.readouterr().err

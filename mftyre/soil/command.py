@@ -39,6 +39,18 @@ def _sweep_type(name):
     return convert
 
 
+def _cone_index(text):
+    scale = {"MPa": 1e6, "kPa": 1e3, "Pa": 1.0}
+    unit = next((u for u in scale if text.endswith(u)), "Pa")
+    try:
+        value = float(text[:len(text) - len(unit)] if text.endswith(unit) else text) * scale[unit]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a cone index like 1.2MPa, 800kPa or 1.2e6 (Pa), got {text!r}")
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"the cone index must be positive, got {text!r}")
+    return value
+
+
 def _outputs_type(text):
     from .equations import OUTPUTS
 
@@ -72,12 +84,17 @@ Values as in `mftyre eval`: a value, a comma list or START:STOP:COUNT, with unit
 a negative first value needs '=': --slip=-0.2:0.6:9. The grid is every combination in command-line order.
 Slip i = 1 - V/(omega Re) with Re the tyre's rolling radius on hard ground (= kappa/(1+kappa)).
 Soils: --soil NAME from the built-in table (mftyre/soil/soils.csv, with sources) or from --soil-file.
+--cone-index CI runs Brixius's cone-index equations (ASAE D497) instead of a soil table.
 --csv writes every output (or --outputs), names suffixed by the SI unit; --plot draws the outputs against the
 swept input with the most values (or --x). Existing output files need --overwrite.""",
         epilog="example: mftyre soil tir_files/agri_460_85R34_mf61.tir --soil sandy_loam --fz 25kN "
                "--slip 0%:60%:31 --p 1bar,1.3bar,1.6bar --plot dp.png")
     p.add_argument("file", metavar="FILE.tir", help="tyre property file")
-    p.add_argument("--soil", required=True, metavar="NAME", help="soil name (built-in or in --soil-file)")
+    model = p.add_mutually_exclusive_group(required=True)
+    model.add_argument("--soil", metavar="NAME", help="soil name (built-in or in --soil-file): the Bekker-Wong model")
+    model.add_argument("--cone-index", type=_cone_index, metavar="CI",
+                       help="cone index (Pa; kPa, MPa allowed): Brixius's cone-index model instead (mftyre.soil."
+                            "ConeIndexTyre)")
     p.add_argument("--soil-file", metavar="SOILS.csv", help="CSV file of soils (columns name,n,k_c,k_phi,c,phi,K)")
     group = p.add_argument_group("operating points (value, list V1,V2,... or range START:STOP:COUNT; units allowed)")
     for name, (_, text) in _SWEEPS.items():
@@ -113,12 +130,19 @@ def run(args) -> int:
     check_request(parser, args, swept, plot_example="--slip 0%:60%:31")
     if args.towed and args.slip is not None:
         parser.error("argument --towed: the towed wheel's slip is solved, not given; drop --slip")
+    if args.cone_index is not None and (args.slip_sinkage or math.isfinite(args.bulldozing_depth) or args.soil_file):
+        parser.error("argument --cone-index: --slip-sinkage, --bulldozing-depth and --soil-file belong to the "
+                     "Bekker-Wong model (--soil)")
     try:
+        from .cone_index import ConeIndexTyre
         from .model import SoftSoilTyre
         from .soils import soil
 
-        tyre = SoftSoilTyre(args.file, soil(args.soil, args.soil_file), slip_sinkage=args.slip_sinkage,
-                            bulldozing_depth=args.bulldozing_depth)
+        if args.cone_index is not None:
+            tyre = ConeIndexTyre(args.file, args.cone_index)
+        else:
+            tyre = SoftSoilTyre(args.file, soil(args.soil, args.soil_file), slip_sinkage=args.slip_sinkage,
+                                bulldozing_depth=args.bulldozing_depth)
         prm = tyre.params
         defaults = dict(fz=prm.FNOMIN, slip=0.15, alpha=0.0, p=prm.INFLPRES, vx=prm.LONGVL)
         grids, shape = sweep_grid(args, swept)
@@ -134,7 +158,9 @@ def run(args) -> int:
                      if n not in swept and not (args.towed and n == "slip")]
             if args.towed:
                 fixed.append("towed (zero driving torque)")
-            print(f"# {args.file} on {tyre.soil.name} ({tyre.soil.source}); {max(1, math.prod(shape))} point(s)")
+            ground = (f"cone index {args.cone_index:g} Pa (Brixius)" if args.cone_index is not None
+                      else f"{tyre.soil.name} ({tyre.soil.source})")
+            print(f"# {args.file} on {ground}; {max(1, math.prod(shape))} point(s)")
             print("# " + "; ".join(fixed))
             print(format_table(_frame(args, out, swept, shape, columns)))
         write_results(args, lambda: _frame(args, out, swept, shape, args.outputs or tuple(OUTPUTS)),
@@ -166,5 +192,5 @@ def _plot(args, tyre, out, swept, shape, outputs):
     from ..grid_results import plot_grid
     from .equations import OUTPUTS
 
-    plot_grid(args, out, swept, shape, outputs, output_units=OUTPUTS,
-              title=f"{Path(args.file).name} on {tyre.soil.name}")
+    ground = f"cone index {args.cone_index:g} Pa" if args.cone_index is not None else tyre.soil.name
+    plot_grid(args, out, swept, shape, outputs, output_units=OUTPUTS, title=f"{Path(args.file).name} on {ground}")

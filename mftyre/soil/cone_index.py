@@ -89,7 +89,8 @@ class ConeIndexTyre:
         power = torque * omega
         drawbar = gross - resistance
         with np.errstate(all="ignore"):
-            efficiency = np.where(power > 0, drawbar * vx / np.where(power > 0, power, 1.0), np.nan)
+            driven = power > 1e-9 * fz * vx
+            efficiency = np.where(driven, drawbar * vx / np.where(driven, power, 1.0), np.nan)
         nan = np.full(fz.shape, np.nan)
         zero = np.zeros(fz.shape)
         out = dict(sinkage=nan, contact_length=nan, flat_length=nan, contact_width=zero + prm.WIDTH,

@@ -135,7 +135,7 @@ OUTPUTS = {
     "omega": ("rad/s", "wheel spin V / ((1 - i) Re)"),
     "power": ("W", "wheel input power T omega"),
     "slip_power": ("W", "shear-slip loss: the shear stress times the slip velocity of the tread, over the contact"),
-    "efficiency": ("-", "tractive efficiency DP V / (T omega); NaN where T omega <= 0"),
+    "efficiency": ("-", "tractive efficiency DP V / (T omega); NaN where T omega <= 1e-9 Fz V (not driven)"),
     "slip": ("-", "slip i = 1 - V / (omega Re), Re the hard-ground rolling radius (input)"),
 }
 
@@ -375,7 +375,7 @@ def soft_soil(prm, soil, fz, slip, alpha, p, vx, be, effects=SoilEffects()):
     hysteresis = -moments.rolling_resistance_moment(prm, state, zero, be)
     torque = t_arc + r_f * h_flat + hysteresis
     power = torque * omega
-    positive = power > 0
+    positive = power > 1e-9 * fz * vx                                    # (not a towed wheel's round-off)
     return {
         "sinkage": z,
         "contact_length": r * sin_e + a,
