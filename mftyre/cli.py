@@ -451,6 +451,64 @@ def _eval_plot(args, model, out, swept, shape, outputs) -> None:
               title=f"{Path(args.file).name} (FITTYP {model.params.fittyp}, {model.side})")
 
 
+# ---------------------------------------------------------------------------------- reading DATA
+DATA_HELP = """\
+DATA: a TYDEX (.tdx), Calspan tyre test consortium (TTC .dat or .mat) or CSV file, recognised by content.
+CSV: one header row, comma separated, one row per sample. Columns named FZ SA SL VX P (required), IA PHIT (0 when
+absent), FX FY FZ MX MY MZ OMEGA RL RHO RE (measured outputs) and TIME are read as they are, in SI units (N, N m,
+rad, m/s, Pa, rad/s, m); other names with --columns FZ=Load_N,SA=alpha, other units with
+--units SA=deg,P=psi,VX=km/h,RL=mm, a run without a channel at a known value with --set P=1.6bar,IA=0. TTC files
+name their channels and units (ET V N SA IA RL RE P FX FY FZ MX MZ ...) and are in SAE axes.
+Values no tyre measurement has in SI units and ISO-W axes (|SA| > 1 rad, P < 20 kPa, VX > 100 m/s, RL > 2 m,
+FZ mostly negative ...) are refused with the channel named and the option that converts them.
+"""
+
+
+def _option_type(parse, name):
+    def convert(text):
+        from .data import DataError
+
+        try:
+            return parse(text)
+        except (ValueError, DataError) as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    convert.__name__ = name
+    return convert
+
+
+def add_data_options(parser) -> None:
+    """The options that say how to read a measurement file (``--columns``, ``--units``, ``--axes``, ``--set``);
+    :func:`read_data_args` reads DATA with them (:func:`mftyre.data.read_data`)."""
+    from .data import AXES, parse_columns, parse_constants, parse_units
+
+    group = parser.add_argument_group("reading DATA (see the DATA section below)")
+    group.add_argument("--columns", type=_option_type(parse_columns, "column map"), metavar="CH=COLUMN,...",
+                       help="file columns of the channels, e.g. FZ=Fz_N,SA=alpha (CSV)")
+    group.add_argument("--units", type=_option_type(parse_units, "units"), metavar="CH=UNIT,...",
+                       help="units of the file's channels, e.g. SA=deg,P=psi,VX=km/h,RL=mm (CSV; default SI)")
+    group.add_argument("--axes", choices=tuple(AXES), default=None,
+                       help="axis system of the file (default ISO-W; SAE for TTC files); see below")
+    group.add_argument("--set", dest="constants", type=_option_type(parse_constants, "constant channels"),
+                       metavar="CH=VALUE,...", help="constant channels the file lacks, e.g. P=1.6bar,IA=0")
+
+
+def data_epilog() -> str:
+    from .data import AXES_HELP
+
+    return DATA_HELP + "\n" + AXES_HELP
+
+
+def read_data_args(args, path=None):
+    """DATA (``args.data`` or ``path``) read with the options of :func:`add_data_options`; messages name the
+    command-line options."""
+    from .data import read_data, speaking_cli
+
+    with speaking_cli():
+        return read_data(path or args.data, columns=args.columns, units=args.units, axes=args.axes,
+                         defaults=args.constants)
+
+
 # ------------------------------------------------------------------------------------------ (more)
 # Other commands (fit, gaps, plot, fmu) are added here by their modules' authors and registered in
 # build_parser() below.

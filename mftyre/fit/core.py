@@ -31,8 +31,7 @@ import numpy as np
 import pandas as pd
 
 from ..backend import NUMPY
-from ..data import TyreData, read_csv, read_tydex
-from ..errors import DataError
+from ..data import TyreData, check_plausible, read_data
 from ..formula import Modes, steady_state, vertical
 from ..model import STRUCTURAL_PARAMETERS, MFModel
 from ..params import TyreParameters
@@ -140,16 +139,12 @@ class FitResult:
 
 
 def load_data(source) -> TyreData:
-    """TyreData as is, or read from a ``.tdx`` / ``.csv`` path."""
+    """TyreData (checked for plausible values, :func:`mftyre.data.check_plausible`), or read from a path
+    (TYDEX, TTC or CSV, recognised by content: :func:`mftyre.data.read_data`)."""
     if isinstance(source, TyreData):
+        check_plausible(source)
         return source
-    path = Path(source)
-    suffix = path.suffix.lower()
-    if suffix in (".tdx", ".tydex"):
-        return read_tydex(path)
-    if suffix == ".csv":
-        return read_csv(path)
-    raise DataError(f"{path}: unknown data format {suffix!r}: expected .tdx (TYDEX) or .csv")
+    return read_data(source)
 
 
 def _start(data: TyreData, start):

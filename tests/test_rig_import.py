@@ -1,0 +1,192 @@
+"""Rig files as labs deliver them: wrong units and axes refused with the channel named (and the option that fixes
+it), converted when the option is given (checked against data converted by hand), constant channels, and the
+Calspan tyre test consortium (TTC) format written here from a synthetic programme (.dat and .mat)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import mftyre
+from mftyre.cli import main
+from mftyre.data import (check_plausible, data_format, read_csv, read_data, read_ttc, speaking_cli,
+                         trailer_programme)
+from mftyre.errors import DataError
+
+from conftest import TIR_FILES
+
+DEG = math.pi / 180
+CHANNELS = ["FZ", "SL", "SA", "IA", "VX", "P", "FX", "FY", "MX", "MY", "MZ", "OMEGA", "RL", "RE"]
+
+
+@pytest.fixture(scope="module")
+def si():
+    model = mftyre.load_tir(TIR_FILES / "car_205_60R15_mf61.tir")
+    data = trailer_programme(model, loads=(0.6, 1.0), pressures=(1.0,), cambers_deg=(0.0, 3.0), points=11,
+                             noise=0.5, seed=2)
+    return data.frame[CHANNELS].copy()
+
+
+def _csv(tmp_path, frame, name="rig.csv"):
+    path = tmp_path / name
+    frame.to_csv(path, index=False, float_format="%.17g")
+    return path
+
+
+def _close(data, si, channels=CHANNELS):
+    for ch in channels:
+        np.testing.assert_allclose(data.array(ch), si[ch].to_numpy(), rtol=1e-12, atol=1e-12, err_msg=ch)
+
+
+def test_degrees_refused_with_the_column_named_then_converted(si, tmp_path):
+    raw = si.copy()
+    raw["SA"] *= 180 / math.pi  # hand conversion: the rig wrote degrees
+    raw["IA"] *= 180 / math.pi
+    path = _csv(tmp_path, raw)
+    with pytest.raises(DataError, match=r"channel SA: 99th percentile of \|SA\| is 12 rad.*deg.*channel IA") as exc:
+        read_csv(path)
+    assert "units={'SA': 'deg', 'IA': 'deg'}" in str(exc.value)
+    _close(read_csv(path, units={"SA": "deg", "IA": "deg"}), si)
+
+
+def test_kpa_and_kmh_refused_then_converted(si, tmp_path):
+    raw = si.copy()
+    raw["P"] /= 1000.0          # kPa
+    raw["VX"] *= 3.6            # km/h (60 km/h: a plausible speed in m/s; found by VX / (OMEGA x RE))
+    path = _csv(tmp_path, raw)
+    with pytest.raises(DataError, match=r"channel VX: 99th percentile of \|VX\| is 108 m/s.*km/h.*channel P: median P "
+                                          r"is 220 Pa.*kPa.*units=\{'VX': 'km/h', 'P': 'kPa'\}"):
+        read_csv(path)
+    slow = si[si["VX"] < 25].copy()  # below 100 m/s in km/h: found by VX / (OMEGA x RE) = 3.6
+    slow["VX"] *= 3.6
+    with pytest.raises(DataError, match=r"channel VX: VX / \(OMEGA x radius\) is 3.6.*km/h"):
+        read_csv(_csv(tmp_path, slow, "slow.csv"))
+    _close(read_csv(path, units={"P": "kPa", "VX": "km/h"}), si)
+
+
+def test_newcomers_file_mapped_columns_mm_and_psi(si, tmp_path):
+    raw = pd.DataFrame({"Load [N]": si["FZ"], "kappa": si["SL"], "alpha_deg": si["SA"] / DEG,
+                        "camber": si["IA"] / DEG, "v_kph": si["VX"] * 3.6, "p_psi": si["P"] / 6894.757293168361,
+                        "Fy": si["FY"], "RL_mm": si["RL"] * 1000.0})
+    path = _csv(tmp_path, raw)
+    columns = {"Load [N]": "FZ", "kappa": "SL", "alpha_deg": "SA", "camber": "IA", "v_kph": "VX", "p_psi": "P",
+               "Fy": "FY", "RL_mm": "RL"}
+    with pytest.raises(DataError, match=r"channel SA \(file column 'alpha_deg'\).*channel IA \(file column 'camber'\)"
+                                          r".*channel VX.*channel P \(file column 'p_psi'\): median P is 31.9.*psi"
+                                          r".*channel RL \(file column 'RL_mm'\).*mm"):
+        read_csv(path, columns=columns)
+    data = read_csv(path, columns=columns, units={"SA": "deg", "IA": "deg", "P": "psi", "VX": "km/h", "RL": "mm"})
+    _close(data, si, ["FZ", "SL", "SA", "IA", "VX", "P", "FY", "RL"])
+
+
+def _to_sae(frame):
+    """ISO-W -> SAE by hand: y and z turned half a turn about x."""
+    out = frame.copy()
+    for ch in ("FY", "FZ", "MY", "MZ", "SA"):
+        out[ch] = -out[ch]
+    return out
+
+
+def test_sae_axes_refused_then_converted(si, tmp_path):
+    path = _csv(tmp_path, _to_sae(si))
+    with pytest.raises(DataError, match=r"channel FZ: 100 % of the values are negative.*axes='SAE'"):
+        read_csv(path)
+    _close(read_csv(path, axes="SAE"), si)
+    adapted = _to_sae(si)
+    adapted["FZ"], adapted["SA"] = -adapted["FZ"], -adapted["SA"]  # Pacejka's adapted SAE: load and alpha positive
+    _close(read_csv(_csv(tmp_path, adapted, "adapted.csv"), axes="adapted-SAE"), si)
+
+
+def test_reversed_slip_angle_refused(si, tmp_path):
+    raw = si.copy()
+    raw["SA"] = -raw["SA"]
+    path = _csv(tmp_path, raw)
+    with pytest.raises(DataError, match=r"channel FY rises with channel SA.*adapted-ISO"):
+        read_csv(path)
+    _close(read_csv(path, axes="adapted-ISO"), si)
+
+
+def test_constant_channels_and_their_errors(si, tmp_path):
+    path = _csv(tmp_path, si.drop(columns=["P", "IA"]))
+    with pytest.raises(DataError, match=r"missing channel\(s\) P.*defaults=\{'P': 'VALUE'\}"):
+        read_csv(path)
+    data = read_csv(path, defaults={"P": "2.2bar", "IA": 0})
+    np.testing.assert_allclose(data.array("P"), 2.2e5, rtol=1e-15)
+    with pytest.raises(DataError, match=r"channel FZ is measured in the file"):
+        read_csv(path, defaults={"P": 2.2e5, "FZ": "4kN"})
+
+
+def test_messages_speak_the_command_line_in_the_cli(si, tmp_path, capsys):
+    raw = si.copy()
+    raw["SA"] /= DEG
+    path = _csv(tmp_path, raw)
+    with speaking_cli(), pytest.raises(DataError, match=r"--units SA=deg"):
+        read_csv(path)
+    status = main(["fit", str(path), "-o", str(tmp_path / "out.tir"), "--quiet"])
+    err = capsys.readouterr().err
+    assert status == 1 and "--units SA=deg" in err and "units={" not in err
+
+
+# ------------------------------------------------------------------------------------------ TTC
+TTC_NAMES = ["ET", "V", "N", "SA", "IA", "RL", "RE", "P", "FX", "FY", "FZ", "MX", "MZ", "NFX", "NFY", "TSTC", "SL"]
+TTC_UNITS = ["s", "kph", "rpm", "deg", "deg", "cm", "cm", "kPa", "N", "N", "N", "N-m", "N-m", "none", "none",
+             "degC", "none"]
+
+
+def _ttc_columns(si):
+    """The programme as the consortium's metric SAE files hold it, converted by hand."""
+    sae = _to_sae(si)
+    return {"ET": np.arange(len(si)) * 0.01, "V": sae["VX"] * 3.6, "N": sae["OMEGA"] * 60 / (2 * math.pi),
+            "SA": sae["SA"] / DEG, "IA": sae["IA"] / DEG, "RL": sae["RL"] * 100, "RE": sae["RE"] * 100,
+            "P": sae["P"] / 1000, "FX": sae["FX"], "FY": sae["FY"], "FZ": sae["FZ"], "MX": sae["MX"],
+            "MZ": sae["MZ"], "NFX": sae["FX"] / sae["FZ"], "NFY": sae["FY"] / sae["FZ"],
+            "TSTC": np.full(len(si), 45.0), "SL": sae["SL"]}
+
+
+def test_ttc_dat_round_trip(si, tmp_path):
+    cols = _ttc_columns(si)
+    lines = ["Tire Test Consortium test; run 12 (written by this test, synthetic)", "\t".join(TTC_NAMES),
+             "\t".join(TTC_UNITS)]
+    lines += ["\t".join(f"{cols[n][i]:.15g}" for n in TTC_NAMES) for i in range(len(si))]
+    path = tmp_path / "B0000run12.dat"
+    path.write_text("\r\n".join(lines) + "\r\n")
+    assert data_format(path) == "ttc"
+    data = read_data(path)
+    _close(data, si, ["FZ", "SL", "SA", "IA", "VX", "P", "FX", "FY", "MX", "MZ", "OMEGA", "RL", "RE"])
+    np.testing.assert_allclose(data.array("TIME"), cols["ET"])
+    assert np.all(data.array("TSTC") == 45.0)
+    with pytest.raises(DataError, match=r"channel FZ: 100 % of the values are negative.*axes='SAE'"):
+        read_data(path, axes="ISO-W")
+
+
+def test_ttc_mat_round_trip_and_us_units(si, tmp_path):
+    import scipy.io
+
+    cols = _ttc_columns(si)
+    path = tmp_path / "B0000run13.mat"
+    scipy.io.savemat(path, {k: np.asarray(v, float) for k, v in cols.items()} | {"tireid": "synthetic"})
+    assert data_format(path) == "ttc"
+    _close(read_ttc(path), si, ["FZ", "SL", "SA", "IA", "VX", "P", "FX", "FY", "MX", "MZ", "OMEGA", "RL", "RE"])
+    # US units, stated by the file's channel struct
+    us = dict(cols, V=cols["V"] / 1.609344, RL=cols["RL"] / 2.54, P=cols["P"] / 6.894757293168361,
+              FZ=cols["FZ"] / 4.4482216152605, MZ=cols["MZ"] / 1.3558179483314004)
+    units = dict(zip(TTC_NAMES, TTC_UNITS)) | {"V": "mph", "RL": "in", "P": "psi", "FZ": "lb", "MZ": "ft-lb"}
+    channel = np.array([(n, units[n]) for n in TTC_NAMES], dtype=[("name", object), ("units", object)])
+    path_us = tmp_path / "B0000run14.mat"
+    scipy.io.savemat(path_us, {k: np.asarray(v, float) for k, v in us.items()} | {"channel": channel})
+    _close(read_data(path_us), si, ["FZ", "SA", "VX", "P", "RL", "MZ"])
+
+
+def test_ttc_errors(tmp_path):
+    bad = tmp_path / "bad.dat"
+    bad.write_text("header\nET\tV\tSA\tFZ\ns\tkph\tdeg\n1\t2\t3\t4\n")
+    with pytest.raises(DataError, match=r"bad.dat:3: 3 units for 4 channels"):
+        read_ttc(bad)
+    bad.write_text("header\nET\tV\tSA\tFZ\ns\tkph\tdeg\tfurlongs\n1\t2\t3\t-400\n")
+    with pytest.raises(DataError, match=r"channel FZ: unknown unit 'furlongs'"):
+        read_ttc(bad)
+    bad.write_bytes(b"MATLAB 5.0 MAT-file, damaged")
+    with pytest.raises(DataError, match=r"cannot read as a MATLAB .mat file"):
+        read_ttc(bad)
