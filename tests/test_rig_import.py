@@ -11,7 +11,7 @@ import pytest
 
 import mftyre
 from mftyre.cli import main
-from mftyre.data import (check_plausible, data_format, read_csv, read_data, read_ttc, speaking_cli,
+from mftyre.data import (TyreData, check_plausible, data_format, read_csv, read_data, read_ttc, speaking_cli,
                          trailer_programme)
 from mftyre.errors import DataError
 
@@ -190,3 +190,44 @@ def test_ttc_errors(tmp_path):
     bad.write_bytes(b"MATLAB 5.0 MAT-file, damaged")
     with pytest.raises(DataError, match=r"cannot read as a MATLAB .mat file"):
         read_ttc(bad)
+
+
+# ------------------------------------------------------------------ files we did not write (MFeval)
+def test_plausibility_on_every_mfeval_reference_table(mfeval_dir):
+    """Every MFeval 4.3.1 reference table (ISO-W, SI, the whole range of load, speed, pressure and slip of five
+    tyres from FSAE to truck-like) read as a rig file passes; the same in degrees or SAE axes is refused."""
+    tables = [p for p in sorted(mfeval_dir.glob("*.csv")) if not p.name.endswith("_parameters.csv")]
+    assert len(tables) >= 20
+    for path in tables:
+        d = pd.read_csv(path)
+        frame = pd.DataFrame({"FZ": d.Fz, "SA": d.alpha, "IA": d.gamma, "SL": d.kappa, "VX": d.Vx, "P": d.P,
+                              "FX": d.Fx, "FY": d.Fy, "MZ": d.Mz, "OMEGA": d.omega, "RL": d.Rl, "RE": d.Re})
+        check_plausible(frame, path.name)
+        sae = frame.assign(FZ=-frame.FZ, FY=-frame.FY, MZ=-frame.MZ, SA=-frame.SA)
+        with pytest.raises(DataError, match="channel FZ.*negative"):
+            check_plausible(sae, path.name)
+        if frame.SA.abs().max() > 0.05:
+            with pytest.raises(DataError, match=r"channel SA.*deg"):
+                check_plausible(frame.assign(SA=frame.SA / DEG), path.name)
+
+
+def test_ttc_time_series_is_recognised_like_the_original(tmp_path):
+    """A rig run written in the TTC format (ET, SAE axes, metric units) reads back as a time series whose
+    programme the recogniser finds as in the original."""
+    from mftyre.programme import recognise
+    from mftyre.rig import rig_programme
+
+    model = mftyre.load_tir(TIR_FILES / "car_205_60R15_mf61.tir")
+    run = rig_programme(model, loads=(0.6, 1.2), pressures=(1.0,), cambers_deg=(0.0,), longitudinal=False, seed=2)
+    si = run.frame
+    cols = _ttc_columns(si[CHANNELS]) | {"ET": si["TIME"].to_numpy()}
+    lines = ["synthetic run", "\t".join(TTC_NAMES), "\t".join(TTC_UNITS)]
+    table = np.column_stack([np.asarray(cols[n], float) for n in TTC_NAMES])
+    lines += ["\t".join(f"{v:.12g}" for v in row) for row in table]
+    path = tmp_path / "run.dat"
+    path.write_text("\n".join(lines) + "\n")
+    data = read_data(path)
+    np.testing.assert_allclose(data.array("TIME"), si["TIME"])
+    original = recognise(TyreData(si.drop(columns=["RHO", "MY", "TEST"]).copy()))
+    assert recognise(data).summary() == original.summary()
+    assert "sampled at 100 Hz" in original.summary()
