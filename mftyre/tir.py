@@ -38,6 +38,7 @@ from .params import (
     MissingParameterWarning,
     TyreParameters,
     VALID_FITTYP,
+    implausible_values,
     invalid_values,
 )
 
@@ -563,6 +564,8 @@ def check_tir(path) -> list[Finding]:
         add(severity, name, f"missing; the default {prm[name]!r} is used ({PARAMETERS[name].description})"
             + (": a core coefficient of the model, which the file must define" if name in core else ""))
     for name, message in invalid_values(prm):
+        add("error", name, message)
+    for name, message in implausible_values(prm):
         add("error", name, message)
     si = all(UNIT_FACTORS[k][v.strip().lower()] == 1 for k, v in prm.units_as_read.items())
     for name, (section, value) in prm.unknown.items():

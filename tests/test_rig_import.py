@@ -4,6 +4,7 @@ Calspan tyre test consortium (TTC) format written here from a synthetic programm
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pandas as pd
@@ -231,3 +232,32 @@ def test_ttc_time_series_is_recognised_like_the_original(tmp_path):
     original = recognise(TyreData(si.drop(columns=["RHO", "MY", "TEST"]).copy()))
     assert recognise(data).summary() == original.summary()
     assert "sampled at 100 Hz" in original.summary()
+
+
+# ------------------------------------------------------------------------------ .tir plausibility
+def _tir_files():
+    from conftest import SHARED
+
+    files = sorted(TIR_FILES.glob("*.tir"))
+    return files + sorted((SHARED / "reference").glob("**/*.tir"))
+
+
+def test_check_passes_every_sample_and_public_tir(capsys):
+    files = [str(p) for p in _tir_files()]
+    assert main(["check", "-q", *files]) == 0
+    assert "outside" not in capsys.readouterr().out
+
+
+def test_check_flags_values_no_tyre_has(tmp_path, capsys):
+    """A newcomer's file: radius in mm, pressure in kPa, slip limit in degrees: legal for the
+    equations, refused by `mftyre check` with each parameter named."""
+    text = (TIR_FILES / "car_205_60R15_mf61.tir").read_text()
+    for name, value in (("UNLOADED_RADIUS", "313"), ("NOMPRES", "220"), ("ALPMAX", "12.5")):
+        text = re.sub(rf"(?m)^({name}\s*=\s*)\S+", rf"\g<1>{value}", text, count=1)
+    path = tmp_path / "newcomer.tir"
+    path.write_text(text)
+    assert main(["check", str(path)]) == 1
+    out = capsys.readouterr().out
+    for name in ("UNLOADED_RADIUS", "NOMPRES", "ALPMAX"):
+        assert re.search(rf"error: {name}: .* is outside", out), name
+    assert "written in mm or inch" in out and "written in degrees" in out and "kPa, bar or psi" in out
