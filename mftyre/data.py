@@ -73,6 +73,7 @@ import contextlib
 import contextvars
 import csv
 import datetime as _dt
+import hashlib
 import io
 import math
 import re
@@ -407,6 +408,7 @@ class TyreData:
     units: dict = field(default_factory=dict)
     constants: dict = field(default_factory=dict)
     history: list = field(default_factory=list)
+    sha256: str = ""  # of the file read (:func:`read_data`), recorded in fitted .tir headers
 
     def __post_init__(self):
         self.frame = self.frame.reset_index(drop=True)
@@ -455,18 +457,18 @@ class TyreData:
         """The rows where ``mask`` (boolean array) is true, metadata kept."""
         sub = self.frame.loc[np.asarray(mask, dtype=bool)]
         hist = list(self.history) + ([note] if note else [])
-        return TyreData(sub.copy(), self.tyre, self.source, dict(self.units), dict(self.constants), hist)
+        return TyreData(sub.copy(), self.tyre, self.source, dict(self.units), dict(self.constants), hist, self.sha256)
 
     def with_frame(self, frame: pd.DataFrame, note: str) -> "TyreData":
         return TyreData(frame, self.tyre, self.source, dict(self.units), dict(self.constants),
-                        list(self.history) + [note])
+                        list(self.history) + [note], self.sha256)
 
     @staticmethod
     def concat(parts: list["TyreData"]) -> "TyreData":
         first = parts[0]
         frame = pd.concat([p.frame for p in parts], ignore_index=True)
         return TyreData(frame, first.tyre, first.source, dict(first.units), dict(first.constants),
-                        list(first.history))
+                        list(first.history), first.sha256)
 
     def inputs(self) -> dict:
         """Keyword arguments fz kappa alpha gamma phit vx p for :meth:`mftyre.MFModel.evaluate`."""
@@ -1160,11 +1162,23 @@ def read_data(path, *, columns: dict | None = None, units: dict | None = None, a
         raise DataError(f"{path}: a {'TYDEX' if kind == 'tydex' else 'TTC'} file names its channels and units; "
                         f"{which} are for CSV files")
     if kind == "tydex":
-        return read_tydex(path, defaults=defaults, axes=axes or "ISO-W", check=check, max_bytes=max_bytes)
-    if kind == "ttc":
-        return read_ttc(path, defaults=defaults, axes=axes or "SAE", check=check, max_bytes=max_bytes)
-    return read_csv(path, columns=columns, units=units, defaults=defaults, axes=axes or "ISO-W", check=check,
-                    max_bytes=max_bytes)
+        data = read_tydex(path, defaults=defaults, axes=axes or "ISO-W", check=check, max_bytes=max_bytes)
+    elif kind == "ttc":
+        data = read_ttc(path, defaults=defaults, axes=axes or "SAE", check=check, max_bytes=max_bytes)
+    else:
+        data = read_csv(path, columns=columns, units=units, defaults=defaults, axes=axes or "ISO-W", check=check,
+                        max_bytes=max_bytes)
+    data.sha256 = file_sha256(path)
+    return data
+
+
+def file_sha256(path) -> str:
+    """SHA-256 (hex) of a regular file, read in 1 MiB blocks."""
+    digest = hashlib.sha256()
+    with open_user_file(path, max_bytes=DATA_MAX_BYTES, what="measurement file", error=DataError) as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
 
 
 # ---------------------------------------------------------------------------------------- preparation

@@ -455,8 +455,9 @@ def _line(name: str, value: str, comment: str = "") -> str:
     return text
 
 
-def tir_text(params: TyreParameters) -> str:
-    """The text :func:`write_tir` writes for ``params``."""
+def tir_text(params: TyreParameters, comments=()) -> str:
+    """The text :func:`write_tir` writes for ``params``; ``comments``: lines added to the header as ``!``
+    comments (e.g. the provenance of fitted values)."""
     version = params.version
     missing = set(params.missing)
     out: list[str] = []
@@ -491,6 +492,7 @@ def tir_text(params: TyreParameters) -> str:
             out.append("! Written by mftyre (Magic Formula tyre model, Python); values in SI units.")
             out.append(f"! Source: {params.source if params.source else '(created in memory)'}")
             out.append(f"! Model: FITTYP {params.fittyp} (MF {version[0]}.{version[1]})")
+            out.extend("! " + " ".join(str(c).split()) for c in comments)
             out.append("!")
     for section, entries in extra_param_sections.items():
         out.append("$" + "-" * max(1, 60 - len(section)) + section.lower())
@@ -504,8 +506,9 @@ def tir_text(params: TyreParameters) -> str:
     return "\n".join(out) + "\n"
 
 
-def write_tir(params: TyreParameters, path, *, overwrite: bool = False) -> Path:
-    """Write ``params`` to ``path`` as a .tir file in SI units; returns the path written.
+def write_tir(params: TyreParameters, path, *, overwrite: bool = False, comments=()) -> Path:
+    """Write ``params`` to ``path`` as a .tir file in SI units; returns the path written. ``comments``: lines for
+    the file's header (``!`` comments, read back as comments).
 
     Refuses to overwrite an existing file unless ``overwrite=True``, and never overwrites the file the
     parameters were read from (``params.source``).
@@ -522,7 +525,7 @@ def write_tir(params: TyreParameters, path, *, overwrite: bool = False) -> Path:
     if p.is_dir():
         raise _err(str(p), None, None, "is a directory: expected a file path")
     _validate(params, str(p))
-    write_atomically(p, tir_text(params))
+    write_atomically(p, tir_text(params, comments))
     return p
 
 

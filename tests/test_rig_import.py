@@ -261,3 +261,42 @@ def test_check_flags_values_no_tyre_has(tmp_path, capsys):
     for name in ("UNLOADED_RADIUS", "NOMPRES", "ALPMAX"):
         assert re.search(rf"error: {name}: .* is outside", out), name
     assert "written in mm or inch" in out and "written in degrees" in out and "kPa, bar or psi" in out
+
+
+# ---------------------------------------------------------------------------------- command line
+def test_fit_reads_a_rig_file_through_the_options_and_records_provenance(si, tmp_path, capsys):
+    import hashlib
+
+    raw = si.drop(columns=["P"]).rename(columns={"FZ": "Load"})
+    raw["SA"] /= DEG
+    raw["IA"] /= DEG
+    path = _csv(tmp_path, raw)
+    out = tmp_path / "fitted.tir"
+    assert main(["fit", str(path), "-o", str(out), "--stages", "pure_fy", "--quiet", "--columns", "FZ=Load",
+                 "--units", "SA=deg,IA=deg", "--set", "P=2.2bar"]) == 0
+    header = out.read_text().split("[UNITS]")[0]
+    assert f"! Data: rig.csv SHA-256 {hashlib.sha256(path.read_bytes()).hexdigest()}, {len(si)} rows" in header
+    assert f"mftyre {mftyre.__version__} on " in header and "! Test programme: 2 loads" in header
+    assert re.search(r"pure_fy \(FY\) \d+\.\d{3}", header)
+    fitted = mftyre.load_tir(out).params
+    assert fitted.NOMPRES == pytest.approx(2.2e5)  # the constant pressure, not 2.2 Pa
+    capsys.readouterr()
+    assert main(["fit", str(path), "-o", str(tmp_path / "x.tir"), "--units", "SA=furlong"]) == 2
+    assert "--units: unknown unit 'furlong' for SA" in capsys.readouterr().err
+    for command in ("fit", "gaps"):
+        assert main([command, "--help"]) == 0
+        text = capsys.readouterr().out
+        assert "--axes {ISO-W,SAE,adapted-SAE,adapted-ISO}" in text and "--set CH=VALUE" in text
+
+
+def test_readme_names_work_after_a_plain_import(tmp_path):
+    """`mftyre.files.sample_tir` and `mftyre.write_tir` after `import mftyre` (failed with AttributeError)."""
+    import subprocess
+    import sys
+
+    code = ("import mftyre; p = mftyre.files.sample_tir('car_205_60R15_mf61.tir'); "
+            "prm = mftyre.load_tir(p).with_params(LMUY=0.9).params; "
+            f"mftyre.write_tir(prm, {str(tmp_path / 'b.tir')!r}); print(mftyre.read_tir({str(tmp_path / 'b.tir')!r}).LMUY)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "0.9"
