@@ -524,11 +524,13 @@ def build_parser() -> argparse.ArgumentParser:
     from .fit.command import register as register_fit
     from .gaps.command import register as register_gaps
     from .fmu_command import register as register_fmu
+    from .plot_command import register as register_plot
     from .soil.command import register as register_soil
 
     register_demo(sub)
     register_fit(sub)
     register_gaps(sub)
+    register_plot(sub)
     register_fmu(sub)
     register_soil(sub)
     return parser

@@ -300,3 +300,26 @@ def test_readme_names_work_after_a_plain_import(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "0.9"
+
+
+def test_plot_measured_against_models(si, tmp_path, capsys):
+    """`mftyre plot` on a TTC file: the model that made the data has a small error, a changed one a larger one;
+    the figure is written (PNG) and never over an existing file without --overwrite."""
+    cols = _ttc_columns(si)
+    lines = ["run", "\t".join(TTC_NAMES), "\t".join(TTC_UNITS)]
+    lines += ["\t".join(f"{cols[n][i]:.15g}" for n in TTC_NAMES) for i in range(len(si))]
+    data = tmp_path / "run.dat"
+    data.write_text("\n".join(lines) + "\n")
+    truth = TIR_FILES / "car_205_60R15_mf61.tir"
+    changed = tmp_path / "lmuy.tir"
+    mftyre.write_tir(mftyre.load_tir(truth).with_params(LMUY=0.8).params, changed)
+    out = tmp_path / "plot.png"
+    assert main(["plot", str(data), "--model", str(truth), str(changed), "-o", str(out)]) == 0
+    assert out.read_bytes().startswith(b"\x89PNG")
+    text = capsys.readouterr().out
+    errors = {m: float(re.search(rf"{m}: .*FY RMS \S+ N \((\S+) %\)", text).group(1))
+              for m in ("car_205_60R15_mf61.tir", "lmuy.tir")}
+    assert errors["car_205_60R15_mf61.tir"] < 2.0 < errors["lmuy.tir"]
+    assert "slip-angle sweeps" in text
+    assert main(["plot", str(data), "-o", str(out)]) == 2
+    assert "pass --overwrite" in capsys.readouterr().err
