@@ -288,7 +288,9 @@ values (or --x), one line per combination of the other swept inputs, in the unit
 command line.""",
         epilog="example: mftyre eval tyre.tir --fz 3kN,4kN,5kN --alpha -10deg:10deg:41 --p 2.2bar --plot fy.png",
     )
-    p.add_argument("file", metavar="FILE.tir", help="tyre property file")
+    p.add_argument("file", metavar="FILE.tir", nargs="+",
+                   help="tyre property file; several are evaluated on the same grid: one table each, one --csv with "
+                        "a 'tir' column, one --plot with a line style per file")
     group = p.add_argument_group("inputs (value, list V1,V2,... or range START:STOP:COUNT; units allowed)")
     helps = {
         "fz": "vertical load [N]; kN allowed (default FNOMIN)",
@@ -341,22 +343,36 @@ def _cmd_eval(args) -> int:
         print(f"mftyre eval: warning: --p {args.p.values.min():g} Pa is below 1 kPa: a plain number is pascal; "
               "write e.g. 2.2bar or 220kPa", file=sys.stderr)
     try:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            from .model import load_tir
+        results = []  # (file, model, outputs) per FILE.tir
+        for file in args.file:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                from .model import load_tir
 
-            model = load_tir(args.file, side=args.side)
-            inputs, shape = _eval_grid(args, swept, model.params)
-            out = model.evaluate(**inputs, turn_slip=args.turn_slip, alpha_star=args.alpha_star,
-                                 limits=not args.no_limits, turn_slip_form=args.turn_slip_form)
-        for w in caught:
-            print(f"mftyre eval: warning: {w.message}", file=sys.stderr)
+                model = load_tir(file, side=args.side)
+                inputs, shape = _eval_grid(args, swept, model.params)
+                out = model.evaluate(**inputs, turn_slip=args.turn_slip, alpha_star=args.alpha_star,
+                                     limits=not args.no_limits, turn_slip_form=args.turn_slip_form)
+            for w in caught:
+                print(f"mftyre eval: warning: {file}: {w.message}", file=sys.stderr)
+            results.append((file, model, out))
         table_cols = args.outputs or _DEFAULT_OUTPUTS
         if not args.quiet:
-            print(_eval_header(args, model, given, swept, shape))
-            print(format_table(_eval_frame(args, out, swept, shape, table_cols, model)))
-        write_results(args, lambda: _eval_frame(args, out, swept, shape, args.outputs or tuple(out.keys()), model),
-                      lambda: _eval_plot(args, model, out, swept, shape, args.outputs or _DEFAULT_OUTPUTS))
+            for file, model, out in results:
+                print(_eval_header(args, file, model, given, swept, shape))
+                print(format_table(_eval_frame(args, out, swept, shape, table_cols, model)))
+
+        def table():
+            frames = [_eval_frame(args, out, swept, shape, args.outputs or tuple(out.keys()), model)
+                      for _, model, out in results]
+            if len(results) == 1:
+                return frames[0]
+            import pandas as pd
+
+            return pd.concat([f.assign(tir=Path(file).name)[["tir", *f.columns]]
+                              for (file, _, _), f in zip(results, frames)], ignore_index=True)
+
+        write_results(args, table, lambda: _eval_plot(args, results, swept, shape, args.outputs or _DEFAULT_OUTPUTS))
     except MFTyreError as exc:
         print(f"mftyre eval: error: {exc}", file=sys.stderr)
         return 1
@@ -411,7 +427,7 @@ def _used_note(args, model, name, value) -> str:
     return "" if used == value else f" (used: {used:g}, the .tir range limit)"
 
 
-def _eval_header(args, model, given, swept, shape) -> str:
+def _eval_header(args, file, model, given, swept, shape) -> str:
     prm = model.params
     fixed = []
     for name in _SWEEPS:
@@ -435,20 +451,25 @@ def _eval_header(args, model, given, swept, shape) -> str:
     modes = [m for m, on in (("turn slip", args.turn_slip), ("alpha*", args.alpha_star),
                              ("no limits", args.no_limits)) if on]
     npts = int(np.prod(shape)) if shape else 1
-    head = (f"# {args.file}: FITTYP {prm.fittyp}, mounted {model.side}; {npts} point{'s' * (npts != 1)}"
+    head = (f"# {file}: FITTYP {prm.fittyp}, mounted {model.side}; {npts} point{'s' * (npts != 1)}"
             f"{'; ' + ', '.join(modes) if modes else ''}")
     return head + "\n# " + "; ".join(fixed)
 
 
-def _eval_plot(args, model, out, swept, shape, outputs) -> None:
+def _eval_plot(args, results, swept, shape, outputs) -> None:
     from .model import OUTPUT_UNITS
 
+    _, model, out = results[0]
     def legend(n, value):  # the value used, and the one asked for where the .tir range saturated it
         sweep, used = getattr(args, n), float(_used(args, model, n, value))
         return sweep.label(used) + ("" if used == value else f" (asked {sweep.label(value).split(' = ')[1]})")
 
-    plot_grid(args, out, swept, shape, outputs, output_units=OUTPUT_UNITS, legend=legend,
-              title=f"{Path(args.file).name} (FITTYP {model.params.fittyp}, {model.side})")
+    if len(results) == 1:
+        plot_grid(args, out, swept, shape, outputs, output_units=OUTPUT_UNITS, legend=legend,
+                  title=f"{Path(results[0][0]).name} (FITTYP {model.params.fittyp}, {model.side})")
+    else:  # legend values as the first file used them
+        plot_grid(args, [(Path(f).name, o) for f, _, o in results], swept, shape, outputs, output_units=OUTPUT_UNITS,
+                  legend=legend, title=f"{len(results)} tyres, mounted {model.side}")
 
 
 # ---------------------------------------------------------------------------------- reading DATA

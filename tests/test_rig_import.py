@@ -323,3 +323,21 @@ def test_plot_measured_against_models(si, tmp_path, capsys):
     assert "slip-angle sweeps" in text
     assert main(["plot", str(data), "-o", str(out)]) == 2
     assert "pass --overwrite" in capsys.readouterr().err
+
+
+def test_eval_overlays_several_tir_files(tmp_path, capsys):
+    truth = TIR_FILES / "car_205_60R15_mf61.tir"
+    changed = tmp_path / "lmuy.tir"
+    mftyre.write_tir(mftyre.load_tir(truth).with_params(LMUY=0.8).params, changed)
+    csv, png = tmp_path / "e.csv", tmp_path / "e.png"
+    assert main(["eval", str(truth), str(changed), "--fz", "3kN,5kN", "--alpha", "-12deg:12deg:9", "--csv", str(csv),
+                 "--plot", str(png)]) == 0
+    text = capsys.readouterr().out
+    assert text.count("# ") >= 4 and f"# {changed}: FITTYP 61" in text  # one header and table per file
+    table = pd.read_csv(csv)
+    assert list(table["tir"].unique()) == ["car_205_60R15_mf61.tir", "lmuy.tir"]
+    fz, alpha = np.meshgrid([3000.0, 5000.0], np.linspace(-12, 12, 9) * DEG, indexing="ij")
+    for name, path in (("car_205_60R15_mf61.tir", truth), ("lmuy.tir", changed)):
+        expected = mftyre.load_tir(path).evaluate(fz.ravel(), 0.0, alpha.ravel()).fy
+        np.testing.assert_allclose(table.loc[table.tir == name, "fy [N]"], expected, rtol=1e-12)
+    assert png.read_bytes().startswith(b"\x89PNG")
