@@ -546,12 +546,14 @@ def build_parser() -> argparse.ArgumentParser:
     from .gaps.command import register as register_gaps
     from .fmu_command import register as register_fmu
     from .plot_command import register as register_plot
+    from .swift_command import register as register_swift
     from .soil.command import register as register_soil
 
     register_demo(sub)
     register_fit(sub)
     register_gaps(sub)
     register_plot(sub)
+    register_swift(sub)
     register_fmu(sub)
     register_soil(sub)
     return parser

@@ -341,3 +341,21 @@ def test_eval_overlays_several_tir_files(tmp_path, capsys):
         expected = mftyre.load_tir(path).evaluate(fz.ravel(), 0.0, alpha.ravel()).fy
         np.testing.assert_allclose(table.loc[table.tir == name, "fy [N]"], expected, rtol=1e-12)
     assert png.read_bytes().startswith(b"\x89PNG")
+
+
+def test_swift_from_the_command_line(tmp_path, capsys):
+    """`mftyre swift`: on a flat road with the axle held the load stays at the static one; over a 10 mm cleat it
+    rises; the wheel advances at the speed given; progress on stderr."""
+    tir = TIR_FILES / "car_205_60R15_mf62_swift.tir"
+    csv, png = tmp_path / "s.csv", tmp_path / "s.png"
+    assert main(["swift", str(tir), "--road", "cleat(x0=1.0, length=0.05, height=0.01)", "--speed", "36km/h",
+                 "--fz", "4kN", "--p", "2.2bar", "--distance", "1.5", "--csv", str(csv), "--plot", str(png)]) == 0
+    err = capsys.readouterr().err
+    assert "building the SWIFT stepper" in err and "running 0.15 s" in err and "done" in err
+    table = pd.read_csv(csv)
+    np.testing.assert_allclose(table["x"], 10.0 * table["t"], atol=1e-9)
+    before = table[table.x < 0.7]
+    assert np.ptp(before["fz"]) < 1.0 and before["fz"].iloc[0] == pytest.approx(4000.0, rel=0.03)
+    assert table["fz"].max() > 1.2 * before["fz"].iloc[0]
+    assert png.read_bytes().startswith(b"\x89PNG")
+    assert main(["swift", str(tir), "--speed", "10", "--csv", str(csv)]) == 2  # exists: needs --overwrite
