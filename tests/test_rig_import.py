@@ -359,3 +359,20 @@ def test_swift_from_the_command_line(tmp_path, capsys):
     assert table["fz"].max() > 1.2 * before["fz"].iloc[0]
     assert png.read_bytes().startswith(b"\x89PNG")
     assert main(["swift", str(tir), "--speed", "10", "--csv", str(csv)]) == 2  # exists: needs --overwrite
+
+
+def test_fmu_build_reports_progress(tmp_path, capsys, monkeypatch):
+    """`mftyre fmu build` says what it is doing (the compilation takes seconds); the compiler is stubbed here."""
+    from mftyre.fmu import native_build
+
+    def fake_compile(sources, library):
+        library.parent.mkdir(parents=True, exist_ok=True)
+        library.write_bytes(b"stub")
+
+    monkeypatch.setattr(native_build, "compile_sources", fake_compile)
+    out = tmp_path / "t.fmu"
+    assert main(["fmu", "build", str(TIR_FILES / "car_205_60R15_mf61.tir"), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    stages = ["building the steady equations", "generating C sources", "compiling", "packing the FMU"]
+    positions = [err.find(s) for s in stages]
+    assert -1 not in positions and positions == sorted(positions), err
