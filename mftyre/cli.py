@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .errors import speaking_cli
 from .grid_results import check_request, format_table, grid_frame, plot_grid, sweep_grid, write_results
 
 __all__ = ["main", "build_parser"]
@@ -565,7 +566,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = _join_negative_values(list(sys.argv[1:] if argv is None else argv))
     try:
         args = parser.parse_args(argv)
-        return int(args.func(args))
+        with speaking_cli():  # messages name command-line options, not keyword arguments
+            return int(args.func(args))
     except SystemExit as exc:  # argparse exits on --help and on usage errors (also raised by handlers)
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
 

@@ -69,8 +69,6 @@ rows. Only regular files are read (a FIFO or a device is refused), up to :data:`
 """
 from __future__ import annotations
 
-import contextlib
-import contextvars
 import csv
 import datetime as _dt
 import hashlib
@@ -83,7 +81,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .errors import DataError
+from .errors import DataError, speaking, speaking_cli
 from .files import DATA_MAX_BYTES, check_outputs, open_user_file, read_user_file, write_atomically
 from .tir import UNIT_FACTORS
 
@@ -205,25 +203,10 @@ def _axes_name(axes: str) -> str:
 
 
 # ----------------------------------------------------------------------- options, in two languages
-#: How remedies are spelled in messages: "python" (keyword arguments) or "cli" (command-line options).
-_SPELLING: contextvars.ContextVar[str] = contextvars.ContextVar("mftyre_data_spelling", default="python")
-
-
-@contextlib.contextmanager
-def speaking_cli():
-    """Within this block the readers' messages name command-line options (``--units SA=deg``) instead of
-    keyword arguments (``units={'SA': 'deg'}``); thread- and task-safe (a context variable)."""
-    token = _SPELLING.set("cli")
-    try:
-        yield
-    finally:
-        _SPELLING.reset(token)
-
-
 def remedy(option: str, channel: str, value: str) -> str:
     """How to pass ``channel=value`` for ``option`` (``columns``, ``units``, ``axes``, ``constants``) in the
     language of the caller (see :func:`speaking_cli`)."""
-    if _SPELLING.get() == "cli":
+    if speaking() == "cli":
         flag = {"columns": "--columns", "units": "--units", "axes": "--axes", "constants": "--set"}[option]
         return f"{flag} {value}" if option == "axes" else f"{flag} {channel}={value}"
     if option == "axes":
@@ -361,7 +344,7 @@ def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of:
         problems.append(f"{name(ch)}: {shown} is {typical:.4g} {si}, {side} the {expected} {si} of any tyre "
                         f"measurement in SI units: {guess}")
     if problems:
-        if _SPELLING.get() == "cli":
+        if speaking() == "cli":
             fix = "--units " + ",".join(f"{ch}={u}" for ch, u in fixes.items())
         else:
             fix = "units={" + ", ".join(f"{ch!r}: {u!r}" for ch, u in fixes.items()) + "}"
@@ -1158,7 +1141,7 @@ def read_data(path, *, columns: dict | None = None, units: dict | None = None, a
     options of ``mftyre fit``, ``gaps`` and ``plot`` (``--columns``, ``--units``, ``--axes``, ``--set``)."""
     kind = data_format(path)
     if kind != "csv" and (columns or units):
-        which = "--columns/--units" if _SPELLING.get() == "cli" else "columns=/units="
+        which = "--columns/--units" if speaking() == "cli" else "columns=/units="
         raise DataError(f"{path}: a {'TYDEX' if kind == 'tydex' else 'TTC'} file names its channels and units; "
                         f"{which} are for CSV files")
     if kind == "tydex":

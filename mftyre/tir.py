@@ -29,7 +29,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
-from .errors import ModelInputError, TirError
+from .errors import ModelInputError, TirError, spelled
 from .files import TIR_MAX_BYTES, read_user_file, same_file, write_atomically
 from .params import (
     CORE_PARAMETERS,
@@ -521,7 +521,8 @@ def write_tir(params: TyreParameters, path, *, overwrite: bool = False, comments
                    "refusing to overwrite the file these parameters were read from "
                    "(params.source); write to a different path")
     if p.exists() and not overwrite:
-        raise _err(str(p), None, None, "file exists: pass overwrite=True to replace it", cls=_TirFileExists)
+        raise _err(str(p), None, None, f"file exists: pass {spelled('overwrite=True', '--overwrite')} to replace it",
+                   cls=_TirFileExists)
     if p.is_dir():
         raise _err(str(p), None, None, "is a directory: expected a file path")
     _validate(params, str(p))

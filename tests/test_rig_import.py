@@ -376,3 +376,13 @@ def test_fmu_build_reports_progress(tmp_path, capsys, monkeypatch):
     stages = ["building the steady equations", "generating C sources", "compiling", "packing the FMU"]
     positions = [err.find(s) for s in stages]
     assert -1 not in positions and positions == sorted(positions), err
+
+
+def test_cli_messages_name_options_python_messages_keywords(capsys):
+    """The same saturation warning names --no-limits on the command line and limits=False from Python."""
+    tir = TIR_FILES / "car_205_60R15_mf61.tir"
+    assert main(["eval", str(tir), "--p", "1.5bar", "-q"]) == 0
+    err = capsys.readouterr().err
+    assert "mftyre eval --no-limits evaluates them as given" in err and "limits=False" not in err
+    with pytest.warns(mftyre.InputClippedWarning, match=r"\(limits=False evaluates them as given\)"):
+        mftyre.load_tir(tir).evaluate(4000.0, 0.0, 0.0, p=1.5e5)
