@@ -373,11 +373,11 @@ def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of:
         ok = np.isfinite(vx) & np.isfinite(omega) & np.isfinite(radius) & (np.abs(omega * radius) > 0.5)
         if ok.sum() >= 5:
             ratio = float(np.median(np.abs(vx[ok]) / np.abs(omega[ok] * radius[ok])))
-            for unit in ("km/h", "mph"):
-                if abs(ratio * unit_to_si("VX", unit) - 1.0) < 0.15:
-                    raise DataError(f"{where}: {name('VX')}: VX / (OMEGA x radius) is {ratio:.3g} (about 1 for a "
-                                    f"rolling wheel in m/s): the speed looks like {unit}: "
-                                    f"{remedy('units', 'VX', unit)}")
+            for ch, unit, factor in (("VX", "km/h", unit_to_si("VX", "km/h")), ("VX", "mph", unit_to_si("VX", "mph")),
+                                     ("OMEGA", "rpm", 1.0 / unit_to_si("OMEGA", "rpm"))):
+                if abs(ratio * factor - 1.0) < 0.15:
+                    raise DataError(f"{where}: {name(ch)}: VX / (OMEGA x radius) is {ratio:.3g} (about 1 for a "
+                                    f"rolling wheel in SI units): {ch} looks like {unit}: {remedy('units', ch, unit)}")
 
 
 # --------------------------------------------------------------------------------------------- TyreData

@@ -62,8 +62,12 @@ def test_kpa_and_kmh_refused_then_converted(si, tmp_path):
         read_csv(path)
     slow = si[si["VX"] < 25].copy()  # below 100 m/s in km/h: found by VX / (OMEGA x RE) = 3.6
     slow["VX"] *= 3.6
-    with pytest.raises(DataError, match=r"channel VX: VX / \(OMEGA x radius\) is 3.6.*km/h"):
+    with pytest.raises(DataError, match=r"channel VX: VX / \(OMEGA x radius\) is 3.6.*VX looks like km/h"):
         read_csv(_csv(tmp_path, slow, "slow.csv"))
+    rpm = si.copy()
+    rpm["OMEGA"] *= 60 / (2 * math.pi)
+    with pytest.raises(DataError, match=r"channel OMEGA: VX / \(OMEGA x radius\) is 0.105.*units=\{'OMEGA': 'rpm'\}"):
+        read_csv(_csv(tmp_path, rpm, "rpm.csv"))
     _close(read_csv(path, units={"P": "kPa", "VX": "km/h"}), si)
 
 
