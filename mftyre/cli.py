@@ -513,6 +513,9 @@ def add_data_options(parser) -> None:
                        help="axis system of the file (default ISO-W; SAE for TTC files); see below")
     group.add_argument("--set", dest="constants", type=_option_type(parse_constants, "constant channels"),
                        metavar="CH=VALUE,...", help="constant channels the file lacks, e.g. P=1.6bar,IA=0")
+    group.add_argument("--no-check", action="store_true",
+                       help="skip the plausibility check of the values (for tyres outside its ranges, e.g. aircraft "
+                            "tyres above 100 m/s); units and axes are then as the options say, unchecked")
 
 
 def data_epilog() -> str:
@@ -528,7 +531,7 @@ def read_data_args(args, path=None):
 
     with speaking_cli():
         return read_data(path or args.data, columns=args.columns, units=args.units, axes=args.axes,
-                         defaults=args.constants)
+                         defaults=args.constants, check=not args.no_check)
 
 
 # ------------------------------------------------------------------------------------------ (more)

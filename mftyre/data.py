@@ -28,6 +28,17 @@ Required channels: ``FZ``, ``SA``, ``SL``, ``VX`` and ``P`` (every row, numeric,
 constant (``constants`` of a TYDEX file, ``defaults=`` of the readers). Measured outputs (FX ... RE) may be
 absent or NaN in rows where they were not measured.
 
+Reading any file (:func:`read_data`): the format is recognised by content (TYDEX, TTC .dat/.mat, CSV); the file's
+axis system (``axes=``, :data:`AXES`: ISO-W, SAE, adapted-SAE, adapted-ISO) is turned into ISO-W, constant channels
+(``defaults=``) fill channels the file lacks, and :func:`check_plausible` refuses values no tyre measurement has in
+SI units and ISO-W axes, naming the channel, the file's column, the likely unit or axis system and the option that
+converts it (``check=False`` skips it). The command line passes ``--columns``, ``--units``, ``--axes``, ``--set``
+and ``--no-check`` (:func:`mftyre.cli.add_data_options`); messages then name those options (:func:`speaking_cli`).
+
+TTC (:func:`read_ttc`): the Calspan tyre test consortium runs: a ``.dat`` text file (a free header line, a row of
+channel names, a row of units, whitespace-separated samples) or a MATLAB ``.mat`` file with the same channels as
+vectors; channels and units as :data:`TTC_CHANNELS` says, SAE axes, ``ET`` kept as ``TIME``.
+
 CSV (:func:`read_csv`)
     Comma separated, UTF-8 (a byte-order mark allowed), one header row, then one row per sample; an empty
     field or ``nan`` is "not measured". Column names are matched to channels case-insensitively; other columns
@@ -534,7 +545,7 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
         check_plausible(frame, str(path), column_of)
     unit_record = {ch: units.get(ch, _SI_NAME[CHANNELS[ch][0]]) for ch in CHANNELS if ch in frame.columns}
     return TyreData(frame, tyre=tyre or path.stem, source=str(path), units=unit_record,
-                    history=_import_notes(axes, units, defaults))
+                    history=_import_notes(axes, units, defaults, check))
 
 
 def _csv_header(first: bytes, path) -> list[str]:
@@ -581,8 +592,14 @@ def _convert_axes(frame, axes, path):
         raise DataError(f"{path}: {exc}") from None
 
 
-def _import_notes(axes, units, defaults) -> list[str]:
+#: The history entry of data read without the plausibility check (:func:`mftyre.fit.load_data` then skips it too).
+UNCHECKED = "plausibility check skipped on request"
+
+
+def _import_notes(axes, units, defaults, check=True) -> list[str]:
     notes = [f"axes {_axes_name(axes)} converted to ISO-W"] if _axes_name(axes) != "ISO-W" else []
+    if not check:
+        notes.append(UNCHECKED)
     if units:
         notes.append("units: " + ", ".join(f"{ch} in {u}" for ch, u in units.items()))
     if defaults:
@@ -735,7 +752,7 @@ def _read_tydex(fh, path: Path, defaults, axes="ISO-W", check=True) -> TyreData:
     tyre = str(state.header.get("MEASID", ("", "", ""))[0] or path.stem)
     consts = {k: v[0] for k, v in {**state.header, **state.constants}.items()}
     return TyreData(frame, tyre=tyre, source=str(path), units=units, constants=consts,
-                    history=_import_notes(axes, None, defaults))
+                    history=_import_notes(axes, None, defaults, check))
 
 
 def _lines(raw: bytes, path) -> list[str]:
@@ -1022,7 +1039,7 @@ def read_ttc(path, *, axes: str = "SAE", defaults: dict | None = None, check: bo
     if check:
         check_plausible(frame, str(path), column_of)
     return TyreData(frame, tyre=path.stem, source=str(path), units=unit_record,
-                    history=[f"TTC run read from {path.name}"] + _import_notes(axes, None, defaults))
+                    history=[f"TTC run read from {path.name}"] + _import_notes(axes, None, defaults, check))
 
 
 def _ttc_dat(raw: bytes, path):

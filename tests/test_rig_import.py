@@ -390,3 +390,18 @@ def test_cli_messages_name_options_python_messages_keywords(capsys):
     assert "mftyre eval --no-limits evaluates them as given" in err and "limits=False" not in err
     with pytest.warns(mftyre.InputClippedWarning, match=r"\(limits=False evaluates them as given\)"):
         mftyre.load_tir(tir).evaluate(4000.0, 0.0, 0.0, p=1.5e5)
+
+
+def test_no_check_reads_values_outside_the_ranges(si, tmp_path):
+    """An aircraft tyre above 100 m/s: refused by default, read with check=False (--no-check), and the fitter's
+    own check then trusts it."""
+    from mftyre.fit import load_data
+
+    fast = si.assign(VX=si["VX"] * 7.0, OMEGA=si["OMEGA"] * 7.0)  # 117 m/s, consistent spin
+    path = _csv(tmp_path, fast)
+    with pytest.raises(DataError, match="channel VX: 99th percentile"):
+        read_csv(path)
+    data = read_data(path, check=False)
+    assert load_data(data) is data and "plausibility check skipped on request" in data.history
+    with pytest.raises(DataError, match="channel VX"):
+        load_data(TyreData(data.frame.copy()))

@@ -33,7 +33,7 @@ import numpy as np
 import pandas as pd
 
 from ..backend import NUMPY
-from ..data import TyreData, check_plausible, read_data
+from ..data import UNCHECKED, TyreData, check_plausible, read_data
 from ..formula import Modes, steady_state, vertical
 from ..model import STRUCTURAL_PARAMETERS, MFModel
 from ..params import TyreParameters
@@ -163,7 +163,8 @@ def load_data(source) -> TyreData:
     """TyreData (checked for plausible values, :func:`mftyre.data.check_plausible`), or read from a path
     (TYDEX, TTC or CSV, recognised by content: :func:`mftyre.data.read_data`)."""
     if isinstance(source, TyreData):
-        check_plausible(source)
+        if UNCHECKED not in source.history:  # read with check=False (--no-check): the user has vouched for it
+            check_plausible(source)
         return source
     return read_data(source)
 
