@@ -129,9 +129,11 @@ def test_messages_speak_the_command_line_in_the_cli(si, tmp_path, capsys):
     path = _csv(tmp_path, raw)
     with speaking_cli(), pytest.raises(DataError, match=r"--units SA=deg"):
         read_csv(path)
-    status = main(["fit", str(path), "-o", str(tmp_path / "out.tir"), "--quiet"])
-    err = capsys.readouterr().err
-    assert status == 1 and "--units SA=deg" in err and "units={" not in err
+    for command in (["fit", str(path), "-o", str(tmp_path / "out.tir")], ["gaps", str(path), "--model", str(path)],
+                    ["plot", str(path), "-o", str(tmp_path / "p.png")]):
+        status = main([*command, "--quiet"] if command[0] != "plot" else command)
+        err = capsys.readouterr().err
+        assert status == 1 and "--units SA=deg" in err and "units={" not in err, command
 
 
 # ------------------------------------------------------------------------------------------ TTC
@@ -216,26 +218,39 @@ def test_plausibility_on_every_mfeval_reference_table(mfeval_dir):
                 check_plausible(frame.assign(SA=frame.SA / DEG), path.name)
 
 
-def test_ttc_time_series_is_recognised_like_the_original(tmp_path):
-    """A rig run written in the TTC format (ET, SAE axes, metric units) reads back as a time series whose
-    programme the recogniser finds as in the original."""
+def test_ttc_time_series_with_warm_up_is_recognised_like_the_original(tmp_path):
+    """A rig run written in the TTC format (ET, SAE axes, metric units) after a 20 s warm-up (+-4 deg slip-angle
+    weaving at the first load, with 1 % load scatter) reads back as a time series in which the recogniser finds
+    the programme of the run alone: the warm-up makes no sweep and no level of its own."""
     from mftyre.programme import recognise
     from mftyre.rig import rig_programme
 
     model = mftyre.load_tir(TIR_FILES / "car_205_60R15_mf61.tir")
     run = rig_programme(model, loads=(0.6, 1.2), pressures=(1.0,), cambers_deg=(0.0,), longitudinal=False, seed=2)
-    si = run.frame
-    cols = _ttc_columns(si[CHANNELS]) | {"ET": si["TIME"].to_numpy()}
-    lines = ["synthetic run", "\t".join(TTC_NAMES), "\t".join(TTC_UNITS)]
+    si = run.frame.drop(columns=["RHO", "MY", "TEST"])
+    t = np.arange(0.0, 20.0, 0.01)
+    first = si.iloc[0]
+    rng = np.random.default_rng(1)
+    warm = pd.DataFrame({"TIME": t, "FZ": first.FZ * (1 + 0.01 * rng.standard_normal(t.size)), "SL": 0.0,
+                         "SA": 4 * DEG * np.sin(2 * math.pi * t / 5), "IA": 0.0, "PHIT": 0.0, "VX": first.VX,
+                         "P": first.P})
+    out = model.evaluate(warm.FZ.to_numpy(), 0.0, warm.SA.to_numpy(), 0.0, 0.0, warm.VX.to_numpy(), warm.P.to_numpy())
+    for ch in ("FX", "FY", "MX", "MZ", "OMEGA", "RL", "RE"):
+        warm[ch] = np.asarray(out[ch.lower()])
+    both = pd.concat([warm[si.columns], si.assign(TIME=si.TIME + 20.0)], ignore_index=True)
+    cols = _ttc_columns(both.assign(MY=0.0)) | {"ET": both["TIME"].to_numpy()}
+    lines = ["synthetic run with warm-up", "\t".join(TTC_NAMES), "\t".join(TTC_UNITS)]
     table = np.column_stack([np.asarray(cols[n], float) for n in TTC_NAMES])
     lines += ["\t".join(f"{v:.12g}" for v in row) for row in table]
     path = tmp_path / "run.dat"
     path.write_text("\n".join(lines) + "\n")
     data = read_data(path)
-    np.testing.assert_allclose(data.array("TIME"), si["TIME"])
-    original = recognise(TyreData(si.drop(columns=["RHO", "MY", "TEST"]).copy()))
-    assert recognise(data).summary() == original.summary()
-    assert "sampled at 100 Hz" in original.summary()
+    np.testing.assert_allclose(data.array("TIME"), both["TIME"])
+    original, read = recognise(TyreData(si.copy())), recognise(data)
+    for kind in ("slip_angle", "slip_ratio", "speed", "load"):
+        assert read.count(kind) == original.count(kind), kind
+    np.testing.assert_allclose(read.levels["FZ"], original.levels["FZ"], rtol=0.01)
+    assert read.sample_rate == pytest.approx(100.0)
 
 
 # ------------------------------------------------------------------------------ .tir plausibility
