@@ -12,4 +12,21 @@ from .model import MFModel, MFOutputs, load_tir
 
 __version__ = "0.1.0"
 __all__ = ["load_tir", "MFModel", "MFOutputs", "MFTyreError", "TirError", "DataError", "ModelInputError",
-           "InputClippedWarning"]
+           "InputClippedWarning", "read_tir", "write_tir", "sample_tir", "read_data"]
+
+#: Imported when first used, so ``import mftyre`` stays light: name -> (module, attribute or None for the module).
+_LAZY = {"read_tir": ("tir", "read_tir"), "write_tir": ("tir", "write_tir"), "sample_tir": ("files", "sample_tir"),
+         "read_data": ("data", "read_data")}
+_SUBMODULES = ("files", "data", "tir", "params", "fit", "gaps", "programme", "rig", "compiled", "transient", "soil",
+               "compat", "cli")
+
+
+def __getattr__(name):  # PEP 562: mftyre.files.sample_tir(...) and mftyre.write_tir(...) after `import mftyre`
+    import importlib
+
+    if name in _LAZY:
+        module, attribute = _LAZY[name]
+        return getattr(importlib.import_module(f".{module}", __name__), attribute)
+    if name in _SUBMODULES:
+        return importlib.import_module(f".{name}", __name__)
+    raise AttributeError(f"module 'mftyre' has no attribute {name!r}")

@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .errors import speaking_cli
 from .grid_results import check_request, format_table, grid_frame, plot_grid, sweep_grid, write_results
 
 __all__ = ["main", "build_parser"]
@@ -288,7 +289,9 @@ values (or --x), one line per combination of the other swept inputs, in the unit
 command line.""",
         epilog="example: mftyre eval tyre.tir --fz 3kN,4kN,5kN --alpha -10deg:10deg:41 --p 2.2bar --plot fy.png",
     )
-    p.add_argument("file", metavar="FILE.tir", help="tyre property file")
+    p.add_argument("file", metavar="FILE.tir", nargs="+",
+                   help="tyre property file; several are evaluated on the same grid: one table each, one --csv with "
+                        "a 'tir' column, one --plot with a line style per file")
     group = p.add_argument_group("inputs (value, list V1,V2,... or range START:STOP:COUNT; units allowed)")
     helps = {
         "fz": "vertical load [N]; kN allowed (default FNOMIN)",
@@ -341,22 +344,36 @@ def _cmd_eval(args) -> int:
         print(f"mftyre eval: warning: --p {args.p.values.min():g} Pa is below 1 kPa: a plain number is pascal; "
               "write e.g. 2.2bar or 220kPa", file=sys.stderr)
     try:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            from .model import load_tir
+        results = []  # (file, model, outputs) per FILE.tir
+        for file in args.file:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                from .model import load_tir
 
-            model = load_tir(args.file, side=args.side)
-            inputs, shape = _eval_grid(args, swept, model.params)
-            out = model.evaluate(**inputs, turn_slip=args.turn_slip, alpha_star=args.alpha_star,
-                                 limits=not args.no_limits, turn_slip_form=args.turn_slip_form)
-        for w in caught:
-            print(f"mftyre eval: warning: {w.message}", file=sys.stderr)
+                model = load_tir(file, side=args.side)
+                inputs, shape = _eval_grid(args, swept, model.params)
+                out = model.evaluate(**inputs, turn_slip=args.turn_slip, alpha_star=args.alpha_star,
+                                     limits=not args.no_limits, turn_slip_form=args.turn_slip_form)
+            for w in caught:
+                print(f"mftyre eval: warning: {file}: {w.message}", file=sys.stderr)
+            results.append((file, model, out))
         table_cols = args.outputs or _DEFAULT_OUTPUTS
         if not args.quiet:
-            print(_eval_header(args, model, given, swept, shape))
-            print(format_table(_eval_frame(args, out, swept, shape, table_cols, model)))
-        write_results(args, lambda: _eval_frame(args, out, swept, shape, args.outputs or tuple(out.keys()), model),
-                      lambda: _eval_plot(args, model, out, swept, shape, args.outputs or _DEFAULT_OUTPUTS))
+            for file, model, out in results:
+                print(_eval_header(args, file, model, given, swept, shape))
+                print(format_table(_eval_frame(args, out, swept, shape, table_cols, model)))
+
+        def table():
+            frames = [_eval_frame(args, out, swept, shape, args.outputs or tuple(out.keys()), model)
+                      for _, model, out in results]
+            if len(results) == 1:
+                return frames[0]
+            import pandas as pd
+
+            return pd.concat([f.assign(tir=Path(file).name)[["tir", *f.columns]]
+                              for (file, _, _), f in zip(results, frames)], ignore_index=True)
+
+        write_results(args, table, lambda: _eval_plot(args, results, swept, shape, args.outputs or _DEFAULT_OUTPUTS))
     except MFTyreError as exc:
         print(f"mftyre eval: error: {exc}", file=sys.stderr)
         return 1
@@ -411,7 +428,7 @@ def _used_note(args, model, name, value) -> str:
     return "" if used == value else f" (used: {used:g}, the .tir range limit)"
 
 
-def _eval_header(args, model, given, swept, shape) -> str:
+def _eval_header(args, file, model, given, swept, shape) -> str:
     prm = model.params
     fixed = []
     for name in _SWEEPS:
@@ -435,20 +452,86 @@ def _eval_header(args, model, given, swept, shape) -> str:
     modes = [m for m, on in (("turn slip", args.turn_slip), ("alpha*", args.alpha_star),
                              ("no limits", args.no_limits)) if on]
     npts = int(np.prod(shape)) if shape else 1
-    head = (f"# {args.file}: FITTYP {prm.fittyp}, mounted {model.side}; {npts} point{'s' * (npts != 1)}"
+    head = (f"# {file}: FITTYP {prm.fittyp}, mounted {model.side}; {npts} point{'s' * (npts != 1)}"
             f"{'; ' + ', '.join(modes) if modes else ''}")
     return head + "\n# " + "; ".join(fixed)
 
 
-def _eval_plot(args, model, out, swept, shape, outputs) -> None:
+def _eval_plot(args, results, swept, shape, outputs) -> None:
     from .model import OUTPUT_UNITS
 
+    _, model, out = results[0]
     def legend(n, value):  # the value used, and the one asked for where the .tir range saturated it
         sweep, used = getattr(args, n), float(_used(args, model, n, value))
         return sweep.label(used) + ("" if used == value else f" (asked {sweep.label(value).split(' = ')[1]})")
 
-    plot_grid(args, out, swept, shape, outputs, output_units=OUTPUT_UNITS, legend=legend,
-              title=f"{Path(args.file).name} (FITTYP {model.params.fittyp}, {model.side})")
+    if len(results) == 1:
+        plot_grid(args, out, swept, shape, outputs, output_units=OUTPUT_UNITS, legend=legend,
+                  title=f"{Path(results[0][0]).name} (FITTYP {model.params.fittyp}, {model.side})")
+    else:  # legend values as the first file used them
+        plot_grid(args, [(Path(f).name, o) for f, _, o in results], swept, shape, outputs, output_units=OUTPUT_UNITS,
+                  legend=legend, title=f"{len(results)} tyres, mounted {model.side}")
+
+
+# ---------------------------------------------------------------------------------- reading DATA
+DATA_HELP = """\
+DATA: a TYDEX (.tdx), Calspan tyre test consortium (TTC .dat or .mat) or CSV file, recognised by content.
+CSV: one header row, comma separated, one row per sample. Columns named FZ SA SL VX P (required), IA PHIT (0 when
+absent), FX FY FZ MX MY MZ OMEGA RL RHO RE (measured outputs) and TIME are read as they are, in SI units (N, N m,
+rad, m/s, Pa, rad/s, m); other names with --columns FZ=Load_N,SA=alpha, other units with
+--units SA=deg,P=psi,VX=km/h,RL=mm, a run without a channel at a known value with --set P=1.6bar,IA=0. TTC files
+name their channels and units (ET V N SA IA RL RE P FX FY FZ MX MZ ...) and are in SAE axes.
+Values no tyre measurement has in SI units and ISO-W axes (|SA| > 1 rad, P < 20 kPa, VX > 100 m/s, RL > 2 m,
+FZ mostly negative ...) are refused with the channel named and the option that converts them.
+"""
+
+
+def _option_type(parse, name):
+    def convert(text):
+        from .data import DataError
+
+        try:
+            return parse(text)
+        except (ValueError, DataError) as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    convert.__name__ = name
+    return convert
+
+
+def add_data_options(parser) -> None:
+    """The options that say how to read a measurement file (``--columns``, ``--units``, ``--axes``, ``--set``);
+    :func:`read_data_args` reads DATA with them (:func:`mftyre.data.read_data`)."""
+    from .data import AXES, parse_columns, parse_constants, parse_units
+
+    group = parser.add_argument_group("reading DATA (see the DATA section below)")
+    group.add_argument("--columns", type=_option_type(parse_columns, "column map"), metavar="CH=COLUMN,...",
+                       help="file columns of the channels, e.g. FZ=Fz_N,SA=alpha (CSV)")
+    group.add_argument("--units", type=_option_type(parse_units, "units"), metavar="CH=UNIT,...",
+                       help="units of the file's channels, e.g. SA=deg,P=psi,VX=km/h,RL=mm (CSV; default SI)")
+    group.add_argument("--axes", choices=tuple(AXES), default=None,
+                       help="axis system of the file (default ISO-W; SAE for TTC files); see below")
+    group.add_argument("--set", dest="constants", type=_option_type(parse_constants, "constant channels"),
+                       metavar="CH=VALUE,...", help="constant channels the file lacks, e.g. P=1.6bar,IA=0")
+    group.add_argument("--no-check", action="store_true",
+                       help="skip the plausibility check of the values (for tyres outside its ranges, e.g. aircraft "
+                            "tyres above 100 m/s); units and axes are then as the options say, unchecked")
+
+
+def data_epilog() -> str:
+    from .data import AXES_HELP
+
+    return DATA_HELP + "\n" + AXES_HELP
+
+
+def read_data_args(args, path=None):
+    """DATA (``args.data`` or ``path``) read with the options of :func:`add_data_options`; messages name the
+    command-line options."""
+    from .data import read_data, speaking_cli
+
+    with speaking_cli():
+        return read_data(path or args.data, columns=args.columns, units=args.units, axes=args.axes,
+                         defaults=args.constants, check=not args.no_check)
 
 
 # ------------------------------------------------------------------------------------------ (more)
@@ -466,11 +549,15 @@ def build_parser() -> argparse.ArgumentParser:
     from .fit.command import register as register_fit
     from .gaps.command import register as register_gaps
     from .fmu_command import register as register_fmu
+    from .plot_command import register as register_plot
+    from .swift_command import register as register_swift
     from .soil.command import register as register_soil
 
     register_demo(sub)
     register_fit(sub)
     register_gaps(sub)
+    register_plot(sub)
+    register_swift(sub)
     register_fmu(sub)
     register_soil(sub)
     return parser
@@ -482,7 +569,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = _join_negative_values(list(sys.argv[1:] if argv is None else argv))
     try:
         args = parser.parse_args(argv)
-        return int(args.func(args))
+        with speaking_cli():  # messages name command-line options, not keyword arguments
+            return int(args.func(args))
     except SystemExit as exc:  # argparse exits on --help and on usage errors (also raised by handlers)
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
 

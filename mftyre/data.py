@@ -28,6 +28,17 @@ Required channels: ``FZ``, ``SA``, ``SL``, ``VX`` and ``P`` (every row, numeric,
 constant (``constants`` of a TYDEX file, ``defaults=`` of the readers). Measured outputs (FX ... RE) may be
 absent or NaN in rows where they were not measured.
 
+Reading any file (:func:`read_data`): the format is recognised by content (TYDEX, TTC .dat/.mat, CSV); the file's
+axis system (``axes=``, :data:`AXES`: ISO-W, SAE, adapted-SAE, adapted-ISO) is turned into ISO-W, constant channels
+(``defaults=``) fill channels the file lacks, and :func:`check_plausible` refuses values no tyre measurement has in
+SI units and ISO-W axes, naming the channel, the file's column, the likely unit or axis system and the option that
+converts it (``check=False`` skips it). The command line passes ``--columns``, ``--units``, ``--axes``, ``--set``
+and ``--no-check`` (:func:`mftyre.cli.add_data_options`); messages then name those options (:func:`speaking_cli`).
+
+TTC (:func:`read_ttc`): the Calspan tyre test consortium runs: a ``.dat`` text file (a free header line, a row of
+channel names, a row of units, whitespace-separated samples) or a MATLAB ``.mat`` file with the same channels as
+vectors; channels and units as :data:`TTC_CHANNELS` says, SAE axes, ``ET`` kept as ``TIME``.
+
 CSV (:func:`read_csv`)
     Comma separated, UTF-8 (a byte-order mark allowed), one header row, then one row per sample; an empty
     field or ``nan`` is "not measured". Column names are matched to channels case-insensitively; other columns
@@ -71,6 +82,7 @@ from __future__ import annotations
 
 import csv
 import datetime as _dt
+import hashlib
 import io
 import math
 import re
@@ -80,12 +92,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .errors import DataError
-from .files import DATA_MAX_BYTES, check_outputs, open_user_file, write_atomically
+from .errors import DataError, speaking, speaking_cli
+from .files import DATA_MAX_BYTES, check_outputs, open_user_file, read_user_file, write_atomically
 from .tir import UNIT_FACTORS
 
 __all__ = [
     "CHANNELS", "REQUIRED", "INPUTS", "OUTPUTS", "UNITS", "TyreData", "read_csv", "read_tydex", "write_tydex",
+    "read_ttc", "read_data", "data_format", "check_plausible", "AXES", "AXES_HELP", "to_iso_w", "speaking_cli",
+    "parse_columns", "parse_units", "parse_constants", "constant_value", "TTC_CHANNELS",
     "unit_to_si", "levels", "split_conditions", "split_sweeps", "bin_sweeps", "resample_sweeps",
     "reject_outliers", "trailer_programme", "NOISE", "noise_scales", "record_outputs", "synthetic_data",
 ]
@@ -135,7 +149,13 @@ def _unit_table() -> dict[str, dict[str, float]]:
     angular.update({"rpm": 2 * math.pi / 60, "1/min": 2 * math.pi / 60, "1/s": 1.0, "u/min": 2 * math.pi / 60})
     curvature = {f"1/{ln}": 1 / fl for ln, fl in length.items()}
     curvature.update({f"{a}/{ln}": fa / fl for a, fa in angle.items() for ln, fl in length.items()})
-    ratio = {"-": 1.0, "": 1.0, "1": 1.0, "%": 0.01, "percent": 0.01}
+    force.update({"lb": force["lbf"], "lbs": force["lbf"]})  # rig files write pounds of force as lb
+    for f, ff in force.items():
+        for ln, fl in length.items():
+            for sep in ("*", ".", "", "-"):
+                moment.setdefault(f"{ln}{sep}{f}", ff * fl)  # ft-lb, in-lb
+                moment.setdefault(f"{f}{sep}{ln}", ff * fl)
+    ratio = {"-": 1.0, "": 1.0, "1": 1.0, "%": 0.01, "percent": 0.01, "none": 1.0, "unitless": 1.0}
     return {"force": force, "moment": moment, "ratio": ratio, "angle": angle, "curvature": curvature,
             "speed": speed, "pressure": pressure, "angular_speed": angular, "length": length}
 
@@ -155,6 +175,222 @@ def unit_to_si(channel: str, unit: str) -> float:
     return table[key]
 
 
+# ------------------------------------------------------------------------------------- axis systems
+#: Sign of each channel in an axis system relative to ISO-W (TYDEX W): value_ISO-W = sign * value_in_system;
+#: channels not listed keep their sign. See :data:`AXES_HELP`.
+AXES: dict[str, dict[str, float]] = {
+    "ISO-W": {},
+    "SAE": {"FY": -1.0, "FZ": -1.0, "MY": -1.0, "MZ": -1.0, "SA": -1.0, "PHIT": -1.0},
+    "adapted-SAE": {"FY": -1.0, "MY": -1.0, "MZ": -1.0, "PHIT": -1.0},
+    "adapted-ISO": {"SA": -1.0},
+}
+AXES_HELP = """\
+Axis systems (the sign of each channel as the file writes it; mftyre works in ISO-W):
+  ISO-W        TYDEX W / ISO 8855 at the contact point: x forward, y left, z up; FZ > 0 is load; a positive
+               slip angle SA gives FY < 0 and MZ > 0 (the .tir convention).
+  SAE          SAE J670: x forward, y right, z down (ISO-W turned half a turn about x): FY, FZ, MY, MZ, SA and
+               turn slip change sign; FX, MX, SL, IA do not. Load is FZ < 0 (Calspan/TTC rig files).
+  adapted-SAE  SAE with the load positive and the slip angle reversed (Pacejka, Tyre and Vehicle Dynamics):
+               FZ > 0, SA > 0 gives FY > 0; against ISO-W FY, MY, MZ and turn slip change sign.
+  adapted-ISO  ISO-W with the slip angle reversed (Pacejka): SA > 0 gives FY > 0; only SA changes sign.
+Wheel spin OMEGA, radii and pressure are taken as magnitudes (forward rolling positive) in every system."""
+
+
+def to_iso_w(frame: pd.DataFrame, axes: str) -> pd.DataFrame:
+    """``frame`` (canonical channels) with the signs of axis system ``axes`` (a key of :data:`AXES`) turned
+    into ISO-W, in place; returns it. ValueError naming the systems for an unknown name."""
+    signs = AXES.get(_axes_name(axes))
+    for ch, sign in signs.items():
+        if ch in frame.columns:
+            frame[ch] = sign * frame[ch]
+    return frame
+
+
+def _axes_name(axes: str) -> str:
+    for name in AXES:
+        if str(axes).strip().lower().replace("_", "-") == name.lower():
+            return name
+    raise ValueError(f"unknown axis system {axes!r}; expected one of {', '.join(AXES)}")
+
+
+# ----------------------------------------------------------------------- options, in two languages
+def remedy(option: str, channel: str, value: str) -> str:
+    """How to pass ``channel=value`` for ``option`` (``columns``, ``units``, ``axes``, ``constants``) in the
+    language of the caller (see :func:`speaking_cli`)."""
+    if speaking() == "cli":
+        flag = {"columns": "--columns", "units": "--units", "axes": "--axes", "constants": "--set"}[option]
+        return f"{flag} {value}" if option == "axes" else f"{flag} {channel}={value}"
+    if option == "axes":
+        return f"axes={value!r}"
+    if option == "columns":
+        return f"columns={{{value!r}: {channel!r}}}"
+    return f"{'defaults' if option == 'constants' else option}={{{channel!r}: {value!r}}}"
+
+
+def _assignments(text: str, what: str) -> list[tuple[str, str]]:
+    pairs = []
+    for item in str(text).split(","):
+        if not item.strip():
+            continue
+        if "=" not in item:
+            raise ValueError(f"{what}: {item.strip()!r} is not CHANNEL=VALUE (e.g. {_EXAMPLE_OPTION[what]})")
+        key, value = (part.strip() for part in item.split("=", 1))
+        if not key or not value:
+            raise ValueError(f"{what}: {item.strip()!r} has an empty side (e.g. {_EXAMPLE_OPTION[what]})")
+        pairs.append((key, value))
+    if not pairs:
+        raise ValueError(f"{what}: empty; expected CHANNEL=VALUE,... (e.g. {_EXAMPLE_OPTION[what]})")
+    return pairs
+
+
+_EXAMPLE_OPTION = {"columns": "FZ=Fz_N,SA=alpha", "units": "SA=deg,P=psi,VX=km/h", "constants": "P=1.6bar,IA=0"}
+
+
+def _channel(name: str, what: str) -> str:
+    ch = name.strip().upper()
+    if ch not in CHANNELS:
+        raise ValueError(f"{what}: unknown channel {name!r}; channels: {', '.join(CHANNELS)}")
+    return ch
+
+
+def parse_columns(text: str) -> dict:
+    """``"FZ=Fz_N,SA=alpha"`` (channel = file column) -> ``{"Fz_N": "FZ", "alpha": "SA"}`` (the ``columns=``
+    of the readers); ValueError naming what was expected."""
+    return {col: _channel(ch, "columns") for ch, col in _assignments(text, "columns")}
+
+
+def parse_units(text: str) -> dict:
+    """``"SA=deg,P=psi"`` -> ``{"SA": "deg", "P": "psi"}``, each unit checked (:func:`unit_to_si`)."""
+    out = {}
+    for ch, unit in _assignments(text, "units"):
+        ch = _channel(ch, "units")
+        unit_to_si(ch, unit)
+        out[ch] = unit
+    return out
+
+
+_QUANTITY = re.compile(r"\s*([+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?)\s*(.*?)\s*$")
+
+
+def constant_value(channel: str, value) -> float:
+    """A constant channel value in SI: a number (SI) or text with a unit, e.g. ``"1.6bar"``, ``"0"``,
+    ``"60km/h"``, ``"-2deg"``; ValueError naming what was expected."""
+    if not isinstance(value, str):
+        number = float(value)
+    else:
+        m = _QUANTITY.fullmatch(value)
+        if not m:
+            raise ValueError(f"{channel}: cannot read {value!r} as a number with an optional unit "
+                             f"(e.g. 1.6bar, 0, 60km/h)")
+        number = float(m.group(1)) * (unit_to_si(channel, m.group(2)) if m.group(2) else 1.0)
+    if not math.isfinite(number):
+        raise ValueError(f"{channel}: {value!r} is not finite")
+    return number
+
+
+def parse_constants(text: str) -> dict:
+    """``"P=1.6bar,IA=0"`` -> ``{"P": 160000.0, "IA": 0.0}`` (SI; the ``defaults=`` of the readers)."""
+    return {(ch := _channel(name, "set")): constant_value(ch, value)
+            for name, value in _assignments(text, "constants")}
+
+
+# -------------------------------------------------------------------------------------- plausibility
+#: Plausible range per channel in SI of a tyre measurement (typical = 99th percentile of |values|, median
+#: for pressure) and the units that, mistaken for SI, put values outside it.
+_PLAUSIBLE = {
+    "SA": (0.0, 1.0, ("deg",)),
+    "IA": (0.0, 1.0, ("deg",)),
+    "SL": (0.0, 2.0, ("%",)),
+    "VX": (0.0, 100.0, ("km/h", "mph")),
+    "P": (2e4, 2e7, ("kPa", "bar", "psi", "MPa")),
+    "RL": (0.0, 2.0, ("mm", "cm", "in")),
+    "RE": (0.0, 2.0, ("mm", "cm", "in")),
+    "RHO": (0.0, 0.5, ("mm", "cm", "in")),
+    "FZ": (30.0, 1e6, ("kN",)),
+}
+#: SI ranges the same quantity has on real tyres (used to say which unit was likely meant).
+_TYPICAL = {"SA": (0.02, 0.6), "IA": (0.005, 0.3), "SL": (0.01, 1.0), "VX": (0.5, 90.0), "P": (4e4, 1.5e6),
+            "RL": (0.1, 1.5), "RE": (0.1, 1.5), "RHO": (0.002, 0.2), "FZ": (30.0, 2e5)}
+
+
+def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of: dict | None = None) -> None:
+    """DataError at the first channel whose values no tyre measurement in SI units and ISO-W axes has: |SA|,
+    |IA| beyond 1 rad (degrees?), |SL| beyond 2 (percent?), VX above 100 m/s (km/h?), P below 20 kPa (kPa,
+    bar, psi?), RL or RE above 2 m, RHO above 0.5 m (mm, cm?), FZ all below 30 N (kN?), FZ mostly negative
+    (SAE axes?), FY rising with SA (slip angle or lateral force reversed?). The message names the channel (and
+    the file's column), what was seen, the likely unit or axis system and the option that converts it."""
+    frame = data.frame if isinstance(data, TyreData) else data
+    where = where or (data.source if isinstance(data, TyreData) else "") or "<data>"
+    column_of = column_of or {}
+
+    def name(ch):
+        col = column_of.get(ch, ch)
+        return f"channel {ch}" + (f" (file column {col!r})" if col != ch else "")
+
+    def values(ch):
+        x = frame[ch].to_numpy(dtype=float)
+        return x[np.isfinite(x)]
+
+    problems, fixes = [], {}
+    for ch, (low, high, candidates) in _PLAUSIBLE.items():
+        if ch not in frame.columns:
+            continue
+        x = np.abs(values(ch))
+        if x.size == 0 or not x.any():
+            continue
+        typical = float(np.median(x)) if ch in ("P", "FZ") else float(np.quantile(x, 0.99))
+        if ch == "FZ":
+            typical = float(np.max(x))
+        if low <= typical <= high:
+            continue
+        lo, hi = _TYPICAL[ch]
+        likely = [u for u in candidates if lo <= typical * unit_to_si(ch, u) <= hi]
+        shown = {"SA": "99th percentile of |SA|", "IA": "99th percentile of |IA|", "SL": "99th percentile of |SL|",
+                 "VX": "99th percentile of |VX|", "P": "median P", "FZ": "largest |FZ|"}.get(ch, f"99th percentile of {ch}")
+        si = _SI_NAME[CHANNELS[ch][0]]
+        expected = f"{low:g}" if typical < low else f"{high:g}"
+        side = "below" if typical < low else "above"
+        guess = f"the values look like {' or '.join(likely)}" if likely else "check the unit of the data"
+        fixes[ch] = (likely or candidates)[0]
+        problems.append(f"{name(ch)}: {shown} is {typical:.4g} {si}, {side} the {expected} {si} of any tyre "
+                        f"measurement in SI units: {guess}")
+    if problems:
+        if speaking() == "cli":
+            fix = "--units " + ",".join(f"{ch}={u}" for ch, u in fixes.items())
+        else:
+            fix = "units={" + ", ".join(f"{ch!r}: {u!r}" for ch, u in fixes.items()) + "}"
+        raise DataError(f"{where}: {'; '.join(problems)}. Give the file's units, e.g. {fix}")
+    if "FZ" in frame.columns:
+        fz = values("FZ")
+        if fz.size and np.mean(fz < 0) > 0.5:
+            raise DataError(f"{where}: {name('FZ')}: {100 * np.mean(fz < 0):.0f} % of the values are negative "
+                            f"(median {np.median(fz):.4g} N): the load is positive in ISO-W; the file is probably in "
+                            f"SAE axes (z down): {remedy('axes', 'FZ', 'SAE')}")
+    if {"SA", "FY"} <= set(frame.columns):
+        sa, fy = frame["SA"].to_numpy(float), frame["FY"].to_numpy(float)
+        near = np.isfinite(sa) & np.isfinite(fy) & (np.abs(sa) < math.radians(4.0))
+        if near.sum() >= 10 and np.ptp(sa[near]) > math.radians(1.0):
+            slope = np.polyfit(sa[near], fy[near], 1)[0]
+            corr = np.corrcoef(sa[near], fy[near])[0, 1]
+            if slope > 0 and corr > 0.7:
+                raise DataError(f"{where}: {name('FY')} rises with {name('SA')} (correlation {corr:.2f} for |SA| < "
+                                f"4 deg): in ISO-W a positive slip angle gives a negative lateral force; the slip "
+                                f"angle or the lateral force is reversed: {remedy('axes', 'SA', 'adapted-ISO')} (SA "
+                                f"reversed) or {remedy('axes', 'SA', 'adapted-SAE')} (FY, MZ reversed); see the "
+                                f"axis systems in the README")
+    if {"VX", "OMEGA"} <= set(frame.columns) and ("RE" in frame.columns or "RL" in frame.columns):
+        radius = frame["RE" if "RE" in frame.columns else "RL"].to_numpy(float)
+        vx, omega = frame["VX"].to_numpy(float), frame["OMEGA"].to_numpy(float)
+        ok = np.isfinite(vx) & np.isfinite(omega) & np.isfinite(radius) & (np.abs(omega * radius) > 0.5)
+        if ok.sum() >= 5:
+            ratio = float(np.median(np.abs(vx[ok]) / np.abs(omega[ok] * radius[ok])))
+            for ch, unit, factor in (("VX", "km/h", unit_to_si("VX", "km/h")), ("VX", "mph", unit_to_si("VX", "mph")),
+                                     ("OMEGA", "rpm", 1.0 / unit_to_si("OMEGA", "rpm"))):
+                if abs(ratio * factor - 1.0) < 0.15:
+                    raise DataError(f"{where}: {name(ch)}: VX / (OMEGA x radius) is {ratio:.3g} (about 1 for a "
+                                    f"rolling wheel in SI units): {ch} looks like {unit}: {remedy('units', ch, unit)}")
+
+
 # --------------------------------------------------------------------------------------------- TyreData
 @dataclass
 class TyreData:
@@ -166,6 +402,7 @@ class TyreData:
     units: dict = field(default_factory=dict)
     constants: dict = field(default_factory=dict)
     history: list = field(default_factory=list)
+    sha256: str = ""  # of the file read (:func:`read_data`), recorded in fitted .tir headers
 
     def __post_init__(self):
         self.frame = self.frame.reset_index(drop=True)
@@ -214,18 +451,18 @@ class TyreData:
         """The rows where ``mask`` (boolean array) is true, metadata kept."""
         sub = self.frame.loc[np.asarray(mask, dtype=bool)]
         hist = list(self.history) + ([note] if note else [])
-        return TyreData(sub.copy(), self.tyre, self.source, dict(self.units), dict(self.constants), hist)
+        return TyreData(sub.copy(), self.tyre, self.source, dict(self.units), dict(self.constants), hist, self.sha256)
 
     def with_frame(self, frame: pd.DataFrame, note: str) -> "TyreData":
         return TyreData(frame, self.tyre, self.source, dict(self.units), dict(self.constants),
-                        list(self.history) + [note])
+                        list(self.history) + [note], self.sha256)
 
     @staticmethod
     def concat(parts: list["TyreData"]) -> "TyreData":
         first = parts[0]
         frame = pd.concat([p.frame for p in parts], ignore_index=True)
         return TyreData(frame, first.tyre, first.source, dict(first.units), dict(first.constants),
-                        list(first.history))
+                        list(first.history), first.sha256)
 
     def inputs(self) -> dict:
         """Keyword arguments fz kappa alpha gamma phit vx p for :meth:`mftyre.MFModel.evaluate`."""
@@ -242,13 +479,15 @@ _NAN_TEXT = ["", "nan", "NaN", "NAN"]
 
 
 def read_csv(path, *, columns: dict | None = None, units: dict | None = None, defaults: dict | None = None,
-             tyre: str = "", max_bytes: int = DATA_MAX_BYTES) -> TyreData:
+             axes: str = "ISO-W", check: bool = True, tyre: str = "", max_bytes: int = DATA_MAX_BYTES) -> TyreData:
     """Read a CSV file into :class:`TyreData`.
 
     Comma separated, one header row (UTF-8, a byte-order mark allowed), one row per sample. ``columns``: file
     column -> channel for columns not named canonically; ``units``: channel -> unit of the file (SI when
-    absent); ``defaults``: channel -> constant SI value for a required channel the file lacks (e.g.
-    ``{"P": 2.2e5, "VX": 16.7}``). An empty field or ``nan`` is "not measured" (an error in a required
+    absent); ``axes``: the file's axis system (:data:`AXES`); ``defaults``: channel -> constant value (SI
+    number, or text with a unit such as ``"1.6bar"``; ISO-W) for a channel the file lacks (e.g.
+    ``{"P": 2.2e5, "VX": 16.7}``); ``check``: refuse values no tyre measurement has (:func:`check_plausible`,
+    after the conversions). An empty field or ``nan`` is "not measured" (an error in a required
     channel); infinite values (``inf``, ``1e400``) are errors in every channel; two columns for one channel are
     an error. Files larger than ``max_bytes`` are refused.
     """
@@ -295,10 +534,18 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
         columns_out[ch] = values * factor if factor != 1.0 else values
         column_of[ch] = col
     frame = pd.DataFrame(columns_out, copy=False)
-    _apply_defaults(frame, defaults, path)
+    unknown_units = [ch for ch in units if ch not in column_of]
+    if unknown_units:
+        raise DataError(f"{path}: unit given for {', '.join(unknown_units)}, which the file has no column for "
+                        f"(columns: {', '.join(header)})")
+    _convert_axes(frame, axes, path)
+    _apply_defaults(frame, defaults, path, column_of)
     _check_required(frame, path, lambda row: f"{path}: line {row + 2}", column_of)
+    if check:
+        check_plausible(frame, str(path), column_of)
     unit_record = {ch: units.get(ch, _SI_NAME[CHANNELS[ch][0]]) for ch in CHANNELS if ch in frame.columns}
-    return TyreData(frame, tyre=tyre or path.stem, source=str(path), units=unit_record)
+    return TyreData(frame, tyre=tyre or path.stem, source=str(path), units=unit_record,
+                    history=_import_notes(axes, units, defaults, check))
 
 
 def _csv_header(first: bytes, path) -> list[str]:
@@ -338,20 +585,52 @@ def _numeric_column(series: pd.Series, where) -> np.ndarray:
     return values.to_numpy(dtype=float)
 
 
-def _apply_defaults(frame, defaults, path):
-    for ch, value in (defaults or {}).items():
-        ch = ch.upper()
+def _convert_axes(frame, axes, path):
+    try:
+        to_iso_w(frame, axes)
+    except ValueError as exc:
+        raise DataError(f"{path}: {exc}") from None
+
+
+#: The history entry of data read without the plausibility check (:func:`mftyre.fit.load_data` then skips it too).
+UNCHECKED = "plausibility check skipped on request"
+
+
+def _import_notes(axes, units, defaults, check=True) -> list[str]:
+    notes = [f"axes {_axes_name(axes)} converted to ISO-W"] if _axes_name(axes) != "ISO-W" else []
+    if not check:
+        notes.append(UNCHECKED)
+    if units:
+        notes.append("units: " + ", ".join(f"{ch} in {u}" for ch, u in units.items()))
+    if defaults:
+        notes.append("constant channels: " + ", ".join(f"{ch} = {v}" for ch, v in defaults.items()))
+    return notes
+
+
+def _apply_defaults(frame, defaults, path, column_of=None):
+    """Constant channels (``defaults``: channel -> SI number or text with a unit) for channels the file lacks;
+    a DataError for a channel the file measures (a constant never replaces a measurement silently)."""
+    for name, value in (defaults or {}).items():
+        ch = str(name).strip().upper()
         if ch not in CHANNELS:
-            raise DataError(f"{path}: default for unknown channel {ch!r}")
-        if ch not in frame.columns:
-            frame[ch] = float(value)
+            raise DataError(f"{path}: constant for unknown channel {name!r}; channels: {', '.join(CHANNELS)}")
+        try:
+            number = constant_value(ch, value)
+        except ValueError as exc:
+            raise DataError(f"{path}: constant {exc}") from None
+        if ch in frame.columns:
+            col = (column_of or {}).get(ch, ch)
+            raise DataError(f"{path}: channel {ch} is measured in the file (column {col!r}); a constant is only for "
+                            f"a channel the file lacks: drop {remedy('constants', ch, str(value))}")
+        frame[ch] = number
 
 
 def _check_required(frame, path, locate, column_of=None):
     missing = [c for c in REQUIRED if c not in frame.columns]
     if missing:
-        raise DataError(f"{path}: missing channel(s) {', '.join(missing)} (required: {', '.join(REQUIRED)}; give "
-                        f"a column map, or `defaults=` for a constant)")
+        raise DataError(f"{path}: missing channel(s) {', '.join(missing)} (required: {', '.join(REQUIRED)}); name "
+                        f"the file's column ({remedy('columns', missing[0], 'COLUMN')}) or give a constant "
+                        f"({remedy('constants', missing[0], 'VALUE')})")
     _check_values(frame, locate, column_of)
 
 
@@ -397,17 +676,19 @@ def _fixed_fields(line: str):
 _DATA_KEY = re.compile(rb"[ \t]*\*\*MEASURDATA(?=\s|\Z)", re.I)
 
 
-def read_tydex(path, *, defaults: dict | None = None, max_bytes: int = DATA_MAX_BYTES) -> TyreData:
+def read_tydex(path, *, defaults: dict | None = None, axes: str = "ISO-W", check: bool = True,
+               max_bytes: int = DATA_MAX_BYTES) -> TyreData:
     """Read a TYDEX ``.tdx`` file (the subset described in the module docstring) into :class:`TyreData`.
 
     UTF-8 (a byte-order mark allowed); ``nan`` in the data is "not measured" (an error in a required channel).
-    Files larger than ``max_bytes`` are refused."""
+    Files larger than ``max_bytes`` are refused. ``axes``, ``defaults`` and ``check`` as for :func:`read_csv`
+    (TYDEX is W-axis by definition; ``axes`` is for files that are not)."""
     path = Path(path)
     with open_user_file(path, max_bytes=max_bytes, what="TYDEX data file", error=DataError) as fh:
-        return _read_tydex(fh, path, defaults)
+        return _read_tydex(fh, path, defaults, axes, check)
 
 
-def _read_tydex(fh, path: Path, defaults) -> TyreData:
+def _read_tydex(fh, path: Path, defaults, axes="ISO-W", check=True) -> TyreData:
     """The blocks before and after the sample rows are read line by line; the rows (the bulk of the file) are
     streamed to pandas' C parser."""
     first = fh.readline()
@@ -453,21 +734,25 @@ def _read_tydex(fh, path: Path, defaults) -> TyreData:
             units[ch] = unit
     del columns
     frame = pd.DataFrame(values_of, copy=False)
+    _convert_axes(frame, axes, path)
     for name, (value, unit, _) in state.constants.items():  # constants standing in for absent channels
         ch = _CHANNEL_OF_TYDEX.get(name)
         if ch in REQUIRED + _ZERO_DEFAULT and ch not in frame.columns and isinstance(value, float):
             frame[ch] = value
             units[ch] = f"{unit} (constant)"
-    _apply_defaults(frame, defaults, path)
+    name_of = {_CHANNEL_OF_TYDEX[name]: name for name, *_ in channels if name in _CHANNEL_OF_TYDEX}
+    _apply_defaults(frame, defaults, path, name_of)
     missing = [c for c in REQUIRED if c not in frame.columns]
     if missing:
         raise DataError(f"{path}: missing channel(s) {', '.join(missing)}: neither a measurement channel "
                         f"({', '.join(_TYDEX_NAMES[c][0] for c in missing)}) nor a constant")
-    name_of = {_CHANNEL_OF_TYDEX[name]: name for name, *_ in channels if name in _CHANNEL_OF_TYDEX}
     _check_values(frame, lambda row: f"{path}:{lines()[row]}", name_of)
+    if check:
+        check_plausible(frame, str(path), name_of)
     tyre = str(state.header.get("MEASID", ("", "", ""))[0] or path.stem)
     consts = {k: v[0] for k, v in {**state.header, **state.constants}.items()}
-    return TyreData(frame, tyre=tyre, source=str(path), units=units, constants=consts)
+    return TyreData(frame, tyre=tyre, source=str(path), units=units, constants=consts,
+                    history=_import_notes(axes, None, defaults, check))
 
 
 def _lines(raw: bytes, path) -> list[str]:
@@ -689,6 +974,211 @@ def write_tydex(data: TyreData, path, *, overwrite: bool = False) -> Path:
     out.append("**END")
     write_atomically(path, "\n".join(out) + "\n")
     return path
+
+
+# ------------------------------------------------------------------------------ tyre test consortium
+#: Channels of the Calspan tyre test consortium (TTC) files -> canonical channel; ``ET`` becomes ``TIME`` [s];
+#: other channels (NFX NFY normalised forces, RST TSTI TSTC TSTO AMBTMP temperatures, SR ...) are kept as they are.
+TTC_CHANNELS = {"FX": "FX", "FY": "FY", "FZ": "FZ", "MX": "MX", "MZ": "MZ", "SA": "SA", "IA": "IA", "SL": "SL",
+                "V": "VX", "P": "P", "N": "OMEGA", "RL": "RL", "RE": "RE"}
+#: Units of the metric TTC files, used when a .mat file states none.
+TTC_METRIC_UNITS = {"ET": "s", "V": "kph", "N": "rpm", "SA": "deg", "IA": "deg", "RL": "cm", "RE": "cm", "P": "kPa",
+                    "FX": "N", "FY": "N", "FZ": "N", "MX": "N-m", "MZ": "N-m", "SL": "-"}
+
+
+def read_ttc(path, *, axes: str = "SAE", defaults: dict | None = None, check: bool = True,
+             max_bytes: int = DATA_MAX_BYTES) -> TyreData:
+    """Read a Calspan tyre test consortium (TTC) run: a ``.dat`` text file (a free header line, a row of
+    channel names, a row of units, then whitespace-separated samples) or a ``.mat`` file holding the same
+    channels as vectors (MATLAB 5 format; units from its ``channel`` struct when present, else
+    :data:`TTC_METRIC_UNITS`). The format is recognised by content. Channels map by :data:`TTC_CHANNELS` with
+    their units converted to SI (``kph``, ``mph``, ``deg``, ``cm``, ``in``, ``kPa``, ``psi``, ``N``, ``lb``,
+    ``N-m``, ``ft-lb``, ``rpm``); ``ET`` is kept as ``TIME`` so the programme recogniser sees a time series. The
+    files use SAE axes (``axes="SAE"``: FZ < 0 under load; see :data:`AXES_HELP`). ``defaults`` and ``check``
+    as for :func:`read_csv`."""
+    path = Path(path)
+    raw = read_user_file(path, max_bytes=max_bytes, what="TTC data file", error=DataError)
+    if raw.startswith(b"MATLAB"):
+        columns, units = _ttc_mat(raw, path)
+        locate = lambda row: f"{path}: sample {row + 1}"  # noqa: E731
+    else:
+        columns, units, first = _ttc_dat(raw, path)
+        locate = lambda row: f"{path}:{first + row}"  # noqa: E731
+    out, column_of, unit_record = {}, {}, {}
+    for name, values in columns.items():
+        ch = TTC_CHANNELS.get(name.upper())
+        unit = units.get(name, TTC_METRIC_UNITS.get(name.upper(), ""))
+        if name.upper() == "ET":
+            try:
+                factor = float(UNIT_FACTORS["TIME"][unit.strip().lower() or "s"])
+            except KeyError:
+                raise DataError(f"{path}: channel ET: unknown time unit {unit!r}; expected s, ms, min") from None
+            out["TIME"] = values * factor
+            continue
+        if ch is None:
+            out[name] = values
+            continue
+        if ch in column_of:
+            raise DataError(f"{path}: channel {name} appears twice (also as {column_of[ch]})")
+        try:
+            factor = unit_to_si(ch, unit or _SI_NAME[CHANNELS[ch][0]])
+        except ValueError as exc:
+            raise DataError(f"{path}: channel {name}: {exc}") from None
+        out[ch] = values * factor
+        column_of[ch] = name
+        unit_record[ch] = unit
+    frame = pd.DataFrame(out, copy=False)
+    if "OMEGA" in frame.columns:  # N is the spin speed, positive rolling forward in every axis system
+        frame["OMEGA"] = frame["OMEGA"].abs()
+    _convert_axes(frame, axes, path)
+    _apply_defaults(frame, defaults, path, column_of)
+    if "SL" not in frame.columns and "SR" in frame.columns:
+        raise DataError(f"{path}: no SL channel (slip ratio); the file has SR: name it with "
+                        f"{remedy('columns', 'SL', 'SR')} or give a constant")
+    _check_required(frame, path, locate, column_of)
+    if check:
+        check_plausible(frame, str(path), column_of)
+    return TyreData(frame, tyre=path.stem, source=str(path), units=unit_record,
+                    history=[f"TTC run read from {path.name}"] + _import_notes(axes, None, defaults, check))
+
+
+def _ttc_dat(raw: bytes, path):
+    """(channel -> values, channel -> unit, file line of the first sample) of a TTC .dat file."""
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        text = raw.decode("latin-1")
+    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    at = _ttc_names_line(lines)
+    if at is None:
+        raise DataError(f"{path}: not a TTC run file: expected a header line, a row of channel names (ET V N SA IA "
+                        "... FZ) and a row of units before the samples")
+    names = lines[at].split()
+    units = lines[at + 1].split()
+    if len(units) != len(names):
+        raise DataError(f"{path}:{at + 2}: {len(units)} units for {len(names)} channels: expected one unit per "
+                        f"channel named on line {at + 1}")
+    body = "\n".join(lines[at + 2:])
+    try:
+        table = pd.read_csv(io.StringIO(body), sep=r"\s+", header=None, names=range(len(names) + 1),
+                            keep_default_na=False, na_values=_NAN_TEXT, skip_blank_lines=True)
+    except pd.errors.EmptyDataError:
+        table = pd.DataFrame(columns=range(len(names) + 1))
+    except (pd.errors.ParserError, ValueError) as exc:
+        raise DataError(f"{path}: cannot read the samples: {exc}") from None
+    if len(table) == 0:
+        raise DataError(f"{path}: no samples after the units row (line {at + 2})")
+    first = at + 3
+    if table[len(names)].notna().any() or table[len(names) - 1].isna().any():
+        row = int(np.flatnonzero((table[len(names)].notna() | table[len(names) - 1].isna()).to_numpy())[0])
+        raise DataError(f"{path}: sample {row + 1} (after line {at + 2}): expected {len(names)} values, one per "
+                        "channel")
+    columns = {}
+    for j, name in enumerate(names):
+        columns[name] = _numeric_column(table[j], lambda row, txt: f"{path}: sample {row + 1} (after line {at + 2}): "
+                                                                 f"channel {name}: non-numeric value {txt!r}")
+    return columns, dict(zip(names, units)), first
+
+
+def _ttc_names_line(lines) -> int | None:
+    """Index of the channel-name row among the first lines (names such as ET, FZ, SA; the next row units)."""
+    for i in range(min(3, len(lines) - 1)):
+        names = {n.upper() for n in lines[i].split()}
+        if {"FZ", "SA"} <= names or {"FZ", "SL"} <= names:
+            if not any(_is_number(u) for u in lines[i + 1].split()):
+                return i
+    return None
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _ttc_mat(raw: bytes, path):
+    """(channel -> values, channel -> unit) of a TTC .mat file (vectors named after the channels)."""
+    import scipy.io
+
+    try:
+        mat = scipy.io.loadmat(io.BytesIO(raw), squeeze_me=True, struct_as_record=False)
+    except Exception as exc:  # scipy raises several kinds for a damaged file
+        raise DataError(f"{path}: cannot read as a MATLAB .mat file: {exc}") from None
+    units = {}
+    channel = mat.get("channel")  # one struct with name and units arrays, or an array of structs
+    if channel is not None and hasattr(channel, "name") and hasattr(channel, "units"):
+        units = {str(n): str(u) for n, u in zip(np.atleast_1d(channel.name), np.atleast_1d(channel.units))}
+    elif isinstance(channel, np.ndarray) and channel.dtype == object:
+        units = {str(c.name): str(c.units) for c in channel.ravel() if hasattr(c, "name") and hasattr(c, "units")}
+    columns, length = {}, None
+    for name, value in mat.items():
+        if name.startswith("__") or not isinstance(value, np.ndarray) or value.dtype.kind not in "fiu" \
+                or value.ndim != 1 or value.size < 2:
+            continue
+        if length is not None and value.size != length:
+            raise DataError(f"{path}: variable {name} has {value.size} samples, others {length}: expected channels "
+                            "of equal length")
+        length = value.size
+        columns[name] = value.astype(float)
+    if "FZ" not in {n.upper() for n in columns}:
+        raise DataError(f"{path}: no channel FZ among the .mat variables ({', '.join(columns) or 'none'}): "
+                        "expected a TTC run (vectors ET, V, N, SA, IA, ..., FZ)")
+    return columns, units
+
+
+def data_format(path) -> str:
+    """The format of a measurement file by its content: ``"tydex"``, ``"ttc"`` (.dat or .mat) or ``"csv"``."""
+    with open_user_file(path, max_bytes=DATA_MAX_BYTES, what="measurement file", error=DataError) as fh:
+        head = fh.read(4096)
+    if head.startswith(b"MATLAB"):
+        return "ttc"
+    if b"\0" in head or head.startswith((b"PK\x03\x04", b"\xd0\xcf\x11\xe0")):
+        kind = {b"PK": "a ZIP archive such as .xlsx", b"\xd0\xcf": "an OLE file such as .xls"}.get(head[:2], "binary")
+        raise DataError(f"{path}: unknown data format ({kind}): expected a TYDEX, TTC (.dat text or MATLAB .mat) or "
+                        "CSV file; export spreadsheets as CSV")
+    text = head.decode("utf-8-sig", errors="replace")
+    first = next((ln.strip() for ln in text.splitlines() if ln.strip() and not ln.strip().startswith("!")), "")
+    if first.startswith("**"):
+        return "tydex"
+    lines = text.replace("\r", "\n").split("\n")[:6]
+    at = _ttc_names_line([ln for ln in lines if ln.strip()])
+    if at is not None and "," not in [ln for ln in lines if ln.strip()][at]:
+        return "ttc"
+    return "csv"
+
+
+def read_data(path, *, columns: dict | None = None, units: dict | None = None, axes: str | None = None,
+              defaults: dict | None = None, check: bool = True, max_bytes: int = DATA_MAX_BYTES) -> TyreData:
+    """Read a measurement file of any supported format (recognised by content, :func:`data_format`): TYDEX,
+    TTC (.dat / .mat) or CSV. ``columns`` and ``units`` are for CSV (the other formats name their channels
+    and units); ``axes`` is the file's axis system (default: ISO-W, SAE for TTC files); ``defaults`` are
+    constant channels; ``check`` refuses implausible values (:func:`check_plausible`). The one home of the
+    options of ``mftyre fit``, ``gaps`` and ``plot`` (``--columns``, ``--units``, ``--axes``, ``--set``)."""
+    kind = data_format(path)
+    if kind != "csv" and (columns or units):
+        which = "--columns/--units" if speaking() == "cli" else "columns=/units="
+        raise DataError(f"{path}: a {'TYDEX' if kind == 'tydex' else 'TTC'} file names its channels and units; "
+                        f"{which} are for CSV files")
+    if kind == "tydex":
+        data = read_tydex(path, defaults=defaults, axes=axes or "ISO-W", check=check, max_bytes=max_bytes)
+    elif kind == "ttc":
+        data = read_ttc(path, defaults=defaults, axes=axes or "SAE", check=check, max_bytes=max_bytes)
+    else:
+        data = read_csv(path, columns=columns, units=units, defaults=defaults, axes=axes or "ISO-W", check=check,
+                        max_bytes=max_bytes)
+    data.sha256 = file_sha256(path)
+    return data
+
+
+def file_sha256(path) -> str:
+    """SHA-256 (hex) of a regular file, read in 1 MiB blocks."""
+    digest = hashlib.sha256()
+    with open_user_file(path, max_bytes=DATA_MAX_BYTES, what="measurement file", error=DataError) as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
 
 
 # ---------------------------------------------------------------------------------------- preparation

@@ -1,4 +1,34 @@
-"""Exceptions raised by mftyre. Every message says what was wrong and what was expected."""
+"""Exceptions raised by mftyre. Every message says what was wrong and what was expected.
+
+Messages that name a remedy name it in the caller's language: keyword arguments from Python, command-line options
+within :func:`speaking_cli` (the command line runs every command in it); :func:`spelled` picks the spelling.
+"""
+import contextlib
+import contextvars
+
+#: "python" (keyword arguments) or "cli" (command-line options): how messages spell remedies.
+_SPELLING: contextvars.ContextVar[str] = contextvars.ContextVar("mftyre_spelling", default="python")
+
+
+@contextlib.contextmanager
+def speaking_cli():
+    """Within this block messages name command-line options (``--units SA=deg``) instead of keyword arguments
+    (``units={'SA': 'deg'}``); thread- and task-safe (a context variable)."""
+    token = _SPELLING.set("cli")
+    try:
+        yield
+    finally:
+        _SPELLING.reset(token)
+
+
+def speaking() -> str:
+    """The current spelling of remedies: ``"python"`` or ``"cli"``."""
+    return _SPELLING.get()
+
+
+def spelled(python: str, cli: str) -> str:
+    """``python`` or ``cli``, whichever language the caller speaks (see :func:`speaking_cli`)."""
+    return cli if _SPELLING.get() == "cli" else python
 
 
 class MFTyreError(Exception):

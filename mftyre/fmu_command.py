@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import importlib.resources
 import sys
+import time
 
 from .errors import MFTyreError
 
@@ -81,10 +82,14 @@ def run(args) -> int:
                 raise ValueError("the native swift FMU takes the wheel-centre height (--vertical position)")
             from .fmu.native_build import build_native_fmu
 
+            started = time.perf_counter()
+
+            def progress(text):
+                print(f"  [{time.perf_counter() - started:6.1f} s] {text}", file=sys.stderr, flush=True)
+
             build_native_fmu(args.tir, args.output, model=args.model, side=args.side,
-                                    vertical=args.vertical, road=args.road, x_start=args.x_start,
-                                    turn_slip=args.turn_slip,
-                                    overwrite=args.overwrite, quiet=False)
+                             vertical=args.vertical, road=args.road, x_start=args.x_start,
+                             turn_slip=args.turn_slip, overwrite=args.overwrite, quiet=False, progress=progress)
             return 0
         if args.model == "transient" or args.turn_slip:
             raise ValueError("--model transient and --turn-slip are only available with --backend native")

@@ -22,8 +22,10 @@ def check_request(parser, args, swept: list[str], *, plot_example: str) -> None:
     """Usage errors (``parser.error``, exit 2) before any work: --csv/--plot that :func:`mftyre.files.check_outputs`
     refuses (the input .tir, the same file twice, an existing file without --overwrite), a --plot with nothing
     swept (``plot_example``: a sweep option to suggest), an --x that is not swept."""
+    files = args.file if isinstance(args.file, list) else [args.file]
     try:
-        check_outputs({"--csv": args.csv, "--plot": args.plot}, {"FILE.tir": args.file}, overwrite=args.overwrite)
+        check_outputs({"--csv": args.csv, "--plot": args.plot}, {f"FILE.tir {f}": f for f in files},
+                      overwrite=args.overwrite)
     except OutputError as exc:
         parser.error(str(exc))
     if args.plot is not None and not swept:
@@ -68,11 +70,19 @@ def format_table(frame) -> str:
     return frame.to_string(index=False, float_format=lambda v: f"{v:.6g}")
 
 
+_STYLES = (("-", "solid"), ("--", "dashed"), (":", "dotted"), ("-.", "dash-dot"))
+
+
 def plot_grid(args, out, swept: list[str], shape, outputs, *, output_units: dict, title: str, legend=None) -> None:
     """Draw ``outputs`` (one panel each) against the swept input --x (default: the one with the most values, the
     first on the command line on ties), one line per combination of the other swept inputs, and save the figure
     to ``args.plot`` (format from the suffix, PNG otherwise). ``legend(name, value)``: the label of one input's
-    value in the legend (default: the sweep's own label)."""
+    value in the legend (default: the sweep's own label). ``out`` may also be a list of (name, outputs): several
+    models overlaid, one line style each (named in the title)."""
+    import io
+
+    from .files import write_atomically
+
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -91,11 +101,15 @@ def plot_grid(args, out, swept: list[str], shape, outputs, *, output_units: dict
     FigureCanvasAgg(fig)
     axes = fig.subplots(nrows, ncols, sharex=True, squeeze=False).ravel()
     x = xs.values / xs.factor
+    series = out if isinstance(out, list) else [("", out)]
+    colours = [f"C{i % 10}" for i in range(len(labels))]
     for k, name in enumerate(outputs):
         ax = axes[k]
-        y = np.moveaxis(np.broadcast_to(out[name], shape), ix, -1).reshape(-1, x.size)
-        for row, label in zip(y, labels):
-            ax.plot(x, row, label=label or None, lw=1.2)
+        for j, (_, result) in enumerate(series):
+            y = np.moveaxis(np.broadcast_to(result[name], shape), ix, -1).reshape(-1, x.size)
+            for row, label, colour in zip(y, labels, colours):
+                ax.plot(x, row, _STYLES[j % len(_STYLES)][0], color=colour, label=(label or None) if j == 0 else None,
+                        lw=1.2)
         unit, meaning = output_units[name]
         ax.set_ylabel(f"{name} [{unit}]")
         ax.set_title(meaning, fontsize=9)
@@ -107,10 +121,14 @@ def plot_grid(args, out, swept: list[str], shape, outputs, *, output_units: dict
         ax.set_visible(False)
     if others and len(combos) <= 12:
         axes[0].legend(fontsize=7)
+    if len(series) > 1:
+        title += "\n" + ", ".join(f"{name} ({_STYLES[j % len(_STYLES)][1]})" for j, (name, _) in enumerate(series))
     fig.suptitle(title, fontsize=10)
     path = Path(args.plot)
     fmt = path.suffix[1:].lower() if path.suffix[1:].lower() in fig.canvas.get_supported_filetypes() else "png"
-    fig.savefig(path, format=fmt)
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format=fmt)
+    write_atomically(path, buffer.getvalue())
 
 
 def write_results(args, table, plot) -> None:
@@ -120,8 +138,10 @@ def write_results(args, table, plot) -> None:
         if target is not None:
             Path(target).parent.mkdir(parents=True, exist_ok=True)
     if args.csv is not None:
+        from .files import write_atomically
+
         frame = table()
-        frame.to_csv(args.csv, index=False)
+        write_atomically(args.csv, frame.to_csv(index=False))
         print(f"wrote {args.csv} ({len(frame)} rows, {frame.shape[1]} columns)", file=sys.stderr)
     if args.plot is not None:
         plot()

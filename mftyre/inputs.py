@@ -20,7 +20,7 @@ import warnings
 
 import numpy as np
 
-from .errors import InputClippedWarning, ModelInputError
+from .errors import InputClippedWarning, ModelInputError, spelled
 
 __all__ = ["RANGE_PARAMETERS", "input_ranges", "saturate", "check_finite", "check_pressure", "warn_outside"]
 
@@ -80,5 +80,6 @@ def warn_outside(counts: dict, total: int, ranges: dict, stacklevel: int = 3) ->
     """One :class:`InputClippedWarning` naming every input with points outside its range (none if no such)."""
     parts = [f"{name} outside {ranges[name][2]} at {n} of {total} point(s)" for name, n in counts.items() if n]
     if parts:
-        warnings.warn("inputs outside the .tir ranges, saturated to them (limits=False evaluates them as given): "
+        given = spelled("limits=False", "mftyre eval --no-limits")
+        warnings.warn(f"inputs outside the .tir ranges, saturated to them ({given} evaluates them as given): "
                       + "; ".join(parts), InputClippedWarning, stacklevel=stacklevel)

@@ -78,6 +78,8 @@ __all__ = [
     "VALID_FITTYP",
     "CORE_PARAMETERS",
     "invalid_values",
+    "implausible_values",
+    "PLAUSIBLE_RANGES",
 ]
 
 
@@ -569,6 +571,44 @@ def invalid_values(prm) -> list[tuple[str, str]]:
     if side not in ("LEFT", "RIGHT"):
         out.append(("TYRESIDE", f"expected 'LEFT' or 'RIGHT' (the side the tyre was measured on; mftyre mirrors "
                                 f"it to the other side), got {prm['TYRESIDE']!r}"))
+    return out
+
+
+#: Values real tyres have (SI): parameter -> (low, high, the unit a value outside probably is in). A value outside
+#: is legal for the equations but no tyre has it: ``mftyre check`` reports it as an error (mm read as m, kPa as
+#: Pa, degrees as radians, km/h as m/s). Ranges span bicycle to earthmover tyres.
+PLAUSIBLE_RANGES = {
+    "UNLOADED_RADIUS": (0.05, 3.0, "mm or inch"),
+    "RIM_RADIUS": (0.0, 2.5, "mm or inch"),
+    "WIDTH": (0.01, 2.0, "mm or inch"),
+    "ASPECT_RATIO": (0.05, 2.0, "percent"),
+    "NOMPRES": (2e4, 1.5e7, "kPa, bar or psi"),
+    "INFLPRES": (2e4, 1.5e7, "kPa, bar or psi"),
+    "PRESMIN": (0.0, 1.5e7, "kPa, bar or psi"),
+    "PRESMAX": (2e4, 1.5e7, "kPa, bar or psi"),
+    "FNOMIN": (10.0, 1e6, "kN"),
+    "FZMAX": (10.0, 1e7, "kN"),
+    "LONGVL": (0.1, 100.0, "km/h or mph"),
+    "VXLOW": (0.0, 30.0, "km/h or mph"),
+    "ALPMIN": (-1.6, 1.6, "degrees"),  # about pi/2 (files round it to 1.5708 and 1.571)
+    "ALPMAX": (-1.6, 1.6, "degrees"),
+    "CAMMIN": (-1.6, 1.6, "degrees"),
+    "CAMMAX": (-1.6, 1.6, "degrees"),
+    "VERTICAL_STIFFNESS": (1e3, 1e9, "N/mm or kN/m"),
+}
+
+
+def implausible_values(prm) -> list[tuple[str, str]]:
+    """(parameter, message) for every value outside :data:`PLAUSIBLE_RANGES`: legal for the equations, but no
+    tyre has it (a unit mistaken for SI, most likely)."""
+    out = []
+    for name, (low, high, unit) in PLAUSIBLE_RANGES.items():
+        if name not in PARAMETERS:
+            continue
+        value = prm[name]
+        if isinstance(value, (int, float)) and not low <= value <= high:
+            out.append((name, f"{value!r} is outside {low:g} .. {high:g} ({PARAMETERS[name].unit} in SI), where "
+                              f"every tyre lies: written in {unit}? (check [UNITS] of the file, or the value)"))
     return out
 
 

@@ -29,7 +29,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
-from .errors import ModelInputError, TirError
+from .errors import ModelInputError, TirError, spelled
 from .files import TIR_MAX_BYTES, read_user_file, same_file, write_atomically
 from .params import (
     CORE_PARAMETERS,
@@ -38,6 +38,7 @@ from .params import (
     MissingParameterWarning,
     TyreParameters,
     VALID_FITTYP,
+    implausible_values,
     invalid_values,
 )
 
@@ -454,8 +455,9 @@ def _line(name: str, value: str, comment: str = "") -> str:
     return text
 
 
-def tir_text(params: TyreParameters) -> str:
-    """The text :func:`write_tir` writes for ``params``."""
+def tir_text(params: TyreParameters, comments=()) -> str:
+    """The text :func:`write_tir` writes for ``params``; ``comments``: lines added to the header as ``!``
+    comments (e.g. the provenance of fitted values)."""
     version = params.version
     missing = set(params.missing)
     out: list[str] = []
@@ -490,6 +492,7 @@ def tir_text(params: TyreParameters) -> str:
             out.append("! Written by mftyre (Magic Formula tyre model, Python); values in SI units.")
             out.append(f"! Source: {params.source if params.source else '(created in memory)'}")
             out.append(f"! Model: FITTYP {params.fittyp} (MF {version[0]}.{version[1]})")
+            out.extend("! " + " ".join(str(c).split()) for c in comments)
             out.append("!")
     for section, entries in extra_param_sections.items():
         out.append("$" + "-" * max(1, 60 - len(section)) + section.lower())
@@ -503,8 +506,9 @@ def tir_text(params: TyreParameters) -> str:
     return "\n".join(out) + "\n"
 
 
-def write_tir(params: TyreParameters, path, *, overwrite: bool = False) -> Path:
-    """Write ``params`` to ``path`` as a .tir file in SI units; returns the path written.
+def write_tir(params: TyreParameters, path, *, overwrite: bool = False, comments=()) -> Path:
+    """Write ``params`` to ``path`` as a .tir file in SI units; returns the path written. ``comments``: lines for
+    the file's header (``!`` comments, read back as comments).
 
     Refuses to overwrite an existing file unless ``overwrite=True``, and never overwrites the file the
     parameters were read from (``params.source``).
@@ -517,11 +521,12 @@ def write_tir(params: TyreParameters, path, *, overwrite: bool = False) -> Path:
                    "refusing to overwrite the file these parameters were read from "
                    "(params.source); write to a different path")
     if p.exists() and not overwrite:
-        raise _err(str(p), None, None, "file exists: pass overwrite=True to replace it", cls=_TirFileExists)
+        raise _err(str(p), None, None, f"file exists: pass {spelled('overwrite=True', '--overwrite')} to replace it",
+                   cls=_TirFileExists)
     if p.is_dir():
         raise _err(str(p), None, None, "is a directory: expected a file path")
     _validate(params, str(p))
-    write_atomically(p, tir_text(params))
+    write_atomically(p, tir_text(params, comments))
     return p
 
 
@@ -563,6 +568,8 @@ def check_tir(path) -> list[Finding]:
         add(severity, name, f"missing; the default {prm[name]!r} is used ({PARAMETERS[name].description})"
             + (": a core coefficient of the model, which the file must define" if name in core else ""))
     for name, message in invalid_values(prm):
+        add("error", name, message)
+    for name, message in implausible_values(prm):
         add("error", name, message)
     si = all(UNIT_FACTORS[k][v.strip().lower()] == 1 for k, v in prm.units_as_read.items())
     for name, (section, value) in prm.unknown.items():

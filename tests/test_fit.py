@@ -213,7 +213,8 @@ def test_command_fits_and_writes(truth, tmp_path, capsys):
 
 
 def test_load_data_rejects_unknown_formats(tmp_path):
-    with pytest.raises(DataError, match="unknown data format '.xls'"):
+    (tmp_path / "a.xls").write_bytes(b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1" + bytes(504))  # recognised by content
+    with pytest.raises(DataError, match=r"unknown data format \(an OLE file such as .xls\)"):
         load_data(tmp_path / "a.xls")
 
 

@@ -253,7 +253,7 @@ def test_command_logs_one_line_per_update_and_validates_numbers(truth, tmp_path,
             parser.parse_args(["fit", str(csv), "-o", "x.tir", *bad])
         assert message in capsys.readouterr().err
     help_text = parser._subparsers._group_actions[0].choices["fit"].format_help()
-    assert "CSV format" in help_text and "FZ  vertical load [N]" in help_text
+    assert "CSV: one header row" in help_text and "--units SA=deg" in help_text and "adapted-SAE" in help_text
     with pytest.raises(ValueError, match="bins must be an integer >= 3"):
         fit_tir(data, bins=1)
 

@@ -42,3 +42,7 @@ def test_notebook_executes(path, monkeypatch):
     text = "".join(o.get("text", "") for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", []))
     for expected in EXPECTED.get(path.name, ()):
         assert expected in text, f"{path.name}: output lacks {expected!r}"
+    for cell in nb.cells:  # every cell that draws shows its figure (matplotlib.use("Agg") hid them in 07)
+        if cell.cell_type == "code" and "plt.subplots" in cell.source:
+            assert any("image/png" in o.get("data", {}) for o in cell.get("outputs", [])), \
+                f"{path.name}: a cell draws a figure but shows none:\n{cell.source[:200]}"

@@ -1,7 +1,8 @@
 """``mftyre fit DATA -o out.tir [--start FILE.tir] [--report report.md] ...``: fit a .tir file to measurements.
 
 :func:`register` adds the ``fit`` sub-command to an argparse sub-parsers object; :func:`run` is its handler
-(``args -> exit status``). DATA is a TYDEX (``.tdx``) or CSV (``.csv``, canonical channel names in SI) file.
+(``args -> exit status``). DATA is a TYDEX, TTC or CSV file (:func:`mftyre.data.read_data`; the options that say how
+to read it are :func:`mftyre.cli.add_data_options`).
 """
 from __future__ import annotations
 
@@ -13,17 +14,7 @@ from pathlib import Path
 __all__ = ["register", "run"]
 
 
-_CSV_FORMAT = """\
-CSV format: one header row, comma separated, one row per sample (rows in measurement order). Columns with
-these names are read as they are, in SI units and ISO-W / TYDEX W axes:
-  FZ  vertical load [N] (required)        FX FY  longitudinal / lateral force [N]
-  SA  slip angle [rad] (required)         MX MY MZ  overturning / rolling-resistance / aligning moment [N m]
-  SL  longitudinal slip [-] (required)    RL RHO RE  loaded radius, deflection, effective radius [m]
-  VX  speed [m/s] (required)              OMEGA  wheel spin [rad/s]
-  P   inflation pressure [Pa] (required)  IA  inclination [rad] (default 0)   PHIT  turn slip [1/m] (default 0)
-  TIME [s] (optional: sample rate of a time series)
-Other names or units: read the file with mftyre.data.read_csv(path, columns={...}, units={...}) in Python.
-Time series (100 Hz and more) are reduced per sweep to binned means, up and down branches averaged."""
+
 
 
 def _integer(minimum):
@@ -39,17 +30,19 @@ def _integer(minimum):
 
 
 def register(subparsers) -> None:
+    from ..cli import add_data_options, data_epilog
     from .stages import STAGE_NAMES
 
     p = subparsers.add_parser(
         "fit", help="fit Magic Formula parameters to tyre measurements and write a .tir file",
-        description="Fit MF 6.1 parameters, stage by stage (pure Fx, pure Fy, Mz, combined, Mx, My, vertical, "
+        description="Fit Magic Formula parameters (MF 6.1, or MF 6.2 with an MF 6.2 --start), stage by stage (pure Fx, pure Fy, Mz, combined, Mx, My, vertical, "
                     "rolling radius), to TYDEX (.tdx) or CSV data; pressure terms when the data have several "
                     "pressures. The test programme is recognised first and printed; stages whose result fails "
                     "the physical checks are rejected with their reason. Writes the .tir file and optionally a "
-                    "Markdown report with plots.", epilog=_CSV_FORMAT,
+                    "Markdown report with plots. Time series (100 Hz and more) are reduced per sweep to binned means, "
+                    "up and down branches averaged.", epilog=data_epilog(),
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("data", help="measurement file: .tdx (TYDEX) or .csv (see the CSV format below)")
+    p.add_argument("data", help="measurement file: TYDEX, TTC (.dat/.mat) or CSV (see DATA below)")
     p.add_argument("-o", "--output", required=True, help="the .tir file to write")
     p.add_argument("--start", help="start parameters from this .tir file (default: neutral values and estimates "
                                    "from the data)")
@@ -65,13 +58,16 @@ def register(subparsers) -> None:
                    help="residual evaluations per pass at most (integer >= 1; default 30 x (parameters + 1))")
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
     p.add_argument("--quiet", action="store_true", help="no progress output")
+    add_data_options(p)
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
+    from ..cli import read_data_args
+    from ..data import speaking_cli
     from ..errors import MFTyreError
     from ..files import OutputError, check_outputs
-    from .core import fit_tir, load_data
+    from .core import fit_tir
     from .stages import STAGE_NAMES
 
     out = Path(args.output)
@@ -101,9 +97,10 @@ def run(args) -> int:
                   flush=True)
 
     try:
-        data = load_data(args.data)
-        result = fit_tir(data, start=args.start, stages=stages, fit_pressure=not args.no_pressure,
-                         weighting=args.weighting, progress=progress, bins=args.bins, max_nfev=args.max_nfev)
+        data = read_data_args(args)
+        with speaking_cli():
+            result = fit_tir(data, start=args.start, stages=stages, fit_pressure=not args.no_pressure,
+                             weighting=args.weighting, progress=progress, bins=args.bins, max_nfev=args.max_nfev)
         if not args.quiet and terminal:
             print(file=sys.stderr)
         print(f"test programme: {result.programme.summary()}")

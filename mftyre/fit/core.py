@@ -20,7 +20,9 @@ needs a positive deflection at the measured loads); otherwise it is rejected and
 """
 from __future__ import annotations
 
+import datetime
 import math
+import textwrap
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -31,8 +33,7 @@ import numpy as np
 import pandas as pd
 
 from ..backend import NUMPY
-from ..data import TyreData, read_csv, read_tydex
-from ..errors import DataError
+from ..data import UNCHECKED, TyreData, check_plausible, read_data
 from ..formula import Modes, steady_state, vertical
 from ..model import STRUCTURAL_PARAMETERS, MFModel
 from ..params import TyreParameters
@@ -132,7 +133,26 @@ class FitResult:
 
             raise TirError(f"{path}: not written: the fitted parameters fail verification: "
                            + "; ".join(self.problems))
-        return write_tir(self.params, path, overwrite=overwrite)
+        return write_tir(self.params, path, overwrite=overwrite, comments=self.provenance())
+
+    def provenance(self) -> list[str]:
+        """Header lines of the fitted .tir: mftyre version and date, the data (file name, SHA-256, rows), the
+        recognised programme, the start, the fit error per stage and channel."""
+        from .. import __version__
+
+        raw = self.raw_data
+        lines = [f"Fitted by mftyre {__version__} on {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC "
+                 f"in {self.seconds:.1f} s",
+                 f"Data: {Path(raw.source).name if raw.source else '(in memory)'}"
+                 + (f" SHA-256 {raw.sha256}" if raw.sha256 else "") + f", {len(raw)} rows"]
+        if self.programme is not None:
+            lines += textwrap.wrap("Test programme: " + self.programme.summary(), 100)
+        lines.append(f"Start: {self.start.source or 'generic values and estimates from the data'}"
+                     if isinstance(self.start, TyreParameters) else "Start: generic values and estimates from the data")
+        lines += textwrap.wrap("Fit error [%] (normalised RMS) per stage: " + "; ".join(
+            f"{name} ({st.channel}) {st.fit_error:.3f}" + (" REJECTED" if st.rejected else "")
+            for name, st in self.stages.items()), 100)
+        return lines
 
     def __repr__(self):
         errs = ", ".join(f"{k} {v:.2f}%" for k, v in self.fit_errors.items())
@@ -140,16 +160,13 @@ class FitResult:
 
 
 def load_data(source) -> TyreData:
-    """TyreData as is, or read from a ``.tdx`` / ``.csv`` path."""
+    """TyreData (checked for plausible values, :func:`mftyre.data.check_plausible`), or read from a path
+    (TYDEX, TTC or CSV, recognised by content: :func:`mftyre.data.read_data`)."""
     if isinstance(source, TyreData):
+        if UNCHECKED not in source.history:  # read with check=False (--no-check): the user has vouched for it
+            check_plausible(source)
         return source
-    path = Path(source)
-    suffix = path.suffix.lower()
-    if suffix in (".tdx", ".tydex"):
-        return read_tydex(path)
-    if suffix == ".csv":
-        return read_csv(path)
-    raise DataError(f"{path}: unknown data format {suffix!r}: expected .tdx (TYDEX) or .csv")
+    return read_data(source)
 
 
 def _start(data: TyreData, start):

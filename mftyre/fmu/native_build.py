@@ -230,9 +230,10 @@ def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_sta
 
 def build_native_fmu(tir, output, *, model: str = "steady", side: str | None = None, vertical: str = "position",
                      road=None, x_start: float = 0.0, turn_slip: bool = False, overwrite: bool = False,
-                     quiet: bool = True) -> Path:
+                     quiet: bool = True, progress=None) -> Path:
     """Build the native FMU of ``tir`` at ``output``; returns the path. ``road``: swift only, a
-    :class:`swift.road.Road`, a road expression or a CSV file with columns x, z."""
+    :class:`swift.road.Road`, a road expression or a CSV file with columns x, z. ``progress``: callable(text)
+    told each stage (equations, C generation, compilation, packing)."""
     import mftyre
     from mftyre.errors import MFTyreError
 
@@ -247,8 +248,10 @@ def build_native_fmu(tir, output, *, model: str = "steady", side: str | None = N
         raise NativeBuildError(f"no such property file: {str(tir)!r}")
     if road is not None and model != "swift":
         raise NativeBuildError("--road is only used by --model swift")
+    say = progress or (lambda text: None)
     try:
         tyre = mftyre.load_tir(tir, side=side)
+        say(f"building the {model} equations from {tir.name} (CasADi)")
         spec = model_spec(tyre, model, vertical=vertical, road=road, x_start=x_start, turn_slip=turn_slip)
     except MFTyreError as exc:
         raise NativeBuildError(f"cannot build the {model} FMU from {tir}: {exc}") from None
@@ -259,6 +262,7 @@ def build_native_fmu(tir, output, *, model: str = "steady", side: str | None = N
     guid = "{" + str(uuid.UUID(digest[:32])) + "}"
     with tempfile.TemporaryDirectory(prefix="mftyre_native_") as tmp:
         root = Path(tmp) / "fmu"
+        say("generating C sources")
         c_files = generate_sources(spec, root / "sources", guid)
         (root / "sources" / "buildDescription.xml").write_text(build_description(model_id, c_files))
         desc = (f"mftyre {model} tyre from {tir.name} (FITTYP {tyre.params.fittyp}), mounted {tyre.side}; "
@@ -266,7 +270,9 @@ def build_native_fmu(tir, output, *, model: str = "steady", side: str | None = N
         (root / "modelDescription.xml").write_text(model_description(spec, model_id, guid, desc, c_files))
         (root / "resources").mkdir()
         (root / "resources" / "tyre.tir").write_bytes(tir_bytes)
+        say(f"compiling {len(c_files)} C sources (the longest step: the generated C of the wheel's equations)")
         compile_sources(root / "sources", root / "binaries" / _platform_dir() / f"{model_id}.so")
+        say("packing the FMU")
         output.parent.mkdir(parents=True, exist_ok=True)
         partial = output.with_name(f".{output.name}.{os.getpid()}.partial")
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as zf:

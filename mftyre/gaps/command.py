@@ -2,10 +2,12 @@
 and measurements disagree, name the missing effects, add them.
 
 :func:`register` adds the ``gaps`` sub-command to an argparse sub-parsers object; :func:`run` is its handler
-(``args -> exit status``: 0 done, 1 error, 2 usage). DATA is a TYDEX (``.tdx``) or CSV (``.csv``) file.
+(``args -> exit status``: 0 done, 1 error, 2 usage). DATA is a TYDEX, TTC or CSV file read with the options of
+:func:`mftyre.cli.add_data_options`.
 """
 from __future__ import annotations
 
+import argparse
 import sys
 import time
 
@@ -13,15 +15,16 @@ __all__ = ["register", "run"]
 
 
 def register(subparsers) -> None:
-    from ..cli import number_type
+    from ..cli import add_data_options, data_epilog, number_type
 
     p = subparsers.add_parser(
         "gaps", help="find the effects a .tir model misses in measured data, add them, show the gap shrink",
         description="Refit the model's active parameters to the data, locate residual structure beyond measurement "
                     "noise, name the missing effect from a catalogue of .tir parameter groups, add it when it "
                     "improves held-out sweeps significantly, repeat. Prints findings and errors; writes the "
-                    "improved .tir, a Markdown/PNG report and JSON.")
-    p.add_argument("data", help="measurement file: .tdx (TYDEX) or .csv (canonical channels, SI)")
+                    "improved .tir, a Markdown/PNG report and JSON.", epilog=data_epilog(),
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("data", help="measurement file: TYDEX, TTC (.dat/.mat) or CSV (see DATA below)")
     p.add_argument("--model", required=True, help="the base .tir file")
     p.add_argument("-o", "--output", help="write the improved .tir file here")
     p.add_argument("--report", metavar="DIR", help="write report.md, PNG plots and gaps.json into this folder (an "
@@ -37,10 +40,13 @@ def register(subparsers) -> None:
     p.add_argument("--channels", help="comma-separated channels to use (default: all measured of FX,FY,MZ,MX,MY,FZ)")
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
     p.add_argument("--quiet", action="store_true", help="no progress output")
+    add_data_options(p)
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
+    from ..cli import read_data_args
+    from ..data import speaking_cli
     from ..errors import MFTyreError
     from ..files import OutputError, check_outputs
     from .core import find_gaps
@@ -65,8 +71,10 @@ def run(args) -> int:
             print(f"  [{time.perf_counter() - t0:6.1f} s] {text}", file=sys.stderr, flush=True)
 
     try:
-        rep = find_gaps(args.data, args.model, holdout=args.holdout, seed=args.seed, alpha=args.alpha,
-                        max_effects=args.max_effects, channels=channels, progress=progress)
+        data = read_data_args(args)
+        with speaking_cli():
+            rep = find_gaps(data, args.model, holdout=args.holdout, seed=args.seed, alpha=args.alpha,
+                            max_effects=args.max_effects, channels=channels, progress=progress)
         if args.output:
             rep.write_tir(args.output, overwrite=args.overwrite)
         if args.json:

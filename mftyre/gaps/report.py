@@ -4,11 +4,13 @@ and PNG plots: held-out errors per channel, and residual maps (cell means with 9
 slip or deflection cells, one line per level of the finding's variable) before and after."""
 from __future__ import annotations
 
+import io
 import math
 from pathlib import Path
 
 import numpy as np
 
+from ..files import write_atomically
 from .locate import cell_table
 from .residuals import UNITS
 
@@ -137,6 +139,13 @@ def _figure(**kw):
     return Figure(**kw)
 
 
+def _save(fig, path) -> None:
+    """The figure as PNG through :func:`mftyre.files.write_atomically` (never half a file at the final path)."""
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png")
+    write_atomically(path, buffer.getvalue())
+
+
 def plot_errors(rep, path) -> Path:
     chans = list(rep.error_before)
     x = np.arange(len(chans))
@@ -151,7 +160,7 @@ def plot_errors(rep, path) -> Path:
     ax.legend(fontsize=7)
     ax.set_title("normalised RMS error on held-out sweeps", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path)
+    _save(fig, path)
     return Path(path)
 
 
@@ -174,7 +183,7 @@ def plot_residual_maps(rep, path) -> Path | None:
         return None
     ev = rep.evaluator
     res_before, res_after = ev.residuals(rep.model_start), ev.residuals(rep.model)
-    fig = _figure(figsize=(8, 2.3 * len(targets)), dpi=80)
+    fig = _figure(figsize=(11, 3.2 * len(targets)), dpi=100)
     axes = fig.subplots(len(targets), 2, squeeze=False)
     for i, (c, var) in enumerate(targets):
         lims = []
@@ -184,19 +193,22 @@ def plot_residual_maps(rep, path) -> Path | None:
             for level, (m, h) in table.items():
                 ax.errorbar(xs, m, yerr=h, marker=".", ms=3, lw=0.8, capsize=1.5, label=str(level))
             ax.axhline(0.0, color="k", lw=0.6)
-            ax.set_xticks(xs, labels, rotation=90, fontsize=5)
-            ax.set_ylabel(f"{c} residual [{UNITS[c]}]", fontsize=7)
+            every = max(1, math.ceil(len(xs) / 25))  # at most 25 labels: readable at 7 pt
+            ax.set_xticks(xs[::every], labels[::every], rotation=60, fontsize=7)
+            ax.set_xticks(xs, minor=True)
+            ax.set_ylabel(f"{c} residual [{UNITS[c]}]", fontsize=8)
             ax.set_xlabel("deflection bin" if c == "FZ" else "slip cell: a = slip-angle bin, k = slip-ratio bin "
-                          "(1 small, 2 medium, 3 large)", fontsize=6)
-            ax.set_title(f"{c} by {var}, {title}", fontsize=8)
+                          "(1 small, 2 medium, 3 large)", fontsize=8)
+            ax.tick_params(axis="y", labelsize=7)
+            ax.set_title(f"{c} by {var}, {title}", fontsize=9)
             lims.append(ax.get_ylim())
             if j == 0:
-                ax.legend(fontsize=6)
+                ax.legend(fontsize=7)
         lo, hi = min(a for a, _ in lims), max(b for _, b in lims)
         for j in range(2):
             axes[i, j].set_ylim(lo, hi)
     fig.tight_layout()
-    fig.savefig(path)
+    _save(fig, path)
     return Path(path)
 
 
@@ -210,6 +222,6 @@ def save_report(rep, directory) -> Path:
     if maps is not None:
         names["maps"] = maps.name
     md = d / "report.md"
-    md.write_text(markdown_report(rep, names), encoding="utf-8")
+    write_atomically(md, markdown_report(rep, names))
     rep.to_json(d / "gaps.json")
     return md

@@ -1,0 +1,190 @@
+"""``mftyre swift FILE.tir --road ROAD --speed V --fz FZ [--p P] --csv out.csv --plot out.png``: the SWIFT tyre
+rolling over a road profile or obstacle at constant speed, axle height held at the static loaded radius (the
+default) or the axle load held (``--axle load``); time histories of the forces, moments, radii and effective road
+as CSV and a plot against the wheel position. Progress (building the compiled stepper, running) goes to stderr.
+"""
+from __future__ import annotations
+
+import argparse
+import io
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["register", "run"]
+
+#: Outputs drawn by --plot, against the wheel position.
+_PLOTTED = (("fz", "N", "vertical force"), ("fx", "N", "longitudinal force"), ("my", "N m", "rolling moment"),
+            ("w", "mm", "effective road height"))
+
+
+def _quantity(name):
+    from .cli import parse_sweep
+
+    def convert(text):
+        try:
+            sweep = parse_sweep(name, text)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+        if sweep.values.size != 1:
+            raise argparse.ArgumentTypeError(f"expected one value, got {sweep.values.size}")
+        return float(sweep.values[0])
+
+    convert.__name__ = name
+    return convert
+
+
+def register(subparsers) -> None:
+    from .cli import number_type
+
+    p = subparsers.add_parser(
+        "swift", help="SWIFT tyre over a road profile or obstacle: time histories (CSV, plot)",
+        description="Roll the SWIFT tyre of FILE.tir (rigid ring, tandem-cam effective road, Magic Formula slip) at "
+                    "constant speed over ROAD, free rolling (rim spin V / Re), from the static equilibrium. "
+                    "--axle height holds the axle at the static loaded radius of --fz (a rig with a fixed axle); "
+                    "--axle load holds the axle load (a quarter car without suspension). Writes the time histories "
+                    "(every output of swift.ring.OUTPUT_NAMES, SI units) and plots Fz, Fx, My and the effective "
+                    "road against the wheel position.",
+        epilog="example: mftyre swift tyre.tir --road 'cleat(x0=1.0, length=0.05, height=0.01)' --speed 30km/h "
+               "--fz 4kN --p 2.2bar --csv cleat.csv --plot cleat.png")
+    p.add_argument("file", metavar="FILE.tir", help="tyre property file (MF 6.2 with SWIFT parameters, or MF 6.1)")
+    p.add_argument("--road", default="", metavar="ROAD",
+                   help="a CSV file with columns x, z [m], or obstacles such as 'cleat(x0=1.0, length=0.05, "
+                        "height=0.01) + step(3, 0.02)' (flat, step, cleat, trapezoid, bump, sine); default flat")
+    p.add_argument("--speed", type=_quantity("vx"), required=True, metavar="V", help="forward speed (m/s, km/h, mph)")
+    p.add_argument("--fz", type=_quantity("fz"), default=None, metavar="FZ", help="axle load (N, kN; default FNOMIN)")
+    p.add_argument("--p", type=_quantity("p"), default=None, metavar="P",
+                   help="inflation pressure (Pa, kPa, bar, psi; default INFLPRES)")
+    p.add_argument("--axle", choices=("height", "load"), default="height",
+                   help="axle height held (default) or axle load held")
+    p.add_argument("--start", type=number_type(), default=0.0, metavar="X", help="wheel position at t = 0 [m] (0)")
+    p.add_argument("--distance", type=number_type(0, open_low=True), default=3.0, metavar="D",
+                   help="distance rolled [m] (default 3)")
+    p.add_argument("--dt", type=number_type(1e-5, 0.01), default=1e-3, metavar="DT",
+                   help="output (and step) interval [s] (default 0.001)")
+    p.add_argument("--csv", metavar="OUT.csv", help="write the time histories here")
+    p.add_argument("--plot", metavar="OUT.png", help="write the plot here (PNG, SVG, PDF)")
+    p.add_argument("--overwrite", action="store_true", help="replace existing output files")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from .errors import MFTyreError
+    from .files import OutputError, check_outputs
+
+    if args.speed <= 0:
+        print("mftyre swift: --speed: expected a forward speed above 0", file=sys.stderr)
+        return 2
+    try:
+        check_outputs({"--csv": args.csv, "--plot": args.plot}, {"FILE.tir": args.file, "--road": _road_file(args)},
+                      overwrite=args.overwrite)
+    except OutputError as exc:
+        print(f"mftyre swift: {exc}", file=sys.stderr)
+        return 2
+    t0 = time.perf_counter()
+
+    def say(text):
+        if not args.quiet:
+            print(f"  [{time.perf_counter() - t0:6.1f} s] {text}", file=sys.stderr, flush=True)
+
+    try:
+        import warnings
+
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            res, road, info = simulate(args, say)
+        for w in caught:
+            print(f"mftyre swift: note: {w.message}", file=sys.stderr)
+        frame = _frame(res)
+        print(info)
+        for name in ("fz", "fx", "my"):
+            print(f"  {name}: min {frame[name].min():.5g}, max {frame[name].max():.5g}, "
+                  f"final {frame[name].iloc[-1]:.5g}")
+        from .files import write_atomically
+
+        for target in (args.csv, args.plot):
+            if target:
+                Path(target).parent.mkdir(parents=True, exist_ok=True)
+        if args.csv:
+            write_atomically(args.csv, frame.to_csv(index=False))
+            say(f"wrote {args.csv} ({len(frame)} rows)")
+        if args.plot:
+            write_atomically(args.plot, _figure(frame, road, args, info))
+            say(f"wrote {args.plot}")
+    except (MFTyreError, OSError) as exc:
+        print(f"mftyre swift: {exc}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _road_file(args):
+    text = str(args.road).strip()
+    return text if text.lower().endswith(".csv") else None
+
+
+def simulate(args, say):
+    """(SimResult, road, one-line description): the tyre built (compiled once, cached), then run."""
+    import mftyre
+    from swift import StepInputs, SwiftTyre
+    from swift.road import parse_road
+
+    model = mftyre.load_tir(args.file)
+    prm = model.params
+    fz = float(prm.FNOMIN if args.fz is None else args.fz)
+    p = float(prm.INFLPRES if args.p is None else args.p)
+    road = parse_road(args.road)
+    v = args.speed
+    static = model.evaluate(fz=fz, kappa=0.0, alpha=0.0, vx=v, p=p)
+    rl, re = float(static.rl), float(static.re)
+    say(f"building the SWIFT stepper for {Path(args.file).name} (C compiled on first use and cached in "
+        "~/.cache/mftyre; a minute at most)")
+    tyre = SwiftTyre(model, road, axle=args.axle, rim="speed", x_range=(args.start - 1.0, args.start + args.distance + 1.0))
+    t_end = args.distance / v
+    say(f"running {t_end:.3g} s ({args.distance:g} m at {v:g} m/s, {int(round(t_end / args.dt))} steps of "
+        f"{args.dt:g} s)")
+    u = StepInputs(x=args.start, vx=v, z=rl, load=fz, omega=v / re, p=p)
+    res = tyre.run(t_end, u, dt=args.dt)
+    say("done")
+    hold = (f"axle height {rl * 1e3:.1f} mm (the loaded radius at {fz:g} N)" if args.axle == "height"
+            else f"axle load {fz:g} N")
+    info = (f"{Path(args.file).name}: {v:g} m/s ({v * 3.6:.1f} km/h), {hold}, p {p / 1e5:.3g} bar, spin "
+            f"{v / re:.4g} rad/s (Re {re * 1e3:.1f} mm); road {args.road or 'flat'}")
+    return res, road, info
+
+
+def _frame(res):
+    import pandas as pd
+
+    cols = {"t": res.t, "x": res.x}
+    cols.update({name: np.asarray(values, float) for name, values in res.outputs.items()})
+    return pd.DataFrame(cols)
+
+
+def _figure(frame, road, args, info) -> bytes:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(7.5, 7.0), dpi=100, layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(len(_PLOTTED), 1, sharex=True)
+    x = frame["x"].to_numpy()
+    for ax, (name, unit, meaning) in zip(axes, _PLOTTED):
+        y = frame[name].to_numpy() * (1e3 if unit == "mm" else 1.0)
+        ax.plot(x, y, lw=1.0, label="effective road height w" if name == "w" else None)
+        if name == "w":
+            ax.plot(x, np.asarray(road.height(x), float) * 1e3, "k:", lw=0.8, label="road under the wheel centre")
+            ax.legend(fontsize=7)
+        ax.set_ylabel(f"{name} [{unit}]")
+        ax.set_title(meaning, fontsize=9)
+        ax.grid(True, lw=0.3)
+    axes[-1].set_xlabel("wheel position x [m]")
+    fig.suptitle("\n".join(textwrap.wrap(info, 110)), fontsize=8)
+    path = Path(args.plot)
+    fmt = path.suffix[1:].lower() if path.suffix[1:].lower() in fig.canvas.get_supported_filetypes() else "png"
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format=fmt)
+    return buffer.getvalue()
