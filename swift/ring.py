@@ -97,17 +97,19 @@ Contact (normal to the effective plane):
     measured forces contain the belt's static camber deflection (r_c F_y + M'_x)/c_bg; the belt camber would
     count it twice (car_205_60R15_mf62_swift.tir, 4 kN, 20 m/s: the belt settles 1.4 mrad below a 30 mrad rim
     camber and the MF at the belt camber gives Fy 13 % lower than at the rim camber,
-    test_camber_slip_is_the_rim_camber). The yaw's
-    compensation (the static twist added back, below) has no camber counterpart without a camber slip state:
-    the deflection depends on the forces it would change. So the belt camber acts on the slip only through the
-    geometry (r_c gammadot_b in alpha'). Evaluated at speed max(|V_cx|, VXLOW): the low-speed reduction is not
+    test_camber_slip_is_the_rim_camber). So the belt camber acts on the slip only through the geometry
+    (r_c gammadot_b in alpha'). Evaluated at speed max(|V_cx|, VXLOW): the low-speed reduction is not
     applied again on top of the transient slips (they already vanish properly at standstill, so the tyre keeps
     its static grip), and the forces keep the sign of the slips in both directions of travel (reversing);
     M'_z follows the direction of travel and M'_y the spin direction (signs linear through standstill).
-    alpha_MF = alpha' + s_v ((psi_b - psi_a) + psi_r): the slip comes from the belt and patch heading, and the
-    static twist Mz/C_psi, which the steady-state Magic Formula already contains (it was measured against the rim
-    heading), is added back [chosen], so that the steady state equals the Magic Formula while belt yaw dynamics
-    and YAW_STIFFNESS act on the transient forces.
+    alpha_MF = alpha' + s_v M_r / C_psi,  M_r = c_rpsi psi_r: the slip comes from the belt and patch heading,
+    and the static twist, which the steady-state Magic Formula already contains (it was measured against the
+    rim heading), is added back as the yaw deflection of the moment the residual spring carries [chosen], so
+    that the steady state equals the Magic Formula while belt yaw dynamics and YAW_STIFFNESS act on the
+    transient forces. (Earlier form: + s_v (psi_b - psi_a + psi_r), the twist from the headings: equal in the
+    steady state, but it passed a rim-yaw change straight into the slip (67-87 % of the Fy change within 7 mm
+    at 60 km/h) and self-excited the belt-yaw mode at 13-34 km/h on the book's DAMP_YAW 0.007;
+    tests/test_swift_modes.py.)
     Forces on the belt (global): F_x = F'_x cos(beta_y) - F'_z sin(beta_y) cos(beta_x), F_z = (F'_x sin(beta_y) +
     F'_z cos(beta_y)) cos(beta_x) + F'_y sin(beta_x), F_y = F'_y cos(beta_x) - F'_z sin(beta_x); moments
     -r_c F'_x + M'_y about y, r_c F'_y + M'_x about x, M'_z about z.
@@ -351,7 +353,10 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
     # direction of travel and of spin: +-1, linear through standstill (below 0.1 VXLOW)
     s_v = be.fmin(be.fmax(vcx / (0.1 * prm.VXLOW), -1.0), 1.0)
     s_o = be.fmin(be.fmax(s["omb"] * prm.UNLOADED_RADIUS / (0.1 * prm.VXLOW), -1.0), 1.0)
-    alpha_mf = s["alpha"] + s_v * (s["psb"] - v["psi"] + s["psr"])
+    # static twist (module notes): the yaw deflection M_r / C_psi of the moment the residual spring carries
+    c_psi = prm.YAW_STIFFNESS * (1.0 + prm.PCMZ1 * dpi)
+    crpsi = 1.0 / (1.0 / c_psi - 1.0 / cbg)
+    alpha_mf = s["alpha"] + s_v * crpsi * s["psr"] / c_psi
     beta_x = road_camber + v["road_camber"]
     mf = model.casadi_function(inputs=("fz", "kappa", "alpha", "gamma", "vx", "p", "omega"),
                                outputs=("fx", "fy", "mz", "mx", "my", "re", "a", "cx", "cy"))
@@ -363,7 +368,6 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
     # residual springs in series with sidewall (+ rotation lever): 1/C = 1/c_b (+ r^2/c_rot) + 1/c_r
     crx = 1.0 / (1.0 / cx - 1.0 / cbx - (r_c**2 / cbth if rc.lever_x else 0.0))
     cry = 1.0 / (1.0 / cy - 1.0 / cby - (r_c**2 / cbg if rc.lever_y else 0.0))
-    crpsi = 1.0 / (1.0 / (prm.YAW_STIFFNESS * (1.0 + prm.PCMZ1 * dpi)) - 1.0 / cbg)
     uxdot = (fxc - crx * s["ux"]) / (damp * crx)
     uydot = (fyc - cry * s["uy"]) / (damp * cry)
     psrdot = (mzc - crpsi * s["psr"]) / (damp * crpsi)
