@@ -155,7 +155,10 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
 
     # one RK4 step in the road frame, then the rim's lateral position back to the frame origin
     xn = lifted(tyre.step_function(lifted(x, -U["road_z"]), uring, dt, x0w, grid, hw)[0], U["road_z"])
-    xn = ca.vertcat(xn[:_S["yb"]], xn[_S["yb"]] - U["vy"] * dt, xn[_S["yb"] + 1:])
+    parts = ca.vertsplit(xn)
+    for n in ("yb", "ya"):
+        parts[_S[n]] = parts[_S[n]] - U["vy"] * dt
+    xn = ca.vertcat(*parts)
     step = ca.Function("swift_substep", [x, u, dt, x0w, grid, hw], [xn], ["x", "u", "dt", "x0w", "grid", "hw"],
                        ["x_next"])
     ring_out = dict(zip(OUTPUT_NAMES, ca.vertsplit(tyre.output_function(lifted(x, -U["road_z"]), uring, x0w,

@@ -7,7 +7,9 @@ to the belt by residual springs; the effective road from the tandem cams (:mod:`
 ISO-W axes (x forward, y left, z up), small angles, forward rolling = positive spin about +y.
 
 State (``STATE_NAMES``): belt x_b, z_b, y_b [m], velocities; wind-up theta_w = theta_b - theta_a; belt and rim
-spin Omega_b, Omega_a; axle z_a, its velocity, axle x_a; belt camber gamma_b and yaw psi_b with rates; residual
+spin Omega_b, Omega_a; axle z_a, its velocity, axle x_a and rim lateral position y_a (imposed at each step start
+from the inputs x, y and moving with vx, vy within the step: a rim position held over a step while the belt moves
+on stretched the sidewall by c_by vy h/2, steady cornering 9-119 % off at 1-5 ms); belt camber gamma_b and yaw psi_b with rates; residual
 (patch) deflections u_x, u_y, residual yaw psi_r; transient slips kappa', alpha'; the filtered effective slope
 betaf (for the rate at which the effective plane turns, below); the contact solution of the last step, x_c - x_b
 and l_s (memory, not integrated: the stepper starts its Newton pass there and stores the new solution after each
@@ -140,7 +142,7 @@ from mftyre.formula import vertical
 __all__ = ["RingConstants", "STATE_NAMES", "INPUT_NAMES", "OUTPUT_NAMES", "CONTACT_PASSES", "AIR_TIME",
            "SLOPE_FILTER", "residual_vertical", "contact_start", "contact_geometry", "ring_equations"]
 
-STATE_NAMES = ("xb", "vxb", "zb", "vzb", "thw", "omb", "oma", "za", "vza", "xa",
+STATE_NAMES = ("xb", "vxb", "zb", "vzb", "thw", "omb", "oma", "za", "vza", "xa", "ya",
                "ux", "kappa", "yb", "vyb", "gb", "wgb", "psb", "wpsb", "uy", "alpha", "psr", "betaf", "xcs", "lsm")
 #: Inputs of one step. x/z/omega of the axle enter through the state (imposed parts are set by the stepper).
 INPUT_NAMES = ("vx", "load", "torque", "p", "y", "vy", "gamma", "psi", "road_camber")
@@ -395,7 +397,7 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
     fx_b, fz_b, fy_b = fxc * cb - fzc * sb * cx_, (fxc * sb + fzc * cb) * cx_ + fyc * sx_, fyc * cx_ - fzc * sx_
     fwx = cbx * (s["xb"] - s["xa"]) + kbx * (s["vxb"] - v["vx"])
     fwz = cbx * (s["zb"] - s["za"]) + kbx * (s["vzb"] - s["vza"])
-    fwy = cby * (s["yb"] - v["y"]) + kby * (s["vyb"] - v["vy"])
+    fwy = cby * (s["yb"] - s["ya"]) + kby * (s["vyb"] - v["vy"])
     mwy = cbth * s["thw"] + kbth * (s["omb"] - s["oma"])
     mwx = cbg * (s["gb"] - v["gamma"]) + kbg * s["wgb"]
     mwz = cbg * (s["psb"] - v["psi"]) + kbg * s["wpsb"]
@@ -409,7 +411,7 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
         "oma": (v["torque"] + mwy) / rc.rim_inertia if rim == "torque" else 0.0 * s["oma"],
         "za": s["vza"],
         "vza": (-v["load"] + fwz + f_bottom * cb) / rc.axle_mass if axle == "load" else 0.0 * s["vza"],
-        "xa": v["vx"], "ux": uxdot, "kappa": kappa_dot,
+        "xa": v["vx"], "ya": v["vy"], "ux": uxdot, "kappa": kappa_dot,
         "yb": s["vyb"], "vyb": (-fwy + fy_b) / rc.mb,
         "gb": s["wgb"], "wgb": (-mwx + r_c * fyc + mxc + rc.iby * s["omb"] * s["wpsb"]) / rc.ibx,
         "psb": s["wpsb"], "wpsb": (-mwz + mzc - rc.iby * s["omb"] * s["wgb"]) / rc.ibx,

@@ -87,6 +87,10 @@ TANDEM_REACH = 0.25
 MAX_RK4_STEP = 1e-3
 #: Newton passes of the contact solution in the stepper, from the solution of the previous RK stage.
 WARM_PASSES = 1
+#: Largest derivative (SI units of each state's rate) that :meth:`SwiftTyre.initial_state` accepts as static
+#: equilibrium; converged solutions reach ~1e-11, inputs without an equilibrium leave 1e1-1e3 (a torque the tyre
+#: cannot hold: the Newton iteration ran off to the axle 26 m above the road or 2260 rad/s).
+EQUILIBRIUM_TOL = 1e-6
 
 
 def _with_casadi(method):
@@ -322,7 +326,7 @@ class SwiftTyre:
 
     def _impose(self, state, inputs: StepInputs):
         state = np.array(state, dtype=float)
-        state[_S["xa"]] = inputs.x
+        state[_S["xa"]], state[_S["ya"]] = inputs.x, inputs.y
         if self.axle == "height":
             state[_S["za"]], state[_S["vza"]] = inputs.z, inputs.vz
         if self.rim == "speed":
@@ -538,7 +542,7 @@ class SwiftTyre:
               else vertical.vertical_force_61(prm, r0 - rl, r0, 0.0, 0.0, 0.0, dpi, be))
         guess = dict.fromkeys(STATE_NAMES, 0.0)
         guess.update(xa=xa, xb=xa, za=za, vza=vza, zb=za + be.fmax(fz, 0.0) / self.constants.cbx, vxb=U["vx"],
-                     vyb=U["vy"], oma=omega, omb=omega, yb=U["y"], gb=U["gamma"], psb=U["psi"])
+                     vyb=U["vy"], oma=omega, omb=omega, yb=U["y"], ya=U["y"], gb=U["gamma"], psb=U["psi"])
 
         unknown, eqs = self.equilibrium_unknowns
         s = ca.MX.sym("s", len(STATE_NAMES))
@@ -559,7 +563,9 @@ class SwiftTyre:
     def initial_state(self, inputs: StepInputs, iterations: int = 30) -> np.ndarray:
         """Static equilibrium (steady rolling at the input speeds) at the axle position of ``inputs``: Newton
         on the accelerations and patch rates, from the steady-state model's deflection. With ``rim="torque"`` the
-        spin is an unknown too (``inputs.omega`` its first guess): the rim torque balances the input torque."""
+        spin is an unknown too (``inputs.omega`` its first guess): the rim torque balances the input torque.
+        Raises :class:`~mftyre.errors.ModelInputError` where the iteration ends without equilibrium (residual above
+        :data:`EQUILIBRIUM_TOL`)."""
         import casadi as ca
 
         prm = self.model.params
@@ -578,7 +584,7 @@ class SwiftTyre:
         s[_S["zb"]] = s[_S["za"]] + max(fz, 0.0) / c.cbx
         s[_S["vxb"]], s[_S["vyb"]] = inputs.vx, inputs.vy
         s[_S["oma"]] = s[_S["omb"]] = inputs.omega
-        s[_S["yb"]] = inputs.y
+        s[_S["yb"]] = s[_S["ya"]] = inputs.y
         s[_S["gb"]], s[_S["psb"]] = inputs.gamma, inputs.psi
         unknown, eqs = self.equilibrium_unknowns
         if self._equilibrium is None:
@@ -598,6 +604,17 @@ class SwiftTyre:
             if not size < 0.1 * last:
                 inverse = None
             last = size
+        r = (self._compiled.rhs(s, u, window[0], i0)[0][eqs] if self._compiled is not None
+             else np.asarray(self._equilibrium(s, u, *window)[0])).ravel()
+        worst = int(np.argmax(np.abs(r))) if np.all(np.isfinite(r)) else int(np.argmin(np.isfinite(r)))
+        if not abs(r[worst]) <= EQUILIBRIUM_TOL:
+            raise ModelInputError(
+                f"no static equilibrium at the inputs (vx = {inputs.vx} m/s, "
+                + (f"load = {inputs.load} N" if self.axle == "load" else f"z = {inputs.z} m")
+                + (f", torque = {inputs.torque} N m" if self.rim == "torque" else f", omega = {inputs.omega} rad/s")
+                + f"): after {iterations} Newton steps d({STATE_NAMES[eqs[worst]]})/dt = {r[worst]:.3g} (tolerance "
+                f"{EQUILIBRIUM_TOL:g}); e.g. a drive/brake torque beyond what the tyre transmits at this load, or "
+                f"the tyre off the road")
         self._store_contact(s, u)
         return s
 
@@ -697,6 +714,7 @@ CASADI_SYMBOL_EXPORT int swift_run(void** p) {
     for (i = 0; i < NI; ++i) if (USED[i] && !(u[i] - u[i] == 0)) return -3;
     if (!(u[%(p)d] > 0)) return -3;
     s[%(xa)d] = u[NU];
+    s[%(ya)d] = u[%(y)d];
     if (%(height)d) { s[%(za)d] = u[NU + 1]; s[%(vza)d] = u[NU + 2]; }
     if (%(speed)d) s[%(oma)d] = u[NU + 3];
     parts = fmax(ceil(fabs(u[0]) * dt / cfg[3]), ceil(dt / cfg[4] - 1e-9));
@@ -753,7 +771,8 @@ def _library(tyre, key: str) -> Path:
         with source.open("a") as f:
             f.write(_DRIVER % dict(nx=len(STATE_NAMES), ny=len(OUTPUT_NAMES), nu=_NU, ni=_NI, window=tyre.window,
                                    height=int(tyre.axle == "height"), speed=int(tyre.rim == "speed"),
-                                   used=", ".join(str(int(u)) for u in _used(tyre)), p=INPUT_NAMES.index("p"), **_S))
+                                   used=", ".join(str(int(u)) for u in _used(tyre)), p=INPUT_NAMES.index("p"),
+                                   y=INPUT_NAMES.index("y"), **_S))
         meta = {"inputs": list(INPUT_NAMES), "outputs": list(OUTPUT_NAMES), "checks": [], "states": list(STATE_NAMES)}
         return source, (*_CFLAGS, "-fPIC", "-shared"), ("-lm",), meta
 
