@@ -67,7 +67,7 @@ from mftyre.formula import vertical
 
 from .enveloping import Cams, CamTable
 from .ring import CONTACT_PASSES, INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, RingConstants, contact_geometry, \
-    contact_start, ring_equations
+    contact_start, pressure_coefficients, ring_equations
 from .road import Road
 
 __all__ = ["StepInputs", "SwiftTyre", "SimResult", "Outputs"]
@@ -281,7 +281,8 @@ class SwiftTyre:
         import casadi as ca
 
         prm = self.model.params
-        payload = {"p": {k: repr(prm[k]) for k in prm}, "side": self.model.side, "axle": self.axle,
+        payload = {"p": {k: repr(prm[k]) for k in prm}, "pressure": pressure_coefficients(prm),  # (absent: derived)
+                   "side": self.model.side, "axle": self.axle,
                    "rim": self.rim, "window": self.window, "substeps": self.substeps,
                    "constants": repr(self.constants), "kind": kind,
                    "passes": (CONTACT_PASSES, WARM_PASSES), "cflags": _CFLAGS,

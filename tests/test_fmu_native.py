@@ -838,3 +838,18 @@ def test_native_swift_steady_cornering_equals_magic_formula(fmus, models, tmp_pa
         out = nat.get()
         assert_magic_formula(model, out["Fx"], out["Fy"], out["Fz_c"], out["Re"], vy, omega, f"{deg} deg {kappa}")
         nat.close()
+
+
+def test_default_inputs_roll_freely(fmus, tmp_path):
+    """No inputs set: the steady, transient and SWIFT FMUs roll freely under the nominal load (start omega R_e = vx,
+    z at the loaded radius of FNOMIN): slip ~0 and |Fx| no more than the MF's own force at zero slip (old: omega
+    10/0.3 rad/s at 10 m/s, a 1.4 % drive slip: Fx 794 N steady, 1362 N SWIFT)."""
+    for kind, path in fmus.items():
+        nat = Slave(path, tmp_path, name=kind).initialise()
+        for _ in range(50):
+            nat.step(1e-3)
+        out = nat.get()
+        assert abs(out["kappa"]) < 1e-4, kind
+        assert abs(out["Fx"]) < 0.01 * out["Fz"], kind
+        assert out["Fz"] == pytest.approx(4000.0, rel=0.05), kind  # FNOMIN of the files (rim: less the belt)
+        nat.close()

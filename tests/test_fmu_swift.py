@@ -378,3 +378,14 @@ def test_steady_cornering_equals_magic_formula(model, swift_fmu, tmp_path, h):
         assert_magic_formula(model, out["Fx"], out["Fy"], out["Fz_c"], out["Re"], vy, omega, f"{deg} deg {kappa}")
         assert fmu.status() == 0
         fmu.close()
+
+
+def test_default_inputs_roll_freely(swift_fmu, tmp_path):
+    """No inputs set: the pythonfmu SWIFT FMU rolls freely under the nominal load (slip ~0, |Fx| < 1 % of Fz)."""
+    fmu = Slave(swift_fmu, tmp_path)
+    for k in range(50):
+        fmu.fmu.doStep(k * 1e-3, 1e-3)
+    out = fmu.get("Fx", "Fz", "kappa")
+    assert abs(out["kappa"]) < 1e-4 and abs(out["Fx"]) < 0.01 * out["Fz"]
+    assert out["Fz"] == pytest.approx(4000.0, rel=0.05)
+    fmu.close()

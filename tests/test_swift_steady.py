@@ -105,3 +105,56 @@ def test_initial_state_raises_without_equilibrium(model, vx, torque):
     out = dict(zip(OUTPUT_NAMES, tyre.outputs(state, u)))
     assert out["fz"] == pytest.approx(4000.0, rel=1e-6)
     assert out["my"] == pytest.approx(-200.0, rel=1e-6)
+
+
+def _files():
+    from conftest import SHARED, require_shared
+
+    return [("sample", lambda: TIR_FILES / "car_205_60R15_mf62_swift.tir"),
+            ("tno", lambda: require_shared(SHARED / "reference" / "tir" / "TNO_car205_60R15.tir"))]
+
+
+@pytest.mark.parametrize("name, path", _files(), ids=[f[0] for f in _files()])
+def test_static_stiffness_and_relaxation_lengths_are_the_files(name, path):
+    """Ring + residual springs + contact patch in series give the file's static stiffness, and so the MF's
+    relaxation lengths (NOTES 4.2, 4.4). Static: rim locked at standstill, the axle pushed 1 mm along x or y; the
+    force change over the push within 3 % of C_x, C_y (LONGITUDINAL/LATERAL_STIFFNESS at the load; old: 277 and
+    287 kN/m against 358 and 382: the patch's compliance a/K was left out). Rolling at 10 m/s: after a 1 % spin
+    step or a 0.5 % lateral-speed step the relaxation length sigma = integral of (1 - (F - F0)/(F_end - F0)) over
+    the travel (a first-order lag's sigma, robust to the ring's ripple) within 6 % of K_xk/C_x, K_ya/C_y (old:
+    0.31 / 0.57 m against 0.25 / 0.53 m on the sample file)."""
+    from dataclasses import replace
+
+    model = mftyre.load_tir(path())
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        tyre = SwiftTyre(model, Flat(), axle="height", rim="speed", x_range=(0.0, 8.0))
+    rl, _ = model.loaded_radius(4000.0)
+    d, ramp, t0 = 1e-3, 0.3, 0.01
+    rest = StepInputs(x=1.0, vx=0.0, z=float(rl), omega=0.0)
+    for axis, force in (("x", "fx"), ("y", "fy")):
+        def pushed(t):
+            s = min(max(t - t0, 0.0), ramp)
+            moving = t0 <= t < t0 + ramp
+            return replace(rest, **{axis: (1.0 if axis == "x" else 0.0) + d * s / ramp,
+                                    "v" + axis: d / ramp if moving else 0.0})
+        res = tyre.run(t0 + ramp + 0.2, pushed, 1e-3)
+        ref = model.evaluate(res["fz_c"][-1], 0.0, 0.0)
+        stiffness = -(res[force][-1] - res[force][0]) / d
+        assert stiffness == pytest.approx(float(getattr(ref, "c" + axis)), rel=0.03), axis
+    V = 10.0
+    re = float(model.evaluate(4000.0, 0.0, 0.0, vx=V).re)
+    rolling = StepInputs(x=1.0, vx=V, z=float(rl), omega=V / re)
+    for axis, force in (("x", "fx"), ("y", "fy")):
+        def stepped(t):
+            u = replace(rolling, x=1.0 + V * t)
+            if t < t0:
+                return u
+            return replace(u, omega=1.01 * V / re) if axis == "x" else replace(u, vy=0.005 * V, y=0.005 * V * (t - t0))
+        res = tyre.run(0.5, stepped, 1e-4)
+        f, after = res[force], res.t >= t0
+        k0 = int(round(t0 / 1e-4))
+        sigma = np.trapezoid(1.0 - (f[after] - f[k0]) / (f[-1] - f[k0]), (res.t[after] - t0) * V)
+        ref = model.evaluate(res["fz_c"][-1], 0.0, 0.0)
+        expected = float(ref.kxk / ref.cx) if axis == "x" else float(abs(ref.kya) / ref.cy)
+        assert sigma == pytest.approx(expected, rel=0.06), axis
