@@ -2,10 +2,12 @@
 SciPy reference, both from the equations of :mod:`swift.ring`.
 
     import mftyre
+    from mftyre.transient import free_rolling_start
     from swift import SwiftTyre, StepInputs, Cleat
     model = mftyre.load_tir("tir_files/car_205_60R15_mf62_swift.tir")
     tyre = SwiftTyre(model, Cleat(x0=1.0, length=0.05, height=0.01), x_range=(0.0, 25.0))
-    u = StepInputs(vx=11.1, z=0.29, omega=11.1 / 0.305)           # axle height fixed, spin imposed
+    omega, z = free_rolling_start(model, 11.1)                     # free rolling under FNOMIN
+    u = StepInputs(vx=11.1, z=z, omega=omega)                      # axle height fixed, spin imposed
     state = tyre.initial_state(u)                                  # static equilibrium on the road
     state, out = tyre.step(state, u, 1e-3)                        # one step: state_next, outputs by name
     res = tyre.run(2.0, u)                                         # 2 s, outputs every 1 ms (SimResult)

@@ -659,7 +659,9 @@ def test_libcosim_runs_four_tyres_of_each_model(fmus):
         got = obs.last_real_values(slave_index=idx, variable_references=[vr["Fx"], vr["Fz"], vr["My"]])
         ref = fmpy.simulate_fmu(str(path), stop_time=0.2, output_interval=1e-3, start_values=start)
         for value, name in zip(got, ("Fx", "Fz", "My")):
-            assert value == pytest.approx(ref[name][-1], rel=1e-12, abs=1e-9), (kind, idx, name)
+            # rel 1e-10: the hosts' step sizes differ in the last bit (libcosim: integer ns; fmpy: float times),
+            # which the SWIFT ring's stiff patch loop carries to ~1e-12 of Fx over 200 steps (1.5e-9 N of 1476 N)
+            assert value == pytest.approx(ref[name][-1], rel=1e-10, abs=1e-9), (kind, idx, name)
 
 
 @pytest.mark.parametrize("args, text", [
