@@ -241,9 +241,10 @@ _TABLE: dict[str, list[tuple]] = {
         ("DAMP_VLOW", 0.001, "time", "6", "Additional low speed damping (proportional to stiffness)"),
         ("Q_BVX", 0.0, "-", "6", "Load and speed influence on in-plane translation stiffness"),
         ("Q_BVT", 0.0, "-", "6", "Load and speed influence on in-plane rotation stiffness"),
-        ("SWIFT_PSTIFF", 0.0, "-", "6", "SWIFT ring (mftyre): sidewall stiffness pressure dependency", True),
-        ("SWIFT_PDAMP", 0.0, "-", "6", "SWIFT ring (mftyre): sidewall and residual damping pressure dependency",
-         True),
+        ("SWIFT_PSTIFF", 0.0, "-", "6", "SWIFT ring (mftyre): sidewall stiffness pressure dependency (absent: "
+         "PFZ1)", True),
+        ("SWIFT_PDAMP", 0.0, "-", "6", "SWIFT ring (mftyre): sidewall and residual damping pressure dependency "
+         "(absent: -SWIFT_PSTIFF/2 of the absent default)", True),
         ("PCFX1", 0.0, "-", "6", "Longitudinal stiffness: linear vertical deflection dependency"),
         ("PCFX2", 0.0, "-", "6", "Longitudinal stiffness: quadratic vertical deflection dependency"),
         ("PCFX3", 0.0, "-", "6", "Longitudinal stiffness: pressure dependency"),

@@ -65,7 +65,7 @@ import numpy as np
 from .backend import NUMPY
 from .errors import ModelInputError
 
-__all__ = ["StateFunctions", "WheelFunctions", "wheel_functions", "WheelTyre", "KINDS", "VERTICAL_MODES", "VX_MIN",
+__all__ = ["StateFunctions", "WheelFunctions", "wheel_functions", "free_rolling_start", "WheelTyre", "KINDS", "VERTICAL_MODES", "VX_MIN",
            "input_table", "OUTPUTS", "PARAMETERS", "default_tau_vlow", "kinematic_slips", "mf_slip", "slip_speeds",
            "wheel_vertical_force", "contact_load", "vertical_couples_forces", "load_at_radius",
            "wheel_centre_moments"]
@@ -111,21 +111,35 @@ def input_table(vertical: str, turn_slip: bool = False) -> dict:
     common = {
         "vx": ("m/s", 10.0, "wheel-centre velocity along ISO-W x (wheel heading projected on the road)"),
         "vy": ("m/s", 0.0, "wheel-centre velocity along ISO-W y (to the left)"),
-        "omega": ("rad/s", 10.0 / 0.3, "wheel spin speed about the axle (positive rolling forwards)"),
+        "omega": ("rad/s", float("nan"), "wheel spin speed about the axle (positive rolling forwards; start: free "
+                  "rolling at the start vx under FNOMIN)"),
         "gamma": ("rad", 0.0, "inclination (camber) of the wheel plane about ISO-W x"),
         "road_camber": ("rad", 0.0, "road camber (banking) about ISO-W x; the MF gets gamma - road_camber"),
         "p": ("Pa", float("nan"), "inflation pressure (start: the .tir INFLPRES)"),
         "mu_scale": ("1", 1.0, "friction scaling: multiplies LMUX and LMUY of the .tir"),
     }
     if vertical == "position":
-        common.update({"z": ("m", 0.3, "wheel-centre height, ISO-W z (same datum as road_z)"),
+        common.update({"z": ("m", float("nan"), "wheel-centre height, ISO-W z (same datum as road_z; start: the "
+                             "loaded radius at FNOMIN)"),
                        "road_z": ("m", 0.0, "road height under the wheel, ISO-W z")})
     else:
-        common["Fz_in"] = ("N", 4000.0, "vertical load on the tyre (negative = no contact)")
+        common["Fz_in"] = ("N", float("nan"), "vertical load on the tyre (negative = no contact; start: FNOMIN)")
     if turn_slip:
         common["yaw_rate"] = ("rad/s", 0.0, "yaw velocity of the wheel about ISO-W z (vehicle yaw rate + steer rate); "
                                             "turn slip phit = -yaw_rate / max(Vc, VXLOW)")
     return common
+
+
+def free_rolling_start(model, vx: float) -> tuple[float, float]:
+    """(omega, z): the spin [rad/s] of free rolling at ``vx`` [m/s] (omega R_e = vx, R_e of the MF at FNOMIN and
+    INFLPRES, which depends on the spin through R_omega: fixed-point passes) and the loaded radius [m] at FNOMIN:
+    the start inputs of the FMUs, so that a tyre with no inputs set rolls freely under its nominal load."""
+    prm = model.params
+    omega = vx / prm.UNLOADED_RADIUS
+    for _ in range(4):
+        omega = vx / float(model.evaluate(prm.FNOMIN, 0.0, 0.0, vx=vx, p=prm.INFLPRES, omega=omega).re)
+    rl, _ = model.loaded_radius(prm.FNOMIN, p=prm.INFLPRES, omega=omega)
+    return omega, float(rl)
 
 
 def default_tau_vlow(model) -> float:
@@ -258,7 +272,9 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
         warnings.warn("Q_FCX/Q_FCY (Fx/Fy influence on the vertical stiffness) are not included in the wheel "
                       "model's vertical force", stacklevel=2)
     table = input_table(vertical, turn_slip)
-    starts = [prm.INFLPRES if n == "p" else s for n, (_, s, _) in table.items()]
+    omega0, z0 = free_rolling_start(model, table["vx"][1])
+    starts = [{"p": prm.INFLPRES, "omega": omega0, "z": z0, "Fz_in": prm.FNOMIN}.get(n, s)
+              for n, (_, s, _) in table.items()]
     u = ca.SX.sym("u", len(table))
     U = {n: u[i] for i, n in enumerate(table)}
     q_names = ("tau_vlow",) if kind == "transient" else ()

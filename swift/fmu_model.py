@@ -2,10 +2,12 @@
 rigid ring of :mod:`swift.ring` stepped by :class:`swift.simulate.SwiftTyre`'s RK4 step over a road table.
 
     import mftyre
+    from mftyre.transient import free_rolling_start
     from swift.fmu_model import SwiftWheel
-    wheel = SwiftWheel(mftyre.load_tir("tir_files/car_205_60R15_mf62_swift.tir"),
-                       "cleat(x0=3.0, length=0.05, height=0.01)")
-    wheel.set_inputs(vx=10.0, omega=10.0 / 0.305, z=0.29)
+    model = mftyre.load_tir("tir_files/car_205_60R15_mf62_swift.tir")
+    wheel = SwiftWheel(model, "cleat(x0=3.0, length=0.05, height=0.01)")
+    omega, z = free_rolling_start(model, 10.0)     # free rolling under FNOMIN (also the FMU's start inputs)
+    wheel.set_inputs(vx=10.0, omega=omega, z=z)
     wheel.set_parameters(x_start=0.0)
     wheel.initialise()
     wheel.step(1e-3); wheel.outputs()["Fz"]
@@ -32,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mftyre.errors import ModelInputError
-from mftyre.transient import StateFunctions
+from mftyre.transient import StateFunctions, free_rolling_start
 
 from .enveloping import Cams
 from .ring import INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES
@@ -54,9 +56,11 @@ SUBSTEPS = 1
 INPUTS = {  # name -> (unit, start, description)
     "vx": ("m/s", 10.0, "wheel-centre velocity along ISO-W x (wheel heading projected on the road)"),
     "vy": ("m/s", 0.0, "wheel-centre velocity along ISO-W y (to the left)"),
-    "omega": ("rad/s", 10.0 / 0.3, "rim spin speed (imposed; positive rolling forwards)"),
+    "omega": ("rad/s", float("nan"), "rim spin speed (imposed; positive rolling forwards; start: free rolling at "
+              "the start vx under FNOMIN)"),
     "gamma": ("rad", 0.0, "rim inclination (camber) about ISO-W x"),
-    "z": ("m", 0.29, "wheel-centre height above the road datum, ISO-W z (imposed)"),
+    "z": ("m", float("nan"), "wheel-centre height above the road datum, ISO-W z (imposed; start: the loaded radius "
+          "at FNOMIN)"),
     "vz": ("m/s", 0.0, "wheel-centre vertical velocity (z moves with it within a step)"),
     "p": ("Pa", float("nan"), "inflation pressure (start: the .tir INFLPRES)"),
     "road_z": ("m", 0.0, "height of the whole road profile above the road datum (the tyre meets z - road_z)"),
@@ -155,7 +159,10 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
 
     # one RK4 step in the road frame, then the rim's lateral position back to the frame origin
     xn = lifted(tyre.step_function(lifted(x, -U["road_z"]), uring, dt, x0w, grid, hw)[0], U["road_z"])
-    xn = ca.vertcat(xn[:_S["yb"]], xn[_S["yb"]] - U["vy"] * dt, xn[_S["yb"] + 1:])
+    parts = ca.vertsplit(xn)
+    for n in ("yb", "ya"):
+        parts[_S[n]] = parts[_S[n]] - U["vy"] * dt
+    xn = ca.vertcat(*parts)
     step = ca.Function("swift_substep", [x, u, dt, x0w, grid, hw], [xn], ["x", "u", "dt", "x0w", "grid", "hw"],
                        ["x_next"])
     ring_out = dict(zip(OUTPUT_NAMES, ca.vertsplit(tyre.output_function(lifted(x, -U["road_z"]), uring, x0w,
@@ -183,7 +190,8 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
              + "/* cam height and road-camber slope per sample, interleaved */\n"
              + "static const double ROAD_H[2 * ROAD_N] = {" + ",".join(repr(float(v)) for v in h) + "};\n"
              + "static const double ROAD_GRID[ROAD_WINDOW] = {" + ",".join(repr(float(v)) for v in grid_v) + "};\n")
-    starts = tuple(prm.INFLPRES if n == "p" else v[1] for n, v in INPUTS.items())
+    omega0, z0 = free_rolling_start(model, INPUTS["vx"][1])
+    starts = tuple({"p": prm.INFLPRES, "omega": omega0, "z": z0}.get(n, v[1]) for n, v in INPUTS.items())
     return SwiftFunctions(init=init, step=step, out=outw, state_names=STATE_NAMES, input_names=tuple(INPUTS),
                           parameter_names=tuple(PARAMETERS), output_names=tuple(OUTPUTS),
                           parameter_starts=(float(x_start), 1e-3), input_starts=starts, table_x0=float(table.x0),

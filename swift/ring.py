@@ -7,7 +7,9 @@ to the belt by residual springs; the effective road from the tandem cams (:mod:`
 ISO-W axes (x forward, y left, z up), small angles, forward rolling = positive spin about +y.
 
 State (``STATE_NAMES``): belt x_b, z_b, y_b [m], velocities; wind-up theta_w = theta_b - theta_a; belt and rim
-spin Omega_b, Omega_a; axle z_a, its velocity, axle x_a; belt camber gamma_b and yaw psi_b with rates; residual
+spin Omega_b, Omega_a; axle z_a, its velocity, axle x_a and rim lateral position y_a (imposed at each step start
+from the inputs x, y and moving with vx, vy within the step: a rim position held over a step while the belt moves
+on stretched the sidewall by c_by vy h/2, steady cornering 9-119 % off at 1-5 ms); belt camber gamma_b and yaw psi_b with rates; residual
 (patch) deflections u_x, u_y, residual yaw psi_r; transient slips kappa', alpha'; the filtered effective slope
 betaf (for the rate at which the effective plane turns, below); the contact solution of the last step, x_c - x_b
 and l_s (memory, not integrated: the stepper starts its Newton pass there and stores the new solution after each
@@ -15,7 +17,13 @@ step; the exact right-hand side solves from scratch).
 
 Sidewall (rim -> belt) [chosen from the parameter comments "undamped frequency / dimensionless damping of the
 ... mode", NOTES sec. 4.2], pressure-aware through this project's own parameters SWIFT_PSTIFF, SWIFT_PDAMP
-(0 = no pressure effect; dpi = (p - NOMPRES)/NOMPRES):
+(0 = no pressure effect; dpi = (p - NOMPRES)/NOMPRES). Where the file does not give them they default to
+SWIFT_PSTIFF = PFZ1 (the sidewall stiffens with pressure as the file's vertical stiffness does, paper (3); seed
+002: the vertical stiffness is the tyre property that carries the pressure effect on enveloping) and SWIFT_PDAMP =
+-PFZ1/2 (the sidewall damping coefficients k_b stay the same to first order, as for a damper whose hysteresis does
+not depend on pressure, so the damping ratios fall as the stiffness rises: seed 001, FE tyre over a bump at
+160/200/242 kPa, decays fastest at the lowest pressure) [chosen]; with both 0 the damping ratio of the vertical
+belt mode rose with pressure (0.102 -> 0.114 from 1.6 to 2.4 bar, sample file):
     c_bx = c_bz = m_b (2 pi FREQ_LONG)^2 f_c,  c_by = m_b (2 pi FREQ_LAT)^2 f_c,
     c_bg = c_bpsi = I_bx (2 pi FREQ_YAW)^2 f_c,  c_bth = I_by (2 pi FREQ_WINDUP)^2 f_c,   f_c = 1 + SWIFT_PSTIFF dpi
     k_b = 2 DAMP_* f_d sqrt(c_b M),  residual time constant (DAMP_RESIDUAL + low-speed part) f_d,
@@ -29,9 +37,15 @@ Residual springs in series so that the static stiffness of ring + residual is th
     bottoming (vertical.py): the rim pushes on the road directly, BOTTOM_STIFF (RIM_RADIUS + BOTTOM_OFFST - d_a)
               with d_a the rim-centre distance to the effective plane; it acts on the rim, not through the
               sidewall (so the static Fz(rho) is the MF relation including bottoming) [chosen]
-    1/C_x = 1/c_bx + r_c^2/c_bth + 1/c_rx,  1/C_y = 1/c_by + r_c^2/c_bg + 1/c_ry   (C_x, C_y of paper (17),
-              (18) at the current load and pressure; lever terms dropped, with a warning, where they would make
-              a residual stiffness non-positive [chosen guard])
+    1/C_x = 1/c_bx + r_c^2/c_bth + 1/c_rx + sigma_c/K_xk,  1/C_y = 1/c_by + r_c^2/c_bg + 1/c_ry + sigma_c/K_ya
+              (C_x, C_y of paper (17), (18) at the current load and pressure; K_xk, K_ya the MF slip stiffnesses:
+              sigma_c/K is the contact patch's static compliance, the transient slip being the patch deflection over
+              sigma_c at standstill; ring + residual + patch = the measured static stiffness, so that the overall
+              relaxation lengths are the MF's K/C, NOTES 4.4. Old: the patch term was left out, static C_x 277 kN/m
+              for 358, relaxation lengths 0.31/0.57 m for 0.25/0.53 m) [chosen]; lever terms dropped, with a warning,
+              where they would make a residual stiffness non-positive; the residual compliance floored at
+              RESIDUAL_FLOOR of 1/C where the patch alone is softer (light or very heavy loads; a warning where it
+              acts within 0.5-1.5 FNOMIN) [chosen guards]
     1/C_psi = 1/c_bpsi + 1/c_rpsi,  C_psi = YAW_STIFFNESS (1 + PCMZ1 dpi)   (NOTES sec. 2.6, 4.2)
     residual damping k_r = (DAMP_RESIDUAL + DAMP_VLOW max(0, 1 - |V|/VXLOW)) f_d c_r [chosen: stiffness
     proportional, DAMP_VLOW faded in linearly below VXLOW]
@@ -61,15 +75,18 @@ kappa_e = d beta_y/dx = cos^2(beta_y) (h_f' - h_r')/l_s, and
       (4 kN). Output ``dre`` = Delta r_e from the current effective curvature (kappa_s = cos(beta_y) kappa_e; the
       steady value; 1 - r_c kappa_s and 1 - t floored at 0.2 where a concave corner is tighter than the belt
       centre distance, e.g. the foot of a 50 mm kerb [chosen guard]). In the slip, beta_dot is the actual rate
-      of the effective slope (with the forward shift and the tandem base moving): the slope filtered over
-      SLOPE_FILTER of travel, state ``betaf``, beta_dot = |V_cx| (beta_y - betaf)/sigma_f, sigma_f = max(
-      SLOPE_FILTER, |V_cx| h/2), which is exact on a constant curvature and keeps the right-hand side
-      continuous where a cam first touches an edge (the slope has a kink there) [chosen]; the filter runs at a
+      of the effective slope (with the forward shift and the tandem base moving): the slope filtered over the
+      contact half-length a of travel, state ``betaf``, beta_dot = |V_cx| (beta_y - betaf)/sigma_f, sigma_f =
+      max(a, |V_cx| h/2) (the rolling radius is a property of the belt along the whole contact patch, the same
+      length over which the patch slip relaxes), which is exact on a constant curvature and keeps the right-hand
+      side continuous where a cam first touches an edge (the slope has a kink there) [chosen]. (Old: a numerical
+      4 mm filter, or half a step's travel above 57 km/h at 1 ms; the term's Fx at 60 km/h was +238 / +151 /
+      -74 N with a 4 / 8 / 16 mm filter; now independent of the step, test_swift_revar.) The filter runs at a
       pace of at least 0.1 VXLOW (betaf_dot = max(|V_cx|, 0.1 VXLOW) (beta_y - betaf)/sigma_f), so that the
       static equilibrium (betaf = beta_y) is defined at standstill and beta_dot fades out linearly below
       0.1 VXLOW. SWIFT_REVAR (this project's own, [CONTACT_PATCH]) scales the term: 1 (default) = the
       kinematics above, 0 = off. The default is not neutral on uneven roads (Fx over a 10 x 20 mm cleat, fixed
-      axle, free rim: peak-to-peak 1052 -> 1718 N at 30 km/h, 1048 -> 1286 N at 60 km/h); on a flat road
+      axle, free rim: peak-to-peak 1119 -> 1254 N at 30 km/h, 963 -> 648 N at 60 km/h); on a flat road
       Delta r_e = 0 exactly, on a constant grade to round-off (1e-14 m);
     * the tandem base l_s = ELLIPS_SHIFT 2a(F_r) at the current (static part of the) contact load F_r, solved
       together with x_c by Newton passes (``CONTACT_PASSES`` from an estimate, one per stage in the stepper from
@@ -88,26 +105,30 @@ Contact (normal to the effective plane):
     psidot_r = M'_z
     sigma_c dkappa'/dt + |V_cx| kappa' = -(V_sx + udot_x)
     sigma_c dalpha'/dt + |V_cx| alpha' = ydot_b + r_c gammadot_b + udot_y - V_cx (psi_b + psi_r)
+                                         + |V_cx| s_v c_rpsi psi_r / C_psi   (static twist, below)
     sigma_c = max(a, |V_cx| h) with a the half contact length [chosen, NOTES sec. 4.4] and h the integration
     step (``h`` argument, 0 for the exact model): |V_cx|/sigma_c never exceeds 1/h, so contact loss (a -> 0)
     cannot make the explicit stepper unstable. Off the road (rho_r <= 0) the slips relax to zero with
     ``AIR_TIME``.
-    Slip model: the Magic Formula (MF 6.1/6.2, the .tir's own) at F'_z, kappa', alpha_MF and the rim camber
+    Slip model: the Magic Formula (MF 6.1/6.2, the .tir's own) at F'_z, kappa', alpha' and the rim camber
     gamma_a - road camber [chosen]: the MF's camber is the wheel-plane inclination it was measured at, and the
     measured forces contain the belt's static camber deflection (r_c F_y + M'_x)/c_bg; the belt camber would
     count it twice (car_205_60R15_mf62_swift.tir, 4 kN, 20 m/s: the belt settles 1.4 mrad below a 30 mrad rim
     camber and the MF at the belt camber gives Fy 13 % lower than at the rim camber,
-    test_camber_slip_is_the_rim_camber). The yaw's
-    compensation (the static twist added back, below) has no camber counterpart without a camber slip state:
-    the deflection depends on the forces it would change. So the belt camber acts on the slip only through the
-    geometry (r_c gammadot_b in alpha'). Evaluated at speed max(|V_cx|, VXLOW): the low-speed reduction is not
+    test_camber_slip_is_the_rim_camber). So the belt camber acts on the slip only through the geometry
+    (r_c gammadot_b in alpha'). Evaluated at speed max(|V_cx|, VXLOW): the low-speed reduction is not
     applied again on top of the transient slips (they already vanish properly at standstill, so the tyre keeps
     its static grip), and the forces keep the sign of the slips in both directions of travel (reversing);
     M'_z follows the direction of travel and M'_y the spin direction (signs linear through standstill).
-    alpha_MF = alpha' + s_v ((psi_b - psi_a) + psi_r): the slip comes from the belt and patch heading, and the
-    static twist Mz/C_psi, which the steady-state Magic Formula already contains (it was measured against the rim
-    heading), is added back [chosen], so that the steady state equals the Magic Formula while belt yaw dynamics
-    and YAW_STIFFNESS act on the transient forces.
+    Static twist: the slip comes from the belt and patch heading; the twist Mz/C_psi, which the steady-state
+    Magic Formula already contains (it was measured against the rim heading), is added back as the yaw
+    deflection of the moment the residual spring carries, s_v M_r/C_psi with M_r = c_rpsi psi_r, in the input
+    of the slip-angle relaxation (alpha' below) [chosen], so that the steady state equals the Magic Formula while
+    belt yaw dynamics and YAW_STIFFNESS act on the transient forces. (Earlier form: alpha_MF = alpha' + s_v
+    (psi_b - psi_a + psi_r), the twist from the headings: equal in the steady state, but it passed a rim-yaw
+    change straight into the slip (67-87 % of the Fy change within 7 mm at 60 km/h) and self-excited the
+    belt-yaw mode at 13-34 km/h on the book's DAMP_YAW 0.007; added to alpha' unrelaxed, the lag of psi_r made
+    the 94 Hz camber mode grow at 1-4 m/s, 8 kN on the TNO file; tests/test_swift_modes.py.)
     Forces on the belt (global): F_x = F'_x cos(beta_y) - F'_z sin(beta_y) cos(beta_x), F_z = (F'_x sin(beta_y) +
     F'_z cos(beta_y)) cos(beta_x) + F'_y sin(beta_x), F_y = F'_y cos(beta_x) - F'_z sin(beta_x); moments
     -r_c F'_x + M'_y about y, r_c F'_y + M'_x about x, M'_z about z.
@@ -136,9 +157,10 @@ from mftyre.errors import ModelInputError
 from mftyre.formula import vertical
 
 __all__ = ["RingConstants", "STATE_NAMES", "INPUT_NAMES", "OUTPUT_NAMES", "CONTACT_PASSES", "AIR_TIME",
-           "SLOPE_FILTER", "residual_vertical", "contact_start", "contact_geometry", "ring_equations"]
+           "RESIDUAL_FLOOR", "pressure_coefficients", "residual_vertical", "residual_compliance", "contact_start", "contact_geometry",
+           "ring_equations"]
 
-STATE_NAMES = ("xb", "vxb", "zb", "vzb", "thw", "omb", "oma", "za", "vza", "xa",
+STATE_NAMES = ("xb", "vxb", "zb", "vzb", "thw", "omb", "oma", "za", "vza", "xa", "ya",
                "ux", "kappa", "yb", "vyb", "gb", "wgb", "psb", "wpsb", "uy", "alpha", "psr", "betaf", "xcs", "lsm")
 #: Inputs of one step. x/z/omega of the axle enter through the state (imposed parts are set by the stepper).
 INPUT_NAMES = ("vx", "load", "torque", "p", "y", "vy", "gamma", "psi", "road_camber")
@@ -155,11 +177,8 @@ _SLOPE_FLOOR = (0.2, 0.1)
 AIR_TIME = 5e-3
 #: Load floor [N] of the slip model and contact length: keeps derivatives finite off the road (sqrt(Fz) at 0).
 _FZ_FLOOR = 1e-3
-#: Travel [m] over which the effective slope is filtered to give its rate for the rolling radius variation (the
-#: slope has kinks where a cam first touches an edge): 4 mm keeps the Fx peak-to-peak over a 10 x 20 mm cleat at
-#: 30-60 km/h within 10 % of the unfiltered rate kappa_s V_cx / (1 - r_c kappa_s), and above half a step's travel
-#: (so the same model in the stepper and the exact right-hand side) up to 57 km/h at 1 ms with 2 substeps.
-SLOPE_FILTER = 4e-3
+#: Least residual compliance as a fraction of the overall 1/C_x, 1/C_y (:func:`residual_compliance`).
+RESIDUAL_FLOOR = 0.02
 #: Floor of 1 - r_c kappa_s (and of 1 - turn): where the effective road is concave more tightly than the belt centre
 #: distance the foot of the normal is not unique (foot of a 50 mm kerb: r_c kappa_s up to 1.17) [chosen guard].
 _FOOT_FLOOR = 0.2
@@ -214,6 +233,15 @@ class RingConstants:
             if not ok:
                 warnings.warn(f"residual stiffness c_r{name} with the rotation lever term would be non-positive; "
                               f"using the translation-only series relation", stacklevel=2)
+        sub = (out.fz >= 0.49 * prm.FNOMIN) & (out.fz <= 1.51 * prm.FNOMIN)
+        floored = [name for name, c, ring, k, ok in (("x", out.cx, 1 / cbx + r2 / cbth * lever_x, out.kxk, lever_x),
+                                                     ("y", out.cy, 1 / cby + r2 / cbg * lever_y, out.kya, lever_y))
+                   if np.any((1 / c - ring - out.a / np.maximum(np.abs(k), 1.0) < RESIDUAL_FLOOR / c)[sub])]
+        if floored:
+            warnings.warn(f"residual stiffness c_r{'/c_r'.join(floored)}: the ring and contact patch alone are "
+                          f"softer than LONGITUDINAL/LATERAL_STIFFNESS between 0.5 and 1.5 FNOMIN; the residual "
+                          f"compliance is held at {RESIDUAL_FLOOR} of the overall one there (the static stiffness "
+                          f"comes out lower than the file's)", stacklevel=2)
         if not (1 / out.cx - 1 / cbx > 0).all() or not (1 / out.cy - 1 / cby > 0).all():
             raise ModelInputError("LONGITUDINAL/LATERAL_STIFFNESS exceed the sidewall stiffness from FREQ_*: "
                                   "no positive residual stiffness exists")
@@ -228,9 +256,28 @@ class RingConstants:
                    float(prm.IYY - prm.BELT_IYY + rim_extra_inertia))
 
 
+def residual_compliance(c_total, c_ring, sigma_c, k_slip, be):
+    """1/c_r: the compliance of the residual spring that makes the static series compliance ring (``c_ring``:
+    1/c_b plus the rotation lever) + residual + contact patch (sigma_c / K, the slip model's static stiffness:
+    at standstill the transient slip is the patch deflection over sigma_c) equal the file's 1/``c_total``
+    (LONGITUDINAL/LATERAL_STIFFNESS at the load and pressure); at least RESIDUAL_FLOOR / c_total, where the
+    patch alone is softer (light loads: K ~ Fz, sigma_c ~ sqrt(Fz)) [chosen]."""
+    patch = sigma_c / be.fmax(be.abs(k_slip), 1.0)
+    return be.fmax(1.0 / c_total - c_ring - patch, RESIDUAL_FLOOR / c_total)
+
+
+def pressure_coefficients(prm) -> tuple[float, float]:
+    """(SWIFT_PSTIFF, SWIFT_PDAMP) as used: the file's values, or where the file has none the defaults derived
+    from its vertical pressure term (module notes): PFZ1 and -PFZ1/2."""
+    pstiff = prm.PFZ1 if "SWIFT_PSTIFF" in prm.missing else prm.SWIFT_PSTIFF
+    pdamp = -0.5 * pstiff if "SWIFT_PDAMP" in prm.missing else prm.SWIFT_PDAMP
+    return float(pstiff), float(pdamp)
+
+
 def _pressure_factors(prm, dpi, be):
     """(f_c, f_d): sidewall stiffness and damping factors at pressure (module notes; 1 at SWIFT_P* = 0)."""
-    return 1.0 + prm.SWIFT_PSTIFF * dpi, 1.0 + prm.SWIFT_PDAMP * dpi
+    pstiff, pdamp = pressure_coefficients(prm)
+    return 1.0 + pstiff * dpi, 1.0 + pdamp * dpi
 
 
 def residual_vertical(prm, rho_r, omega, dpi, cbz, be):
@@ -351,28 +398,32 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
     # direction of travel and of spin: +-1, linear through standstill (below 0.1 VXLOW)
     s_v = be.fmin(be.fmax(vcx / (0.1 * prm.VXLOW), -1.0), 1.0)
     s_o = be.fmin(be.fmax(s["omb"] * prm.UNLOADED_RADIUS / (0.1 * prm.VXLOW), -1.0), 1.0)
-    alpha_mf = s["alpha"] + s_v * (s["psb"] - v["psi"] + s["psr"])
+    # static twist (module notes): the yaw deflection M_r / C_psi of the moment the residual spring carries
+    c_psi = prm.YAW_STIFFNESS * (1.0 + prm.PCMZ1 * dpi)
+    crpsi = 1.0 / (1.0 / c_psi - 1.0 / cbg)
+    twist = s_v * crpsi * s["psr"] / c_psi
+    alpha_mf = s["alpha"]
     beta_x = road_camber + v["road_camber"]
     mf = model.casadi_function(inputs=("fz", "kappa", "alpha", "gamma", "vx", "p", "omega"),
-                               outputs=("fx", "fy", "mz", "mx", "my", "re", "a", "cx", "cy"))
-    fxc, fyc, mzc, mxc, myc, re, a, cx, cy = mf(be.fmax(fzc, _FZ_FLOOR), s["kappa"], alpha_mf,
+                               outputs=("fx", "fy", "mz", "mx", "my", "re", "a", "cx", "cy", "kxk", "kya"))
+    fxc, fyc, mzc, mxc, myc, re, a, cx, cy, kxk, kya = mf(be.fmax(fzc, _FZ_FLOOR), s["kappa"], alpha_mf,
                                                  v["gamma"] - beta_x, be.fmax(be.abs(vcx), prm.VXLOW),
                                                  v["p"], s["omb"])
     mzc, myc = mzc * s_v, myc * s_o
 
-    # residual springs in series with sidewall (+ rotation lever): 1/C = 1/c_b (+ r^2/c_rot) + 1/c_r
-    crx = 1.0 / (1.0 / cx - 1.0 / cbx - (r_c**2 / cbth if rc.lever_x else 0.0))
-    cry = 1.0 / (1.0 / cy - 1.0 / cby - (r_c**2 / cbg if rc.lever_y else 0.0))
-    crpsi = 1.0 / (1.0 / (prm.YAW_STIFFNESS * (1.0 + prm.PCMZ1 * dpi)) - 1.0 / cbg)
+    # residual springs in series with sidewall (+ rotation lever) and the contact patch (the slip model's static
+    # stiffness K / sigma_c): 1/C = 1/c_b (+ r^2/c_rot) + 1/c_r + sigma_c/K, floored (module notes)
+    sigma_c = be.fmax(a, be.abs(vcx) * h + 1e-4)
+    crx = 1.0 / residual_compliance(cx, 1.0 / cbx + (r_c**2 / cbth if rc.lever_x else 0.0), sigma_c, kxk, be)
+    cry = 1.0 / residual_compliance(cy, 1.0 / cby + (r_c**2 / cbg if rc.lever_y else 0.0), sigma_c, kya, be)
     uxdot = (fxc - crx * s["ux"]) / (damp * crx)
     uydot = (fyc - cry * s["uy"]) / (damp * cry)
     psrdot = (mzc - crpsi * s["psr"]) / (damp * crpsi)
-    sigma_c = be.fmax(a, be.abs(vcx) * h + 1e-4)
     # effective rolling radius variation (module notes): the belt band runs at (Omega_b + beta_dot) R_e relative to
     # the turning plane, whose contact point moves along the road at V_cx + r_c beta_dot; beta_dot from the slope
-    # filtered over SLOPE_FILTER of travel (at least half a step's travel: stable RK4), the filter paced by at least
+    # filtered over the contact half-length a of travel (at least half a step's travel: stable RK4), paced by at least
     # 0.1 VXLOW (defined at standstill)
-    sigma_f = be.fmax(SLOPE_FILTER, be.abs(vcx) * h / 2 + 1e-4)
+    sigma_f = be.fmax(a, be.abs(vcx) * h / 2 + 1e-4)
     lag = beta - s["betaf"]
     betaf_dot = be.where(contact, be.fmax(be.abs(vcx), 0.1 * prm.VXLOW) * lag / sigma_f, lag / AIR_TIME)
     beta_rate = be.where(contact, be.abs(vcx) * lag / sigma_f, 0.0)
@@ -384,14 +435,14 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
     dre = re * turn / be.fmax(1.0 - turn, _FOOT_FLOOR)  # V_cx / Omega_b = R_e + dre at zero slip
     vcy = s["vyb"] + r_c * s["wgb"] + uydot - vcx * (s["psb"] + s["psr"])
     kappa_dot = be.where(contact, (-(vsx + uxdot) - be.abs(vcx) * s["kappa"]) / sigma_c, -s["kappa"] / AIR_TIME)
-    alpha_dot = be.where(contact, (vcy - be.abs(vcx) * s["alpha"]) / sigma_c, -s["alpha"] / AIR_TIME)
+    alpha_dot = be.where(contact, (vcy + be.abs(vcx) * (twist - s["alpha"])) / sigma_c, -s["alpha"] / AIR_TIME)
 
     # forces on the belt, global axes (plane tilted by beta_y forward, beta_x sideways); bottoming on the rim
     cx_, sx_ = be.cos(beta_x), be.sin(beta_x)
     fx_b, fz_b, fy_b = fxc * cb - fzc * sb * cx_, (fxc * sb + fzc * cb) * cx_ + fyc * sx_, fyc * cx_ - fzc * sx_
     fwx = cbx * (s["xb"] - s["xa"]) + kbx * (s["vxb"] - v["vx"])
     fwz = cbx * (s["zb"] - s["za"]) + kbx * (s["vzb"] - s["vza"])
-    fwy = cby * (s["yb"] - v["y"]) + kby * (s["vyb"] - v["vy"])
+    fwy = cby * (s["yb"] - s["ya"]) + kby * (s["vyb"] - v["vy"])
     mwy = cbth * s["thw"] + kbth * (s["omb"] - s["oma"])
     mwx = cbg * (s["gb"] - v["gamma"]) + kbg * s["wgb"]
     mwz = cbg * (s["psb"] - v["psi"]) + kbg * s["wpsb"]
@@ -405,7 +456,7 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
         "oma": (v["torque"] + mwy) / rc.rim_inertia if rim == "torque" else 0.0 * s["oma"],
         "za": s["vza"],
         "vza": (-v["load"] + fwz + f_bottom * cb) / rc.axle_mass if axle == "load" else 0.0 * s["vza"],
-        "xa": v["vx"], "ux": uxdot, "kappa": kappa_dot,
+        "xa": v["vx"], "ya": v["vy"], "ux": uxdot, "kappa": kappa_dot,
         "yb": s["vyb"], "vyb": (-fwy + fy_b) / rc.mb,
         "gb": s["wgb"], "wgb": (-mwx + r_c * fyc + mxc + rc.iby * s["omb"] * s["wpsb"]) / rc.ibx,
         "psb": s["wpsb"], "wpsb": (-mwz + mzc - rc.iby * s["omb"] * s["wgb"]) / rc.ibx,

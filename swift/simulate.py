@@ -2,10 +2,12 @@
 SciPy reference, both from the equations of :mod:`swift.ring`.
 
     import mftyre
+    from mftyre.transient import free_rolling_start
     from swift import SwiftTyre, StepInputs, Cleat
     model = mftyre.load_tir("tir_files/car_205_60R15_mf62_swift.tir")
     tyre = SwiftTyre(model, Cleat(x0=1.0, length=0.05, height=0.01), x_range=(0.0, 25.0))
-    u = StepInputs(vx=11.1, z=0.29, omega=11.1 / 0.305)           # axle height fixed, spin imposed
+    omega, z = free_rolling_start(model, 11.1)                     # free rolling under FNOMIN
+    u = StepInputs(vx=11.1, z=z, omega=omega)                      # axle height fixed, spin imposed
     state = tyre.initial_state(u)                                  # static equilibrium on the road
     state, out = tyre.step(state, u, 1e-3)                        # one step: state_next, outputs by name
     res = tyre.run(2.0, u)                                         # 2 s, outputs every 1 ms (SimResult)
@@ -67,7 +69,7 @@ from mftyre.formula import vertical
 
 from .enveloping import Cams, CamTable
 from .ring import CONTACT_PASSES, INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, RingConstants, contact_geometry, \
-    contact_start, ring_equations
+    contact_start, pressure_coefficients, ring_equations
 from .road import Road
 
 __all__ = ["StepInputs", "SwiftTyre", "SimResult", "Outputs"]
@@ -87,6 +89,10 @@ TANDEM_REACH = 0.25
 MAX_RK4_STEP = 1e-3
 #: Newton passes of the contact solution in the stepper, from the solution of the previous RK stage.
 WARM_PASSES = 1
+#: Largest derivative (SI units of each state's rate) that :meth:`SwiftTyre.initial_state` accepts as static
+#: equilibrium; converged solutions reach ~1e-11, inputs without an equilibrium leave 1e1-1e3 (a torque the tyre
+#: cannot hold: the Newton iteration ran off to the axle 26 m above the road or 2260 rad/s).
+EQUILIBRIUM_TOL = 1e-6
 
 
 def _with_casadi(method):
@@ -277,7 +283,8 @@ class SwiftTyre:
         import casadi as ca
 
         prm = self.model.params
-        payload = {"p": {k: repr(prm[k]) for k in prm}, "side": self.model.side, "axle": self.axle,
+        payload = {"p": {k: repr(prm[k]) for k in prm}, "pressure": pressure_coefficients(prm),  # (absent: derived)
+                   "side": self.model.side, "axle": self.axle,
                    "rim": self.rim, "window": self.window, "substeps": self.substeps,
                    "constants": repr(self.constants), "kind": kind,
                    "passes": (CONTACT_PASSES, WARM_PASSES), "cflags": _CFLAGS,
@@ -322,7 +329,7 @@ class SwiftTyre:
 
     def _impose(self, state, inputs: StepInputs):
         state = np.array(state, dtype=float)
-        state[_S["xa"]] = inputs.x
+        state[_S["xa"]], state[_S["ya"]] = inputs.x, inputs.y
         if self.axle == "height":
             state[_S["za"]], state[_S["vza"]] = inputs.z, inputs.vz
         if self.rim == "speed":
@@ -538,7 +545,7 @@ class SwiftTyre:
               else vertical.vertical_force_61(prm, r0 - rl, r0, 0.0, 0.0, 0.0, dpi, be))
         guess = dict.fromkeys(STATE_NAMES, 0.0)
         guess.update(xa=xa, xb=xa, za=za, vza=vza, zb=za + be.fmax(fz, 0.0) / self.constants.cbx, vxb=U["vx"],
-                     vyb=U["vy"], oma=omega, omb=omega, yb=U["y"], gb=U["gamma"], psb=U["psi"])
+                     vyb=U["vy"], oma=omega, omb=omega, yb=U["y"], ya=U["y"], gb=U["gamma"], psb=U["psi"])
 
         unknown, eqs = self.equilibrium_unknowns
         s = ca.MX.sym("s", len(STATE_NAMES))
@@ -559,7 +566,9 @@ class SwiftTyre:
     def initial_state(self, inputs: StepInputs, iterations: int = 30) -> np.ndarray:
         """Static equilibrium (steady rolling at the input speeds) at the axle position of ``inputs``: Newton
         on the accelerations and patch rates, from the steady-state model's deflection. With ``rim="torque"`` the
-        spin is an unknown too (``inputs.omega`` its first guess): the rim torque balances the input torque."""
+        spin is an unknown too (``inputs.omega`` its first guess): the rim torque balances the input torque.
+        Raises :class:`~mftyre.errors.ModelInputError` where the iteration ends without equilibrium (residual above
+        :data:`EQUILIBRIUM_TOL`)."""
         import casadi as ca
 
         prm = self.model.params
@@ -578,7 +587,7 @@ class SwiftTyre:
         s[_S["zb"]] = s[_S["za"]] + max(fz, 0.0) / c.cbx
         s[_S["vxb"]], s[_S["vyb"]] = inputs.vx, inputs.vy
         s[_S["oma"]] = s[_S["omb"]] = inputs.omega
-        s[_S["yb"]] = inputs.y
+        s[_S["yb"]] = s[_S["ya"]] = inputs.y
         s[_S["gb"]], s[_S["psb"]] = inputs.gamma, inputs.psi
         unknown, eqs = self.equilibrium_unknowns
         if self._equilibrium is None:
@@ -598,6 +607,17 @@ class SwiftTyre:
             if not size < 0.1 * last:
                 inverse = None
             last = size
+        r = (self._compiled.rhs(s, u, window[0], i0)[0][eqs] if self._compiled is not None
+             else np.asarray(self._equilibrium(s, u, *window)[0])).ravel()
+        worst = int(np.argmax(np.abs(r))) if np.all(np.isfinite(r)) else int(np.argmin(np.isfinite(r)))
+        if not abs(r[worst]) <= EQUILIBRIUM_TOL:
+            raise ModelInputError(
+                f"no static equilibrium at the inputs (vx = {inputs.vx} m/s, "
+                + (f"load = {inputs.load} N" if self.axle == "load" else f"z = {inputs.z} m")
+                + (f", torque = {inputs.torque} N m" if self.rim == "torque" else f", omega = {inputs.omega} rad/s")
+                + f"): after {iterations} Newton steps d({STATE_NAMES[eqs[worst]]})/dt = {r[worst]:.3g} (tolerance "
+                f"{EQUILIBRIUM_TOL:g}); e.g. a drive/brake torque beyond what the tyre transmits at this load, or "
+                f"the tyre off the road")
         self._store_contact(s, u)
         return s
 
@@ -697,6 +717,7 @@ CASADI_SYMBOL_EXPORT int swift_run(void** p) {
     for (i = 0; i < NI; ++i) if (USED[i] && !(u[i] - u[i] == 0)) return -3;
     if (!(u[%(p)d] > 0)) return -3;
     s[%(xa)d] = u[NU];
+    s[%(ya)d] = u[%(y)d];
     if (%(height)d) { s[%(za)d] = u[NU + 1]; s[%(vza)d] = u[NU + 2]; }
     if (%(speed)d) s[%(oma)d] = u[NU + 3];
     parts = fmax(ceil(fabs(u[0]) * dt / cfg[3]), ceil(dt / cfg[4] - 1e-9));
@@ -753,7 +774,8 @@ def _library(tyre, key: str) -> Path:
         with source.open("a") as f:
             f.write(_DRIVER % dict(nx=len(STATE_NAMES), ny=len(OUTPUT_NAMES), nu=_NU, ni=_NI, window=tyre.window,
                                    height=int(tyre.axle == "height"), speed=int(tyre.rim == "speed"),
-                                   used=", ".join(str(int(u)) for u in _used(tyre)), p=INPUT_NAMES.index("p"), **_S))
+                                   used=", ".join(str(int(u)) for u in _used(tyre)), p=INPUT_NAMES.index("p"),
+                                   y=INPUT_NAMES.index("y"), **_S))
         meta = {"inputs": list(INPUT_NAMES), "outputs": list(OUTPUT_NAMES), "checks": [], "states": list(STATE_NAMES)}
         return source, (*_CFLAGS, "-fPIC", "-shared"), ("-lm",), meta
 

@@ -659,7 +659,9 @@ def test_libcosim_runs_four_tyres_of_each_model(fmus):
         got = obs.last_real_values(slave_index=idx, variable_references=[vr["Fx"], vr["Fz"], vr["My"]])
         ref = fmpy.simulate_fmu(str(path), stop_time=0.2, output_interval=1e-3, start_values=start)
         for value, name in zip(got, ("Fx", "Fz", "My")):
-            assert value == pytest.approx(ref[name][-1], rel=1e-12, abs=1e-9), (kind, idx, name)
+            # rel 1e-10: the hosts' step sizes differ in the last bit (libcosim: integer ns; fmpy: float times),
+            # which the SWIFT ring's stiff patch loop carries to ~1e-12 of Fx over 200 steps (1.5e-9 N of 1476 N)
+            assert value == pytest.approx(ref[name][-1], rel=1e-10, abs=1e-9), (kind, idx, name)
 
 
 @pytest.mark.parametrize("args, text", [
@@ -819,3 +821,37 @@ def test_outputs_in_initialisation_mode_are_those_of_the_initial_state(fmus, tmp
 def test_options_of_the_other_backend_are_refused(tmp_path, capsys, args, text):
     assert _build([TIR62, "-o", tmp_path / "x.fmu", *args]) == 1
     assert text in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("h", [1e-3, 5e-3])
+def test_native_swift_steady_cornering_equals_magic_formula(fmus, models, tmp_path, h):
+    """Constant lateral axle speed (4 and 10 deg, kappa 0 and 0.1), imposed spin, axle height fixed: the native
+    SWIFT FMU's rim forces equal the MF at its own Fz_c, slip angle and spin within 1 % at 1 and 5 ms steps (old:
+    Fy 10-21 % off, growing with the internal step: the rim's y was held over a step while the belt moved on)."""
+    from test_swift_steady import V, _spin, assert_magic_formula
+
+    model = models["62"]
+    rl, _ = model.loaded_radius(4000.0)
+    for deg, kappa in ((4.0, 0.0), (10.0, 0.1)):
+        vy, omega = -V * math.tan(math.radians(deg)), _spin(model, kappa)
+        nat = Slave(fmus["swift"], tmp_path).initialise(vx=V, vy=vy, omega=omega, z=float(rl), x_start=-10.0)
+        for _ in range(int(round(0.3 / h))):
+            nat.step(h)
+        out = nat.get()
+        assert_magic_formula(model, out["Fx"], out["Fy"], out["Fz_c"], out["Re"], vy, omega, f"{deg} deg {kappa}")
+        nat.close()
+
+
+def test_default_inputs_roll_freely(fmus, tmp_path):
+    """No inputs set: the steady, transient and SWIFT FMUs roll freely under the nominal load (start omega R_e = vx,
+    z at the loaded radius of FNOMIN): slip ~0 and |Fx| no more than the MF's own force at zero slip (old: omega
+    10/0.3 rad/s at 10 m/s, a 1.4 % drive slip: Fx 794 N steady, 1362 N SWIFT)."""
+    for kind, path in fmus.items():
+        nat = Slave(path, tmp_path, name=kind).initialise()
+        for _ in range(50):
+            nat.step(1e-3)
+        out = nat.get()
+        assert abs(out["kappa"]) < 1e-4, kind
+        assert abs(out["Fx"]) < 0.01 * out["Fz"], kind
+        assert out["Fz"] == pytest.approx(4000.0, rel=0.05), kind  # FNOMIN of the files (rim: less the belt)
+        nat.close()

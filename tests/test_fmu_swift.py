@@ -360,3 +360,32 @@ def test_standstill_start_and_rest(model, swift_fmu, tmp_path):
     assert np.ptp(fz) < 1e-6 and fz[0] > 0.8 * float(model.vertical_force(z))
     assert np.ptp([o["Fx"] for _, o in rows]) < 1e-6 and rows[-1][1]["x_road"] == 0.0
     fmu.close()
+
+
+@pytest.mark.parametrize("h", [1e-3, 5e-3])
+def test_steady_cornering_equals_magic_formula(model, swift_fmu, tmp_path, h):
+    """Constant lateral axle speed (4 and 10 deg, kappa 0 and 0.1), imposed spin, flat road: the pythonfmu SWIFT
+    FMU's rim forces equal the MF at its own Fz_c, slip angle and spin within 1 % at 1 and 5 ms steps."""
+    from test_swift_steady import V, _spin, assert_magic_formula
+
+    rl, _ = model.loaded_radius(4000.0)
+    for deg, kappa in ((4.0, 0.0), (10.0, 0.1)):
+        vy, omega = -V * math.tan(math.radians(deg)), _spin(model, kappa)
+        fmu = Slave(swift_fmu, tmp_path, start={"vx": V, "vy": vy, "omega": omega, "z": float(rl)})
+        for k in range(int(round(0.3 / h))):
+            fmu.fmu.doStep(k * h, h)
+        out = fmu.get("Fx", "Fy", "Fz_c", "Re")
+        assert_magic_formula(model, out["Fx"], out["Fy"], out["Fz_c"], out["Re"], vy, omega, f"{deg} deg {kappa}")
+        assert fmu.status() == 0
+        fmu.close()
+
+
+def test_default_inputs_roll_freely(swift_fmu, tmp_path):
+    """No inputs set: the pythonfmu SWIFT FMU rolls freely under the nominal load (slip ~0, |Fx| < 1 % of Fz)."""
+    fmu = Slave(swift_fmu, tmp_path)
+    for k in range(50):
+        fmu.fmu.doStep(k * 1e-3, 1e-3)
+    out = fmu.get("Fx", "Fz", "kappa")
+    assert abs(out["kappa"]) < 1e-4 and abs(out["Fx"]) < 0.01 * out["Fz"]
+    assert out["Fz"] == pytest.approx(4000.0, rel=0.05)
+    fmu.close()

@@ -26,6 +26,8 @@ import tempfile
 import warnings
 from pathlib import Path
 
+from mftyre.transient import free_rolling_start
+
 HERE = Path(__file__).resolve().parent
 MODELS = ("steady", "swift")
 INPUT_MODES = ("vehicle", "rig")
@@ -129,8 +131,7 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
             shutil.copytree(Path(swift.__file__).parent, stage / "vendor" / "swift",
                             ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.so"))
 
-        rl0, _ = tyre.loaded_radius(prm.FNOMIN, p=prm.INFLPRES)
-        re0 = float(tyre.evaluate(prm.FNOMIN, 0.0, 0.0, vx=prm.LONGVL, p=prm.INFLPRES).re)
+        omega0, rl0 = free_rolling_start(tyre, float(prm.LONGVL))  # no inputs set: free rolling under FNOMIN
         config = {
             "tir": "tyre.tir",
             "tir_name": tir.name,
@@ -142,7 +143,7 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
             "parameters": {"tir_file": "", "model": model, "side": tyre.side, "input_mode": input_mode,
                            "vertical_input": vertical_input, "evaluator": "auto", "road": "", "rim": "speed",
                            "x_start": 0.0, "max_step": 1e-3, "axle_mass": 30.0},
-            "inputs": {"vx": float(prm.LONGVL), "vy": 0.0, "omega": float(prm.LONGVL) / re0, "gamma": 0.0,
+            "inputs": {"vx": float(prm.LONGVL), "vy": 0.0, "omega": omega0, "gamma": 0.0,
                        "z": float(rl0), "road_z": 0.0, "Fz_in": float(prm.FNOMIN), "p": float(prm.INFLPRES),
                        "kappa_in": 0.0, "alpha_in": 0.0, "vz": 0.0, "torque": 0.0},
         }

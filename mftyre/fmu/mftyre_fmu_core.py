@@ -517,6 +517,7 @@ class SwiftCore:
                 self._recentre_x(state)
                 state, out = self.tyre.step(state, self._inputs(u, state, u["vz"] * k * dt), dt)
                 state[S["yb"]] -= u["vy"] * dt  # the rim moved by vy dt: keep its y at 0
+                state[S["ya"]] -= u["vy"] * dt
             if h <= 0 or out is None:
                 state, out = self.tyre.step(state, self._inputs(u, state), 0.0)
             self._recentre_x(state)

@@ -1,0 +1,59 @@
+"""SWIFT linear modes: the eigenvalue table of the rigid ring rolling on a flat road (swift.modes), axle height
+fixed at the loaded radius, rim free to spin, no slip:
+
+    python benchmarks/bench_swift_modes.py [--tir FILE.tir ...] [--load 4000] [--grid]
+
+Per file: for each speed the damped natural frequencies [Hz] with their damping ratios, sorted by frequency, and
+the slowest decay rate max Re(lambda) [1/s] (negative: every mode damped). ``--grid``: also the worst point of
+the scan of tests/test_swift_modes.py (0.5-70 m/s forward and reverse, 2-8 kN, PRESMIN..PRESMAX held to
+0.7-1.3 NOMPRES) with the time it took. Default files: the bundled SWIFT sample and the shared TNO file.
+"""
+from __future__ import annotations
+
+import argparse
+import time
+import warnings
+from pathlib import Path
+
+import mftyre
+
+ROOT = Path(__file__).resolve().parents[1]
+SPEEDS = (0.5, 2.0, 7.0, 15.0, 25.0, 40.0, 70.0, -7.0)
+GRID_SPEEDS = [s * v for v in (0.5, 2.0, 4.0, 7.0, 9.0, 15.0, 30.0, 70.0) for s in (1.0, -1.0)]
+
+
+def main():
+    from swift import Flat, SwiftTyre
+    from swift.modes import modes, scan
+
+    default = [ROOT / "tir_files" / "car_205_60R15_mf62_swift.tir",
+               ROOT.parent / "shared" / "reference" / "tir" / "TNO_car205_60R15.tir"]
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--tir", nargs="+", type=Path, default=[p for p in default if p.exists()])
+    ap.add_argument("--load", type=float, default=4000.0, help="vertical load of the table [N]")
+    ap.add_argument("--grid", action="store_true", help="also the worst point of the full scan")
+    args = ap.parse_args()
+    for path in args.tir:
+        model = mftyre.load_tir(path)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            tyre = SwiftTyre(model, Flat(), axle="height", rim="torque", x_range=(0.0, 3.0))
+        prm = model.params
+        print(f"\n{path.name}: Fz {args.load:.0f} N, p {prm.INFLPRES / 1e5:.2f} bar; frequency [Hz] (damping ratio)")
+        print(f"{'vx [m/s]':>9}  {'max Re [1/s]':>12}  modes")
+        for v in SPEEDS:
+            m = modes(tyre, v, args.load)
+            order = m.frequency.argsort()
+            cells = "  ".join(f"{f:5.1f} ({z:.3f})" for f, z in zip(m.frequency[order], m.damping[order]))
+            print(f"{v:9.1f}  {m.max_real:12.2f}  {cells}")
+        if args.grid:
+            lo, hi = max(prm.PRESMIN, 0.7 * prm.NOMPRES), min(prm.PRESMAX, 1.3 * prm.NOMPRES)
+            t0 = time.perf_counter()
+            rows = scan(tyre, GRID_SPEEDS, (2000.0, 5000.0, 8000.0), sorted({lo, prm.INFLPRES, hi}))
+            worst = max(rows, key=lambda r: r.max_real)
+            print(f"scan of {len(rows)} points ({time.perf_counter() - t0:.1f} s): slowest decay "
+                  f"{worst.max_real:.2f} 1/s at vx {worst.vx} m/s, Fz {worst.fz:.0f} N, p {worst.p / 1e5:.2f} bar")
+
+
+if __name__ == "__main__":
+    main()
