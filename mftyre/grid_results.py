@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .files import OutputError, check_outputs
+from .files import OutputError, check_outputs, make_output_folder, write_figure, write_frame_csv
 
 __all__ = ["check_request", "sweep_grid", "grid_frame", "format_table", "plot_grid", "write_results"]
 
@@ -108,9 +108,7 @@ def plot_grid(args, out, swept: list[str], shape, outputs, *, output_units: dict
     if others and len(combos) <= 12:
         axes[0].legend(fontsize=7)
     fig.suptitle(title, fontsize=10)
-    path = Path(args.plot)
-    fmt = path.suffix[1:].lower() if path.suffix[1:].lower() in fig.canvas.get_supported_filetypes() else "png"
-    fig.savefig(path, format=fmt)
+    write_figure(fig, args.plot)
 
 
 def write_results(args, table, plot) -> None:
@@ -118,10 +116,10 @@ def write_results(args, table, plot) -> None:
     where asked, creating missing folders, and say so on stderr. :func:`check_request` has allowed both."""
     for target in (args.csv, args.plot):
         if target is not None:
-            Path(target).parent.mkdir(parents=True, exist_ok=True)
+            make_output_folder(Path(target).parent)
     if args.csv is not None:
         frame = table()
-        frame.to_csv(args.csv, index=False)
+        write_frame_csv(frame, args.csv, index=False)
         print(f"wrote {args.csv} ({len(frame)} rows, {frame.shape[1]} columns)", file=sys.stderr)
     if args.plot is not None:
         plot()

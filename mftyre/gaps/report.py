@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..files import make_output_folder, write_atomically, write_figure
 from .locate import cell_table
 from .residuals import UNITS
 
@@ -151,8 +152,7 @@ def plot_errors(rep, path) -> Path:
     ax.legend(fontsize=7)
     ax.set_title("normalised RMS error on held-out sweeps", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path)
-    return Path(path)
+    return write_figure(fig, path)
 
 
 def _map_targets(rep, limit=3):
@@ -196,20 +196,19 @@ def plot_residual_maps(rep, path) -> Path | None:
         for j in range(2):
             axes[i, j].set_ylim(lo, hi)
     fig.tight_layout()
-    fig.savefig(path)
-    return Path(path)
+    return write_figure(fig, path)
 
 
 def save_report(rep, directory) -> Path:
     """Write ``report.md``, ``errors.png``, ``residual_maps_before_after.png`` and ``gaps.json`` into
     ``directory``; returns the Markdown path."""
     d = Path(directory)
-    d.mkdir(parents=True, exist_ok=True)
+    make_output_folder(d)
     names = {"errors": plot_errors(rep, d / "errors.png").name}
     maps = plot_residual_maps(rep, d / "residual_maps_before_after.png")
     if maps is not None:
         names["maps"] = maps.name
     md = d / "report.md"
-    md.write_text(markdown_report(rep, names), encoding="utf-8")
+    write_atomically(md, markdown_report(rep, names))
     rep.to_json(d / "gaps.json")
     return md
