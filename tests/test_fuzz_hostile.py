@@ -16,7 +16,8 @@ import pytest
 import mftyre
 from mftyre import cli
 from mftyre.errors import DataError, MFTyreError, TirError
-from mftyre.files import OutputError, write_atomically, write_figure, write_frame_csv
+from mftyre import files
+from mftyre.files import OutputError, write_atomically
 
 from conftest import TIR_FILES
 
@@ -66,14 +67,14 @@ def test_figures_and_tables_are_rendered_in_memory_then_written_by_the_routine(t
     fig = Figure()
     FigureCanvasAgg(fig)
     fig.subplots().plot([0, 1])
-    assert write_figure(fig, tmp_path / "a.png").read_bytes()[:4] == b"\x89PNG"
-    assert write_figure(fig, tmp_path / "a.svg").read_text().lstrip().startswith("<?xml")
-    write_frame_csv(pd.DataFrame({"a": [1, 2]}), tmp_path / "t.csv", index=False)
+    assert files.write_figure(fig, tmp_path / "a.png").read_bytes()[:4] == b"\x89PNG"
+    assert files.write_figure(fig, tmp_path / "a.svg").read_text().lstrip().startswith("<?xml")
+    files.write_frame_csv(pd.DataFrame({"a": [1, 2]}), tmp_path / "t.csv", index=False)
     assert (tmp_path / "t.csv").read_text() == "a\n1\n2\n"
     victim = _victim(tmp_path)
     (tmp_path / "link.png").symlink_to(victim)
     with pytest.raises(OutputError):
-        write_figure(fig, tmp_path / "link.png")
+        files.write_figure(fig, tmp_path / "link.png")
     assert victim.read_bytes() == VICTIM
 
 
