@@ -254,13 +254,15 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
     """
     path = Path(path)
     with open_user_file(path, max_bytes=max_bytes, what="CSV data file", error=DataError) as fh:
-        header = _csv_header(fh.readline(), path)
-        fh.seek(0)
-        try:
-            raw = pd.read_csv(fh, skipinitialspace=True, keep_default_na=False, na_values=_NAN_TEXT,
-                              encoding="utf-8-sig")
-        except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, ValueError) as exc:
-            raise DataError(f"{path}: cannot read as CSV: {exc}") from None
+        data = fh.read()
+    header = _csv_header(data, path)
+    _check_field_counts(data, len(header), path)
+    try:  # index_col=False: a row is never shifted onto an index (the counts are checked above)
+        raw = pd.read_csv(io.BytesIO(data), skipinitialspace=True, keep_default_na=False, na_values=_NAN_TEXT,
+                          encoding="utf-8-sig", index_col=False)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, ValueError) as exc:
+        raise DataError(f"{path}: cannot read as CSV: {exc}") from None
+    del data
     if len(raw.columns) != len(header):  # pragma: no cover - pandas and the csv module agree on the header
         raise DataError(f"{path}: line 1: cannot read the header")
     raw.columns = header
@@ -301,16 +303,56 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
     return TyreData(frame, tyre=tyre or path.stem, source=str(path), units=unit_record)
 
 
-def _csv_header(first: bytes, path) -> list[str]:
-    """The column names of the first line, stripped (a UTF-8 byte-order mark removed)."""
+def _line_break(data: bytes) -> bytes:
+    """The line break of a CSV file: LF (also for CR LF), or CR alone when the file has no LF."""
+    return b"\n" if b"\n" in data or b"\r" not in data else b"\r"
+
+
+def _csv_header(data: bytes, path) -> list[str]:
+    """The column names of the first line of the file ``data``, stripped (a UTF-8 byte-order mark removed)."""
+    first = data.split(_line_break(data), 1)[0]
     try:
         text = first.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise DataError(f"{path}: line 1: cannot read as CSV: {exc}") from None
-    names = next(csv.reader([text.rstrip("\r\n")]), [])
+    try:
+        names = next(csv.reader([text.rstrip("\r\n")]), [])
+    except csv.Error as exc:  # e.g. a field longer than the csv module's limit (128 KiB)
+        raise DataError(f"{path}: line 1: cannot read the header: {exc}") from None
     if not any(n.strip() for n in names):
         raise DataError(f"{path}: line 1: no header: expected column names such as FZ,SA,SL,VX,P")
     return [n.strip() for n in names]
+
+
+def _check_field_counts(data: bytes, expected: int, path) -> None:
+    """DataError naming the first line whose number of fields differs from the header's ``expected`` (blank
+    lines are skipped, as the reader skips them): such a row would otherwise be shifted onto the columns or
+    padded. Linear time: commas counted per line with NumPy, or by the csv module when the file quotes fields."""
+    if b'"' in data:  # quoted fields may hold commas and line breaks: let the csv module split them
+        text = io.StringIO(data.decode("utf-8-sig", errors="replace"), newline="")
+        try:
+            for number, row in enumerate(csv.reader(text), start=1):
+                if row and len(row) != expected:
+                    _field_count_error(path, number, len(row), expected)
+        except csv.Error as exc:
+            raise DataError(f"{path}: cannot read as CSV: {exc}") from None
+        return
+    raw = np.frombuffer(data, np.uint8)
+    breaks = np.flatnonzero(raw == _line_break(data)[0])
+    starts = np.concatenate(([0], breaks + 1))
+    ends = np.concatenate((breaks, [raw.size]))
+    commas = np.concatenate(([0], np.cumsum(raw == ord(","))))
+    fields = commas[ends] - commas[starts] + 1
+    length = ends - starts - (raw[np.maximum(ends - 1, 0)] == ord("\r")) * (ends > starts)
+    wrong = np.flatnonzero((fields != expected) & (length > 0))
+    if wrong.size:
+        line = int(wrong[0])
+        _field_count_error(path, line + 1, int(fields[line]), expected)
+
+
+def _field_count_error(path, line: int, count: int, expected: int):
+    raise DataError(f"{path}: line {line}: {count} fields, but the header has {expected} columns: expected one "
+                    "value per column on every line (a row with a field more or less would shift the channels)")
 
 
 def _refuse_duplicates(header: list[str], mapping: dict, path) -> None:

@@ -155,3 +155,34 @@ def test_native_fmu_build_never_writes_through_a_planted_partial_link(tmp_path, 
     with pytest.raises(MFTyreError, match="symbolic link"):
         native_build.build_native_fmu(T61, output, model="steady", overwrite=True)
     assert victim.read_bytes() == VICTIM
+
+
+# ------------------------------------------------------------------------------------ 3: CSV field counts
+@pytest.mark.parametrize("rows, line, count", [
+    ("4000,0.1,0.0,10,220000,99\n", 2, 6),  # pandas took FZ as the index: FZ = 0.1, VX = 220000, P = 99
+    ("4000,0.1,0.0,10,220000\n4000,0.1,0.0\n", 3, 3),  # a short row was padded with "not measured"
+    ("4000,0.1,0.0,10,220000\n" + ",".join(["1"] * 60000) + "\n", 3, 60000),  # took 42 s
+])
+def test_a_row_whose_field_count_differs_from_the_header_names_file_and_line(tmp_path, rows, line, count):
+    from mftyre.data import read_csv
+
+    path = tmp_path / "d.csv"
+    path.write_text("FZ,SA,SL,VX,P\n" + rows)
+    start = time.process_time()
+    with pytest.raises(DataError, match=rf"d\.csv: line {line}: {count} fields, but the header has 5 columns"):
+        read_csv(path)
+    assert time.process_time() - start < 5.0  # milliseconds in fact; the old reader took 42 s on 60,000 fields
+
+
+def test_csv_with_cr_only_line_ends_quoted_commas_and_a_huge_header_field(tmp_path):
+    from mftyre.data import read_csv
+
+    path = tmp_path / "cr.csv"
+    path.write_bytes(b"FZ,SA,SL,VX,P\r4000,0.1,0.0,10,220000\r3000,0.0,0.1,10,220000\r")
+    frame = read_csv(path).frame
+    assert frame["FZ"].tolist() == [4000.0, 3000.0] and frame["VX"].tolist() == [10.0, 10.0]
+    path.write_bytes(b'FZ,SA,SL,VX,P,NOTE\n4000,0.1,0.0,10,220000,"a,b"\n')  # a quoted comma is one field
+    assert read_csv(path).frame["NOTE"].tolist() == ["a,b"]
+    path.write_bytes(b"FZ,SA,SL,VX,P," + b"X" * (128 * 1024 + 10) + b"\n4000,0.1,0.0,10,220000,1\n")
+    with pytest.raises(DataError, match="line 1"):
+        read_csv(path)
