@@ -52,6 +52,8 @@ def open_user_file(path, *, max_bytes: int, what: str, error=MFTyreError):
         raise error(f"{name}: file not found: expected an existing {what}") from None
     except IsADirectoryError:
         raise error(f"{name}: is a directory: expected a {what}") from None
+    except ValueError:  # e.g. an embedded NUL character
+        raise error(f"{name!r}: not a valid file name: expected the path of a {what}") from None
     except OSError as exc:
         raise error(f"{name}: cannot open: {exc.strerror}: expected a readable {what}") from None
     try:
@@ -138,6 +140,8 @@ def refuse_special_output(path, label: str = "output") -> None:
         info = os.lstat(path)
     except FileNotFoundError:
         return
+    except ValueError:  # e.g. an embedded NUL character
+        raise OutputError(f"{label} {str(path)!r}: not a valid file name") from None
     except OSError as exc:
         raise OutputError(f"{label} {path}: cannot inspect: {exc.strerror}") from None
     if stat.S_ISLNK(info.st_mode):

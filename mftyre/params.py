@@ -533,15 +533,72 @@ _POSITIVE = {
     "INFLPRES": "the inflation pressure",
     "VXLOW": "the low-speed limit, which the low-speed scaling divides by",
     "FZMAX": "the largest load (loads are saturated to it)",
+    "Q_RE0": "the ratio of the free radius at standstill to UNLOADED_RADIUS (about 1)",
 }
+
+#: Largest |Q_V1|: the free radius changes by Q_V1 UNLOADED_RADIUS at the reference speed LONGVL (published tyres
+#: ~1e-3); a tenth of the radius is more than any tyre grows.
+_Q_V1_LIMIT = 0.1
+
+
+def _geometry_problems(prm) -> list[tuple[str, str]]:
+    """The vertical relations of a tyre whose scales are positive must give outputs a tyre can have over the load
+    range 0..FZMAX at the nominal pressure: a real Q_FZ1, an effective rolling radius Re > 0, a free radius that
+    does not run away with speed, a contact patch of positive size. Plain float arithmetic (inf, never an
+    OverflowError, for extreme values)."""
+    out = []
+    R0, Fz0, Cz0, Fzmax = (float(prm[n]) for n in ("UNLOADED_RADIUS", "FNOMIN", "VERTICAL_STIFFNESS", "FZMAX"))
+    ratio = Cz0 * R0 / Fz0  # the stiffness ratio of Q_FZ1, paper (4); about 10 to 30 for real tyres
+    disc = ratio * ratio - 4.0 * prm["Q_FZ2"]
+    if not math.isfinite(disc):  # the name: the factor furthest from a real tyre's (Fz0 > 1 N, R0 < 100 m)
+        name = "FNOMIN" if Fz0 < 1.0 else "UNLOADED_RADIUS" if R0 > 100.0 else "VERTICAL_STIFFNESS"
+        out.append((name, f"the stiffness ratio VERTICAL_STIFFNESS*UNLOADED_RADIUS/FNOMIN = {Cz0!r}*{R0!r}/{Fz0!r} "
+                          f"has no finite square (real tyres: about 10 to 30)"))
+        return out
+    if disc < 0:
+        out.append(("Q_FZ2", f"(Cz0*R0/Fz0)^2 - 4*Q_FZ2 = {disc!r} < 0: Q_FZ1 = sqrt(...) is undefined "
+                             "(VERTICAL_STIFFNESS too small or Q_FZ2 too large)"))
+    # effective rolling radius, paper (7): Re = R_omega - Fz0/Cz (DREFF atan(BREFF Fz/Fz0) + FREFF Fz/Fz0) > 0
+    reduction = Fz0 / Cz0 * (prm["DREFF"] * math.atan(prm["BREFF"] * Fzmax / Fz0) + prm["FREFF"] * Fzmax / Fz0)
+    if not reduction < R0 * prm["Q_RE0"]:
+        name = "DREFF" if abs(prm["DREFF"]) * math.pi / 2 >= abs(prm["FREFF"]) * Fzmax / Fz0 else "FREFF"
+        out.append((name, f"gives an effective rolling radius Re <= 0 at FZMAX = {Fzmax!r} N (Re = R_omega - Fz0/Cz0 "
+                          f"(DREFF atan(BREFF Fz/Fz0) + FREFF Fz/Fz0) = {R0 * prm['Q_RE0'] - reduction!r} m): "
+                          f"expected DREFF about 0.2-0.3, FREFF about 0.01-0.1, got DREFF = {prm['DREFF']!r}, "
+                          f"FREFF = {prm['FREFF']!r}"))
+    if not abs(prm["Q_V1"]) < _Q_V1_LIMIT:
+        out.append(("Q_V1", f"|Q_V1| must be less than {_Q_V1_LIMIT} (the free radius changes by Q_V1*UNLOADED_RADIUS "
+                            f"at the reference speed LONGVL; published tyres: about 1e-3), got {prm['Q_V1']!r}"))
+    # contact patch, paper (9), (10) (MF 5.2: Q_A1, Q_A2): a/sqrt(x) and b/x^(1/3) are monotone in the load x,
+    # so a, b >= 0 over (0, FZMAX] when the root term is not negative and the size at FZMAX is not negative
+    if prm.version == "52":
+        if prm["Q_A1"] != 0.0 or prm["Q_A2"] != 0.0:
+            y = Fzmax / Fz0
+            terms = [("A", "Q_A1", "Q_A2", R0 * (prm["Q_A2"] * y + prm["Q_A1"] * math.sqrt(y)))]
+        else:
+            terms = []
+    else:
+        x = min(Fzmax / (Cz0 * R0), 1.0)  # the load term Fz/(Cz R0), at most the deflection of a flat tyre
+        terms = [("A", "Q_RA1", "Q_RA2", R0 * (prm["Q_RA2"] * x + prm["Q_RA1"] * math.sqrt(x))),
+                 ("B", "Q_RB1", "Q_RB2", prm["WIDTH"] * (prm["Q_RB2"] * x + prm["Q_RB1"] * x ** (1.0 / 3.0)))]
+    for size, root, linear, at_max in terms:
+        half = "half length a" if size == "A" else "half width b"
+        if prm[root] < 0:
+            out.append((root, f"must not be negative (the root term of the contact-patch {half}: a negative one "
+                              f"gives a negative patch at small loads), got {prm[root]!r}"))
+        elif not at_max >= 0:
+            out.append((linear, f"gives a negative contact-patch {half} = {at_max!r} m at FZMAX = {Fzmax!r} N "
+                                f"({linear} = {prm[linear]!r}, {root} = {prm[root]!r})"))
+    return out
 
 
 def invalid_values(prm) -> list[tuple[str, str]]:
     """(parameter, what is wrong and what is expected) for every value no tyre can have.
 
     The one rule shared by the .tir reader (a TirError naming file, line and parameter), the writer and
-    ``check_tir``: positive scales and dimensions, slip stiffness scales not negative, radii in order, ranges not
-    inverted, a real Q_FZ1, a known tyre side.
+    ``check_tir``, ``MFModel.with_params`` and the FMU builders: positive scales and dimensions, slip stiffness
+    scales not negative, radii in order, ranges not inverted, vertical relations a tyre can have over 0..FZMAX (a
+    real Q_FZ1, Re > 0, a bounded speed growth Q_V1, a contact patch of positive size), a known tyre side.
     """
     out = []
     for name, meaning in _POSITIVE.items():
@@ -560,11 +617,8 @@ def invalid_values(prm) -> list[tuple[str, str]]:
                    ("CAMMIN", "CAMMAX")):
         if prm[lo] > prm[hi]:
             out.append((lo, f"inverted range: {lo} = {prm[lo]!r} > {hi} = {prm[hi]!r}"))
-    if prm["FNOMIN"] > 0:
-        disc = (prm["VERTICAL_STIFFNESS"] * prm["UNLOADED_RADIUS"] / prm["FNOMIN"]) ** 2 - 4 * prm["Q_FZ2"]
-        if disc < 0:
-            out.append(("Q_FZ2", f"(Cz0*R0/Fz0)^2 - 4*Q_FZ2 = {disc!r} < 0: Q_FZ1 = sqrt(...) is undefined "
-                                 "(VERTICAL_STIFFNESS too small or Q_FZ2 too large)"))
+    if all(prm[n] > 0 for n in _POSITIVE):
+        out += _geometry_problems(prm)
     side = str(prm["TYRESIDE"]).strip().strip("'\"").upper()
     if side not in ("LEFT", "RIGHT"):
         out.append(("TYRESIDE", f"expected 'LEFT' or 'RIGHT' (the side the tyre was measured on; mftyre mirrors "

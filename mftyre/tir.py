@@ -41,7 +41,8 @@ from .params import (
     invalid_values,
 )
 
-__all__ = ["read_tir", "parse_tir", "write_tir", "check_tir", "Finding", "UNIT_FACTORS", "unit_factor"]
+__all__ = ["read_tir", "parse_tir", "write_tir", "check_tir", "validate_params", "Finding", "UNIT_FACTORS",
+           "unit_factor"]
 
 
 class _TirFileExists(TirError, FileExistsError):
@@ -382,7 +383,11 @@ def _parse(text: str, source: str, *, strict: bool, stacklevel: int, validate: b
                 raise _err(source, lineno, name, f"expected an integer, got {_shown(text_value)}")
             values[name] = int(num)
         else:
-            values[name] = _convert(num, unit_factor(spec.unit, base))
+            try:
+                values[name] = _convert(num, unit_factor(spec.unit, base))
+            except OverflowError:
+                raise _err(source, lineno, name, f"{_shown(text_value)} converted to SI with the file's [UNITS] is "
+                                                 "beyond the range of a floating-point number") from None
 
     if "FITTYP" not in values:
         raise _err(source, None, "FITTYP",
@@ -445,15 +450,34 @@ def _read_text(p: Path) -> str:
     return text
 
 
+def validate_params(prm: TyreParameters, source: str = "parameters") -> TyreParameters:
+    """``prm`` when every value is one a tyre can have (:func:`mftyre.params.invalid_values`), else TirError naming
+    the parameter (and its line when read from a file): the check of :func:`read_tir`, :func:`write_tir`,
+    :meth:`mftyre.MFModel.with_params` and the FMU builders."""
+    for name, message in invalid_values(prm):
+        raise _err(source, None, name, message)
+    return prm
+
+
 # ----------------------------------------------------------------------------------------------------
 # Writing
 # ----------------------------------------------------------------------------------------------------
-def _format_value(value: Any, string: bool) -> str:
+def _format_value(value: Any, string: bool, name: str = "") -> str:
+    """The text of a value as :func:`parse_tir` reads it back: a string in the quotes it does not contain, or
+    without quotes when it holds both kinds (TirError when no spelling reads back the same text)."""
     if string or isinstance(value, str):
         text = str(value)
-        if "'" in text:
+        if "\n" in text or "\r" in text:
+            raise _err("write_tir", None, name or None, f"the text {_shown(text)} spans lines: a .tir value is one line")
+        if "'" not in text:
+            return "'" + text + "'"
+        if '"' not in text:
             return '"' + text + '"'
-        return "'" + text + "'"
+        if text == text.strip() and text[:1] not in "'\"" and not any(c in text for c in "$!{"):
+            return text  # both quote kinds: unquoted, read back as written
+        raise _err("write_tir", None, name or None,
+                   f"the text {_shown(text)} holds both quote kinds and a comment character or surrounding blanks: "
+                   "no .tir spelling reads it back unchanged")
     if isinstance(value, bool):
         return str(int(value))
     if isinstance(value, int):
@@ -481,10 +505,10 @@ def tir_text(params: TyreParameters) -> str:
         non_default = value != spec.default
         if not (present or relevant or non_default or name == "FITTYP"):
             continue
-        by_section[spec.section].append(_line(name, _format_value(value, spec.is_string), spec.description))
+        by_section[spec.section].append(_line(name, _format_value(value, spec.is_string, name), spec.description))
     extra_param_sections: dict[str, list[str]] = {}
     for name, (section, value) in params.unknown.items():
-        line = _line(name, _format_value(value, False))
+        line = _line(name, _format_value(value, False, name))
         if section in by_section:
             by_section[section].append(line)
         else:
