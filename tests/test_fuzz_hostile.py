@@ -199,3 +199,143 @@ def test_repeated_unknown_sections_parse_in_linear_time():
     prm = _quiet(parse_tir, text, "big.tir")
     assert time.process_time() - start < 10.0
     assert prm.extra_sections["SHAPE"].count("1.0 0.0") == 320_000
+
+
+# ------------------------------------------------------------------------------------ 5-7: values and raw errors
+def _set(text: str, name: str, value: str) -> str:
+    """``text`` with the value of parameter ``name`` replaced (its first assignment)."""
+    import re
+
+    new, n = re.subn(rf"(?im)^(\s*{name}\s*=\s*)[^\s$!]+", lambda m: m.group(1) + value, text, count=1)
+    assert n == 1, name
+    return new
+
+
+@pytest.mark.parametrize("name, value, blamed", [
+    ("FNOMIN", "1e-300", "FNOMIN"),  # OverflowError
+    ("VERTICAL_STIFFNESS", "1e200", "VERTICAL_STIFFNESS"),  # OverflowError
+    ("DREFF", "1e308", "DREFF"),  # re = -2.8e306 m
+    ("Q_RE0", "0", "Q_RE0"), ("Q_RE0", "-1", "Q_RE0"),  # rho < 0
+    ("Q_RA1", "-1", "Q_RA1"), ("Q_RB1", "-1", "Q_RB1"),  # negative patch
+    ("Q_RA2", "-50", "Q_RA2"),  # a < 0 at FZMAX
+    ("Q_V1", "61", "Q_V1"),  # rl = 1.49 m > 2 R0 at 20 m/s
+])
+def test_values_no_tyre_can_have_are_refused_by_load_check_with_params_and_write(tmp_path, name, value, blamed):
+    text = _set(T61.read_text(), name, value)
+    with pytest.raises(TirError, match=rf"x\.tir:\d+: {blamed}:"):
+        _quiet(mftyre.tir.parse_tir, text, "x.tir")
+    path = tmp_path / "x.tir"
+    path.write_text(text)
+    assert any(f.severity == "error" and f.parameter == blamed for f in mftyre.tir.check_tir(path))
+    model = _quiet(mftyre.load_tir, T61)
+    with pytest.raises(TirError, match=blamed):
+        model.with_params(**{name: float(value)})
+    with pytest.raises(TirError, match=blamed):
+        mftyre.tir.write_tir(model.params.replace(**{name: float(value)}), tmp_path / "w.tir")
+    assert not (tmp_path / "w.tir").exists()
+
+
+def test_mf52_contact_length_coefficients_are_checked(tmp_path):
+    from conftest import require_shared, MFEVAL_DIR
+
+    source = require_shared(MFEVAL_DIR / "MagicFormula52_Parameters.tir")
+    prm = _quiet(mftyre.tir.read_tir, source)
+    with pytest.raises(TirError, match="Q_A2"):
+        mftyre.tir.validate_params(prm.replace(Q_A1=0.5, Q_A2=-5.0))
+    with pytest.raises(TirError, match="Q_A1"):
+        mftyre.tir.validate_params(prm.replace(Q_A1=-0.5, Q_A2=1.0))
+
+
+def test_published_files_still_load_and_pass_check():
+    """The new rules must not reject real files (TNO declares PRESMIN 0.1 bar, PRESMAX 10 bar: legal)."""
+    from conftest import MFEVAL_DIR, SHARED
+
+    files = sorted(TIR_FILES.glob("*.tir")) + sorted(MFEVAL_DIR.glob("*.tir")) + \
+        sorted((SHARED / "reference" / "tir").glob("*.tir"))
+    assert len(files) >= 4
+    for path in files:
+        _quiet(mftyre.load_tir, path)
+        assert [str(f) for f in mftyre.tir.check_tir(path) if f.severity == "error"] == [], path
+
+
+def test_check_reports_extreme_values_and_goes_on_to_the_next_file(tmp_path, capsys):
+    bad = tmp_path / "bad.tir"
+    bad.write_text(_set(T61.read_text(), "VERTICAL_STIFFNESS", "1e200"))
+    units = tmp_path / "units.tir"  # 1e306 kN is beyond a float in newtons
+    units.write_text(_set(_set(T61.read_text(), "FORCE", "'kN'"), "FNOMIN", "1e306"))
+    assert cli.main(["check", str(bad), str(units), str(T61)]) == 1
+    out = capsys.readouterr().out
+    assert "VERTICAL_STIFFNESS" in out and "FNOMIN" in out and "beyond the range" in out
+    assert "checked 3 files" in out and "2 file(s) with errors" in out
+
+
+def test_with_params_zero_nominal_load_and_inverted_load_range():
+    model = _quiet(mftyre.load_tir, T61)
+    with pytest.raises(TirError, match="FNOMIN: must be positive"):
+        model.with_params(FNOMIN=0)  # was a raw ZeroDivisionError
+    with pytest.raises(TirError, match="FZMIN: inverted range"):
+        model.with_params(FZMIN=1e9)  # gave rl = 0 silently
+
+
+def test_a_nul_in_a_path_and_a_cache_that_is_a_file_are_clear_errors(tmp_path, monkeypatch):
+    with pytest.raises(TirError, match="not a valid file name"):
+        mftyre.load_tir("a\0b")
+    with pytest.raises(OutputError, match="not a valid file name"):
+        write_atomically(str(tmp_path / "a\0b"), "x")
+    from mftyre import compiled
+
+    cache = tmp_path / "cache"
+    cache.write_text("a file")
+    monkeypatch.setenv("MFTYRE_CACHE", str(cache))
+    with pytest.raises(MFTyreError, match="MFTYRE_CACHE"):
+        compiled.cache_dir()
+
+
+def test_write_tir_spells_every_string_so_read_tir_reads_it_back(tmp_path):
+    from mftyre.params import TyreParameters
+
+    prm = TyreParameters.from_defaults(61, FNOMIN=4000.0)
+    prm = TyreParameters(prm.to_dict(), unknown={"NOTE": ("MODEL", "a'b\"c"), "Q": ("MODEL", "it's")})
+    back = _quiet(mftyre.tir.read_tir, mftyre.tir.write_tir(prm, tmp_path / "n.tir"))
+    assert back.unknown["NOTE"] == ("MODEL", "a'b\"c") and back.unknown["Q"] == ("MODEL", "it's")
+    for text in ("a'b\"c $ d", "two\nlines"):
+        bad = TyreParameters(prm.to_dict(), unknown={"NOTE": ("MODEL", text)})
+        with pytest.raises(TirError, match="NOTE"):
+            mftyre.tir.write_tir(bad, tmp_path / "bad.tir")
+    assert not (tmp_path / "bad.tir").exists()
+
+
+# ------------------------------------------------------------------------------------ 6: loads above FZMAX
+@pytest.mark.parametrize("path, fz", [(T61, 1e7), (T62, 1e6)])
+def test_loads_above_fzmax_are_warned_and_saturated_in_every_output(path, fz):
+    """`mftyre eval T61 --fz 1e7` gave rl 3.5 m, re 0.0027 m, omega 6140 rad/s; T62 at 1e6 N rl = -0.088 m."""
+    from mftyre.errors import InputClippedWarning
+
+    model = _quiet(mftyre.load_tir, path)
+    with pytest.warns(InputClippedWarning, match="fz outside FZMAX"):
+        out = model.evaluate(fz, 0.0, 0.0, vx=16.7)
+    at_max = _quiet(model.evaluate, model.params.FZMAX, 0.0, 0.0, vx=16.7)
+    for name in ("fx", "fy", "mz", "re", "omega", "rl", "rho", "a", "b", "cz"):
+        assert float(getattr(out, name)) == pytest.approx(float(getattr(at_max, name)), rel=1e-12, abs=1e-12), name
+    r0 = model.params.UNLOADED_RADIUS
+    assert 0 < float(out.rl) < r0 and 0.5 * r0 < float(out.re) < r0 and float(out.fz) == fz
+
+
+def test_the_compiled_model_raises_where_evaluate_raises():
+    """vx = 1e308: evaluate raised, the compiled C returned NaN radii and spin (52 of 248 extreme comparisons)."""
+    from mftyre.compiled import compile_model
+    from mftyre.errors import ModelInputError
+
+    model = _quiet(mftyre.load_tir, T61)
+    compiled = compile_model(model)
+    extreme = dict(fz=4000.0, kappa=0.0, alpha=0.0, gamma=0.0, phit=0.0, vx=1e308, p=2.2e5)
+    with pytest.raises(ModelInputError, match="non-finite") as numpy_error:
+        model.evaluate(**extreme)
+    with pytest.raises(ModelInputError, match="non-finite") as c_error:
+        compiled(*extreme.values())
+    assert "vx=1e+308" in str(numpy_error.value) and "vx=1e+308" in str(c_error.value)
+    vx = np.array([20.0, 1e308, 30.0])
+    with pytest.raises(ModelInputError, match=r"1 of 3 point\(s\), first at point 1"):
+        compiled.batch(4000.0, 0.0, 0.0, 0.0, 0.0, vx, 2.2e5)
+    with pytest.raises(ModelInputError, match=r"1 of 3 point\(s\), first at point 1"):
+        model.evaluate(4000.0, 0.0, 0.0, vx=vx)
