@@ -495,7 +495,7 @@ def _read_tydex(fh, path: Path, defaults) -> TyreData:
             units[ch] = unit
     del columns
     frame = pd.DataFrame(values_of, copy=False)
-    for name, (value, unit, _) in state.constants.items():  # constants standing in for absent channels
+    for name, (value, unit, *_) in state.constants.items():  # constants standing in for absent channels
         ch = _CHANNEL_OF_TYDEX.get(name)
         if ch in REQUIRED + _ZERO_DEFAULT and ch not in frame.columns and isinstance(value, float):
             frame[ch] = value
@@ -559,15 +559,29 @@ class _TydexBlocks:
                 if not name:
                     raise DataError(f"{path}:{lineno}: column 1-10: empty name in {self.block}")
                 target = self.header if self.block == "**HEADER" else self.constants
-                target[name.upper()] = (_constant_value(name.upper(), unit, value, path, lineno), unit, desc)
+                key = name.upper()
+                if key in target:
+                    raise DataError(f"{path}:{lineno}: columns 1-10: {key} appears twice in {self.block} (also on "
+                                    f"line {target[key][3]}): expected one value per name")
+                target[key] = (_constant_value(key, unit, value, path, lineno), unit, desc, lineno)
             elif self.block == "**MEASURCHANNELS":
                 name, desc, unit, rest = _fixed_fields(line)
                 parts = rest.split()
                 if not name or not parts:
                     raise DataError(f"{path}:{lineno}: channel line needs name (columns 1-10), description, unit "
                                     f"(41-50) and a conversion factor (from column 51): {line[:80]!r}")
+                if len(parts) > 3:
+                    raise DataError(f"{path}:{lineno}: column 51: channel {name}: {len(parts)} numbers "
+                                    f"{rest.strip()[:60]!r}: expected a conversion factor and up to two offsets")
+                key = name.upper()
+                canonical = _CHANNEL_OF_TYDEX.get(key, key)
+                for other, *_, other_line in self.channels:
+                    if _CHANNEL_OF_TYDEX.get(other, other) == canonical:
+                        also = "" if other == key else f" as {other}"
+                        raise DataError(f"{path}:{lineno}: columns 1-10: channel {key} ({canonical}) is listed twice "
+                                        f"(also{also} on line {other_line}): expected one column per channel")
                 try:
-                    numbers = [float(p.replace("D", "E").replace("d", "e")) for p in parts[:3]]
+                    numbers = [float(p.replace("D", "E").replace("d", "e")) for p in parts]
                 except ValueError:
                     raise DataError(f"{path}:{lineno}: column 51: channel {name}: non-numeric factor/offset "
                                     f"{rest[:40]!r}") from None
@@ -681,6 +695,8 @@ def _constant_value(name, unit, text, path, lineno):
         if name in _CONSTANT_KINDS:
             raise DataError(f"{path}:{lineno}: column 51: constant {name}: non-numeric value {text!r}") from None
         return text
+    if not math.isfinite(value):
+        raise DataError(f"{path}:{lineno}: column 51: constant {name}: {text.strip()[:40]!r} is not a finite number")
     if name in _CONSTANT_KINDS:
         ch = _CONSTANT_KINDS[name]
         try:

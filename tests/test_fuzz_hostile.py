@@ -339,3 +339,37 @@ def test_the_compiled_model_raises_where_evaluate_raises():
         compiled.batch(4000.0, 0.0, 0.0, 0.0, 0.0, vx, 2.2e5)
     with pytest.raises(ModelInputError, match=r"1 of 3 point\(s\), first at point 1"):
         model.evaluate(4000.0, 0.0, 0.0, vx=vx)
+
+
+# ------------------------------------------------------------------------------------ 8: TYDEX
+@pytest.fixture(scope="module")
+def tydex_text(tmp_path_factory):
+    from mftyre.data import trailer_programme, write_tydex
+
+    model = _quiet(mftyre.load_tir, T61)
+    data = trailer_programme(model, points=3, loads=(1.0,), pressures=(1.0,), cambers_deg=(0.0,))
+    return write_tydex(data, tmp_path_factory.mktemp("tdx") / "d.tdx").read_text()
+
+
+def _line_of(text: str, start: str) -> str:
+    return next(line for line in text.splitlines() if line.startswith(start))
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda t: t.replace(_line_of(t, "FYW "), "FXW" + _line_of(t, "FYW ")[3:]), r":\d+: columns 1-10: channel FXW"),
+    (lambda t: t.replace(_line_of(t, "FYW "), "FX " + _line_of(t, "FYW ")[3:]), r"channel FX \(FX\) is listed twice"),
+    (lambda t: t.replace(_line_of(t, "FXW "), _line_of(t, "FXW ") + " 5"), r"channel FXW: 4 numbers"),
+    (lambda t: t.replace(_line_of(t, "FNOMIN"), _line_of(t, "FNOMIN").replace("4000.0", "1e400")),
+     "constant FNOMIN: '1e400' is not a finite number"),
+    (lambda t: t.replace(_line_of(t, "LONGVEL "), _line_of(t, "LONGVEL ").replace("16.7", "nan")),
+     "constant LONGVEL: 'nan' is not a finite number"),
+    (lambda t: t.replace(_line_of(t, "NOMPRES"), _line_of(t, "NOMPRES") + "\n" + _line_of(t, "NOMPRES")),
+     "NOMPRES appears twice"),
+])
+def test_tydex_duplicates_factor_lines_and_constants_are_refused(tmp_path, tydex_text, edit, message):
+    from mftyre.data import read_tydex
+
+    path = tmp_path / "bad.tdx"
+    path.write_text(edit(tydex_text))
+    with pytest.raises(DataError, match=message):
+        read_tydex(path)
