@@ -415,6 +415,15 @@ def _check_values(frame, locate, column_of=None):
                 else f"{values[row]} (infinite, or beyond the float range such as 1e400): expected a finite number")
         column = f"file column {col!r}, " if col != ch else ""
         raise DataError(f"{locate(row)}: channel {ch}: {what} ({column}{int(bad.sum())} rows)")
+    if "P" in frame.columns:  # the model's pressure terms divide by it: a tyre is measured inflated
+        pressure = frame["P"].to_numpy(dtype=float)
+        bad = ~(pressure > 0)
+        if bad.any():
+            row = int(np.flatnonzero(bad)[0])
+            col = (column_of or {}).get("P", "P")
+            column = f"file column {col!r}, " if col != "P" else ""
+            raise DataError(f"{locate(row)}: channel P: inflation pressure {float(pressure[row])!r} Pa: expected a positive "
+                            f"pressure (in the file's unit, pascal by default) ({column}{int(bad.sum())} rows)")
 
 
 # ---------------------------------------------------------------------------------------------- TYDEX
