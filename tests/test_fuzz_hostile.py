@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import mftyre
+import mftyre.tir
 from mftyre import cli
 from mftyre.errors import DataError, MFTyreError, TirError
 from mftyre import files
@@ -373,3 +374,43 @@ def test_tydex_duplicates_factor_lines_and_constants_are_refused(tmp_path, tydex
     path.write_text(edit(tydex_text))
     with pytest.raises(DataError, match=message):
         read_tydex(path)
+
+
+# ------------------------------------------------------------------------------------ 5: more raw exceptions
+def test_fit_on_data_at_zero_pressure_is_a_data_error(tmp_path, capsys):
+    path = tmp_path / "p0.csv"
+    path.write_text("FZ,SA,SL,VX,P\n4000,0,0,16,0\n4000,0.1,0,16,0\n")
+    from mftyre.data import read_csv
+
+    with pytest.raises(DataError, match=r"line 2: channel P: inflation pressure 0\.0 Pa"):
+        read_csv(path)
+    assert cli.main(["fit", str(path), "-o", str(tmp_path / "f.tir"), "--quiet"]) != 0
+    assert "channel P" in capsys.readouterr().err
+
+
+def test_a_road_beyond_any_table_is_refused(tmp_path, capsys):
+    from mftyre.errors import ModelInputError
+    from swift.road import Cleat, parse_road
+
+    with pytest.raises(ModelInputError, match="obstacle edge at x = 1e\\+308"):
+        parse_road("cleat(x0=1e308, length=0.02, height=0.01)")
+    with pytest.raises(ModelInputError, match="height of"):
+        parse_road(Cleat(0.0, 0.02, 1e300))
+    assert cli.main(["fmu", "build", str(T62), "-o", str(tmp_path / "c.fmu"), "--model", "swift", "--vertical",
+                     "position", "--road", "cleat(x0=1e308, length=0.02, height=0.01)"]) == 1
+    assert "obstacle edge" in capsys.readouterr().err and not (tmp_path / "c.fmu").exists()
+
+
+@pytest.mark.parametrize("name", ["ELLIPS_LENGTH", "ELLIPS_SHIFT", "FREQ_WINDUP", "DAMP_VLOW", "SWIFT_PSTIFF"])
+def test_swift_with_extreme_parameters_raises_a_model_input_error(name):
+    """1e308 gave OverflowError (cam table) or ValueError (NaN position to an index) from SwiftTyre."""
+    from mftyre.errors import ModelInputError
+    from swift.road import Cleat
+    from swift.simulate import StepInputs, SwiftTyre
+
+    model = _quiet(mftyre.load_tir, T62)
+    extreme = mftyre.MFModel(model.params.replace(**{name: 1e308}))
+    inputs = StepInputs(x=0.0, vx=10.0, z=0.0, vz=0.0, load=4000.0, omega=33.0, torque=0.0, p=None, y=0.0)
+    with pytest.raises(ModelInputError, match="cam sizes|not finite"):
+        tyre = _quiet(SwiftTyre, extreme, Cleat(0.5, 0.02, 0.01), compiled=False)
+        _quiet(tyre.run, 0.002, inputs, dt=1e-3)
