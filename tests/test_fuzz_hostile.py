@@ -414,3 +414,21 @@ def test_swift_with_extreme_parameters_raises_a_model_input_error(name):
     with pytest.raises(ModelInputError, match="cam sizes|not finite"):
         tyre = _quiet(SwiftTyre, extreme, Cleat(0.5, 0.02, 0.01), compiled=False)
         _quiet(tyre.run, 0.002, inputs, dt=1e-3)
+
+
+# ------------------------------------------------------------------------------------ 9: soil file, FMU step budget
+def test_soil_file_refuses_a_fifo_and_a_device_without_blocking(tmp_path, capsys):
+    fifo = tmp_path / "soils.csv"
+    os.mkfifo(fifo)
+    result = []
+    worker = threading.Thread(target=lambda: result.append(cli.main(
+        ["soil", str(T61), "--soil", "x", "--soil-file", str(fifo), "-q"])), daemon=True)
+    worker.start()
+    worker.join(30)
+    if worker.is_alive():
+        with open(fifo, "wb"):
+            pass
+        pytest.fail("mftyre soil --soil-file FIFO blocked")
+    assert result and result[0] != 0 and "not a regular file" in capsys.readouterr().err
+    assert cli.main(["soil", str(T61), "--soil", "x", "--soil-file", "/dev/zero", "-q"]) != 0
+    assert "not a regular file" in capsys.readouterr().err
