@@ -217,6 +217,7 @@ def _set(text: str, name: str, value: str) -> str:
     ("VERTICAL_STIFFNESS", "1e200", "VERTICAL_STIFFNESS"),  # OverflowError
     ("DREFF", "1e308", "DREFF"),  # re = -2.8e306 m
     ("Q_RE0", "0", "Q_RE0"), ("Q_RE0", "-1", "Q_RE0"),  # rho < 0
+    ("Q_RE0", "3", "Q_RE0"),  # rl = 0.94 m for a 0.31 m tyre
     ("Q_RA1", "-1", "Q_RA1"), ("Q_RB1", "-1", "Q_RB1"),  # negative patch
     ("Q_RA2", "-50", "Q_RA2"),  # a < 0 at FZMAX
     ("Q_V1", "61", "Q_V1"),  # rl = 1.49 m > 2 R0 at 20 m/s
