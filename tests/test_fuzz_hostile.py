@@ -453,3 +453,248 @@ def test_one_swift_fmu_step_has_a_time_budget_proportional_to_the_step(tmp_path)
     within = Slave(path, tmp_path, start=dict(start, max_step=2e-6))  # 5e5 internal steps per second: allowed
     within.fmu.doStep(0.0, 0.01)
     assert 0.0 < within.get("Fz")["Fz"] < 1e5
+
+
+# ------------------------------------------------------------------------------------ seeded fuzz: the counts
+_HOSTILE = ["1e308", "-1e308", "1e-300", "-1e-300", "0", "-1", "1e200", "-1e200", "61", "-61", "1e10", "1e-10", "3",
+            "-3", "0.5", "-0.5"]
+
+
+def _impossible(out, prm) -> str | None:
+    """What no tyre can give: non-finite outputs, a loaded or effective radius outside (0, 2 R0], a negative patch."""
+    r0 = prm.UNLOADED_RADIUS
+    values = {k: np.asarray(getattr(out, k), float) for k in ("fx", "fy", "mz", "rl", "re", "rho", "a", "b", "omega")}
+    bad = [k for k, v in values.items() if not np.isfinite(v).all()]
+    if bad:
+        return f"non-finite {bad}"
+    if not ((values["rl"] >= 0).all() and (values["rl"] <= 2 * r0).all()):
+        return f"rl {values['rl'].min():.3g}..{values['rl'].max():.3g} m"
+    if not ((values["re"] > 0).all() and (values["re"] <= 2 * r0).all()):
+        return f"re {values['re'].min():.3g}..{values['re'].max():.3g} m"
+    if not ((values["a"] >= 0).all() and (values["b"] >= 0).all()):
+        return "negative contact patch"
+    return None
+
+
+def _fuzz_tir(rng, cases: int, counts: dict) -> None:
+    """One parameter of T61/T62 set to a hostile value: load, then evaluate over loads up to 1e7 N and speeds up to
+    three times the reference speed (the speed terms are judged there, see params.invalid_values)."""
+    import re
+
+    from mftyre.params import PARAMETERS
+
+    texts = [T61.read_text(), T62.read_text()]
+    names = [n for n, spec in PARAMETERS.items() if not spec.is_string and not spec.is_integer]
+    for case in range(cases):
+        name = names[rng.integers(len(names))]
+        value = (_HOSTILE[rng.integers(len(_HOSTILE))] if rng.random() < 0.5
+                 else repr(float(rng.choice([-1.0, 1.0]) * 10 ** rng.uniform(-12, 12))))
+        text, n = re.subn(rf"(?im)^(\s*{name}\s*=\s*)[^\s$!]+", lambda m: m.group(1) + value, texts[case % 2], count=1)
+        if n == 0:
+            continue
+        counts["tir cases"] += 1
+        try:
+            model = mftyre.MFModel(_quiet(mftyre.tir.parse_tir, text, "f.tir"))
+        except MFTyreError:
+            continue
+        except Exception as exc:  # noqa: BLE001 - counted: the campaign's measure
+            counts["raw exceptions"] += 1
+            counts.setdefault("raw", []).append((name, value, repr(exc)[:80]))
+            continue
+        prm = model.params
+        fz = np.array([0.0, 100.0, prm.FNOMIN, prm.FZMAX, 10 * prm.FZMAX, 1e7])[:, None]
+        for vx in (0.0, prm.LONGVL / 3, prm.LONGVL, 3 * prm.LONGVL, -prm.LONGVL):
+            try:
+                out = _quiet(model.evaluate, fz, np.array([-0.3, 0.0, 0.3]), 0.05, 0.02, vx=vx)
+            except MFTyreError:
+                continue
+            except Exception as exc:  # noqa: BLE001
+                counts["raw exceptions"] += 1
+                counts.setdefault("raw", []).append((name, value, vx, repr(exc)[:80]))
+                continue
+            why = _impossible(out, prm)
+            if why:
+                counts["silent impossible results"] += 1
+                counts.setdefault("impossible", []).append((name, value, vx, why))
+
+
+def _fuzz_compiled(rng, points: int, counts: dict) -> None:
+    """Extreme inputs: the compiled model raises where evaluate raises, and agrees where both return."""
+    from mftyre.compiled import compile_model
+
+    extremes = {"fz": [0.0, 4000.0, 1e7, 1e308, -1e308], "kappa": [0.0, -1.0, 1e308, -1e308],
+                "alpha": [0.1, 1e308, -1e308], "gamma": [0.0, 1e308], "phit": [0.0, 1e308],
+                "vx": [16.7, 0.0, 1e308, -1e308, 1e-300], "p": [2.2e5, 1e308, 1e-300]}
+    model = _quiet(mftyre.load_tir, T61)
+    compiled = compile_model(model)
+    for _ in range(points):
+        point = {k: v[rng.integers(len(v))] for k, v in extremes.items()}
+        counts["compiled points"] += 1
+        results = []
+        for run in (lambda: _quiet(model.evaluate, **point), lambda: _quiet(compiled, *point.values())):
+            try:
+                results.append(run())
+            except MFTyreError as exc:
+                results.append(type(exc))
+            except Exception:  # noqa: BLE001
+                counts["raw exceptions"] += 1
+                results.append(None)
+        numpy_out, c_out = results
+        if isinstance(numpy_out, type) or isinstance(c_out, type) or numpy_out is None or c_out is None:
+            if numpy_out is not c_out:
+                counts["compiled/evaluate disagreements"] += 1
+            continue
+        expected = np.array([float(numpy_out[k]) for k in compiled.outputs])
+        if not np.allclose(expected, c_out, rtol=1e-6, atol=1e-9):
+            counts["compiled/evaluate disagreements"] += 1
+
+
+def _fuzz_csv(rng, tmp_path, cases: int, counts: dict) -> None:
+    """Tables with a row of a field more or less, CR/CRLF/LF line ends, quoted fields: a DataError naming the line,
+    or every channel exactly as written (never a shifted column)."""
+    from mftyre.data import read_csv
+
+    for case in range(cases):
+        counts["csv cases"] += 1
+        rows = rng.uniform(1.0, 9.0, (int(rng.integers(1, 6)), 5)).round(3)
+        rows[:, 4] *= 1e5  # P in Pa
+        lines = [",".join(repr(float(v)) for v in row) for row in rows]
+        wrong = int(rng.integers(len(lines))) if rng.random() < 0.6 else None
+        if wrong is not None:
+            fields = lines[wrong].split(",")
+            lines[wrong] = ",".join(fields + ["99"] * int(rng.integers(1, 4)) if rng.random() < 0.5
+                                    else fields[:int(rng.integers(1, 5))])
+        end = ["\n", "\r\n", "\r"][case % 3]
+        path = tmp_path / f"f{case}.csv"
+        path.write_bytes(end.join(["FZ,SA,SL,VX,P", *lines]).encode() + end.encode())
+        try:
+            frame = read_csv(path).frame
+        except DataError as exc:
+            if wrong is None or f"line {wrong + 2}:" not in str(exc):
+                counts["csv errors without the right line"] += 1
+            continue
+        except Exception:  # noqa: BLE001
+            counts["raw exceptions"] += 1
+            continue
+        read = frame[["FZ", "SA", "SL", "VX", "P"]].to_numpy()
+        if wrong is not None or not np.array_equal(read, rows):
+            counts["silent impossible results"] += 1
+
+
+def _fuzz_tydex(rng, tmp_path, text: str, cases: int, counts: dict) -> None:
+    """TYDEX lines duplicated, numbers added, dropped or made non-finite: a DataError or a table, never a raw error
+    and never a duplicated channel or constant read silently."""
+    from mftyre.data import read_tydex
+
+    lines = text.splitlines()
+    head = lines.index("**MEASURDATA")
+    for case in range(cases):
+        counts["tydex cases"] += 1
+        edited = list(lines)
+        k = int(rng.integers(1, head + 3))
+        kind = case % 4
+        if kind == 0:
+            edited.insert(k, edited[k])
+        elif kind == 1:
+            edited[k] = edited[k] + " 7"
+        elif kind == 2:
+            edited[k] = " ".join(edited[k].split()[:-1])
+        else:
+            edited[k] = edited[k].replace("0", ["nan", "1e400", "inf"][int(rng.integers(3))], 1)
+        path = tmp_path / f"t{case}.tdx"
+        path.write_text("\n".join(edited) + "\n")
+        try:
+            read_tydex(path)
+        except DataError:
+            continue
+        except Exception:  # noqa: BLE001
+            counts["raw exceptions"] += 1
+            continue
+        line = lines[k]
+        duplicated = kind == 0 and (line[:10].strip() and not line.startswith(("**", "!")) and k < head
+                                    and k > lines.index("**CONSTANTS"))
+        if duplicated:
+            counts["silent impossible results"] += 1
+
+
+def _fuzz_outputs(rng, tmp_path, cases: int, counts: dict) -> None:
+    """Outputs aimed at planted links (to a victim, dangling), FIFOs, existing and new files, with overwrite: the
+    victim unchanged, nothing created but the requested file, no call blocking."""
+    import pandas as pd
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(2, 2))
+    FigureCanvasAgg(fig)
+    fig.subplots().plot([0, 1])
+    frame = pd.DataFrame({"a": [1.0]})
+    writers = [lambda p: write_atomically(p, b"data"), lambda p: files.write_figure(fig, p),
+               lambda p: files.write_frame_csv(frame, p, index=False)]
+    for case in range(cases):
+        counts["output cases"] += 1
+        folder = tmp_path / f"o{case}"
+        folder.mkdir()
+        victim = folder / "victim.txt"
+        victim.write_bytes(VICTIM)
+        target = folder / "out.dat"
+        kind = ["link", "dangling", "fifo", "existing", "new", "partial_link"][case % 6]
+        if kind == "link":
+            target.symlink_to(victim)
+        elif kind == "dangling":
+            target.symlink_to(folder / "elsewhere.dat")
+        elif kind == "fifo":
+            os.mkfifo(target)
+        elif kind == "existing":
+            target.write_bytes(b"old")
+        elif kind == "partial_link":  # the old FMU build's predictable temporary name
+            (folder / f".out.dat.{os.getpid()}.partial").symlink_to(victim)
+        before = {p.name for p in folder.iterdir()}
+        result = []
+
+        def write():
+            try:
+                writers[int(rng.integers(len(writers)))](target)
+                result.append("written")
+            except OutputError:
+                result.append("refused")
+            except Exception as exc:  # noqa: BLE001
+                result.append(repr(exc))
+
+        worker = threading.Thread(target=write, daemon=True)
+        worker.start()
+        worker.join(20)
+        if worker.is_alive():
+            counts["writes outside the requested output"] += 1  # blocked on a FIFO
+            with open(target, "rb") as fh:
+                fh.read()
+            worker.join(5)
+            continue
+        after = {p.name for p in folder.iterdir()}
+        if result[0] not in ("written", "refused"):
+            counts["raw exceptions"] += 1
+        if victim.read_bytes() != VICTIM or after - before - {"out.dat"} or (folder / "elsewhere.dat").exists():
+            counts["writes outside the requested output"] += 1
+        if kind in ("link", "dangling", "fifo") and result[0] != "refused":
+            counts["writes outside the requested output"] += 1
+
+
+def test_seeded_fuzz_counts_are_zero(tmp_path, tydex_text, capsys):
+    """The campaign's cases, seeded and fast (~3 s): raw exceptions 0, silent impossible results 0, writes outside the
+    requested output 0 (and the compiled model agreeing with evaluate, CSV errors naming their line)."""
+    from collections import Counter
+
+    rng = np.random.default_rng(25)
+    counts = Counter()
+    _fuzz_tir(rng, 300, counts)
+    _fuzz_compiled(rng, 120, counts)
+    _fuzz_csv(rng, tmp_path, 150, counts)
+    _fuzz_tydex(rng, tmp_path, tydex_text, 80, counts)
+    _fuzz_outputs(rng, tmp_path, 60, counts)
+    measures = ("raw exceptions", "silent impossible results", "writes outside the requested output",
+                "compiled/evaluate disagreements", "csv errors without the right line")
+    with capsys.disabled():
+        print("\nhostile fuzz:", {k: v for k, v in counts.items() if not isinstance(v, list)},
+              {m: counts[m] for m in measures})
+    assert counts["tir cases"] > 200 and counts["csv cases"] == 150 and counts["output cases"] == 60
+    for measure in measures:
+        assert counts[measure] == 0, (measure, counts.get("raw"), counts.get("impossible"))
