@@ -45,6 +45,10 @@ __all__ = ["read_tir", "parse_tir", "write_tir", "check_tir", "validate_params",
            "unit_factor"]
 
 
+#: Most parameters not in the schema a file may hold (each is kept to be written back; real files have a few).
+MAX_UNKNOWN_PARAMETERS = 10_000
+
+
 class _TirFileExists(TirError, FileExistsError):
     """The target file exists and overwrite=False."""
 
@@ -321,8 +325,11 @@ def _parse(text: str, source: str, *, strict: bool, stacklevel: int, validate: b
         lines[name] = lineno
         if name in PARAMETERS:
             raw_values[name] = (section, value, quoted, lineno)
-        else:
+        elif len(unknown) < MAX_UNKNOWN_PARAMETERS:
             unknown[name] = (section, _raw_value(value, quoted))
+        else:
+            raise _err(source, lineno, name, f"more than {MAX_UNKNOWN_PARAMETERS:,} parameters that are not in the "
+                                             "schema: not a tyre property file (real files have none or a few)")
 
     def end_unknown_section(section: str, first_line: int, body: list[str]) -> None:
         """An unknown section: parameters when every content line is ``NAME = value``, else kept verbatim."""

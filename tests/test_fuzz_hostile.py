@@ -202,6 +202,18 @@ def test_repeated_unknown_sections_parse_in_linear_time():
     assert prm.extra_sections["SHAPE"].count("1.0 0.0") == 320_000
 
 
+
+def test_a_flood_of_unknown_parameters_is_refused_early():
+    """1.6 M lines `Pn=1` (16 MB) were all kept (each written back later): 20 s and 1.2 GB in the campaign, 7 s and
+    0.7 GB here; real files have none or a few, so more than 10,000 is no tyre property file (1.8 s, 0.19 GB)."""
+    from mftyre.tir import MAX_UNKNOWN_PARAMETERS, parse_tir
+
+    text = T61.read_text() + "[EXTRA]\n" + "".join(f"P{i}=1\n" for i in range(200_000))
+    with pytest.raises(TirError, match=rf"big\.tir:\d+: P{MAX_UNKNOWN_PARAMETERS}: more than 10,000 parameters"):
+        _quiet(parse_tir, text, "big.tir")
+    few = _quiet(parse_tir, T61.read_text() + "[EXTRA]\n" + "".join(f"P{i}=1\n" for i in range(50)), "few.tir")
+    assert len(few.unknown) == 50 and few.unknown["P7"] == ("EXTRA", 1.0)
+
 # ------------------------------------------------------------------------------------ 5-7: values and raw errors
 def _set(text: str, name: str, value: str) -> str:
     """``text`` with the value of parameter ``name`` replaced (its first assignment)."""
