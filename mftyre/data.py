@@ -310,7 +310,8 @@ def _line_break(data: bytes) -> bytes:
 
 def _csv_header(data: bytes, path) -> list[str]:
     """The column names of the first line of the file ``data``, stripped (a UTF-8 byte-order mark removed)."""
-    first = data.split(_line_break(data), 1)[0]
+    end = data.find(_line_break(data))
+    first = data if end < 0 else data[:end]
     try:
         text = first.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -341,9 +342,10 @@ def _check_field_counts(data: bytes, expected: int, path) -> None:
     breaks = np.flatnonzero(raw == _line_break(data)[0])
     starts = np.concatenate(([0], breaks + 1))
     ends = np.concatenate((breaks, [raw.size]))
-    commas = np.concatenate(([0], np.cumsum(raw == ord(","))))
-    fields = commas[ends] - commas[starts] + 1
-    length = ends - starts - (raw[np.maximum(ends - 1, 0)] == ord("\r")) * (ends > starts)
+    commas = np.flatnonzero(raw == ord(","))
+    fields = np.searchsorted(commas, ends) - np.searchsorted(commas, starts) + 1  # commas between start and end
+    length = ends - starts
+    length[length > 0] -= raw[ends[length > 0] - 1] == ord("\r")  # a CR before the LF: an empty line is empty
     wrong = np.flatnonzero((fields != expected) & (length > 0))
     if wrong.size:
         line = int(wrong[0])
