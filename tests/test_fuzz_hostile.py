@@ -329,8 +329,9 @@ def test_loads_above_fzmax_are_warned_and_saturated_in_every_output(path, fz):
     with pytest.warns(InputClippedWarning, match="fz outside FZMAX"):
         out = model.evaluate(fz, 0.0, 0.0, vx=16.7)
     at_max = _quiet(model.evaluate, model.params.FZMAX, 0.0, 0.0, vx=16.7)
-    for name in ("fx", "fy", "mz", "re", "omega", "rl", "rho", "a", "b", "cz"):
-        assert float(getattr(out, name)) == pytest.approx(float(getattr(at_max, name)), rel=1e-12, abs=1e-12), name
+    for name in out.keys():  # every output but the load as given (my used the unlimited load: -12.4 kN m)
+        if name != "fz":
+            assert float(out[name]) == pytest.approx(float(at_max[name]), rel=1e-12, abs=1e-12), name
     r0 = model.params.UNLOADED_RADIUS
     assert 0 < float(out.rl) < r0 and 0.5 * r0 < float(out.re) < r0 and float(out.fz) == fz
 
