@@ -325,6 +325,9 @@ def _csv_header(data: bytes, path) -> list[str]:
     return [n.strip() for n in names]
 
 
+_BLOCK = 1 << 20
+
+
 def _check_field_counts(data: bytes, expected: int, path) -> None:
     """DataError naming the first line whose number of fields differs from the header's ``expected`` (blank
     lines are skipped, as the reader skips them): such a row would otherwise be shifted onto the columns or
@@ -338,18 +341,28 @@ def _check_field_counts(data: bytes, expected: int, path) -> None:
         except csv.Error as exc:
             raise DataError(f"{path}: cannot read as CSV: {exc}") from None
         return
-    raw = np.frombuffer(data, np.uint8)
-    breaks = np.flatnonzero(raw == _line_break(data)[0])
-    starts = np.concatenate(([0], breaks + 1))
-    ends = np.concatenate((breaks, [raw.size]))
-    commas = np.flatnonzero(raw == ord(","))
-    fields = np.searchsorted(commas, ends) - np.searchsorted(commas, starts) + 1  # commas between start and end
-    length = ends - starts
-    length[length > 0] -= raw[ends[length > 0] - 1] == ord("\r")  # a CR before the LF: an empty line is empty
-    wrong = np.flatnonzero((fields != expected) & (length > 0))
-    if wrong.size:
-        line = int(wrong[0])
-        _field_count_error(path, line + 1, int(fields[line]), expected)
+    line_break = _line_break(data)
+    every = np.frombuffer(data, np.uint8)
+    start, line, size = 0, 1, len(data)
+    while start < size:  # blocks of whole lines of about 1 MiB (kept in the cache: 4x faster than one pass)
+        end = size if start + _BLOCK >= size else data.rfind(line_break, start, start + _BLOCK) + 1
+        if end <= start:  # a line longer than a block
+            end = data.find(line_break, start + _BLOCK) + 1 or size
+        raw = every[start:end]
+        separators = np.flatnonzero((raw == ord(",")) | (raw == line_break[0]))
+        at = np.flatnonzero(raw[separators] == line_break[0])  # the line breaks among the separators
+        breaks = separators[at]
+        if end == size and (raw.size == 0 or raw[-1] != line_break[0]):  # a last line without a break
+            at, breaks = np.append(at, separators.size), np.append(breaks, raw.size)
+        fields = np.diff(at, prepend=-1)  # commas of each line + 1
+        length = breaks - np.concatenate(([0], breaks[:-1] + 1))
+        some = length > 0
+        length[some] -= raw[breaks[some] - 1] == ord("\r")  # CR LF: a line of only CR is empty
+        wrong = np.flatnonzero((fields != expected) & (length > 0))
+        if wrong.size:
+            _field_count_error(path, line + int(wrong[0]), int(fields[wrong[0]]), expected)
+        line += breaks.size
+        start = end
 
 
 def _field_count_error(path, line: int, count: int, expected: int):

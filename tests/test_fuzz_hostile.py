@@ -712,3 +712,22 @@ def test_seeded_fuzz_counts_are_zero(tmp_path, tydex_text, capsys):
     assert counts["tir cases"] > 200 and counts["csv cases"] == 150 and counts["output cases"] == 60
     for measure in measures:
         assert counts[measure] == 0, (measure, counts.get("raw"), counts.get("impossible"))
+
+
+def test_field_counts_are_checked_across_the_blocks_of_a_large_file(tmp_path):
+    """The count runs in blocks of about 1 MiB: a wrong row far inside, CR LF line ends, a last line without a break."""
+    from mftyre.data import read_csv
+
+    rows = ["4000,0.1,0.0,10,220000"] * 150_000  # 3.4 MB
+    rows[120_000] = "4000,0.1,0.0,10"
+    path = tmp_path / "big.csv"
+    path.write_text("FZ,SA,SL,VX,P\r\n" + "\r\n".join(rows))
+    with pytest.raises(DataError, match="line 120002: 4 fields"):
+        read_csv(path)
+    rows[120_000], rows[-1] = rows[0], "1,2"
+    path.write_text("FZ,SA,SL,VX,P\r\n" + "\r\n".join(rows))
+    with pytest.raises(DataError, match="line 150001: 2 fields"):
+        read_csv(path)
+    rows[-1] = rows[0]
+    path.write_text("FZ,SA,SL,VX,P\n" + "\n".join(rows) + "\n\n")
+    assert len(read_csv(path).frame) == 150_000
