@@ -59,7 +59,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import MFTyreError, ModelInputError
-from .inputs import check_finite, check_pressure, input_ranges, warn_outside
+from .inputs import check_finite, check_finite_outputs, check_pressure, input_ranges, warn_outside
 
 __all__ = ["CompiledFunction", "CacheSecurityError", "compile_model", "compile_function", "compile_external",
            "cached_library", "compile_c", "cache_dir", "generate_c", "CASADI_LOCK"]
@@ -118,7 +118,11 @@ def cache_dir() -> Path:
 
 def _private_dir(path) -> Path:
     path = Path(path)
-    path.mkdir(mode=0o700, parents=True, exist_ok=True)
+    try:
+        path.mkdir(mode=0o700, parents=True, exist_ok=True)
+    except (OSError, ValueError) as exc:  # a file in the way (MFTYRE_CACHE naming a file), no permission
+        raise CacheSecurityError(f"cannot use {path} as the compile cache: {getattr(exc, 'strerror', None) or exc}; "
+                                 "set MFTYRE_CACHE to a folder (new, or one only you can write)") from None
     _check_private(path, "the folder")
     return path
 
@@ -421,8 +425,9 @@ class CompiledFunction:
     cores) and returns one array per output. Bad inputs raise :class:`ModelInputError`.
     """
 
-    def __init__(self, library):
+    def __init__(self, library, *, finite_outputs: bool = False):
         library = Path(library)
+        self._finite_outputs = finite_outputs  # raise like MFModel.evaluate where finite inputs give non-finite outputs
         meta = _verify(library)
         self.library = library
         self.inputs, self.outputs = tuple(meta["inputs"]), tuple(meta["outputs"])
@@ -458,7 +463,10 @@ class CompiledFunction:
         flags = self._point(xy)
         if flags:
             self._report(lambda k, kind: (flags >> (kind * _FLAG_BITS + k)) & 1, 1, xy[:n_in])
-        return self._unpack(xy, 8 * n_in)
+        result = self._unpack(xy, 8 * n_in)
+        if self._finite_outputs and not all(map(math.isfinite, result)):
+            self._check_outputs(result, xy[:n_in], ())
+        return result
 
     def batch(self, *arrays, threads: int = 1):
         """Many points: one array (or number) per input, broadcast together; one array per output.
@@ -484,6 +492,8 @@ class CompiledFunction:
             self._packed(n, _address(packed), _address(result), _address(counts))
             if counts.any():
                 self._report(lambda k, kind: counts[k, kind], n, packed)
+            if self._finite_outputs:
+                self._check_outputs(result, packed, shape)
             return tuple(result.reshape((n_out, *shape)))
         flat, strides = [], []
         for v in values:
@@ -518,7 +528,18 @@ class CompiledFunction:
         total = counts.sum(axis=0)
         if total.any():
             self._report(lambda k, kind: total[k, kind], n, flat)
+        if self._finite_outputs:
+            self._check_outputs(result, [np.broadcast_to(v, shape) for v in values], shape)
         return tuple(result.reshape((n_out, *shape)))
+
+    def _check_outputs(self, result, inputs, shape) -> None:
+        """ModelInputError naming the outputs and the first point where finite inputs gave non-finite outputs
+        (:func:`mftyre.inputs.check_finite_outputs`, the check of MFModel.evaluate)."""
+        result = np.asarray(result, dtype=float).reshape((len(self.outputs), *shape))
+        if np.isfinite(result).all():
+            return
+        check_finite_outputs(dict(zip(self.outputs, result)),
+                             {name: np.asarray(v, dtype=float).reshape(shape) for name, v in zip(self.inputs, inputs)})
 
     def _as_array(self, name, value):
         arr = np.asarray(value)
@@ -677,7 +698,7 @@ def compile_model(model, inputs=("fz", "kappa", "alpha", "gamma", "phit", "vx", 
     checks = _model_checks(model, inputs, options.get("limits", True))
     library = compile_function(lambda: model.casadi_function(inputs, outputs, **options), key, directory, outputs,
                                checks)
-    return CompiledFunction(library)
+    return CompiledFunction(library, finite_outputs=True)
 
 
 def _check_fixed(name, value):

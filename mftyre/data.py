@@ -493,13 +493,15 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
     """
     path = Path(path)
     with open_user_file(path, max_bytes=max_bytes, what="CSV data file", error=DataError) as fh:
-        header = _csv_header(fh.readline(), path)
-        fh.seek(0)
-        try:
-            raw = pd.read_csv(fh, skipinitialspace=True, keep_default_na=False, na_values=_NAN_TEXT,
-                              encoding="utf-8-sig")
-        except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, ValueError) as exc:
-            raise DataError(f"{path}: cannot read as CSV: {exc}") from None
+        data = fh.read()
+    header = _csv_header(data, path)
+    _check_field_counts(data, len(header), path)
+    try:  # index_col=False: a row is never shifted onto an index (the counts are checked above)
+        raw = pd.read_csv(io.BytesIO(data), skipinitialspace=True, keep_default_na=False, na_values=_NAN_TEXT,
+                          encoding="utf-8-sig", index_col=False)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, ValueError) as exc:
+        raise DataError(f"{path}: cannot read as CSV: {exc}") from None
+    del data
     if len(raw.columns) != len(header):  # pragma: no cover - pandas and the csv module agree on the header
         raise DataError(f"{path}: line 1: cannot read the header")
     raw.columns = header
@@ -548,16 +550,71 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
                     history=_import_notes(axes, units, defaults, check))
 
 
-def _csv_header(first: bytes, path) -> list[str]:
-    """The column names of the first line, stripped (a UTF-8 byte-order mark removed)."""
+def _line_break(data: bytes) -> bytes:
+    """The line break of a CSV file: LF (also for CR LF), or CR alone when the file has no LF."""
+    return b"\n" if b"\n" in data or b"\r" not in data else b"\r"
+
+
+def _csv_header(data: bytes, path) -> list[str]:
+    """The column names of the first line of the file ``data``, stripped (a UTF-8 byte-order mark removed)."""
+    end = data.find(_line_break(data))
+    first = data if end < 0 else data[:end]
     try:
         text = first.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise DataError(f"{path}: line 1: cannot read as CSV: {exc}") from None
-    names = next(csv.reader([text.rstrip("\r\n")]), [])
+    try:
+        names = next(csv.reader([text.rstrip("\r\n")]), [])
+    except csv.Error as exc:  # e.g. a field longer than the csv module's limit (128 KiB)
+        raise DataError(f"{path}: line 1: cannot read the header: {exc}") from None
     if not any(n.strip() for n in names):
         raise DataError(f"{path}: line 1: no header: expected column names such as FZ,SA,SL,VX,P")
     return [n.strip() for n in names]
+
+
+_BLOCK = 1 << 20
+
+
+def _check_field_counts(data: bytes, expected: int, path) -> None:
+    """DataError naming the first line whose number of fields differs from the header's ``expected`` (blank
+    lines are skipped, as the reader skips them): such a row would otherwise be shifted onto the columns or
+    padded. Linear time: commas counted per line with NumPy, or by the csv module when the file quotes fields."""
+    if b'"' in data:  # quoted fields may hold commas and line breaks: let the csv module split them
+        text = io.StringIO(data.decode("utf-8-sig", errors="replace"), newline="")
+        try:
+            for number, row in enumerate(csv.reader(text), start=1):
+                if row and len(row) != expected:
+                    _field_count_error(path, number, len(row), expected)
+        except csv.Error as exc:
+            raise DataError(f"{path}: cannot read as CSV: {exc}") from None
+        return
+    line_break = _line_break(data)
+    every = np.frombuffer(data, np.uint8)
+    start, line, size = 0, 1, len(data)
+    while start < size:  # blocks of whole lines of about 1 MiB (kept in the cache: 4x faster than one pass)
+        end = size if start + _BLOCK >= size else data.rfind(line_break, start, start + _BLOCK) + 1
+        if end <= start:  # a line longer than a block
+            end = data.find(line_break, start + _BLOCK) + 1 or size
+        raw = every[start:end]
+        separators = np.flatnonzero((raw == ord(",")) | (raw == line_break[0]))
+        at = np.flatnonzero(raw[separators] == line_break[0])  # the line breaks among the separators
+        breaks = separators[at]
+        if end == size and (raw.size == 0 or raw[-1] != line_break[0]):  # a last line without a break
+            at, breaks = np.append(at, separators.size), np.append(breaks, raw.size)
+        fields = np.diff(at, prepend=-1)  # commas of each line + 1
+        length = breaks - np.concatenate(([0], breaks[:-1] + 1))
+        some = length > 0
+        length[some] -= raw[breaks[some] - 1] == ord("\r")  # CR LF: a line of only CR is empty
+        wrong = np.flatnonzero((fields != expected) & (length > 0))
+        if wrong.size:
+            _field_count_error(path, line + int(wrong[0]), int(fields[wrong[0]]), expected)
+        line += breaks.size
+        start = end
+
+
+def _field_count_error(path, line: int, count: int, expected: int):
+    raise DataError(f"{path}: line {line}: {count} fields, but the header has {expected} columns: expected one "
+                    "value per column on every line (a row with a field more or less would shift the channels)")
 
 
 def _refuse_duplicates(header: list[str], mapping: dict, path) -> None:
@@ -652,6 +709,15 @@ def _check_values(frame, locate, column_of=None):
                 else f"{values[row]} (infinite, or beyond the float range such as 1e400): expected a finite number")
         column = f"file column {col!r}, " if col != ch else ""
         raise DataError(f"{locate(row)}: channel {ch}: {what} ({column}{int(bad.sum())} rows)")
+    if "P" in frame.columns:  # the model's pressure terms divide by it: a tyre is measured inflated
+        pressure = frame["P"].to_numpy(dtype=float)
+        bad = ~(pressure > 0)
+        if bad.any():
+            row = int(np.flatnonzero(bad)[0])
+            col = (column_of or {}).get("P", "P")
+            column = f"file column {col!r}, " if col != "P" else ""
+            raise DataError(f"{locate(row)}: channel P: inflation pressure {float(pressure[row])!r} Pa: expected a positive "
+                            f"pressure (in the file's unit, pascal by default) ({column}{int(bad.sum())} rows)")
 
 
 # ---------------------------------------------------------------------------------------------- TYDEX
@@ -735,7 +801,7 @@ def _read_tydex(fh, path: Path, defaults, axes="ISO-W", check=True) -> TyreData:
     del columns
     frame = pd.DataFrame(values_of, copy=False)
     _convert_axes(frame, axes, path)
-    for name, (value, unit, _) in state.constants.items():  # constants standing in for absent channels
+    for name, (value, unit, *_) in state.constants.items():  # constants standing in for absent channels
         ch = _CHANNEL_OF_TYDEX.get(name)
         if ch in REQUIRED + _ZERO_DEFAULT and ch not in frame.columns and isinstance(value, float):
             frame[ch] = value
@@ -802,15 +868,29 @@ class _TydexBlocks:
                 if not name:
                     raise DataError(f"{path}:{lineno}: column 1-10: empty name in {self.block}")
                 target = self.header if self.block == "**HEADER" else self.constants
-                target[name.upper()] = (_constant_value(name.upper(), unit, value, path, lineno), unit, desc)
+                key = name.upper()
+                if key in target:
+                    raise DataError(f"{path}:{lineno}: columns 1-10: {key} appears twice in {self.block} (also on "
+                                    f"line {target[key][3]}): expected one value per name")
+                target[key] = (_constant_value(key, unit, value, path, lineno), unit, desc, lineno)
             elif self.block == "**MEASURCHANNELS":
                 name, desc, unit, rest = _fixed_fields(line)
                 parts = rest.split()
                 if not name or not parts:
                     raise DataError(f"{path}:{lineno}: channel line needs name (columns 1-10), description, unit "
                                     f"(41-50) and a conversion factor (from column 51): {line[:80]!r}")
+                if len(parts) > 3:
+                    raise DataError(f"{path}:{lineno}: column 51: channel {name}: {len(parts)} numbers "
+                                    f"{rest.strip()[:60]!r}: expected a conversion factor and up to two offsets")
+                key = name.upper()
+                canonical = _CHANNEL_OF_TYDEX.get(key, key)
+                for other, *_, other_line in self.channels:
+                    if _CHANNEL_OF_TYDEX.get(other, other) == canonical:
+                        also = "" if other == key else f" as {other}"
+                        raise DataError(f"{path}:{lineno}: columns 1-10: channel {key} ({canonical}) is listed twice "
+                                        f"(also{also} on line {other_line}): expected one column per channel")
                 try:
-                    numbers = [float(p.replace("D", "E").replace("d", "e")) for p in parts[:3]]
+                    numbers = [float(p.replace("D", "E").replace("d", "e")) for p in parts]
                 except ValueError:
                     raise DataError(f"{path}:{lineno}: column 51: channel {name}: non-numeric factor/offset "
                                     f"{rest[:40]!r}") from None
@@ -924,6 +1004,8 @@ def _constant_value(name, unit, text, path, lineno):
         if name in _CONSTANT_KINDS:
             raise DataError(f"{path}:{lineno}: column 51: constant {name}: non-numeric value {text!r}") from None
         return text
+    if not math.isfinite(value):
+        raise DataError(f"{path}:{lineno}: column 51: constant {name}: {text.strip()[:40]!r} is not a finite number")
     if name in _CONSTANT_KINDS:
         ch = _CONSTANT_KINDS[name]
         try:

@@ -33,7 +33,7 @@ def run_demo(out_dir="out", tir=None, *, seed: int = 1, echo=print, overwrite: b
     otherwise)."""
     from matplotlib.figure import Figure
 
-    from mftyre.files import check_outputs, sample_tir
+    from mftyre.files import check_outputs, make_output_folder, sample_tir, write_figure
 
     import mftyre
     from mftyre.data import read_tydex, trailer_programme, write_tydex
@@ -44,7 +44,7 @@ def run_demo(out_dir="out", tir=None, *, seed: int = 1, echo=print, overwrite: b
     out = Path(out_dir)
     check_outputs({}, {"tyre": tir}, folders={"--out": out}, overwrite=overwrite,
                   option="--overwrite (overwrite=True)")
-    out.mkdir(parents=True, exist_ok=True)
+    make_output_folder(out, "--out")
     truth = mftyre.load_tir(tir)
     prm = truth.params
     echo(f"1/3 evaluate {Path(tir).name} (FITTYP {prm.fittyp}, FNOMIN {prm.FNOMIN:.0f} N, "
@@ -65,7 +65,7 @@ def run_demo(out_dir="out", tir=None, *, seed: int = 1, echo=print, overwrite: b
     ax_fy.legend()
     fig.tight_layout()
     characteristics = out / "characteristics.png"
-    fig.savefig(characteristics)
+    write_figure(fig, characteristics)
     for p, fy, kya in zip(pressures, res.fy, res.kya[:, 0]):
         echo(f"    {p / 1e5:.2f} bar: peak |Fy| {np.max(np.abs(fy)):7.0f} N, cornering stiffness {kya:8.0f} N/rad")
     echo(f"    wrote {characteristics}")
@@ -136,11 +136,11 @@ def register(subparsers) -> None:
 def _run(args) -> int:
     import sys
 
-    from mftyre.files import OutputError
+    from mftyre.errors import MFTyreError
 
     try:
         run_demo(args.out, seed=args.seed, overwrite=args.overwrite)
-    except OutputError as exc:
+    except MFTyreError as exc:
         print(f"mftyre demo: error: {exc}", file=sys.stderr)
         return 2
     return 0

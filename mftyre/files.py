@@ -9,14 +9,17 @@ package as ``mftyre.tir_files``.
 
 Writing (:func:`check_outputs`, used by every command before it does any work): an output never replaces an input
 (compared by resolved path, and by inode where both exist), two outputs are never the same file, and an existing
-output is replaced only with ``--overwrite`` (``overwrite=True``). :func:`write_atomically` writes through a
-temporary file in the target folder and renames it into place, with the ordinary permissions of a new file
-(0666 less the umask, e.g. 0644).
+output is replaced only with ``--overwrite`` (``overwrite=True``), and never when it is a symbolic link or not a
+regular file (a FIFO, a device). Every output is written by :func:`write_atomically` (figures by
+:func:`write_figure`, tables by :func:`write_frame_csv`, rendered in memory first): a new file with a random name
+in the target folder, created with O_EXCL|O_NOFOLLOW, fsynced and renamed into place, with the ordinary
+permissions of a new file (0666 less the umask, e.g. 0644).
 """
 from __future__ import annotations
 
 import contextlib
 import importlib.resources
+import io
 import os
 import secrets
 import stat
@@ -25,7 +28,7 @@ from pathlib import Path
 from .errors import MFTyreError
 
 __all__ = ["OutputError", "open_user_file", "read_user_file", "same_file", "check_outputs", "write_atomically",
-           "sample_tir", "TIR_MAX_BYTES", "DATA_MAX_BYTES"]
+           "write_figure", "write_frame_csv", "make_output_folder", "refuse_special_output", "sample_tir", "TIR_MAX_BYTES", "DATA_MAX_BYTES"]
 
 #: Largest .tir file read (16 MiB; real files are tens of kB).
 TIR_MAX_BYTES = 16 * 2**20
@@ -49,6 +52,8 @@ def open_user_file(path, *, max_bytes: int, what: str, error=MFTyreError):
         raise error(f"{name}: file not found: expected an existing {what}") from None
     except IsADirectoryError:
         raise error(f"{name}: is a directory: expected a {what}") from None
+    except ValueError:  # e.g. an embedded NUL character
+        raise error(f"{name!r}: not a valid file name: expected the path of a {what}") from None
     except OSError as exc:
         raise error(f"{name}: cannot open: {exc.strerror}: expected a readable {what}") from None
     try:
@@ -113,6 +118,8 @@ def check_outputs(outputs: dict, inputs: dict | None = None, *, folders: dict | 
     for label, out in files.items():
         if out.is_dir():
             raise OutputError(f"{label} {out}: is a folder: expected a file path")
+    for label, out in files.items():
+        refuse_special_output(out, label)
     for label, folder in dirs.items():
         if folder.exists() and not folder.is_dir():
             raise OutputError(f"{label} {folder}: is a file: expected a folder (new, or existing)")
@@ -124,26 +131,91 @@ def check_outputs(outputs: dict, inputs: dict | None = None, *, folders: dict | 
                           "replace")
 
 
+def refuse_special_output(path, label: str = "output") -> None:
+    """Refuse (:class:`OutputError`) an output path that is a symbolic link (even a dangling one) or an existing
+    file that is not a regular file (FIFO, device, socket): replacing it would write where the user did not ask,
+    or block."""
+    path = Path(path)
+    try:
+        info = os.lstat(path)
+    except FileNotFoundError:
+        return
+    except ValueError:  # e.g. an embedded NUL character
+        raise OutputError(f"{label} {str(path)!r}: not a valid file name") from None
+    except OSError as exc:
+        raise OutputError(f"{label} {path}: cannot inspect: {exc.strerror}") from None
+    if stat.S_ISLNK(info.st_mode):
+        raise OutputError(f"{label} {path}: is a symbolic link; outputs are never written through or over a link: "
+                          "remove it or choose another path")
+    if stat.S_ISDIR(info.st_mode):
+        raise OutputError(f"{label} {path}: is a folder: expected a file path")
+    if not stat.S_ISREG(info.st_mode):
+        raise OutputError(f"{label} {path}: exists and is not a regular file (a FIFO, device or socket); "
+                          "choose another path")
+
+
 def write_atomically(path, data: bytes | str) -> Path:
-    """Write ``data`` (text as UTF-8) to ``path`` through a temporary file in the same folder renamed into
-    place; the new file has the permissions of any new file (0666 less the umask). Returns the path."""
+    """Write ``data`` (text as UTF-8) to ``path``: the one routine through which every output of mftyre is
+    written. A new file with a random name in the target folder is created with O_CREAT|O_EXCL|O_NOFOLLOW (never
+    an existing file or a planted link), written, fsynced and renamed onto ``path``; a ``path`` that is a
+    symbolic link or an existing non-regular file (FIFO, device) is refused (:class:`OutputError`). The new file
+    has the permissions of any new file (0666 less the umask). Returns the path."""
     path = Path(path)
     if isinstance(data, str):
         data = data.encode("utf-8")
+    refuse_special_output(path)
     folder = path.parent
-    tmp = folder / f".{path.name}.{secrets.token_hex(6)}.tmp"
-    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_BINARY", 0)
+    tmp = folder / f".{path.name[:64]}.{secrets.token_hex(8)}.tmp"
+    try:
+        fd = os.open(tmp, flags, 0o666)
+    except OSError as exc:
+        raise OutputError(f"output {path}: cannot write in {folder}: {exc.strerror}") from None
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
+        refuse_special_output(path)  # a link or FIFO planted while writing is refused too (rename would replace it)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         try:
             os.unlink(tmp)
         except OSError:
             pass
+        if isinstance(exc, OSError) and not isinstance(exc, MFTyreError):
+            raise OutputError(f"output {path}: cannot write: {exc.strerror or exc}") from None
         raise
     return path
+
+
+def write_figure(fig, path) -> Path:
+    """Save the matplotlib Figure ``fig`` to ``path`` through :func:`write_atomically` (rendered in memory; the
+    format from the suffix, PNG when the suffix is not one matplotlib writes)."""
+    path = Path(path)
+    suffix = path.suffix[1:].lower()
+    fmt = suffix if suffix in fig.canvas.get_supported_filetypes() else "png"
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format=fmt)
+    return write_atomically(path, buffer.getvalue())
+
+
+def write_frame_csv(frame, path, **to_csv) -> Path:
+    """Write the pandas DataFrame ``frame`` as CSV to ``path`` through :func:`write_atomically`."""
+    text = io.StringIO()
+    frame.to_csv(text, **to_csv)
+    return write_atomically(path, text.getvalue())
+
+
+def make_output_folder(folder, label: str = "output folder") -> Path:
+    """Create ``folder`` (and its parents) for outputs; :class:`OutputError` when that is impossible (no
+    permission, a file in the way)."""
+    folder = Path(folder)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"{label} {folder}: cannot create: {exc.strerror or exc}") from None
+    return folder
 
 
 def sample_tir(name: str) -> Path:

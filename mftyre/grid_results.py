@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .files import OutputError, check_outputs
+from .files import OutputError, check_outputs, make_output_folder, write_figure, write_frame_csv
 
 __all__ = ["check_request", "sweep_grid", "grid_frame", "format_table", "plot_grid", "write_results"]
 
@@ -79,10 +79,6 @@ def plot_grid(args, out, swept: list[str], shape, outputs, *, output_units: dict
     to ``args.plot`` (format from the suffix, PNG otherwise). ``legend(name, value)``: the label of one input's
     value in the legend (default: the sweep's own label). ``out`` may also be a list of (name, outputs): several
     models overlaid, one line style each (named in the title)."""
-    import io
-
-    from .files import write_atomically
-
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -124,11 +120,7 @@ def plot_grid(args, out, swept: list[str], shape, outputs, *, output_units: dict
     if len(series) > 1:
         title += "\n" + ", ".join(f"{name} ({_STYLES[j % len(_STYLES)][1]})" for j, (name, _) in enumerate(series))
     fig.suptitle(title, fontsize=10)
-    path = Path(args.plot)
-    fmt = path.suffix[1:].lower() if path.suffix[1:].lower() in fig.canvas.get_supported_filetypes() else "png"
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format=fmt)
-    write_atomically(path, buffer.getvalue())
+    write_figure(fig, args.plot)
 
 
 def write_results(args, table, plot) -> None:
@@ -136,12 +128,10 @@ def write_results(args, table, plot) -> None:
     where asked, creating missing folders, and say so on stderr. :func:`check_request` has allowed both."""
     for target in (args.csv, args.plot):
         if target is not None:
-            Path(target).parent.mkdir(parents=True, exist_ok=True)
+            make_output_folder(Path(target).parent)
     if args.csv is not None:
-        from .files import write_atomically
-
         frame = table()
-        write_atomically(args.csv, frame.to_csv(index=False))
+        write_frame_csv(frame, args.csv, index=False)
         print(f"wrote {args.csv} ({len(frame)} rows, {frame.shape[1]} columns)", file=sys.stderr)
     if args.plot is not None:
         plot()

@@ -22,7 +22,8 @@ import numpy as np
 
 from .errors import InputClippedWarning, ModelInputError, spelled
 
-__all__ = ["RANGE_PARAMETERS", "input_ranges", "saturate", "check_finite", "check_pressure", "warn_outside"]
+__all__ = ["RANGE_PARAMETERS", "input_ranges", "saturate", "check_finite", "check_pressure", "warn_outside",
+           "check_finite_outputs"]
 
 #: input -> (.tir parameter of the lower bound or None, of the upper bound, unit): the ranges ``limits=True``
 #: saturates the inputs to (see the module docstring for Fz and FZMIN).
@@ -83,3 +84,22 @@ def warn_outside(counts: dict, total: int, ranges: dict, stacklevel: int = 3) ->
         given = spelled("limits=False", "mftyre eval --no-limits")
         warnings.warn(f"inputs outside the .tir ranges, saturated to them ({given} evaluates them as given): "
                       + "; ".join(parts), InputClippedWarning, stacklevel=stacklevel)
+
+
+def check_finite_outputs(out: dict, arrays: dict) -> None:
+    """Finite inputs must give finite outputs (``out``: name -> array, ``arrays``: input name -> array of the same
+    shape; the check of :meth:`mftyre.MFModel.evaluate` and of the compiled model alike): where the .tir parameters admit no finite solution (e.g. Q_V1, Q_V2
+    that make the free radius vanish at the speed asked for), raise ModelInputError naming the outputs and the
+    first such point instead of returning NaN."""
+    bad = [k for k, v in out.items() if not np.isfinite(v).all()]
+    if not bad:
+        return
+    mask = np.zeros(np.shape(out[bad[0]]), dtype=bool)
+    for k in bad:
+        mask |= ~np.isfinite(out[k])
+    i = np.unravel_index(np.argmax(mask), mask.shape) if mask.ndim else ()
+    index = "" if not i else f" {int(i[0])}" if len(i) == 1 else f" {tuple(int(j) for j in i)}"
+    at = ", ".join(f"{k}={np.broadcast_to(v, mask.shape)[i]:.6g}" for k, v in arrays.items())
+    raise ModelInputError(f"the equations give non-finite {', '.join(bad)} at {int(mask.sum())} of {mask.size} "
+                          f"point(s), first at point{index}: {at}: the .tir parameters have no finite solution there "
+                          "(check the speed terms Q_V1, Q_V2 and the vertical parameters)")

@@ -21,7 +21,7 @@ import functools
 import numpy as np
 
 from .errors import ModelInputError
-from .inputs import check_finite, check_pressure, input_ranges, saturate, warn_outside
+from .inputs import check_finite, check_finite_outputs, check_pressure, input_ranges, saturate, warn_outside
 from .formula import OUTPUT_NAMES, Modes, steady_state, vertical
 from .backend import NUMPY, NUMPY_FOLDING
 
@@ -143,8 +143,12 @@ class MFModel:
         return self._params
 
     def with_params(self, **changes) -> "MFModel":
-        """A new model with some parameters changed, e.g. ``model.with_params(INFLPRES=2.0e5, LMUY=0.9)``."""
-        return MFModel(self._params.replace(**changes), side=self.side)
+        """A new model with some parameters changed, e.g. ``model.with_params(INFLPRES=2.0e5, LMUY=0.9)``; TirError
+        naming the parameter when a value is one no tyre can have (the check of :func:`mftyre.tir.read_tir`)."""
+        from .tir import validate_params
+
+        params = self._params.replace(**changes)
+        return MFModel(validate_params(params, "with_params"), side=self.side)
 
     def with_side(self, side: str) -> "MFModel":
         """The same tyre mounted on ``side``."""
@@ -251,7 +255,7 @@ class MFModel:
             check_finite = check_finite and not finite
         out = {k: v.reshape(shape) for k, v in out.items()}
         if check_finite:
-            _check_finite_outputs(out, arrays)
+            check_finite_outputs(out, arrays)
         return out
 
     def _mirrored_input(self, name: str) -> bool:
@@ -424,24 +428,6 @@ def _own_arrays(values: dict, n: int, inputs: list) -> dict:
         seen.add(id(v))
         out[k] = v
     return out
-
-
-def _check_finite_outputs(out: dict, arrays: dict) -> None:
-    """Finite inputs must give finite outputs: where the .tir parameters admit no finite solution (e.g. Q_V1, Q_V2
-    that make the free radius vanish at the speed asked for), raise ModelInputError naming the outputs and the
-    first such point instead of returning NaN."""
-    bad = [k for k, v in out.items() if not np.isfinite(v).all()]
-    if not bad:
-        return
-    mask = np.zeros(np.shape(out[bad[0]]), dtype=bool)
-    for k in bad:
-        mask |= ~np.isfinite(out[k])
-    i = np.unravel_index(np.argmax(mask), mask.shape) if mask.ndim else ()
-    index = "" if not i else f" {int(i[0])}" if len(i) == 1 else f" {tuple(int(j) for j in i)}"
-    at = ", ".join(f"{k}={np.broadcast_to(v, mask.shape)[i]:.6g}" for k, v in arrays.items())
-    raise ModelInputError(f"the equations give non-finite {', '.join(bad)} at {int(mask.sum())} of {mask.size} "
-                          f"point(s), first at point{index}: {at}: the .tir parameters have no finite solution there "
-                          "(check the speed terms Q_V1, Q_V2 and the vertical parameters)")
 
 
 def _as_float_arrays(inputs: dict, copy: bool = True) -> dict:

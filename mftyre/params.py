@@ -538,13 +538,82 @@ _POSITIVE = {
     "FZMAX": "the largest load (loads are saturated to it)",
 }
 
+#: Free radius growth with speed, Q_V1 (V/LONGVL)^2 of UNLOADED_RADIUS: less than _GROWTH_LIMIT at three times the
+#: reference speed (published tyres: ~0.7 % there; the files declare no top speed, the reference speed is the scale
+#: they give, 3 m/s for a tractor tyre, 16.7 m/s for a car's); loads at which Re is checked: FZMAX k/_LOAD_POINTS.
+_GROWTH_LIMIT = 0.1
+_SPEED_RATIO = 3.0
+_LOAD_POINTS = 64
+
+
+def _geometry_problems(prm) -> list[tuple[str, str]]:
+    """The vertical relations of a tyre whose scales are positive must give outputs a tyre can have over the load
+    range 0..FZMAX at the nominal pressure: a real Q_FZ1, an effective rolling radius Re > 0, a free radius that
+    does not run away with speed, a contact patch of positive size. Plain float arithmetic (inf, never an
+    OverflowError, for extreme values)."""
+    out = []
+    R0, Fz0, Cz0, Fzmax = (float(prm[n]) for n in ("UNLOADED_RADIUS", "FNOMIN", "VERTICAL_STIFFNESS", "FZMAX"))
+    ratio = Cz0 * R0 / Fz0  # the stiffness ratio of Q_FZ1, paper (4); about 10 to 30 for real tyres
+    disc = ratio * ratio - 4.0 * prm["Q_FZ2"]
+    if not math.isfinite(disc):  # the name: the factor furthest from a real tyre's (Fz0 > 1 N, R0 < 100 m)
+        name = "FNOMIN" if Fz0 < 1.0 else "UNLOADED_RADIUS" if R0 > 100.0 else "VERTICAL_STIFFNESS"
+        out.append((name, f"the stiffness ratio VERTICAL_STIFFNESS*UNLOADED_RADIUS/FNOMIN = {Cz0!r}*{R0!r}/{Fz0!r} "
+                          f"has no finite square (real tyres: about 10 to 30)"))
+        return out
+    if disc < 0:
+        out.append(("Q_FZ2", f"(Cz0*R0/Fz0)^2 - 4*Q_FZ2 = {disc!r} < 0: Q_FZ1 = sqrt(...) is undefined "
+                             "(VERTICAL_STIFFNESS too small or Q_FZ2 too large)"))
+    if not abs(prm["Q_RE0"] - 1.0) < 0.5:
+        out.append(("Q_RE0", f"must be within 0.5..1.5 (the free radius at standstill is Q_RE0*UNLOADED_RADIUS; "
+                             f"published tyres: about 0.997-1), got {prm['Q_RE0']!r}"))
+    # effective rolling radius, paper (7): Re = R_omega - Fz0/Cz (DREFF atan(BREFF Fz/Fz0) + FREFF Fz/Fz0) between
+    # 0 and twice the free radius at every load up to FZMAX (the reduction is not monotone when the signs differ)
+    free = R0 * prm["Q_RE0"]
+    for k in range(1, _LOAD_POINTS + 1):
+        fz = Fzmax * k / _LOAD_POINTS
+        reduction = Fz0 / Cz0 * (prm["DREFF"] * math.atan(prm["BREFF"] * fz / Fz0) + prm["FREFF"] * fz / Fz0)
+        if not -free < reduction < free:
+            name = "DREFF" if abs(prm["DREFF"]) * math.pi / 2 >= abs(prm["FREFF"]) * fz / Fz0 else "FREFF"
+            out.append((name, f"gives an effective rolling radius Re = {free - reduction!r} m at Fz = {fz!r} N "
+                              f"(Re = R_omega - Fz0/Cz0 (DREFF atan(BREFF Fz/Fz0) + FREFF Fz/Fz0), R_omega = {free!r} m): "
+                              f"expected 0 < Re < 2 R_omega (published: DREFF about 0.2-0.3, FREFF about 0.01-0.1), "
+                              f"got DREFF = {prm['DREFF']!r}, FREFF = {prm['FREFF']!r}"))
+            break
+    growth = prm["Q_V1"] * _SPEED_RATIO**2  # free radius growth with speed, paper (1), at _SPEED_RATIO LONGVL
+    if not abs(growth) < _GROWTH_LIMIT:
+        out.append(("Q_V1", f"makes the free radius change by {100 * growth:.3g} % of UNLOADED_RADIUS at "
+                            f"{_SPEED_RATIO:g} LONGVL (Q_V1 (V/LONGVL)^2): expected less than {100 * _GROWTH_LIMIT:g} % "
+                            f"(published tyres: Q_V1 about 1e-3), got Q_V1 = {prm['Q_V1']!r}"))
+    # contact patch, paper (9), (10) (MF 5.2: Q_A1, Q_A2): a/sqrt(x) and b/x^(1/3) are monotone in the load x,
+    # so a, b >= 0 over (0, FZMAX] when the root term is not negative and the size at FZMAX is not negative
+    if prm.version == "52":
+        if prm["Q_A1"] != 0.0 or prm["Q_A2"] != 0.0:
+            y = Fzmax / Fz0
+            terms = [("A", "Q_A1", "Q_A2", R0 * (prm["Q_A2"] * y + prm["Q_A1"] * math.sqrt(y)))]
+        else:
+            terms = []
+    else:
+        x = min(Fzmax / (Cz0 * R0), 1.0)  # the load term Fz/(Cz R0), at most the deflection of a flat tyre
+        terms = [("A", "Q_RA1", "Q_RA2", R0 * (prm["Q_RA2"] * x + prm["Q_RA1"] * math.sqrt(x))),
+                 ("B", "Q_RB1", "Q_RB2", prm["WIDTH"] * (prm["Q_RB2"] * x + prm["Q_RB1"] * x ** (1.0 / 3.0)))]
+    for size, root, linear, at_max in terms:
+        half = "half length a" if size == "A" else "half width b"
+        if prm[root] < 0:
+            out.append((root, f"must not be negative (the root term of the contact-patch {half}: a negative one "
+                              f"gives a negative patch at small loads), got {prm[root]!r}"))
+        elif not at_max >= 0:
+            out.append((linear, f"gives a negative contact-patch {half} = {at_max!r} m at FZMAX = {Fzmax!r} N "
+                                f"({linear} = {prm[linear]!r}, {root} = {prm[root]!r})"))
+    return out
+
 
 def invalid_values(prm) -> list[tuple[str, str]]:
     """(parameter, what is wrong and what is expected) for every value no tyre can have.
 
     The one rule shared by the .tir reader (a TirError naming file, line and parameter), the writer and
-    ``check_tir``: positive scales and dimensions, slip stiffness scales not negative, radii in order, ranges not
-    inverted, a real Q_FZ1, a known tyre side.
+    ``check_tir``, ``MFModel.with_params`` and the FMU builders: positive scales and dimensions, slip stiffness
+    scales not negative, radii in order, ranges not inverted, vertical relations a tyre can have over 0..FZMAX (a
+    real Q_FZ1, Re > 0, a bounded speed growth Q_V1, a contact patch of positive size), a known tyre side.
     """
     out = []
     for name, meaning in _POSITIVE.items():
@@ -563,11 +632,8 @@ def invalid_values(prm) -> list[tuple[str, str]]:
                    ("CAMMIN", "CAMMAX")):
         if prm[lo] > prm[hi]:
             out.append((lo, f"inverted range: {lo} = {prm[lo]!r} > {hi} = {prm[hi]!r}"))
-    if prm["FNOMIN"] > 0:
-        disc = (prm["VERTICAL_STIFFNESS"] * prm["UNLOADED_RADIUS"] / prm["FNOMIN"]) ** 2 - 4 * prm["Q_FZ2"]
-        if disc < 0:
-            out.append(("Q_FZ2", f"(Cz0*R0/Fz0)^2 - 4*Q_FZ2 = {disc!r} < 0: Q_FZ1 = sqrt(...) is undefined "
-                                 "(VERTICAL_STIFFNESS too small or Q_FZ2 too large)"))
+    if all(prm[n] > 0 for n in _POSITIVE):
+        out += _geometry_problems(prm)
     side = str(prm["TYRESIDE"]).strip().strip("'\"").upper()
     if side not in ("LEFT", "RIGHT"):
         out.append(("TYRESIDE", f"expected 'LEFT' or 'RIGHT' (the side the tyre was measured on; mftyre mirrors "

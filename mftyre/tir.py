@@ -42,7 +42,12 @@ from .params import (
     invalid_values,
 )
 
-__all__ = ["read_tir", "parse_tir", "write_tir", "check_tir", "Finding", "UNIT_FACTORS", "unit_factor"]
+__all__ = ["read_tir", "parse_tir", "write_tir", "check_tir", "validate_params", "Finding", "UNIT_FACTORS",
+           "unit_factor"]
+
+
+#: Most parameters not in the schema a file may hold (each is kept to be written back; real files have a few).
+MAX_UNKNOWN_PARAMETERS = 10_000
 
 
 class _TirFileExists(TirError, FileExistsError):
@@ -244,24 +249,26 @@ def _raw_value(text: str, quoted: bool) -> Any:
 # ----------------------------------------------------------------------------------------------------
 # Parsing
 # ----------------------------------------------------------------------------------------------------
-def _split_blocks(text: str):
-    """-> list of (section or None, header line, [(lineno, raw), ...])."""
+def _lines(text: str) -> list[str]:
+    """The lines of ``text`` (CR LF, CR or LF line ends; a byte-order mark dropped)."""
     if text.startswith("\ufeff"):
         text = text[1:]
-    lines = re.split(r"\r\n|\r|\n", text)
-    blocks = [(None, 0, [])]
-    for i, raw in enumerate(lines, start=1):
-        s = raw.strip()
-        if s.startswith("["):
-            m = _HEADER_RE.match(s)
-            if m is None or _strip_trailing_comment(m.group(2)).strip():
-                blocks.append(("\0bad", i, [(i, raw)]))
-                continue
-            name = re.sub(r"\s+", "_", m.group(1).strip()).upper()
-            blocks.append((name, i, []))
-        else:
-            blocks[-1][2].append((i, raw))
-    return blocks
+    return re.split(r"\r\n|\r|\n", text)
+
+
+def _section_header(stripped: str):
+    """The canonical section name of a header line ``[NAME]`` (upper case, blanks as '_'), ``"\0bad"`` for a
+    malformed header, None for a line that is not a header."""
+    if not stripped.startswith("["):
+        return None
+    m = _HEADER_RE.match(stripped)
+    if m is None or _strip_trailing_comment(m.group(2)).strip():
+        return "\0bad"
+    return re.sub(r"\s+", "_", m.group(1).strip()).upper()
+
+
+def _is_assignment(raw: str) -> bool:
+    return "=" in raw and bool(_NAME_RE.match(_strip_trailing_comment(raw.split("=", 1)[0]).strip() or "-"))
 
 
 def parse_tir(text: str, source: str = "<string>", *, strict: bool = False) -> TyreParameters:
@@ -279,74 +286,89 @@ def _parse(text: str, source: str, *, strict: bool, stacklevel: int, validate: b
     """-> (TyreParameters, {schema name: section it was read in}). ``stacklevel`` is for the warning;
     ``validate``: raise TirError on the first value no tyre can have (:func:`mftyre.params.invalid_values`)."""
     source = str(source)
-    blocks = _split_blocks(text)
-    if not any(sec is not None and sec != "\0bad" for sec, _, _ in blocks):
-        for sec, hl, _ in blocks:
-            if sec == "\0bad":
-                raise _err(source, hl, None, "malformed section header: expected '[SECTION_NAME]'")
+    lines_of_text = _lines(text)
+    headers = (_section_header(raw.strip()) for raw in lines_of_text)
+    if not any(h is not None and h != "\0bad" for h in headers):
+        for i, raw in enumerate(lines_of_text, start=1):
+            if _section_header(raw.strip()) == "\0bad":
+                raise _err(source, i, None, "malformed section header: expected '[SECTION_NAME]'")
         raise _err(source, None, None, "not a .tir property file: no [SECTION] headers found "
                                        "(expected e.g. [MDI_HEADER], [MODEL], [VERTICAL])")
 
     known_sections = set(SECTIONS)
     raw_values: dict[str, tuple[str, str, bool, int]] = {}  # name -> (section, text, quoted, line)
     unknown: dict[str, tuple[str, object]] = {}
-    extra_sections: dict[str, str] = {}
+    extra_parts: dict[str, list[str]] = {}  # unknown non-assignment section -> its lines (joined once, at the end)
     units: dict[str, str] = {}  # key -> lower-case spelling
     units_as_read: dict[str, str] = {}
-    seen_lines: dict[str, int] = {}
-    lines: dict[str, int] = {}
+    unit_lines: dict[str, int] = {}
+    lines: dict[str, int] = {}  # parameter -> line (also how a duplicate is found)
 
-    def register(key: str, name: str, lineno: int):
-        if key in seen_lines:
+    def assign(section: str, lineno: int, raw: str) -> None:
+        name, value, quoted = _split_assignment(raw, source, lineno)
+        if section == "UNITS" and name in UNIT_FACTORS:
+            if name in unit_lines:
+                raise _err(source, lineno, name, f"duplicate parameter: defined on line {unit_lines[name]} and "
+                                                  f"again on line {lineno}")
+            unit_lines[name] = lineno
+            spelling = value.strip().lower()
+            if spelling not in UNIT_FACTORS[name]:
+                accepted = ", ".join(UNIT_FACTORS[name])
+                raise _err(source, lineno, name,
+                           f"unknown unit {_shown(value)}: accepted spellings (any case, quoted or not) are "
+                           f"{accepted}")
+            units[name] = spelling
+            units_as_read[name] = value
+            return
+        if name in lines:
             raise _err(source, lineno, name,
-                       f"duplicate parameter: defined on line {seen_lines[key]} and again on line {lineno}")
-        seen_lines[key] = lineno
+                       f"duplicate parameter: defined on line {lines[name]} and again on line {lineno}")
+        lines[name] = lineno
+        if name in PARAMETERS:
+            raw_values[name] = (section, value, quoted, lineno)
+        elif len(unknown) < MAX_UNKNOWN_PARAMETERS:
+            unknown[name] = (section, _raw_value(value, quoted))
+        else:
+            raise _err(source, lineno, name, f"more than {MAX_UNKNOWN_PARAMETERS:,} parameters that are not in the "
+                                             "schema: not a tyre property file (real files have none or a few)")
 
-    for section, header_line, body in blocks:
-        if section == "\0bad":
-            raise _err(source, header_line, None,
-                       f"malformed section header {_shown(body[0][1].strip())}: expected '[SECTION_NAME]'")
-        content = [(n, r) for n, r in body if not _is_comment_or_blank(r.strip())]
-        if section is None:
-            if content:
-                n, r = content[0]
-                name = r.split("=", 1)[0].strip() if "=" in r else None
-                raise _err(source, n, name.upper() if name else None,
+    def end_unknown_section(section: str, first_line: int, body: list[str]) -> None:
+        """An unknown section: parameters when every content line is ``NAME = value``, else kept verbatim."""
+        content = [raw for raw in body if not _is_comment_or_blank(raw.strip())]
+        if content and all(_is_assignment(raw) for raw in content):
+            del content
+            for k, raw in enumerate(body):
+                if not _is_comment_or_blank(raw.strip()):
+                    assign(section, first_line + k, raw)
+            return
+        while body and _is_comment_or_blank(body[-1].strip()) and not body[-1].strip().startswith("{"):
+            body.pop()
+        extra_parts.setdefault(section, []).append("\n".join(body))
+
+    section, first_line, body = None, 1, []  # body: the lines of the unknown section being read
+    for lineno, raw in enumerate(lines_of_text, start=1):
+        stripped = raw.strip()
+        header = _section_header(stripped)
+        if header == "\0bad":
+            raise _err(source, lineno, None, f"malformed section header {_shown(stripped)}: expected '[SECTION_NAME]'")
+        if header is not None:
+            if section is not None and section not in known_sections:
+                end_unknown_section(section, first_line, body)
+            section, first_line, body = header, lineno + 1, []
+        elif section is None:
+            if not _is_comment_or_blank(stripped):
+                name = raw.split("=", 1)[0].strip() if "=" in raw else None
+                raise _err(source, lineno, name.upper() if name else None,
                            "text before the first [SECTION] header: expected a section header such as [MDI_HEADER]")
-            continue
-        if section not in known_sections:
-            is_assignments = bool(content) and all(
-                "=" in r and _NAME_RE.match(_strip_trailing_comment(r.split("=", 1)[0]).strip() or "-")
-                for _, r in content
-            )
-            if not is_assignments:
-                kept = [r for _, r in body]
-                while kept and _is_comment_or_blank(kept[-1].strip()) and not kept[-1].strip().startswith("{"):
-                    kept.pop()
-                if section in extra_sections:
-                    extra_sections[section] += "\n" + "\n".join(kept)
-                else:
-                    extra_sections[section] = "\n".join(kept)
-                continue
-        for lineno, raw in content:
-            name, value, quoted = _split_assignment(raw, source, lineno)
-            if section == "UNITS" and name in UNIT_FACTORS:
-                register("[UNITS]" + name, name, lineno)
-                spelling = value.strip().lower()
-                if spelling not in UNIT_FACTORS[name]:
-                    accepted = ", ".join(UNIT_FACTORS[name])
-                    raise _err(source, lineno, name,
-                               f"unknown unit {_shown(value)}: accepted spellings (any case, quoted or not) are "
-                               f"{accepted}")
-                units[name] = spelling
-                units_as_read[name] = value
-                continue
-            register(name, name, lineno)
-            lines[name] = lineno
-            if name in PARAMETERS:
-                raw_values[name] = (section, value, quoted, lineno)
-            else:
-                unknown[name] = (section, _raw_value(value, quoted))
+        elif section in known_sections:
+            if not _is_comment_or_blank(stripped):
+                assign(section, lineno, raw)
+        else:
+            body.append(raw)
+    if section is not None and section not in known_sections:
+        end_unknown_section(section, first_line, body)
+    del lines_of_text, body
+    extra_sections = {name: "\n".join(parts) for name, parts in extra_parts.items()}
 
     # -- typed values, converted to SI ----------------------------------------------------------------
     base = _base_factors(units)
@@ -369,7 +391,11 @@ def _parse(text: str, source: str, *, strict: bool, stacklevel: int, validate: b
                 raise _err(source, lineno, name, f"expected an integer, got {_shown(text_value)}")
             values[name] = int(num)
         else:
-            values[name] = _convert(num, unit_factor(spec.unit, base))
+            try:
+                values[name] = _convert(num, unit_factor(spec.unit, base))
+            except OverflowError:
+                raise _err(source, lineno, name, f"{_shown(text_value)} converted to SI with the file's [UNITS] is "
+                                                 "beyond the range of a floating-point number") from None
 
     if "FITTYP" not in values:
         raise _err(source, None, "FITTYP",
@@ -432,15 +458,34 @@ def _read_text(p: Path) -> str:
     return text
 
 
+def validate_params(prm: TyreParameters, source: str = "parameters") -> TyreParameters:
+    """``prm`` when every value is one a tyre can have (:func:`mftyre.params.invalid_values`), else TirError naming
+    the parameter (and its line when read from a file): the check of :func:`read_tir`, :func:`write_tir`,
+    :meth:`mftyre.MFModel.with_params` and the FMU builders."""
+    for name, message in invalid_values(prm):
+        raise _err(source, None, name, message)
+    return prm
+
+
 # ----------------------------------------------------------------------------------------------------
 # Writing
 # ----------------------------------------------------------------------------------------------------
-def _format_value(value: Any, string: bool) -> str:
+def _format_value(value: Any, string: bool, name: str = "") -> str:
+    """The text of a value as :func:`parse_tir` reads it back: a string in the quotes it does not contain, or
+    without quotes when it holds both kinds (TirError when no spelling reads back the same text)."""
     if string or isinstance(value, str):
         text = str(value)
-        if "'" in text:
+        if "\n" in text or "\r" in text:
+            raise _err("write_tir", None, name or None, f"the text {_shown(text)} spans lines: a .tir value is one line")
+        if "'" not in text:
+            return "'" + text + "'"
+        if '"' not in text:
             return '"' + text + '"'
-        return "'" + text + "'"
+        if text == text.strip() and text[:1] not in "'\"" and not any(c in text for c in "$!{"):
+            return text  # both quote kinds: unquoted, read back as written
+        raise _err("write_tir", None, name or None,
+                   f"the text {_shown(text)} holds both quote kinds and a comment character or surrounding blanks: "
+                   "no .tir spelling reads it back unchanged")
     if isinstance(value, bool):
         return str(int(value))
     if isinstance(value, int):
@@ -469,10 +514,10 @@ def tir_text(params: TyreParameters, comments=()) -> str:
         non_default = value != spec.default
         if not (present or relevant or non_default or name == "FITTYP"):
             continue
-        by_section[spec.section].append(_line(name, _format_value(value, spec.is_string), spec.description))
+        by_section[spec.section].append(_line(name, _format_value(value, spec.is_string, name), spec.description))
     extra_param_sections: dict[str, list[str]] = {}
     for name, (section, value) in params.unknown.items():
-        line = _line(name, _format_value(value, False))
+        line = _line(name, _format_value(value, False, name))
         if section in by_section:
             by_section[section].append(line)
         else:

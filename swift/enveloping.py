@@ -47,6 +47,7 @@ is continued along x, see :func:`quasi_static`), with a residual check.
 """
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass
 
@@ -56,7 +57,7 @@ from mftyre.backend import NUMPY
 from mftyre.errors import ModelInputError
 from mftyre.formula import vertical
 
-from .road import Road
+from .road import MAX_DISTANCE, Road, check_road
 
 __all__ = ["Cams", "cam_height", "CamTable", "tandem_base", "EffectiveRoad", "effective_road",
            "effective_road_3d", "QuasiStatic", "quasi_static", "CURVATURE_STEP"]
@@ -64,6 +65,9 @@ __all__ = ["Cams", "cam_height", "CamTable", "tandem_base", "EffectiveRoad", "ef
 #: Step [m] of the central difference that gives the effective curvature d beta_y / dx.
 CURVATURE_STEP = 2e-3
 _CHUNK = 4096
+
+#: Largest cam half length / height [m] and ELLIPS_SHIFT: a hundred metres is no tyre's (real: ~0.3 m, shift ~0.8).
+_CAM_LIMIT = 100.0
 
 
 def _warn_unmodelled(prm) -> None:
@@ -106,6 +110,10 @@ class Cams:
     def __post_init__(self):
         if not (self.ae >= 0 and self.be > 0 and self.ce > 0 and self.shift >= 0):
             raise ModelInputError(f"cam sizes must be ae >= 0, be > 0, ce > 0, shift >= 0; got {self}")
+        if not (self.ae <= _CAM_LIMIT and self.be <= _CAM_LIMIT and self.shift <= _CAM_LIMIT
+                and math.isfinite(self.ce)):  # 1e308: the road tables around the cams overflow
+            raise ModelInputError(f"cam sizes (ELLIPS_LENGTH, ELLIPS_HEIGHT times UNLOADED_RADIUS; ELLIPS_SHIFT) must "
+                                  f"be at most {_CAM_LIMIT:g} and ELLIPS_ORDER finite; got {self}")
 
     def contour(self, xi):
         """z_c(xi) >= 0: height of the cam contour above its lowest point (inf beyond |xi| > ae)."""
@@ -176,6 +184,10 @@ class CamTable:
         contact half width b at the nominal load) is required when ``road.varies_with_y``."""
         if not x_end > x_start:
             raise ModelInputError(f"x_end ({x_end}) must exceed x_start ({x_start})")
+        if not (abs(x_start) <= MAX_DISTANCE and abs(x_end) <= MAX_DISTANCE):
+            raise ModelInputError(f"the table's range {x_start!r}..{x_end!r} m: expected positions within "
+                                  f"+-{MAX_DISTANCE:g} m")
+        check_road(road)
         n = int(np.ceil((x_end - x_start) / dx)) + 1
         grid = x_start + dx * np.arange(n)
         if not road.varies_with_y:

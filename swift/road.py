@@ -24,7 +24,12 @@ import numpy as np
 
 from mftyre.errors import DataError, ModelInputError
 
-__all__ = ["Road", "Flat", "Step", "Cleat", "Trapezoid", "CircularBump", "Sine", "Sampled", "TwoTrack", "parse_road"]
+__all__ = ["Road", "Flat", "Step", "Cleat", "Trapezoid", "CircularBump", "Sine", "Sampled", "TwoTrack", "parse_road",
+           "check_road", "MAX_DISTANCE", "MAX_HEIGHT"]
+
+#: Largest |x| [m] of an obstacle edge and largest |height| [m] of a road profile (1000 km, 100 m).
+MAX_DISTANCE = 1e6
+MAX_HEIGHT = 100.0
 
 
 class Road:
@@ -242,10 +247,27 @@ def parse_road(spec, base_dir=None) -> Road:
     (``flat``, ``step``, ``cleat``, ``trapezoid``, ``bump``, ``sine``; sine needs ``x_end``; ``csv("file.csv")``,
     ``points([[x, z], ...])``). Empty: flat.
     Nothing is evaluated as Python; errors (:class:`ModelInputError`) name the term and what was expected."""
+    if isinstance(spec, Road):
+        return check_road(spec)
+    return check_road(_parse_road(spec, base_dir))
+
+
+def check_road(road: Road, what: str = "road") -> Road:
+    """``road`` when every obstacle lies within +-MAX_DISTANCE and its heights within +-MAX_HEIGHT, else
+    ModelInputError naming the value (positions such as 1e308 overflow the tables built around them)."""
+    for x in road.breakpoints:
+        if not abs(x) <= MAX_DISTANCE:
+            raise ModelInputError(f"{what}: an obstacle edge at x = {x!r} m: expected positions within "
+                                  f"+-{MAX_DISTANCE:g} m")
+    for z in road.height_range():
+        if not abs(z) <= MAX_HEIGHT:
+            raise ModelInputError(f"{what}: a height of {z!r} m: expected heights within +-{MAX_HEIGHT:g} m")
+    return road
+
+
+def _parse_road(spec, base_dir=None) -> Road:
     import ast
 
-    if isinstance(spec, Road):
-        return spec
     text = "" if spec is None else str(spec).strip()
     if text == "":
         return Flat()

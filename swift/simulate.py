@@ -349,6 +349,9 @@ class SwiftTyre:
         state[_S["lsm"]] = out[OUTPUT_NAMES.index("ls")]
 
     def _window_start(self, xb):
+        if not math.isfinite(xb):  # e.g. a stiffness of 1e308 made the equilibrium or a step overflow
+            raise ModelInputError(f"the SWIFT ring's position is not finite ({float(xb)!r}): no finite solution with these "
+                                  "parameters (check the [STRUCTURAL], [CONTACT_PATCH] and SWIFT_* values)")
         i0 = math.floor((xb - self.table.x0) / self.table.dx) - self.window // 2
         if i0 < 0 or i0 + self.window > self.table.h.size:
             raise self._outside_table(xb)

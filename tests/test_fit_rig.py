@@ -40,7 +40,8 @@ def rig_fit(truth):
 def test_verify_rejects_the_held_out_speed_terms(truth):
     """Q_V1 = -1433, Q_V2 = 480 were written by the old fit; evaluating at 40 m/s raised ArithmeticError."""
     assert verify_tir(truth) == []
-    bad = truth.with_params(Q_V1=-1433.0, Q_V2=480.0)
+    # values no tyre can have: with_params refuses them, the unchecked replace() does not
+    bad = mftyre.MFModel(truth.params.replace(Q_V1=-1433.0, Q_V2=480.0))
     problems = verify_tir(bad)
     assert problems and any("non-finite" in p or "Q_V1" in p for p in problems)
     mild = truth.with_params(Q_V1=0.02)  # 2 % radius growth at 16.7 m/s, 11 % at 40 m/s: too much

@@ -33,7 +33,7 @@ def test_existing_output_or_dangling_link_needs_overwrite(argv, tmp_path, capsys
     assert main([*argv, "--csv", str(csv), "-q"]) == 2
     assert "pass --overwrite to replace" in capsys.readouterr().err and csv.read_text() == "keep me"
     assert main([*argv, "--plot", str(link), "-q"]) == 2
-    assert "pass --overwrite to replace" in capsys.readouterr().err
+    assert "is a symbolic link" in capsys.readouterr().err  # a link is never replaced, even with --overwrite
     assert not (tmp_path / "nowhere.png").exists()
 
 

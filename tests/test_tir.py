@@ -419,7 +419,7 @@ def test_read_write_read_identity(tmp_path, path):
 
 
 def test_write_keeps_unknown_parameters_sections_and_exact_numbers(tmp_path):
-    text = HEAD + "MY_FLAG = 3\n[VERTICAL]\nFNOMIN = 4000.000000000001\nQ_V1 = 0.1\n[SHAPE]\n{r w}\n 1.0 0.0\n" \
+    text = HEAD + "MY_FLAG = 3\n[VERTICAL]\nFNOMIN = 4000.000000000001\nQ_V1 = 0.01\n[SHAPE]\n{r w}\n 1.0 0.0\n" \
                   "[MY_PARAMS]\nFOO = \"it's\"\nBAZ = 1.5E3\n"
     prm = parse_quiet(text).replace(PCX1=0.1 + 0.2, PDX1=1e-300, PKX1=123456789.123456789)
     out = write_tir(prm, tmp_path / "w.tir")
@@ -529,7 +529,8 @@ def test_check_more_value_rules(tmp_path):
     assert ("error", "Q_FZ2") not in by  # (Cz0 R0/Fz0)^2 - 0 >= 0
     path.write_text(HEAD + "[VERTICAL]\nFNOMIN = 4000\nVERTICAL_STIFFNESS = 1000\nQ_FZ2 = 10\n")
     errs = [f for f in check_tir(path) if f.severity == "error" and "core coefficient" not in f.message]
-    assert [f.parameter for f in errs] == ["Q_FZ2"] and "Q_FZ1" in errs[0].message
+    assert [f.parameter for f in errs][0] == "Q_FZ2" and "Q_FZ1" in errs[0].message
+    assert [f.parameter for f in errs][1:] == ["DREFF"]  # 1 kN/m: Fz0/Cz0 = 4 m, Re < 0 long before FZMAX
 
 
 def test_check_parse_error_is_one_finding(tmp_path):

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..files import make_output_folder, write_atomically, write_figure
 from ..programme import cluster_levels
 from ..model import MFModel
 from .core import _predict
@@ -116,8 +117,7 @@ def plot_stage(result, name: str, path) -> Path | None:
     fig = stage_figure(result, name)
     if fig is None:
         return None
-    fig.savefig(path)
-    return Path(path)
+    return write_figure(fig, path)
 
 
 def stage_figure(result, name: str):
@@ -179,11 +179,11 @@ def stage_figure(result, name: str):
 def save_report(result, path) -> Path:
     """Write the Markdown report to ``path`` and one PNG per fitted stage beside it (``<stem>_<stage>.png``)."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    make_output_folder(path.parent)
     names = {}
     for name in result.stages:
         png = path.with_name(f"{path.stem}_{name}.png")
         if plot_stage(result, name, png) is not None:
             names[name] = png.name
-    path.write_text(markdown_report(result, names), encoding="utf-8")
+    write_atomically(path, markdown_report(result, names))
     return path

@@ -68,6 +68,7 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
     """
     import mftyre
     from mftyre.errors import MFTyreError
+    from mftyre.files import make_output_folder, refuse_special_output, write_atomically
 
     sys.path.insert(0, str(HERE))
     try:
@@ -90,6 +91,10 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
         raise FMUBuildError(f"the output file must end in .fmu, got {str(output)!r}")
     if not tir.is_file():
         raise FMUBuildError(f"no such property file: {str(tir)!r}")
+    try:  # never a link or a FIFO (the command line has also checked --overwrite)
+        refuse_special_output(output, "-o")
+    except MFTyreError as exc:
+        raise FMUBuildError(str(exc)) from None
     try:
         tyre = mftyre.load_tir(tir, side=side)
     except MFTyreError as exc:
@@ -157,12 +162,12 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
         (docs / "README.md").write_text(readme, encoding="utf-8")
 
         project = [stage / n for n in ("mftyre_fmu_core.py", "tyre.tir", "config.json", "functions", "vendor")]
-        output.parent.mkdir(parents=True, exist_ok=True)
         built = Path(tmp) / "out"
         built.mkdir()
         fmu = FmuBuilder.build_FMU(stage / "MFTyre.py", dest=built, project_files=project,
                                    documentation_folder=docs)
-        shutil.move(str(fmu), str(output))
+        make_output_folder(output.parent)
+        write_atomically(output, Path(fmu).read_bytes())  # the one atomic no-follow routine
     if not quiet:
         print(f"wrote {output}: {tir.name} (FITTYP {prm.fittyp}), mounted {tyre.side}, model {model}, "
               f"evaluator {'compiled C + CasADi' if index['mf']['compiled'] else 'CasADi'}")

@@ -307,6 +307,7 @@ SWIFT_TABLE_DX = 1e-3
 SWIFT_WINDOW = 1024
 #: Largest wheel travel [m] within one internal SWIFT step (the cam-height window is fixed over a step).
 SWIFT_MAX_TRAVEL = 0.2
+STEP_RATE_LIMIT = 1e6  # internal steps per simulated second one step may take (as the native FMU)
 
 
 def parse_road(spec, base_dir=None):
@@ -511,6 +512,10 @@ class SwiftCore:
         try:
             self._set_road_z(state, u["road_z"])
             n = max(1, math.ceil(h / self.max_step - 1e-9), math.ceil(abs(u["vx"]) * h / SWIFT_MAX_TRAVEL))
+            if not (n <= math.ceil(h * STEP_RATE_LIMIT) and n < 1e7):  # the native FMU's time budget (glue_swift.c)
+                raise TyreFMUError(f"the step of {h!r} s needs {n:.3g} internal steps, more than its time budget "
+                                   f"({STEP_RATE_LIMIT:g} per simulated second): max_step too small or the speed too "
+                                   "high for this model")
             dt = h / n
             out = None
             for k in range(n):

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import hashlib
 import importlib.resources
+import io
 import os
 import shutil
 import subprocess
@@ -25,6 +26,7 @@ from types import SimpleNamespace
 from xml.sax.saxutils import escape
 
 from mftyre.errors import MFTyreError
+from mftyre.files import OutputError, check_outputs, make_output_folder, write_atomically
 
 #: The hand-written C files (package data of mftyre.fmu, so installed wheels can build FMUs).
 C_DIR = importlib.resources.files("mftyre.fmu") / "native"
@@ -242,8 +244,10 @@ def build_native_fmu(tir, output, *, model: str = "steady", side: str | None = N
         raise NativeBuildError(f"--model must be one of {', '.join(MODELS)}, got {model!r}")
     if output.suffix.lower() != ".fmu":
         raise NativeBuildError(f"the output file must end in .fmu, got {str(output)!r}")
-    if output.exists() and not overwrite:
-        raise NativeBuildError(f"{output} exists; use --overwrite to replace it")
+    try:  # the one output rule: never an input, an existing file only with --overwrite, never a link or FIFO
+        check_outputs({"-o": output}, {"FILE.tir": tir}, overwrite=overwrite)
+    except OutputError as exc:
+        raise NativeBuildError(str(exc)) from None
     if not tir.is_file():
         raise NativeBuildError(f"no such property file: {str(tir)!r}")
     if road is not None and model != "swift":
@@ -273,13 +277,13 @@ def build_native_fmu(tir, output, *, model: str = "steady", side: str | None = N
         say(f"compiling {len(c_files)} C sources (the longest step: the generated C of the wheel's equations)")
         compile_sources(root / "sources", root / "binaries" / _platform_dir() / f"{model_id}.so")
         say("packing the FMU")
-        output.parent.mkdir(parents=True, exist_ok=True)
-        partial = output.with_name(f".{output.name}.{os.getpid()}.partial")
-        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as zf:
+        archive = io.BytesIO()  # zipped in memory, then written by the one atomic no-follow routine
+        with zipfile.ZipFile(archive, "w", zipfile.ZIP_DEFLATED) as zf:
             for p in sorted(root.rglob("*")):
                 if p.is_file():
                     zf.write(p, p.relative_to(root).as_posix())
-        os.replace(partial, output)
+        make_output_folder(output.parent)
+        write_atomically(output, archive.getvalue())
     if not quiet:
         print(f"wrote {output}: native FMI 2.0 CS, model {model}, {tir.name} mounted {tyre.side}")
     return output

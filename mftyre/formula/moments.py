@@ -44,8 +44,9 @@ def overturning_moment(prm, s, fy, be):
 
 
 def rolling_resistance_moment(prm, s, fx, be):
-    """My from the unlimited load, the speed, Fx, inclination and pressure."""
-    Fz = s.uFz
+    """My from the load (saturated at FZMAX with limits, as every output), the speed, Fx, inclination and
+    pressure."""
+    Fz = s.Fz
     if prm.FZMIN > 0:
         Fz = be.where(Fz < prm.FZMIN, Fz * (Fz / prm.FZMIN), Fz)
     R0, Fz0, V0, vx = prm.UNLOADED_RADIUS, prm.FNOMIN, prm.LONGVL, s.vx

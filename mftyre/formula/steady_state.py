@@ -18,7 +18,8 @@ def steady_state(prm, fz, kappa, alpha, gamma, phit, vx, p, omega, omega_given, 
     """All outputs at the given inputs (ISO-W, SI).
 
     ``omega_given`` is True (use ``omega``), False (estimate it from kappa and Vx) or a boolean array
-    choosing per element.
+    choosing per element. With limits every output uses the load saturated at FZMAX (forces, moments, Re and the
+    spin estimated from it, the loaded radius and deflection, the contact patch); the output fz is the load as given.
     """
     s = normalisation.condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be)
     omega, r_omega, re = vertical.spin_and_radius(prm, s, omega, omega_given, be)
@@ -38,14 +39,14 @@ def steady_state(prm, fz, kappa, alpha, gamma, phit, vx, p, omega, omega_given, 
     my = moments.rolling_resistance_moment(prm, s, fx, be)
 
     if prm.version == "62":
-        rl, rho = vertical.loaded_radius_62(prm, s.uFz, r_omega, omega, fx, fy, s.gamma, s.dpi, be)
+        rl, rho = vertical.loaded_radius_62(prm, s.Fz, r_omega, omega, fx, fy, s.gamma, s.dpi, be)
         fz_cz = s.Fz
     else:
         rho = vertical.deflection_61(prm, s.Fz_low, r_omega, omega, fx, fy, s.dpi, be)
         rl = be.fmax(r_omega - rho, 0.0)
         fz_cz = s.Fz_low
     cz = fz_cz / be.where(fz_cz == 0, 1e-6, rho)
-    a, b = vertical.contact_patch(prm, s.uFz, s.dpi, be)
+    a, b = vertical.contact_patch(prm, s.Fz, s.dpi, be)
     cx, cy, sigmax, sigmay = derived.carcass_stiffness_and_relaxation(prm, s, lon.Kxk, lat.Kya, be)
 
     muy = be.abs(lat.muy) if modes.limits else lat.muy

@@ -10,6 +10,7 @@ import numpy as np
 from scipy import stats
 
 from ..data import TyreData
+from ..files import write_atomically
 from ..fit.core import load_data
 from ..fit.metrics import normalised_rms
 from ..fit.verify import verify_tir
@@ -124,7 +125,7 @@ class GapReport:
 
         text = json.dumps(_jsonable(self.to_dict()), indent=2)
         if path is not None:
-            Path(path).write_text(text, encoding="utf-8")
+            write_atomically(path, text)
         return text
 
     def markdown(self, plot_names: dict | None = None) -> str:

@@ -4,13 +4,12 @@ and PNG plots: held-out errors per channel, and residual maps (cell means with 9
 slip or deflection cells, one line per level of the finding's variable) before and after."""
 from __future__ import annotations
 
-import io
 import math
 from pathlib import Path
 
 import numpy as np
 
-from ..files import write_atomically
+from ..files import make_output_folder, write_atomically, write_figure
 from .locate import cell_table
 from .residuals import UNITS
 
@@ -139,13 +138,6 @@ def _figure(**kw):
     return Figure(**kw)
 
 
-def _save(fig, path) -> None:
-    """The figure as PNG through :func:`mftyre.files.write_atomically` (never half a file at the final path)."""
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png")
-    write_atomically(path, buffer.getvalue())
-
-
 def plot_errors(rep, path) -> Path:
     chans = list(rep.error_before)
     x = np.arange(len(chans))
@@ -160,8 +152,7 @@ def plot_errors(rep, path) -> Path:
     ax.legend(fontsize=7)
     ax.set_title("normalised RMS error on held-out sweeps", fontsize=9)
     fig.tight_layout()
-    _save(fig, path)
-    return Path(path)
+    return write_figure(fig, path)
 
 
 def _map_targets(rep, limit=3):
@@ -208,15 +199,14 @@ def plot_residual_maps(rep, path) -> Path | None:
         for j in range(2):
             axes[i, j].set_ylim(lo, hi)
     fig.tight_layout()
-    _save(fig, path)
-    return Path(path)
+    return write_figure(fig, path)
 
 
 def save_report(rep, directory) -> Path:
     """Write ``report.md``, ``errors.png``, ``residual_maps_before_after.png`` and ``gaps.json`` into
     ``directory``; returns the Markdown path."""
     d = Path(directory)
-    d.mkdir(parents=True, exist_ok=True)
+    make_output_folder(d)
     names = {"errors": plot_errors(rep, d / "errors.png").name}
     maps = plot_residual_maps(rep, d / "residual_maps_before_after.png")
     if maps is not None:

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import DataError, ModelInputError
+from ..files import TIR_MAX_BYTES, read_user_file
 
 __all__ = ["Soil", "read_soils", "builtin_soils", "soil", "BUILTIN_FILE"]
 
@@ -78,15 +79,19 @@ def read_soils(path) -> dict[str, Soil]:
     """The soils of a CSV file (see the module notes), keyed by name. Raises :class:`DataError` naming the file,
     line and column of a malformed, missing, negative or duplicate value."""
     path = Path(path)
+    data = read_user_file(path, max_bytes=TIR_MAX_BYTES, what="soil CSV file", error=DataError)  # no FIFO, device
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise DataError(f"{path}: cannot read soil file: {exc}") from None
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise DataError(f"{path}: cannot read soil file: not UTF-8 text near byte {exc.start}") from None
     numbered = [(i, line) for i, line in enumerate(text.splitlines(), 1) if line.strip() and
                 not line.lstrip().startswith("#")]
     if not numbered:
         raise DataError(f"{path}: no header line; expected columns {','.join(_COLUMNS)}")
-    rows = list(csv.reader([line for _, line in numbered]))
+    try:
+        rows = list(csv.reader([line for _, line in numbered]))
+    except csv.Error as exc:
+        raise DataError(f"{path}: cannot read soil file as CSV: {exc}") from None
     header = [h.strip() for h in rows[0]]
     missing = [c for c in _COLUMNS if c not in header]
     if missing:

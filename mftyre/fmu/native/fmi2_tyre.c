@@ -473,6 +473,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSet
     char msg[512];
     double x[ARR(TYRE_NX)];
     fmi2Status status;
+    int rc;
     CHECK_INSTANCE(c, "fmi2DoStep")
     (void)noSetFMUStatePriorToCurrentPoint;
     if (inst->s.phase != PHASE_STEP) {
@@ -489,7 +490,14 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSet
         return fmi2Discard;
     }
     memcpy(x, inst->s.x, sizeof x);
-    if (glue_step(inst->work, x, inst->s.u, inst->s.q, h) != 0 || !all_finite(x, TYRE_NX)) {
+    rc = glue_step(inst->work, x, inst->s.u, inst->s.q, h);
+    if (rc == GLUE_OVER_BUDGET) {
+        LOG_ERROR(inst, "fmi2DoStep at t = %g: the step of %g s needs more internal steps than its time budget "
+                        "(the parameter max_step is too small or the speed too high for this model); state and "
+                        "outputs held", t, h);
+        return fmi2Error;
+    }
+    if (rc != 0 || !all_finite(x, TYRE_NX)) {
         LOG_DISCARD(inst, "fmi2DoStep at t = %g: the tyre state became non-finite; state and outputs held", t);
         return fmi2Discard;
     }

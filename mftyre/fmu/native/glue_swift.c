@@ -101,6 +101,9 @@ int glue_init(GlueWork *g, const double *u, const double *q, double *x, char *ms
     return 0;
 }
 
+/* internal steps per simulated second allowed in one call (see glue_step) */
+#define STEP_RATE_LIMIT 1e6
+
 int glue_step(GlueWork *g, double *x, const double *u, const double *q, double h) {
     double x_next[TYRE_NX];
     /* RK4 steps of at most max_step and never above SWIFT_MAX_RK4_STEP (stability of the parked tyre) */
@@ -108,7 +111,10 @@ int glue_step(GlueWork *g, double *x, const double *u, const double *q, double h
     double n2 = ceil(fabs(u[TYRE_U_VX]) * h / SWIFT_MAX_TRAVEL);
     double nd = n1 > n2 ? n1 : n2;
     long n;
-    if (!(nd < 1e7)) return 1; /* a step that would need more than 1e7 internal steps is refused */
+    /* the time budget of one call, proportional to the step: at most STEP_RATE_LIMIT internal steps per simulated
+     * second (steps of 1 us; ~6 us of CPU each, so at most a few seconds of CPU per simulated second), never more
+     * than 1e7; a step over budget (max_step far too small, or |vx| far beyond any vehicle) is refused */
+    if (!(nd <= ceil(h * STEP_RATE_LIMIT) && nd < 1e7)) return GLUE_OVER_BUDGET;
     n = nd < 1 ? 1 : (long)nd;
     x[S_ZA] = u[TYRE_U_Z];
     x[S_VZA] = u[TYRE_U_VZ];

@@ -12,7 +12,9 @@ void glue_free(GlueWork *w);
 int glue_validate(const double *q, const double *u, char *msg, size_t n);
 /* initial state x at inputs u, parameters q */
 int glue_init(GlueWork *w, const double *u, const double *q, double *x, char *msg, size_t n);
-/* advance x in place over h with u held */
+/* advance x in place over h with u held; GLUE_OVER_BUDGET when the step needs more internal steps than its time
+ * budget (proportional to h), x unchanged */
+#define GLUE_OVER_BUDGET 2
 int glue_step(GlueWork *w, double *x, const double *u, const double *q, double h);
 /* outputs y at (x, u) */
 int glue_out(GlueWork *w, const double *x, const double *u, const double *q, double *y);

@@ -1,0 +1,733 @@
+"""Hostile files, planted links and shifted columns (issue 25): every output goes through the one atomic no-follow
+routine (mftyre.files.write_atomically), malformed inputs give MFTyreError subclasses naming what was wrong, and
+no impossible result leaves the library silently. The seeded fuzz cases at the end count raw exceptions, silent
+impossible results and writes outside the requested output; each count must be 0."""
+from __future__ import annotations
+
+import os
+import threading
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import mftyre
+import mftyre.tir
+from mftyre import cli
+from mftyre.errors import DataError, MFTyreError, TirError
+from mftyre import files
+from mftyre.files import OutputError, write_atomically
+
+from conftest import TIR_FILES
+
+T61 = TIR_FILES / "car_205_60R15_mf61.tir"
+T62 = TIR_FILES / "car_205_60R15_mf62_swift.tir"
+VICTIM = b"the victim's own bytes\n"
+
+
+def _victim(tmp_path) -> Path:
+    victim = tmp_path / "victim.txt"
+    victim.write_bytes(VICTIM)
+    return victim
+
+
+def _quiet(fn, *args, **kwargs):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return fn(*args, **kwargs)
+
+
+# ------------------------------------------------------------------------------------ 1+2: the one write routine
+def test_write_atomically_refuses_links_and_fifos_and_leaves_no_temporary(tmp_path):
+    victim = _victim(tmp_path)
+    link = tmp_path / "out.csv"
+    link.symlink_to(victim)
+    with pytest.raises(OutputError, match="symbolic link"):
+        write_atomically(link, "x")
+    dangling = tmp_path / "dangling.csv"
+    dangling.symlink_to(tmp_path / "created_by_link.txt")
+    with pytest.raises(OutputError, match="symbolic link"):
+        write_atomically(dangling, "x")
+    fifo = tmp_path / "fifo.csv"
+    os.mkfifo(fifo)
+    with pytest.raises(OutputError, match="not a regular file"):
+        write_atomically(fifo, "x")
+    assert victim.read_bytes() == VICTIM and not (tmp_path / "created_by_link.txt").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dangling.csv", "fifo.csv", "out.csv", "victim.txt"]
+    with pytest.raises(OutputError, match="below_a_file.txt"):
+        write_atomically(victim / "below_a_file.txt", "x")  # a parent that is a file: an OutputError, not raw
+
+
+def test_figures_and_tables_are_rendered_in_memory_then_written_by_the_routine(tmp_path):
+    import pandas as pd
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure()
+    FigureCanvasAgg(fig)
+    fig.subplots().plot([0, 1])
+    assert files.write_figure(fig, tmp_path / "a.png").read_bytes()[:4] == b"\x89PNG"
+    assert files.write_figure(fig, tmp_path / "a.svg").read_text().lstrip().startswith("<?xml")
+    files.write_frame_csv(pd.DataFrame({"a": [1, 2]}), tmp_path / "t.csv", index=False)
+    assert (tmp_path / "t.csv").read_text() == "a\n1\n2\n"
+    victim = _victim(tmp_path)
+    (tmp_path / "link.png").symlink_to(victim)
+    with pytest.raises(OutputError):
+        files.write_figure(fig, tmp_path / "link.png")
+    assert victim.read_bytes() == VICTIM
+
+
+@pytest.mark.parametrize("command", [["eval", str(T61), "--alpha", "0:0.1:3", "-q"],
+                                     ["soil", str(T61), "--soil", "dry_sand", "--slip", "0:0.2:3", "-q"]])
+@pytest.mark.parametrize("option", ["--csv", "--plot"])
+def test_eval_and_soil_never_write_through_a_link_even_with_overwrite(tmp_path, capsys, command, option):
+    victim = _victim(tmp_path)
+    link, dangling = tmp_path / "out.png", tmp_path / "dangling.png"
+    link.symlink_to(victim)
+    dangling.symlink_to(tmp_path / "new_target.png")
+    for target in (link, dangling):
+        assert cli.main([*command, option, str(target), "--overwrite"]) != 0
+        assert "symbolic link" in capsys.readouterr().err
+    assert victim.read_bytes() == VICTIM and not (tmp_path / "new_target.png").exists()
+
+
+def test_eval_csv_to_a_fifo_is_refused_without_blocking(tmp_path, capsys):
+    fifo = tmp_path / "fifo.csv"
+    os.mkfifo(fifo)
+    result = []
+    worker = threading.Thread(target=lambda: result.append(cli.main(
+        ["eval", str(T61), "--alpha", "0:0.1:3", "-q", "--csv", str(fifo), "--overwrite"])), daemon=True)
+    worker.start()
+    worker.join(30)
+    if worker.is_alive():  # unblock the writer so the test process can exit, then fail
+        with open(fifo, "rb") as fh:
+            fh.read()
+        pytest.fail("mftyre eval --csv FIFO --overwrite blocked")
+    assert result == [2] and "not a regular file" in capsys.readouterr().err
+
+
+def test_fit_report_and_its_plots_are_never_written_through_links(tmp_path, capsys):
+    data = tmp_path / "d.csv"
+    data.write_text("FZ,SA,SL,VX,P\n4000,0,0,16,2e5\n")
+    victim = _victim(tmp_path)
+    for name in ("r.md", "r_pure_fx.png"):
+        (tmp_path / name).symlink_to(victim)
+        assert cli.main(["fit", str(data), "-o", str(tmp_path / "f.tir"), "--report", str(tmp_path / "r.md"),
+                         "--quiet", "--overwrite"]) == 2
+        assert "symbolic link" in capsys.readouterr().err
+        (tmp_path / name).unlink()
+    assert victim.read_bytes() == VICTIM and not (tmp_path / "f.tir").exists()
+
+
+def test_demo_never_writes_through_a_link_in_its_folder_and_reports_an_unwritable_folder(tmp_path, capsys):
+    out = tmp_path / "out"
+    out.mkdir()
+    victim = _victim(tmp_path)
+    (out / "characteristics.png").symlink_to(victim)
+    assert cli.main(["demo", "--out", str(out), "--overwrite"]) == 2
+    assert "symbolic link" in capsys.readouterr().err and victim.read_bytes() == VICTIM
+    assert cli.main(["demo", "--out", str(victim / "out")]) == 2  # below a file: cannot be created
+    assert "cannot create" in capsys.readouterr().err
+
+
+def test_native_fmu_build_never_writes_through_a_planted_partial_link(tmp_path, monkeypatch):
+    """The zip went to the predictable `.<name>.<pid>.partial` opened with ZipFile(path, "w"), following a link
+    planted there; now it is zipped in memory and written by write_atomically (random name, O_EXCL|O_NOFOLLOW)."""
+    from mftyre.fmu import native_build
+
+    def fake_compile(sources, library):  # the compiler is not what is tested here
+        library.parent.mkdir(parents=True, exist_ok=True)
+        library.write_bytes(b"\x7fELF not really")
+
+    monkeypatch.setattr(native_build, "compile_sources", fake_compile)
+    victim = _victim(tmp_path)
+    output = tmp_path / "t.fmu"
+    (tmp_path / f".t.fmu.{os.getpid()}.partial").symlink_to(victim)
+    native_build.build_native_fmu(T61, output, model="steady")
+    assert victim.read_bytes() == VICTIM
+    import zipfile
+
+    with zipfile.ZipFile(output) as zf:
+        assert "modelDescription.xml" in zf.namelist()
+    output.unlink()
+    output.symlink_to(victim)
+    with pytest.raises(MFTyreError, match="symbolic link"):
+        native_build.build_native_fmu(T61, output, model="steady", overwrite=True)
+    assert victim.read_bytes() == VICTIM
+
+
+# ------------------------------------------------------------------------------------ 3: CSV field counts
+@pytest.mark.parametrize("rows, line, count", [
+    ("4000,0.1,0.0,10,220000,99\n", 2, 6),  # pandas took FZ as the index: FZ = 0.1, VX = 220000, P = 99
+    ("4000,0.1,0.0,10,220000\n4000,0.1,0.0\n", 3, 3),  # a short row was padded with "not measured"
+    ("4000,0.1,0.0,10,220000\n" + ",".join(["1"] * 60000) + "\n", 3, 60000),  # took 42 s
+])
+def test_a_row_whose_field_count_differs_from_the_header_names_file_and_line(tmp_path, rows, line, count):
+    from mftyre.data import read_csv
+
+    path = tmp_path / "d.csv"
+    path.write_text("FZ,SA,SL,VX,P\n" + rows)
+    start = time.process_time()
+    with pytest.raises(DataError, match=rf"d\.csv: line {line}: {count} fields, but the header has 5 columns"):
+        read_csv(path)
+    assert time.process_time() - start < 5.0  # milliseconds in fact; the old reader took 42 s on 60,000 fields
+
+
+def test_csv_with_cr_only_line_ends_quoted_commas_and_a_huge_header_field(tmp_path):
+    from mftyre.data import read_csv
+
+    path = tmp_path / "cr.csv"
+    path.write_bytes(b"FZ,SA,SL,VX,P\r4000,0.1,0.0,10,220000\r3000,0.0,0.1,10,220000\r")
+    frame = read_csv(path).frame
+    assert frame["FZ"].tolist() == [4000.0, 3000.0] and frame["VX"].tolist() == [10.0, 10.0]
+    path.write_bytes(b'FZ,SA,SL,VX,P,NOTE\n4000,0.1,0.0,10,220000,"a,b"\n')  # a quoted comma is one field
+    assert read_csv(path).frame["NOTE"].tolist() == ["a,b"]
+    path.write_bytes(b"FZ,SA,SL,VX,P," + b"X" * (128 * 1024 + 10) + b"\n4000,0.1,0.0,10,220000,1\n")
+    with pytest.raises(DataError, match="line 1"):
+        read_csv(path)
+
+
+# ------------------------------------------------------------------------------------ 4: linear .tir parsing
+def test_repeated_unknown_sections_parse_in_linear_time():
+    """320,000 repeated `[SHAPE]` tables (5 MB) took 27.9 s (each repetition copied the kept text); lists joined
+    once take under a second. CPU time, bounded at 10 s."""
+    from mftyre.tir import parse_tir
+
+    text = T61.read_text() + "[SHAPE]\n1.0 0.0\n" * 320_000
+    start = time.process_time()
+    prm = _quiet(parse_tir, text, "big.tir")
+    assert time.process_time() - start < 10.0
+    assert prm.extra_sections["SHAPE"].count("1.0 0.0") == 320_000
+
+
+
+def test_a_flood_of_unknown_parameters_is_refused_early():
+    """1.6 M lines `Pn=1` (16 MB) were all kept (each written back later): 20 s and 1.2 GB in the campaign, 7 s and
+    0.7 GB here; real files have none or a few, so more than 10,000 is no tyre property file (1.8 s, 0.19 GB)."""
+    from mftyre.tir import MAX_UNKNOWN_PARAMETERS, parse_tir
+
+    text = T61.read_text() + "[EXTRA]\n" + "".join(f"P{i}=1\n" for i in range(200_000))
+    with pytest.raises(TirError, match=rf"big\.tir:\d+: P{MAX_UNKNOWN_PARAMETERS}: more than 10,000 parameters"):
+        _quiet(parse_tir, text, "big.tir")
+    few = _quiet(parse_tir, T61.read_text() + "[EXTRA]\n" + "".join(f"P{i}=1\n" for i in range(50)), "few.tir")
+    assert len(few.unknown) == 50 and few.unknown["P7"] == ("EXTRA", 1.0)
+
+# ------------------------------------------------------------------------------------ 5-7: values and raw errors
+def _set(text: str, name: str, value: str) -> str:
+    """``text`` with the value of parameter ``name`` replaced (its first assignment)."""
+    import re
+
+    new, n = re.subn(rf"(?im)^(\s*{name}\s*=\s*)[^\s$!]+", lambda m: m.group(1) + value, text, count=1)
+    assert n == 1, name
+    return new
+
+
+@pytest.mark.parametrize("name, value, blamed", [
+    ("FNOMIN", "1e-300", "FNOMIN"),  # OverflowError
+    ("VERTICAL_STIFFNESS", "1e200", "VERTICAL_STIFFNESS"),  # OverflowError
+    ("DREFF", "1e308", "DREFF"),  # re = -2.8e306 m
+    ("Q_RE0", "0", "Q_RE0"), ("Q_RE0", "-1", "Q_RE0"),  # rho < 0
+    ("Q_RE0", "3", "Q_RE0"),  # rl = 0.94 m for a 0.31 m tyre
+    ("Q_RA1", "-1", "Q_RA1"), ("Q_RB1", "-1", "Q_RB1"),  # negative patch
+    ("Q_RA2", "-50", "Q_RA2"),  # a < 0 at FZMAX
+    ("Q_V1", "61", "Q_V1"),  # rl = 1.49 m > 2 R0 at 20 m/s
+])
+def test_values_no_tyre_can_have_are_refused_by_load_check_with_params_and_write(tmp_path, name, value, blamed):
+    text = _set(T61.read_text(), name, value)
+    with pytest.raises(TirError, match=rf"x\.tir:\d+: {blamed}:"):
+        _quiet(mftyre.tir.parse_tir, text, "x.tir")
+    path = tmp_path / "x.tir"
+    path.write_text(text)
+    assert any(f.severity == "error" and f.parameter == blamed for f in mftyre.tir.check_tir(path))
+    model = _quiet(mftyre.load_tir, T61)
+    with pytest.raises(TirError, match=blamed):
+        model.with_params(**{name: float(value)})
+    with pytest.raises(TirError, match=blamed):
+        mftyre.tir.write_tir(model.params.replace(**{name: float(value)}), tmp_path / "w.tir")
+    assert not (tmp_path / "w.tir").exists()
+
+
+def test_mf52_contact_length_coefficients_are_checked(tmp_path):
+    from conftest import require_shared, MFEVAL_DIR
+
+    source = require_shared(MFEVAL_DIR / "MagicFormula52_Parameters.tir")
+    prm = _quiet(mftyre.tir.read_tir, source)
+    with pytest.raises(TirError, match="Q_A2"):
+        mftyre.tir.validate_params(prm.replace(Q_A1=0.5, Q_A2=-5.0))
+    with pytest.raises(TirError, match="Q_A1"):
+        mftyre.tir.validate_params(prm.replace(Q_A1=-0.5, Q_A2=1.0))
+
+
+def test_published_files_still_load_and_pass_check():
+    """The new rules must not reject real files (TNO declares PRESMIN 0.1 bar, PRESMAX 10 bar: legal)."""
+    from conftest import MFEVAL_DIR, SHARED
+
+    files = sorted(TIR_FILES.glob("*.tir")) + sorted(MFEVAL_DIR.glob("*.tir")) + \
+        sorted((SHARED / "reference" / "tir").glob("*.tir"))
+    assert len(files) >= 4
+    for path in files:
+        _quiet(mftyre.load_tir, path)
+        assert [str(f) for f in mftyre.tir.check_tir(path) if f.severity == "error"] == [], path
+
+
+def test_check_reports_extreme_values_and_goes_on_to_the_next_file(tmp_path, capsys):
+    bad = tmp_path / "bad.tir"
+    bad.write_text(_set(T61.read_text(), "VERTICAL_STIFFNESS", "1e200"))
+    units = tmp_path / "units.tir"  # 1e306 kN is beyond a float in newtons
+    units.write_text(_set(_set(T61.read_text(), "FORCE", "'kN'"), "FNOMIN", "1e306"))
+    assert cli.main(["check", str(bad), str(units), str(T61)]) == 1
+    out = capsys.readouterr().out
+    assert "VERTICAL_STIFFNESS" in out and "FNOMIN" in out and "beyond the range" in out
+    assert "checked 3 files" in out and "2 file(s) with errors" in out
+
+
+def test_with_params_zero_nominal_load_and_inverted_load_range():
+    model = _quiet(mftyre.load_tir, T61)
+    with pytest.raises(TirError, match="FNOMIN: must be positive"):
+        model.with_params(FNOMIN=0)  # was a raw ZeroDivisionError
+    with pytest.raises(TirError, match="FZMIN: inverted range"):
+        model.with_params(FZMIN=1e9)  # gave rl = 0 silently
+
+
+def test_a_nul_in_a_path_and_a_cache_that_is_a_file_are_clear_errors(tmp_path, monkeypatch):
+    with pytest.raises(TirError, match="not a valid file name"):
+        mftyre.load_tir("a\0b")
+    with pytest.raises(OutputError, match="not a valid file name"):
+        write_atomically(str(tmp_path / "a\0b"), "x")
+    from mftyre import compiled
+
+    cache = tmp_path / "cache"
+    cache.write_text("a file")
+    monkeypatch.setenv("MFTYRE_CACHE", str(cache))
+    with pytest.raises(MFTyreError, match="MFTYRE_CACHE"):
+        compiled.cache_dir()
+
+
+def test_write_tir_spells_every_string_so_read_tir_reads_it_back(tmp_path):
+    from mftyre.params import TyreParameters
+
+    prm = TyreParameters.from_defaults(61, FNOMIN=4000.0)
+    prm = TyreParameters(prm.to_dict(), unknown={"NOTE": ("MODEL", "a'b\"c"), "Q": ("MODEL", "it's")})
+    back = _quiet(mftyre.tir.read_tir, mftyre.tir.write_tir(prm, tmp_path / "n.tir"))
+    assert back.unknown["NOTE"] == ("MODEL", "a'b\"c") and back.unknown["Q"] == ("MODEL", "it's")
+    for text in ("a'b\"c $ d", "two\nlines"):
+        bad = TyreParameters(prm.to_dict(), unknown={"NOTE": ("MODEL", text)})
+        with pytest.raises(TirError, match="NOTE"):
+            mftyre.tir.write_tir(bad, tmp_path / "bad.tir")
+    assert not (tmp_path / "bad.tir").exists()
+
+
+# ------------------------------------------------------------------------------------ 6: loads above FZMAX
+@pytest.mark.parametrize("path, fz", [(T61, 1e7), (T62, 1e6)])
+def test_loads_above_fzmax_are_warned_and_saturated_in_every_output(path, fz):
+    """`mftyre eval T61 --fz 1e7` gave rl 3.5 m, re 0.0027 m, omega 6140 rad/s; T62 at 1e6 N rl = -0.088 m."""
+    from mftyre.errors import InputClippedWarning
+
+    model = _quiet(mftyre.load_tir, path)
+    with pytest.warns(InputClippedWarning, match="fz outside FZMAX"):
+        out = model.evaluate(fz, 0.0, 0.0, vx=16.7)
+    at_max = _quiet(model.evaluate, model.params.FZMAX, 0.0, 0.0, vx=16.7)
+    for name in out.keys():  # every output but the load as given (my used the unlimited load: -12.4 kN m)
+        if name != "fz":
+            assert float(out[name]) == pytest.approx(float(at_max[name]), rel=1e-12, abs=1e-12), name
+    r0 = model.params.UNLOADED_RADIUS
+    assert 0 < float(out.rl) < r0 and 0.5 * r0 < float(out.re) < r0 and float(out.fz) == fz
+
+
+def test_the_compiled_model_raises_where_evaluate_raises():
+    """vx = 1e308: evaluate raised, the compiled C returned NaN radii and spin (52 of 248 extreme comparisons)."""
+    from mftyre.compiled import compile_model
+    from mftyre.errors import ModelInputError
+
+    model = _quiet(mftyre.load_tir, T61)
+    compiled = compile_model(model)
+    extreme = dict(fz=4000.0, kappa=0.0, alpha=0.0, gamma=0.0, phit=0.0, vx=1e308, p=2.2e5)
+    with pytest.raises(ModelInputError, match="non-finite") as numpy_error:
+        model.evaluate(**extreme)
+    with pytest.raises(ModelInputError, match="non-finite") as c_error:
+        compiled(*extreme.values())
+    assert "vx=1e+308" in str(numpy_error.value) and "vx=1e+308" in str(c_error.value)
+    vx = np.array([20.0, 1e308, 30.0])
+    with pytest.raises(ModelInputError, match=r"1 of 3 point\(s\), first at point 1"):
+        compiled.batch(4000.0, 0.0, 0.0, 0.0, 0.0, vx, 2.2e5)
+    with pytest.raises(ModelInputError, match=r"1 of 3 point\(s\), first at point 1"):
+        model.evaluate(4000.0, 0.0, 0.0, vx=vx)
+
+
+# ------------------------------------------------------------------------------------ 8: TYDEX
+@pytest.fixture(scope="module")
+def tydex_text(tmp_path_factory):
+    from mftyre.data import trailer_programme, write_tydex
+
+    model = _quiet(mftyre.load_tir, T61)
+    data = trailer_programme(model, points=3, loads=(1.0,), pressures=(1.0,), cambers_deg=(0.0,))
+    return write_tydex(data, tmp_path_factory.mktemp("tdx") / "d.tdx").read_text()
+
+
+def _line_of(text: str, start: str) -> str:
+    return next(line for line in text.splitlines() if line.startswith(start))
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda t: t.replace(_line_of(t, "FYW "), "FXW" + _line_of(t, "FYW ")[3:]), r":\d+: columns 1-10: channel FXW"),
+    (lambda t: t.replace(_line_of(t, "FYW "), "FX " + _line_of(t, "FYW ")[3:]), r"channel FX \(FX\) is listed twice"),
+    (lambda t: t.replace(_line_of(t, "FXW "), _line_of(t, "FXW ") + " 5"), r"channel FXW: 4 numbers"),
+    (lambda t: t.replace(_line_of(t, "FNOMIN"), _line_of(t, "FNOMIN").replace("4000.0", "1e400")),
+     "constant FNOMIN: '1e400' is not a finite number"),
+    (lambda t: t.replace(_line_of(t, "LONGVEL "), _line_of(t, "LONGVEL ").replace("16.7", "nan")),
+     "constant LONGVEL: 'nan' is not a finite number"),
+    (lambda t: t.replace(_line_of(t, "NOMPRES"), _line_of(t, "NOMPRES") + "\n" + _line_of(t, "NOMPRES")),
+     "NOMPRES appears twice"),
+])
+def test_tydex_duplicates_factor_lines_and_constants_are_refused(tmp_path, tydex_text, edit, message):
+    from mftyre.data import read_tydex
+
+    path = tmp_path / "bad.tdx"
+    path.write_text(edit(tydex_text))
+    with pytest.raises(DataError, match=message):
+        read_tydex(path)
+
+
+# ------------------------------------------------------------------------------------ 5: more raw exceptions
+def test_fit_on_data_at_zero_pressure_is_a_data_error(tmp_path, capsys):
+    path = tmp_path / "p0.csv"
+    path.write_text("FZ,SA,SL,VX,P\n4000,0,0,16,0\n4000,0.1,0,16,0\n")
+    from mftyre.data import read_csv
+
+    with pytest.raises(DataError, match=r"line 2: channel P: inflation pressure 0\.0 Pa"):
+        read_csv(path)
+    assert cli.main(["fit", str(path), "-o", str(tmp_path / "f.tir"), "--quiet"]) != 0
+    assert "channel P" in capsys.readouterr().err
+
+
+def test_a_road_beyond_any_table_is_refused(tmp_path, capsys):
+    from mftyre.errors import ModelInputError
+    from swift.road import Cleat, parse_road
+
+    with pytest.raises(ModelInputError, match="obstacle edge at x = 1e\\+308"):
+        parse_road("cleat(x0=1e308, length=0.02, height=0.01)")
+    with pytest.raises(ModelInputError, match="height of"):
+        parse_road(Cleat(0.0, 0.02, 1e300))
+    assert cli.main(["fmu", "build", str(T62), "-o", str(tmp_path / "c.fmu"), "--model", "swift", "--vertical",
+                     "position", "--road", "cleat(x0=1e308, length=0.02, height=0.01)"]) == 1
+    assert "obstacle edge" in capsys.readouterr().err and not (tmp_path / "c.fmu").exists()
+
+
+@pytest.mark.parametrize("name", ["ELLIPS_LENGTH", "ELLIPS_SHIFT", "FREQ_WINDUP", "DAMP_VLOW", "SWIFT_PSTIFF"])
+def test_swift_with_extreme_parameters_raises_a_model_input_error(name):
+    """1e308 gave OverflowError (cam table) or ValueError (NaN position to an index) from SwiftTyre."""
+    from mftyre.errors import ModelInputError
+    from swift.road import Cleat
+    from swift.simulate import StepInputs, SwiftTyre
+
+    model = _quiet(mftyre.load_tir, T62)
+    extreme = mftyre.MFModel(model.params.replace(**{name: 1e308}))
+    inputs = StepInputs(x=0.0, vx=10.0, z=0.0, vz=0.0, load=4000.0, omega=33.0, torque=0.0, p=None, y=0.0)
+    with pytest.raises(ModelInputError, match="cam sizes|not finite"):
+        tyre = _quiet(SwiftTyre, extreme, Cleat(0.5, 0.02, 0.01), compiled=False)
+        _quiet(tyre.run, 0.002, inputs, dt=1e-3)
+
+
+# ------------------------------------------------------------------------------------ 9: soil file, FMU step budget
+def test_soil_file_refuses_a_fifo_and_a_device_without_blocking(tmp_path, capsys):
+    fifo = tmp_path / "soils.csv"
+    os.mkfifo(fifo)
+    result = []
+    worker = threading.Thread(target=lambda: result.append(cli.main(
+        ["soil", str(T61), "--soil", "x", "--soil-file", str(fifo), "-q"])), daemon=True)
+    worker.start()
+    worker.join(30)
+    if worker.is_alive():
+        with open(fifo, "wb"):
+            pass
+        pytest.fail("mftyre soil --soil-file FIFO blocked")
+    assert result and result[0] != 0 and "not a regular file" in capsys.readouterr().err
+    assert cli.main(["soil", str(T61), "--soil", "x", "--soil-file", "/dev/zero", "-q"]) != 0
+    assert "not a regular file" in capsys.readouterr().err
+
+
+def test_one_swift_fmu_step_has_a_time_budget_proportional_to_the_step(tmp_path):
+    """max_step = 2e-7 and a 1 s step: 5e6 internal steps (about 30 s in one fmi2DoStep; up to 1e7 were allowed) ran;
+    now a step may take at most 1e6 internal steps per simulated second, one over budget is refused with fmi2Error
+    and a message."""
+    from fmpy.fmi1 import FMICallException
+    from test_fmu import Slave
+
+    path = tmp_path / "swift.fmu"
+    assert cli.main(["fmu", "build", str(T62), "-o", str(path), "--model", "swift", "--vertical", "position"]) == 0
+    start = {"vx": 10.0, "omega": 10.0 / 0.305, "z": 0.29, "max_step": 2e-7}
+    fmu = Slave(path, tmp_path, start=start)
+    cpu = time.process_time()
+    with pytest.raises(FMICallException, match="error"):
+        fmu.fmu.doStep(0.0, 1.0)
+    assert time.process_time() - cpu < 5.0
+    assert any("time budget" in message for _, message in fmu.messages)
+    within = Slave(path, tmp_path, start=dict(start, max_step=2e-6))  # 5e5 internal steps per second: allowed
+    within.fmu.doStep(0.0, 0.01)
+    assert 0.0 < within.get("Fz")["Fz"] < 1e5
+
+
+# ------------------------------------------------------------------------------------ seeded fuzz: the counts
+_HOSTILE = ["1e308", "-1e308", "1e-300", "-1e-300", "0", "-1", "1e200", "-1e200", "61", "-61", "1e10", "1e-10", "3",
+            "-3", "0.5", "-0.5"]
+
+
+def _impossible(out, prm) -> str | None:
+    """What no tyre can give: non-finite outputs, a loaded or effective radius outside (0, 2 R0], a negative patch."""
+    r0 = prm.UNLOADED_RADIUS
+    values = {k: np.asarray(getattr(out, k), float) for k in ("fx", "fy", "mz", "rl", "re", "rho", "a", "b", "omega")}
+    bad = [k for k, v in values.items() if not np.isfinite(v).all()]
+    if bad:
+        return f"non-finite {bad}"
+    if not ((values["rl"] >= 0).all() and (values["rl"] <= 2 * r0).all()):
+        return f"rl {values['rl'].min():.3g}..{values['rl'].max():.3g} m"
+    if not ((values["re"] > 0).all() and (values["re"] <= 2 * r0).all()):
+        return f"re {values['re'].min():.3g}..{values['re'].max():.3g} m"
+    if not ((values["a"] >= 0).all() and (values["b"] >= 0).all()):
+        return "negative contact patch"
+    return None
+
+
+def _fuzz_tir(rng, cases: int, counts: dict) -> None:
+    """One parameter of T61/T62 set to a hostile value: load, then evaluate over loads up to 1e7 N and speeds up to
+    three times the reference speed (the speed terms are judged there, see params.invalid_values)."""
+    import re
+
+    from mftyre.params import PARAMETERS
+
+    texts = [T61.read_text(), T62.read_text()]
+    names = [n for n, spec in PARAMETERS.items() if not spec.is_string and not spec.is_integer]
+    for case in range(cases):
+        name = names[rng.integers(len(names))]
+        value = (_HOSTILE[rng.integers(len(_HOSTILE))] if rng.random() < 0.5
+                 else repr(float(rng.choice([-1.0, 1.0]) * 10 ** rng.uniform(-12, 12))))
+        text, n = re.subn(rf"(?im)^(\s*{name}\s*=\s*)[^\s$!]+", lambda m: m.group(1) + value, texts[case % 2], count=1)
+        if n == 0:
+            continue
+        counts["tir cases"] += 1
+        try:
+            model = mftyre.MFModel(_quiet(mftyre.tir.parse_tir, text, "f.tir"))
+        except MFTyreError:
+            continue
+        except Exception as exc:  # noqa: BLE001 - counted: the campaign's measure
+            counts["raw exceptions"] += 1
+            counts.setdefault("raw", []).append((name, value, repr(exc)[:80]))
+            continue
+        prm = model.params
+        fz = np.array([0.0, 100.0, prm.FNOMIN, prm.FZMAX, 10 * prm.FZMAX, 1e7])[:, None]
+        for vx in (0.0, prm.LONGVL / 3, prm.LONGVL, 3 * prm.LONGVL, -prm.LONGVL):
+            try:
+                out = _quiet(model.evaluate, fz, np.array([-0.3, 0.0, 0.3]), 0.05, 0.02, vx=vx)
+            except MFTyreError:
+                continue
+            except Exception as exc:  # noqa: BLE001
+                counts["raw exceptions"] += 1
+                counts.setdefault("raw", []).append((name, value, vx, repr(exc)[:80]))
+                continue
+            why = _impossible(out, prm)
+            if why:
+                counts["silent impossible results"] += 1
+                counts.setdefault("impossible", []).append((name, value, vx, why))
+
+
+def _fuzz_compiled(rng, points: int, counts: dict) -> None:
+    """Extreme inputs: the compiled model raises where evaluate raises, and agrees where both return."""
+    from mftyre.compiled import compile_model
+
+    extremes = {"fz": [0.0, 4000.0, 1e7, 1e308, -1e308], "kappa": [0.0, -1.0, 1e308, -1e308],
+                "alpha": [0.1, 1e308, -1e308], "gamma": [0.0, 1e308], "phit": [0.0, 1e308],
+                "vx": [16.7, 0.0, 1e308, -1e308, 1e-300], "p": [2.2e5, 1e308, 1e-300]}
+    model = _quiet(mftyre.load_tir, T61)
+    compiled = compile_model(model)
+    for _ in range(points):
+        point = {k: v[rng.integers(len(v))] for k, v in extremes.items()}
+        counts["compiled points"] += 1
+        results = []
+        for run in (lambda: _quiet(model.evaluate, **point), lambda: _quiet(compiled, *point.values())):
+            try:
+                results.append(run())
+            except MFTyreError as exc:
+                results.append(type(exc))
+            except Exception:  # noqa: BLE001
+                counts["raw exceptions"] += 1
+                results.append(None)
+        numpy_out, c_out = results
+        if isinstance(numpy_out, type) or isinstance(c_out, type) or numpy_out is None or c_out is None:
+            if numpy_out is not c_out:
+                counts["compiled/evaluate disagreements"] += 1
+            continue
+        expected = np.array([float(numpy_out[k]) for k in compiled.outputs])
+        if not np.allclose(expected, c_out, rtol=1e-6, atol=1e-9):
+            counts["compiled/evaluate disagreements"] += 1
+
+
+def _fuzz_csv(rng, tmp_path, cases: int, counts: dict) -> None:
+    """Tables with a row of a field more or less, CR/CRLF/LF line ends, quoted fields: a DataError naming the line,
+    or every channel exactly as written (never a shifted column)."""
+    from mftyre.data import read_csv
+
+    for case in range(cases):
+        counts["csv cases"] += 1
+        rows = rng.uniform(1.0, 9.0, (int(rng.integers(1, 6)), 5)).round(3)
+        rows[:, 4] *= 1e5  # P in Pa
+        lines = [",".join(repr(float(v)) for v in row) for row in rows]
+        wrong = int(rng.integers(len(lines))) if rng.random() < 0.6 else None
+        if wrong is not None:
+            fields = lines[wrong].split(",")
+            lines[wrong] = ",".join(fields + ["99"] * int(rng.integers(1, 4)) if rng.random() < 0.5
+                                    else fields[:int(rng.integers(1, 5))])
+        end = ["\n", "\r\n", "\r"][case % 3]
+        path = tmp_path / f"f{case}.csv"
+        path.write_bytes(end.join(["FZ,SA,SL,VX,P", *lines]).encode() + end.encode())
+        try:
+            frame = read_csv(path).frame
+        except DataError as exc:
+            if wrong is None or f"line {wrong + 2}:" not in str(exc):
+                counts["csv errors without the right line"] += 1
+            continue
+        except Exception:  # noqa: BLE001
+            counts["raw exceptions"] += 1
+            continue
+        read = frame[["FZ", "SA", "SL", "VX", "P"]].to_numpy()
+        if wrong is not None or not np.array_equal(read, rows):
+            counts["silent impossible results"] += 1
+
+
+def _fuzz_tydex(rng, tmp_path, text: str, cases: int, counts: dict) -> None:
+    """TYDEX lines duplicated, numbers added, dropped or made non-finite: a DataError or a table, never a raw error
+    and never a duplicated channel or constant read silently."""
+    from mftyre.data import read_tydex
+
+    lines = text.splitlines()
+    head = lines.index("**MEASURDATA")
+    for case in range(cases):
+        counts["tydex cases"] += 1
+        edited = list(lines)
+        k = int(rng.integers(1, head + 3))
+        kind = case % 4
+        if kind == 0:
+            edited.insert(k, edited[k])
+        elif kind == 1:
+            edited[k] = edited[k] + " 7"
+        elif kind == 2:
+            edited[k] = " ".join(edited[k].split()[:-1])
+        else:
+            edited[k] = edited[k].replace("0", ["nan", "1e400", "inf"][int(rng.integers(3))], 1)
+        path = tmp_path / f"t{case}.tdx"
+        path.write_text("\n".join(edited) + "\n")
+        try:
+            read_tydex(path)
+        except DataError:
+            continue
+        except Exception:  # noqa: BLE001
+            counts["raw exceptions"] += 1
+            continue
+        line = lines[k]
+        duplicated = kind == 0 and (line[:10].strip() and not line.startswith(("**", "!")) and k < head
+                                    and k > lines.index("**CONSTANTS"))
+        if duplicated:
+            counts["silent impossible results"] += 1
+
+
+def _fuzz_outputs(rng, tmp_path, cases: int, counts: dict) -> None:
+    """Outputs aimed at planted links (to a victim, dangling), FIFOs, existing and new files, with overwrite: the
+    victim unchanged, nothing created but the requested file, no call blocking."""
+    import pandas as pd
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(2, 2))
+    FigureCanvasAgg(fig)
+    fig.subplots().plot([0, 1])
+    frame = pd.DataFrame({"a": [1.0]})
+    writers = [lambda p: write_atomically(p, b"data"), lambda p: files.write_figure(fig, p),
+               lambda p: files.write_frame_csv(frame, p, index=False)]
+    for case in range(cases):
+        counts["output cases"] += 1
+        folder = tmp_path / f"o{case}"
+        folder.mkdir()
+        victim = folder / "victim.txt"
+        victim.write_bytes(VICTIM)
+        target = folder / "out.dat"
+        kind = ["link", "dangling", "fifo", "existing", "new", "partial_link"][case % 6]
+        if kind == "link":
+            target.symlink_to(victim)
+        elif kind == "dangling":
+            target.symlink_to(folder / "elsewhere.dat")
+        elif kind == "fifo":
+            os.mkfifo(target)
+        elif kind == "existing":
+            target.write_bytes(b"old")
+        elif kind == "partial_link":  # the old FMU build's predictable temporary name
+            (folder / f".out.dat.{os.getpid()}.partial").symlink_to(victim)
+        before = {p.name for p in folder.iterdir()}
+        result = []
+
+        def write():
+            try:
+                writers[int(rng.integers(len(writers)))](target)
+                result.append("written")
+            except OutputError:
+                result.append("refused")
+            except Exception as exc:  # noqa: BLE001
+                result.append(repr(exc))
+
+        worker = threading.Thread(target=write, daemon=True)
+        worker.start()
+        worker.join(20)
+        if worker.is_alive():
+            counts["writes outside the requested output"] += 1  # blocked on a FIFO
+            with open(target, "rb") as fh:
+                fh.read()
+            worker.join(5)
+            continue
+        after = {p.name for p in folder.iterdir()}
+        if result[0] not in ("written", "refused"):
+            counts["raw exceptions"] += 1
+        if victim.read_bytes() != VICTIM or after - before - {"out.dat"} or (folder / "elsewhere.dat").exists():
+            counts["writes outside the requested output"] += 1
+        if kind in ("link", "dangling", "fifo") and result[0] != "refused":
+            counts["writes outside the requested output"] += 1
+
+
+def test_seeded_fuzz_counts_are_zero(tmp_path, tydex_text, capsys):
+    """The campaign's cases, seeded and fast (~3 s): raw exceptions 0, silent impossible results 0, writes outside the
+    requested output 0 (and the compiled model agreeing with evaluate, CSV errors naming their line)."""
+    from collections import Counter
+
+    rng = np.random.default_rng(25)
+    counts = Counter()
+    _fuzz_tir(rng, 300, counts)
+    _fuzz_compiled(rng, 120, counts)
+    _fuzz_csv(rng, tmp_path, 150, counts)
+    _fuzz_tydex(rng, tmp_path, tydex_text, 80, counts)
+    _fuzz_outputs(rng, tmp_path, 60, counts)
+    measures = ("raw exceptions", "silent impossible results", "writes outside the requested output",
+                "compiled/evaluate disagreements", "csv errors without the right line")
+    with capsys.disabled():
+        print("\nhostile fuzz:", {k: v for k, v in counts.items() if not isinstance(v, list)},
+              {m: counts[m] for m in measures})
+    assert counts["tir cases"] > 200 and counts["csv cases"] == 150 and counts["output cases"] == 60
+    for measure in measures:
+        assert counts[measure] == 0, (measure, counts.get("raw"), counts.get("impossible"))
+
+
+def test_field_counts_are_checked_across_the_blocks_of_a_large_file(tmp_path):
+    """The count runs in blocks of about 1 MiB: a wrong row far inside, CR LF line ends, a last line without a break."""
+    from mftyre.data import read_csv
+
+    rows = ["4000,0.1,0.0,10,220000"] * 150_000  # 3.4 MB
+    rows[120_000] = "4000,0.1,0.0,10"
+    path = tmp_path / "big.csv"
+    path.write_text("FZ,SA,SL,VX,P\r\n" + "\r\n".join(rows))
+    with pytest.raises(DataError, match="line 120002: 4 fields"):
+        read_csv(path)
+    rows[120_000], rows[-1] = rows[0], "1,2"
+    path.write_text("FZ,SA,SL,VX,P\r\n" + "\r\n".join(rows))
+    with pytest.raises(DataError, match="line 150001: 2 fields"):
+        read_csv(path)
+    rows[-1] = rows[0]
+    path.write_text("FZ,SA,SL,VX,P\n" + "\n".join(rows) + "\n\n")
+    assert len(read_csv(path).frame) == 150_000
