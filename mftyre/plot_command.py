@@ -10,7 +10,6 @@ per model. The error of each model on every measured channel (RMS and normalised
 from __future__ import annotations
 
 import argparse
-import io
 import math
 import sys
 import warnings
@@ -78,11 +77,11 @@ def run(args) -> int:
         for name, table in _errors(data, predictions).items():
             print(f"  {name}: " + "; ".join(f"{ch} RMS {rms:.4g} {_UNIT[ch]} ({nrms:.2f} %)"
                                              for ch, (rms, nrms) in table.items()))
-        png, shown = _figure(rows, predictions, models, args)
-        Path(args.output).parent.mkdir(parents=True, exist_ok=True)
-        from .files import write_atomically
+        fig, shown = _figure(rows, predictions, models, args)
+        from .files import make_output_folder, write_figure
 
-        write_atomically(args.output, png)
+        make_output_folder(Path(args.output).parent)
+        write_figure(fig, args.output)
     except (MFTyreError, OSError) as exc:
         print(f"mftyre plot: {exc}", file=sys.stderr)
         return 1
@@ -118,8 +117,8 @@ def _errors(data, predictions) -> dict:
     return table
 
 
-def _figure(rows, predictions, models, args) -> tuple[bytes, str]:
-    """The PNG (or the format of the output's suffix) as bytes, and what it shows."""
+def _figure(rows, predictions, models, args):
+    """The matplotlib Figure, and what it shows."""
     import matplotlib
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
@@ -166,13 +165,9 @@ def _figure(rows, predictions, models, args) -> tuple[bytes, str]:
         ax.set_visible(False)
     styles = ", ".join(f"{name} ({_STYLE_NAMES[k % len(_STYLES)]})" for k, (name, _) in enumerate(models))
     fig.suptitle(f"{Path(args.data).name}: measured (dots)" + (f" against {styles}" if models else ""), fontsize=10)
-    path = Path(args.output)
-    fmt = path.suffix[1:].lower() if path.suffix[1:].lower() in fig.canvas.get_supported_filetypes() else "png"
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format=fmt)
     shown = ", ".join(f"{len(s)} {k.replace('_', '-')} sweeps" for k, s in
                       {p[0]: p[5] for p in panels}.items())
-    return buffer.getvalue(), shown
+    return fig, shown
 
 
 def _condition(rows, mask) -> str:

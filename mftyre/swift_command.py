@@ -6,7 +6,6 @@ as CSV and a plot against the wheel position. Progress (building the compiled st
 from __future__ import annotations
 
 import argparse
-import io
 import sys
 import textwrap
 import time
@@ -104,16 +103,16 @@ def run(args) -> int:
         for name in ("fz", "fx", "my"):
             print(f"  {name}: min {frame[name].min():.5g}, max {frame[name].max():.5g}, "
                   f"final {frame[name].iloc[-1]:.5g}")
-        from .files import write_atomically
+        from .files import make_output_folder, write_figure, write_frame_csv
 
         for target in (args.csv, args.plot):
             if target:
-                Path(target).parent.mkdir(parents=True, exist_ok=True)
+                make_output_folder(Path(target).parent)
         if args.csv:
-            write_atomically(args.csv, frame.to_csv(index=False))
+            write_frame_csv(frame, args.csv, index=False)
             say(f"wrote {args.csv} ({len(frame)} rows)")
         if args.plot:
-            write_atomically(args.plot, _figure(frame, road, args, info))
+            write_figure(_figure(frame, road, args, info), args.plot)
             say(f"wrote {args.plot}")
     except (MFTyreError, OSError) as exc:
         print(f"mftyre swift: {exc}", file=sys.stderr)
@@ -164,7 +163,7 @@ def _frame(res):
     return pd.DataFrame(cols)
 
 
-def _figure(frame, road, args, info) -> bytes:
+def _figure(frame, road, args, info):
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -183,8 +182,4 @@ def _figure(frame, road, args, info) -> bytes:
         ax.grid(True, lw=0.3)
     axes[-1].set_xlabel("wheel position x [m]")
     fig.suptitle("\n".join(textwrap.wrap(info, 110)), fontsize=8)
-    path = Path(args.plot)
-    fmt = path.suffix[1:].lower() if path.suffix[1:].lower() in fig.canvas.get_supported_filetypes() else "png"
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format=fmt)
-    return buffer.getvalue()
+    return fig

@@ -581,8 +581,8 @@ def _fuzz_csv(rng, tmp_path, cases: int, counts: dict) -> None:
         end = ["\n", "\r\n", "\r"][case % 3]
         path = tmp_path / f"f{case}.csv"
         path.write_bytes(end.join(["FZ,SA,SL,VX,P", *lines]).encode() + end.encode())
-        try:
-            frame = read_csv(path).frame
+        try:  # (values drawn at random, not a tyre: the plausibility check is not what is tested here)
+            frame = read_csv(path, check=False).frame
         except DataError as exc:
             if wrong is None or f"line {wrong + 2}:" not in str(exc):
                 counts["csv errors without the right line"] += 1
