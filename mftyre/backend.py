@@ -169,6 +169,9 @@ class NumpyBackend:
         file's unit scaling factors and zero coefficients then cost no array operation)."""
         return {k: _exact(v) if type(v) is float else v for k, v in values.items()}
 
+    #: sqrt of a quantity >= 0 (CasADi: with the derivative 0 where it is 0)
+    sqrt0 = staticmethod(np.sqrt)
+
     @staticmethod
     def cos_atan(x):
         """cos(atan(x)) = 1 / sqrt(1 + x^2), without the two transcendental functions."""
@@ -379,6 +382,14 @@ class CasadiBackend:
     def cos_atan(self, x):
         """cos(atan(x)) = 1 / sqrt(1 + x^2)."""
         return 1.0 / self.ca.sqrt(1.0 + x * x)
+
+    def sqrt0(self, square):
+        """sqrt of a quantity >= 0 (a speed sqrt(Vx^2 + Vsy^2), a load ratio Fz/Fz0) with the derivative 0 where it
+        is 0: there sqrt's infinite slope times the quantity's zero slope would make NaN of every derivative
+        through it (the derivative of Fz sqrt(Fz/Fz0) at Fz = 0 is 0 indeed)."""
+        ca = self.ca
+        positive = square > 0
+        return ca.if_else(positive, ca.sqrt(ca.if_else(positive, square, 1.0)), 0.0)
 
     @staticmethod
     def any(cond) -> bool:

@@ -50,7 +50,7 @@ def aligning_coefficients(prm, s, lat, gyk, modes, be) -> SimpleNamespace:
     if modes.turn_slip:
         zeta0, zeta2, zeta6 = 0.0, s.zeta2, s.zeta6
         published = modes.turn_slip_form == "published"
-        mz_inf = prm.QCRP1 * be.abs(lat.muy) * R0 * Fz * be.sqrt(Fz / s.Fz0p) * prm.LMP  # (4.95)
+        mz_inf = prm.QCRP1 * be.abs(lat.muy) * R0 * Fz * be.sqrt0(Fz / s.Fz0p) * prm.LMP  # (4.95)
         mz_inf = be.where(mz_inf <= 0, 1e-6, mz_inf)  # kept positive (also at zero load)
         c_drp = prm.QDRP1  # (4.96)
         d_drp = mz_inf / be.sin(0.5 * be.pi * c_drp)  # (4.94)
@@ -68,10 +68,21 @@ def aligning_coefficients(prm, s, lat, gyk, modes, be) -> SimpleNamespace:
         # published: Cr = (2/pi) acos of the ratio held in [-1, 1] (0 or 2), a real shape factor as (4.46) needs;
         # mfeval: MATLAB's complex acos, Cr = a + i b with b = (2/pi) acosh|ratio|, of which MFeval reports the
         # real part of Mzr: Dr cos(a x) cosh(b x), x = atan(Br alpha_r) (unbounded in alpha_r)
-        ratio = be.where(mz90 == 0, 0.0, mz90 / be.abs(d_rp))
-        zeta7 = (2.0 / be.pi) * be.acos(be.clip(ratio, -1.0, 1.0))
+        held = be.abs(d_rp)
+        finite = held * 1e12 > be.abs(mz90)  # else the ratio is held at +-1e12 (D_rphi = 0 at zero load)
+        ratio = be.where(mz90 == 0, 0.0, be.where(finite, mz90 / be.where(finite, held, 1.0),
+                                                  be.where(mz90 > 0, 1e12, -1e12)))
+        # (acos and acosh only inside their open domains: their infinite slopes at +-1 times the held ratio's zero
+        # slope would make NaN derivatives)
+        inside = be.abs(ratio) < 1.0
+        zeta7 = be.where(inside, (2.0 / be.pi) * be.acos(be.where(inside, ratio, 0.0)), be.where(ratio > 0, 0.0, 2.0))
         # (where D_rphi = 0 MFeval divides by zero; the ratio is held at 1e12 to keep Mzr finite)
-        zeta7_imag = None if published else (2.0 / be.pi) * be.acosh(be.clip(be.abs(ratio), 1.0, 1e12))
+        if not published:
+            beyond = be.abs(ratio) > 1.0
+            zeta7_imag = (2.0 / be.pi) * be.where(beyond, be.acosh(be.where(beyond, be.fmin(be.abs(ratio), 1e12), 2.0)),
+                                                   0.0)
+        else:
+            zeta7_imag = None
         zeta8 = 1.0 + d_rp  # (4.97)
     else:
         zeta0 = zeta2 = zeta6 = zeta7 = zeta8 = 1.0
@@ -91,8 +102,8 @@ def aligning_torque(prm, s, c, kxk, fx, fy, svyk, fy0_gamma0, gyk, modes, be):
     """(Mz, t, Mzr) under combined slip (4.E71-4.E78, paper A54-A56)."""
     R0 = prm.UNLOADED_RADIUS
     k_ratio2 = (kxk / c.Kya_prime) ** 2 * s.kappa**2
-    alpha_r_eq = be.atan(be.sqrt(be.tan(c.alpha_r) ** 2 + k_ratio2)) * be.sign(c.alpha_r)  # paper A54
-    alpha_t_eq = be.atan(be.sqrt(be.tan(c.alpha_t) ** 2 + k_ratio2)) * be.sign(c.alpha_t)  # paper A55
+    alpha_r_eq = be.atan(be.sqrt0(be.tan(c.alpha_r) ** 2 + k_ratio2)) * be.sign(c.alpha_r)  # paper A54
+    alpha_t_eq = be.atan(be.sqrt0(be.tan(c.alpha_t) ** 2 + k_ratio2)) * be.sign(c.alpha_t)  # paper A55
     arm = R0 * (prm.SSZ1 + prm.SSZ2 * (fy / prm.FNOMIN) + (prm.SSZ3 + prm.SSZ4 * s.dfz) * s.gamma) * prm.LS  # paper A56
     shape_arg = be.atan(c.Br * alpha_r_eq)
     mzr = c.Dr * be.cos(c.Cr * shape_arg)  # (4.E75)

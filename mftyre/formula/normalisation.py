@@ -84,8 +84,8 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
     speed = be.abs(vx)
     vsx = -kappa * speed
     vsy = s.tan_alpha * speed
-    vs = be.sqrt(vsx**2 + vsy**2)
-    vc = be.sqrt(vx**2 + vsy**2)
+    vs = be.sqrt0(vsx**2 + vsy**2)
+    vc = be.sqrt0(vx**2 + vsy**2)
     vc_prime = vc + 1e-6  # (4.E6a), Vc >= 0 so sign(Vc) = +1
     s.cos_alpha_prime = vx / vc_prime  # cos(alpha') (4.E6)
 

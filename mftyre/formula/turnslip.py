@@ -31,7 +31,7 @@ def spin_slip(prm, s, omega, modes, be):
     """phi (4.76) and the camber reduction factor eps_gamma (4.90)."""
     eps_gamma = prm.PECP1 * (1.0 + prm.PECP2 * s.dfz)  # (4.90)
     vsy = -s.tan_alpha * be.abs(s.vx)
-    vc = be.sqrt(s.vx**2 + vsy**2)
+    vc = be.sqrt0(s.vx**2 + vsy**2)
     camber_spin = (1.0 - eps_gamma) * omega * be.sin(s.gamma)
     if modes.turn_slip_form == "published":
         vc_prime = be.fmax(vc, prm.VXLOW)  # singularity protection, continuous
