@@ -145,6 +145,7 @@ class NumpyBackend:
     cos = staticmethod(np.cos)
     tan = staticmethod(np.tan)
     atan = staticmethod(np.arctan)
+    tanh = staticmethod(np.tanh)
     acos = staticmethod(np.arccos)
     acosh = staticmethod(np.arccosh)
     cosh = staticmethod(np.cosh)
@@ -224,6 +225,13 @@ class NumpyBackend:
         if type(x) is np.ndarray:
             return np.clip(x, lo, hi)  # min(max(x, lo), hi) in one pass
         return np.minimum(np.maximum(x, lo), hi)  # (np.clip costs more on numbers)
+
+    @staticmethod
+    def saturate(x, lo, hi):
+        """x held in [lo, hi] (``lo`` None: below ``hi``), the .tir range limits (see CasADi's for the slope)."""
+        if lo is None:
+            return np.minimum(x, hi)
+        return NumpyBackend.clip(x, lo, hi)
 
     @staticmethod
     def broadcast(*values):
@@ -355,7 +363,7 @@ class CasadiBackend:
         self.ca = ca
         self.smooth = smooth
         self.sin, self.cos, self.tan = ca.sin, ca.cos, ca.tan
-        self.atan, self.acos = ca.atan, ca.acos
+        self.atan, self.acos, self.tanh = ca.atan, ca.acos, ca.tanh
         self.acosh, self.cosh = ca.acosh, ca.cosh
         self.sqrt, self.exp = ca.sqrt, ca.exp
         self.logical_and, self.logical_or = ca.logic_and, ca.logic_or
@@ -409,6 +417,13 @@ class CasadiBackend:
 
     def clip(self, x, lo, hi):
         return self.fmin(self.fmax(x, lo), hi)
+
+    def saturate(self, x, lo, hi):
+        """x held in [lo, hi] (``lo`` None: below ``hi``), exact also with ``smooth``, with the slope 1 up to and at
+        the bounds (one-sided, from inside: fmin/fmax would give 1/2 there) and 0 strictly beyond them."""
+        ca = self.ca
+        held = ca.if_else(x > hi, hi, x)
+        return held if lo is None else ca.if_else(x < lo, lo, held)
 
     @staticmethod
     def broadcast(*values):

@@ -175,8 +175,9 @@ class MFModel:
         input outside its range, the range and how many points were outside it (as MFeval reports them, the
         output p is the pressure used, kappa and alpha the low-speed-scaled slips before saturation, gamma and
         fz as given: see OUTPUT_UNITS; ``mftyre eval``'s NAME_used columns show the saturated values). ``limits=False`` evaluates the equations at the inputs as given,
-        extrapolating beyond the fitted ranges, with no low-speed model. ``limits="smooth"`` saturates with a
-        1 % slope left beyond the ranges (for optimisers, see :class:`mftyre.formula.Modes`).
+        extrapolating beyond the fitted ranges, with no low-speed model. ``limits="smooth"`` (for decision
+        variables of optimisers) is the identity inside the ranges and saturates softly beyond them, with the full
+        slope a hair outside and 1 % left far outside (see :class:`mftyre.formula.Modes`).
         """
         modes = Modes(limits=limits, alpha_star=alpha_star, turn_slip=turn_slip, turn_slip_form=turn_slip_form)
         prm = self._params
@@ -286,10 +287,11 @@ class MFModel:
         in the function (CasADi needs distinct input and output names).
         ``smooth``: None for the exact model, or eps > 0 for smooth kinks (see
         :class:`mftyre.backend.CasadiBackend`); outputs stay finite at any finite input, a negative Fz included.
-        ``limits``: True saturates the inputs to the .tir ranges, so every derivative with respect to an input
-        beyond its range is exactly zero (and at Fz <= 0 the forces and their derivatives are zero: no contact);
-        an optimiser that may step outside the ranges should use ``limits="smooth"`` (1 % of the slope kept
-        beyond the ranges, derivatives non-zero) together with ``smooth=1e-6``; False extrapolates.
+        ``limits``: True saturates the inputs to the .tir ranges: the full derivative up to and at a bound
+        (one-sided), exactly zero beyond it (and at Fz <= 0 the forces and their derivatives are zero: no
+        contact); decision variables of an optimiser (a pressure bounded by PRESMIN..PRESMAX: an interior-point
+        solver ends a hair outside an active bound) need ``limits="smooth"``: the full slope a hair outside, a
+        soft saturation fading to 1 % further out (:class:`mftyre.formula.Modes`); False extrapolates.
         The MF 6.2 loaded radius is solved with up to 8 bracket-widening and 16 Dekker steps and a final
         Newton step, so its derivatives are those of the implicit function. Evaluate many points with
         ``f.map(n)``; :mod:`mftyre.compiled` compiles the function to C.

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
-from .options import SMOOTH_LIMITS_SLOPE
+from .options import SMOOTH_LIMITS_MARGIN, SMOOTH_LIMITS_SLOPE
 
 __all__ = ["condition_inputs", "smooth_low_speed"]
 
@@ -46,10 +46,9 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
         phit = be.where(vx < 0, -phit, phit)
 
         def saturate(x, lo, hi):
-            inside = be.clip(x, lo, hi) if lo is not None else be.fmin(x, hi)
-            if modes.limits == "smooth":  # a small slope beyond the ranges (see Modes.limits)
-                return inside + SMOOTH_LIMITS_SLOPE * (x - inside)
-            return inside
+            if modes.limits == "smooth":  # a soft saturation beyond the ranges (see Modes.limits)
+                return _soft_saturate(x, lo, hi, be)
+            return be.saturate(x, lo, hi)
 
         kappa = saturate(kappa, prm.KPUMIN, prm.KPUMAX)
         alpha = saturate(alpha, prm.ALPMIN, prm.ALPMAX)
@@ -96,6 +95,23 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
     s.LMUY_star = prm.LMUY / friction_decay
     s.LMUX_prime, s.LMUY_prime = s.LMUX_star, s.LMUY_star
     return s
+
+
+def _soft_saturate(x, lo, hi, be):
+    """x inside [lo, hi] (``lo`` None: below ``hi``); beyond a bound by d: the bound + (1 - s) m tanh(d/m) + s d,
+    with the slope 1 and no curvature at the bound (see Modes.limits)."""
+    s = SMOOTH_LIMITS_SLOPE
+    m = SMOOTH_LIMITS_MARGIN * (hi if lo is None else hi - lo)
+
+    def beyond(d):
+        return (1.0 - s) * m * be.tanh(d / m) + s * d
+
+    above = x > hi
+    used = be.where(above, hi + beyond(be.where(above, x - hi, 0.0)), x)
+    if lo is None:
+        return used
+    below = x < lo
+    return be.where(below, lo - beyond(be.where(below, lo - x, 0.0)), used)
 
 
 def smooth_low_speed(s, value, be):
