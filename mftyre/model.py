@@ -273,7 +273,7 @@ class MFModel:
     def casadi_function(self, inputs=("fz", "kappa", "alpha", "gamma", "phit", "vx", "p"), outputs=OUTPUT_NAMES,
                         *, turn_slip: bool = False, alpha_star: bool = False, limits: bool | str = True,
                         turn_slip_form: str = "published", fixed: dict | None = None, parameters=(),
-                        smooth: float | None = None, name: str = "mftyre"):
+                        smooth: float | bool | dict | None = None, name: str = "mftyre"):
         """A ``casadi.Function`` of the same equations, built from ``casadi.SX`` scalars.
 
         ``inputs``: the symbolic inputs, any of fz kappa alpha gamma phit vx p omega, as the first arguments in
@@ -285,8 +285,11 @@ class MFModel:
         equations (FITTYP, FZMIN, QSX1-QSX14, Q_CAM1, Q_CAM2, Q_A1, Q_A2, PHYP4, TYRESIDE) must stay numbers.
         ``outputs``: any of :data:`OUTPUT_NAMES`; the echoed inputs are named ``kappa_used``, ``alpha_used``...
         in the function (CasADi needs distinct input and output names).
-        ``smooth``: None for the exact model, or eps > 0 for smooth kinks (see
-        :class:`mftyre.backend.CasadiBackend`); outputs stay finite at any finite input, a negative Fz included.
+        ``smooth``: None for the exact model; True rounds every kink over a width of its own quantity
+        (:data:`mftyre.backend.SMOOTH_WIDTHS`: force 1 N (the contact at Fz = 0), speed 0.01 m/s (|Vx| and the
+        low-speed switch at VXLOW), angle and slip 1e-4, other 1e-6), a mapping overrides some widths
+        (``{"force": 10.0}``), a number is one width for all (see :class:`mftyre.backend.CasadiBackend`); outputs
+        stay finite at any finite input, a negative Fz included.
         ``limits``: True saturates the inputs to the .tir ranges: the full derivative up to and at a bound
         (one-sided), exactly zero beyond it (and at Fz <= 0 the forces and their derivatives are zero: no
         contact); decision variables of an optimiser (a pressure bounded by PRESMIN..PRESMAX: an interior-point

@@ -24,7 +24,7 @@ __all__ = ["condition_inputs", "smooth_low_speed"]
 def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> SimpleNamespace:
     """The conditioned inputs and the basic quantities of Section 4.3.2 (4.E1-4.E8)."""
     s = SimpleNamespace(vx=vx, ukappa=kappa, ugamma=gamma, uphit=phit)
-    uFz = be.fmax(fz, 0.0)  # a negative load means no contact
+    uFz = be.of("force").fmax(fz, 0.0)  # a negative load means no contact
     s.uFz = uFz
     s.alpha_out = be.where(vx == 0, 0.0, alpha)
 
@@ -34,12 +34,13 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
         if be.any(phit != 0):  # (NumPy skips this without turn slip)
             phit = phit * be.cos(alpha)
         if be.any(s.low_speed):  # (NumPy skips this when no point is that slow; the factors would all be 1)
-            reduction_linear = be.where(s.low_speed, be.abs(vx / VXLOW), 1.0)
+            speed_kink = be.of("speed")  # (the switch at VXLOW rounded with the speed width when smooth)
+            reduction_linear = speed_kink.fmin(speed_kink.abs(vx), VXLOW) / VXLOW
             s.reduction_smooth = be.where(s.low_speed, 1.0 - 0.5 * (1.0 + be.cos(be.pi * vx / VXLOW)), 1.0)
             kappa = kappa * reduction_linear
             phit = phit * reduction_linear
-            speed_sum = be.abs(vx) + be.abs(be.tan(alpha) * vx)  # below VXLOW only where |Vx| is
-            alpha = be.where(speed_sum < VXLOW, alpha * speed_sum / VXLOW, alpha)
+            speed_sum = speed_kink.abs(vx) + speed_kink.abs(be.tan(alpha) * vx)  # below VXLOW only where |Vx| is
+            alpha = alpha * (speed_kink.fmin(speed_sum, VXLOW) / VXLOW)
         else:
             s.reduction_smooth = None
         s.kappa_out = kappa
@@ -54,7 +55,7 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
         alpha = saturate(alpha, prm.ALPMIN, prm.ALPMAX)
         gamma = saturate(gamma, prm.CAMMIN, prm.CAMMAX)
         Fz = saturate(uFz, None, prm.FZMAX)
-        s.Fz_low = be.fmax(Fz, prm.FZMIN)
+        s.Fz_low = be.of("force").fmax(Fz, prm.FZMIN)
         p = saturate(p, prm.PRESMIN, prm.PRESMAX)
     else:
         s.low_speed = None
@@ -72,7 +73,7 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
     s.dfz2, s.dpi2 = s.dfz**2, s.dpi**2  # (their squares, shared by the equations)
 
     if modes.alpha_star:
-        s.alpha_star = s.tan_alpha * be.sign(vx)  # (4.E3)
+        s.alpha_star = s.tan_alpha * be.of("speed").sign(vx)  # (4.E3)
         s.gamma_star = be.sin(gamma)  # (4.E4)
     else:
         s.alpha_star, s.gamma_star = alpha, gamma
@@ -80,7 +81,7 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
     s.gamma_star2 = s.gamma2 if s.gamma_star is gamma else s.gamma_star**2
 
     # slip and contact-centre velocities, ISO-W signs: Vsy = tan(alpha) |Vx| (2.12, 4.E5)
-    speed = be.abs(vx)
+    speed = be.of("speed").abs(vx)
     vsx = -kappa * speed
     vsy = s.tan_alpha * speed
     vs = be.sqrt0(vsx**2 + vsy**2)
