@@ -4,7 +4,8 @@ iteration, for every route CasADi offers, side by side in one run.
     python benchmarks/bench_ocp.py [--tir FILE.tir] [--intervals 30] [--repeat 3] [--jit]
 
 Rows: tyre x route (see mftyre.lane_change: "sx" MX graph calling the SX tyre, "expand" one SX graph,
-"external" compile_external(hessian=True), "external-fd" compile_external(hessian=False) under IPOPT's exact mode
+"external" compile_external(hessian=True), "external-expand" the same inside an expanded NLP (SX call nodes),
+"external-fd" compile_external(hessian=False) under IPOPT's exact mode
 (second derivatives by differences of the compiled Jacobian), "external-lbfgs" hessian=False with IPOPT's
 limited-memory quasi-Newton, "jit" (--jit only: the expanded NLP compiled by CasADi's jit, minutes of gcc for the
 MF tyre). Columns: iterations, CPU time of the solve in this thread (best of --repeat; IPOPT and the tyre run in
@@ -51,7 +52,8 @@ def main(argv=None):
         warnings.simplefilter("ignore")
         problem = LaneChange.from_tir(args.tir, intervals=args.intervals)
     routes = {"simple": ["expand", "sx"] + (["jit"] if args.jit else []),
-              "mf": ["external", "expand", "sx", "external-fd", "external-lbfgs"] + (["jit"] if args.jit else [])}
+              "mf": ["external", "expand", "sx", "external-expand", "external-fd", "external-lbfgs"]
+              + (["jit"] if args.jit else [])}
     rows = []
     for tyre, names in routes.items():
         for route in names:

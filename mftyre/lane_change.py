@@ -2,7 +2,8 @@
 
     >>> from mftyre.lane_change import LaneChange
     >>> problem = LaneChange.from_tir("tir_files/car_205_60R15_mf61.tir", intervals=30)
-    >>> result = problem.solve()                        # route "expand" (the fastest measured, see below)
+    >>> result = problem.solve()                        # route "expand": no compiler needed
+    >>> result = problem.solve(route="external")        # the fastest per iteration (compiled once, cached)
     >>> result.time, result.p_front, result.stats
 
 Model (planar, ISO body axes at the CoG, as :mod:`mftyre.vehicle`): states X, Y, heading psi, body velocities vx,
@@ -28,7 +29,8 @@ Mz = -t Fy with a constant trail) whose peaks match the MF tyre's at the nominal
 cost per iteration. ``route`` (how CasADi evaluates the problem; benchmarks/bench_ocp.py measures them side by
 side): ``"sx"`` the MX graph calling the SX tyre function, ``"expand"`` the whole NLP expanded to one SX graph
 (``expand=True``), ``"external"`` the tyre compiled to C with its Jacobian and Hessian
-(:func:`mftyre.compiled.compile_external`, ``hessian=True``), ``"external-lbfgs"`` the same without the Hessian
+(:func:`mftyre.compiled.compile_external`, ``hessian=True``; the fastest measured), ``"external-expand"`` the
+same inside the expanded NLP (CasADi's SX call nodes: 4x slower per iteration), ``"external-lbfgs"`` the same without the Hessian
 and IPOPT's limited-memory quasi-Newton, ``"jit"`` the expanded NLP compiled to C by CasADi's just-in-time
 compiler (seconds of gcc per problem size).
 """
@@ -46,7 +48,7 @@ from .vehicle import WHEELS, VehicleParams
 
 __all__ = ["LaneChange", "LaneChangeResult", "ROUTES", "simple_tyre_function"]
 
-ROUTES = ("sx", "expand", "external", "external-lbfgs", "jit")
+ROUTES = ("sx", "expand", "external", "external-expand", "external-lbfgs", "jit")
 _STATES = ("X", "Y", "psi", "vx", "vy", "r")
 _CONTROLS = ("delta", "kappa")
 
@@ -133,7 +135,7 @@ class LaneChange:
             return simple_tyre_function(model, f"simple_{wheel}")
         inputs, outputs = ("fz", "kappa", "alpha", "vx", "p"), ("fx", "fy", "mz")
         options = dict(limits="smooth", smooth=True)
-        if route in ("external", "external-lbfgs"):
+        if route in ("external", "external-expand", "external-lbfgs"):
             from .compiled import compile_external
 
             return compile_external(model, inputs, outputs, hessian=route == "external", name=f"mf_{wheel}",
@@ -206,7 +208,7 @@ class LaneChange:
         ubg = np.r_[np.zeros(defects.numel()), np.full(alpha_all.numel(), 0.3)]
         w = ca.vertcat(ca.vec(X), ca.vec(U), T, pv)
         options = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes"}
-        if route in ("expand", "jit"):
+        if route in ("expand", "external-expand", "jit"):
             options["expand"] = True
         if route == "jit":
             options.update(jit=True, compiler="shell", jit_options={"flags": ["-O1"], "verbose": False})

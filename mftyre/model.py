@@ -334,7 +334,9 @@ class MFModel:
     # ---------------------------------------------------------------------------------------- vertical
     def vertical_force(self, rl, p=None, omega=0.0, fx=0.0, fy=0.0, gamma=0.0):
         """Fz [N] at loaded radius ``rl`` [m]: the MF 6.1 load-deflection relation (A3.3) with rho = R_omega -
-        Rl, or for FITTYP 62 the MF 6.2 relation with camber, Fx/Fy and speed terms; bottoming included."""
+        Rl, or for FITTYP 62 the MF 6.2 relation with camber, Fx/Fy and speed terms; bottoming included. No
+        limits apply: to check the ``rl`` of :meth:`evaluate` pass the inputs it used (``p``, ``omega``, forces
+        from its outputs; gamma saturated, ``used_input("gamma", gamma)``, as limits=True evaluates it)."""
         a, dpi, r_omega = self._vertical_inputs(rl=rl, p=p, omega=omega, fx=fx, fy=fy, gamma=gamma)
         prm = self._params
         with np.errstate(all="ignore"):
