@@ -110,6 +110,13 @@ class LaneChange:
     def __init__(self, tyres: dict, params: VehicleParams | None = None, *, speed: float = 20.0,
                  length: float = 50.0, width: float = 3.5, intervals: int = 30, yaw_inertia: float | None = None):
         self.params = params or VehicleParams()
+        if not isinstance(tyres, dict) or sorted(tyres) != sorted(WHEELS):
+            raise ModelInputError(f"tyres must map each of {', '.join(WHEELS)} to an MFModel")
+        for w, model in tyres.items():
+            if not isinstance(model, MFModel):
+                raise ModelInputError(f"tyre {w} must be an MFModel, got {type(model).__name__}")
+            if model.side != ("left" if w[1] == "L" else "right"):
+                raise ModelInputError(f"tyre {w} is mounted on the {model.side} side; use model.with_side(...)")
         self.tyres = tyres
         if not intervals >= 4:
             raise ModelInputError(f"intervals must be at least 4, got {intervals!r}")

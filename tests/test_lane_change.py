@@ -108,3 +108,15 @@ def test_simple_tyre_and_routes_agree(problem, best):
     sx = problem.solve("mf", "sx")
     assert sx.success and sx.time == pytest.approx(best.time, rel=1e-6)
     assert set(WHEELS) == set(problem.tyres)
+
+
+def test_lane_change_rejects_bad_inputs(problem):
+    from mftyre.errors import ModelInputError
+
+    left = problem.tyres["FL"]
+    with pytest.raises(ModelInputError, match="FR is mounted on the left"):
+        LaneChange({"FL": left, "FR": left, "RL": left, "RR": problem.tyres["RR"]})
+    with pytest.raises(ModelInputError, match="intervals"):
+        LaneChange(problem.tyres, intervals=2)
+    with pytest.raises(ModelInputError, match="route"):
+        problem.build("mf", "fastest")
