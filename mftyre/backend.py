@@ -18,7 +18,20 @@ import numpy as np
 
 from .errors import ModelInputError
 
-__all__ = ["ExactCoefficient", "NumpyBackend", "CasadiBackend", "NUMPY", "NUMPY_FOLDING", "CASADI", "casadi_backend"]
+__all__ = ["ExactCoefficient", "NumpyBackend", "CasadiBackend", "NUMPY", "NUMPY_FOLDING", "CASADI", "casadi_backend",
+           "SMOOTH_WIDTHS"]
+
+#: The quantities whose kinks ``smooth`` rounds, each with its own width (in its unit), and the widths
+#: ``smooth=True`` uses: a width is small against the scale that matters for its quantity, yet the kink it
+#: rounds is visible to a solver at the quantity's own scale (a single 1e-6 for all left the kink at Fz = 0
+#: a step of the slope within a micronewton).
+SMOOTH_WIDTHS = {
+    "force": 1.0,   # N: the contact kink at Fz = 0, FZMIN in the aligning torque
+    "speed": 0.01,  # m/s: |Vx|, sign(Vx), the low-speed switch at VXLOW
+    "angle": 1e-4,  # rad: |gamma|, sign(alpha_r), sign(alpha_t)
+    "slip": 1e-4,   # -: sign(kappa) in E_x
+    "other": 1e-6,  # every other kink (dimensionless factors such as E <= 1, turn slip)
+}
 
 _ULP4 = 4.0 * np.finfo(float).eps  # the root searches' relative floor: 4 units in the last place
 
@@ -145,6 +158,7 @@ class NumpyBackend:
     cos = staticmethod(np.cos)
     tan = staticmethod(np.tan)
     atan = staticmethod(np.arctan)
+    tanh = staticmethod(np.tanh)
     acos = staticmethod(np.arccos)
     acosh = staticmethod(np.arccosh)
     cosh = staticmethod(np.cosh)
@@ -158,6 +172,10 @@ class NumpyBackend:
     logical_and = staticmethod(np.logical_and)
     logical_or = staticmethod(np.logical_or)
 
+    def of(self, quantity: str):
+        """The operations for kinks in ``quantity`` (see :data:`SMOOTH_WIDTHS`): the same exact ones here."""
+        return self
+
     def exact(self, value: float):
         """``value`` as a number the arithmetic may fold (with ``fold``: an :class:`ExactCoefficient` where it is 0
         or 1)."""
@@ -168,6 +186,9 @@ class NumpyBackend:
         """``values`` with every float equal to 0 or 1 as an :class:`ExactCoefficient` (for array evaluations: a
         file's unit scaling factors and zero coefficients then cost no array operation)."""
         return {k: _exact(v) if type(v) is float else v for k, v in values.items()}
+
+    #: sqrt of a quantity >= 0 (CasADi: with the derivative 0 where it is 0)
+    sqrt0 = staticmethod(np.sqrt)
 
     @staticmethod
     def cos_atan(x):
@@ -221,6 +242,13 @@ class NumpyBackend:
         if type(x) is np.ndarray:
             return np.clip(x, lo, hi)  # min(max(x, lo), hi) in one pass
         return np.minimum(np.maximum(x, lo), hi)  # (np.clip costs more on numbers)
+
+    @staticmethod
+    def saturate(x, lo, hi):
+        """x held in [lo, hi] (``lo`` None: below ``hi``), the .tir range limits (see CasADi's for the slope)."""
+        if lo is None:
+            return np.minimum(x, hi)
+        return NumpyBackend.clip(x, lo, hi)
 
     @staticmethod
     def broadcast(*values):
@@ -325,8 +353,10 @@ class NumpyBackend:
 class CasadiBackend:
     """The same operations on CasADi SX/MX expressions (fixed iteration counts for loops).
 
-    ``smooth=eps`` replaces the kinks of the equations by smooth functions, for gradient-based optimisation
-    only (the exact model is the default):
+    ``smooth`` replaces the kinks of the equations by smooth functions, for gradient-based optimisation
+    only (the exact model is the default). Each kink is rounded over a width ``eps`` in the unit of its
+    quantity (:data:`SMOOTH_WIDTHS`: force, speed, angle, slip, other): ``smooth=True`` takes those widths, a
+    mapping overrides some of them (``{"force": 10.0}``), a number uses one width for every kink:
 
     ========  =====================================  ==================================
     exact      smooth                                 largest difference
@@ -338,21 +368,23 @@ class CasadiBackend:
     max(a,b)   (a + b + sqrt((a - b)^2 + eps^2)) / 2  eps / 2 (at a = b)
     ========  =====================================  ==================================
 
-    ``eps`` is in the units of the argument (forces, angles, slips alike), so choose it small against the
-    smallest scale that matters (1e-6 is a good start). Case distinctions on conditions (below VXLOW, rolling
-    backwards, outside the .tir ranges) stay exact: keep an optimisation inside one case. The iterations
-    (spin, MF 6.2 loaded radius) always use the exact operations.
+    The low-speed switch at VXLOW (kappa and alpha scaled by min(|Vx|, VXLOW)/VXLOW) is rounded with the speed
+    width. Other case distinctions (rolling backwards, outside the .tir ranges: see ``limits="smooth"``) stay
+    exact. The iterations (spin, MF 6.2 loaded radius) always use the exact operations.
     """
 
     name = "casadi"
     pi = np.pi
-    def __init__(self, smooth: float | None = None):
+    def __init__(self, smooth: float | bool | dict | None = None):
         import casadi as ca
 
         self.ca = ca
+        self.widths = _smooth_widths(smooth)
+        smooth = None if self.widths is None else self.widths["other"]
+        self._quantities = {}
         self.smooth = smooth
         self.sin, self.cos, self.tan = ca.sin, ca.cos, ca.tan
-        self.atan, self.acos = ca.atan, ca.acos
+        self.atan, self.acos, self.tanh = ca.atan, ca.acos, ca.tanh
         self.acosh, self.cosh = ca.acosh, ca.cosh
         self.sqrt, self.exp = ca.sqrt, ca.exp
         self.logical_and, self.logical_or = ca.logic_and, ca.logic_or
@@ -360,8 +392,6 @@ class CasadiBackend:
             self.abs, self.sign = ca.fabs, ca.sign
             self.fmin, self.fmax = ca.fmin, ca.fmax
         else:
-            if not smooth > 0:
-                raise ValueError(f"smooth must be a positive number, got {smooth!r}")
             e2 = float(smooth) ** 2
             self.abs = lambda x: ca.sqrt(x * x + e2)
             self.sign = lambda x: x / ca.sqrt(x * x + e2)
@@ -371,6 +401,15 @@ class CasadiBackend:
     def log10(self, x):
         return self.ca.log(x) / np.log(10.0)
 
+    def of(self, quantity: str):
+        """The operations for kinks in ``quantity`` (a key of :data:`SMOOTH_WIDTHS`), rounded over its width."""
+        if self.widths is None:
+            return self
+        if quantity not in self._quantities:
+            width = self.widths[quantity]
+            self._quantities[quantity] = self if width == self.smooth else CasadiBackend(width)
+        return self._quantities[quantity]
+
     @staticmethod
     def exact(value: float) -> float:
         """``value`` (CasADi folds 0 and 1 itself)."""
@@ -379,6 +418,14 @@ class CasadiBackend:
     def cos_atan(self, x):
         """cos(atan(x)) = 1 / sqrt(1 + x^2)."""
         return 1.0 / self.ca.sqrt(1.0 + x * x)
+
+    def sqrt0(self, square):
+        """sqrt of a quantity >= 0 (a speed sqrt(Vx^2 + Vsy^2), a load ratio Fz/Fz0) with the derivative 0 where it
+        is 0: there sqrt's infinite slope times the quantity's zero slope would make NaN of every derivative
+        through it (the derivative of Fz sqrt(Fz/Fz0) at Fz = 0 is 0 indeed)."""
+        ca = self.ca
+        positive = square > 0
+        return ca.if_else(positive, ca.sqrt(ca.if_else(positive, square, 1.0)), 0.0)
 
     @staticmethod
     def any(cond) -> bool:
@@ -398,6 +445,13 @@ class CasadiBackend:
 
     def clip(self, x, lo, hi):
         return self.fmin(self.fmax(x, lo), hi)
+
+    def saturate(self, x, lo, hi):
+        """x held in [lo, hi] (``lo`` None: below ``hi``), exact also with ``smooth``, with the slope 1 up to and at
+        the bounds (one-sided, from inside: fmin/fmax would give 1/2 there) and 0 strictly beyond them."""
+        ca = self.ca
+        held = ca.if_else(x > hi, hi, x)
+        return held if lo is None else ca.if_else(x < lo, lo, held)
 
     @staticmethod
     def broadcast(*values):
@@ -446,6 +500,26 @@ def __getattr__(name):  # lazy CASADI so that importing mftyre does not import c
     raise AttributeError(name)
 
 
-def casadi_backend(smooth: float | None = None) -> CasadiBackend:
+def _smooth_widths(smooth) -> dict | None:
+    """The width of every quantity for ``smooth`` (None, True, a positive number or a partial mapping)."""
+    if smooth is None or smooth is False:
+        return None
+    if smooth is True:
+        return dict(SMOOTH_WIDTHS)
+    if isinstance(smooth, dict):
+        unknown = sorted(set(smooth) - set(SMOOTH_WIDTHS))
+        if unknown:
+            raise ValueError(f"smooth: unknown quantities {unknown}; they are {', '.join(SMOOTH_WIDTHS)}")
+        widths = {**SMOOTH_WIDTHS, **smooth}
+    else:
+        widths = dict.fromkeys(SMOOTH_WIDTHS, smooth)
+    for quantity, width in widths.items():
+        if isinstance(width, bool) or not isinstance(width, (int, float)) or not width > 0:
+            raise ValueError(f"smooth must be True, a positive number or a mapping of quantities to positive "
+                             f"widths; got {width!r} for {quantity!r}")
+    return {k: float(v) for k, v in widths.items()}
+
+
+def casadi_backend(smooth: float | bool | dict | None = None) -> CasadiBackend:
     """The exact CasADi backend, or a smoothed one (see :class:`CasadiBackend`)."""
-    return __getattr__("CASADI") if smooth is None else CasadiBackend(smooth)
+    return __getattr__("CASADI") if smooth is None or smooth is False else CasadiBackend(smooth)

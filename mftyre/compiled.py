@@ -712,9 +712,13 @@ def compile_external(model, inputs=("fz", "kappa", "alpha"), outputs=("fx", "fy"
     """A ``casadi.Function`` of the model, compiled to C with its derivatives, for optimal control.
 
     ``model.casadi_function(inputs, outputs, **options)`` (e.g. ``fixed=``, ``smooth=``, ``limits=``) is written
-    by CasADi's code generator together with its Jacobian (``jac_<name>``) and, with ``hessian=True``, the
-    Jacobian of that (``jac_jac_<name>``: the second derivatives an exact-Hessian IPOPT needs), compiled once
-    (cached like :func:`compile_model`) and loaded with ``casadi.external``. Call it in an MX or SX graph as
+    by CasADi's code generator together with its Jacobian (``jac_<name>``) and, with ``hessian=True``, its
+    adjoint (``adj1_<name>``, lambda^T J) and the Jacobian of that (``jac_adj1_<name>``: the Hessian of the
+    Lagrangian an exact-Hessian IPOPT needs; 17 % less time per lane-change iteration than the Jacobian of the
+    Jacobian, benchmarks/bench_ocp.py), compiled once (cached like :func:`compile_model`) and loaded with
+    ``casadi.external``. ``hessian=False``: second derivatives, where a solver asks for them (IPOPT's exact
+    mode), by finite differences of the compiled Jacobian (3x the time per iteration of ``hessian=True``); with
+    IPOPT's ``hessian_approximation="limited-memory"`` none are asked for (cheap iterations, many more of them). Call it in an MX or SX graph as
     any CasADi function: the optimiser then evaluates compiled C for the tyre and its derivatives, and the
     problem's own graph stays small (no need to generate and compile C for the whole problem).
     ``limits=True`` (the default) saturates slip, camber and pressure to the .tir ranges: beyond them, and at
@@ -733,9 +737,12 @@ def compile_external(model, inputs=("fz", "kappa", "alpha"), outputs=("fx", "fy"
         f = model.casadi_function(inputs, outputs, name=name, **options)
         sx = f.sx_in()
         f = ca.Function(name, sx, f.call(sx), f.name_in(), f.name_out(), {"cse": True})
-        jac = f.jacobian()
         gen = ca.CodeGenerator("mftyre_ext.c", {"with_header": False})
-        for g in (f, jac, jac.jacobian()) if hessian else (f, jac):
+        # second derivatives as the Jacobian of the adjoint (reverse) function, i.e. of lambda^T J: the Hessian of
+        # the Lagrangian weighted by the outputs' multipliers, n_in^2 + n_in n_out entries where the Jacobian of
+        # the Jacobian has n_out n_in^2 (and costs 4x as much per point)
+        derivatives = (f.jacobian(), f.reverse(1), f.reverse(1).jacobian()) if hessian else (f.jacobian(),)
+        for g in (f, *derivatives):
             gen.add(g)
         meta = {"inputs": list(f.name_in()), "outputs": list(f.name_out()), "checks": [], "toolchain": "casadi",
                 "function": name, "hessian": hessian}
@@ -743,5 +750,5 @@ def compile_external(model, inputs=("fz", "kappa", "alpha"), outputs=("fx", "fy"
         return Path(gen.generate(str(folder) + os.sep)), flags, ("-lm",), meta
 
     library = cached_library("mftyre_ext", key, generate, directory)
-    with CASADI_LOCK:
-        return ca.external(name, str(library))
+    with CASADI_LOCK:  # without the Hessian: second derivatives (where asked for) by differences of the Jacobian
+        return ca.external(name, str(library), {} if hessian else {"enable_fd": True, "jacobian_options": {"enable_fd": True}, "der_options": {"enable_fd": True}})

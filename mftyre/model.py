@@ -179,8 +179,9 @@ class MFModel:
         input outside its range, the range and how many points were outside it (as MFeval reports them, the
         output p is the pressure used, kappa and alpha the low-speed-scaled slips before saturation, gamma and
         fz as given: see OUTPUT_UNITS; ``mftyre eval``'s NAME_used columns show the saturated values). ``limits=False`` evaluates the equations at the inputs as given,
-        extrapolating beyond the fitted ranges, with no low-speed model. ``limits="smooth"`` saturates with a
-        1 % slope left beyond the ranges (for optimisers, see :class:`mftyre.formula.Modes`).
+        extrapolating beyond the fitted ranges, with no low-speed model. ``limits="smooth"`` (for decision
+        variables of optimisers) is the identity inside the ranges and saturates softly beyond them, with the full
+        slope a hair outside and 1 % left far outside (see :class:`mftyre.formula.Modes`).
         """
         modes = Modes(limits=limits, alpha_star=alpha_star, turn_slip=turn_slip, turn_slip_form=turn_slip_form)
         prm = self._params
@@ -276,7 +277,7 @@ class MFModel:
     def casadi_function(self, inputs=("fz", "kappa", "alpha", "gamma", "phit", "vx", "p"), outputs=OUTPUT_NAMES,
                         *, turn_slip: bool = False, alpha_star: bool = False, limits: bool | str = True,
                         turn_slip_form: str = "published", fixed: dict | None = None, parameters=(),
-                        smooth: float | None = None, name: str = "mftyre"):
+                        smooth: float | bool | dict | None = None, name: str = "mftyre"):
         """A ``casadi.Function`` of the same equations, built from ``casadi.SX`` scalars.
 
         ``inputs``: the symbolic inputs, any of fz kappa alpha gamma phit vx p omega, as the first arguments in
@@ -288,12 +289,16 @@ class MFModel:
         equations (FITTYP, FZMIN, QSX1-QSX14, Q_CAM1, Q_CAM2, Q_A1, Q_A2, PHYP4, TYRESIDE) must stay numbers.
         ``outputs``: any of :data:`OUTPUT_NAMES`; the echoed inputs are named ``kappa_used``, ``alpha_used``...
         in the function (CasADi needs distinct input and output names).
-        ``smooth``: None for the exact model, or eps > 0 for smooth kinks (see
-        :class:`mftyre.backend.CasadiBackend`); outputs stay finite at any finite input, a negative Fz included.
-        ``limits``: True saturates the inputs to the .tir ranges, so every derivative with respect to an input
-        beyond its range is exactly zero (and at Fz <= 0 the forces and their derivatives are zero: no contact);
-        an optimiser that may step outside the ranges should use ``limits="smooth"`` (1 % of the slope kept
-        beyond the ranges, derivatives non-zero) together with ``smooth=1e-6``; False extrapolates.
+        ``smooth``: None for the exact model; True rounds every kink over a width of its own quantity
+        (:data:`mftyre.backend.SMOOTH_WIDTHS`: force 1 N (the contact at Fz = 0), speed 0.01 m/s (|Vx| and the
+        low-speed switch at VXLOW), angle and slip 1e-4, other 1e-6), a mapping overrides some widths
+        (``{"force": 10.0}``), a number is one width for all (see :class:`mftyre.backend.CasadiBackend`); outputs
+        stay finite at any finite input, a negative Fz included.
+        ``limits``: True saturates the inputs to the .tir ranges: the full derivative up to and at a bound
+        (one-sided), exactly zero beyond it (and at Fz <= 0 the forces and their derivatives are zero: no
+        contact); decision variables of an optimiser (a pressure bounded by PRESMIN..PRESMAX: an interior-point
+        solver ends a hair outside an active bound) need ``limits="smooth"``: the full slope a hair outside, a
+        soft saturation fading to 1 % further out (:class:`mftyre.formula.Modes`); False extrapolates.
         The MF 6.2 loaded radius is solved with up to 8 bracket-widening and 16 Dekker steps and a final
         Newton step, so its derivatives are those of the implicit function. Evaluate many points with
         ``f.map(n)``; :mod:`mftyre.compiled` compiles the function to C.
@@ -333,7 +338,9 @@ class MFModel:
     # ---------------------------------------------------------------------------------------- vertical
     def vertical_force(self, rl, p=None, omega=0.0, fx=0.0, fy=0.0, gamma=0.0):
         """Fz [N] at loaded radius ``rl`` [m]: the MF 6.1 load-deflection relation (A3.3) with rho = R_omega -
-        Rl, or for FITTYP 62 the MF 6.2 relation with camber, Fx/Fy and speed terms; bottoming included."""
+        Rl, or for FITTYP 62 the MF 6.2 relation with camber, Fx/Fy and speed terms; bottoming included. No
+        limits apply: to check the ``rl`` of :meth:`evaluate` pass the inputs it used (``p``, ``omega``, forces
+        from its outputs; gamma saturated, ``used_input("gamma", gamma)``, as limits=True evaluates it)."""
         a, dpi, r_omega = self._vertical_inputs(rl=rl, p=p, omega=omega, fx=fx, fy=fy, gamma=gamma)
         prm = self._params
         with np.errstate(all="ignore"):

@@ -211,6 +211,9 @@ class MaxLateralResult:
     pressures_optimised: bool
     stats: SolverStats
     active_bounds: tuple = ()      #: bounds active at the optimum (steer lock, slip-angle trust region, PRESMIN...)
+    #: with optimised pressures: d(ay/g)/dp [1/Pa] of the front and rear pressure at their optimum from IPOPT's
+    #: multipliers of the PRESMIN..PRESMAX bounds: what moving an active bound would gain (0 where inactive)
+    pressure_sensitivity: tuple = ()
 
     @property
     def ay_g(self) -> float:
@@ -325,7 +328,7 @@ class Vehicle:
                                       f"model.with_side({_MOUNT[w]!r}) so that left and right are mirror images")
         self.tyres = {w: tyres[w] for w in WHEELS}
         self.limits = limits
-        self._casadi_tyres = None
+        self._casadi_tyres = {}  # limits mode -> {wheel: casadi.Function}
         self._opti_cache = {}
         self._rootfinder = None
 
@@ -353,21 +356,23 @@ class Vehicle:
         return pf, pr
 
     # ------------------------------------------------------------------------------------ equations
-    def _tyre_forces(self, wheel, fz, kappa, alpha, vx, p, symbolic):
+    def _tyre_forces(self, wheel, fz, kappa, alpha, vx, p, symbolic, limits=None):
         if symbolic:
-            if self._casadi_tyres is None:
-                self._casadi_tyres = {
+            limits = self.limits if limits is None else limits
+            if limits not in self._casadi_tyres:
+                self._casadi_tyres[limits] = {
                     w: t.casadi_function(inputs=("fz", "kappa", "alpha", "vx", "p"), outputs=("fx", "fy", "mz"),
-                                         limits=self.limits, name=f"tyre_{w}")
+                                         limits=limits, name=f"tyre_{w}")
                     for w, t in self.tyres.items()}
-            fx, fy, mz = self._casadi_tyres[wheel](fz, kappa, alpha, vx, p)
+            fx, fy, mz = self._casadi_tyres[limits][wheel](fz, kappa, alpha, vx, p)
             return fx, fy, mz
         out = self.tyres[wheel].evaluate(fz, kappa, alpha, vx=vx, p=p, limits=self.limits)
         return out.fx, out.fy, out.mz
 
-    def wheel_states(self, V, delta, beta, r, kappa, p_front=None, p_rear=None) -> dict:
+    def wheel_states(self, V, delta, beta, r, kappa, p_front=None, p_rear=None, *, tyre_limits=None) -> dict:
         """Per-wheel kinematics, loads and forces (NumPy arrays, broadcast; or CasADi expressions).
 
+        ``tyre_limits``: the symbolic tyres' ``limits`` mode (default: the vehicle's ``limits``).
         Returns ``{wheel: {vx, vy (wheel axes), alpha, kappa, fz, fx, fy, mz (wheel axes), Fx, Fy (body axes),
         x, y}}`` plus ``"total": {FX, FY}`` (the ground forces equilibrium requires).
         """
@@ -403,7 +408,7 @@ class Vehicle:
             vyw = -vx * sd + vy * cd
             alpha = m.atan(vyw / vxw)
             p = p_front if front else p_rear
-            fx, fy, mz = self._tyre_forces(w, fz[w], k, alpha, vxw, p, symbolic)
+            fx, fy, mz = self._tyre_forces(w, fz[w], k, alpha, vxw, p, symbolic, tyre_limits)
             states[w] = dict(x=x, y=y, vx=vxw, vy=vyw, alpha=alpha, kappa=k, fz=fz[w], p=p, fx=fx, fy=fy, mz=mz,
                              Fx=fx * cd - fy * sd, Fy=fx * sd + fy * cd)
         states["total"] = dict(FX=FX, FY=FY)
@@ -542,12 +547,18 @@ class Vehicle:
             p_scale = 1e5                            # pressures in bar inside the NLP
             pv = opti.variable(2)
             p_lo, p_hi = self.pressure_bounds()
-            opti.subject_to(opti.bounded(p_lo / p_scale, pv, p_hi / p_scale))
+            pressure_bounds = (pv >= p_lo / p_scale, pv <= p_hi / p_scale)
+            opti.subject_to(pressure_bounds[0])
+            opti.subject_to(pressure_bounds[1])
         else:
             p_scale = 1.0
             pv = opti.parameter(2)
+            pressure_bounds = None
         delta, beta, r, kappa = x[0], x[1], x[2], x[3]
-        s = self.wheel_states(V, delta, beta, r, kappa, pv[0] * p_scale, pv[1] * p_scale)
+        # pressures as decision variables: limits="smooth" gives them the full slope at and a hair beyond their
+        # bounds (IPOPT relaxes bounds by ~1e-8), where True's saturation would leave them none
+        tyre_limits = "smooth" if optimise_pressures and self.limits is True else self.limits
+        s = self.wheel_states(V, delta, beta, r, kappa, pv[0] * p_scale, pv[1] * p_scale, tyre_limits=tyre_limits)
         opti.minimize(-sign * V * r / P.g)
         opti.subject_to(self._residuals_of(s) / self._scales() == 0)
         opti.subject_to(opti.bounded(-P.max_steer, delta, P.max_steer))
@@ -560,7 +571,7 @@ class Vehicle:
         options = {"print_level": 0, "tol": 1e-10, "acceptable_tol": 1e-8, "max_iter": 200, "sb": "yes"}
         options.update(ipopt_options or {})
         opti.solver("ipopt", {"expand": True, "print_time": False}, options)
-        return SimpleNamespace(opti=opti, x=x, V=V, pv=pv, p_scale=p_scale)
+        return SimpleNamespace(opti=opti, x=x, V=V, pv=pv, p_scale=p_scale, pressure_bounds=pressure_bounds)
 
     def max_lateral_acceleration(self, V, pressures=None, *, turn: str = "left", x0=None,
                                  slip_angle_max: float | None = 0.35, starts=(0.5, 0.7, 0.3),
@@ -612,7 +623,13 @@ class Vehicle:
                 sol = opti.solve()
                 values, pvals = sol.value(prob.x), sol.value(prob.pv)
             except RuntimeError:  # not converged: keep the last iterate and the solver's status
-                values, pvals = opti.debug.value(prob.x), opti.debug.value(prob.pv)
+                sol = opti.debug
+                values, pvals = sol.value(prob.x), sol.value(prob.pv)
+            # the multipliers (>= 0) of p >= PRESMIN and p <= PRESMAX: d(-ay/g)/d(bound) is +lower, -upper (pressures
+            # in units of p_scale inside the NLP)
+            sensitivity = (tuple(float(v) for v in (np.ravel(sol.value(opti.dual(prob.pressure_bounds[1])))
+                                  - np.ravel(sol.value(opti.dual(prob.pressure_bounds[0])))) / prob.p_scale)
+                           if optimise else ())
             wall += time.perf_counter() - t0
             st = opti.stats()
             iters += int(st.get("iter_count", 0))
@@ -628,7 +645,7 @@ class Vehicle:
         state = self.state(V, *values, pvals[0], pvals[1], stats=stats)
         active = self._active_bounds(state, optimise, slip_angle_max)
         return MaxLateralResult(ay=state.ay, state=state, pressures_optimised=optimise, stats=stats,
-                                active_bounds=active)
+                                active_bounds=active, pressure_sensitivity=sensitivity)
 
     def _active_bounds(self, state, optimise, slip_angle_max, tol=1e-6):
         P = self.params

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import mftyre
+from mftyre.backend import SMOOTH_WIDTHS
 
 from conftest import TIR_FILES
 
@@ -63,3 +64,56 @@ def test_limits_option_is_validated():
     model = mftyre.load_tir(FILES[0])
     with pytest.raises(ValueError, match="limits"):
         model.evaluate(4000.0, 0.0, 0.0, limits="soft")
+
+
+def _derivative(model, name, outputs, fixed, **kw):
+    """d(outputs)/d(name) as a function of input ``name`` with the other inputs fixed."""
+    f = model.casadi_function((name,), outputs, fixed=fixed, **kw)
+    x = ca.SX.sym(name)
+    y = ca.vertcat(*f.call([x]))
+    return ca.Function("derivative", [x], [y, ca.jacobian(y, x)])
+
+
+@pytest.mark.parametrize("path", FILES, ids=["mf61", "mf62"])
+def test_smooth_widths_per_quantity_round_the_contact_and_low_speed_kinks(path):
+    """smooth=True rounds each kink over the width of its own quantity (mftyre.backend.SMOOTH_WIDTHS): the slope
+    of Fy in Fz changes gradually through Fz = 0 (1 N wide; one width of 1e-6 for every quantity left a step of
+    the whole slope within a micronewton), the slope of Fx in Vx through the low-speed switch at VXLOW (a kink
+    of the exact model, 1 cm/s wide); away from the kinks the model is the exact one (angles and slips rounded
+    over 1e-4 rad, not over the force width: 1e-4 relative)."""
+    model = mftyre.load_tir(path)
+    prm = model.params
+    common = dict(kappa=0.02, alpha=0.05, gamma=0.02, phit=0.0, p=prm.NOMPRES)
+    d_fz = _derivative(model, "fz", ("fy",), {**common, "vx": 20.0}, smooth=True)
+    loads = np.linspace(-3.0, 3.0, 61)
+    slopes = np.array([float(d_fz(v)[1]) for v in loads])
+    full = float(d_fz(3.0 * SMOOTH_WIDTHS["force"] + 50.0)[1])
+    assert np.all(np.abs(np.diff(slopes)) <= 0.1 * abs(full)), np.diff(slopes)
+    d_vx = _derivative(model, "vx", ("fx", "fy"), {**common, "fz": 4000.0}, smooth=True)
+    exact_vx = _derivative(model, "vx", ("fx", "fy"), {**common, "fz": 4000.0})
+    step = 1e-4
+    below, above = (np.array(d_vx(prm.VXLOW + d)[1]).ravel() for d in (-step, step))
+    exact_below, exact_above = (np.array(exact_vx(prm.VXLOW + d)[1]).ravel() for d in (-step, step))
+    kink = np.abs(exact_above - exact_below)
+    assert np.all(kink > 1.0)  # the exact model's slope jumps at VXLOW
+    assert np.all(np.abs(above - below) < 0.1 * kink)
+    # away from the kinks: the exact model
+    smooth_f = model.casadi_function(INPUTS, ("fx", "fy", "mz"), smooth=True)
+    exact_f = model.casadi_function(INPUTS, ("fx", "fy", "mz"))
+    point = [4000.0, 0.02, 0.05, 0.02, 0.0, 20.0, prm.NOMPRES]
+    np.testing.assert_allclose(np.array(ca.vertcat(*smooth_f(*point))).ravel(),
+                               np.array(ca.vertcat(*exact_f(*point))).ravel(), rtol=1e-4)
+
+
+def test_smooth_widths_are_validated_and_partial_mappings_keep_the_defaults():
+    model = mftyre.load_tir(FILES[0])
+    for bad in ({"load": 1.0}, {"force": -1.0}, 0.0, "1e-6"):
+        with pytest.raises(ValueError, match="smooth"):
+            model.casadi_function(("fz",), ("fy",), fixed={"kappa": 0.0, "alpha": 0.05}, smooth=bad)
+    d_default = _derivative(model, "fz", ("fy",), {"kappa": 0.0, "alpha": 0.05}, smooth=True)
+    d_wide = _derivative(model, "fz", ("fy",), {"kappa": 0.0, "alpha": 0.05}, smooth={"force": 100.0})
+    # the slope at Fz = 0 is half the slope beyond the kink for either width; 20 N away the narrow one is full
+    for d in (d_default, d_wide):
+        assert float(d(0.0)[1]) == pytest.approx(0.5 * float(d(1000.0)[1]), rel=0.05)
+    assert float(d_default(20.0)[1]) == pytest.approx(float(d_default(1000.0)[1]), rel=0.05)
+    assert abs(float(d_wide(20.0)[1])) < 0.7 * abs(float(d_wide(1000.0)[1]))

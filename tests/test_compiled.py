@@ -312,6 +312,36 @@ def test_external_function_inside_ipopt(tmp_path):
     assert float(out.fx) == pytest.approx(1500.0, abs=1e-6) and float(out.fy) == pytest.approx(-2500.0, abs=1e-6)
 
 
+@pytest.mark.parametrize("hessian, approximation", [(True, "exact"), (False, "exact"), (False, "limited-memory")])
+def test_external_function_with_or_without_hessian_inside_ipopt(tmp_path, hessian, approximation):
+    """compile_external(hessian=False) works in IPOPT's exact-Hessian mode (second derivatives by differences of the
+    compiled Jacobian; it failed at construction: 'Failed to create nlp_hess_l') and with its limited-memory
+    quasi-Newton, and reaches the optimum of hessian=True (which carries the Jacobian of the adjoint, the
+    Hessian of the Lagrangian, exact)."""
+    import casadi as ca
+
+    model = mftyre.load_tir(TIR_FILES / FILES["mf61"])
+    ext = compile_external(model, ("kappa", "alpha"), ("fx", "fy"), hessian=hessian, directory=tmp_path,
+                           fixed={"fz": 4000.0}, name="tyre4k")
+    w = ca.MX.sym("w", 2)
+    fx, fy = ext(w[0], w[1])
+    solver = ca.nlpsol("s", "ipopt", {"x": w, "f": w[0] ** 2 + w[1] ** 2, "g": ca.vertcat(fx - 1500.0, fy + 2500.0)},
+                       {"ipopt.print_level": 0, "print_time": 0, "ipopt.hessian_approximation": approximation})
+    sol = solver(x0=[0.01, 0.01], lbg=0, ubg=0, lbx=[-0.2, -0.2], ubx=[0.2, 0.2])
+    assert solver.stats()["success"]
+    kappa, alpha = np.array(sol["x"]).ravel()
+    out = model.evaluate(4000.0, kappa, alpha)
+    assert float(out.fx) == pytest.approx(1500.0, abs=1e-5) and float(out.fy) == pytest.approx(-2500.0, abs=1e-5)
+    # the same point as the exact-derivative route of the SX function
+    f = model.casadi_function(("kappa", "alpha"), ("fx", "fy"), fixed={"fz": 4000.0})
+    fx_s, fy_s = f(w[0], w[1])
+    exact = ca.nlpsol("e", "ipopt", {"x": w, "f": w[0] ** 2 + w[1] ** 2, "g": ca.vertcat(fx_s - 1500.0, fy_s + 2500.0)},
+                      {"ipopt.print_level": 0, "print_time": 0})
+    np.testing.assert_allclose(np.array(sol["x"]).ravel(),
+                               np.array(exact(x0=[0.01, 0.01], lbg=0, ubg=0, lbx=[-0.2, -0.2], ubx=[0.2, 0.2])["x"]).ravel(),
+                               rtol=1e-7, atol=1e-10)
+
+
 @pytest.mark.parametrize("table, tir", [("mf61_random", "MagicFormula61_Parameters.tir"),
                                         ("mf62_random", "MagicFormula62_Parameters.tir")])
 def test_compiled_reproduces_reference_tables(mfeval_dir, tmp_path, table, tir):

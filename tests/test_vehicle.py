@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import TIR_FILES
+from conftest import MFEVAL_DIR, TIR_FILES, require_shared
 
 casadi = pytest.importorskip("casadi")
 
@@ -19,6 +19,7 @@ from mftyre.vehicle import (WHEELS, Vehicle, VehicleParams, brute_force_braking_
                             optimal_braking_slip)
 
 TIR = TIR_FILES / "car_205_60R15_mf61.tir"
+MFEVAL_61 = MFEVAL_DIR / "MagicFormula61_Parameters.tir"
 V = 20.0
 
 
@@ -80,6 +81,62 @@ def test_optimised_pressure_optimum_is_a_steady_state_maximum(car, max_optimised
     """At the optimal pressures, the independent search finds the same ay."""
     brute = car.brute_force_max_lateral_acceleration(V, (max_optimised.p_front, max_optimised.p_rear))
     assert max_optimised.ay == pytest.approx(brute.ay, rel=5e-3)
+
+
+@pytest.mark.parametrize("limits", [True, "smooth"])
+def test_pressure_has_its_full_slope_up_to_and_at_its_bounds(limits):
+    """Inside PRESMIN..PRESMAX, the bounds included, an input is the identity with its full (one-sided) slope:
+    dFy/dp equals that of limits=False (fmin/fmax gave half of it at the bound). Beyond: True saturates (slope 0);
+    "smooth" keeps the full slope a hair outside (an interior-point solver's bound relaxation: 1e-8) and a slope
+    that fades to 1 % further out, continuous in value and slope at the bound."""
+    model = mftyre.load_tir(TIR)
+    prm = model.params
+
+    def dfy_dp(lim):
+        p = casadi.SX.sym("p")
+        fy = model.casadi_function(("fz", "kappa", "alpha", "p"), ("fy",), limits=lim)(4000.0, 0.02, 0.05, p)
+        return casadi.Function("dfy", [p], [fy, casadi.jacobian(fy, p)])
+
+    free, limited = dfy_dp(False), dfy_dp(limits)
+    for bound, outward in ((prm.PRESMIN, -1.0), (prm.PRESMAX, 1.0)):
+        for p in (bound - outward * 1e3, bound):
+            assert float(limited(p)[1]) == pytest.approx(float(free(p)[1]), rel=1e-12), (bound, p)
+        hair = bound * (1.0 + outward * 1e-8)
+        far = bound + outward * 0.2 * (prm.PRESMAX - prm.PRESMIN)
+        value, slope = (float(v) for v in limited(hair))
+        if limits is True:
+            assert slope == 0.0 and value == float(free(bound)[0])
+        else:
+            assert slope == pytest.approx(float(free(bound)[1]), rel=1e-6)
+            assert value == pytest.approx(float(free(hair)[0]), rel=1e-9)
+            far_slope = float(limited(far)[1])
+            assert 0.0 < far_slope / float(free(bound)[1]) < 0.05
+
+
+@pytest.mark.parametrize("tir, ipopt_options", [(TIR, {}), (TIR, {"tol": 1e-12}),
+                                                 (TIR, {"tol": 1e-8, "acceptable_tol": 1e-6}),
+                                                 (MFEVAL_61, {}), (MFEVAL_61, {"tol": 1e-12})],
+                         ids=["bound", "bound-tol1e-12", "bound-ipopt-defaults", "interior", "interior-tol1e-12"])
+def test_optimal_pressures_converge_with_true_multipliers(tir, ipopt_options):
+    """The pressure design problem converges at any IPOPT tolerance (at 1e-12 the old saturation ran 600
+    iterations to Maximum_Iterations_Exceeded; at IPOPT's default 1e-8 it took 160): an optimum at PRESMIN (the
+    sample car file) and an interior one (the reference evaluator's MF 6.1 file). The bound multipliers are the
+    sensitivities d(ay/g)/dp a one-sided finite difference of the fixed-pressure optimum gives."""
+    car = Vehicle.from_tir(require_shared(tir))
+    lo, hi = car.pressure_bounds()
+    best = car.max_lateral_acceleration(V, pressures="optimise", ipopt_options=ipopt_options)
+    assert best.stats.success and best.stats.iterations <= 40, best.stats
+    h = 2e-3 * (hi - lo)
+    for k, (p, name) in enumerate(((best.p_front, "front"), (best.p_rear, "rear"))):
+        at_bound = p <= lo + 1.0
+        assert at_bound == (tir == TIR), (name, p)
+        if not at_bound:
+            assert abs(best.pressure_sensitivity[k]) < 1e-10
+            continue
+        moved = [best.p_front, best.p_rear]
+        moved[k] = lo + h
+        fd = (car.max_lateral_acceleration(V, pressures=tuple(moved)).ay_g - best.ay_g) / h
+        assert best.pressure_sensitivity[k] == pytest.approx(fd, rel=0.02), name
 
 
 # --------------------------------------------------------------------------------------------- (c) braking slip

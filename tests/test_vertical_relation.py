@@ -9,6 +9,8 @@ above the free radius is the first one. NumPy and CasADi alike; the CasADi deriv
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -380,3 +382,70 @@ def test_numpy_loaded_radius_converged_in_rl(key):
     carried = (np.abs(value) <= 1e-9 * np.maximum(fz, 1.0)) & (slope != 0)
     assert carried.sum() > 0.9 * n
     assert np.max(np.abs(value / np.where(carried, slope, 1.0))[carried]) <= 1e-13
+
+
+@pytest.mark.parametrize("key", list(FILES))
+def test_loaded_radius_across_bottoming_onset_with_large_side_force(key, tmp_path):
+    """Across the bottoming onset (Rl within 4 mm of RIM_RADIUS + BOTTOM_OFFST, where the slope of Fz(Rl) jumps
+    by BOTTOM_STIFF) with |Fy| up to FZMAX, |Fx| up to FZMAX/2, any spin, pressure and camber in range: the load
+    the relation gives at a chosen Rl is carried by the Rl that NumPy, CasADi and the compiled C return (1e-9
+    relative), and the three agree with that Rl."""
+    import casadi as ca
+
+    from mftyre.backend import casadi_backend
+    from mftyre.compiled import CompiledFunction, compile_function
+
+    prm = _model(key).params
+    rng = np.random.default_rng(11)
+    n = 3000
+    omega = rng.uniform(0.0, 250.0, n)
+    dpi = rng.uniform(prm.PRESMIN, prm.PRESMAX, n) / prm.NOMPRES - 1.0
+    gamma = rng.uniform(prm.CAMMIN, prm.CAMMAX, n)
+    fy = rng.uniform(-1.0, 1.0, n) * prm.FZMAX
+    fx = rng.uniform(-0.5, 0.5, n) * prm.FZMAX
+    onset = prm.RIM_RADIUS + prm.BOTTOM_OFFST
+    rl_chosen = onset + rng.uniform(-0.004, 0.004, n)
+    r_omega = vertical.free_radius(prm, omega, NUMPY)
+    fz = vertical.vertical_force_62(prm, rl_chosen, r_omega, omega, fx, fy, gamma, dpi, NUMPY)
+    keep = fz > 100.0  # (a side force far beyond the friction limit may leave the relation no load there)
+    assert keep.sum() > 0.8 * n
+    assert np.sum(rl_chosen[keep] < onset) > 0.3 * n and np.sum(rl_chosen[keep] > onset) > 0.3 * n
+    fz, omega, dpi, gamma, fx, fy, rl_chosen, r_omega = (v[keep] for v in (fz, omega, dpi, gamma, fx, fy, rl_chosen,
+                                                                          r_omega))
+    inputs = (fz, omega, fx, fy, gamma, dpi)
+
+    def carried(rl):
+        back = vertical.vertical_force_62(prm, rl, r_omega, omega, fx, fy, gamma, dpi, NUMPY)
+        return np.abs(back - fz) <= 1e-9 * fz
+
+    rl_numpy, _ = vertical.loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, NUMPY)
+    be = casadi_backend()
+    symbols = [ca.SX.sym(name) for name in ("fz", "omega", "fx", "fy", "gamma", "dpi")]
+    rl_s, _ = vertical.loaded_radius_62(prm, symbols[0], vertical.free_radius(prm, symbols[1], be), *symbols[1:], be)
+    function = ca.Function("rl", symbols, [rl_s], ["fz", "omega", "fx", "fy", "gamma", "dpi"], ["rl"])
+    rl_casadi = np.array(function.map(fz.size)(*inputs)).ravel()
+    library = compile_function(function, f"bottoming-onset-{key}", directory=tmp_path)
+    (rl_c,) = CompiledFunction(library).batch(*inputs)
+    for rl in (rl_numpy, rl_casadi, rl_c):
+        assert carried(rl).all(), np.c_[inputs][~carried(rl)][:3]
+        np.testing.assert_allclose(rl, rl_chosen, rtol=0, atol=1e-9 * prm.UNLOADED_RADIUS)
+
+
+@pytest.mark.parametrize("turn_slip", [False, True])
+def test_issue_points_in_bottoming_carry_the_load_at_the_camber_used(turn_slip):
+    """The two points of issue #24 (15.5 and 15.8 kN, |Fy| ~ 11 kN, Rl in the bottoming region of the reference
+    evaluator's MF 6.2 sample): with limits=True the camber is saturated to CAMMIN..CAMMAX, and the Rl returned
+    carries the load with that camber, the spin, forces and pressure used (the 13.9 kN of the issue came from the
+    unsaturated camber, which the relation was never solved for); with limits=False the root at the given camber."""
+    model = _model("mfeval_mf62")
+    points = [(15480.0, 0.0458, -0.6208, 0.1144, 25.02, 2.878e5), (15846.0, 0.0047, 0.3162, -0.1165, 12.47, 2.276e5)]
+    onset = model.params.RIM_RADIUS + model.params.BOTTOM_OFFST
+    for fz, kappa, alpha, gamma, vx, p in points:
+        for limits in (True, False):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", mftyre.InputClippedWarning)
+                out = model.evaluate(fz, kappa, alpha, gamma, 0.0, vx, p, limits=limits, turn_slip=turn_slip)
+            used = model.used_input("gamma", gamma) if limits else gamma
+            assert float(out.rl) < onset  # bottoming
+            back = model.vertical_force(out.rl, p=out.p, omega=out.omega, fx=out.fx, fy=out.fy, gamma=used)
+            assert float(back) == pytest.approx(fz, rel=1e-9)

@@ -39,7 +39,7 @@ def aligning_coefficients(prm, s, lat, gyk, modes, be) -> SimpleNamespace:
     zeta5 = s.zeta5 if modes.turn_slip else 1.0
     c.Dt = ((prm.QDZ1 + prm.QDZ2 * dfz) * (1.0 - prm.PPZ1 * dpi)
             * (1.0 + prm.QDZ3 * s.gamma + prm.QDZ4 * s.gamma2) * Fz * (R0 / s.Fz0p) * prm.LTR * zeta5)  # paper A60
-    c.Bt = ((prm.QBZ1 + prm.QBZ2 * dfz + prm.QBZ3 * s.dfz2) * (1.0 + prm.QBZ4 * s.gamma + prm.QBZ5 * be.abs(s.gamma))
+    c.Bt = ((prm.QBZ1 + prm.QBZ2 * dfz + prm.QBZ3 * s.dfz2) * (1.0 + prm.QBZ4 * s.gamma + prm.QBZ5 * be.of("angle").abs(s.gamma))
             * prm.LKY / s.LMUY_star)  # paper A58
     c.Ct = prm.QCZ1  # (4.E41)
     c.Et = ((prm.QEZ1 + prm.QEZ2 * dfz + prm.QEZ3 * s.dfz2)
@@ -50,14 +50,14 @@ def aligning_coefficients(prm, s, lat, gyk, modes, be) -> SimpleNamespace:
     if modes.turn_slip:
         zeta0, zeta2, zeta6 = 0.0, s.zeta2, s.zeta6
         published = modes.turn_slip_form == "published"
-        mz_inf = prm.QCRP1 * be.abs(lat.muy) * R0 * Fz * be.sqrt(Fz / s.Fz0p) * prm.LMP  # (4.95)
+        mz_inf = prm.QCRP1 * be.abs(lat.muy) * R0 * Fz * be.sqrt0(Fz / s.Fz0p) * prm.LMP  # (4.95)
         mz_inf = be.where(mz_inf <= 0, 1e-6, mz_inf)  # kept positive (also at zero load)
         c_drp = prm.QDRP1  # (4.96)
         d_drp = mz_inf / be.sin(0.5 * be.pi * c_drp)  # (4.94)
         if published:  # (4.99)
-            k_zgr0 = Fz * R0 * (prm.QDZ8 + prm.QDZ9 * dfz + (prm.QDZ10 + prm.QDZ11 * dfz) * be.abs(s.gamma)) * prm.LKZC
+            k_zgr0 = Fz * R0 * (prm.QDZ8 + prm.QDZ9 * dfz + (prm.QDZ10 + prm.QDZ11 * dfz) * be.of("angle").abs(s.gamma)) * prm.LKZC
         else:  # the reference evaluator's form
-            k_zgr0 = Fz * R0 * (prm.QDZ8 * prm.QDZ9 * dfz + prm.QDZ10 + prm.QDZ11 * dfz * be.abs(s.gamma)) * prm.LKZC
+            k_zgr0 = Fz * R0 * (prm.QDZ8 * prm.QDZ9 * dfz + prm.QDZ10 + prm.QDZ11 * dfz * be.of("angle").abs(s.gamma)) * prm.LKZC
         b_drp = k_zgr0 / (c_drp * d_drp * (1.0 - s.eps_gamma))  # (4.98)
         spin = s.phi if published else s.phit
         d_rp = d_drp * be.sin(c_drp * be.atan(b_drp * R0 * spin))  # (4.93)
@@ -68,10 +68,21 @@ def aligning_coefficients(prm, s, lat, gyk, modes, be) -> SimpleNamespace:
         # published: Cr = (2/pi) acos of the ratio held in [-1, 1] (0 or 2), a real shape factor as (4.46) needs;
         # mfeval: MATLAB's complex acos, Cr = a + i b with b = (2/pi) acosh|ratio|, of which MFeval reports the
         # real part of Mzr: Dr cos(a x) cosh(b x), x = atan(Br alpha_r) (unbounded in alpha_r)
-        ratio = be.where(mz90 == 0, 0.0, mz90 / be.abs(d_rp))
-        zeta7 = (2.0 / be.pi) * be.acos(be.clip(ratio, -1.0, 1.0))
+        held = be.abs(d_rp)
+        finite = held * 1e12 > be.abs(mz90)  # else the ratio is held at +-1e12 (D_rphi = 0 at zero load)
+        ratio = be.where(mz90 == 0, 0.0, be.where(finite, mz90 / be.where(finite, held, 1.0),
+                                                  be.where(mz90 > 0, 1e12, -1e12)))
+        # (acos and acosh only inside their open domains: their infinite slopes at +-1 times the held ratio's zero
+        # slope would make NaN derivatives)
+        inside = be.abs(ratio) < 1.0
+        zeta7 = be.where(inside, (2.0 / be.pi) * be.acos(be.where(inside, ratio, 0.0)), be.where(ratio > 0, 0.0, 2.0))
         # (where D_rphi = 0 MFeval divides by zero; the ratio is held at 1e12 to keep Mzr finite)
-        zeta7_imag = None if published else (2.0 / be.pi) * be.acosh(be.clip(be.abs(ratio), 1.0, 1e12))
+        if not published:
+            beyond = be.abs(ratio) > 1.0
+            zeta7_imag = (2.0 / be.pi) * be.where(beyond, be.acosh(be.where(beyond, be.fmin(be.abs(ratio), 1e12), 2.0)),
+                                                   0.0)
+        else:
+            zeta7_imag = None
         zeta8 = 1.0 + d_rp  # (4.97)
     else:
         zeta0 = zeta2 = zeta6 = zeta7 = zeta8 = 1.0
@@ -79,8 +90,8 @@ def aligning_coefficients(prm, s, lat, gyk, modes, be) -> SimpleNamespace:
 
     c.Dr = (Fz * R0 * ((prm.QDZ6 + prm.QDZ7 * dfz) * prm.LRES * zeta2
                        + ((prm.QDZ8 + prm.QDZ9 * dfz) * (1.0 + prm.PPZ2 * dpi)
-                          + (prm.QDZ10 + prm.QDZ11 * dfz) * be.abs(gs)) * gs * prm.LKZC * zeta0)
-            * s.LMUY_star * be.sign(s.vx) * be.cos(s.alpha_star) + zeta8 - 1.0)  # (4.E47)
+                          + (prm.QDZ10 + prm.QDZ11 * dfz) * be.of("angle").abs(gs)) * gs * prm.LKZC * zeta0)
+            * s.LMUY_star * be.of("speed").sign(s.vx) * be.cos(s.alpha_star) + zeta8 - 1.0)  # (4.E47)
     c.Br = (prm.QBZ9 * prm.LKY / s.LMUY_star + prm.QBZ10 * lat.By * lat.Cy) * zeta6  # (4.E45)
     c.Cr = zeta7  # (4.E46)
     c.Cr_imag = zeta7_imag  # mfeval form only (None: Cr is real)
@@ -91,8 +102,8 @@ def aligning_torque(prm, s, c, kxk, fx, fy, svyk, fy0_gamma0, gyk, modes, be):
     """(Mz, t, Mzr) under combined slip (4.E71-4.E78, paper A54-A56)."""
     R0 = prm.UNLOADED_RADIUS
     k_ratio2 = (kxk / c.Kya_prime) ** 2 * s.kappa**2
-    alpha_r_eq = be.atan(be.sqrt(be.tan(c.alpha_r) ** 2 + k_ratio2)) * be.sign(c.alpha_r)  # paper A54
-    alpha_t_eq = be.atan(be.sqrt(be.tan(c.alpha_t) ** 2 + k_ratio2)) * be.sign(c.alpha_t)  # paper A55
+    alpha_r_eq = be.atan(be.sqrt0(be.tan(c.alpha_r) ** 2 + k_ratio2)) * be.of("angle").sign(c.alpha_r)  # paper A54
+    alpha_t_eq = be.atan(be.sqrt0(be.tan(c.alpha_t) ** 2 + k_ratio2)) * be.of("angle").sign(c.alpha_t)  # paper A55
     arm = R0 * (prm.SSZ1 + prm.SSZ2 * (fy / prm.FNOMIN) + (prm.SSZ3 + prm.SSZ4 * s.dfz) * s.gamma) * prm.LS  # paper A56
     shape_arg = be.atan(c.Br * alpha_r_eq)
     mzr = c.Dr * be.cos(c.Cr * shape_arg)  # (4.E75)

@@ -21,7 +21,7 @@ def carcass_stiffness_and_relaxation(prm, s, kxk, kya, be):
     if prm.version == "52":
         R0 = prm.UNLOADED_RADIUS
         sigma_x = (prm.PTX1 + prm.PTX2 * dfz) * be.exp(-prm.PTX3 * dfz) * prm.LSGKP * R0 * s.Fz / prm.FNOMIN
-        sigma_y = (prm.PTY1 * be.sin(2.0 * be.atan(s.Fz / (prm.PTY2 * s.Fz0p))) * (1.0 - prm.PKY3 * be.abs(s.gamma))
+        sigma_y = (prm.PTY1 * be.sin(2.0 * be.atan(s.Fz / (prm.PTY2 * s.Fz0p))) * (1.0 - prm.PKY3 * be.of("angle").abs(s.gamma))
                    * R0 * prm.LFZO * prm.LSGAL)
     else:
         sigma_x = be.abs(kxk / cx)

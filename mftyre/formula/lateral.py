@@ -15,7 +15,7 @@ __all__ = ["pure_lateral", "combined_lateral"]
 
 def _cornering_stiffness(prm, s, gamma_star, gamma_star2, zeta3, be):
     """Kya (4.E25) at inclination gamma_star (gamma_star2 = gamma_star^2)."""
-    return (prm.PKY1 * s.Fz0p * (1.0 + prm.PPY1 * s.dpi) * (1.0 - prm.PKY3 * be.abs(gamma_star))
+    return (prm.PKY1 * s.Fz0p * (1.0 + prm.PPY1 * s.dpi) * (1.0 - prm.PKY3 * be.of("angle").abs(gamma_star))
             * be.sin(prm.PKY4 * be.atan((s.Fz / s.Fz0p)
                                         / ((prm.PKY2 + prm.PKY5 * gamma_star2) * (1.0 + prm.PPY2 * s.dpi))))
             * zeta3 * prm.LKY)

@@ -23,7 +23,7 @@ def pure_longitudinal(prm, s, modes, be) -> SimpleNamespace:
     SHx = smooth_low_speed(s, (prm.PHX1 + prm.PHX2 * dfz) * prm.LHX, be)  # (4.E17)
     SVx = smooth_low_speed(s, Fz * (prm.PVX1 + prm.PVX2 * dfz) * prm.LVX * s.LMUX_prime * zeta1, be)  # (4.E18)
     kappa_x = s.kappa + SHx  # (4.E10)
-    Ex = (prm.PEX1 + prm.PEX2 * dfz + prm.PEX3 * dfz2) * (1.0 - prm.PEX4 * be.sign(kappa_x)) * prm.LEX  # (4.E14)
+    Ex = (prm.PEX1 + prm.PEX2 * dfz + prm.PEX3 * dfz2) * (1.0 - prm.PEX4 * be.of("slip").sign(kappa_x)) * prm.LEX  # (4.E14)
     if modes.limits:
         Ex = be.fmin(Ex, 1.0)
     bk = Bx * kappa_x

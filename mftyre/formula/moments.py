@@ -35,11 +35,11 @@ def overturning_moment(prm, s, fy, be):
     first_set = any(prm[f"QSX{i}"] != 0 for i in range(1, 12))
     second_set = any(prm[f"QSX{i}"] != 0 for i in (12, 13, 14))
     if first_set and second_set:  # draft paper eq. 49
-        return (R0 * Fz * prm.LMX * (core - prm.QSX12 * g * be.abs(g))
-                + R0 * fy * prm.LMX * (prm.QSX13 + prm.QSX14 * be.abs(g)))
+        return (R0 * Fz * prm.LMX * (core - prm.QSX12 * g * be.of("angle").abs(g))
+                + R0 * fy * prm.LMX * (prm.QSX13 + prm.QSX14 * be.of("angle").abs(g)))
     mx = R0 * Fz * prm.LMX * core
     if second_set:  # (QSX12-QSX14 are zero in most files: no term)
-        mx = mx + R0 * prm.LMX * (fy * (prm.QSX13 + prm.QSX14 * be.abs(g)) - Fz * prm.QSX12 * g * be.abs(g))
+        mx = mx + R0 * prm.LMX * (fy * (prm.QSX13 + prm.QSX14 * be.of("angle").abs(g)) - Fz * prm.QSX12 * g * be.of("angle").abs(g))
     return mx
 
 
@@ -50,7 +50,7 @@ def rolling_resistance_moment(prm, s, fx, be):
     if prm.FZMIN > 0:
         Fz = be.where(Fz < prm.FZMIN, Fz * (Fz / prm.FZMIN), Fz)
     R0, Fz0, V0, vx = prm.UNLOADED_RADIUS, prm.FNOMIN, prm.LONGVL, s.vx
-    speed_terms = prm.QSY1 + prm.QSY2 * fx / Fz0 + prm.QSY3 * be.abs(vx / V0) + prm.QSY4 * (vx / V0) ** 4
+    speed_terms = prm.QSY1 + prm.QSY2 * fx / Fz0 + prm.QSY3 * be.of("speed").abs(vx) / V0 + prm.QSY4 * (vx / V0) ** 4
     if prm.version == "52":
         my = -R0 * Fz * prm.LMY * speed_terms
     else:

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
-from .options import SMOOTH_LIMITS_SLOPE
+from .options import SMOOTH_LIMITS_MARGIN, SMOOTH_LIMITS_SLOPE
 
 __all__ = ["condition_inputs", "smooth_low_speed"]
 
@@ -24,7 +24,7 @@ __all__ = ["condition_inputs", "smooth_low_speed"]
 def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> SimpleNamespace:
     """The conditioned inputs and the basic quantities of Section 4.3.2 (4.E1-4.E8)."""
     s = SimpleNamespace(vx=vx, ukappa=kappa, ugamma=gamma, uphit=phit)
-    uFz = be.fmax(fz, 0.0)  # a negative load means no contact
+    uFz = be.of("force").fmax(fz, 0.0)  # a negative load means no contact
     s.uFz = uFz
     s.alpha_out = be.where(vx == 0, 0.0, alpha)
 
@@ -34,28 +34,28 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
         if be.any(phit != 0):  # (NumPy skips this without turn slip)
             phit = phit * be.cos(alpha)
         if be.any(s.low_speed):  # (NumPy skips this when no point is that slow; the factors would all be 1)
-            reduction_linear = be.where(s.low_speed, be.abs(vx / VXLOW), 1.0)
+            speed_kink = be.of("speed")  # (the switch at VXLOW rounded with the speed width when smooth)
+            reduction_linear = speed_kink.fmin(speed_kink.abs(vx), VXLOW) / VXLOW
             s.reduction_smooth = be.where(s.low_speed, 1.0 - 0.5 * (1.0 + be.cos(be.pi * vx / VXLOW)), 1.0)
             kappa = kappa * reduction_linear
             phit = phit * reduction_linear
-            speed_sum = be.abs(vx) + be.abs(be.tan(alpha) * vx)  # below VXLOW only where |Vx| is
-            alpha = be.where(speed_sum < VXLOW, alpha * speed_sum / VXLOW, alpha)
+            speed_sum = speed_kink.abs(vx) + speed_kink.abs(be.tan(alpha) * vx)  # below VXLOW only where |Vx| is
+            alpha = alpha * (speed_kink.fmin(speed_sum, VXLOW) / VXLOW)
         else:
             s.reduction_smooth = None
         s.kappa_out = kappa
         phit = be.where(vx < 0, -phit, phit)
 
         def saturate(x, lo, hi):
-            inside = be.clip(x, lo, hi) if lo is not None else be.fmin(x, hi)
-            if modes.limits == "smooth":  # a small slope beyond the ranges (see Modes.limits)
-                return inside + SMOOTH_LIMITS_SLOPE * (x - inside)
-            return inside
+            if modes.limits == "smooth":  # a soft saturation beyond the ranges (see Modes.limits)
+                return _soft_saturate(x, lo, hi, be)
+            return be.saturate(x, lo, hi)
 
         kappa = saturate(kappa, prm.KPUMIN, prm.KPUMAX)
         alpha = saturate(alpha, prm.ALPMIN, prm.ALPMAX)
         gamma = saturate(gamma, prm.CAMMIN, prm.CAMMAX)
         Fz = saturate(uFz, None, prm.FZMAX)
-        s.Fz_low = be.fmax(Fz, prm.FZMIN)
+        s.Fz_low = be.of("force").fmax(Fz, prm.FZMIN)
         p = saturate(p, prm.PRESMIN, prm.PRESMAX)
     else:
         s.low_speed = None
@@ -73,7 +73,7 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
     s.dfz2, s.dpi2 = s.dfz**2, s.dpi**2  # (their squares, shared by the equations)
 
     if modes.alpha_star:
-        s.alpha_star = s.tan_alpha * be.sign(vx)  # (4.E3)
+        s.alpha_star = s.tan_alpha * be.of("speed").sign(vx)  # (4.E3)
         s.gamma_star = be.sin(gamma)  # (4.E4)
     else:
         s.alpha_star, s.gamma_star = alpha, gamma
@@ -81,11 +81,11 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
     s.gamma_star2 = s.gamma2 if s.gamma_star is gamma else s.gamma_star**2
 
     # slip and contact-centre velocities, ISO-W signs: Vsy = tan(alpha) |Vx| (2.12, 4.E5)
-    speed = be.abs(vx)
+    speed = be.of("speed").abs(vx)
     vsx = -kappa * speed
     vsy = s.tan_alpha * speed
-    vs = be.sqrt(vsx**2 + vsy**2)
-    vc = be.sqrt(vx**2 + vsy**2)
+    vs = be.sqrt0(vsx**2 + vsy**2)
+    vc = be.sqrt0(vx**2 + vsy**2)
     vc_prime = vc + 1e-6  # (4.E6a), Vc >= 0 so sign(Vc) = +1
     s.cos_alpha_prime = vx / vc_prime  # cos(alpha') (4.E6)
 
@@ -96,6 +96,23 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
     s.LMUY_star = prm.LMUY / friction_decay
     s.LMUX_prime, s.LMUY_prime = s.LMUX_star, s.LMUY_star
     return s
+
+
+def _soft_saturate(x, lo, hi, be):
+    """x inside [lo, hi] (``lo`` None: below ``hi``); beyond a bound by d: the bound + (1 - s) m tanh(d/m) + s d,
+    with the slope 1 and no curvature at the bound (see Modes.limits)."""
+    s = SMOOTH_LIMITS_SLOPE
+    m = SMOOTH_LIMITS_MARGIN * (hi if lo is None else hi - lo)
+
+    def beyond(d):
+        return (1.0 - s) * m * be.tanh(d / m) + s * d
+
+    above = x > hi
+    used = be.where(above, hi + beyond(be.where(above, x - hi, 0.0)), x)
+    if lo is None:
+        return used
+    below = x < lo
+    return be.where(below, lo - beyond(be.where(below, lo - x, 0.0)), used)
 
 
 def smooth_low_speed(s, value, be):

@@ -3,10 +3,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["Modes", "TURN_SLIP_FORMS", "SMOOTH_LIMITS_SLOPE"]
+__all__ = ["Modes", "TURN_SLIP_FORMS", "SMOOTH_LIMITS_SLOPE", "SMOOTH_LIMITS_MARGIN"]
 
-#: With ``limits="smooth"``, the share of an input's change beyond its .tir range that still reaches the equations.
+#: With ``limits="smooth"``, the share of an input's change far beyond its .tir range that still reaches the
+#: equations.
 SMOOTH_LIMITS_SLOPE = 0.01
+#: With ``limits="smooth"``, the width (a share of the range, of FZMAX for Fz) over which the slope beyond a bound
+#: falls from 1 to SMOOTH_LIMITS_SLOPE: the input used goes at most about this far beyond the range (plus 1 % of
+#: the excursion).
+SMOOTH_LIMITS_MARGIN = 0.01
 
 #: Forms of the turn-slip equations (see :mod:`mftyre.formula.turnslip`):
 #: "published": Pacejka (2012) as printed: the spin (4.76) with its leading minus sign, K_zgamma,r0 (4.99),
@@ -26,9 +31,14 @@ class Modes:
                 factors E at 1 (the reference evaluator's use mode 1xx). The saturation makes every derivative
                 with respect to a saturated input exactly zero beyond its range (and a load Fz <= 0 gives zero
                 forces and zero derivatives: the wheel has left the road).
-                "smooth": the same, but beyond the ranges the inputs keep SMOOTH_LIMITS_SLOPE (1 %) of their
-                slope, kappa_used = clip(kappa) + 0.01 (kappa - clip(kappa)), so that a gradient-based optimiser
-                still sees the way back into the range (outputs beyond the ranges differ slightly from True).
+                At a bound itself the slope is the full one from inside (one-sided).
+                "smooth", for optimisers (decision variables such as the pressure bounded by PRESMIN..PRESMAX):
+                the identity inside the ranges, as True, and beyond a bound a soft saturation, twice continuously
+                differentiable at the bound: at a distance d beyond it the input used is the bound plus
+                (1 - s) m tanh(d/m) + s d (s = SMOOTH_LIMITS_SLOPE = 1 %, m = SMOOTH_LIMITS_MARGIN = 1 % of the
+                range, of FZMAX for Fz). A point a hair outside (an interior-point solver's bound relaxation)
+                sees the full slope, so an optimum at a bound gets its true multiplier, and far outside 1 % of
+                the slope still points back into the range (outputs beyond the ranges differ from True).
                 False: the equations at the inputs as given (use mode 2xx).
     alpha_star: alpha* = tan(alpha) sign(Vx), gamma* = sin(gamma) (4.E3, 4.E4); otherwise alpha* = alpha.
     turn_slip:  turn slip and camber spin through the zeta factors (4.76-4.106).

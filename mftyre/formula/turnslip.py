@@ -30,8 +30,8 @@ __all__ = ["spin_slip", "zeta_factors", "lateral_shift_turn_slip"]
 def spin_slip(prm, s, omega, modes, be):
     """phi (4.76) and the camber reduction factor eps_gamma (4.90)."""
     eps_gamma = prm.PECP1 * (1.0 + prm.PECP2 * s.dfz)  # (4.90)
-    vsy = -s.tan_alpha * be.abs(s.vx)
-    vc = be.sqrt(s.vx**2 + vsy**2)
+    vsy = -s.tan_alpha * be.of("speed").abs(s.vx)
+    vc = be.sqrt0(s.vx**2 + vsy**2)
     camber_spin = (1.0 - eps_gamma) * omega * be.sin(s.gamma)
     if modes.turn_slip_form == "published":
         vc_prime = be.fmax(vc, prm.VXLOW)  # singularity protection, continuous
@@ -62,10 +62,10 @@ def lateral_shift_turn_slip(prm, s, kya, kya0, kyg0, svyg, limits, be):
     kya_prime = kya + 1e-6 * be.sign_nz(kya)  # (4.E39)
     kya0_prime = kya0 + 1e-6 * be.sign_nz(kya0)
     c_hyp = prm.PHYP1  # (4.85)
-    d_hyp = (prm.PHYP2 + prm.PHYP3 * s.dfz) * be.sign_nz(s.vx)  # (4.86); +1 at standstill keeps B_Hyphi finite
+    d_hyp = (prm.PHYP2 + prm.PHYP3 * s.dfz) * be.of("speed").sign_nz(s.vx)  # (4.86); +1 at standstill keeps B_Hyphi finite
     e_hyp = min(prm.PHYP4, 1.0) if limits else prm.PHYP4  # (4.87)
     k_yrp0 = kyg0 / (1.0 - s.eps_gamma)  # (4.89)
     b_hyp = k_yrp0 / (c_hyp * d_hyp * kya0_prime)  # (4.88)
     x = b_hyp * R0 * phi
-    s_hyp = d_hyp * be.sin(c_hyp * be.atan(x - e_hyp * (x - be.atan(x)))) * be.sign(s.vx)  # (4.80)
+    s_hyp = d_hyp * be.sin(c_hyp * be.atan(x - e_hyp * (x - be.atan(x)))) * be.of("speed").sign(s.vx)  # (4.80)
     return 1.0 + s_hyp - svyg / kya_prime  # (4.84)

@@ -88,7 +88,8 @@ def spin_and_radius(prm, s, omega_in, omega_given, be):
         c = R0 * prm.Q_RE0 - reduction
         d = R0 * prm.Q_V1 * (wheel_speed * R0 / prm.LONGVL) ** 2
         c_pos = be.fmax(c, 0.0)
-        cube_bound = c_pos + d ** (1.0 / 3.0)
+        spinning = d != 0  # (d^(1/3) not at d = 0: its infinite slope there would make NaN derivatives)
+        cube_bound = c_pos + be.where(spinning, be.where(spinning, d, 1.0) ** (1.0 / 3.0), 0.0)
         re0 = be.where(c > 0, be.fmin(c + d / be.where(c > 0, c, 1.0) ** 2, cube_bound), cube_bound)
         re0 = be.where(d == 0, c, re0)  # no spin: Re = c
 
