@@ -44,7 +44,11 @@ def test_verify_rejects_the_held_out_speed_terms(truth):
     bad = mftyre.MFModel(truth.params.replace(Q_V1=-1433.0, Q_V2=480.0))
     problems = verify_tir(bad)
     assert problems and any("non-finite" in p or "Q_V1" in p for p in problems)
-    mild = truth.with_params(Q_V1=0.02)  # 2 % radius growth at 16.7 m/s, 11 % at 40 m/s: too much
+    # 2 % radius growth at 16.7 m/s, 11 % at 40 m/s: too much; with_params refuses it (18 % at 3 LONGVL), and
+    # verify_tir names it in a parameter set built without the checks
+    with pytest.raises(TirError, match="Q_V1"):
+        truth.with_params(Q_V1=0.02)
+    mild = mftyre.MFModel(truth.params.replace(Q_V1=0.02))
     assert any("free radius grows" in p for p in verify_tir(mild))
 
 
