@@ -43,7 +43,7 @@ from .metrics import normalised_rms
 from .stages import (STAGE_NAMES, STAGES, Stage, conditions, level_labels, shape_violations, stage_parameters,
                      stage_rows, supported_parameters)
 from .start import estimate_stage, start_parameters
-from .verify import check_speeds, verify_tir
+from .verify import check_speeds, verification, verify_tir
 
 __all__ = ["fit_tir", "FitResult", "StageResult", "load_data", "COMPARED_STAGES", "BOUNDS", "bounded_parameters"]
 
@@ -96,7 +96,8 @@ class StageResult:
 class FitResult:
     """The outcome of :func:`fit_tir`: ``model``, ``params``, ``stages`` (name -> :class:`StageResult`),
     ``comparison`` (Table-2 DataFrame or None), ``data`` (as fitted), ``raw_data``, ``programme``, ``reduction``,
-    ``problems`` (:func:`mftyre.fit.verify.verify_tir` of the result), ``start``; ``report`` (Markdown),
+    ``problems`` and ``warnings`` (:func:`mftyre.fit.verify.verification` of the result on the data's domain,
+    relative to the start), ``start``; ``report`` (Markdown),
     ``save_report(path)`` (Markdown and PNG plots), ``write_tir(path)``."""
 
     def __init__(self, params, data, start, stages, comparison, notes, seconds):
@@ -106,7 +107,8 @@ class FitResult:
         self.comparison, self.notes, self.seconds = comparison, notes, seconds
         self.programme = self.reduction = None  # the recognised programme, the time-series reduction (or None)
         self.raw_data = data  # the data as given (``data``: what was fitted, reduced when a time series)
-        self.problems = []  # what verify_tir finds in the final parameters
+        self.problems = []  # what verification finds in the final parameters (and the start did not have)
+        self.warnings = []  # what it finds beyond the data's domain, or shares with the start
 
     @property
     def fit_errors(self) -> dict:
@@ -124,12 +126,29 @@ class FitResult:
 
         return save_report(self, path)
 
-    def write_tir(self, path, *, overwrite: bool = False) -> Path:
-        """Write the fitted .tir; refused (:class:`mftyre.errors.TirError`) when the parameters fail
-        :func:`mftyre.fit.verify.verify_tir` (which no accepted stage allows)."""
-        if self.problems:
-            from ..errors import TirError
+    @property
+    def undetermined(self) -> dict:
+        """Reason -> the parameters held at their start values because the data do not determine them (the
+        stages' ``skipped`` and ``reset``, e.g. the Fy shifts of a drive/brake run at alpha 0, -3, -6 deg)."""
+        out = {}
+        for st in self.stages.values():
+            for n, why in list(st.skipped.items()) + list(st.reset.items()):
+                if n not in st.fitted:
+                    out.setdefault(why, []).append(n)
+        return out
 
+    def write_tir(self, path, *, overwrite: bool = False) -> Path:
+        """Write the fitted .tir; refused (:class:`mftyre.errors.TirError`) when no stage fitted anything, or when
+        the parameters have a verification problem (:func:`mftyre.fit.verify.verification`) the start values did
+        not have (which no accepted stage allows). Parameters the data do not determine keep their start values
+        (:attr:`undetermined`); warnings of the verification are in ``warnings``."""
+        from ..errors import TirError
+
+        if not any(st.fitted for st in self.stages.values()):
+            raise TirError(f"{path}: not written: nothing could be fitted: " + "; ".join(
+                f"{st.title}: {'; '.join(st.rejected) or (next(iter(st.skipped.values())) if st.skipped else 'no parameter')}"
+                for st in self.stages.values()))
+        if self.problems:
             raise TirError(f"{path}: not written: the fitted parameters fail verification: "
                            + "; ".join(self.problems))
         return write_tir(self.params, path, overwrite=overwrite)
@@ -524,9 +543,7 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
             rejected.append(f"the vertical relation does not describe the data (FZ error {err:.3g} %, measured "
                             f"deflection down to {np.nanmin(measured_rho):.3g} m)")
     if not rejected:
-        new_problems = [q for q in verify_tir(MFModel(prm, side=side), data)
-                        if q not in verify_tir(MFModel(before, side=side), data)]
-        rejected += new_problems
+        rejected += verify_tir(MFModel(prm, side=side), data, baseline=MFModel(before, side=side))
     result = StageResult(stage.name, stage.title, stage.channel, len(sub), free, skipped, start, values, stderr,
                          corr, err, passes, time.perf_counter() - t0, reset=reset, rejected=rejected, notes=notes,
                          n_eff=n_eff)
@@ -622,7 +639,8 @@ def fit_tir(data, start=None, stages=STAGE_NAMES, fit_pressure: bool = True, *, 
     result = FitResult(prm.replace(INFLPRES=prm.NOMPRES), fit_data, start_prm, results, comparison, notes,
                        time.perf_counter() - t0)
     result.programme, result.reduction, result.raw_data = programme, reduction, data
-    result.problems = verify_tir(result.model, data)
+    checked = verification(result.model, data, baseline=MFModel(start_prm, side=side))
+    result.problems, result.warnings = checked.problems, checked.warnings
     return result
 
 

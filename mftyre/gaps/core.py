@@ -21,7 +21,7 @@ from ..timeseries import effective_samples, needs_reduction, reduce_sweeps
 from ..tir import write_tir
 from .catalogue import CATALOGUE, PARAM_STAGE, Effect, effect_state, parameter_needs
 from .locate import locate
-from .refit import FAIR_STAGES, SWEEP_REASONS, _at_neutral, _new_problems, active_parameters, covariance, standard_errors, _stage_data, data_conditions, needs_met, refit, refit_stages
+from .refit import FAIR_STAGES, SWEEP_REASONS, _at_neutral, active_parameters, covariance, standard_errors, _stage_data, data_conditions, needs_met, refit, refit_stages
 from .residuals import Evaluator, _sweeps, holdout_mask, noise_levels, noise_of_means
 from .transient import sweep_hysteresis
 from .small import SMALL_DATA, aicc, fit_all, loo_errors, weighted_rss
@@ -387,7 +387,7 @@ def _find_small(data, given, start, fair, candidates, untestable, ev, ts, max_ef
         for t, c in zip(trials, rnd):
             if not c.significant:
                 continue
-            problems = _new_problems(verify_tir(prm, data), verify_tir(t[3], data))
+            problems = verify_tir(t[3], data, baseline=given)
             if problems:
                 c.significant = False
                 rejected[c.name] = "the improved .tir fails verification: " + "; ".join(problems)
@@ -509,7 +509,7 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
         stages = [st for st in FAIR_STAGES if st in {PARAM_STAGE.get(k) for k in names}
                   or STAGES[st].channel in e.channels]
         polished, _ = refit_stages(new, train, stages, turn_slip=ts, channels=ev_train.channels,
-                                   max_nfev=max_nfev, extra=tuple(names), active=active)
+                                   max_nfev=max_nfev, extra=tuple(names), active=active, baseline=given)
         if _chi2(ev_train, polished, sigma, ev_train.channels) <= _chi2(ev_train, new, sigma, ev_train.channels):
             return polished
         return new
@@ -577,7 +577,7 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
                 again = score(e, kept, candidates[cand.name][2], new, rr, len(tried), why_not)[0]
                 if not again.significant:
                     kept, why_not = [], why_not + "; what is left is not significant"
-            problems = _new_problems(verify_tir(prm, data), verify_tir(new, data)) if kept else []
+            problems = verify_tir(new, data, baseline=given) if kept else []
             if not kept or problems:
                 reason = why_not if not kept else "the improved .tir fails verification: " + "; ".join(problems)
                 cand.significant, cand.note = False, "; ".join(x for x in (cand.note, "rejected: " + reason) if x)
