@@ -22,7 +22,8 @@ import numpy as np
 
 from .errors import InputClippedWarning, ModelInputError
 
-__all__ = ["RANGE_PARAMETERS", "input_ranges", "saturate", "check_finite", "check_pressure", "warn_outside"]
+__all__ = ["RANGE_PARAMETERS", "input_ranges", "saturate", "check_finite", "check_pressure", "warn_outside",
+           "saturate_inputs", "warn_data_outside"]
 
 #: input -> (.tir parameter of the lower bound or None, of the upper bound, unit): the ranges ``limits=True``
 #: saturates the inputs to (see the module docstring for Fz and FZMIN).
@@ -82,3 +83,22 @@ def warn_outside(counts: dict, total: int, ranges: dict, stacklevel: int = 3) ->
     if parts:
         warnings.warn("inputs outside the .tir ranges, saturated to them (limits=False evaluates them as given): "
                       + "; ".join(parts), InputClippedWarning, stacklevel=stacklevel)
+
+
+def saturate_inputs(model, inputs: dict) -> dict:
+    """``inputs`` (keyword arguments of :meth:`mftyre.MFModel.evaluate`) saturated to ``model``'s ranges, as
+    ``limits=True`` would saturate them, so that a workflow evaluating the same measured rows many times (fitting,
+    the gap finder) warns once (:func:`warn_data_outside`) rather than at every evaluation."""
+    return {k: (model.used_input(k, v) if k in RANGE_PARAMETERS else v) for k, v in inputs.items()}
+
+
+def warn_data_outside(model, inputs: dict, what: str) -> None:
+    """One :class:`InputClippedWarning` when measured ``inputs`` lie outside ``model``'s ranges (``what``: the
+    data, named in the message)."""
+    ranges = input_ranges(model.params, model.mirrored)
+    counts = {name: saturate(inputs[name], ranges[name])[1] for name in ranges if name in inputs}
+    parts = [f"{name} outside {ranges[name][2]} at {n} of {np.size(inputs['fz'])} row(s)"
+             for name, n in counts.items() if n]
+    if parts:
+        warnings.warn(f"{what}: inputs outside the .tir ranges; the model saturates them there: " + "; ".join(parts),
+                      InputClippedWarning, stacklevel=3)

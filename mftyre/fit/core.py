@@ -34,6 +34,7 @@ from ..backend import NUMPY
 from ..data import TyreData, read_csv, read_tydex
 from ..errors import DataError
 from ..formula import Modes, steady_state, vertical
+from ..inputs import saturate_inputs, warn_data_outside
 from ..model import STRUCTURAL_PARAMETERS, MFModel
 from ..params import TyreParameters
 from ..programme import recognise
@@ -193,7 +194,7 @@ def _predict(stage: Stage, model: MFModel, data: TyreData, inputs: dict) -> np.n
         return model.vertical_force(rl, p=inputs["p"], omega=chan("OMEGA"), fx=chan("FX"), fy=chan("FY"),
                                     gamma=inputs["gamma"])
     omega = data.array("OMEGA") if stage.output == "re" and data.has("OMEGA") else None
-    return model.evaluate(**inputs, omega=omega)[stage.output]
+    return model.evaluate(**saturate_inputs(model, inputs), omega=omega)[stage.output]
 
 
 class _BatchPredictor:
@@ -622,6 +623,7 @@ def fit_tir(data, start=None, stages=STAGE_NAMES, fit_pressure: bool = True, *, 
         fit_data = programme.annotate(data)
     radius_given = start is not None or isinstance(data.constants.get("RFREE"), float)
     prm, generic = _start(fit_data, start)
+    warn_data_outside(MFModel(prm), fit_data.inputs(), f"{data.source or 'the data'} against the start values")
     side = None
     start_prm = prm
     prm, results = _fit_stages(fit_data, prm, side, stages, fit_pressure, generic, weighting, progress, max_nfev,

@@ -13,6 +13,7 @@ from ..data import TyreData
 from ..fit.core import load_data
 from ..fit.metrics import normalised_rms
 from ..fit.verify import verify_tir
+from ..inputs import warn_data_outside
 from ..fit.stages import _REASONS as _STAGE_REASONS  # the stages' own wording
 from ..fit.stages import STAGES, conditions
 from ..model import MFModel, load_tir
@@ -460,6 +461,7 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
     if not isinstance(model, MFModel):
         model = MFModel(model)
     given = model.params
+    warn_data_outside(model, data.inputs(), f"{data.source or 'the data'} against the given model")
     ts = bool(np.any(data.array("PHIT") != 0)) if turn_slip is None else bool(turn_slip)
     small = len(data) < SMALL_DATA
     test_mask = np.zeros(len(data), bool) if small else holdout_mask(data, holdout, seed)
