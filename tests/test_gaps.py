@@ -56,7 +56,10 @@ _CACHE = {}
 def _data(tyre: str, partial: bool = False):
     key = (tyre, partial)
     if key not in _CACHE:
-        kw = dict(loads=(0.5, 1.0), pressures=(1.0,), cambers_deg=(0.0,)) if partial else {}
+        # partial: one pressure, camber 0. (Three loads: with two, one of them nominal, the held-out sweeps showed no
+        # load effect at all; the given file was as good there as the truth, and only a fair start that made it
+        # worse, issue 18 item 3, gave the effect something to repair.)
+        kw = dict(loads=(0.5, 1.0, 1.5), pressures=(1.0,), cambers_deg=(0.0,)) if partial else {}
         model = TYRES[tyre]()
         _CACHE[key] = (model, trailer_programme(model, points=15, noise=NOISE, seed=5, **kw))
     return _CACHE[key]
@@ -213,7 +216,8 @@ def test_vertical_problem_leads_to_pressure_and_hardening_terms():
     d = TyreData(d.frame[["TEST", "SWEEP", "FZ", "SL", "SA", "IA", "VX", "P", "RL", "RHO"]], source="load-deflection")
     rep = find_gaps(d, neutralise(full, "vertical_hardening", "pressure_vertical_stiffness"))
     assert sorted(rep.effect_names) == ["pressure_vertical_stiffness", "vertical_hardening"]
-    assert rep.shrink()["FZ"] >= 0.9
+    true = rep.held_out_error(full)["FZ"]    # the excess over the true model's error shrinks by 90 %
+    assert rep.error_after["FZ"] - true <= 0.1 * (rep.error_before["FZ"] - true)
     values = {k: v["value"] for a in rep.effects_added for k, v in a.parameters.items()}
     assert values["PFZ1"] == pytest.approx(full.params.PFZ1, rel=0.1)
     assert values["Q_FZ2"] == pytest.approx(full.params.Q_FZ2, rel=0.1)
@@ -232,7 +236,8 @@ def test_command_line_writes_tir_report_and_json(tmp_path):
     assert [e["name"] for e in report["effects_added"]] == ["pressure_trail"]
     e = report["effects_added"][0]
     assert {"name", "description", "parameters", "held_out_gain"} <= set(e) and e["parameters"][0]["name"] == "PPZ1"
-    assert report["error_after"]["MZ"] < 0.3 * report["error_before"]["MZ"]
+    true = 2.19   # the true model's held-out MZ error [%] on these data (the noise floor)
+    assert report["error_after"]["MZ"] - true < 0.3 * (report["error_before"]["MZ"] - true)
     assert report["findings"] and report["findings"][0]["channel"] == "MZ"
     improved = mftyre.load_tir(tmp_path / "improved.tir")
     assert improved.params.PPZ1 == pytest.approx(full.params.PPZ1, rel=0.05)
@@ -325,7 +330,7 @@ def test_shifts_are_untestable_from_slip_of_one_sign():
     frame = d.frame.copy()
     frame["FX"] = frame["FX"] + 0.3 * frame["FZ"]
     rep = find_gaps(d.with_frame(frame, "Fx offset"), neutralise(full, "fx_shift"))
-    assert rep.effect_names == []
+    assert "fx_shift" not in rep.effect_names   # (a load-curvature term may take up part of the offset)
     assert "one sign only" in rep.untestable["fx_shift"]
     assert not {"fx_shift"} & {c.name for r in rep.rounds for c in r}
     fx = rep.model.evaluate(4000.0, np.array([-0.05, 0.05]), 0.0, 0.0, 0.0, limits=False)["fx"]
@@ -489,3 +494,40 @@ def test_no_warning_flood_from_our_own_checks():
         clipped = [str(w.message) for w in caught if issubclass(w.category, mftyre.InputClippedWarning)]
         assert len(clipped) <= 1, clipped[:3]
         assert all("p outside PRESMIN..PRESMAX" in m for m in clipped)
+
+
+def _vertical_sweeps(full, seed=1):
+    """Load-deflection sweeps (41 points, 0.1-2 FNOMIN) at 0.85, 1 and 1.15 NOMPRES: FZ, RL, RHO only."""
+    d = trailer_programme(full, loads=(1.0,), pressures=(0.85, 1.0, 1.15), cambers_deg=(0.0,), points=5,
+                          vertical_points=41, noise=NOISE, seed=seed)
+    d = d.select(d.frame["TEST"].to_numpy() == "vertical")
+    return TyreData(d.frame[["TEST", "SWEEP", "FZ", "SL", "SA", "IA", "VX", "P", "RL", "RHO"]],
+                    source="load-deflection")
+
+
+def test_pressure_vertical_stiffness_is_not_rejected_by_a_collapsed_n_eff():
+    """Issue 18 item 2: TNO's MF 6.2 file with PFZ1 = 0, load-deflection sweeps at three pressures. The
+    candidate PFZ1 explained most of the held-out chi-square and was rejected (p = 0.02-0.07): the AR(1) count of
+    independent residuals came from residuals still dominated by the structure under test (n_eff about 5 of 123
+    rows). Point data have independent noise: the honest count is the number of rows; the AR(1) count of the
+    residual lacking the effect (about half the rows here) is
+    shown beside it. The held-out error's excess over the truth shrinks by more than 90 %."""
+    tno = mftyre.load_tir(require_shared(SHARED / "reference/tir/TNO_car205_60R15.tir"))
+    rep = find_gaps(_vertical_sweeps(tno), neutralise(tno, "pressure_vertical_stiffness"))
+    assert rep.effect_names == ["pressure_vertical_stiffness"], rep.message
+    cand = rep.rounds[0][0]
+    assert cand.n_eff == cand.n_train and cand.n_eff_residual < 0.6 * cand.n_train
+    true = rep.held_out_error(tno)
+    assert rep.error_after["FZ"] - true["FZ"] <= 0.1 * (rep.error_given["FZ"] - true["FZ"])
+    assert "n_eff" in rep.markdown()
+
+
+def test_fair_start_never_worsens_the_held_out_error():
+    """Issue 18 item 3: trained on two of the three pressures' sweeps, the fair start's vertical refit (without
+    PFZ1) raised the held-out FZ error from 9.5 % (the file as given) to 14.2 %. A stage that loses on the held-out
+    data keeps the given values, with the reason."""
+    full = _tyre_a()
+    rep = find_gaps(_vertical_sweeps(full), neutralise(full, "pressure_vertical_stiffness"))
+    for c in rep.error_given:
+        assert rep.error_before[c] <= rep.error_given[c] * (1 + 1e-9), (c, rep.error_given, rep.error_before)
+    assert rep.effect_names == ["pressure_vertical_stiffness"]

@@ -44,7 +44,7 @@ from .metrics import normalised_rms
 from .stages import (STAGE_NAMES, STAGES, Stage, conditions, level_labels, shape_violations, stage_parameters,
                      stage_rows, supported_parameters)
 from .start import estimate_stage, start_parameters
-from .verify import check_speeds, verification, verify_tir
+from .verify import check_speeds, physical_domain, verification, verify_tir
 
 __all__ = ["fit_tir", "FitResult", "StageResult", "load_data", "COMPARED_STAGES", "BOUNDS", "bounded_parameters"]
 
@@ -279,9 +279,10 @@ def physical_bounds(prm, data: TyreData) -> dict:
     """Bounds that follow from physics and the data's range, tighter than :data:`BOUNDS` where they apply:
     free-radius growth with speed (Q_V1) at most 3 % and the speed stiffening (Q_V2) at most 40 % at the top
     speed checked by :func:`mftyre.fit.verify.verify_tir`; Q_RE0 within 5 % of 1; a positive vertical stiffness
-    over PRESMIN..PRESMAX and the data's pressures (PFZ1); shifts of a few percent (PHX1, PVX1, PHY1, PVY1)."""
+    over the physical pressure range (:func:`mftyre.fit.verify.physical_domain`: 0.5-1.5 NOMPRES within
+    PRESMIN..PRESMAX) and the data's pressures (PFZ1); shifts of a few percent (PHX1, PVX1, PHY1, PVY1)."""
     speed_ratio = float(check_speeds(prm, data)[-1]) / prm.LONGVL  # omega R0 / V0 at the top speed
-    p = np.concatenate([data.array("P"), [prm.PRESMIN, prm.PRESMAX]])
+    p = np.concatenate([data.array("P"), physical_domain(prm, data).pressures])
     dpi = np.abs((p[p > 0] - prm.NOMPRES) / prm.NOMPRES)
     pfz1 = 0.9 / max(float(np.max(dpi)), 1e-3)
     return {"Q_V1": (0.0, 0.03 / speed_ratio**2), "Q_V2": (0.0, 0.4 / speed_ratio), "Q_RE0": (0.95, 1.05),

@@ -277,11 +277,12 @@ def _versions(n):
 
 
 def refit_stages(params, data: TyreData, stages=FAIR_STAGES, *, turn_slip: bool = False, channels=None,
-                 max_nfev: int | None = None, progress=None, extra=(), active=None, min_points: int = 10, baseline=None):
+                 max_nfev: int | None = None, progress=None, extra=(), active=None, min_points: int = 10, baseline=None, judge=None):
     """Fair start: refit the active parameters stage by stage (stages with at least ``min_points`` rows, more
     than their parameters); returns (parameters, {stage: RefitResult}). A stage is kept only when
     :func:`mftyre.fit.verify.verify_tir` finds no problem in the data's domain that ``baseline`` (default
-    ``params``) does not have."""
+    ``params``) does not have, and when ``judge(old, new)`` (e.g. the held-out errors, never worse) returns no
+    reason against it."""
     prm = params.params if isinstance(params, MFModel) else params
     given = prm if baseline is None else baseline
     results = {}
@@ -307,6 +308,13 @@ def refit_stages(params, data: TyreData, stages=FAIR_STAGES, *, turn_slip: bool 
             results[name].problems = problems
             if progress:
                 progress(f"fair start: {name} rejected, the previous values kept: " + "; ".join(problems))
+            continue
+        worse = judge(prm, new) if judge is not None else None
+        if worse:      # e.g. worse on held-out data than the values as given: keep those
+            results[name].success, results[name].values = False, {k: float(prm[k]) for k in names}
+            results[name].problems = (worse,)
+            if progress:
+                progress(f"fair start: {name}: the previous values kept: {worse}")
             continue
         prm = new
     return prm, results
