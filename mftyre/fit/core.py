@@ -134,7 +134,9 @@ class FitResult:
         out = {}
         for st in self.stages.values():
             for n, why in list(st.skipped.items()) + list(st.reset.items()):
-                if n not in st.fitted:
+                if n not in st.fitted:   # the reset reasons by kind (their figures are in the stage results)
+                    why = ("standard error larger than the value" if why.startswith("standard error") else
+                           "over 0.99 correlated with another parameter" if why.startswith("correlated") else why)
                     out.setdefault(why, []).append(n)
         return out
 
