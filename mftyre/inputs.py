@@ -23,7 +23,7 @@ import numpy as np
 from .errors import InputClippedWarning, ModelInputError, spelled
 
 __all__ = ["RANGE_PARAMETERS", "input_ranges", "saturate", "check_finite", "check_pressure", "warn_outside",
-           "check_finite_outputs"]
+           "check_finite_outputs", "saturate_inputs", "warn_data_outside"]
 
 #: input -> (.tir parameter of the lower bound or None, of the upper bound, unit): the ranges ``limits=True``
 #: saturates the inputs to (see the module docstring for Fz and FZMIN).
@@ -103,3 +103,22 @@ def check_finite_outputs(out: dict, arrays: dict) -> None:
     raise ModelInputError(f"the equations give non-finite {', '.join(bad)} at {int(mask.sum())} of {mask.size} "
                           f"point(s), first at point{index}: {at}: the .tir parameters have no finite solution there "
                           "(check the speed terms Q_V1, Q_V2 and the vertical parameters)")
+
+
+def saturate_inputs(model, inputs: dict) -> dict:
+    """``inputs`` (keyword arguments of :meth:`mftyre.MFModel.evaluate`) saturated to ``model``'s ranges, as
+    ``limits=True`` would saturate them, so that a workflow evaluating the same measured rows many times (fitting,
+    the gap finder) warns once (:func:`warn_data_outside`) rather than at every evaluation."""
+    return {k: (model.used_input(k, v) if k in RANGE_PARAMETERS else v) for k, v in inputs.items()}
+
+
+def warn_data_outside(model, inputs: dict, what: str) -> None:
+    """One :class:`InputClippedWarning` when measured ``inputs`` lie outside ``model``'s ranges (``what``: the
+    data, named in the message)."""
+    ranges = input_ranges(model.params, model.mirrored)
+    counts = {name: saturate(inputs[name], ranges[name])[1] for name in ranges if name in inputs}
+    parts = [f"{name} outside {ranges[name][2]} at {n} of {np.size(inputs['fz'])} row(s)"
+             for name, n in counts.items() if n]
+    if parts:
+        warnings.warn(f"{what}: inputs outside the .tir ranges; the model saturates them there: " + "; ".join(parts),
+                      InputClippedWarning, stacklevel=3)

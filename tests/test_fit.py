@@ -59,13 +59,17 @@ def test_stage_parameters_are_schema_parameters_of_the_right_section():
 
 
 def test_only_what_the_data_determine_is_fitted():
-    one = dict(loads=1, pressures=1, speeds=1, camber=False, camber_levels=0, fx=False, fy=True)
+    one = dict(loads=1, pressures=1, speeds=1, camber=False, camber_levels=0, fx=False, fy=True, kappa_sides=True,
+               alpha_sides=True)
     groups, skipped = stage_parameters(STAGES["pure_fy"], one, fit_pressure=True)
     fitted = groups["base"] + groups["pressure"] + groups["camber"]
     assert set(fitted) == {"PCY1", "PDY1", "PEY1", "PEY3", "PKY1", "PHY1", "PVY1"}
+    one_sided = dict(one, alpha_sides=False)   # slip angles of one sign: no shifts or asymmetry (issue 18)
+    groups, skipped = stage_parameters(STAGES["pure_fy"], one_sided, fit_pressure=True)
+    assert set(groups["base"]) == {"PCY1", "PDY1", "PEY1", "PKY1"} and "one sign" in skipped["PHY1"]
     assert skipped["PDY2"] == "one load level only" and skipped["PKY6"] == "no camber in the data"
     assert "one pressure" in skipped["PPY1"]
-    full = dict(loads=3, pressures=3, speeds=1, camber=True, camber_levels=2, fx=False, fy=True)
+    full = dict(one, loads=3, pressures=3, camber=True, camber_levels=2)
     groups, skipped = stage_parameters(STAGES["pure_fy"], full, fit_pressure=True)
     assert {"PPY1", "PPY2", "PPY3", "PPY4"} <= set(groups["pressure"]) and "PPY5" in groups["camber"]
     assert "PKY5" in groups["camber"]
@@ -76,7 +80,8 @@ def test_only_what_the_data_determine_is_fitted():
 def test_second_order_camber_terms_need_two_camber_magnitudes():
     """With one |gamma| level (e.g. -3, 0, +3 deg) gamma|gamma| is proportional to gamma on the data: QDZ10 would
     trade off against QDZ8 freely and ruin the model at other cambers; such terms are not fitted."""
-    one_level = dict(loads=3, pressures=3, speeds=1, camber=True, camber_levels=1, fx=False, fy=True)
+    one_level = dict(loads=3, pressures=3, speeds=1, camber=True, camber_levels=1, fx=False, fy=True,
+                     kappa_sides=True, alpha_sides=True)
     groups, skipped = stage_parameters(STAGES["mz"], one_level, fit_pressure=True)
     assert {"QDZ8", "QDZ9"} <= set(groups["camber"]) and "collinear" in skipped["QDZ10"] and "QDZ11" in skipped
     groups, skipped = stage_parameters(STAGES["pure_fy"], one_level, fit_pressure=True)

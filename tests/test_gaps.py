@@ -56,7 +56,10 @@ _CACHE = {}
 def _data(tyre: str, partial: bool = False):
     key = (tyre, partial)
     if key not in _CACHE:
-        kw = dict(loads=(0.5, 1.0), pressures=(1.0,), cambers_deg=(0.0,)) if partial else {}
+        # partial: one pressure, camber 0. (Three loads: with two, one of them nominal, the held-out sweeps showed no
+        # load effect at all; the given file was as good there as the truth, and only a fair start that made it
+        # worse, issue 18 item 3, gave the effect something to repair.)
+        kw = dict(loads=(0.5, 1.0, 1.5), pressures=(1.0,), cambers_deg=(0.0,)) if partial else {}
         model = TYRES[tyre]()
         _CACHE[key] = (model, trailer_programme(model, points=15, noise=NOISE, seed=5, **kw))
     return _CACHE[key]
@@ -213,7 +216,8 @@ def test_vertical_problem_leads_to_pressure_and_hardening_terms():
     d = TyreData(d.frame[["TEST", "SWEEP", "FZ", "SL", "SA", "IA", "VX", "P", "RL", "RHO"]], source="load-deflection")
     rep = find_gaps(d, neutralise(full, "vertical_hardening", "pressure_vertical_stiffness"))
     assert sorted(rep.effect_names) == ["pressure_vertical_stiffness", "vertical_hardening"]
-    assert rep.shrink()["FZ"] >= 0.9
+    true = rep.held_out_error(full)["FZ"]    # the excess over the true model's error shrinks by 90 %
+    assert rep.error_after["FZ"] - true <= 0.1 * (rep.error_before["FZ"] - true)
     values = {k: v["value"] for a in rep.effects_added for k, v in a.parameters.items()}
     assert values["PFZ1"] == pytest.approx(full.params.PFZ1, rel=0.1)
     assert values["Q_FZ2"] == pytest.approx(full.params.Q_FZ2, rel=0.1)
@@ -232,7 +236,8 @@ def test_command_line_writes_tir_report_and_json(tmp_path):
     assert [e["name"] for e in report["effects_added"]] == ["pressure_trail"]
     e = report["effects_added"][0]
     assert {"name", "description", "parameters", "held_out_gain"} <= set(e) and e["parameters"][0]["name"] == "PPZ1"
-    assert report["error_after"]["MZ"] < 0.3 * report["error_before"]["MZ"]
+    true = 2.19   # the true model's held-out MZ error [%] on these data (the noise floor)
+    assert report["error_after"]["MZ"] - true < 0.3 * (report["error_before"]["MZ"] - true)
     assert report["findings"] and report["findings"][0]["channel"] == "MZ"
     improved = mftyre.load_tir(tmp_path / "improved.tir")
     assert improved.params.PPZ1 == pytest.approx(full.params.PPZ1, rel=0.05)
@@ -313,21 +318,22 @@ def test_small_data_finds_hardening_and_pressure_stiffness_with_uncertainties():
 
 
 # ------------------------------------------------------------------------------------ verify before writing (#11)
-def test_an_effect_whose_tir_fails_verification_is_rejected_with_the_reason():
-    """Drive-side slip sweeps only (kappa >= 0) with a large Fx offset: the Fx shifts fit the data, but the .tir
-    would carry the offset into braking, where there are no data (Fx = -62 / +171 N at kappa = -/+0.05): an
-    invented asymmetry. The effect is rejected with the verification's reason, the fair start's stage too, and
-    the improved model stays odd in kappa."""
+def test_shifts_are_untestable_from_slip_of_one_sign():
+    """Drive-side slip sweeps only (kappa >= 0) with a large Fx offset: the Fx shifts would fit the data, but the
+    .tir would carry the offset into braking, where there are no data (issue 11: Fx = -62 / +171 N at kappa =
+    -/+0.05, an invented asymmetry). Shifts act across kappa = 0, so slip of one sign cannot tell them from the
+    curve's shape (issue 18): the effect is reported untestable with that reason, never tried, the improved model
+    stays odd in kappa and passes verification."""
     full = _tyre_a()
     d = trailer_programme(full, points=21, noise=1.0, seed=3, cambers_deg=(0.0,), combined_alpha_deg=())
     d = d.select((d.frame["TEST"].to_numpy() == "pure_longitudinal") & (d.frame["SL"].to_numpy() >= 0))
     frame = d.frame.copy()
     frame["FX"] = frame["FX"] + 0.3 * frame["FZ"]
     rep = find_gaps(d.with_frame(frame, "Fx offset"), neutralise(full, "fx_shift"))
-    assert rep.effect_names == []
-    assert "verification" in rep.rejected["fx_shift"] and "asymmetry" in rep.rejected["fx_shift"]
-    assert "fx_shift" in rep.markdown() and "Effects rejected" in rep.markdown()
-    fx = rep.model.evaluate(4000.0, np.array([-0.05, 0.05]), 0.0, 0.0, 0.0)["fx"]
+    assert "fx_shift" not in rep.effect_names   # (a load-curvature term may take up part of the offset)
+    assert "one sign only" in rep.untestable["fx_shift"]
+    assert not {"fx_shift"} & {c.name for r in rep.rounds for c in r}
+    fx = rep.model.evaluate(4000.0, np.array([-0.05, 0.05]), 0.0, 0.0, 0.0, limits=False)["fx"]
     assert abs(fx[0] + fx[1]) < 0.02 * 4000.0
     from mftyre.fit.verify import verify_tir
     assert verify_tir(rep.model) == []
@@ -418,3 +424,110 @@ def test_autocorrelated_samples_do_not_make_a_negligible_gain_significant():
     p_sweeps, sweeps = _sweep_test(ev_te, full, new, sigma, ["FY"])
     print("held-out sweeps", sweeps, "p", p_sweeps)
     assert sweeps == 0 or p_sweeps > 0.05
+
+
+# ----------------------------------------------------------- judged by physics and the data, not our files (#18)
+from conftest import SHARED, require_shared  # noqa: E402
+
+_PUBLISHED = ["tir_files/" + p.name for p in sorted(TIR_FILES.glob("*.tir"))] + [
+    "reference/mfeval/" + n for n in ("FSAE_Defaults.tir", "MagicFormula52_Parameters.tir",
+                                      "MagicFormula61_Parameters.tir", "MagicFormula62_Parameters.tir",
+                                      "PacejkaBook_Defaults.tir")] + ["reference/tir/TNO_car205_60R15.tir"]
+
+
+def _published(name):
+    return TIR_FILES / name.split("/", 1)[1] if name.startswith("tir_files/") else require_shared(SHARED / name)
+
+
+@pytest.mark.parametrize("name", _PUBLISHED)
+def test_every_published_tir_passes_verification(name):
+    """Issue 18: real files declare "don't care" ranges (TNO's own MF 6.2 example: PRESMIN 0.1 bar, PRESMAX 10 bar,
+    where 1 + PPY1 dpi < 0 turns Fy round). Verification covers the domain that matters (a standard programme's
+    loads and pressures, the declared slips, speeds to 2 LONGVL), so no published file fails it; what it finds
+    beyond, in the physical domain, is a warning naming the range (the MFeval FSAE file's slip stiffness
+    PKX1 + PKX2 dfz turns negative above 1.63 FNOMIN: Fx reverses at Fz = FZMAX = 2 FNOMIN)."""
+    import warnings as _warnings
+
+    from mftyre.fit.verify import verification
+
+    model = mftyre.load_tir(_published(name))
+    with _warnings.catch_warnings():
+        _warnings.simplefilter("error", mftyre.InputClippedWarning)   # the checks stay within the .tir ranges
+        v = verification(model)
+    assert v.problems == [], v.problems
+    if name.endswith("FSAE_Defaults.tir"):
+        assert any(w.kind == "fx_sign" and "beyond the data" in w and "Fz 50..2000 N" in w for w in v.warnings)
+
+
+def test_tno_pressure_cornering_stiffness_is_accepted():
+    """Issue 18 item 1: with TNO's MF 6.2 file as the truth and PPY1 = PPY2 = 0, the gap finder used to name
+    pressure_cornering_stiffness and then reject it because the improved file "fails verification" at 10 bar
+    (which the truth itself does). Judged on the data's domain and relative to the given file it is added and the
+    held-out Fy error's excess over the truth shrinks by 70 %; the file as given (PPY1 = 0) passes too."""
+    tno = mftyre.load_tir(require_shared(SHARED / "reference/tir/TNO_car205_60R15.tir"))
+    d = trailer_programme(tno, points=15, noise=NOISE, seed=5, cambers_deg=(0.0,), combined_alpha_deg=())
+    d = d.select(d.frame["TEST"].to_numpy() == "pure_lateral")
+    rep = find_gaps(d, neutralise(tno, "pressure_cornering_stiffness"))
+    assert rep.effect_names == ["pressure_cornering_stiffness"] and not rep.rejected, (rep.message, rep.rejected)
+    true = rep.held_out_error(tno)
+    assert rep.error_after["FY"] - true["FY"] <= 0.3 * (rep.error_before["FY"] - true["FY"])
+
+
+def test_no_warning_flood_from_our_own_checks():
+    """Issue 18 item 7: on rig data whose lowest pressure lies below the tyre's PRESMIN (the generator's 0.86
+    NOMPRES with its jitter, against PRESMIN = 0.845 NOMPRES), the fit printed 24 and the gap finder over a thousand
+    InputClippedWarnings from their own verification grids and repeated evaluations. Now the verification stays
+    within the .tir ranges and each workflow says once that the data lie outside them."""
+    import warnings as _warnings
+
+    from mftyre.fit import fit_tir
+    from mftyre.rig import rig_programme
+
+    full = _tyre_a()
+    data = rig_programme(full, loads=(0.5, 1.0, 1.5), cambers_deg=(0.0,), longitudinal=False, seed=11)
+    assert np.min(data.array("P")) < full.params.PRESMIN
+    for run in (lambda: fit_tir(data, compare=False),
+                lambda: find_gaps(data, neutralise(full, "pressure_cornering_stiffness"))):
+        with _warnings.catch_warnings(record=True) as caught:
+            _warnings.simplefilter("always")
+            run()
+        clipped = [str(w.message) for w in caught if issubclass(w.category, mftyre.InputClippedWarning)]
+        assert len(clipped) <= 1, clipped[:3]
+        assert all("p outside PRESMIN..PRESMAX" in m for m in clipped)
+
+
+def _vertical_sweeps(full, seed=1):
+    """Load-deflection sweeps (41 points, 0.1-2 FNOMIN) at 0.85, 1 and 1.15 NOMPRES: FZ, RL, RHO only."""
+    d = trailer_programme(full, loads=(1.0,), pressures=(0.85, 1.0, 1.15), cambers_deg=(0.0,), points=5,
+                          vertical_points=41, noise=NOISE, seed=seed)
+    d = d.select(d.frame["TEST"].to_numpy() == "vertical")
+    return TyreData(d.frame[["TEST", "SWEEP", "FZ", "SL", "SA", "IA", "VX", "P", "RL", "RHO"]],
+                    source="load-deflection")
+
+
+def test_pressure_vertical_stiffness_is_not_rejected_by_a_collapsed_n_eff():
+    """Issue 18 item 2: TNO's MF 6.2 file with PFZ1 = 0, load-deflection sweeps at three pressures. The
+    candidate PFZ1 explained most of the held-out chi-square and was rejected (p = 0.02-0.07): the AR(1) count of
+    independent residuals came from residuals still dominated by the structure under test (n_eff about 5 of 123
+    rows). Point data have independent noise: the honest count is the number of rows; the AR(1) count of the
+    residual lacking the effect (about half the rows here) is
+    shown beside it. The held-out error's excess over the truth shrinks by more than 90 %."""
+    tno = mftyre.load_tir(require_shared(SHARED / "reference/tir/TNO_car205_60R15.tir"))
+    rep = find_gaps(_vertical_sweeps(tno), neutralise(tno, "pressure_vertical_stiffness"))
+    assert rep.effect_names == ["pressure_vertical_stiffness"], rep.message
+    cand = rep.rounds[0][0]
+    assert cand.n_eff == cand.n_train and cand.n_eff_residual < 0.6 * cand.n_train
+    true = rep.held_out_error(tno)
+    assert rep.error_after["FZ"] - true["FZ"] <= 0.1 * (rep.error_given["FZ"] - true["FZ"])
+    assert "n_eff" in rep.markdown()
+
+
+def test_fair_start_never_worsens_the_held_out_error():
+    """Issue 18 item 3: trained on two of the three pressures' sweeps, the fair start's vertical refit (without
+    PFZ1) raised the held-out FZ error from 9.5 % (the file as given) to 14.2 %. A stage that loses on the held-out
+    data keeps the given values, with the reason."""
+    full = _tyre_a()
+    rep = find_gaps(_vertical_sweeps(full), neutralise(full, "pressure_vertical_stiffness"))
+    for c in rep.error_given:
+        assert rep.error_before[c] <= rep.error_given[c] * (1 + 1e-9), (c, rep.error_given, rep.error_before)
+    assert rep.effect_names == ["pressure_vertical_stiffness"]

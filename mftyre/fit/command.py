@@ -121,6 +121,11 @@ def run(args) -> int:
         print(f"  {name:<15} {st.n_points:6d} points  {len(st.fitted):3d} parameters  fit error "
               f"{st.fit_error:7.3f} %" + (f"  REJECTED: {'; '.join(st.rejected)}" if st.rejected else "")
               + (f"  reset (not determined): {', '.join(st.reset)}" if st.reset else ""))
+    for why, names in result.undetermined.items():
+        print(f"warning: held at their start values, not determined by the data ({why}): {' '.join(names)}",
+              file=sys.stderr)
+    for text in result.warnings:
+        print(f"warning: {text}", file=sys.stderr)
     if result.comparison is not None:
         for _, row in result.comparison.iterrows():
             print(f"  pressure comparison {row.stage:<8} lower {row.lower:.3f} %  upper {row.upper:.3f} %  "

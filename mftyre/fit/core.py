@@ -35,6 +35,7 @@ import pandas as pd
 from ..backend import NUMPY
 from ..data import UNCHECKED, TyreData, check_plausible, read_data
 from ..formula import Modes, steady_state, vertical
+from ..inputs import saturate_inputs, warn_data_outside
 from ..model import STRUCTURAL_PARAMETERS, MFModel
 from ..params import TyreParameters
 from ..programme import recognise
@@ -44,7 +45,7 @@ from .metrics import normalised_rms
 from .stages import (STAGE_NAMES, STAGES, Stage, conditions, level_labels, shape_violations, stage_parameters,
                      stage_rows, supported_parameters)
 from .start import estimate_stage, start_parameters
-from .verify import check_speeds, verify_tir
+from .verify import check_speeds, physical_domain, verification, verify_tir
 
 __all__ = ["fit_tir", "FitResult", "StageResult", "load_data", "COMPARED_STAGES", "BOUNDS", "bounded_parameters"]
 
@@ -97,7 +98,8 @@ class StageResult:
 class FitResult:
     """The outcome of :func:`fit_tir`: ``model``, ``params``, ``stages`` (name -> :class:`StageResult`),
     ``comparison`` (Table-2 DataFrame or None), ``data`` (as fitted), ``raw_data``, ``programme``, ``reduction``,
-    ``problems`` (:func:`mftyre.fit.verify.verify_tir` of the result), ``start``; ``report`` (Markdown),
+    ``problems`` and ``warnings`` (:func:`mftyre.fit.verify.verification` of the result on the data's domain,
+    relative to the start), ``start``; ``report`` (Markdown),
     ``save_report(path)`` (Markdown and PNG plots), ``write_tir(path)``."""
 
     def __init__(self, params, data, start, stages, comparison, notes, seconds):
@@ -107,7 +109,8 @@ class FitResult:
         self.comparison, self.notes, self.seconds = comparison, notes, seconds
         self.programme = self.reduction = None  # the recognised programme, the time-series reduction (or None)
         self.raw_data = data  # the data as given (``data``: what was fitted, reduced when a time series)
-        self.problems = []  # what verify_tir finds in the final parameters
+        self.problems = []  # what verification finds in the final parameters (and the start did not have)
+        self.warnings = []  # what it finds beyond the data's domain, or shares with the start
 
     @property
     def fit_errors(self) -> dict:
@@ -125,12 +128,31 @@ class FitResult:
 
         return save_report(self, path)
 
-    def write_tir(self, path, *, overwrite: bool = False) -> Path:
-        """Write the fitted .tir; refused (:class:`mftyre.errors.TirError`) when the parameters fail
-        :func:`mftyre.fit.verify.verify_tir` (which no accepted stage allows)."""
-        if self.problems:
-            from ..errors import TirError
+    @property
+    def undetermined(self) -> dict:
+        """Reason -> the parameters held at their start values because the data do not determine them (the
+        stages' ``skipped`` and ``reset``, e.g. the Fy shifts of a drive/brake run at alpha 0, -3, -6 deg)."""
+        out = {}
+        for st in self.stages.values():
+            for n, why in list(st.skipped.items()) + list(st.reset.items()):
+                if n not in st.fitted:   # the reset reasons by kind (their figures are in the stage results)
+                    why = ("standard error larger than the value" if why.startswith("standard error") else
+                           "over 0.99 correlated with another parameter" if why.startswith("correlated") else why)
+                    out.setdefault(why, []).append(n)
+        return out
 
+    def write_tir(self, path, *, overwrite: bool = False) -> Path:
+        """Write the fitted .tir; refused (:class:`mftyre.errors.TirError`) when no stage fitted anything, or when
+        the parameters have a verification problem (:func:`mftyre.fit.verify.verification`) the start values did
+        not have (which no accepted stage allows). Parameters the data do not determine keep their start values
+        (:attr:`undetermined`); warnings of the verification are in ``warnings``."""
+        from ..errors import TirError
+
+        if not any(st.fitted for st in self.stages.values()):
+            raise TirError(f"{path}: not written: nothing could be fitted: " + "; ".join(
+                f"{st.title}: {'; '.join(st.rejected) or (next(iter(st.skipped.values())) if st.skipped else 'no parameter')}"
+                for st in self.stages.values()))
+        if self.problems:
             raise TirError(f"{path}: not written: the fitted parameters fail verification: "
                            + "; ".join(self.problems))
         return write_tir(self.params, path, overwrite=overwrite, comments=self.provenance())
@@ -191,7 +213,7 @@ def _predict(stage: Stage, model: MFModel, data: TyreData, inputs: dict) -> np.n
         return model.vertical_force(rl, p=inputs["p"], omega=chan("OMEGA"), fx=chan("FX"), fy=chan("FY"),
                                     gamma=inputs["gamma"])
     omega = data.array("OMEGA") if stage.output == "re" and data.has("OMEGA") else None
-    return model.evaluate(**inputs, omega=omega)[stage.output]
+    return model.evaluate(**saturate_inputs(model, inputs), omega=omega)[stage.output]
 
 
 class _BatchPredictor:
@@ -276,9 +298,10 @@ def physical_bounds(prm, data: TyreData) -> dict:
     """Bounds that follow from physics and the data's range, tighter than :data:`BOUNDS` where they apply:
     free-radius growth with speed (Q_V1) at most 3 % and the speed stiffening (Q_V2) at most 40 % at the top
     speed checked by :func:`mftyre.fit.verify.verify_tir`; Q_RE0 within 5 % of 1; a positive vertical stiffness
-    over PRESMIN..PRESMAX and the data's pressures (PFZ1); shifts of a few percent (PHX1, PVX1, PHY1, PVY1)."""
+    over the physical pressure range (:func:`mftyre.fit.verify.physical_domain`: 0.5-1.5 NOMPRES within
+    PRESMIN..PRESMAX) and the data's pressures (PFZ1); shifts of a few percent (PHX1, PVX1, PHY1, PVY1)."""
     speed_ratio = float(check_speeds(prm, data)[-1]) / prm.LONGVL  # omega R0 / V0 at the top speed
-    p = np.concatenate([data.array("P"), [prm.PRESMIN, prm.PRESMAX]])
+    p = np.concatenate([data.array("P"), physical_domain(prm, data).pressures])
     dpi = np.abs((p[p > 0] - prm.NOMPRES) / prm.NOMPRES)
     pfz1 = 0.9 / max(float(np.max(dpi)), 1e-3)
     return {"Q_V1": (0.0, 0.03 / speed_ratio**2), "Q_V2": (0.0, 0.4 / speed_ratio), "Q_RE0": (0.95, 1.05),
@@ -541,9 +564,7 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
             rejected.append(f"the vertical relation does not describe the data (FZ error {err:.3g} %, measured "
                             f"deflection down to {np.nanmin(measured_rho):.3g} m)")
     if not rejected:
-        new_problems = [q for q in verify_tir(MFModel(prm, side=side), data)
-                        if q not in verify_tir(MFModel(before, side=side), data)]
-        rejected += new_problems
+        rejected += verify_tir(MFModel(prm, side=side), data, baseline=MFModel(before, side=side))
     result = StageResult(stage.name, stage.title, stage.channel, len(sub), free, skipped, start, values, stderr,
                          corr, err, passes, time.perf_counter() - t0, reset=reset, rejected=rejected, notes=notes,
                          n_eff=n_eff)
@@ -622,6 +643,7 @@ def fit_tir(data, start=None, stages=STAGE_NAMES, fit_pressure: bool = True, *, 
         fit_data = programme.annotate(data)
     radius_given = start is not None or isinstance(data.constants.get("RFREE"), float)
     prm, generic = _start(fit_data, start)
+    warn_data_outside(MFModel(prm), fit_data.inputs(), f"{data.source or 'the data'} against the start values")
     side = None
     start_prm = prm
     prm, results = _fit_stages(fit_data, prm, side, stages, fit_pressure, generic, weighting, progress, max_nfev,
@@ -639,7 +661,8 @@ def fit_tir(data, start=None, stages=STAGE_NAMES, fit_pressure: bool = True, *, 
     result = FitResult(prm.replace(INFLPRES=prm.NOMPRES), fit_data, start_prm, results, comparison, notes,
                        time.perf_counter() - t0)
     result.programme, result.reduction, result.raw_data = programme, reduction, data
-    result.problems = verify_tir(result.model, data)
+    checked = verification(result.model, data, baseline=MFModel(start_prm, side=side))
+    result.problems, result.warnings = checked.problems, checked.warnings
     return result
 
 

@@ -58,6 +58,9 @@ def markdown_report(result, plot_names: dict | None = None) -> str:
         lines.append("")
     if result.problems:
         lines += ["## Verification problems", ""] + [f"- {p}" for p in result.problems] + [""]
+    if result.warnings:
+        lines += ["## Verification warnings", "", "Not a reason to reject the file: beyond the data, or the start "
+                  "values have them too.", ""] + [f"- {p}" for p in result.warnings] + [""]
     lines += ["## Fit errors", "",
               "Normalised RMS error, Schmeitz et al. (2005) eq. (4): "
               "100 sqrt(sum (A_MF - A_meas)^2 / sum A_meas^2) %, over the data of each stage.", "",

@@ -12,7 +12,11 @@ data can determine it (``needs``):
   |gamma|, would be indistinguishable from them with one |gamma| level); ``pressure``: two or more pressures and
   ``fit_pressure``
   (the dpi terms); ``pressure3``: three or more pressures (dpi^2 terms);
-* ``speeds`` / ``speeds3``: two / three speed levels; ``fx`` / ``fy``: a non-zero longitudinal / lateral force.
+* ``speeds`` / ``speeds3``: two / three speed levels; ``fx`` / ``fy``: a non-zero longitudinal / lateral force;
+* ``kappa_sides`` / ``alpha_sides``: slip ratio (beyond +-0.01) / slip angle (beyond +-1 deg) of both signs: the
+  shifts and the asymmetric curvature terms (PHX*, PVX*, PEX4; PHY*, PVY*, PEY3; QHZ*, QEZ4) act across zero
+  slip, so data of one sign (a drive/brake run at alpha 0, -3, -6 deg) cannot tell them from the curve's
+  shape; held at their start (neutral) values they add no asymmetry where there are no data.
 
 Each stage is fitted in passes, as on the test bench: the base parameters on the data at zero camber and
 nominal pressure, then the pressure terms added with all pressures, then the camber terms with all data.
@@ -52,18 +56,18 @@ def _g(needs, names):
 
 STAGES: dict[str, Stage] = {s.name: s for s in (
     Stage("pure_fx", "Pure longitudinal force Fx0 (4.E9-4.E18)", "FX", "fx", "pure_longitudinal", (
-        _g("", "PCX1 PDX1 PEX1 PEX4 PKX1 PHX1 PVX1"),
-        _g("loads", "PDX2 PEX2 PKX2 PHX2 PVX2"), _g("loads3", "PEX3 PKX3"),
+        _g("", "PCX1 PDX1 PEX1 PKX1"), _g("kappa_sides", "PEX4 PHX1 PVX1"),
+        _g("loads", "PDX2 PEX2 PKX2"), _g("loads kappa_sides", "PHX2 PVX2"), _g("loads3", "PEX3 PKX3"),
         _g("camber", "PDX3"), _g("pressure", "PPX1 PPX3"), _g("pressure3", "PPX2 PPX4"))),
     Stage("pure_fy", "Pure lateral force Fy0 (4.E19-4.E30)", "FY", "fy", "pure_lateral", (
-        _g("", "PCY1 PDY1 PEY1 PEY3 PKY1 PHY1 PVY1"),
-        _g("loads", "PDY2 PEY2 PKY2 PHY2 PVY2"), _g("loads3", "PKY4"),
+        _g("", "PCY1 PDY1 PEY1 PKY1"), _g("alpha_sides", "PEY3 PHY1 PVY1"),
+        _g("loads", "PDY2 PEY2 PKY2"), _g("loads alpha_sides", "PHY2 PVY2"), _g("loads3", "PKY4"),
         _g("camber", "PDY3 PEY4 PEY5 PKY3 PKY6 PVY3"), _g("camber2", "PKY5"), _g("camber loads", "PKY7 PVY4"),
         _g("pressure", "PPY1 PPY3"), _g("pressure loads", "PPY2"), _g("pressure3", "PPY4"),
         _g("pressure camber", "PPY5"))),
     Stage("mz", "Pure aligning moment Mz0 (4.E31-4.E49)", "MZ", "mz", "pure_lateral", (
-        _g("", "QBZ1 QCZ1 QDZ1 QEZ1 QEZ4 QHZ1 QDZ6 QBZ9"),
-        _g("loads", "QBZ2 QDZ2 QEZ2 QHZ2 QDZ7"), _g("loads3", "QBZ3 QEZ3"),
+        _g("", "QBZ1 QCZ1 QDZ1 QEZ1 QDZ6 QBZ9"), _g("alpha_sides", "QEZ4 QHZ1"),
+        _g("loads", "QBZ2 QDZ2 QEZ2 QDZ7"), _g("loads alpha_sides", "QHZ2"), _g("loads3", "QBZ3 QEZ3"),
         _g("camber", "QBZ4 QBZ5 QDZ3 QDZ4 QEZ5 QHZ3 QDZ8"), _g("camber2", "QDZ10"),
         _g("camber loads", "QHZ4 QDZ9"), _g("camber2 loads", "QDZ11"),
         _g("pressure", "PPZ1"), _g("pressure camber", "PPZ2"))),
@@ -158,8 +162,10 @@ def conditions(data: TyreData) -> dict:
     clusters separated by empty room (:func:`mftyre.programme.cluster_levels`), not by a fraction of the
     largest value; a swept speed counts its 1 m/s bins."""
     if len(data) == 0:
-        return dict(loads=0, pressures=0, speeds=0, camber=False, camber_levels=0, fx=False, fy=False)
+        return dict(loads=0, pressures=0, speeds=0, camber=False, camber_levels=0, fx=False, fy=False,
+                    kappa_sides=False, alpha_sides=False)
     fz = data.array("FZ")
+    sl, sa = data.array("SL"), data.array("SA")
     return dict(
         loads=_count(data, "FZ", 0.05 * float(np.median(np.abs(fz))) + 1e-9),
         pressures=_count(data, "P", 0.02 * float(np.median(data.array("P")))),
@@ -168,7 +174,13 @@ def conditions(data: TyreData) -> dict:
         camber_levels=_nonzero_camber_levels(data.array("IA")),
         fx=bool(data.has("FX") and np.nanmax(np.abs(data.array("FX"))) > 0.05 * float(np.max(fz))),
         fy=bool(data.has("FY") and np.nanmax(np.abs(data.array("FY"))) > 0.05 * float(np.max(fz))),
+        kappa_sides=bool(np.any(sl >= _SIDE_KAPPA) and np.any(sl <= -_SIDE_KAPPA)),
+        alpha_sides=bool(np.any(sa >= _SIDE_ALPHA) and np.any(sa <= -_SIDE_ALPHA)),
     )
+
+
+#: the slip beyond which data count as measured on that side of zero (conditions' kappa_sides, alpha_sides)
+_SIDE_KAPPA, _SIDE_ALPHA = 0.01, math.radians(1.0)
 
 
 # the channel each stage's characteristic runs along, and the bin width that makes two values distinct
@@ -227,6 +239,7 @@ def _met(need: str, cond: dict, fit_pressure: bool) -> bool:
         "camber2": cond["camber_levels"] >= 2,
         "pressure": fit_pressure and cond["pressures"] >= 2, "pressure3": fit_pressure and cond["pressures"] >= 3,
         "speeds": cond["speeds"] >= 2, "speeds3": cond["speeds"] >= 3, "fx": cond["fx"], "fy": cond["fy"],
+        "kappa_sides": cond["kappa_sides"], "alpha_sides": cond["alpha_sides"],
     }[need]
 
 
@@ -234,7 +247,11 @@ _REASONS = {"loads": "one load level only", "loads3": "fewer than three load lev
             "camber2": "fewer than two non-zero camber magnitudes (collinear with the first-order camber term)",
             "pressure": "one pressure only (or fit_pressure=False)", "pressure3": "fewer than three pressures "
             "(or fit_pressure=False)", "speeds": "one speed only", "speeds3": "fewer than three speeds",
-            "fx": "no longitudinal force in the data", "fy": "no lateral force in the data"}
+            "fx": "no longitudinal force in the data", "fy": "no lateral force in the data",
+            "kappa_sides": "longitudinal slip of one sign only: the Fx shifts and driving/braking asymmetry act "
+                           "across kappa = 0",
+            "alpha_sides": "slip angle of one sign only: the shifts and asymmetry of Fy and Mz act across "
+                           "alpha = 0"}
 
 
 def stage_parameters(stage: Stage, cond: dict, fit_pressure: bool):

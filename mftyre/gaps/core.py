@@ -14,6 +14,7 @@ from ..files import write_atomically
 from ..fit.core import load_data
 from ..fit.metrics import normalised_rms
 from ..fit.verify import verify_tir
+from ..inputs import warn_data_outside
 from ..fit.stages import _REASONS as _STAGE_REASONS  # the stages' own wording
 from ..fit.stages import STAGES, conditions
 from ..model import MFModel, load_tir
@@ -22,7 +23,7 @@ from ..timeseries import effective_samples, needs_reduction, reduce_sweeps
 from ..tir import write_tir
 from .catalogue import CATALOGUE, PARAM_STAGE, Effect, effect_state, parameter_needs
 from .locate import locate
-from .refit import FAIR_STAGES, SWEEP_REASONS, _at_neutral, _new_problems, active_parameters, covariance, standard_errors, _stage_data, data_conditions, needs_met, refit, refit_stages
+from .refit import FAIR_STAGES, SWEEP_REASONS, _at_neutral, active_parameters, covariance, standard_errors, _stage_data, data_conditions, needs_met, refit, refit_stages
 from .residuals import Evaluator, _sweeps, holdout_mask, noise_levels, noise_of_means
 from .transient import sweep_hysteresis
 from .small import SMALL_DATA, aicc, fit_all, loo_errors, weighted_rss
@@ -50,9 +51,10 @@ class Candidate:
     values: dict = field(default_factory=dict)
     stderr: dict = field(default_factory=dict)
     note: str = ""
-    n_eff: float = math.nan           # effective number of independent training residuals (AR(1) within sweeps)
+    n_eff: float = math.nan           # effective number of independent training residuals (from the noise)
     held_out_p: float = math.nan      # one-sided signed-rank test of the chi-square decrease per held-out sweep
     held_out_sweeps: int = 0
+    n_eff_residual: float = math.nan  # the AR(1) count from the residual lacking the effect (shown, not used)
 
     def to_dict(self) -> dict:
         return dict(self.__dict__)
@@ -199,8 +201,20 @@ def _sweep_ids(ev: Evaluator, c: str) -> np.ndarray:
     return _sweeps(ev.data)[ev.rows[c]]
 
 
-def _n_eff(ev: Evaluator, prm, channels) -> float:
-    """Effective number of independent residuals of ``prm`` on ``channels`` (AR(1) rule within sweeps)."""
+def _n_eff(ev: Evaluator, prm, channels, series: bool = True) -> float:
+    """Effective number of independent residuals on ``channels``: point data (one row per condition, or binned
+    means of a time series: ``series=False``) have independent noise, so every row counts; in a time series the
+    AR(1) rule within sweeps on the residual of ``prm``, the candidate model (what is left when the effect is in:
+    the noise), never on the residual the candidate is to explain."""
+    res = ev.residuals(prm, channels)
+    if not series:
+        return float(sum(np.count_nonzero(np.isfinite(r)) for r in res.values()))
+    return float(sum(effective_samples(res[c], _sweep_ids(ev, c)) for c in res))
+
+
+def _n_eff_of_residual(ev: Evaluator, prm, channels) -> float:
+    """The AR(1) count from the residual of ``prm`` itself (the model lacking the effect): shown beside the honest
+    figure, since a missing effect makes that residual smooth and this count collapse."""
     res = ev.residuals(prm, channels)
     return float(sum(effective_samples(res[c], _sweep_ids(ev, c)) for c in res))
 
@@ -224,7 +238,7 @@ def _sweep_test(ev: Evaluator, before, after, sigma, channels):
     return float(stats.wilcoxon(d, alternative="greater").pvalue), int(d.size)
 
 
-def _prune(new, current, e: Effect, names, ev: Evaluator, sigma, alpha: float):
+def _prune(new, current, e: Effect, names, ev: Evaluator, sigma, alpha: float, series: bool = True):
     """(parameters, kept names, note): a candidate parameter whose standard error (from the effective number of
     samples) exceeds its size goes back to its value before the effect (switches: neutral), the rest refitted; one
     more than 0.99 correlated with another goes back too unless that raises the training chi-square significantly
@@ -233,7 +247,7 @@ def _prune(new, current, e: Effect, names, ev: Evaluator, sigma, alpha: float):
     names, notes, needed = list(names), [], set()
     ch = [c for c in e.channels if c in ev.channels]
     while names:
-        n_eff = _n_eff(ev, new, ch)
+        n_eff = _n_eff(ev, new, ch, series)
         se, corr = covariance(new, ev, names, ch, sigma, n_eff)
         ref = {k: e.neutral.get(k, float(current[k])) for k in names}
         # a switch's size is its distance from the neutral value, a shape factor's its value
@@ -388,7 +402,7 @@ def _find_small(data, given, start, fair, candidates, untestable, ev, ts, max_ef
         for t, c in zip(trials, rnd):
             if not c.significant:
                 continue
-            problems = _new_problems(verify_tir(prm, data), verify_tir(t[3], data))
+            problems = verify_tir(t[3], data, baseline=given)
             if problems:
                 c.significant = False
                 rejected[c.name] = "the improved .tir fails verification: " + "; ".join(problems)
@@ -461,7 +475,10 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
     if not isinstance(model, MFModel):
         model = MFModel(model)
     given = model.params
+    warn_data_outside(model, data.inputs(), f"{data.source or 'the data'} against the given model")
     ts = bool(np.any(data.array("PHIT") != 0)) if turn_slip is None else bool(turn_slip)
+    # point data (one row per condition, or binned means) have independent noise; a time series has not
+    series = reduction is None and programme.sample_rate is not None
     small = len(data) < SMALL_DATA
     test_mask = np.zeros(len(data), bool) if small else holdout_mask(data, holdout, seed)
     train, test = data.select(~test_mask), data.select(test_mask)
@@ -473,11 +490,18 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
     say(f"{len(train)} training points, {len(test)} held-out points (whole sweeps); channels "
         f"{' '.join(ev_train.channels)}")
 
-    # 1. fair start
+    # 1. fair start, never worse on the held-out data than the values as given
     error_given = _errors(ev_test, given)
     active = active_parameters(given, ts)        # what the given model has switched on, fixed from here
+
+    def held_out_worse(old, new):
+        before, after = _errors(ev_test, old), _errors(ev_test, new)
+        worse = [f"{c} {before[c]:.3g} -> {after[c]:.3g} %" for c in before if after[c] > before[c] * (1 + 1e-9)]
+        return "worse on the held-out data (" + ", ".join(worse) + ")" if worse else None
+
     prm, fair = refit_stages(given, train, turn_slip=ts, channels=ev_train.channels, max_nfev=max_nfev,
-                             progress=say, active=active, min_points=2 if small else 10)
+                             progress=say, active=active, min_points=2 if small else 10,
+                             judge=None if small else held_out_worse)
     start = prm
     pool = [CATALOGUE[n] for n in (effects or CATALOGUE)]
     candidates, untestable = _candidates(pool, given, train, ts)
@@ -510,7 +534,7 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
         stages = [st for st in FAIR_STAGES if st in {PARAM_STAGE.get(k) for k in names}
                   or STAGES[st].channel in e.channels]
         polished, _ = refit_stages(new, train, stages, turn_slip=ts, channels=ev_train.channels,
-                                   max_nfev=max_nfev, extra=tuple(names), active=active)
+                                   max_nfev=max_nfev, extra=tuple(names), active=active, baseline=given)
         if _chi2(ev_train, polished, sigma, ev_train.channels) <= _chi2(ev_train, new, sigma, ev_train.channels):
             return polished
         return new
@@ -529,16 +553,17 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
         c_te0, c_te1 = _chi2(ev_test, prm, sigma, ch), _chi2(ev_test, new, sigma, ch)
         n_tr = int(sum(ev_train.measured[c].size for c in ch))
         n_te = int(sum(n_test_rows[c] for c in ch))
-        n_eff = _n_eff(ev_train, new, ch)
+        n_eff = _n_eff(ev_train, new, ch, series)
         fstat, p = f_test(c_tr0, c_tr1, n_tr, n_eff, k)
-        n_eff_te = _n_eff(ev_test, new, ch)
+        n_eff_te = _n_eff(ev_test, new, ch, series)
         sc = (c_te0 - c_te1) * n_eff_te / max(n_te, 1) - k * math.log(max(n_eff_te, 2.0))
         gain = (c_te0 - c_te1) / c_te0 if c_te0 > 0 else 0.0
         p_sweeps, n_sweeps = _sweep_test(ev_test, prm, new, sigma, ch)
         sig = p < alpha / m and sc > 0 and (n_sweeps < MIN_HELD_OUT_SWEEPS or p_sweeps < HELD_OUT_ALPHA)
         note = "; ".join([f"{k2} not freed ({v})" for k2, v in why.items()] + ([extra_note] if extra_note else []))
         return (Candidate(e.name, list(keep), c_tr0, c_tr1, c_te0, c_te1, n_tr, n_te, fstat, p, sc, gain, sig,
-                          {k: float(new[k]) for k in keep}, rr.stderr, note, n_eff, p_sweeps, n_sweeps), new, rr)
+                          {k: float(new[k]) for k in keep}, rr.stderr, note, n_eff, p_sweeps, n_sweeps,
+                          _n_eff_of_residual(ev_train, prm, ch)), new, rr)
     n_test_rows = {c: ev_test.measured[c].size for c in ev_test.channels}
     while findings and len(added) < max_effects:
         tried = [(e, keep, why) for e, keep, why in candidates.values() if _matches(e, findings)]
@@ -573,12 +598,17 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
             e = candidates[cand.name][0]
             if "stages refitted" not in cand.note:
                 new = polish(new, e, cand.parameters)
-            new, kept, why_not = _prune(new, prm, e, cand.parameters, ev_train, sigma, alpha)
-            if kept and len(kept) < len(cand.parameters):   # re-scored with what is left
+            new, kept, why_not = _prune(new, prm, e, cand.parameters, ev_train, sigma, alpha, series)
+            if kept and len(kept) < len(cand.parameters):
+                # a partial effect: the parameters the data determine are added when they still explain the
+                # training data significantly and gain on the held-out data (the effect as a whole passed the
+                # held-out test by sweeps; the rest stay at their values, the note says which)
                 again = score(e, kept, candidates[cand.name][2], new, rr, len(tried), why_not)[0]
-                if not again.significant:
+                if not (again.p_value < alpha / len(tried) and again.score > 0):
                     kept, why_not = [], why_not + "; what is left is not significant"
-            problems = _new_problems(verify_tir(prm, data), verify_tir(new, data)) if kept else []
+                else:
+                    why_not = f"partly added ({' '.join(kept)}): " + why_not
+            problems = verify_tir(new, data, baseline=given) if kept else []
             if not kept or problems:
                 reason = why_not if not kept else "the improved .tir fails verification: " + "; ".join(problems)
                 cand.significant, cand.note = False, "; ".join(x for x in (cand.note, "rejected: " + reason) if x)

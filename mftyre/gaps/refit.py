@@ -13,8 +13,9 @@ Bounds are the fit's (:data:`mftyre.fit.core.BOUNDS` tightened by :func:`mftyre.
 :func:`refit_stages` is the "fair start": stage by stage (rows and channel of :data:`mftyre.fit.STAGES`), the
 parameters that are active in the model (base parameters, and those of every effect that is switched on) and
 that the stage's data can determine (the stage groups' ``needs``, and a sweep of the input the stage's curve runs
-along, :func:`data_conditions`) are refitted; a stage whose values fail :func:`mftyre.fit.verify.verify_tir` where
-the previous ones passed keeps the previous ones.
+along, :func:`data_conditions`) are refitted; a stage whose values have a problem
+(:func:`mftyre.fit.verify.verify_tir` in the data's domain) that the given file does not have keeps the previous
+ones.
 """
 from __future__ import annotations
 
@@ -153,15 +154,6 @@ def covariance(params, ev: Evaluator, names, channels, sigma: dict, n_eff: float
     return {k: (float(d[i]) if np.isfinite(d[i]) else None) for i, k in enumerate(names)}, corr
 
 
-def _new_problems(before: list, after: list) -> list:
-    """The verification problems (:func:`mftyre.fit.verify.verify_tir`) of ``after`` that ``before`` did not have
-    (compared by their first words)."""
-    def key(text):
-        return " ".join(text.split()[:3])
-    old = {key(t) for t in before}
-    return [t for t in after if key(t) not in old]
-
-
 def needs_met(needs, cond: dict, turn_slip: bool) -> bool:
     """Whether data with the conditions ``cond`` (:func:`data_conditions`) determine a parameter with ``needs``."""
     return all(turn_slip if n == "turn_slip" else cond[n] if n in _SWEEPS else _met(n, cond, True) for n in needs)
@@ -285,10 +277,14 @@ def _versions(n):
 
 
 def refit_stages(params, data: TyreData, stages=FAIR_STAGES, *, turn_slip: bool = False, channels=None,
-                 max_nfev: int | None = None, progress=None, extra=(), active=None, min_points: int = 10):
+                 max_nfev: int | None = None, progress=None, extra=(), active=None, min_points: int = 10, baseline=None, judge=None):
     """Fair start: refit the active parameters stage by stage (stages with at least ``min_points`` rows, more
-    than their parameters); returns (parameters, {stage: RefitResult})."""
+    than their parameters); returns (parameters, {stage: RefitResult}). A stage is kept only when
+    :func:`mftyre.fit.verify.verify_tir` finds no problem in the data's domain that ``baseline`` (default
+    ``params``) does not have, and when ``judge(old, new)`` (e.g. the held-out errors, never worse) returns no
+    reason against it."""
     prm = params.params if isinstance(params, MFModel) else params
+    given = prm if baseline is None else baseline
     results = {}
     for name in stages:
         stage = STAGES[name]
@@ -306,12 +302,19 @@ def refit_stages(params, data: TyreData, stages=FAIR_STAGES, *, turn_slip: bool 
         if progress:
             progress(f"fair start: {name}: {len(names)} parameters on {len(sub)} points")
         new, results[name] = refit(prm, ev, names, max_nfev=max_nfev)
-        problems = _new_problems(verify_tir(prm, data), verify_tir(new, data))
+        problems = verify_tir(new, data, baseline=given)
         if problems:   # the stage's values would make the .tir implausible where there are no data: keep the previous
             results[name].success, results[name].values = False, {k: float(prm[k]) for k in names}
             results[name].problems = problems
             if progress:
                 progress(f"fair start: {name} rejected, the previous values kept: " + "; ".join(problems))
+            continue
+        worse = judge(prm, new) if judge is not None else None
+        if worse:      # e.g. worse on held-out data than the values as given: keep those
+            results[name].success, results[name].values = False, {k: float(prm[k]) for k in names}
+            results[name].problems = (worse,)
+            if progress:
+                progress(f"fair start: {name}: the previous values kept: {worse}")
             continue
         prm = new
     return prm, results

@@ -82,13 +82,17 @@ def markdown_report(rep, plot_names: dict | None = None) -> str:
                   f"![residual maps before and after]({plot_names['maps']})", ""]
     lines += ["## Candidates tried", "",
               "Per round, each candidate's parameters refitted alone on the training sweeps; F = training chi-square "
-              "decrease per parameter over the residual variance; score = held-out chi-square decrease - k ln(n).", ""]
+              "decrease per parameter over the residual variance; score = held-out chi-square decrease - k ln(n). "
+              "n: training residuals; n_eff: the independent ones the tests count (point data: every row; a time "
+              "series: the AR(1) rule with the noise's correlation); n_eff (residual): the AR(1) count from the "
+              "residual lacking the effect, shown for comparison (a missing effect makes it collapse).", ""]
     for i, rnd in enumerate(rep.rounds, 1):
-        lines += [f"Round {i}:", "", "| effect | parameters | F | p | held-out gain | score | accepted |",
-                  "| --- | --- | ---: | ---: | ---: | ---: | --- |"]
+        lines += [f"Round {i}:", "", "| effect | parameters | F | p | n | n_eff | n_eff (residual) | held-out gain | "
+                  "score | accepted |", "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |"]
         best = next((c.name for c in rnd if c.significant), None)
         for c in rnd:
             lines.append(f"| {c.name} | {' '.join(c.parameters)} | {c.f_statistic:.3g} | {c.p_value:.2g} | "
+                         f"{c.n_train} | {c.n_eff:.0f} | {c.n_eff_residual:.0f} | "
                          f"{100 * c.held_out_gain:.1f} % | {c.score:.0f} | {'yes' if c.name == best else ''} |")
         lines.append("")
     if rep.rejected:

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..data import TyreData, split_sweeps
 from ..formula.vertical import free_radius
+from ..inputs import saturate_inputs
 from ..backend import NUMPY
 from ..model import MFModel
 
@@ -96,7 +97,7 @@ class Evaluator:
         out = {}
         force = [c for c in channels if c != "FZ"]
         if force:
-            res = model.evaluate(**self.inputs, turn_slip=self.turn_slip)
+            res = model.evaluate(**saturate_inputs(model, self.inputs), turn_slip=self.turn_slip)
             for c in force:
                 out[c] = np.asarray(res[_OUT[c]], float)[self.rows[c]]
         if "FZ" in channels:

@@ -20,6 +20,7 @@ import math
 import numpy as np
 from scipy import stats
 
+from ..inputs import saturate_inputs
 from ..timeseries import both_ways
 
 __all__ = ["sweep_hysteresis"]
@@ -83,8 +84,9 @@ def sweep_hysteresis(reduction, raw, model, sigma: dict, alpha: float = 1e-3) ->
                 if float(g @ g) > 0:
                     lengths.append(-float(h[order] @ g) / float(g @ g))
             cond = grp.iloc[len(grp) // 2]
-            res = model.evaluate(float(np.mean(grp["FZ"])), 0.0, 0.0, float(cond["IA"]), 0.0, vx,
-                                 float(np.mean(grp["P"])))
+            res = model.evaluate(**saturate_inputs(model, dict(
+                fz=float(np.mean(grp["FZ"])), kappa=0.0, alpha=0.0, gamma=float(cond["IA"]), phit=0.0, vx=vx,
+                p=float(np.mean(grp["P"])))))
             model_lengths.append(float(res[out_name]))
         if not dof:
             continue
