@@ -1053,8 +1053,7 @@ def _ttc_dat(raw: bytes, path):
     if at is None:
         raise DataError(f"{path}: not a TTC run file: expected a header line, a row of channel names (ET V N SA IA "
                         "... FZ) and a row of units before the samples")
-    names = lines[at].split()
-    units = lines[at + 1].split()
+    names, units = _ttc_fields(lines[at]), _ttc_fields(lines[at + 1])
     if len(units) != len(names):
         raise DataError(f"{path}:{at + 2}: {len(units)} units for {len(names)} channels: expected one unit per "
                         f"channel named on line {at + 1}")
@@ -1078,6 +1077,17 @@ def _ttc_dat(raw: bytes, path):
         columns[name] = _numeric_column(table[j], lambda row, txt: f"{path}: sample {row + 1} (after line {at + 2}): "
                                                                  f"channel {name}: non-numeric value {txt!r}")
     return columns, dict(zip(names, units)), first
+
+
+def _ttc_fields(line: str) -> list[str]:
+    """The fields of a names or units row: tab-separated when the row has tabs (a unit may hold a blank, as in
+    ``deg C``), else separated by blanks."""
+    if "\t" not in line:
+        return line.split()
+    fields = [f.strip() for f in line.rstrip("\r\n").split("\t")]
+    while fields and not fields[-1]:
+        fields.pop()
+    return fields
 
 
 def _ttc_names_line(lines) -> int | None:

@@ -420,3 +420,16 @@ def test_no_check_reads_values_outside_the_ranges(si, tmp_path):
     assert load_data(data) is data and "plausibility check skipped on request" in data.history
     with pytest.raises(DataError, match="channel VX"):
         load_data(TyreData(data.frame.copy()))
+
+
+def test_ttc_dat_units_with_blanks_in_a_tab_separated_row(si, tmp_path):
+    """Tab-separated names and units rows: a unit such as ``deg C`` holds a blank and is one field."""
+    cols = _ttc_columns(si)
+    units = ["deg C" if u == "degC" else u for u in TTC_UNITS]
+    lines = ["run 12 (written by this test, synthetic)", "\t".join(TTC_NAMES) + "\t", "\t".join(units) + "\t"]
+    lines += ["\t".join(f"{cols[n][i]:.15g}" for n in TTC_NAMES) for i in range(len(si))]
+    path = tmp_path / "B0000run15.dat"
+    path.write_text("\r\n".join(lines) + "\r\n")
+    data = read_data(path)
+    _close(data, si, ["FZ", "SA", "IA", "VX", "P", "FY", "MZ", "RL"])
+    assert data.units.get("FZ") == "N" and np.all(data.array("TSTC") == 45.0)
