@@ -140,6 +140,7 @@ def simulate(args, say):
     v = args.speed
     static = model.evaluate(fz=fz, kappa=0.0, alpha=0.0, vx=v, p=p)
     rl, re = float(static.rl), float(static.re)
+    p = float(static.p)  # as used: saturated to PRESMIN..PRESMAX (a note says so), for the ring as for the height
     say(f"building the SWIFT stepper for {Path(args.file).name} (C compiled on first use and cached in "
         "~/.cache/mftyre; a minute at most)")
     tyre = SwiftTyre(model, road, axle=args.axle, rim="speed", x_range=(args.start - 1.0, args.start + args.distance + 1.0))

@@ -433,3 +433,16 @@ def test_ttc_dat_units_with_blanks_in_a_tab_separated_row(si, tmp_path):
     data = read_data(path)
     _close(data, si, ["FZ", "SA", "IA", "VX", "P", "FY", "MZ", "RL"])
     assert data.units.get("FZ") == "N" and np.all(data.array("TSTC") == 45.0)
+
+
+def test_swift_command_below_presmin_holds_the_load_it_was_asked(tmp_path, capsys):
+    """A pressure below PRESMIN is saturated (and said so) for the axle height and for the SWIFT run alike: the
+    static load on a flat road is the --fz asked (before, the axle was placed at 2.0 bar and the ring rolled at
+    1.0 bar, carrying 40 % less)."""
+    tir = TIR_FILES / "car_205_60R15_mf62_swift.tir"
+    csv = tmp_path / "low.csv"
+    assert main(["swift", str(tir), "--speed", "10", "--fz", "4kN", "--p", "1bar", "--distance", "0.3",
+                 "--csv", str(csv), "--quiet"]) == 0
+    out = capsys.readouterr()
+    assert "saturated" in out.err and "p 1.86 bar" in out.out
+    assert pd.read_csv(csv)["fz"].iloc[0] == pytest.approx(4000.0, rel=0.03)
