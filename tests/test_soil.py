@@ -13,7 +13,7 @@ from conftest import MFEVAL_DIR, SHARED, TIR_FILES, require_shared
 from mftyre.backend import NUMPY
 from mftyre.errors import DataError, ModelInputError
 from mftyre.model import load_tir
-from mftyre.soil import Ground, SinkageError, Soil, SoftSoilTyre, builtin_soils, read_soils, soil
+from mftyre.soil import ConeIndexTyre, Ground, SinkageError, Soil, SoftSoilTyre, builtin_soils, read_soils, soil
 from mftyre.soil.equations import (bulldozing_coefficients, compaction_resistance, critical_pressure,
                                    hard_ground_footprint, rigid_wheel_sinkage)
 
@@ -329,6 +329,22 @@ def test_agricultural_contact_width_and_carcass_pressure(tir):
     assert np.all(out.carcass_pressure > 0)
     np.testing.assert_allclose(out.carcass_pressure, fz / (4 * a * b) - p, rtol=1e-12)
     assert np.all(out.contact_width == prm.WIDTH)
+
+
+@pytest.mark.parametrize("tir", [CAR, *_FOREIGN], ids=lambda p: p.name)
+def test_carcass_pressure_never_negative_on_car_tyres(tir):
+    """The car files' gross patch 4ab carries less than the inflation pressure at most loads and pressures
+    (Fz / (4ab) - p_i down to -0.5 p_i on the TNO file): p_c is 0 there, never negative, in both soil models."""
+    model = load_tir(require_shared(tir) if tir in _FOREIGN else tir)
+    prm = model.params
+    fz = np.linspace(0.25, 2.0, 8)[:, None] * prm.FNOMIN
+    p = np.linspace(prm.PRESMIN, prm.PRESMAX, 6)[None, :]
+    _, a, b = hard_ground_footprint(prm, fz, p, NUMPY)
+    assert np.any(fz / (4 * a * b) < p)                     # the case this is about
+    for out in (SoftSoilTyre(model, "clayey_soil").evaluate(fz=fz, slip=0.1, p=p),
+                ConeIndexTyre(model, 1.0e6).evaluate(fz=fz, slip=0.1, p=p)):
+        assert np.all(out.carcass_pressure >= 0)
+        np.testing.assert_allclose(out.carcass_pressure, np.maximum(fz / (4 * a * b) - p, 0.0), rtol=1e-12)
 
 
 def test_drawbar_pull_rises_with_slip_to_a_saturating_maximum():

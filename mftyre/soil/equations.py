@@ -100,8 +100,8 @@ from ..errors import ModelInputError
 from ..formula import moments, vertical
 
 __all__ = ["SoilEffects", "rigid_wheel_sinkage", "critical_pressure", "compaction_resistance",
-           "bulldozing_coefficients", "hard_ground_footprint", "flat_load", "soft_soil", "OUTPUTS",
-           "ARC_NODES", "FLAT_NODES"]
+           "bulldozing_coefficients", "hard_ground_footprint", "carcass_pressure", "flat_load", "soft_soil",
+           "OUTPUTS", "ARC_NODES", "FLAT_NODES"]
 
 #: Gauss-Legendre nodes on the front arc (in s, theta = theta_e - (theta_e - theta_f) s^m) and on the flat part
 ARC_NODES, FLAT_NODES = 10, 12
@@ -121,7 +121,8 @@ OUTPUTS = {
     "contact_width": ("m", "width B of the soil contact (arc and flat part): the section width WIDTH"),
     "ground_pressure": ("Pa", "normal stress under the flat part, F_t / (2 a_t B) = k z_0^n"),
     "flat_load": ("N", "load F_t carried by the flat part (the rest by the front arc)"),
-    "carcass_pressure": ("Pa", "carcass stiffness pressure p_c = Fz / (4 a_h b_h) - p_i on hard ground at this load"),
+    "carcass_pressure": ("Pa", "carcass stiffness pressure p_c = max(Fz / (4 a_h b_h) - p_i, 0) on hard ground at "
+                               "this load (see carcass_pressure)"),
     "deflection": ("m", "tyre deflection: the .tir's Fz(rho, p) at the flat load F_t"),
     "rolling_radius": ("m", "radius r_f of the tread speed omega r_f on the flat part (.tir's Re at F_t)"),
     "compaction_resistance": ("N", "compaction resistance R_c (horizontal part of the arc's normal stress)"),
@@ -198,6 +199,14 @@ def hard_ground_footprint(prm, fz, p, be):
         rho = vertical.deflection_61(prm, fz, r_omega, zero, zero, zero, dpi, be)
     a, b = vertical.contact_patch(prm, fz, dpi, be)
     return rho, a, b
+
+
+def carcass_pressure(fz, a, b, p, be):
+    """Wong's carcass stiffness pressure p_c: what the mean pressure over the hard-ground patch (half length a, half
+    width b: the .tir's) adds to the inflation pressure p, max(Fz / (4 a b) - p, 0). The carcass only adds
+    pressure; where the gross rectangle 4ab carries less than p (a car tyre's patch: grooves, rounded ends), the
+    rectangle is larger than the area that carries the load and p_c is 0, not negative."""
+    return be.fmax(fz / (4.0 * a * b) - p, 0.0)
 
 
 class _Contact(SimpleNamespace):
@@ -383,7 +392,7 @@ def soft_soil(prm, soil, fz, slip, alpha, p, vx, be, effects=SoilEffects()):
         "contact_width": width + zero,
         "ground_pressure": g.sigma_f,
         "flat_load": load_t,
-        "carcass_pressure": fz / (4.0 * a_h * b_h) - p,
+        "carcass_pressure": carcass_pressure(fz, a_h, b_h, p, be),
         "deflection": rho_t,
         "rolling_radius": r_f,
         "compaction_resistance": compaction,
