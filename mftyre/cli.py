@@ -506,7 +506,7 @@ def add_data_options(parser) -> None:
 
     group = parser.add_argument_group("reading DATA (see the DATA section below)")
     group.add_argument("--columns", type=_option_type(parse_columns, "column map"), metavar="CH=COLUMN,...",
-                       help="file columns of the channels, e.g. FZ=Fz_N,SA=alpha (CSV)")
+                       help="file columns of the channels, e.g. FZ=Fz_N,SA=alpha (CSV; TTC: e.g. SL=SR)")
     group.add_argument("--units", type=_option_type(parse_units, "units"), metavar="CH=UNIT,...",
                        help="units of the file's channels, e.g. SA=deg,P=psi,VX=km/h,RL=mm (CSV; default SI)")
     group.add_argument("--axes", choices=tuple(AXES), default=None,

@@ -986,8 +986,8 @@ TTC_METRIC_UNITS = {"ET": "s", "V": "kph", "N": "rpm", "SA": "deg", "IA": "deg",
                     "FX": "N", "FY": "N", "FZ": "N", "MX": "N-m", "MZ": "N-m", "SL": "-"}
 
 
-def read_ttc(path, *, axes: str = "SAE", defaults: dict | None = None, check: bool = True,
-             max_bytes: int = DATA_MAX_BYTES) -> TyreData:
+def read_ttc(path, *, columns: dict | None = None, axes: str = "SAE", defaults: dict | None = None,
+             check: bool = True, max_bytes: int = DATA_MAX_BYTES) -> TyreData:
     """Read a Calspan tyre test consortium (TTC) run: a ``.dat`` text file (a free header line, a row of
     channel names, a row of units, then whitespace-separated samples) or a ``.mat`` file holding the same
     channels as vectors (MATLAB 5 format; units from its ``channel`` struct when present, else
@@ -995,18 +995,21 @@ def read_ttc(path, *, axes: str = "SAE", defaults: dict | None = None, check: bo
     their units converted to SI (``kph``, ``mph``, ``deg``, ``cm``, ``in``, ``kPa``, ``psi``, ``N``, ``lb``,
     ``N-m``, ``ft-lb``, ``rpm``); ``ET`` is kept as ``TIME`` so the programme recogniser sees a time series. The
     files use SAE axes (``axes="SAE"``: FZ < 0 under load; see :data:`AXES_HELP`). ``defaults`` and ``check``
-    as for :func:`read_csv`."""
+    as for :func:`read_csv`. ``columns``: file channel -> canonical channel for a channel the default map does not
+    give, e.g. ``{"SR": "SL"}`` for a run that records the slip ratio only as SR (the default channel of that
+    canonical channel is then kept as an extra column, ``TTC_SL``)."""
     path = Path(path)
     raw = read_user_file(path, max_bytes=max_bytes, what="TTC data file", error=DataError)
     if raw.startswith(b"MATLAB"):
-        columns, units = _ttc_mat(raw, path)
+        channels, units = _ttc_mat(raw, path)
         locate = lambda row: f"{path}: sample {row + 1}"  # noqa: E731
     else:
-        columns, units, first = _ttc_dat(raw, path)
+        channels, units, first = _ttc_dat(raw, path)
         locate = lambda row: f"{path}:{first + row}"  # noqa: E731
+    mapping = _ttc_mapping(list(channels), columns, path)
     out, column_of, unit_record = {}, {}, {}
-    for name, values in columns.items():
-        ch = TTC_CHANNELS.get(name.upper())
+    for name, values in channels.items():
+        ch = mapping.get(name)
         unit = units.get(name, TTC_METRIC_UNITS.get(name.upper(), ""))
         if name.upper() == "ET":
             try:
@@ -1015,8 +1018,8 @@ def read_ttc(path, *, axes: str = "SAE", defaults: dict | None = None, check: bo
                 raise DataError(f"{path}: channel ET: unknown time unit {unit!r}; expected s, ms, min") from None
             out["TIME"] = values * factor
             continue
-        if ch is None:
-            out[name] = values
+        if ch is None:  # an extra column; a default channel replaced through ``columns`` keeps a distinct name
+            out[f"TTC_{name}" if name.upper() in CHANNELS else name] = values
             continue
         if ch in column_of:
             raise DataError(f"{path}: channel {name} appears twice (also as {column_of[ch]})")
@@ -1040,6 +1043,20 @@ def read_ttc(path, *, axes: str = "SAE", defaults: dict | None = None, check: bo
         check_plausible(frame, str(path), column_of)
     return TyreData(frame, tyre=path.stem, source=str(path), units=unit_record,
                     history=[f"TTC run read from {path.name}"] + _import_notes(axes, None, defaults, check))
+
+
+def _ttc_mapping(names, columns, path) -> dict:
+    """File channel -> canonical channel: :data:`TTC_CHANNELS`, with ``columns`` (file channel -> canonical)
+    taking precedence; a canonical channel given by ``columns`` is no longer taken from its default channel."""
+    mapping = {n: TTC_CHANNELS[n.upper()] for n in names if n.upper() in TTC_CHANNELS}
+    for col, ch in (columns or {}).items():
+        if col not in names:
+            raise DataError(f"{path}: channel {col!r} (for {ch}) not in the file; its channels are {', '.join(names)}")
+        if str(ch).upper() not in CHANNELS:
+            raise DataError(f"{path}: unknown channel {ch!r} for {col!r}; channels: {', '.join(CHANNELS)}")
+        mapping = {n: c for n, c in mapping.items() if c != ch.upper()}
+        mapping[col] = ch.upper()
+    return mapping
 
 
 def _ttc_dat(raw: bytes, path):
@@ -1162,19 +1179,22 @@ def data_format(path) -> str:
 def read_data(path, *, columns: dict | None = None, units: dict | None = None, axes: str | None = None,
               defaults: dict | None = None, check: bool = True, max_bytes: int = DATA_MAX_BYTES) -> TyreData:
     """Read a measurement file of any supported format (recognised by content, :func:`data_format`): TYDEX,
-    TTC (.dat / .mat) or CSV. ``columns`` and ``units`` are for CSV (the other formats name their channels
-    and units); ``axes`` is the file's axis system (default: ISO-W, SAE for TTC files); ``defaults`` are
+    TTC (.dat / .mat) or CSV. ``columns`` is for CSV and TTC, ``units`` for CSV (the other formats name their
+    channels and units); ``axes`` is the file's axis system (default: ISO-W, SAE for TTC files); ``defaults`` are
     constant channels; ``check`` refuses implausible values (:func:`check_plausible`). The one home of the
     options of ``mftyre fit``, ``gaps`` and ``plot`` (``--columns``, ``--units``, ``--axes``, ``--set``)."""
     kind = data_format(path)
-    if kind != "csv" and (columns or units):
-        which = "--columns/--units" if speaking() == "cli" else "columns=/units="
+    if kind == "tydex" and (columns or units) or kind == "ttc" and units:
+        which = ("--columns/--units" if kind == "tydex" else "--units") if speaking() == "cli" else \
+            ("columns=/units=" if kind == "tydex" else "units=")
         raise DataError(f"{path}: a {'TYDEX' if kind == 'tydex' else 'TTC'} file names its channels and units; "
-                        f"{which} are for CSV files")
+                        f"{which} are for CSV files" + (" (--columns maps TTC channels, e.g. SL=SR)"
+                                                        if kind == "ttc" and speaking() == "cli" else ""))
     if kind == "tydex":
         data = read_tydex(path, defaults=defaults, axes=axes or "ISO-W", check=check, max_bytes=max_bytes)
     elif kind == "ttc":
-        data = read_ttc(path, defaults=defaults, axes=axes or "SAE", check=check, max_bytes=max_bytes)
+        data = read_ttc(path, columns=columns, defaults=defaults, axes=axes or "SAE", check=check,
+                        max_bytes=max_bytes)
     else:
         data = read_csv(path, columns=columns, units=units, defaults=defaults, axes=axes or "ISO-W", check=check,
                         max_bytes=max_bytes)

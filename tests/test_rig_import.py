@@ -446,3 +446,21 @@ def test_swift_command_below_presmin_holds_the_load_it_was_asked(tmp_path, capsy
     out = capsys.readouterr()
     assert "saturated" in out.err and "p 1.86 bar" in out.out
     assert pd.read_csv(csv)["fz"].iloc[0] == pytest.approx(4000.0, rel=0.03)
+
+
+def test_ttc_run_with_sr_only_read_through_the_column_map(si, tmp_path, capsys):
+    """Cornering runs that record the slip ratio only as SR: the error names --columns SL=SR, and that option
+    works on a TTC file (it was refused: '--columns/--units are for CSV files'); also through fit."""
+    cols = {k: v for k, v in _ttc_columns(si).items() if k != "SL"} | {"SR": _to_sae(si)["SL"]}
+    names = [n if n != "SL" else "SR" for n in TTC_NAMES]
+    lines = ["run 16 (written by this test, synthetic)", "\t".join(names), "\t".join(TTC_UNITS)]
+    lines += ["\t".join(f"{cols[n][i]:.15g}" for n in names) for i in range(len(si))]
+    path = tmp_path / "B0000run16.dat"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(DataError, match=r"columns=\{'SR': 'SL'\}"):
+        read_data(path)
+    _close(read_data(path, columns={"SR": "SL"}), si, ["SL", "SA", "FZ", "FY"])
+    assert main(["fit", str(path), "-o", str(tmp_path / "x.tir"), "--stages", "pure_fy", "--quiet"]) == 1
+    assert "--columns SL=SR" in capsys.readouterr().err
+    assert main(["fit", str(path), "-o", str(tmp_path / "x.tir"), "--stages", "pure_fy", "--quiet",
+                 "--columns", "SL=SR"]) == 0
