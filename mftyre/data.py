@@ -92,7 +92,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .errors import DataError, speaking, speaking_cli
+from .errors import DataError, speaking, speaking_cli, spelled
 from .files import DATA_MAX_BYTES, check_outputs, open_user_file, read_user_file, write_atomically
 from .tir import UNIT_FACTORS
 
@@ -313,12 +313,15 @@ _TYPICAL = {"SA": (0.02, 0.6), "IA": (0.005, 0.3), "SL": (0.01, 1.0), "VX": (0.5
             "RL": (0.1, 1.5), "RE": (0.1, 1.5), "RHO": (0.002, 0.2), "FZ": (30.0, 2e5)}
 
 
-def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of: dict | None = None) -> None:
+def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of: dict | None = None,
+                    stated: str = "") -> None:
     """DataError at the first channel whose values no tyre measurement in SI units and ISO-W axes has: |SA|,
     |IA| beyond 1 rad (degrees?), |SL| beyond 2 (percent?), VX above 100 m/s (km/h?), P below 20 kPa (kPa,
     bar, psi?), RL or RE above 2 m, RHO above 0.5 m (mm, cm?), FZ all below 30 N (kN?), FZ mostly negative
     (SAE axes?), FY rising with SA (slip angle or lateral force reversed?). The message names the channel (and
-    the file's column), what was seen, the likely unit or axis system and the option that converts it."""
+    the file's column), what was seen, the likely unit or axis system and the option that converts it.
+    ``stated``: where a file that states its own units (TYDEX, TTC) states them; the remedy for a unit is then
+    to correct that statement (``--units`` is for CSV files)."""
     frame = data.frame if isinstance(data, TyreData) else data
     where = where or (data.source if isinstance(data, TyreData) else "") or "<data>"
     column_of = column_of or {}
@@ -355,6 +358,11 @@ def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of:
         problems.append(f"{name(ch)}: {shown} is {typical:.4g} {si}, {side} the {expected} {si} of any tyre "
                         f"measurement in SI units: {guess}")
     if problems:
+        if stated:
+            likely = ", ".join(f"{column_of.get(ch, ch)} looks like {u}" for ch, u in fixes.items())
+            raise DataError(f"{where}: {'; '.join(problems)}. The file states its units ({stated}): correct the "
+                            f"wrong ones in a copy of the file ({likely}), or read it unchecked with "
+                            f"{spelled('check=False', '--no-check')}")
         if speaking() == "cli":
             fix = "--units " + ",".join(f"{ch}={u}" for ch, u in fixes.items())
         else:
@@ -748,7 +756,7 @@ def _read_tydex(fh, path: Path, defaults, axes="ISO-W", check=True) -> TyreData:
                         f"({', '.join(_TYDEX_NAMES[c][0] for c in missing)}) nor a constant")
     _check_values(frame, lambda row: f"{path}:{lines()[row]}", name_of)
     if check:
-        check_plausible(frame, str(path), name_of)
+        check_plausible(frame, str(path), name_of, stated="the unit column of its **MEASURCHANNELS lines")
     tyre = str(state.header.get("MEASID", ("", "", ""))[0] or path.stem)
     consts = {k: v[0] for k, v in {**state.header, **state.constants}.items()}
     return TyreData(frame, tyre=tyre, source=str(path), units=units, constants=consts,
@@ -1040,7 +1048,8 @@ def read_ttc(path, *, columns: dict | None = None, axes: str = "SAE", defaults: 
                         f"{remedy('columns', 'SL', 'SR')} or give a constant")
     _check_required(frame, path, locate, column_of)
     if check:
-        check_plausible(frame, str(path), column_of)
+        check_plausible(frame, str(path), column_of, stated="the channel struct of the .mat file, else the metric TTC "
+                        "units" if raw.startswith(b"MATLAB") else "the units row below the channel names")
     return TyreData(frame, tyre=path.stem, source=str(path), units=unit_record,
                     history=[f"TTC run read from {path.name}"] + _import_notes(axes, None, defaults, check))
 

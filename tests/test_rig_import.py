@@ -464,3 +464,23 @@ def test_ttc_run_with_sr_only_read_through_the_column_map(si, tmp_path, capsys):
     assert "--columns SL=SR" in capsys.readouterr().err
     assert main(["fit", str(path), "-o", str(tmp_path / "x.tir"), "--stages", "pure_fy", "--quiet",
                  "--columns", "SL=SR"]) == 0
+
+
+def test_files_that_state_their_units_are_not_told_to_use_units(si, tmp_path, capsys):
+    """A TYDEX file whose MEASURCHANNELS say rad for angles written in degrees: the error named --units, which
+    such files refuse; it now says where the file states its units and names --no-check."""
+    frame = si.assign(SA=si["SA"] / DEG, IA=si["IA"] / DEG)
+    lines = ["**HEADER", "RELEASE   Release of TYDEX-format                 1.3", "**MEASURCHANNELS"]
+    names = {"FZ": "FZW", "SL": "LONGSLIP", "SA": "SLIPANGL", "IA": "INCLANGL", "VX": "LONGVEL", "P": "INFLPRES",
+             "FY": "FYW"}
+    units = {"FZ": "N", "SL": "-", "SA": "rad", "IA": "rad", "VX": "m/s", "P": "Pa", "FY": "N"}
+    lines += [f"{names[ch]:<10}{ch:<30}{units[ch]:<10}1 0 0" for ch in names] + ["**MEASURDATA"]
+    lines += [" ".join(f"{frame[ch].iloc[i]:.12g}" for ch in names) for i in range(len(frame))] + ["**END"]
+    path = tmp_path / "lie.tdx"
+    path.write_text("\n".join(lines) + "\n")
+    assert main(["fit", str(path), "-o", str(tmp_path / "x.tir"), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "channel SA (file column 'SLIPANGL')" in err and "**MEASURCHANNELS" in err and "--no-check" in err
+    assert "SLIPANGL looks like deg" in err and "--units" not in err
+    with pytest.raises(DataError, match="check=False"):
+        read_data(path)
