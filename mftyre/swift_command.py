@@ -55,7 +55,8 @@ def register(subparsers) -> None:
                    help="a CSV file with columns x, z [m], or obstacles such as 'cleat(x0=1.0, length=0.05, "
                         "height=0.01) + step(3, 0.02)' (flat, step, cleat, trapezoid, bump, sine); default flat")
     p.add_argument("--speed", type=_quantity("vx"), required=True, metavar="V", help="forward speed (m/s, km/h, mph)")
-    p.add_argument("--fz", type=_quantity("fz"), default=None, metavar="FZ", help="axle load (N, kN; default FNOMIN)")
+    p.add_argument("--fz", type=_quantity("fz"), default=None, metavar="FZ",
+                   help="axle load (N, kN, lbf; default FNOMIN)")
     p.add_argument("--p", type=_quantity("p"), default=None, metavar="P",
                    help="inflation pressure (Pa, kPa, bar, psi; default INFLPRES)")
     p.add_argument("--axle", choices=("height", "load"), default="height",
@@ -140,7 +141,7 @@ def simulate(args, say):
     v = args.speed
     static = model.evaluate(fz=fz, kappa=0.0, alpha=0.0, vx=v, p=p)
     rl, re = float(static.rl), float(static.re)
-    p = float(static.p)  # as used: saturated to PRESMIN..PRESMAX (a note says so), for the ring as for the height
+    p = float(static.p)  # as used (saturated to PRESMIN..PRESMAX, a note says so): for the ring as for the height
     say(f"building the SWIFT stepper for {Path(args.file).name} (C compiled on first use and cached in "
         "~/.cache/mftyre; a minute at most)")
     tyre = SwiftTyre(model, road, axle=args.axle, rim="speed", x_range=(args.start - 1.0, args.start + args.distance + 1.0))

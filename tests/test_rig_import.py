@@ -484,3 +484,11 @@ def test_files_that_state_their_units_are_not_told_to_use_units(si, tmp_path, ca
     assert "SLIPANGL looks like deg" in err and "--units" not in err
     with pytest.raises(DataError, match="check=False"):
         read_data(path)
+
+
+def test_load_in_pounds_on_the_command_line():
+    """US rig sheets give loads in lbf: `mftyre eval/soil/swift --fz 1200lbf` (was: unknown unit)."""
+    from mftyre.cli import parse_sweep
+
+    np.testing.assert_allclose(parse_sweep("fz", "1200lbf,1000lb").values, [1200 * 4.4482216152605,
+                                                                            1000 * 4.4482216152605])
