@@ -812,3 +812,13 @@ def test_balance_without_a_root_in_the_bracket_is_a_typed_error():
     absurd = model.with_params(VERTICAL_STIFFNESS=model.params.VERTICAL_STIFFNESS * 1e30)
     with pytest.raises(ModelInputError, match="flat load below 1e-30 Fz"):
         SoftSoilTyre(absurd, "paddy_soil").evaluate(fz=10e3, slip=0.1)
+
+
+def test_towed_outside_the_bracket_says_where_and_why():
+    """A tyre sunk to near its axle needs driving torque even at slip -1: the error names the operating point and
+    the sinkage (it said 'the soil cannot turn the wheel', the opposite of what happens)."""
+    tyre = SoftSoilTyre(AGRI_SMALL, "lean_clay_wet")
+    fz = tyre.params.FNOMIN * np.array([1.0, 1.5])
+    with pytest.raises(ModelInputError, match=r"at fz = 33832.5 N, p = 150000 Pa the wheel needs a driving torque "
+                                              r"even turning at half its free-rolling speed \(slip -1; sinkage 0.6"):
+        tyre.towed(fz=fz, p=1.5e5, vx=0.5, alpha=0.05)
