@@ -754,6 +754,26 @@ def test_rear_tyre_in_the_front_rut_repetitive_loading():
     np.testing.assert_allclose(lhs, rhs, rtol=1e-9)
 
 
+def test_rear_tyre_where_the_soil_would_spring_back_above_its_surface():
+    """On firm LETE sand with Wong's sand unloading constants sigma_1 / k_u exceeds the rut depth z_1: the soil
+    rebounds to its surface, no further. The reloading line then starts from zero stress at the surface (it
+    started at 99 kPa there: the rear tyre sank less than the front and met more compaction resistance)."""
+    model = load_tir(AGRI)
+    front_tyre = SoftSoilTyre(model, "lete_sand", unloading=SANDY_UNLOADING)
+    front = front_tyre.evaluate(fz=25e3, slip=0.1, p=1.2e5)
+    s = soil("lete_sand")
+    z_1 = float(front.sinkage)
+    sigma_1 = s.modulus(model.params.WIDTH) * z_1**s.n
+    assert sigma_1 / (SANDY_UNLOADING[1] * z_1) > z_1                      # the case this is about
+    rear = front_tyre.following(front).evaluate(fz=25e3, slip=0.1, p=1.2e5)
+    z_2 = float(rear.sinkage)
+    assert z_1 < z_2 < 2 * z_1
+    assert float(rear.compaction_resistance) < float(front.compaction_resistance)
+    work = model.params.WIDTH * quad(lambda d: sigma_1 * d / z_1 if d < z_1 else s.modulus(model.params.WIDTH)
+                                     * d**s.n, 0.0, z_2, points=[z_1], limit=200)[0]
+    assert float(rear.compaction_resistance) == pytest.approx(work, rel=1e-10)
+
+
 def test_multi_pass_bad_input():
     with pytest.raises(ModelInputError, match="needs unloading"):
         SoftSoilTyre(AGRI, "sandy_loam", rut=0.03)
