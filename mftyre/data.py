@@ -511,8 +511,15 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
     if len(raw.columns) != len(header):  # pragma: no cover - pandas and the csv module agree on the header
         raise DataError(f"{path}: line 1: cannot read the header")
     raw.columns = header
+    if len(header) == 1 and header[0].upper() not in CHANNELS:
+        for sep, name in ((";", "semicolons"), ("\t", "tabs"), (" ", "blanks")):
+            if len(header[0].split(sep)) > 2:
+                raise DataError(f"{path}: line 1: one column named {header[0][:60]!r}: the columns look separated "
+                                f"by {name}; expected comma-separated values (save the file as CSV with commas and "
+                                f"a decimal point)")
     if len(raw) == 0:
         raise DataError(f"{path}: no data rows: expected a header line followed by one line per sample")
+    _refuse_units_row(raw, header, path)
     mapping = {c: c.upper() for c in header if c.upper() in CHANNELS}
     for col, ch in (columns or {}).items():
         if col not in header:
@@ -554,6 +561,30 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
     unit_record = {ch: units.get(ch, _SI_NAME[CHANNELS[ch][0]]) for ch in CHANNELS if ch in frame.columns}
     return TyreData(frame, tyre=tyre or path.stem, source=str(path), units=unit_record,
                     history=_import_notes(axes, units, defaults, check))
+
+
+def _refuse_units_row(raw, header, path):
+    """A DataError naming the units row when line 2 holds no number but words such as N, deg, kPa (a units row
+    under the names, as many lab exports have)."""
+    first = [str(v).strip() for v in raw.iloc[0].tolist()]
+    if len(first) < 2 or any(_is_number(v) for v in first if v) or not any(first):
+        return
+    known = [(col, unit) for col, unit in zip(header, first) if col.upper() in CHANNELS and unit
+             and _known_unit(col.upper(), unit)]
+    if known:
+        given = ",".join(f"{col.upper()}={unit}" for col, unit in known if unit_to_si(col.upper(), unit) != 1.0)
+        fix = "(its units are SI)" if not given else \
+            (f"and give them with --units {given}" if speaking() == "cli" else f"and give them with units= ({given})")
+        raise DataError(f"{path}: line 2 holds units ({', '.join(first[:8])}{' ...' if len(first) > 8 else ''}), not "
+                        f"samples: delete that line {fix}")
+
+
+def _known_unit(channel: str, unit: str) -> bool:
+    try:
+        unit_to_si(channel, unit)
+    except ValueError:
+        return False
+    return True
 
 
 def _csv_header(first: bytes, path) -> list[str]:

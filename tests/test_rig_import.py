@@ -492,3 +492,24 @@ def test_load_in_pounds_on_the_command_line():
 
     np.testing.assert_allclose(parse_sweep("fz", "1200lbf,1000lb").values, [1200 * 4.4482216152605,
                                                                             1000 * 4.4482216152605])
+
+
+def test_lab_exports_semicolons_tabs_and_a_units_row(si, tmp_path, capsys):
+    """Exports as labs make them: ';' with decimal commas, tabs, a units row under the names. Each is named for
+    what it is (they read as 'missing channels FZ, SA ...', suggesting --columns, or 'non-numeric value N')."""
+    semi = tmp_path / "semi.csv"
+    si.to_csv(semi, sep=";", decimal=",", index=False)
+    with pytest.raises(DataError, match=r"line 1: one column named 'FZ;SL;SA.*separated by semicolons"):
+        read_data(semi)
+    tabs = tmp_path / "tabs.txt"
+    si.to_csv(tabs, sep="\t", index=False)
+    with pytest.raises(DataError, match=r"separated by tabs"):
+        read_data(tabs)
+    raw = si.assign(SA=si["SA"] / DEG, P=si["P"] / 1e3)
+    units = tmp_path / "units.csv"
+    names = {"SA": "deg", "P": "kPa", "IA": "rad", "SL": "-", "VX": "m/s", "OMEGA": "rad/s"}
+    row = [names.get(c, "N" if c.startswith("F") else "m" if c.startswith("R") else "Nm") for c in raw.columns]
+    units.write_text(",".join(raw.columns) + "\n" + ",".join(row) + "\n" + raw.to_csv(index=False, header=False))
+    assert main(["fit", str(units), "-o", str(tmp_path / "x.tir"), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "line 2 holds units (N, -, deg, rad, m/s, kPa, N, N ...)" in err and "--units SA=deg,P=kPa" in err
