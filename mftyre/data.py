@@ -357,6 +357,20 @@ def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of:
         fixes[ch] = (likely or candidates)[0]
         problems.append(f"{name(ch)}: {shown} is {typical:.4g} {si}, {side} the {expected} {si} of any tyre "
                         f"measurement in SI units: {guess}")
+    lever = "RE" if "RE" in frame.columns else "RL"
+    if {"VX", "OMEGA", lever} <= set(frame.columns) and not {"VX", lever} & set(fixes):  # (VX, radius in SI)
+        radius = frame[lever].to_numpy(float)
+        vx, omega = frame["VX"].to_numpy(float), frame["OMEGA"].to_numpy(float)
+        ok = np.isfinite(vx) & np.isfinite(omega) & np.isfinite(radius) & (np.abs(omega * radius) > 0.5)
+        if ok.sum() >= 5:
+            ratio = float(np.median(np.abs(vx[ok]) / np.abs(omega[ok] * radius[ok])))
+            for ch, unit, factor in (("VX", "km/h", unit_to_si("VX", "km/h")), ("VX", "mph", unit_to_si("VX", "mph")),
+                                     ("OMEGA", "rpm", 1.0 / unit_to_si("OMEGA", "rpm"))):
+                if abs(ratio * factor - 1.0) < 0.15 and ch not in fixes:
+                    fixes[ch] = unit
+                    problems.append(f"{name(ch)}: VX / (OMEGA x radius) is {ratio:.3g} (about 1 for a rolling wheel "
+                                    f"in SI units): {ch} looks like {unit}")
+                    break
     if problems:
         if stated:
             likely = ", ".join(f"{column_of.get(ch, ch)} looks like {u}" for ch, u in fixes.items())
@@ -386,17 +400,6 @@ def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of:
                                 f"angle or the lateral force is reversed: {remedy('axes', 'SA', 'adapted-ISO')} (SA "
                                 f"reversed) or {remedy('axes', 'SA', 'adapted-SAE')} (FY, MZ reversed); see the "
                                 f"axis systems in the README")
-    if {"VX", "OMEGA"} <= set(frame.columns) and ("RE" in frame.columns or "RL" in frame.columns):
-        radius = frame["RE" if "RE" in frame.columns else "RL"].to_numpy(float)
-        vx, omega = frame["VX"].to_numpy(float), frame["OMEGA"].to_numpy(float)
-        ok = np.isfinite(vx) & np.isfinite(omega) & np.isfinite(radius) & (np.abs(omega * radius) > 0.5)
-        if ok.sum() >= 5:
-            ratio = float(np.median(np.abs(vx[ok]) / np.abs(omega[ok] * radius[ok])))
-            for ch, unit, factor in (("VX", "km/h", unit_to_si("VX", "km/h")), ("VX", "mph", unit_to_si("VX", "mph")),
-                                     ("OMEGA", "rpm", 1.0 / unit_to_si("OMEGA", "rpm"))):
-                if abs(ratio * factor - 1.0) < 0.15:
-                    raise DataError(f"{where}: {name(ch)}: VX / (OMEGA x radius) is {ratio:.3g} (about 1 for a "
-                                    f"rolling wheel in SI units): {ch} looks like {unit}: {remedy('units', ch, unit)}")
 
 
 # --------------------------------------------------------------------------------------------- TyreData

@@ -513,3 +513,16 @@ def test_lab_exports_semicolons_tabs_and_a_units_row(si, tmp_path, capsys):
     assert main(["fit", str(units), "-o", str(tmp_path / "x.tir"), "--quiet"]) == 1
     err = capsys.readouterr().err
     assert "line 2 holds units (N, -, deg, rad, m/s, kPa, N, N ...)" in err and "--units SA=deg,P=kPa" in err
+
+
+def test_kpa_and_kmh_below_100_named_together(tmp_path):
+    """Pressure in kPa and speed in km/h at 60 km/h (below the 100 of the range check): one error names both,
+    P by its range and VX by VX / (OMEGA x radius) (VX was named only once P had been fixed)."""
+    model = mftyre.load_tir(TIR_FILES / "car_205_60R15_mf61.tir")
+    frame = trailer_programme(model, loads=(1.0,), pressures=(1.0,), cambers_deg=(0.0,), points=11,
+                              free_rolling_speeds=(16.7,), noise=0.5, seed=4).frame
+    path = _csv(tmp_path, frame.assign(P=frame["P"] / 1e3, VX=frame["VX"] * 3.6))
+    with pytest.raises(DataError, match=r"channel P: .*channel VX: VX / \(OMEGA x radius\) is 3.6.*"
+                                        r"units=\{'P': 'kPa', 'VX': 'km/h'\}"):
+        read_data(path)
+    np.testing.assert_allclose(read_data(path, units={"P": "kPa", "VX": "km/h"}).array("VX"), frame["VX"])
