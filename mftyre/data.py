@@ -371,23 +371,27 @@ def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of:
                     problems.append(f"{name(ch)}: VX / (OMEGA x radius) is {ratio:.3g} (about 1 for a rolling wheel "
                                     f"in SI units): {ch} looks like {unit}")
                     break
+    sae = ""  # the load's sign is independent of the units: named in the same error
+    if "FZ" in frame.columns:
+        fz = values("FZ")
+        if fz.size and np.mean(fz < 0) > 0.5:
+            sae = (f"{name('FZ')}: {100 * np.mean(fz < 0):.0f} % of the values are negative (median "
+                   f"{np.median(fz):.4g} N): the load is positive in ISO-W; the file is probably in SAE axes (z down): "
+                   f"{remedy('axes', 'FZ', 'SAE')}")
     if problems:
+        axes = f". Also {sae}" if sae else ""
         if stated:
             likely = ", ".join(f"{column_of.get(ch, ch)} looks like {u}" for ch, u in fixes.items())
             raise DataError(f"{where}: {'; '.join(problems)}. The file states its units ({stated}): correct the "
                             f"wrong ones in a copy of the file ({likely}), or read it unchecked with "
-                            f"{spelled('check=False', '--no-check')}")
+                            f"{spelled('check=False', '--no-check')}{axes}")
         if speaking() == "cli":
             fix = "--units " + ",".join(f"{ch}={u}" for ch, u in fixes.items())
         else:
             fix = "units={" + ", ".join(f"{ch!r}: {u!r}" for ch, u in fixes.items()) + "}"
-        raise DataError(f"{where}: {'; '.join(problems)}. Give the file's units, e.g. {fix}")
-    if "FZ" in frame.columns:
-        fz = values("FZ")
-        if fz.size and np.mean(fz < 0) > 0.5:
-            raise DataError(f"{where}: {name('FZ')}: {100 * np.mean(fz < 0):.0f} % of the values are negative "
-                            f"(median {np.median(fz):.4g} N): the load is positive in ISO-W; the file is probably in "
-                            f"SAE axes (z down): {remedy('axes', 'FZ', 'SAE')}")
+        raise DataError(f"{where}: {'; '.join(problems)}. Give the file's units, e.g. {fix}{axes}")
+    if sae:
+        raise DataError(f"{where}: {sae}")
     if {"SA", "FY"} <= set(frame.columns):
         sa, fy = frame["SA"].to_numpy(float), frame["FY"].to_numpy(float)
         near = np.isfinite(sa) & np.isfinite(fy) & (np.abs(sa) < math.radians(4.0))

@@ -526,3 +526,14 @@ def test_kpa_and_kmh_below_100_named_together(tmp_path):
                                         r"units=\{'P': 'kPa', 'VX': 'km/h'\}"):
         read_data(path)
     np.testing.assert_allclose(read_data(path, units={"P": "kPa", "VX": "km/h"}).array("VX"), frame["VX"])
+
+
+def test_degrees_and_sae_axes_named_in_one_error(si, tmp_path):
+    """A file in degrees and in SAE axes: one error names the units and the axis system (the axes came only
+    after the units had been fixed)."""
+    sae = _to_sae(si)
+    path = _csv(tmp_path, sae.assign(SA=sae["SA"] / DEG, IA=sae["IA"] / DEG))
+    with pytest.raises(DataError, match=r"channel SA: .*units=\{'SA': 'deg', 'IA': 'deg'\}\. Also channel FZ: "
+                                        r"100 % of the values are negative.*axes='SAE'"):
+        read_data(path)
+    _close(read_data(path, units={"SA": "deg", "IA": "deg"}, axes="SAE"), si)
