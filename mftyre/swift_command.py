@@ -21,6 +21,10 @@ _PLOTTED = (("fz", "N", "vertical force"), ("fx", "N", "longitudinal force"), ("
             ("w", "mm", "effective road height"))
 
 
+#: Most steps one `mftyre swift` run takes (its time histories: about 2 GB at this count).
+MAX_STEPS = 10_000_000
+
+
 def _quantity(name):
     from .cli import parse_sweep
 
@@ -79,6 +83,16 @@ def run(args) -> int:
 
     if args.speed <= 0:
         print("mftyre swift: --speed: expected a forward speed above 0", file=sys.stderr)
+        return 2
+    for option, value in (("--fz", args.fz), ("--p", args.p)):
+        if value is not None and not value > 0:
+            print(f"mftyre swift: {option}: expected a value above 0, got {value:g}", file=sys.stderr)
+            return 2
+    steps = args.distance / args.speed / args.dt
+    if steps > MAX_STEPS:
+        print(f"mftyre swift: --distance {args.distance:g} m at {args.speed:g} m/s in steps of --dt {args.dt:g} s is "
+              f"{steps:.3g} steps, more than the {MAX_STEPS:,} one run writes; shorten --distance or raise --dt",
+              file=sys.stderr)
         return 2
     try:
         check_outputs({"--csv": args.csv, "--plot": args.plot}, {"FILE.tir": args.file, "--road": _road_file(args)},

@@ -537,3 +537,16 @@ def test_degrees_and_sae_axes_named_in_one_error(si, tmp_path):
                                         r"100 % of the values are negative.*axes='SAE'"):
         read_data(path)
     _close(read_data(path, units={"SA": "deg", "IA": "deg"}, axes="SAE"), si)
+
+
+def test_swift_command_refuses_what_it_cannot_run(capsys):
+    """A negative axle load ran (as a tyre pulling the road), a distance of 1e9 m died with a NumPy MemoryError;
+    a zero pressure in eval said 'np.float64(0.0)'."""
+    tir = str(TIR_FILES / "car_205_60R15_mf62_swift.tir")
+    assert main(["swift", tir, "--speed", "10", "--fz=-3kN"]) == 2
+    assert "--fz: expected a value above 0, got -3000" in capsys.readouterr().err
+    assert main(["swift", tir, "--speed", "10", "--distance", "1e9"]) == 2
+    assert "1e+11 steps, more than the 10,000,000" in capsys.readouterr().err
+    assert main(["eval", tir, "--p", "0"]) != 0
+    err = capsys.readouterr().err
+    assert "got minimum 0.0" in err and "np." not in err
