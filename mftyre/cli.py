@@ -84,7 +84,7 @@ def _strip_location(message: str, path: str) -> str:
 # ----------------------------------------------------------------------------------------------- eval
 # Sweep inputs of `mftyre eval`: name -> (SI unit, {accepted unit (lower case): factor to SI}).
 _SWEEPS: dict[str, tuple[str, dict[str, float]]] = {
-    "fz": ("N", {"n": 1.0, "kn": 1e3}),
+    "fz": ("N", {"n": 1.0, "kn": 1e3, "lbf": 4.4482216152605, "lb": 4.4482216152605}),
     "kappa": ("-", {"-": 1.0, "%": 1e-2}),
     "alpha": ("rad", {"rad": 1.0, "deg": math.pi / 180, "°": math.pi / 180}),
     "gamma": ("rad", {"rad": 1.0, "deg": math.pi / 180, "°": math.pi / 180}),
@@ -294,7 +294,7 @@ command line.""",
                         "a 'tir' column, one --plot with a line style per file")
     group = p.add_argument_group("inputs (value, list V1,V2,... or range START:STOP:COUNT; units allowed)")
     helps = {
-        "fz": "vertical load [N]; kN allowed (default FNOMIN)",
+        "fz": "vertical load [N]; kN, lbf allowed (default FNOMIN)",
         "kappa": "longitudinal slip [-], (omega Re - vx)/vx: -1 = locked wheel also for vx < 0; %% allowed "
                  "(default 0)",
         "alpha": "slip angle [rad]; deg allowed (default 0)",
@@ -506,7 +506,7 @@ def add_data_options(parser) -> None:
 
     group = parser.add_argument_group("reading DATA (see the DATA section below)")
     group.add_argument("--columns", type=_option_type(parse_columns, "column map"), metavar="CH=COLUMN,...",
-                       help="file columns of the channels, e.g. FZ=Fz_N,SA=alpha (CSV)")
+                       help="file columns of the channels, e.g. FZ=Fz_N,SA=alpha (CSV; TTC: e.g. SL=SR)")
     group.add_argument("--units", type=_option_type(parse_units, "units"), metavar="CH=UNIT,...",
                        help="units of the file's channels, e.g. SA=deg,P=psi,VX=km/h,RL=mm (CSV; default SI)")
     group.add_argument("--axes", choices=tuple(AXES), default=None,

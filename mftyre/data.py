@@ -92,7 +92,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .errors import DataError, speaking, speaking_cli
+from .errors import DataError, speaking, speaking_cli, spelled
 from .files import DATA_MAX_BYTES, check_outputs, open_user_file, read_user_file, write_atomically
 from .tir import UNIT_FACTORS
 
@@ -313,12 +313,15 @@ _TYPICAL = {"SA": (0.02, 0.6), "IA": (0.005, 0.3), "SL": (0.01, 1.0), "VX": (0.5
             "RL": (0.1, 1.5), "RE": (0.1, 1.5), "RHO": (0.002, 0.2), "FZ": (30.0, 2e5)}
 
 
-def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of: dict | None = None) -> None:
+def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of: dict | None = None,
+                    stated: str = "") -> None:
     """DataError at the first channel whose values no tyre measurement in SI units and ISO-W axes has: |SA|,
     |IA| beyond 1 rad (degrees?), |SL| beyond 2 (percent?), VX above 100 m/s (km/h?), P below 20 kPa (kPa,
     bar, psi?), RL or RE above 2 m, RHO above 0.5 m (mm, cm?), FZ all below 30 N (kN?), FZ mostly negative
     (SAE axes?), FY rising with SA (slip angle or lateral force reversed?). The message names the channel (and
-    the file's column), what was seen, the likely unit or axis system and the option that converts it."""
+    the file's column), what was seen, the likely unit or axis system and the option that converts it.
+    ``stated``: where a file that states its own units (TYDEX, TTC) states them; the remedy for a unit is then
+    to correct that statement (``--units`` is for CSV files)."""
     frame = data.frame if isinstance(data, TyreData) else data
     where = where or (data.source if isinstance(data, TyreData) else "") or "<data>"
     column_of = column_of or {}
@@ -354,18 +357,41 @@ def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of:
         fixes[ch] = (likely or candidates)[0]
         problems.append(f"{name(ch)}: {shown} is {typical:.4g} {si}, {side} the {expected} {si} of any tyre "
                         f"measurement in SI units: {guess}")
+    lever = "RE" if "RE" in frame.columns else "RL"
+    if {"VX", "OMEGA", lever} <= set(frame.columns) and not {"VX", lever} & set(fixes):  # (VX, radius in SI)
+        radius = frame[lever].to_numpy(float)
+        vx, omega = frame["VX"].to_numpy(float), frame["OMEGA"].to_numpy(float)
+        ok = np.isfinite(vx) & np.isfinite(omega) & np.isfinite(radius) & (np.abs(omega * radius) > 0.5)
+        if ok.sum() >= 5:
+            ratio = float(np.median(np.abs(vx[ok]) / np.abs(omega[ok] * radius[ok])))
+            for ch, unit, factor in (("VX", "km/h", unit_to_si("VX", "km/h")), ("VX", "mph", unit_to_si("VX", "mph")),
+                                     ("OMEGA", "rpm", 1.0 / unit_to_si("OMEGA", "rpm"))):
+                if abs(ratio * factor - 1.0) < 0.15 and ch not in fixes:
+                    fixes[ch] = unit
+                    problems.append(f"{name(ch)}: VX / (OMEGA x radius) is {ratio:.3g} (about 1 for a rolling wheel "
+                                    f"in SI units): {ch} looks like {unit}")
+                    break
+    sae = ""  # the load's sign is independent of the units: named in the same error
+    if "FZ" in frame.columns:
+        fz = values("FZ")
+        if fz.size and np.mean(fz < 0) > 0.5:
+            sae = (f"{name('FZ')}: {100 * np.mean(fz < 0):.0f} % of the values are negative (median "
+                   f"{np.median(fz):.4g} N): the load is positive in ISO-W; the file is probably in SAE axes (z down): "
+                   f"{remedy('axes', 'FZ', 'SAE')}")
     if problems:
+        axes = f". Also {sae}" if sae else ""
+        if stated:
+            likely = ", ".join(f"{column_of.get(ch, ch)} looks like {u}" for ch, u in fixes.items())
+            raise DataError(f"{where}: {'; '.join(problems)}. The file states its units ({stated}): correct the "
+                            f"wrong ones in a copy of the file ({likely}), or read it unchecked with "
+                            f"{spelled('check=False', '--no-check')}{axes}")
         if speaking() == "cli":
             fix = "--units " + ",".join(f"{ch}={u}" for ch, u in fixes.items())
         else:
             fix = "units={" + ", ".join(f"{ch!r}: {u!r}" for ch, u in fixes.items()) + "}"
-        raise DataError(f"{where}: {'; '.join(problems)}. Give the file's units, e.g. {fix}")
-    if "FZ" in frame.columns:
-        fz = values("FZ")
-        if fz.size and np.mean(fz < 0) > 0.5:
-            raise DataError(f"{where}: {name('FZ')}: {100 * np.mean(fz < 0):.0f} % of the values are negative "
-                            f"(median {np.median(fz):.4g} N): the load is positive in ISO-W; the file is probably in "
-                            f"SAE axes (z down): {remedy('axes', 'FZ', 'SAE')}")
+        raise DataError(f"{where}: {'; '.join(problems)}. Give the file's units, e.g. {fix}{axes}")
+    if sae:
+        raise DataError(f"{where}: {sae}")
     if {"SA", "FY"} <= set(frame.columns):
         sa, fy = frame["SA"].to_numpy(float), frame["FY"].to_numpy(float)
         near = np.isfinite(sa) & np.isfinite(fy) & (np.abs(sa) < math.radians(4.0))
@@ -378,17 +404,6 @@ def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of:
                                 f"angle or the lateral force is reversed: {remedy('axes', 'SA', 'adapted-ISO')} (SA "
                                 f"reversed) or {remedy('axes', 'SA', 'adapted-SAE')} (FY, MZ reversed); see the "
                                 f"axis systems in the README")
-    if {"VX", "OMEGA"} <= set(frame.columns) and ("RE" in frame.columns or "RL" in frame.columns):
-        radius = frame["RE" if "RE" in frame.columns else "RL"].to_numpy(float)
-        vx, omega = frame["VX"].to_numpy(float), frame["OMEGA"].to_numpy(float)
-        ok = np.isfinite(vx) & np.isfinite(omega) & np.isfinite(radius) & (np.abs(omega * radius) > 0.5)
-        if ok.sum() >= 5:
-            ratio = float(np.median(np.abs(vx[ok]) / np.abs(omega[ok] * radius[ok])))
-            for ch, unit, factor in (("VX", "km/h", unit_to_si("VX", "km/h")), ("VX", "mph", unit_to_si("VX", "mph")),
-                                     ("OMEGA", "rpm", 1.0 / unit_to_si("OMEGA", "rpm"))):
-                if abs(ratio * factor - 1.0) < 0.15:
-                    raise DataError(f"{where}: {name(ch)}: VX / (OMEGA x radius) is {ratio:.3g} (about 1 for a "
-                                    f"rolling wheel in SI units): {ch} looks like {unit}: {remedy('units', ch, unit)}")
 
 
 # --------------------------------------------------------------------------------------------- TyreData
@@ -505,8 +520,15 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
     if len(raw.columns) != len(header):  # pragma: no cover - pandas and the csv module agree on the header
         raise DataError(f"{path}: line 1: cannot read the header")
     raw.columns = header
+    if len(header) == 1 and header[0].upper() not in CHANNELS:
+        for sep, name in ((";", "semicolons"), ("\t", "tabs"), (" ", "blanks")):
+            if len(header[0].split(sep)) > 2:
+                raise DataError(f"{path}: line 1: one column named {header[0][:60]!r}: the columns look separated "
+                                f"by {name}; expected comma-separated values (save the file as CSV with commas and "
+                                f"a decimal point)")
     if len(raw) == 0:
         raise DataError(f"{path}: no data rows: expected a header line followed by one line per sample")
+    _refuse_units_row(raw, header, path)
     mapping = {c: c.upper() for c in header if c.upper() in CHANNELS}
     for col, ch in (columns or {}).items():
         if col not in header:
@@ -548,6 +570,30 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
     unit_record = {ch: units.get(ch, _SI_NAME[CHANNELS[ch][0]]) for ch in CHANNELS if ch in frame.columns}
     return TyreData(frame, tyre=tyre or path.stem, source=str(path), units=unit_record,
                     history=_import_notes(axes, units, defaults, check))
+
+
+def _refuse_units_row(raw, header, path):
+    """A DataError naming the units row when line 2 holds no number but words such as N, deg, kPa (a units row
+    under the names, as many lab exports have)."""
+    first = [str(v).strip() for v in raw.iloc[0].tolist()]
+    if len(first) < 2 or any(_is_number(v) for v in first if v) or not any(first):
+        return
+    known = [(col, unit) for col, unit in zip(header, first) if col.upper() in CHANNELS and unit
+             and _known_unit(col.upper(), unit)]
+    if known:
+        given = ",".join(f"{col.upper()}={unit}" for col, unit in known if unit_to_si(col.upper(), unit) != 1.0)
+        fix = "(its units are SI)" if not given else \
+            (f"and give them with --units {given}" if speaking() == "cli" else f"and give them with units= ({given})")
+        raise DataError(f"{path}: line 2 holds units ({', '.join(first[:8])}{' ...' if len(first) > 8 else ''}), not "
+                        f"samples: delete that line {fix}")
+
+
+def _known_unit(channel: str, unit: str) -> bool:
+    try:
+        unit_to_si(channel, unit)
+    except ValueError:
+        return False
+    return True
 
 
 def _line_break(data: bytes) -> bytes:
@@ -814,7 +860,7 @@ def _read_tydex(fh, path: Path, defaults, axes="ISO-W", check=True) -> TyreData:
                         f"({', '.join(_TYDEX_NAMES[c][0] for c in missing)}) nor a constant")
     _check_values(frame, lambda row: f"{path}:{lines()[row]}", name_of)
     if check:
-        check_plausible(frame, str(path), name_of)
+        check_plausible(frame, str(path), name_of, stated="the unit column of its **MEASURCHANNELS lines")
     tyre = str(state.header.get("MEASID", ("", "", ""))[0] or path.stem)
     consts = {k: v[0] for k, v in {**state.header, **state.constants}.items()}
     return TyreData(frame, tyre=tyre, source=str(path), units=units, constants=consts,
@@ -1068,8 +1114,8 @@ TTC_METRIC_UNITS = {"ET": "s", "V": "kph", "N": "rpm", "SA": "deg", "IA": "deg",
                     "FX": "N", "FY": "N", "FZ": "N", "MX": "N-m", "MZ": "N-m", "SL": "-"}
 
 
-def read_ttc(path, *, axes: str = "SAE", defaults: dict | None = None, check: bool = True,
-             max_bytes: int = DATA_MAX_BYTES) -> TyreData:
+def read_ttc(path, *, columns: dict | None = None, axes: str = "SAE", defaults: dict | None = None,
+             check: bool = True, max_bytes: int = DATA_MAX_BYTES) -> TyreData:
     """Read a Calspan tyre test consortium (TTC) run: a ``.dat`` text file (a free header line, a row of
     channel names, a row of units, then whitespace-separated samples) or a ``.mat`` file holding the same
     channels as vectors (MATLAB 5 format; units from its ``channel`` struct when present, else
@@ -1077,18 +1123,21 @@ def read_ttc(path, *, axes: str = "SAE", defaults: dict | None = None, check: bo
     their units converted to SI (``kph``, ``mph``, ``deg``, ``cm``, ``in``, ``kPa``, ``psi``, ``N``, ``lb``,
     ``N-m``, ``ft-lb``, ``rpm``); ``ET`` is kept as ``TIME`` so the programme recogniser sees a time series. The
     files use SAE axes (``axes="SAE"``: FZ < 0 under load; see :data:`AXES_HELP`). ``defaults`` and ``check``
-    as for :func:`read_csv`."""
+    as for :func:`read_csv`. ``columns``: file channel -> canonical channel for a channel the default map does not
+    give, e.g. ``{"SR": "SL"}`` for a run that records the slip ratio only as SR (the default channel of that
+    canonical channel is then kept as an extra column, ``TTC_SL``)."""
     path = Path(path)
     raw = read_user_file(path, max_bytes=max_bytes, what="TTC data file", error=DataError)
     if raw.startswith(b"MATLAB"):
-        columns, units = _ttc_mat(raw, path)
+        channels, units = _ttc_mat(raw, path)
         locate = lambda row: f"{path}: sample {row + 1}"  # noqa: E731
     else:
-        columns, units, first = _ttc_dat(raw, path)
+        channels, units, first = _ttc_dat(raw, path)
         locate = lambda row: f"{path}:{first + row}"  # noqa: E731
+    mapping = _ttc_mapping(list(channels), columns, path)
     out, column_of, unit_record = {}, {}, {}
-    for name, values in columns.items():
-        ch = TTC_CHANNELS.get(name.upper())
+    for name, values in channels.items():
+        ch = mapping.get(name)
         unit = units.get(name, TTC_METRIC_UNITS.get(name.upper(), ""))
         if name.upper() == "ET":
             try:
@@ -1097,8 +1146,8 @@ def read_ttc(path, *, axes: str = "SAE", defaults: dict | None = None, check: bo
                 raise DataError(f"{path}: channel ET: unknown time unit {unit!r}; expected s, ms, min") from None
             out["TIME"] = values * factor
             continue
-        if ch is None:
-            out[name] = values
+        if ch is None:  # an extra column; a default channel replaced through ``columns`` keeps a distinct name
+            out[f"TTC_{name}" if name.upper() in CHANNELS else name] = values
             continue
         if ch in column_of:
             raise DataError(f"{path}: channel {name} appears twice (also as {column_of[ch]})")
@@ -1119,9 +1168,24 @@ def read_ttc(path, *, axes: str = "SAE", defaults: dict | None = None, check: bo
                         f"{remedy('columns', 'SL', 'SR')} or give a constant")
     _check_required(frame, path, locate, column_of)
     if check:
-        check_plausible(frame, str(path), column_of)
+        check_plausible(frame, str(path), column_of, stated="the channel struct of the .mat file, else the metric TTC "
+                        "units" if raw.startswith(b"MATLAB") else "the units row below the channel names")
     return TyreData(frame, tyre=path.stem, source=str(path), units=unit_record,
                     history=[f"TTC run read from {path.name}"] + _import_notes(axes, None, defaults, check))
+
+
+def _ttc_mapping(names, columns, path) -> dict:
+    """File channel -> canonical channel: :data:`TTC_CHANNELS`, with ``columns`` (file channel -> canonical)
+    taking precedence; a canonical channel given by ``columns`` is no longer taken from its default channel."""
+    mapping = {n: TTC_CHANNELS[n.upper()] for n in names if n.upper() in TTC_CHANNELS}
+    for col, ch in (columns or {}).items():
+        if col not in names:
+            raise DataError(f"{path}: channel {col!r} (for {ch}) not in the file; its channels are {', '.join(names)}")
+        if str(ch).upper() not in CHANNELS:
+            raise DataError(f"{path}: unknown channel {ch!r} for {col!r}; channels: {', '.join(CHANNELS)}")
+        mapping = {n: c for n, c in mapping.items() if c != ch.upper()}
+        mapping[col] = ch.upper()
+    return mapping
 
 
 def _ttc_dat(raw: bytes, path):
@@ -1135,8 +1199,7 @@ def _ttc_dat(raw: bytes, path):
     if at is None:
         raise DataError(f"{path}: not a TTC run file: expected a header line, a row of channel names (ET V N SA IA "
                         "... FZ) and a row of units before the samples")
-    names = lines[at].split()
-    units = lines[at + 1].split()
+    names, units = _ttc_fields(lines[at]), _ttc_fields(lines[at + 1])
     if len(units) != len(names):
         raise DataError(f"{path}:{at + 2}: {len(units)} units for {len(names)} channels: expected one unit per "
                         f"channel named on line {at + 1}")
@@ -1160,6 +1223,17 @@ def _ttc_dat(raw: bytes, path):
         columns[name] = _numeric_column(table[j], lambda row, txt: f"{path}: sample {row + 1} (after line {at + 2}): "
                                                                  f"channel {name}: non-numeric value {txt!r}")
     return columns, dict(zip(names, units)), first
+
+
+def _ttc_fields(line: str) -> list[str]:
+    """The fields of a names or units row: tab-separated when the row has tabs (a unit may hold a blank, as in
+    ``deg C``), else separated by blanks."""
+    if "\t" not in line:
+        return line.split()
+    fields = [f.strip() for f in line.rstrip("\r\n").split("\t")]
+    while fields and not fields[-1]:
+        fields.pop()
+    return fields
 
 
 def _ttc_names_line(lines) -> int | None:
@@ -1234,19 +1308,22 @@ def data_format(path) -> str:
 def read_data(path, *, columns: dict | None = None, units: dict | None = None, axes: str | None = None,
               defaults: dict | None = None, check: bool = True, max_bytes: int = DATA_MAX_BYTES) -> TyreData:
     """Read a measurement file of any supported format (recognised by content, :func:`data_format`): TYDEX,
-    TTC (.dat / .mat) or CSV. ``columns`` and ``units`` are for CSV (the other formats name their channels
-    and units); ``axes`` is the file's axis system (default: ISO-W, SAE for TTC files); ``defaults`` are
+    TTC (.dat / .mat) or CSV. ``columns`` is for CSV and TTC, ``units`` for CSV (the other formats name their
+    channels and units); ``axes`` is the file's axis system (default: ISO-W, SAE for TTC files); ``defaults`` are
     constant channels; ``check`` refuses implausible values (:func:`check_plausible`). The one home of the
     options of ``mftyre fit``, ``gaps`` and ``plot`` (``--columns``, ``--units``, ``--axes``, ``--set``)."""
     kind = data_format(path)
-    if kind != "csv" and (columns or units):
-        which = "--columns/--units" if speaking() == "cli" else "columns=/units="
+    if kind == "tydex" and (columns or units) or kind == "ttc" and units:
+        which = ("--columns/--units" if kind == "tydex" else "--units") if speaking() == "cli" else \
+            ("columns=/units=" if kind == "tydex" else "units=")
         raise DataError(f"{path}: a {'TYDEX' if kind == 'tydex' else 'TTC'} file names its channels and units; "
-                        f"{which} are for CSV files")
+                        f"{which} are for CSV files" + (" (--columns maps TTC channels, e.g. SL=SR)"
+                                                        if kind == "ttc" and speaking() == "cli" else ""))
     if kind == "tydex":
         data = read_tydex(path, defaults=defaults, axes=axes or "ISO-W", check=check, max_bytes=max_bytes)
     elif kind == "ttc":
-        data = read_ttc(path, defaults=defaults, axes=axes or "SAE", check=check, max_bytes=max_bytes)
+        data = read_ttc(path, columns=columns, defaults=defaults, axes=axes or "SAE", check=check,
+                        max_bytes=max_bytes)
     else:
         data = read_csv(path, columns=columns, units=units, defaults=defaults, axes=axes or "ISO-W", check=check,
                         max_bytes=max_bytes)

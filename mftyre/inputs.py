@@ -74,7 +74,7 @@ def check_pressure(p, name: str = "p") -> None:
     """Raise :class:`ModelInputError` unless every inflation pressure is positive (in Pa)."""
     p = np.asarray(p)
     if np.any(~(p > 0)):
-        raise ModelInputError(f"inflation pressure {name!r} must be positive (in Pa); got minimum {np.min(p)!r}")
+        raise ModelInputError(f"inflation pressure {name!r} must be positive (in Pa); got minimum {float(np.min(p))!r}")
 
 
 def warn_outside(counts: dict, total: int, ranges: dict, stacklevel: int = 3) -> None:

@@ -20,6 +20,10 @@ _PLOTTED = (("fz", "N", "vertical force"), ("fx", "N", "longitudinal force"), ("
             ("w", "mm", "effective road height"))
 
 
+#: Most steps one `mftyre swift` run takes (its time histories: about 2 GB at this count).
+MAX_STEPS = 10_000_000
+
+
 def _quantity(name):
     from .cli import parse_sweep
 
@@ -54,7 +58,8 @@ def register(subparsers) -> None:
                    help="a CSV file with columns x, z [m], or obstacles such as 'cleat(x0=1.0, length=0.05, "
                         "height=0.01) + step(3, 0.02)' (flat, step, cleat, trapezoid, bump, sine); default flat")
     p.add_argument("--speed", type=_quantity("vx"), required=True, metavar="V", help="forward speed (m/s, km/h, mph)")
-    p.add_argument("--fz", type=_quantity("fz"), default=None, metavar="FZ", help="axle load (N, kN; default FNOMIN)")
+    p.add_argument("--fz", type=_quantity("fz"), default=None, metavar="FZ",
+                   help="axle load (N, kN, lbf; default FNOMIN)")
     p.add_argument("--p", type=_quantity("p"), default=None, metavar="P",
                    help="inflation pressure (Pa, kPa, bar, psi; default INFLPRES)")
     p.add_argument("--axle", choices=("height", "load"), default="height",
@@ -77,6 +82,16 @@ def run(args) -> int:
 
     if args.speed <= 0:
         print("mftyre swift: --speed: expected a forward speed above 0", file=sys.stderr)
+        return 2
+    for option, value in (("--fz", args.fz), ("--p", args.p)):
+        if value is not None and not value > 0:
+            print(f"mftyre swift: {option}: expected a value above 0, got {value:g}", file=sys.stderr)
+            return 2
+    steps = args.distance / args.speed / args.dt
+    if steps > MAX_STEPS:
+        print(f"mftyre swift: --distance {args.distance:g} m at {args.speed:g} m/s in steps of --dt {args.dt:g} s is "
+              f"{steps:.3g} steps, more than the {MAX_STEPS:,} one run writes; shorten --distance or raise --dt",
+              file=sys.stderr)
         return 2
     try:
         check_outputs({"--csv": args.csv, "--plot": args.plot}, {"FILE.tir": args.file, "--road": _road_file(args)},
@@ -139,6 +154,7 @@ def simulate(args, say):
     v = args.speed
     static = model.evaluate(fz=fz, kappa=0.0, alpha=0.0, vx=v, p=p)
     rl, re = float(static.rl), float(static.re)
+    p = float(static.p)  # as used (saturated to PRESMIN..PRESMAX, a note says so): for the ring as for the height
     say(f"building the SWIFT stepper for {Path(args.file).name} (C compiled on first use and cached in "
         "~/.cache/mftyre; a minute at most)")
     tyre = SwiftTyre(model, road, axle=args.axle, rim="speed", x_range=(args.start - 1.0, args.start + args.distance + 1.0))

@@ -420,3 +420,133 @@ def test_no_check_reads_values_outside_the_ranges(si, tmp_path):
     assert load_data(data) is data and "plausibility check skipped on request" in data.history
     with pytest.raises(DataError, match="channel VX"):
         load_data(TyreData(data.frame.copy()))
+
+
+def test_ttc_dat_units_with_blanks_in_a_tab_separated_row(si, tmp_path):
+    """Tab-separated names and units rows: a unit such as ``deg C`` holds a blank and is one field."""
+    cols = _ttc_columns(si)
+    units = ["deg C" if u == "degC" else u for u in TTC_UNITS]
+    lines = ["run 12 (written by this test, synthetic)", "\t".join(TTC_NAMES) + "\t", "\t".join(units) + "\t"]
+    lines += ["\t".join(f"{cols[n][i]:.15g}" for n in TTC_NAMES) for i in range(len(si))]
+    path = tmp_path / "B0000run15.dat"
+    path.write_text("\r\n".join(lines) + "\r\n")
+    data = read_data(path)
+    _close(data, si, ["FZ", "SA", "IA", "VX", "P", "FY", "MZ", "RL"])
+    assert data.units.get("FZ") == "N" and np.all(data.array("TSTC") == 45.0)
+
+
+def test_swift_command_below_presmin_holds_the_load_it_was_asked(tmp_path, capsys):
+    """A pressure below PRESMIN is saturated (and said so) for the axle height and for the SWIFT run alike: the
+    static load on a flat road is the --fz asked (before, the axle was placed at 2.0 bar and the ring rolled at
+    1.0 bar, carrying 40 % less)."""
+    tir = TIR_FILES / "car_205_60R15_mf62_swift.tir"
+    csv = tmp_path / "low.csv"
+    assert main(["swift", str(tir), "--speed", "10", "--fz", "4kN", "--p", "1bar", "--distance", "0.3",
+                 "--csv", str(csv), "--quiet"]) == 0
+    out = capsys.readouterr()
+    assert "saturated" in out.err and "p 1.86 bar" in out.out
+    assert pd.read_csv(csv)["fz"].iloc[0] == pytest.approx(4000.0, rel=0.03)
+
+
+def test_ttc_run_with_sr_only_read_through_the_column_map(si, tmp_path, capsys):
+    """Cornering runs that record the slip ratio only as SR: the error names --columns SL=SR, and that option
+    works on a TTC file (it was refused: '--columns/--units are for CSV files'); also through fit."""
+    cols = {k: v for k, v in _ttc_columns(si).items() if k != "SL"} | {"SR": _to_sae(si)["SL"]}
+    names = [n if n != "SL" else "SR" for n in TTC_NAMES]
+    lines = ["run 16 (written by this test, synthetic)", "\t".join(names), "\t".join(TTC_UNITS)]
+    lines += ["\t".join(f"{cols[n][i]:.15g}" for n in names) for i in range(len(si))]
+    path = tmp_path / "B0000run16.dat"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(DataError, match=r"columns=\{'SR': 'SL'\}"):
+        read_data(path)
+    _close(read_data(path, columns={"SR": "SL"}), si, ["SL", "SA", "FZ", "FY"])
+    assert main(["fit", str(path), "-o", str(tmp_path / "x.tir"), "--stages", "pure_fy", "--quiet"]) == 1
+    assert "--columns SL=SR" in capsys.readouterr().err
+    assert main(["fit", str(path), "-o", str(tmp_path / "x.tir"), "--stages", "pure_fy", "--quiet",
+                 "--columns", "SL=SR"]) == 0
+
+
+def test_files_that_state_their_units_are_not_told_to_use_units(si, tmp_path, capsys):
+    """A TYDEX file whose MEASURCHANNELS say rad for angles written in degrees: the error named --units, which
+    such files refuse; it now says where the file states its units and names --no-check."""
+    frame = si.assign(SA=si["SA"] / DEG, IA=si["IA"] / DEG)
+    lines = ["**HEADER", "RELEASE   Release of TYDEX-format                 1.3", "**MEASURCHANNELS"]
+    names = {"FZ": "FZW", "SL": "LONGSLIP", "SA": "SLIPANGL", "IA": "INCLANGL", "VX": "LONGVEL", "P": "INFLPRES",
+             "FY": "FYW"}
+    units = {"FZ": "N", "SL": "-", "SA": "rad", "IA": "rad", "VX": "m/s", "P": "Pa", "FY": "N"}
+    lines += [f"{names[ch]:<10}{ch:<30}{units[ch]:<10}1 0 0" for ch in names] + ["**MEASURDATA"]
+    lines += [" ".join(f"{frame[ch].iloc[i]:.12g}" for ch in names) for i in range(len(frame))] + ["**END"]
+    path = tmp_path / "lie.tdx"
+    path.write_text("\n".join(lines) + "\n")
+    assert main(["fit", str(path), "-o", str(tmp_path / "x.tir"), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "channel SA (file column 'SLIPANGL')" in err and "**MEASURCHANNELS" in err and "--no-check" in err
+    assert "SLIPANGL looks like deg" in err and "--units" not in err
+    with pytest.raises(DataError, match="check=False"):
+        read_data(path)
+
+
+def test_load_in_pounds_on_the_command_line():
+    """US rig sheets give loads in lbf: `mftyre eval/soil/swift --fz 1200lbf` (was: unknown unit)."""
+    from mftyre.cli import parse_sweep
+
+    np.testing.assert_allclose(parse_sweep("fz", "1200lbf,1000lb").values, [1200 * 4.4482216152605,
+                                                                            1000 * 4.4482216152605])
+
+
+def test_lab_exports_semicolons_tabs_and_a_units_row(si, tmp_path, capsys):
+    """Exports as labs make them: ';' with decimal commas, tabs, a units row under the names. Each is named for
+    what it is (they read as 'missing channels FZ, SA ...', suggesting --columns, or 'non-numeric value N')."""
+    semi = tmp_path / "semi.csv"
+    si.to_csv(semi, sep=";", decimal=",", index=False)
+    with pytest.raises(DataError, match=r"line 1: one column named 'FZ;SL;SA.*separated by semicolons"):
+        read_data(semi)
+    tabs = tmp_path / "tabs.txt"
+    si.to_csv(tabs, sep="\t", index=False)
+    with pytest.raises(DataError, match=r"separated by tabs"):
+        read_data(tabs)
+    raw = si.assign(SA=si["SA"] / DEG, P=si["P"] / 1e3)
+    units = tmp_path / "units.csv"
+    names = {"SA": "deg", "P": "kPa", "IA": "rad", "SL": "-", "VX": "m/s", "OMEGA": "rad/s"}
+    row = [names.get(c, "N" if c.startswith("F") else "m" if c.startswith("R") else "Nm") for c in raw.columns]
+    units.write_text(",".join(raw.columns) + "\n" + ",".join(row) + "\n" + raw.to_csv(index=False, header=False))
+    assert main(["fit", str(units), "-o", str(tmp_path / "x.tir"), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "line 2 holds units (N, -, deg, rad, m/s, kPa, N, N ...)" in err and "--units SA=deg,P=kPa" in err
+
+
+def test_kpa_and_kmh_below_100_named_together(tmp_path):
+    """Pressure in kPa and speed in km/h at 60 km/h (below the 100 of the range check): one error names both,
+    P by its range and VX by VX / (OMEGA x radius) (VX was named only once P had been fixed)."""
+    model = mftyre.load_tir(TIR_FILES / "car_205_60R15_mf61.tir")
+    frame = trailer_programme(model, loads=(1.0,), pressures=(1.0,), cambers_deg=(0.0,), points=11,
+                              free_rolling_speeds=(16.7,), noise=0.5, seed=4).frame
+    path = _csv(tmp_path, frame.assign(P=frame["P"] / 1e3, VX=frame["VX"] * 3.6))
+    with pytest.raises(DataError, match=r"channel P: .*channel VX: VX / \(OMEGA x radius\) is 3.6.*"
+                                        r"units=\{'P': 'kPa', 'VX': 'km/h'\}"):
+        read_data(path)
+    np.testing.assert_allclose(read_data(path, units={"P": "kPa", "VX": "km/h"}).array("VX"), frame["VX"])
+
+
+def test_degrees_and_sae_axes_named_in_one_error(si, tmp_path):
+    """A file in degrees and in SAE axes: one error names the units and the axis system (the axes came only
+    after the units had been fixed)."""
+    sae = _to_sae(si)
+    path = _csv(tmp_path, sae.assign(SA=sae["SA"] / DEG, IA=sae["IA"] / DEG))
+    with pytest.raises(DataError, match=r"channel SA: .*units=\{'SA': 'deg', 'IA': 'deg'\}\. Also channel FZ: "
+                                        r"100 % of the values are negative.*axes='SAE'"):
+        read_data(path)
+    _close(read_data(path, units={"SA": "deg", "IA": "deg"}, axes="SAE"), si)
+
+
+def test_swift_command_refuses_what_it_cannot_run(capsys):
+    """A negative axle load ran (as a tyre pulling the road), a distance of 1e9 m died with a NumPy MemoryError;
+    a zero pressure in eval said 'np.float64(0.0)'."""
+    tir = str(TIR_FILES / "car_205_60R15_mf62_swift.tir")
+    assert main(["swift", tir, "--speed", "10", "--fz=-3kN"]) == 2
+    assert "--fz: expected a value above 0, got -3000" in capsys.readouterr().err
+    assert main(["swift", tir, "--speed", "10", "--distance", "1e9"]) == 2
+    assert "1e+11 steps, more than the 10,000,000" in capsys.readouterr().err
+    assert main(["eval", tir, "--p", "0"]) != 0
+    err = capsys.readouterr().err
+    assert "got minimum 0.0" in err and "np." not in err

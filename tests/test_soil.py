@@ -13,7 +13,7 @@ from conftest import MFEVAL_DIR, SHARED, TIR_FILES, require_shared
 from mftyre.backend import NUMPY
 from mftyre.errors import DataError, ModelInputError
 from mftyre.model import load_tir
-from mftyre.soil import Ground, SinkageError, Soil, SoftSoilTyre, builtin_soils, read_soils, soil
+from mftyre.soil import ConeIndexTyre, Ground, SinkageError, Soil, SoftSoilTyre, builtin_soils, read_soils, soil
 from mftyre.soil.equations import (bulldozing_coefficients, compaction_resistance, critical_pressure,
                                    hard_ground_footprint, rigid_wheel_sinkage)
 
@@ -329,6 +329,22 @@ def test_agricultural_contact_width_and_carcass_pressure(tir):
     assert np.all(out.carcass_pressure > 0)
     np.testing.assert_allclose(out.carcass_pressure, fz / (4 * a * b) - p, rtol=1e-12)
     assert np.all(out.contact_width == prm.WIDTH)
+
+
+@pytest.mark.parametrize("tir", [CAR, *_FOREIGN], ids=lambda p: p.name)
+def test_carcass_pressure_never_negative_on_car_tyres(tir):
+    """The car files' gross patch 4ab carries less than the inflation pressure at most loads and pressures
+    (Fz / (4ab) - p_i down to -0.5 p_i on the TNO file): p_c is 0 there, never negative, in both soil models."""
+    model = load_tir(require_shared(tir) if tir in _FOREIGN else tir)
+    prm = model.params
+    fz = np.linspace(0.25, 2.0, 8)[:, None] * prm.FNOMIN
+    p = np.linspace(prm.PRESMIN, prm.PRESMAX, 6)[None, :]
+    _, a, b = hard_ground_footprint(prm, fz, p, NUMPY)
+    assert np.any(fz / (4 * a * b) < p)                     # the case this is about
+    for out in (SoftSoilTyre(model, "clayey_soil").evaluate(fz=fz, slip=0.1, p=p),
+                ConeIndexTyre(model, 1.0e6).evaluate(fz=fz, slip=0.1, p=p)):
+        assert np.all(out.carcass_pressure >= 0)
+        np.testing.assert_allclose(out.carcass_pressure, np.maximum(fz / (4 * a * b) - p, 0.0), rtol=1e-12)
 
 
 def test_drawbar_pull_rises_with_slip_to_a_saturating_maximum():
@@ -738,6 +754,26 @@ def test_rear_tyre_in_the_front_rut_repetitive_loading():
     np.testing.assert_allclose(lhs, rhs, rtol=1e-9)
 
 
+def test_rear_tyre_where_the_soil_would_spring_back_above_its_surface():
+    """On firm LETE sand with Wong's sand unloading constants sigma_1 / k_u exceeds the rut depth z_1: the soil
+    rebounds to its surface, no further. The reloading line then starts from zero stress at the surface (it
+    started at 99 kPa there: the rear tyre sank less than the front and met more compaction resistance)."""
+    model = load_tir(AGRI)
+    front_tyre = SoftSoilTyre(model, "lete_sand", unloading=SANDY_UNLOADING)
+    front = front_tyre.evaluate(fz=25e3, slip=0.1, p=1.2e5)
+    s = soil("lete_sand")
+    z_1 = float(front.sinkage)
+    sigma_1 = s.modulus(model.params.WIDTH) * z_1**s.n
+    assert sigma_1 / (SANDY_UNLOADING[1] * z_1) > z_1                      # the case this is about
+    rear = front_tyre.following(front).evaluate(fz=25e3, slip=0.1, p=1.2e5)
+    z_2 = float(rear.sinkage)
+    assert z_1 < z_2 < 2 * z_1
+    assert float(rear.compaction_resistance) < float(front.compaction_resistance)
+    work = model.params.WIDTH * quad(lambda d: sigma_1 * d / z_1 if d < z_1 else s.modulus(model.params.WIDTH)
+                                     * d**s.n, 0.0, z_2, points=[z_1], limit=200)[0]
+    assert float(rear.compaction_resistance) == pytest.approx(work, rel=1e-10)
+
+
 def test_multi_pass_bad_input():
     with pytest.raises(ModelInputError, match="needs unloading"):
         SoftSoilTyre(AGRI, "sandy_loam", rut=0.03)
@@ -796,3 +832,13 @@ def test_balance_without_a_root_in_the_bracket_is_a_typed_error():
     absurd = model.with_params(VERTICAL_STIFFNESS=model.params.VERTICAL_STIFFNESS * 1e30)
     with pytest.raises(ModelInputError, match="flat load below 1e-30 Fz"):
         SoftSoilTyre(absurd, "paddy_soil").evaluate(fz=10e3, slip=0.1)
+
+
+def test_towed_outside_the_bracket_says_where_and_why():
+    """A tyre sunk to near its axle needs driving torque even at slip -1: the error names the operating point and
+    the sinkage (it said 'the soil cannot turn the wheel', the opposite of what happens)."""
+    tyre = SoftSoilTyre(AGRI_SMALL, "lean_clay_wet")
+    fz = tyre.params.FNOMIN * np.array([1.0, 1.5])
+    with pytest.raises(ModelInputError, match=r"at fz = 33832.5 N, p = 150000 Pa the wheel needs a driving torque "
+                                              r"even turning at half its free-rolling speed \(slip -1; sinkage 0.6"):
+        tyre.towed(fz=fz, p=1.5e5, vx=0.5, alpha=0.05)

@@ -16,7 +16,7 @@ __all__ = ["register", "run"]
 
 #: sweep option -> (unit option of `mftyre eval` whose units it takes, help)
 _SWEEPS = {
-    "fz": ("fz", "vertical load [N]; kN allowed (default FNOMIN)"),
+    "fz": ("fz", "vertical load [N]; kN, lbf allowed (default FNOMIN)"),
     "slip": ("kappa", "slip i = 1 - V/(omega Re) [-]; %% allowed (default 0.15)"),
     "alpha": ("alpha", "slip angle [rad]; deg allowed (default 0)"),
     "p": ("p", "inflation pressure [Pa]; bar, kPa, psi allowed (default INFLPRES)"),

@@ -31,7 +31,7 @@ from ..backend import NUMPY
 from ..errors import ModelInputError
 from ..formula import vertical
 from ..model import MFModel, load_tir
-from .equations import OUTPUTS, hard_ground_footprint
+from .equations import OUTPUTS, carcass_pressure, hard_ground_footprint
 from .model import SoilOutputs, _check
 
 __all__ = ["ConeIndexTyre", "mobility_number", "SOURCE"]
@@ -94,8 +94,8 @@ class ConeIndexTyre:
         nan = np.full(fz.shape, np.nan)
         zero = np.zeros(fz.shape)
         out = dict(sinkage=nan, contact_length=nan, flat_length=nan, contact_width=zero + prm.WIDTH,
-                   ground_pressure=nan, flat_load=nan, carcass_pressure=fz / (4.0 * a_h * b_h) - p, deflection=rho,
-                   rolling_radius=r_e,
+                   ground_pressure=nan, flat_load=nan, carcass_pressure=carcass_pressure(fz, a_h, b_h, p, NUMPY),
+                   deflection=rho, rolling_radius=r_e,
                    compaction_resistance=resistance, bulldozing_resistance=zero, motion_resistance=resistance,
                    gross_traction=gross, drawbar_pull=drawbar, hysteresis_moment=zero, torque=torque, fy=nan,
                    omega=omega, power=power, slip_power=gross * (omega * r_e - vx), efficiency=efficiency, slip=s)

@@ -81,7 +81,9 @@ Multi-pass (option ``rut``: the front tyre's rut depth z_1): the soil the rear t
 sigma_1 = k z_1^n and rebounded along Wong's unloading line of slope k_u = k_0 + A_u z_1 (repetitive loading [W];
 k_0, A_u soil constants): it carries nothing above z_1 - sigma_1 / k_u, reloads along that line down to z_1 and
 follows the virgin curve below:  sigma(d) = k_u (d - z_1 + sigma_1 / k_u)  for d in [z_1 - sigma_1 / k_u, z_1],
-k d^n below. The rear tyre's front arc starts at that rebounded rut bottom; R_c is the integral of this stress over
+k d^n below. The soil springs back to its surface at most: where sigma_1 / k_u > z_1 the reloading line runs from
+zero stress at the surface to sigma_1 at z_1 (slope sigma_1 / z_1; see _reloading_slope), never a stress step at
+the surface. The rear tyre's front arc starts at that rebounded rut bottom; R_c is the integral of this stress over
 the depth (closed form), the rest as above; no slip sinkage in a rut. Wong gives k_0 and A_u for a few terrains
 (for a sandy terrain k_0 = 0, A_u = 503 MN/m^4, as recalled here: check the book before relying on it); they are
 inputs, not built-in soil constants. The rear tyre sinks further than the front at the same load (repetitive
@@ -100,8 +102,8 @@ from ..errors import ModelInputError
 from ..formula import moments, vertical
 
 __all__ = ["SoilEffects", "rigid_wheel_sinkage", "critical_pressure", "compaction_resistance",
-           "bulldozing_coefficients", "hard_ground_footprint", "flat_load", "soft_soil", "OUTPUTS",
-           "ARC_NODES", "FLAT_NODES"]
+           "bulldozing_coefficients", "hard_ground_footprint", "carcass_pressure", "flat_load", "soft_soil",
+           "OUTPUTS", "ARC_NODES", "FLAT_NODES"]
 
 #: Gauss-Legendre nodes on the front arc (in s, theta = theta_e - (theta_e - theta_f) s^m) and on the flat part
 ARC_NODES, FLAT_NODES = 10, 12
@@ -121,7 +123,8 @@ OUTPUTS = {
     "contact_width": ("m", "width B of the soil contact (arc and flat part): the section width WIDTH"),
     "ground_pressure": ("Pa", "normal stress under the flat part, F_t / (2 a_t B) = k z_0^n"),
     "flat_load": ("N", "load F_t carried by the flat part (the rest by the front arc)"),
-    "carcass_pressure": ("Pa", "carcass stiffness pressure p_c = Fz / (4 a_h b_h) - p_i on hard ground at this load"),
+    "carcass_pressure": ("Pa", "carcass stiffness pressure p_c = max(Fz / (4 a_h b_h) - p_i, 0) on hard ground at "
+                               "this load (see carcass_pressure)"),
     "deflection": ("m", "tyre deflection: the .tir's Fz(rho, p) at the flat load F_t"),
     "rolling_radius": ("m", "radius r_f of the tread speed omega r_f on the flat part (.tir's Re at F_t)"),
     "compaction_resistance": ("N", "compaction resistance R_c (horizontal part of the arc's normal stress)"),
@@ -200,6 +203,14 @@ def hard_ground_footprint(prm, fz, p, be):
     return rho, a, b
 
 
+def carcass_pressure(fz, a, b, p, be):
+    """Wong's carcass stiffness pressure p_c: what the mean pressure over the hard-ground patch (half length a, half
+    width b: the .tir's) adds to the inflation pressure p, max(Fz / (4 a b) - p, 0). The carcass only adds
+    pressure; where the gross rectangle 4ab carries less than p (a car tyre's patch: grooves, rounded ends), the
+    rectangle is larger than the area that carries the load and p_c is 0, not negative."""
+    return be.fmax(fz / (4.0 * a * b) - p, 0.0)
+
+
 class _Contact(SimpleNamespace):
     """Geometry and normal stresses of the contact at one flat load (see :func:`_contact`)."""
 
@@ -213,7 +224,7 @@ def _stress(soil, k, depth, factor, effects, be):
         return virgin
     z_1 = effects.rut
     sigma_1 = k * z_1 ** n
-    k_u = effects.unloading[0] + effects.unloading[1] * z_1
+    k_u = _reloading_slope(soil, k, effects)
     reload = be.fmax(k_u * (depth - z_1) + sigma_1, 0.0)                # (no slip sinkage in a rut)
     return be.where(depth < z_1, reload, virgin)
 
@@ -231,7 +242,7 @@ def _contact(prm, soil, k, flat_load_, dpi, factor, effects, be):
     else:  # in the rut: the reloading line carries sigma_f where it is below sigma_1
         z_1 = effects.rut
         sigma_1 = k * z_1 ** soil.n
-        k_u = effects.unloading[0] + effects.unloading[1] * z_1
+        k_u = _reloading_slope(soil, k, effects)
         z_0 = be.where(sigma_f < sigma_1, z_1 - (sigma_1 - sigma_f) / k_u, z_virgin)
     z = z_0 if factor is None else factor * z_0
     c = be.sqrt(r * r - a * a)                                      # axle height above the flat
@@ -383,7 +394,7 @@ def soft_soil(prm, soil, fz, slip, alpha, p, vx, be, effects=SoilEffects()):
         "contact_width": width + zero,
         "ground_pressure": g.sigma_f,
         "flat_load": load_t,
-        "carcass_pressure": fz / (4.0 * a_h * b_h) - p,
+        "carcass_pressure": carcass_pressure(fz, a_h, b_h, p, be),
         "deflection": rho_t,
         "rolling_radius": r_f,
         "compaction_resistance": compaction,
@@ -411,7 +422,7 @@ def _compaction_integral(soil, k, z, effects, be):
         return virgin
     z_1 = effects.rut
     sigma_1 = k * z_1 ** n
-    k_u = effects.unloading[0] + effects.unloading[1] * z_1
+    k_u = _reloading_slope(soil, k, effects)
     top = _rebounded_rut(soil, k, effects, be)
     end = be.fmax(be.fmin(z, z_1), top)                                  # the reloading line from top to end
     reload = sigma_1 * (end - top) + 0.5 * k_u * ((end - z_1) ** 2 - (top - z_1) ** 2)
@@ -419,8 +430,15 @@ def _compaction_integral(soil, k, z, effects, be):
     return reload / k + (deeper ** (n + 1.0) - z_1 ** (n + 1.0)) / (n + 1.0)
 
 
+def _reloading_slope(soil, k, effects):
+    """Slope of the unloading/reloading line in the rut of depth z_1: Wong's k_u = k_0 + A_u z_1 [W], at least
+    sigma_1 / z_1, so that the line reaches zero stress at or below the soil surface (the soil does not spring back
+    above the surface it had)."""
+    z_1 = effects.rut
+    return max(effects.unloading[0] + effects.unloading[1] * z_1, k * z_1 ** soil.n / z_1)
+
+
 def _rebounded_rut(soil, k, effects, be):
     """z_1 - sigma_1 / k_u (>= 0): the bottom of the front tyre's rut after the soil's elastic rebound [W]."""
     z_1 = effects.rut
-    k_u = effects.unloading[0] + effects.unloading[1] * z_1
-    return be.fmax(z_1 - k * z_1 ** soil.n / k_u, 0.0)
+    return be.fmax(z_1 - k * z_1 ** soil.n / _reloading_slope(soil, k, effects), 0.0)

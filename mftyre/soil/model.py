@@ -166,9 +166,19 @@ class SoftSoilTyre:
         shape = np.shape(args["fz"])
         lo, hi = np.full(shape, -1.0), np.full(shape, 0.5)
         t_lo, t_hi = self.evaluate(slip=lo, **args).torque, self.evaluate(slip=hi, **args).torque
-        if not (np.all(t_lo < 0) and np.all(t_hi > 0)):
-            raise ModelInputError("towed: the driving torque does not change sign between slip -1 and 0.5 at some "
-                                  "operating points (the soil cannot turn the wheel)")
+        if not np.all(t_lo < 0):
+            i = int(np.argmax(~(t_lo < 0)))
+            sunk = float(np.ravel(self.evaluate(slip=lo, **args).sinkage)[i])
+            raise ModelInputError(f"towed: at fz = {np.ravel(args['fz'])[i]:g} N, p = {np.ravel(args['p'])[i]:g} Pa "
+                                  f"the wheel needs a driving torque even turning at half its free-rolling speed "
+                                  f"(slip -1; sinkage {sunk:.3g} m, free radius {r:.3g} m): sunk this deep, a towed "
+                                  f"wheel would all but stop turning, outside the model; expected a smaller load, a "
+                                  f"lower pressure or a firmer soil")
+        if not np.all(t_hi > 0):
+            i = int(np.argmax(~(t_hi > 0)))
+            raise ModelInputError(f"towed: at fz = {np.ravel(args['fz'])[i]:g} N, p = {np.ravel(args['p'])[i]:g} Pa "
+                                  f"the driving torque is not positive even at slip 0.5 (the soil cannot turn the "
+                                  f"wheel)")
         scale = tol * args["fz"] * r
         slip, torque = hi.copy(), t_hi.copy()
         side = np.zeros(shape)                                  # Illinois: +1 the low end moved last, -1 the high
