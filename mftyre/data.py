@@ -510,6 +510,12 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
     with open_user_file(path, max_bytes=max_bytes, what="CSV data file", error=DataError) as fh:
         data = fh.read()
     header = _csv_header(data, path)
+    if len(header) == 1 and header[0].upper() not in CHANNELS:
+        for sep, name in ((";", "semicolons"), ("\t", "tabs"), (" ", "blanks")):
+            if len(header[0].split(sep)) > 2:
+                raise DataError(f"{path}: line 1: one column named {header[0][:60]!r}: the columns look separated "
+                                f"by {name}; expected comma-separated values (save the file as CSV with commas and "
+                                f"a decimal point)")
     _check_field_counts(data, len(header), path)
     try:  # index_col=False: a row is never shifted onto an index (the counts are checked above)
         raw = pd.read_csv(io.BytesIO(data), skipinitialspace=True, keep_default_na=False, na_values=_NAN_TEXT,
@@ -520,12 +526,6 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
     if len(raw.columns) != len(header):  # pragma: no cover - pandas and the csv module agree on the header
         raise DataError(f"{path}: line 1: cannot read the header")
     raw.columns = header
-    if len(header) == 1 and header[0].upper() not in CHANNELS:
-        for sep, name in ((";", "semicolons"), ("\t", "tabs"), (" ", "blanks")):
-            if len(header[0].split(sep)) > 2:
-                raise DataError(f"{path}: line 1: one column named {header[0][:60]!r}: the columns look separated "
-                                f"by {name}; expected comma-separated values (save the file as CSV with commas and "
-                                f"a decimal point)")
     if len(raw) == 0:
         raise DataError(f"{path}: no data rows: expected a header line followed by one line per sample")
     _refuse_units_row(raw, header, path)
