@@ -15,7 +15,7 @@ from .backend import NUMPY
 from .errors import ModelInputError
 from .formula import Modes
 from .formula.normalisation import condition_inputs
-from .model import MFModel, _as_float_arrays, load_tir
+from .model import MFModel, as_float_arrays, load_tir
 
 __all__ = ["mfeval", "MFEVAL_COLUMNS"]
 
@@ -44,7 +44,7 @@ def mfeval(tir, inputs, use_mode: int, *, turn_slip_form: str = "published") -> 
     n = table.shape[0]
     pressure = table[:, 6] if table.shape[1] > 6 else np.zeros(n)
     omega = table[:, 7] if table.shape[1] > 7 else np.zeros(n)
-    arrays = _as_float_arrays(dict(fz=table[:, 0], kappa=table[:, 1], alpha=table[:, 2], gamma=table[:, 3],
+    arrays = as_float_arrays(dict(fz=table[:, 0], kappa=table[:, 1], alpha=table[:, 2], gamma=table[:, 3],
                                    phit=table[:, 4], vx=table[:, 5],
                                    p=np.where(pressure == 0, prm.INFLPRES, pressure), omega=omega))
     if np.any(arrays["p"] < 0):

@@ -125,7 +125,7 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("demo", help="run the main job on the bundled tyre: evaluate, synthetic trailer "
                                            "data, fit", description=__doc__.split("\n\n")[0])
     p.add_argument("--out", default="out", help="output folder (default: out)")
-    from mftyre.cli import number_type
+    from mftyre.arguments import number_type
 
     p.add_argument("--seed", type=number_type(0, integer=True), default=1,
                    help="seed of the measurement noise (default 1)")

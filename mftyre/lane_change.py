@@ -36,7 +36,6 @@ compiler (seconds of gcc per problem size).
 """
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass
 

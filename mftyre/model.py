@@ -188,7 +188,7 @@ class MFModel:
         inputs = dict(fz=fz, kappa=kappa, alpha=alpha, gamma=gamma, phit=phit,
                       vx=prm.LONGVL if vx is None else vx, p=prm.INFLPRES if p is None else p,
                       omega=0.0 if omega is None else omega)
-        arrays = _as_float_arrays(inputs, copy=False)
+        arrays = as_float_arrays(inputs, copy=False)
         self._check_pressure(arrays["p"])
         if limits:
             ranges = self._input_ranges
@@ -365,7 +365,7 @@ class MFModel:
 
     def _vertical_inputs(self, p, **inputs):
         """Validated, broadcast, side-mirrored inputs of the vertical relations, dpi and R_omega."""
-        a = _as_float_arrays(dict(inputs, p=self._params.INFLPRES if p is None else p))
+        a = as_float_arrays(dict(inputs, p=self._params.INFLPRES if p is None else p))
         self._check_pressure(a["p"])
         if self.mirrored:
             a["fy"], a["gamma"] = -a["fy"], -a["gamma"]
@@ -437,7 +437,7 @@ def _own_arrays(values: dict, n: int, inputs: list) -> dict:
     return out
 
 
-def _as_float_arrays(inputs: dict, copy: bool = True) -> dict:
+def as_float_arrays(inputs: dict, copy: bool = True) -> dict:
     """Broadcast the inputs to one shape as float arrays (writable copies, or with ``copy=False`` read-only
     broadcast views); NaN, +-inf or non-numeric -> ModelInputError."""
     arrays = {}

@@ -28,7 +28,7 @@ _STYLE_NAMES = ("solid", "dashed", "dotted", "dash-dot")
 
 
 def register(subparsers) -> None:
-    from .cli import add_data_options, data_epilog
+    from .arguments import add_data_options, data_epilog
 
     p = subparsers.add_parser(
         "plot", help="plot measured data against .tir models, sweep by sweep (no fitting)",
@@ -49,7 +49,7 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    from .cli import read_data_args
+    from .arguments import read_data_args
     from .data import speaking_cli
     from .errors import MFTyreError
     from .files import OutputError, check_outputs

@@ -25,7 +25,7 @@ MAX_STEPS = 10_000_000
 
 
 def _quantity(name):
-    from .cli import parse_sweep
+    from .arguments import parse_sweep
 
     def convert(text):
         try:
@@ -41,7 +41,7 @@ def _quantity(name):
 
 
 def register(subparsers) -> None:
-    from .cli import number_type
+    from .arguments import number_type
 
     p = subparsers.add_parser(
         "swift", help="SWIFT tyre over a road profile or obstacle: time histories (CSV, plot)",

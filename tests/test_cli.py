@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 import mftyre
-from mftyre import cli
+from mftyre import arguments, cli
 from mftyre.model import OUTPUT_UNITS
 
 from conftest import PROJECT, TIR_FILES
@@ -107,16 +107,16 @@ def test_eval_prints_table_with_si_units(capsys):
     ("phit", "0.1/m", [0.1]),
 ])
 def test_parse_sweep_units(name, text, expected):
-    sweep = cli.parse_sweep(name, text)
+    sweep = arguments.parse_sweep(name, text)
     np.testing.assert_allclose(sweep.values, expected, rtol=1e-15, atol=1e-15)
 
 
 def test_sweep_remembers_unit_for_plots():
-    s = cli.parse_sweep("alpha", "-10deg:10deg:21")
+    s = arguments.parse_sweep("alpha", "-10deg:10deg:21")
     assert s.unit == "deg" and s.values.size == 21
     assert s.label(s.values[-1]) == "alpha = 10 deg"
-    assert cli.parse_sweep("p", "1.8bar,2.2bar").unit == "bar"
-    assert cli.parse_sweep("p", "220000").unit == "Pa"
+    assert arguments.parse_sweep("p", "1.8bar,2.2bar").unit == "bar"
+    assert arguments.parse_sweep("p", "220000").unit == "Pa"
 
 
 def test_grid_is_outer_product(tmp_path, capsys):

@@ -9,7 +9,8 @@ import pandas as pd
 import pytest
 
 from conftest import TIR_FILES
-from mftyre.cli import main, parse_sweep
+from mftyre.arguments import parse_sweep
+from mftyre.cli import main
 from mftyre.grid_results import grid_frame, sweep_grid
 
 CAR = str(TIR_FILES / "car_205_60R15_mf61.tir")

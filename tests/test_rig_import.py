@@ -488,7 +488,7 @@ def test_files_that_state_their_units_are_not_told_to_use_units(si, tmp_path, ca
 
 def test_load_in_pounds_on_the_command_line():
     """US rig sheets give loads in lbf: `mftyre eval/soil/swift --fz 1200lbf` (was: unknown unit)."""
-    from mftyre.cli import parse_sweep
+    from mftyre.arguments import parse_sweep
 
     np.testing.assert_allclose(parse_sweep("fz", "1200lbf,1000lb").values, [1200 * 4.4482216152605,
                                                                             1000 * 4.4482216152605])

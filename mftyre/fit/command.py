@@ -30,7 +30,7 @@ def _integer(minimum):
 
 
 def register(subparsers) -> None:
-    from ..cli import add_data_options, data_epilog
+    from ..arguments import add_data_options, data_epilog
     from .stages import STAGE_NAMES
 
     p = subparsers.add_parser(
@@ -63,7 +63,7 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    from ..cli import read_data_args
+    from ..arguments import read_data_args
     from ..data import speaking_cli
     from ..errors import MFTyreError
     from ..files import OutputError, check_outputs

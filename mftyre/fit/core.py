@@ -35,14 +35,15 @@ import pandas as pd
 from ..backend import NUMPY
 from ..data import UNCHECKED, TyreData, check_plausible, read_data
 from ..formula import Modes, steady_state, vertical
-from ..inputs import saturate_inputs, warn_data_outside
+from ..inputs import warn_data_outside
 from ..model import STRUCTURAL_PARAMETERS, MFModel
 from ..params import TyreParameters
+from .predict import predict_stage
 from ..programme import recognise
 from ..timeseries import effective_samples, needs_reduction, reduce_sweeps
 from ..tir import read_tir, write_tir
 from .metrics import normalised_rms
-from .stages import (STAGE_NAMES, STAGES, Stage, conditions, level_labels, shape_violations, stage_parameters,
+from .stages import (STAGE_NAMES, STAGES, conditions, level_labels, shape_violations, stage_parameters,
                      stage_rows, supported_parameters)
 from .start import estimate_stage, start_parameters
 from .verify import check_speeds, physical_domain, verification, verify_tir
@@ -201,21 +202,6 @@ def _start(data: TyreData, start):
     return read_tir(start), False
 
 
-# ------------------------------------------------------------------------------------------ prediction
-def _predict(stage: Stage, model: MFModel, data: TyreData, inputs: dict) -> np.ndarray:
-    if stage.output == "fz_from_rl":
-        def chan(name):
-            return np.nan_to_num(data.array(name)) if name in data else 0.0
-        if data.has("RL"):
-            rl = data.array("RL")
-        else:  # measured deflection: the loaded radius it means for the model
-            rl = vertical.free_radius(model.params, chan("OMEGA"), NUMPY) - data.array("RHO")
-        return model.vertical_force(rl, p=inputs["p"], omega=chan("OMEGA"), fx=chan("FX"), fy=chan("FY"),
-                                    gamma=inputs["gamma"])
-    omega = data.array("OMEGA") if stage.output == "re" and data.has("OMEGA") else None
-    return model.evaluate(**saturate_inputs(model, inputs), omega=omega)[stage.output]
-
-
 class _BatchPredictor:
     """The stage's model output for many parameter vectors at once: the equations evaluated once with the varied
     parameters as column vectors (shape (K, 1)) against the data as a row (shape (1, N)), so a finite-difference
@@ -247,7 +233,7 @@ class _BatchPredictor:
         """(K, N) predictions for the (K, P) parameter values (P = len(names))."""
         values = np.atleast_2d(values)
         if self.loop:
-            return np.stack([_predict(self.stage, MFModel(self.prm.replace(**dict(zip(self.names, v))), side=self.side),
+            return np.stack([predict_stage(self.stage, MFModel(self.prm.replace(**dict(zip(self.names, v))), side=self.side),
                                       self.data, self.inputs) for v in values])
         prm = _BatchParameters(self.prm, {n: values[:, j:j + 1] for j, n in enumerate(self.names)})
         r = self.row
@@ -514,7 +500,7 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
         est = {k: v for k, v in estimate_stage(stage.name, prm, sub).items() if k in names_all}
         prm = prm.replace(**est)
     start = {n: float(prm[n]) for n in names_all}
-    err_before = normalised_rms(_predict(stage, MFModel(before, side=side), sub, sub.inputs()),
+    err_before = normalised_rms(predict_stage(stage, MFModel(before, side=side), sub, sub.inputs()),
                                 sub.array(stage.channel))
     g, p = sub.array("IA"), sub.array("P")
     flat = np.abs(g) < math.radians(0.25)
@@ -551,7 +537,7 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
     values = {n: float(prm[n]) for n in names_all}
     stderr, corr, n_eff = _uncertainties(problem, prm, sub) if free else ({}, {}, float(len(sub)))
     stderr.update({n: None for n in reset})
-    pred = _predict(stage, MFModel(prm, side=side), sub, sub.inputs())
+    pred = predict_stage(stage, MFModel(prm, side=side), sub, sub.inputs())
     err = normalised_rms(pred, sub.array(stage.channel))
     rejected = []
     if not np.isfinite(err):

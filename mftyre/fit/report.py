@@ -12,7 +12,7 @@ import numpy as np
 from ..files import make_output_folder, write_atomically, write_figure
 from ..programme import cluster_levels
 from ..model import MFModel
-from .core import _predict
+from .predict import predict_stage
 from .stages import STAGES, stage_rows
 
 __all__ = ["markdown_report", "save_report", "plot_stage", "stage_figure"]
@@ -133,7 +133,7 @@ def stage_figure(result, name: str):
         return None
     data = result.data.select(stage_rows(stage, result.data))
     model = MFModel(result.params)
-    fitted = _predict(stage, model, data, data.inputs())
+    fitted = predict_stage(stage, model, data, data.inputs())
     measured = data.array(stage.channel)
     xch, xlabel, fac = _X[name]
     x = data.array(xch) * fac

@@ -233,7 +233,7 @@ def _nonzero_camber_levels(gamma) -> int:
     return len(levels(magnitude, _CAMBER_TOL)[1]) if magnitude.size else 0
 
 
-def _met(need: str, cond: dict, fit_pressure: bool) -> bool:
+def need_met(need: str, cond: dict, fit_pressure: bool) -> bool:
     return {
         "loads": cond["loads"] >= 2, "loads3": cond["loads"] >= 3, "camber": cond["camber"],
         "camber2": cond["camber_levels"] >= 2,
@@ -243,7 +243,7 @@ def _met(need: str, cond: dict, fit_pressure: bool) -> bool:
     }[need]
 
 
-_REASONS = {"loads": "one load level only", "loads3": "fewer than three load levels", "camber": "no camber in the data",
+SKIP_REASONS = {"loads": "one load level only", "loads3": "fewer than three load levels", "camber": "no camber in the data",
             "camber2": "fewer than two non-zero camber magnitudes (collinear with the first-order camber term)",
             "pressure": "one pressure only (or fit_pressure=False)", "pressure3": "fewer than three pressures "
             "(or fit_pressure=False)", "speeds": "one speed only", "speeds3": "fewer than three speeds",
@@ -265,9 +265,9 @@ def stage_parameters(stage: Stage, cond: dict, fit_pressure: bool):
         for n in names:
             if n not in PARAMETERS:  # pragma: no cover - guards the table
                 raise KeyError(f"stage {stage.name}: {n} is not a schema parameter")
-        unmet = [n for n in needs if not _met(n, cond, fit_pressure)]
+        unmet = [n for n in needs if not need_met(n, cond, fit_pressure)]
         if unmet:
-            skipped.update({n: _REASONS[unmet[0]] for n in names})
+            skipped.update({n: SKIP_REASONS[unmet[0]] for n in names})
             continue
         kind = "camber" if any(n.startswith("camber") for n in needs) else ("pressure" if any(n.startswith("pressure") for n in needs)
                                                     else "base")

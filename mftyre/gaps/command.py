@@ -15,7 +15,7 @@ __all__ = ["register", "run"]
 
 
 def register(subparsers) -> None:
-    from ..cli import add_data_options, data_epilog, number_type
+    from ..arguments import add_data_options, data_epilog, number_type
 
     p = subparsers.add_parser(
         "gaps", help="find the effects a .tir model misses in measured data, add them, show the gap shrink",
@@ -45,7 +45,7 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    from ..cli import read_data_args
+    from ..arguments import read_data_args
     from ..data import speaking_cli
     from ..errors import MFTyreError
     from ..files import OutputError, check_outputs

@@ -15,7 +15,7 @@ from ..fit.core import load_data
 from ..fit.metrics import normalised_rms
 from ..fit.verify import verify_tir
 from ..inputs import warn_data_outside
-from ..fit.stages import _REASONS as _STAGE_REASONS  # the stages' own wording
+from ..fit.stages import SKIP_REASONS as _STAGE_REASONS  # the stages' own wording
 from ..fit.stages import STAGES, conditions
 from ..model import MFModel, load_tir
 from ..programme import recognise
@@ -23,8 +23,8 @@ from ..timeseries import effective_samples, needs_reduction, reduce_sweeps
 from ..tir import write_tir
 from .catalogue import CATALOGUE, PARAM_STAGE, Effect, effect_state, parameter_needs
 from .locate import locate
-from .refit import FAIR_STAGES, SWEEP_REASONS, _at_neutral, active_parameters, covariance, standard_errors, _stage_data, data_conditions, needs_met, refit, refit_stages
-from .residuals import Evaluator, _sweeps, holdout_mask, noise_levels, noise_of_means
+from .refit import FAIR_STAGES, SWEEP_REASONS, at_neutral, active_parameters, covariance, standard_errors, stage_data, data_conditions, needs_met, refit, refit_stages
+from .residuals import Evaluator, sweep_labels, holdout_mask, noise_levels, noise_of_means
 from .transient import sweep_hysteresis
 from .small import SMALL_DATA, aicc, fit_all, loo_errors, weighted_rss
 
@@ -198,7 +198,7 @@ def f_test(chi2_before: float, chi2_after: float, n: int, n_eff: float, k: int):
 
 
 def _sweep_ids(ev: Evaluator, c: str) -> np.ndarray:
-    return _sweeps(ev.data)[ev.rows[c]]
+    return sweep_labels(ev.data)[ev.rows[c]]
 
 
 def _n_eff(ev: Evaluator, prm, channels, series: bool = True) -> float:
@@ -295,7 +295,7 @@ def _identifiable(effect: Effect, prm, data: TyreData, turn_slip: bool):
     keep, why = [], {}
     for n in effect.parameters:
         stage = PARAM_STAGE.get(n)
-        sub = _stage_data(stage, data) if stage in STAGES else data
+        sub = stage_data(stage, data) if stage in STAGES else data
         cond = data_conditions(sub)
         ts = turn_slip and bool(np.any(sub.array("PHIT") != 0))
         needs = tuple(parameter_needs(n)) + tuple(effect.needs)
@@ -305,14 +305,14 @@ def _identifiable(effect: Effect, prm, data: TyreData, turn_slip: bool):
             keep.append(n)
         else:
             missing = [x for x in needs if not needs_met((x,), cond, ts)]
-            why[n] = "; ".join(_REASONS.get(x, "needs " + x) for x in missing)
+            why[n] = "; ".join(SKIP_REASONS.get(x, "needs " + x) for x in missing)
     # the switches must be determinable, or the effect cannot be switched on
     if not any(n in keep for n in effect.neutral):
         return [], why
     return keep, why
 
 
-_REASONS = dict(_STAGE_REASONS, **SWEEP_REASONS, turn_slip="no turn slip in the data")
+SKIP_REASONS = dict(_STAGE_REASONS, **SWEEP_REASONS, turn_slip="no turn slip in the data")
 
 
 def _matches(effect: Effect, findings) -> bool:
@@ -349,7 +349,7 @@ def _candidates(pool, given, train: TyreData, ts: bool):
             continue
         if state == "active":
             # partly switched on: the switches still at their neutral values are the candidate
-            off = [n for n in e.neutral if _at_neutral(given[n], e.neutral[n])]
+            off = [n for n in e.neutral if at_neutral(given[n], e.neutral[n])]
             if not off:
                 continue
             e = replace(e, parameters=tuple(off), neutral={n: e.neutral[n] for n in off})

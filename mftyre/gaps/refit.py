@@ -29,7 +29,7 @@ import numpy as np
 from ..data import TyreData, levels
 from ..fit.core import BOUNDS, bounded_parameters, physical_bounds
 from ..fit.verify import verify_tir
-from ..fit.stages import STAGES, _met, conditions, shape_violations, stage_rows  # _met: the stages' own rule
+from ..fit.stages import STAGES, need_met, conditions, shape_violations, stage_rows  # need_met: the stages' own rule
 from ..model import MFModel
 from ..params import PARAMETERS
 from .catalogue import BASE, CATALOGUE, PARAM_STAGE, TURN_SLIP_BASE, effect_state, parameter_needs
@@ -156,7 +156,7 @@ def covariance(params, ev: Evaluator, names, channels, sigma: dict, n_eff: float
 
 def needs_met(needs, cond: dict, turn_slip: bool) -> bool:
     """Whether data with the conditions ``cond`` (:func:`data_conditions`) determine a parameter with ``needs``."""
-    return all(turn_slip if n == "turn_slip" else cond[n] if n in _SWEEPS else _met(n, cond, True) for n in needs)
+    return all(turn_slip if n == "turn_slip" else cond[n] if n in _SWEEPS else need_met(n, cond, True) for n in needs)
 
 
 _SWEEPS = ("slip_ratio", "slip_angle", "combined", "deflection")
@@ -195,7 +195,7 @@ def data_conditions(data: TyreData) -> dict:
 _KAPPA_TOL, _ALPHA_TOL = 0.005, math.radians(0.25)
 
 
-def _stage_data(stage_name: str, data: TyreData) -> TyreData:
+def stage_data(stage_name: str, data: TyreData) -> TyreData:
     """The rows the gap finder refits a stage on: wider than the fitting stage's (:func:`stage_rows`), since the
     gap finder starts from a complete model: every row whose channel the stage's functions shape."""
     stage = STAGES[stage_name]
@@ -238,14 +238,14 @@ def _is_active(name: str, prm, turn_slip: bool) -> bool:
         if name not in e.parameters:
             continue
         if name in e.neutral:          # a switch: active when away from its neutral value
-            if not _at_neutral(prm[name], e.neutral[name]):
+            if not at_neutral(prm[name], e.neutral[name]):
                 return True
         elif effect_state(e, prm) == "active":   # a shape factor of an effect that is switched on
             return True
     return False
 
 
-def _at_neutral(value, neutral) -> bool:
+def at_neutral(value, neutral) -> bool:
     return abs(float(value) - neutral) <= 1e-12 * max(1.0, abs(neutral))
 
 
@@ -290,7 +290,7 @@ def refit_stages(params, data: TyreData, stages=FAIR_STAGES, *, turn_slip: bool 
         stage = STAGES[name]
         if channels is not None and stage.channel not in channels:
             continue
-        sub = _stage_data(name, data)
+        sub = stage_data(name, data)
         if len(sub) < min_points:
             continue
         names = stage_names(name, prm, sub, turn_slip, extra, active)

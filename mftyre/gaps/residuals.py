@@ -114,7 +114,7 @@ class Evaluator:
         return np.flatnonzero(self.rows[c])
 
 
-def _sweeps(data: TyreData) -> np.ndarray:
+def sweep_labels(data: TyreData) -> np.ndarray:
     if "SWEEP" in data:
         return data.frame["SWEEP"].to_numpy()
     return split_sweeps(data).frame["SWEEP"].to_numpy()
@@ -123,7 +123,7 @@ def _sweeps(data: TyreData) -> np.ndarray:
 def noise_levels(ev: Evaluator, residuals: dict, min_dof: int = 20) -> dict:
     """Channel -> (sigma, method): measurement-noise standard deviation from repeats or neighbours."""
     d = ev.data
-    sweep = _sweeps(d)
+    sweep = sweep_labels(d)
     fz_step = 0.01 * float(np.max(np.abs(d.array("FZ")))) or 1.0   # the load is recorded with noise
     key_cols = [np.round(d.array(c) / s).astype(np.int64) for c, s in
                 (("SA", 1e-5), ("SL", 1e-5), ("IA", 1e-5), ("VX", 1e-3), ("P", 1.0), ("PHIT", 1e-6), ("FZ", fz_step))]
@@ -176,7 +176,7 @@ def test_kind(data: TyreData) -> np.ndarray:
 def holdout_mask(data: TyreData, fraction: float = 0.25, seed: int = 0) -> np.ndarray:
     """Boolean mask of the held-out rows: whole sweeps, systematically every 1/fraction-th sweep of each kind of
     test (starting at an offset drawn with ``seed``); kinds with fewer than three sweeps are not held out."""
-    sweep = _sweeps(data)
+    sweep = sweep_labels(data)
     kind = test_kind(data)
     rng = np.random.default_rng(seed)
     mask = np.zeros(len(data), bool)

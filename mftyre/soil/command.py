@@ -27,7 +27,7 @@ _DEFAULT_OUTPUTS = ("sinkage", "contact_length", "motion_resistance", "drawbar_p
 
 
 def _sweep_type(name):
-    from ..cli import parse_sweep
+    from ..arguments import parse_sweep
 
     def convert(text):
         try:
@@ -64,14 +64,10 @@ def _outputs_type(text):
     return tuple(dict.fromkeys(names))
 
 
-class _SweepAction(argparse.Action):
-    def __call__(self, parser, namespace, values, option_string=None):
-        setattr(namespace, self.dest, values)
-        namespace.sweep_order = [n for n in (namespace.sweep_order or []) if n != self.dest] + [self.dest]
-
-
 def register(subparsers) -> argparse.ArgumentParser:
     """Add the ``soil`` command to an argparse subparsers object."""
+    from ..arguments import SweepAction
+
     p = subparsers.add_parser(
         "soil", help="evaluate the tyre on soft soil (Bekker/Janosi-Hanamoto, deflecting tyre) on a grid",
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -98,7 +94,7 @@ swept input with the most values (or --x). Existing output files need --overwrit
     p.add_argument("--soil-file", metavar="SOILS.csv", help="CSV file of soils (columns name,n,k_c,k_phi,c,phi,K)")
     group = p.add_argument_group("operating points (value, list V1,V2,... or range START:STOP:COUNT; units allowed)")
     for name, (_, text) in _SWEEPS.items():
-        group.add_argument(f"--{name}", dest=name, type=_sweep_type(name), action=_SweepAction, metavar="SPEC",
+        group.add_argument(f"--{name}", dest=name, type=_sweep_type(name), action=SweepAction, metavar="SPEC",
                            help=text)
     effects = p.add_argument_group("options of the model (absent at their defaults)")
     effects.add_argument("--slip-sinkage", type=float, default=0.0, metavar="S",
@@ -175,7 +171,7 @@ def run(args) -> int:
 
 
 def _unit(name):
-    from ..cli import _SWEEPS as EVAL_SWEEPS
+    from ..arguments import SWEEP_UNITS as EVAL_SWEEPS
 
     return EVAL_SWEEPS[_SWEEPS[name][0]][0]
 

@@ -32,7 +32,7 @@ from ..errors import ModelInputError
 from ..formula import vertical
 from ..model import MFModel, load_tir
 from .equations import OUTPUTS, carcass_pressure, hard_ground_footprint
-from .model import SoilOutputs, _check
+from .model import SoilOutputs, check_soil_inputs
 
 __all__ = ["ConeIndexTyre", "mobility_number", "SOURCE"]
 
@@ -73,7 +73,7 @@ class ConeIndexTyre:
             args = dict(zip(values, np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in values.values()))))
         except (TypeError, ValueError):
             raise ModelInputError(f"inputs must be numeric and broadcast to one shape, got {values!r}") from None
-        _check(args)
+        check_soil_inputs(args)
         fz, s, p, vx = args["fz"], args["slip"], args["p"], args["vx"]
         dpi = (p - prm.NOMPRES) / prm.NOMPRES
         r = vertical.free_radius(prm, 0.0, NUMPY)
@@ -108,7 +108,7 @@ class ConeIndexTyre:
         prm = self.params
         fz_a, p_a = np.broadcast_arrays(np.asarray(fz, dtype=float), np.asarray(prm.INFLPRES if p is None else p,
                                                                              dtype=float))
-        _check(dict(fz=fz_a, slip=np.zeros(fz_a.shape), alpha=np.asarray(alpha, dtype=float), p=p_a,
+        check_soil_inputs(dict(fz=fz_a, slip=np.zeros(fz_a.shape), alpha=np.asarray(alpha, dtype=float), p=p_a,
                     vx=np.asarray(prm.LONGVL if vx is None else vx, dtype=float)))
         rho, _, _ = hard_ground_footprint(prm, fz_a, p_a, NUMPY)
         bn = mobility_number(self.cone_index, prm.WIDTH, 2.0 * prm.UNLOADED_RADIUS, fz_a, rho,

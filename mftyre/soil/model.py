@@ -132,7 +132,7 @@ class SoftSoilTyre:
         except ValueError:
             shapes = ", ".join(f"{k}{np.shape(v)}" for k, v in arrays.items())
             raise ModelInputError(f"inputs do not broadcast to one shape: {shapes}") from None
-        _check(arrays)
+        check_soil_inputs(arrays)
         shape = arrays["fz"].shape
         flat = {k: np.ravel(v) for k, v in arrays.items()}
         size = flat["fz"].size
@@ -244,7 +244,7 @@ class SoftSoilTyre:
         return f"SoftSoilTyre({self.tyre!r}, soil={self.soil.name!r})"
 
 
-def _check(arrays):
+def check_soil_inputs(arrays):
     """Typed errors for inputs outside the model's domain."""
     rules = (("fz", lambda v: v > 0, "positive (in N)"), ("slip", lambda v: v < 1, "below 1 (i = 1 - V/(omega Re))"),
              ("alpha", lambda v: np.abs(v) < np.pi / 2, "within (-90, 90) deg (in rad)"),
