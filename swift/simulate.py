@@ -65,6 +65,7 @@ import numpy as np
 from mftyre.compiled import CASADI_LOCK, cached_library  # the verified cache of every compiled library
 from mftyre.backend import NUMPY
 from mftyre.errors import ModelInputError
+from mftyre.params import swift_invalid_values
 from mftyre.formula import vertical
 
 from .enveloping import Cams, CamTable
@@ -165,6 +166,8 @@ class SwiftTyre:
             raise ModelInputError(f"axle must be 'height' or 'load', rim 'speed' or 'torque'; got {axle!r}, {rim!r}")
         self.model, self.axle, self.rim = model, axle, rim
         self._p_nominal = model.params.INFLPRES  # the default inflation pressure (the parameters are immutable)
+        for name, message in swift_invalid_values(model.params):  # parameters built by hand skip the reader's check
+            raise ModelInputError(f"SWIFT parameter {name} {message}")
         self.constants = RingConstants.from_model(model, axle_mass, rim_extra_inertia)
         self.cams = Cams.from_params(model.params)
         margin = window * table_dx
@@ -612,13 +615,20 @@ class SwiftTyre:
             last = size
         r = (self._compiled.rhs(s, u, window[0], i0)[0][eqs] if self._compiled is not None
              else np.asarray(self._equilibrium(s, u, *window)[0])).ravel()
-        worst = int(np.argmax(np.abs(r))) if np.all(np.isfinite(r)) else int(np.argmin(np.isfinite(r)))
+        finite = bool(np.all(np.isfinite(r)) and np.all(np.isfinite(s)))
+        worst = int(np.argmax(np.abs(r))) if finite else int(np.argmin(np.isfinite(r)))
+        at = (f"vx = {inputs.vx} m/s, " + (f"load = {inputs.load} N" if self.axle == "load" else f"z = {inputs.z} m")
+              + (f", torque = {inputs.torque} N m" if self.rim == "torque" else f", omega = {inputs.omega} rad/s")
+              + f", p = {p:g} Pa")
+        if not finite:  # overflow in the ring's constants or equations: no input can help
+            raise ModelInputError(
+                f"the SWIFT equations are not finite with these parameters (d({STATE_NAMES[eqs[worst]]})/dt = "
+                f"{float(r[worst])!r} at the inputs {at}): check the [STRUCTURAL] (FREQ_*, DAMP_*, BELT_*), "
+                f"[VERTICAL] and [CONTACT_PATCH] values and SWIFT_* for one no tyre has")
         if not abs(r[worst]) <= EQUILIBRIUM_TOL:
             raise ModelInputError(
-                f"no static equilibrium at the inputs (vx = {inputs.vx} m/s, "
-                + (f"load = {inputs.load} N" if self.axle == "load" else f"z = {inputs.z} m")
-                + (f", torque = {inputs.torque} N m" if self.rim == "torque" else f", omega = {inputs.omega} rad/s")
-                + f"): after {iterations} Newton steps d({STATE_NAMES[eqs[worst]]})/dt = {r[worst]:.3g} (tolerance "
+                f"no static equilibrium at the inputs ({at}): after {iterations} Newton steps "
+                f"d({STATE_NAMES[eqs[worst]]})/dt = {r[worst]:.3g} (tolerance "
                 f"{EQUILIBRIUM_TOL:g}); e.g. a drive/brake torque beyond what the tyre transmits at this load, or "
                 f"the tyre off the road")
         self._store_contact(s, u)
