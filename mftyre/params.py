@@ -620,19 +620,20 @@ _SWIFT_DAMPING = ("DAMP_LONG", "DAMP_LAT", "DAMP_YAW", "DAMP_WINDUP", "DAMP_RESI
 
 def swift_invalid_values(prm) -> list[tuple[str, str]]:
     """(parameter, message) for every SWIFT ring value no tyre can have (part of :func:`invalid_values`, also
-    checked by ``swift.simulate.SwiftTyre`` on parameters built by hand): belt masses and inertias positive and
-    finite, ring frequencies positive with a finite stiffness (mass (2 pi f)^2), damping ratios and time constants
+    checked by ``swift.simulate.SwiftTyre`` on parameters built by hand): belt masses, inertias and ring
+    frequencies not negative (0 is how files without a ring fill [STRUCTURAL]: the ring itself refuses it,
+    swift.ring.RingConstants), the frequencies with a finite stiffness (mass (2 pi f)^2), damping ratios and time constants
     finite and not negative (the time constants with a finite damping), SWIFT_PSTIFF / SWIFT_PDAMP keeping the sidewall stiffness and damping factors positive
     over 0.5-1.5 NOMPRES. Plain float arithmetic (inf, never an OverflowError)."""
     out = []
     for name, meaning in _SWIFT_MASSES.items():
-        if not 0 < prm[name] < math.inf:
-            out.append((name, f"must be positive and finite ({meaning}), got {prm[name]!r}"))
+        if not prm[name] >= 0:
+            out.append((name, f"must not be negative ({meaning}; 0: no SWIFT ring), got {prm[name]!r}"))
     for name, mass in _SWIFT_FREQUENCIES.items():
         omega = 2.0 * math.pi * float(prm[name])
-        if not prm[name] > 0:
-            out.append((name, f"must be positive (an undamped ring-mode frequency in Hz; published: 30-110), "
-                              f"got {prm[name]!r}"))
+        if not prm[name] >= 0:
+            out.append((name, f"must not be negative (an undamped ring-mode frequency in Hz, published: 30-110; "
+                              f"0: no SWIFT ring), got {prm[name]!r}"))
         elif 0 < prm[mass] < math.inf and not math.isfinite(prm[mass] * omega * omega):
             out.append((name, f"gives an infinite ring stiffness {mass} (2 pi {name})^2 = {prm[mass]!r} (2 pi "
                               f"{prm[name]!r})^2 (a frequency in Hz, published: 30-110; a mass in kg)"))

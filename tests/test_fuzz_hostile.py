@@ -452,16 +452,18 @@ def test_swift_equations_that_overflow_say_so_naming_the_inputs(name):
 
 
 @pytest.mark.parametrize("name, value", [("SWIFT_PSTIFF", 1e308), ("SWIFT_PSTIFF", 2.5), ("SWIFT_PDAMP", -2.0),
-                                         ("FREQ_WINDUP", 1e308), ("FREQ_LAT", 0.0), ("DAMP_YAW", -0.1), ("DAMP_VLOW", 1e308),
-                                         ("BELT_MASS", 0.0)])
+                                         ("FREQ_WINDUP", 1e308), ("FREQ_LAT", -40.0), ("DAMP_YAW", -0.1), ("DAMP_VLOW", 1e308),
+                                         ("BELT_MASS", -7.0)])
 def test_swift_values_no_tyre_can_have_are_refused_where_every_value_is_checked(name, value):
     """SWIFT_PSTIFF = 1e308 ran at nominal pressure (dpi = 0) and failed only elsewhere; a sidewall factor
-    1 + SWIFT_P* dpi <= 0 within 0.5-1.5 NOMPRES, a ring frequency <= 0 or with an infinite stiffness, a negative
-    damping, a non-finite belt mass are refused by with_params (and so load_tir, write_tir, check) naming it."""
+    1 + SWIFT_P* dpi <= 0 within 0.5-1.5 NOMPRES, a negative ring frequency or one with an infinite stiffness, a
+    negative damping or an infinite residual damping, a negative belt mass are refused by with_params (and so
+    load_tir, write_tir, check) naming it; 0 in [STRUCTURAL] (a file without a ring) still loads."""
     model = _quiet(mftyre.load_tir, T62)
     with pytest.raises(TirError, match=name):
         model.with_params(**{name: value})
     model.with_params(SWIFT_PSTIFF=1.9, SWIFT_PDAMP=-1.9)  # factors 0.05 at 0.5 / 1.5 NOMPRES: legal
+    model.with_params(FREQ_LONG=0.0, BELT_MASS=0.0)
 
 
 # ------------------------------------------------------------------------------------ 9: soil file, FMU step budget
