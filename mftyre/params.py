@@ -244,7 +244,7 @@ _TABLE: dict[str, list[tuple]] = {
         ("SWIFT_PSTIFF", 0.0, "-", "6", "SWIFT ring (mftyre): sidewall stiffness pressure dependency (absent: "
          "PFZ1)", True),
         ("SWIFT_PDAMP", 0.0, "-", "6", "SWIFT ring (mftyre): sidewall and residual damping pressure dependency "
-         "(absent: -SWIFT_PSTIFF/2 of the absent default)", True),
+         "(absent: damping coefficients independent of pressure, f_d = 1/sqrt(f_c))", True),
         ("PCFX1", 0.0, "-", "6", "Longitudinal stiffness: linear vertical deflection dependency"),
         ("PCFX2", 0.0, "-", "6", "Longitudinal stiffness: quadratic vertical deflection dependency"),
         ("PCFX3", 0.0, "-", "6", "Longitudinal stiffness: pressure dependency"),

@@ -182,7 +182,7 @@ def test_yaw_compliance_acts_on_transient_not_steady_forces(model):
 
 def test_pressure_aware_sidewall_damping(model):
     """SWIFT_PSTIFF / SWIFT_PDAMP absent from the file (as in the sample file): derived from its vertical pressure
-    term, PFZ1 and -PFZ1/2 (swift.ring notes), the vertical belt mode stiffens and its damping ratio falls with
+    term, PFZ1 and f_d = 1/sqrt(f_c) (swift.ring notes), the vertical belt mode stiffens and its damping ratio falls with
     pressure, as the FE tyre of seed 001 decays fastest at the lowest pressure (issue 19; old default 0: the ratio
     rose, 0.112 -> 0.125 over PRESMIN..PRESMAX). Written as 0 in the file: no pressure effect on the sidewall (the
     ratio then rises through the stiffness-proportional residual damping); SWIFT_PDAMP < 0 alone also reverses it.
