@@ -161,8 +161,8 @@ from mftyre.errors import ModelInputError
 from mftyre.formula import vertical
 
 __all__ = ["RingConstants", "STATE_NAMES", "INPUT_NAMES", "OUTPUT_NAMES", "CONTACT_PASSES", "AIR_TIME",
-           "RESIDUAL_FLOOR", "pressure_coefficients", "pressure_limits", "check_pressure", "residual_vertical", "residual_compliance", "contact_start", "contact_geometry",
-           "ring_equations"]
+           "RESIDUAL_FLOOR", "pressure_coefficients", "pressure_limits", "check_pressure", "residual_vertical",
+           "residual_compliance", "contact_start", "contact_geometry", "ring_equations"]
 
 STATE_NAMES = ("xb", "vxb", "zb", "vzb", "thw", "omb", "oma", "za", "vza", "xa", "ya",
                "ux", "kappa", "yb", "vyb", "gb", "wgb", "psb", "wpsb", "uy", "alpha", "psr", "betaf", "xcs", "lsm")
