@@ -5,8 +5,9 @@ fixed at the loaded radius, rim free to spin, no slip:
 
 Per file: for each speed the damped natural frequencies [Hz] with their damping ratios, sorted by frequency, and
 the slowest decay rate max Re(lambda) [1/s] (negative: every mode damped). ``--grid``: also the worst point of
-the scan of tests/test_swift_modes.py (0.5-70 m/s forward and reverse, 2-8 kN, PRESMIN..PRESMAX held to
-0.7-1.3 NOMPRES) with the time it took. Default files: the bundled SWIFT sample and the shared TNO file.
+the scan of tests/test_swift_modes.py (0.5-70 m/s forward and reverse, 2-8 kN) at each of seven pressures over
+the declared PRESMIN..PRESMAX, with the MF's cornering-stiffness pressure factor 1 + PPY1 dpi beside it (the TNO
+file's turns negative at 5.72 bar: the modes grow there, the MF's Kya having reversed) and the time it took. Default files: the bundled SWIFT sample and the shared TNO file.
 """
 from __future__ import annotations
 
@@ -47,13 +48,16 @@ def main():
             cells = "  ".join(f"{f:5.1f} ({z:.3f})" for f, z in zip(m.frequency[order], m.damping[order]))
             print(f"{v:9.1f}  {m.max_real:12.2f}  {cells}")
         if args.grid:
-            lo, hi = max(prm.PRESMIN, 0.7 * prm.NOMPRES), min(prm.PRESMAX, 1.3 * prm.NOMPRES)
-            t0 = time.perf_counter()
-            rows = scan(tyre, GRID_SPEEDS, (2000.0, 5000.0, 8000.0), sorted({lo, prm.INFLPRES, hi}))
-            worst = max(rows, key=lambda r: r.max_real)
-            print(f"scan of {len(rows)} points ({time.perf_counter() - t0:.1f} s): slowest decay "
-                  f"{worst.max_real:.2f} 1/s at vx {worst.vx} m/s, Fz {worst.fz:.0f} N, p {worst.p / 1e5:.2f} bar")
+            import numpy as np
 
+            for p in sorted(set(np.geomspace(prm.PRESMIN, prm.PRESMAX, 7)) | {prm.INFLPRES}):
+                t0 = time.perf_counter()
+                rows = scan(tyre, GRID_SPEEDS, (2000.0, 5000.0, 8000.0), [p])
+                worst = max(rows, key=lambda r: r.max_real)
+                dpi = (p - prm.NOMPRES) / prm.NOMPRES
+                print(f"p {p / 1e5:5.2f} bar (1 + PPY1 dpi = {1 + prm.PPY1 * dpi:6.3f}): {len(rows)} points "
+                      f"({time.perf_counter() - t0:.1f} s), slowest decay {worst.max_real:9.2f} 1/s at vx {worst.vx} "
+                      f"m/s, Fz {worst.fz:.0f} N")
 
 if __name__ == "__main__":
     main()

@@ -244,7 +244,7 @@ _TABLE: dict[str, list[tuple]] = {
         ("SWIFT_PSTIFF", 0.0, "-", "6", "SWIFT ring (mftyre): sidewall stiffness pressure dependency (absent: "
          "PFZ1)", True),
         ("SWIFT_PDAMP", 0.0, "-", "6", "SWIFT ring (mftyre): sidewall and residual damping pressure dependency "
-         "(absent: -SWIFT_PSTIFF/2 of the absent default)", True),
+         "(absent: damping coefficients independent of pressure, f_d = 1/sqrt(f_c))", True),
         ("PCFX1", 0.0, "-", "6", "Longitudinal stiffness: linear vertical deflection dependency"),
         ("PCFX2", 0.0, "-", "6", "Longitudinal stiffness: quadratic vertical deflection dependency"),
         ("PCFX3", 0.0, "-", "6", "Longitudinal stiffness: pressure dependency"),
@@ -607,13 +607,63 @@ def _geometry_problems(prm) -> list[tuple[str, str]]:
     return out
 
 
+#: Pressures, relative to NOMPRES, over which the SWIFT sidewall factors f_c = 1 + SWIFT_PSTIFF dpi and
+#: f_d = 1 + SWIFT_PDAMP dpi (swift.ring notes) must stay positive: any real tyre runs at 0.5-1.5 NOMPRES (the
+#: published files declare 0.85-1.15, the TNO file 0.05-4.5, where f_d = 1/sqrt(f_c) when SWIFT_PDAMP is absent).
+_SWIFT_PRESSURE_SPAN = 0.5
+_SWIFT_MASSES = {"BELT_MASS": "the belt mass", "BELT_IXX": "the belt's diametral inertia",
+                 "BELT_IYY": "the belt's polar inertia"}
+_SWIFT_FREQUENCIES = {"FREQ_LONG": "BELT_MASS", "FREQ_LAT": "BELT_MASS", "FREQ_YAW": "BELT_IXX",
+                      "FREQ_WINDUP": "BELT_IYY"}
+_SWIFT_DAMPING = ("DAMP_LONG", "DAMP_LAT", "DAMP_YAW", "DAMP_WINDUP", "DAMP_RESIDUAL", "DAMP_VLOW")
+
+
+def swift_invalid_values(prm) -> list[tuple[str, str]]:
+    """(parameter, message) for every SWIFT ring value no tyre can have (part of :func:`invalid_values`, also
+    checked by ``swift.simulate.SwiftTyre`` on parameters built by hand): belt masses, inertias and ring
+    frequencies not negative (0 is how files without a ring fill [STRUCTURAL]: the ring itself refuses it,
+    swift.ring.RingConstants), the frequencies with a finite stiffness (mass (2 pi f)^2), damping ratios and time constants
+    finite and not negative (the time constants with a finite damping), SWIFT_PSTIFF / SWIFT_PDAMP keeping the sidewall stiffness and damping factors positive
+    over 0.5-1.5 NOMPRES. Plain float arithmetic (inf, never an OverflowError)."""
+    out = []
+    for name, meaning in _SWIFT_MASSES.items():
+        if not prm[name] >= 0:
+            out.append((name, f"must not be negative ({meaning}; 0: no SWIFT ring), got {prm[name]!r}"))
+    for name, mass in _SWIFT_FREQUENCIES.items():
+        omega = 2.0 * math.pi * float(prm[name])
+        if not prm[name] >= 0:
+            out.append((name, f"must not be negative (an undamped ring-mode frequency in Hz, published: 30-110; "
+                              f"0: no SWIFT ring), got {prm[name]!r}"))
+        elif 0 < prm[mass] < math.inf and not math.isfinite(prm[mass] * omega * omega):
+            out.append((name, f"gives an infinite ring stiffness {mass} (2 pi {name})^2 = {prm[mass]!r} (2 pi "
+                              f"{prm[name]!r})^2 (a frequency in Hz, published: 30-110; a mass in kg)"))
+    for name in _SWIFT_DAMPING:
+        if not 0 <= prm[name] < math.inf:
+            out.append((name, f"must be finite and not negative (a damping ratio or time constant), got {prm[name]!r}"))
+        elif name in ("DAMP_RESIDUAL", "DAMP_VLOW") and not math.isfinite(prm[name] * float(prm["VERTICAL_STIFFNESS"])):
+            out.append((name, f"gives an infinite residual damping {name} * VERTICAL_STIFFNESS (a stiffness-"
+                              f"proportional time constant in s; published: about 0.001-0.003), got {prm[name]!r}"))
+    for name in ("SWIFT_PSTIFF", "SWIFT_PDAMP"):
+        if name in prm.missing:
+            continue
+        factors = [1.0 + prm[name] * dpi for dpi in (-_SWIFT_PRESSURE_SPAN, _SWIFT_PRESSURE_SPAN)]
+        if not all(f > 0 for f in factors):
+            what = "stiffness" if name == "SWIFT_PSTIFF" else "damping"
+            out.append((name, f"makes the SWIFT sidewall {what} factor 1 + {name} (p - NOMPRES)/NOMPRES = "
+                              f"{min(factors)!r} <= 0 within {1 - _SWIFT_PRESSURE_SPAN:g}-{1 + _SWIFT_PRESSURE_SPAN:g} "
+                              f"NOMPRES (a negative {what}): expected |{name}| < {1 / _SWIFT_PRESSURE_SPAN:g} "
+                              f"(published PFZ1: about 0.7-0.9), got {prm[name]!r}"))
+    return out
+
+
 def invalid_values(prm) -> list[tuple[str, str]]:
     """(parameter, what is wrong and what is expected) for every value no tyre can have.
 
     The one rule shared by the .tir reader (a TirError naming file, line and parameter), the writer and
     ``check_tir``, ``MFModel.with_params`` and the FMU builders: positive scales and dimensions, slip stiffness
     scales not negative, radii in order, ranges not inverted, vertical relations a tyre can have over 0..FZMAX (a
-    real Q_FZ1, Re > 0, a bounded speed growth Q_V1, a contact patch of positive size), a known tyre side.
+    real Q_FZ1, Re > 0, a bounded speed growth Q_V1, a contact patch of positive size), SWIFT ring values a tyre
+    can have (:func:`swift_invalid_values`), a known tyre side.
     """
     out = []
     for name, meaning in _POSITIVE.items():
@@ -634,6 +684,7 @@ def invalid_values(prm) -> list[tuple[str, str]]:
             out.append((lo, f"inverted range: {lo} = {prm[lo]!r} > {hi} = {prm[hi]!r}"))
     if all(prm[n] > 0 for n in _POSITIVE):
         out += _geometry_problems(prm)
+    out += swift_invalid_values(prm)
     side = str(prm["TYRESIDE"]).strip().strip("'\"").upper()
     if side not in ("LEFT", "RIGHT"):
         out.append(("TYRESIDE", f"expected 'LEFT' or 'RIGHT' (the side the tyre was measured on; mftyre mirrors "

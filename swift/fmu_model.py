@@ -37,7 +37,7 @@ from mftyre.errors import ModelInputError
 from mftyre.transient import StateFunctions, free_rolling_start
 
 from .enveloping import Cams
-from .ring import INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES
+from .ring import INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, check_pressure, pressure_coefficients
 from .road import parse_road
 from .simulate import MAX_RK4_STEP
 
@@ -183,9 +183,12 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
     table = tyre.table
     h = tyre.cam_pairs
     grid_v = np.ascontiguousarray(table.dx * np.arange(WINDOW))
+    pstiff, pdamp = pressure_coefficients(prm)  # the factors' signs checked by glue_validate (ring.check_pressure)
     extra = (f"#define ROAD_N {table.h.size}\n#define ROAD_WINDOW {WINDOW}\n#define ROAD_X0 {table.x0!r}\n"
              f"#define ROAD_DX {table.dx!r}\n#define SWIFT_MAX_TRAVEL {MAX_TRAVEL!r}\n"
              f"#define SWIFT_MAX_RK4_STEP {MAX_RK4_STEP!r}\n"
+             f"#define SWIFT_P_NOM {float(prm.NOMPRES)!r}\n#define SWIFT_P_STIFF {pstiff!r}\n"
+             f"#define SWIFT_P_DAMP {0.0 if pdamp is None else pdamp!r}\n"
              + "".join(f"#define S_{n.upper()} {i}\n" for i, n in enumerate(STATE_NAMES))
              + "/* cam height and road-camber slope per sample, interleaved */\n"
              + "static const double ROAD_H[2 * ROAD_N] = {" + ",".join(repr(float(v)) for v in h) + "};\n"
@@ -205,6 +208,7 @@ class SwiftWheel:
 
     def __init__(self, model, road=None, *, x_start: float = 0.0):
         self.functions = f = swift_functions(model, road, x_start=x_start)
+        self._params = model.params
         self.u = np.array(f.input_starts, dtype=float)
         self.q = np.array(f.parameter_starts, dtype=float)
         self.state = np.zeros(len(STATE_NAMES))
@@ -229,6 +233,7 @@ class SwiftWheel:
         return f.table_x0 + i0 * f.table_dx, f.grid, f.table_h[2 * i0:2 * (i0 + WINDOW)]
 
     def initialise(self):
+        check_pressure(self._params, float(self.u[self.functions.input_names.index("p")]))
         x = np.asarray(self.functions.init(self.u, self.q, *self._window(self.q[0])), dtype=float).ravel()
         if not np.all(np.isfinite(x)):
             raise ModelInputError("no static equilibrium found at the initial inputs")
@@ -237,6 +242,7 @@ class SwiftWheel:
     def step(self, h: float):
         if not (math.isfinite(h) and h > 0):
             raise ModelInputError(f"step size must be positive and finite, got {h!r}")
+        check_pressure(self._params, float(self.u[self.functions.input_names.index("p")]))
         U = dict(zip(self.functions.input_names, self.u))
         x = self.state.copy()
         x[_S["za"]], x[_S["vza"]], x[_S["oma"]] = U["z"], U["vz"], U["omega"]

@@ -17,17 +17,20 @@ step; the exact right-hand side solves from scratch).
 
 Sidewall (rim -> belt) [chosen from the parameter comments "undamped frequency / dimensionless damping of the
 ... mode", NOTES sec. 4.2], pressure-aware through this project's own parameters SWIFT_PSTIFF, SWIFT_PDAMP
-(0 = no pressure effect; dpi = (p - NOMPRES)/NOMPRES). Where the file does not give them they default to
-SWIFT_PSTIFF = PFZ1 (the sidewall stiffens with pressure as the file's vertical stiffness does, paper (3); seed
-002: the vertical stiffness is the tyre property that carries the pressure effect on enveloping) and SWIFT_PDAMP =
--PFZ1/2 (the sidewall damping coefficients k_b stay the same to first order, as for a damper whose hysteresis does
-not depend on pressure, so the damping ratios fall as the stiffness rises: seed 001, FE tyre over a bump at
-160/200/242 kPa, decays fastest at the lowest pressure) [chosen]; with both 0 the damping ratio of the vertical
-belt mode rose with pressure (0.102 -> 0.114 from 1.6 to 2.4 bar, sample file):
+(0 = no pressure effect; dpi = (p - NOMPRES)/NOMPRES). Where the file does not give them, SWIFT_PSTIFF = PFZ1
+(the sidewall stiffens with pressure as the file's vertical stiffness does, paper (3); seed 002: the vertical
+stiffness is the tyre property that carries the pressure effect on enveloping) and the damping factor is
+f_d = 1/sqrt(f_c): the sidewall damping coefficients k_b stay the same, as for a damper
+whose hysteresis does not depend on pressure, so the damping ratios fall as the stiffness rises (seed 001, FE tyre
+over a bump at 160/200/242 kPa, decays fastest at the lowest pressure) [chosen]; to first order this is
+SWIFT_PDAMP = -PFZ1/2, but positive wherever f_c is (the linear form made f_d < 0, negative damping, above
+dpi = 2/PFZ1: 3.5 bar over nominal on the TNO file, whose range reaches 10 bar). With both 0 the damping ratio of
+the vertical belt mode rose with pressure (0.102 -> 0.114 from 1.6 to 2.4 bar, sample file). A pressure at which
+f_c or f_d <= 0 (:func:`pressure_limits`) is refused with a ModelInputError (:func:`check_pressure`):
     c_bx = c_bz = m_b (2 pi FREQ_LONG)^2 f_c,  c_by = m_b (2 pi FREQ_LAT)^2 f_c,
     c_bg = c_bpsi = I_bx (2 pi FREQ_YAW)^2 f_c,  c_bth = I_by (2 pi FREQ_WINDUP)^2 f_c,   f_c = 1 + SWIFT_PSTIFF dpi
     k_b = 2 DAMP_* f_d sqrt(c_b M),  residual time constant (DAMP_RESIDUAL + low-speed part) f_d,
-    f_d = 1 + SWIFT_PDAMP dpi
+    f_d = 1 + SWIFT_PDAMP dpi  (given),  f_d = 1/sqrt(f_c)  (SWIFT_PDAMP absent)
 Residual springs in series so that the static stiffness of ring + residual is the steady-state model's:
     vertical  rho_MF(F) = rho_r + F / c_bz with F(rho) = A rho + B rho^2 the MF 6.1 load-deflection relation
               without bottoming (A3.3 with its speed and pressure factors; = MF 6.2 at zero camber and side
@@ -148,6 +151,7 @@ the belt yaw rate, ENV_C1/ENV_C2.
 """
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass
 
@@ -157,8 +161,8 @@ from mftyre.errors import ModelInputError
 from mftyre.formula import vertical
 
 __all__ = ["RingConstants", "STATE_NAMES", "INPUT_NAMES", "OUTPUT_NAMES", "CONTACT_PASSES", "AIR_TIME",
-           "RESIDUAL_FLOOR", "pressure_coefficients", "residual_vertical", "residual_compliance", "contact_start", "contact_geometry",
-           "ring_equations"]
+           "RESIDUAL_FLOOR", "pressure_coefficients", "pressure_limits", "check_pressure", "residual_vertical",
+           "residual_compliance", "contact_start", "contact_geometry", "ring_equations"]
 
 STATE_NAMES = ("xb", "vxb", "zb", "vzb", "thw", "omb", "oma", "za", "vza", "xa", "ya",
                "ux", "kappa", "yb", "vyb", "gb", "wgb", "psb", "wpsb", "uy", "alpha", "psr", "betaf", "xcs", "lsm")
@@ -266,18 +270,54 @@ def residual_compliance(c_total, c_ring, sigma_c, k_slip, be):
     return be.fmax(1.0 / c_total - c_ring - patch, RESIDUAL_FLOOR / c_total)
 
 
-def pressure_coefficients(prm) -> tuple[float, float]:
-    """(SWIFT_PSTIFF, SWIFT_PDAMP) as used: the file's values, or where the file has none the defaults derived
-    from its vertical pressure term (module notes): PFZ1 and -PFZ1/2."""
+def pressure_coefficients(prm) -> tuple[float, float | None]:
+    """(SWIFT_PSTIFF, SWIFT_PDAMP) as used: the file's values; where the file has none SWIFT_PSTIFF = PFZ1 and
+    SWIFT_PDAMP None (the damping factor f_d = 1/sqrt(f_c): damping coefficients independent of pressure, module
+    notes)."""
     pstiff = prm.PFZ1 if "SWIFT_PSTIFF" in prm.missing else prm.SWIFT_PSTIFF
-    pdamp = -0.5 * pstiff if "SWIFT_PDAMP" in prm.missing else prm.SWIFT_PDAMP
-    return float(pstiff), float(pdamp)
+    pdamp = None if "SWIFT_PDAMP" in prm.missing else float(prm.SWIFT_PDAMP)
+    return float(pstiff), pdamp
 
 
 def _pressure_factors(prm, dpi, be):
-    """(f_c, f_d): sidewall stiffness and damping factors at pressure (module notes; 1 at SWIFT_P* = 0)."""
+    """(f_c, f_d): sidewall stiffness and damping factors at pressure (module notes; 1 at NOMPRES)."""
     pstiff, pdamp = pressure_coefficients(prm)
-    return 1.0 + pstiff * dpi, 1.0 + pdamp * dpi
+    f_c = 1.0 + pstiff * dpi
+    return f_c, (1.0 / be.sqrt(f_c) if pdamp is None else 1.0 + pdamp * dpi)
+
+
+def pressure_limits(prm) -> tuple[tuple[float, str], tuple[float, str]]:
+    """((p_low, parameter), (p_high, parameter)): the open range of inflation pressures [Pa] over which the
+    sidewall factors f_c and f_d (module notes) are positive, each bound with the parameter that sets it
+    ("" where none does: 0 and inf). Outside it the ring has a negative stiffness or damping: no tyre."""
+    pstiff, pdamp = pressure_coefficients(prm)
+    low, high = (0.0, ""), (math.inf, "")
+    for name, coef in (("SWIFT_PSTIFF", pstiff), ("SWIFT_PDAMP", pdamp)):
+        if not coef:  # None (f_d = 1/sqrt(f_c): positive wherever f_c is) or 0
+            continue
+        edge = prm.NOMPRES * (1.0 - 1.0 / coef)  # 1 + coef (p - NOMPRES)/NOMPRES = 0
+        if coef > 0 and edge > low[0]:
+            low = (edge, name)
+        elif coef < 0 and edge < high[0]:
+            high = (edge, name)
+    return low, high
+
+
+def check_pressure(prm, p: float) -> None:
+    """ModelInputError naming the parameter and the pressure where the sidewall stiffness or damping factor
+    (module notes) is not positive at ``p`` [Pa]; the valid range from :func:`pressure_limits`."""
+    pstiff, pdamp = pressure_coefficients(prm)
+    dpi = (p - prm.NOMPRES) / prm.NOMPRES
+    for name, coef, factor, what in (("SWIFT_PSTIFF", pstiff, "stiffness factor f_c", "stiffness"),
+                                     ("SWIFT_PDAMP", pdamp, "damping factor f_d", "damping")):
+        if coef is None or 1.0 + coef * dpi > 0:
+            continue
+        (p_low, _), (p_high, _) = pressure_limits(prm)
+        given = " (absent from the file: PFZ1)" if name in prm.missing else ""
+        raise ModelInputError(
+            f"inflation pressure p = {p:g} Pa gives the SWIFT sidewall {factor} = 1 + {name} dpi = "
+            f"{1.0 + coef * dpi:.3g} <= 0 ({name} = {coef!r}{given}, dpi = (p - NOMPRES)/NOMPRES = {dpi:.3g}): a ring "
+            f"with negative {what} is no tyre; with these parameters the ring is valid for {p_low:g} < p < {p_high:g} Pa")
 
 
 def residual_vertical(prm, rho_r, omega, dpi, cbz, be):

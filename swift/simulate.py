@@ -65,11 +65,12 @@ import numpy as np
 from mftyre.compiled import CASADI_LOCK, cached_library  # the verified cache of every compiled library
 from mftyre.backend import NUMPY
 from mftyre.errors import ModelInputError
+from mftyre.params import swift_invalid_values
 from mftyre.formula import vertical
 
 from .enveloping import Cams, CamTable
 from .ring import CONTACT_PASSES, INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, RingConstants, contact_geometry, \
-    contact_start, pressure_coefficients, ring_equations
+    check_pressure, contact_start, pressure_coefficients, ring_equations
 from .road import Road
 
 __all__ = ["StepInputs", "SwiftTyre", "SimResult", "Outputs"]
@@ -165,6 +166,8 @@ class SwiftTyre:
             raise ModelInputError(f"axle must be 'height' or 'load', rim 'speed' or 'torque'; got {axle!r}, {rim!r}")
         self.model, self.axle, self.rim = model, axle, rim
         self._p_nominal = model.params.INFLPRES  # the default inflation pressure (the parameters are immutable)
+        for name, message in swift_invalid_values(model.params):  # parameters built by hand skip the reader's check
+            raise ModelInputError(f"SWIFT parameter {name} {message}")
         self.constants = RingConstants.from_model(model, axle_mass, rim_extra_inertia)
         self.cams = Cams.from_params(model.params)
         margin = window * table_dx
@@ -426,6 +429,7 @@ class SwiftTyre:
             raise ModelInputError(f"input {bad[0]!r} must be finite, got {row[_ROW.index(bad[0])]!r}")
         if not row[INPUT_NAMES.index("p")] > 0:
             raise ModelInputError(f"input 'p' (inflation pressure) must be positive [Pa], got {inputs.p!r}")
+        check_pressure(self.model.params, row[INPUT_NAMES.index("p")])
         state = self._impose(state, inputs)
         u = self._u(inputs)
         n = max(1, math.ceil(abs(inputs.vx) * dt / self._reach), math.ceil(dt / self._max_call - 1e-9))
@@ -577,6 +581,7 @@ class SwiftTyre:
         prm = self.model.params
         c = self.constants
         p = prm.INFLPRES if inputs.p is None else inputs.p
+        check_pressure(prm, p)
         s = np.zeros(len(STATE_NAMES))
         s[_S["xa"]] = s[_S["xb"]] = inputs.x
         h = float(self.table(inputs.x))
@@ -612,13 +617,20 @@ class SwiftTyre:
             last = size
         r = (self._compiled.rhs(s, u, window[0], i0)[0][eqs] if self._compiled is not None
              else np.asarray(self._equilibrium(s, u, *window)[0])).ravel()
-        worst = int(np.argmax(np.abs(r))) if np.all(np.isfinite(r)) else int(np.argmin(np.isfinite(r)))
+        finite = bool(np.all(np.isfinite(r)) and np.all(np.isfinite(s)))
+        worst = int(np.argmax(np.abs(r))) if finite else int(np.argmin(np.isfinite(r)))
+        at = (f"vx = {inputs.vx} m/s, " + (f"load = {inputs.load} N" if self.axle == "load" else f"z = {inputs.z} m")
+              + (f", torque = {inputs.torque} N m" if self.rim == "torque" else f", omega = {inputs.omega} rad/s")
+              + f", p = {p:g} Pa")
+        if not finite:  # overflow in the ring's constants or equations: no input can help
+            raise ModelInputError(
+                f"the SWIFT equations are not finite with these parameters (d({STATE_NAMES[eqs[worst]]})/dt = "
+                f"{float(r[worst])!r} at the inputs {at}): check the [STRUCTURAL] (FREQ_*, DAMP_*, BELT_*), "
+                f"[VERTICAL] and [CONTACT_PATCH] values and SWIFT_* for one no tyre has")
         if not abs(r[worst]) <= EQUILIBRIUM_TOL:
             raise ModelInputError(
-                f"no static equilibrium at the inputs (vx = {inputs.vx} m/s, "
-                + (f"load = {inputs.load} N" if self.axle == "load" else f"z = {inputs.z} m")
-                + (f", torque = {inputs.torque} N m" if self.rim == "torque" else f", omega = {inputs.omega} rad/s")
-                + f"): after {iterations} Newton steps d({STATE_NAMES[eqs[worst]]})/dt = {r[worst]:.3g} (tolerance "
+                f"no static equilibrium at the inputs ({at}): after {iterations} Newton steps "
+                f"d({STATE_NAMES[eqs[worst]]})/dt = {r[worst]:.3g} (tolerance "
                 f"{EQUILIBRIUM_TOL:g}); e.g. a drive/brake torque beyond what the tyre transmits at this load, or "
                 f"the tyre off the road")
         self._store_contact(s, u)
@@ -704,6 +716,9 @@ _DRIVER = """
 #define NU %(nu)d
 #define NI %(ni)d
 #define WINDOW %(window)d
+#define P_NOM %(p_nom)r
+#define P_STIFF %(p_stiff)r
+#define P_DAMP %(p_damp)r
 static const int USED[NI] = {%(used)s};
 CASADI_SYMBOL_EXPORT int swift_run(void** p) {
   const casadi_real *x_init = p[0], *in = p[1], *scal = p[2], *cfg = p[3], *grid = p[4], *table = p[5];
@@ -718,7 +733,8 @@ CASADI_SYMBOL_EXPORT int swift_run(void** p) {
   for (k = 0; k < n; ++k) {
     const casadi_real* u = in + k * NI;
     for (i = 0; i < NI; ++i) if (USED[i] && !(u[i] - u[i] == 0)) return -3;
-    if (!(u[%(p)d] > 0)) return -3;
+    if (!(u[%(p)d] > 0 && 1 + P_STIFF * ((u[%(p)d] - P_NOM) / P_NOM) > 0 && 1 + P_DAMP * ((u[%(p)d] - P_NOM) / P_NOM) > 0))
+      return -3;
     s[%(xa)d] = u[NU];
     s[%(ya)d] = u[%(y)d];
     if (%(height)d) { s[%(za)d] = u[NU + 1]; s[%(vza)d] = u[NU + 2]; }
@@ -769,6 +785,8 @@ def _library(tyre, key: str) -> Path:
     :data:`_DRIVER`."""
     import casadi as ca
 
+    stiff, damp = pressure_coefficients(tyre.model.params)  # (f_d = 1/sqrt(f_c) is positive where f_c is)
+
     def generate(folder):
         gen = ca.CodeGenerator("swift.c", {"with_header": False})
         for function in (tyre.step_function, tyre.rhs_function):
@@ -778,7 +796,8 @@ def _library(tyre, key: str) -> Path:
             f.write(_DRIVER % dict(nx=len(STATE_NAMES), ny=len(OUTPUT_NAMES), nu=_NU, ni=_NI, window=tyre.window,
                                    height=int(tyre.axle == "height"), speed=int(tyre.rim == "speed"),
                                    used=", ".join(str(int(u)) for u in _used(tyre)), p=INPUT_NAMES.index("p"),
-                                   y=INPUT_NAMES.index("y"), **_S))
+                                   y=INPUT_NAMES.index("y"), p_nom=float(tyre.model.params.NOMPRES),
+                                   p_stiff=stiff, p_damp=0.0 if damp is None else damp, **_S))
         meta = {"inputs": list(INPUT_NAMES), "outputs": list(OUTPUT_NAMES), "checks": [], "states": list(STATE_NAMES)}
         return source, (*_CFLAGS, "-fPIC", "-shared"), ("-lm",), meta
 
@@ -892,9 +911,15 @@ class _Compiled:
             k, i = np.argwhere(bad)[0]
             return ModelInputError(f"input {_ROW[i]!r} must be finite, got {float(rows[k, i])!r}"
                                    + (f" (step {k}, t = {k * dt:g} s)" if len(rows) > 1 else ""))
-        k = int(np.argmax(~(rows[:, INPUT_NAMES.index("p")] > 0)))
-        return ModelInputError(f"input 'p' (inflation pressure) must be positive [Pa], got {float(rows[k, 3])!r}"
-                               + (f" (step {k}, t = {k * dt:g} s)" if len(rows) > 1 else ""))
+        for k, p in enumerate(rows[:, INPUT_NAMES.index("p")]):
+            where = f" (step {k}, t = {k * dt:g} s)" if len(rows) > 1 else ""
+            if not p > 0:
+                return ModelInputError(f"input 'p' (inflation pressure) must be positive [Pa], got {float(p)!r}{where}")
+            try:
+                check_pressure(self._tyre.model.params, float(p))
+            except ModelInputError as error:
+                return ModelInputError(f"{error}{where}")
+        return ModelInputError("compiled SWIFT step refused its inputs")
 
     def run(self, state, rows, dt):
         """``len(rows)`` steps from ``state``: (states, outputs) after each step."""

@@ -461,6 +461,30 @@ def test_failed_initialisation_is_an_error(fmus, tmp_path, kind, start, text):
     s.fmu.freeInstance()
 
 
+def test_swift_pressure_with_a_negative_sidewall_factor_is_an_error(tmp_path):
+    """An explicit SWIFT_PSTIFF = 1.5 (legal over 0.5-1.5 NOMPRES) at p = 0.3 NOMPRES makes f_c = 1 + SWIFT_PSTIFF
+    dpi = -0.05: the native FMU refuses it with fmi2Error naming the parameter (glue_validate, as
+    swift.ring.check_pressure in Python) instead of simulating a ring with negative stiffness."""
+    from fmpy.fmi1 import FMICallException
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = mftyre.load_tir(TIR62).with_params(SWIFT_PSTIFF=1.5)
+        mftyre.write_tir(model.params, tmp_path / "stiff.tir")
+        assert _build([tmp_path / "stiff.tir", "-o", tmp_path / "s.fmu", "--model", "swift"]) == 0
+    s = Slave(tmp_path / "s.fmu", tmp_path)
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.enterInitializationMode()
+    s.set(p=0.3 * model.params.NOMPRES)
+    with pytest.raises(FMICallException):
+        s.fmu.exitInitializationMode()
+    assert any(status == 3 and "SWIFT_PSTIFF dpi = -0.05 <= 0" in msg for status, msg in s.messages), s.messages
+    s.fmu.reset()
+    s.initialise()  # at the file's pressure it runs
+    s.step()
+    s.fmu.freeInstance()
+
+
 def test_wrong_guid_is_refused(fmus, tmp_path):
     """fmi2Instantiate with another GUID returns NULL and logs the cause (through the test's own logger, see
     :func:`_callbacks`)."""

@@ -417,7 +417,10 @@ def test_a_road_beyond_any_table_is_refused(tmp_path, capsys):
 
 @pytest.mark.parametrize("name", ["ELLIPS_LENGTH", "ELLIPS_SHIFT", "FREQ_WINDUP", "DAMP_VLOW", "SWIFT_PSTIFF"])
 def test_swift_with_extreme_parameters_raises_a_model_input_error(name):
-    """1e308 gave OverflowError (cam table) or ValueError (NaN position to an index) from SwiftTyre."""
+    """1e308 gave OverflowError (cam table) or ValueError (NaN position to an index) from SwiftTyre. Built by hand
+    (no reader check), the SWIFT values no tyre can have are refused by SwiftTyre naming the parameter (the rule of
+    params.invalid_values); the rest end in the SWIFT equations being "not finite" (initial_state), never in a
+    misleading "no static equilibrium"."""
     from mftyre.errors import ModelInputError
     from swift.road import Cleat
     from swift.simulate import StepInputs, SwiftTyre
@@ -425,9 +428,42 @@ def test_swift_with_extreme_parameters_raises_a_model_input_error(name):
     model = _quiet(mftyre.load_tir, T62)
     extreme = mftyre.MFModel(model.params.replace(**{name: 1e308}))
     inputs = StepInputs(x=0.0, vx=10.0, z=0.0, vz=0.0, load=4000.0, omega=33.0, torque=0.0, p=None, y=0.0)
-    with pytest.raises(ModelInputError, match="cam sizes|not finite"):
+    with pytest.raises(ModelInputError, match=f"cam sizes|not finite|SWIFT parameter {name} ") as error:
         tyre = _quiet(SwiftTyre, extreme, Cleat(0.5, 0.02, 0.01), compiled=False)
         _quiet(tyre.run, 0.002, inputs, dt=1e-3)
+    assert "no static equilibrium" not in str(error.value)
+
+
+@pytest.mark.parametrize("name", ["DAMP_LONG", "Q_V2"])
+def test_swift_equations_that_overflow_say_so_naming_the_inputs(name):
+    """swift19's initial_state check reported "no static equilibrium ... d(vxb)/dt = nan" (a torque or the tyre off
+    the road, it suggested) where the ring's equations overflow with the parameters: now it says they are not
+    finite, naming the inputs and where to look."""
+    from mftyre.errors import ModelInputError
+    from swift.road import Flat
+    from swift.simulate import StepInputs, SwiftTyre
+
+    extreme = mftyre.MFModel(_quiet(mftyre.load_tir, T62).params.replace(**{name: 1e308}))
+    tyre = _quiet(SwiftTyre, extreme, Flat(), x_range=(0.0, 2.0), compiled=False)
+    inputs = StepInputs(x=0.5, vx=10.0, z=0.29, omega=33.0)
+    with pytest.raises(ModelInputError, match=r"SWIFT equations are not finite with these parameters \(d\(\w+\)/dt = "
+                                              r"nan at the inputs vx = 10.0 m/s, z = 0.29 m, omega = 33.0 rad/s"):
+        _quiet(tyre.initial_state, inputs)
+
+
+@pytest.mark.parametrize("name, value", [("SWIFT_PSTIFF", 1e308), ("SWIFT_PSTIFF", 2.5), ("SWIFT_PDAMP", -2.0),
+                                         ("FREQ_WINDUP", 1e308), ("FREQ_LAT", -40.0), ("DAMP_YAW", -0.1), ("DAMP_VLOW", 1e308),
+                                         ("BELT_MASS", -7.0)])
+def test_swift_values_no_tyre_can_have_are_refused_where_every_value_is_checked(name, value):
+    """SWIFT_PSTIFF = 1e308 ran at nominal pressure (dpi = 0) and failed only elsewhere; a sidewall factor
+    1 + SWIFT_P* dpi <= 0 within 0.5-1.5 NOMPRES, a negative ring frequency or one with an infinite stiffness, a
+    negative damping or an infinite residual damping, a negative belt mass are refused by with_params (and so
+    load_tir, write_tir, check) naming it; 0 in [STRUCTURAL] (a file without a ring) still loads."""
+    model = _quiet(mftyre.load_tir, T62)
+    with pytest.raises(TirError, match=name):
+        model.with_params(**{name: value})
+    model.with_params(SWIFT_PSTIFF=1.9, SWIFT_PDAMP=-1.9)  # factors 0.05 at 0.5 / 1.5 NOMPRES: legal
+    model.with_params(FREQ_LONG=0.0, BELT_MASS=0.0)
 
 
 # ------------------------------------------------------------------------------------ 9: soil file, FMU step budget

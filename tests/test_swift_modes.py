@@ -1,5 +1,5 @@
 """SWIFT stability and steering response: every linear mode of the ring rolling on a flat road is damped over
-0.5-70 m/s forward and reverse, 2-8 kN and the pressure range, on the bundled and the shared SWIFT files (the
+0.5-70 m/s forward and reverse, 2-8 kN and the declared pressure range (where the MF's own relations hold), on the bundled and the shared SWIFT files (the
 belt-yaw mode was self-excited at 13-34 km/h on the sample file: the rim heading passed straight into the slip);
 and after a rim-yaw step the contact force builds up over the carcass relaxation length (at most 25 % of its
 change within the first 7 mm of travel at 60 km/h; it was 67 % / 87 %)."""
@@ -34,11 +34,42 @@ def _tyre(path, rim, length=3.0):
         return model, SwiftTyre(model, Flat(), axle="height", rim=rim, x_range=(0.0, length))
 
 
+def _mf_valid_dpi(prm):
+    """(lowest, highest) dpi = (p - NOMPRES)/NOMPRES around 0 at which the Magic Formula's own pressure factors keep
+    their sign: vertical stiffness 1 + PFZ1 dpi, slip stiffnesses Kxk 1 + PPX1 dpi + PPX2 dpi^2 (4.E15), Kya
+    1 + PPY1 dpi (4.E25). Beyond, the MF's steady-state tyre pushes along the slip (TNO file: PPY1 = -0.6249, Kya
+    changes sign at dpi = 1.60, 5.72 bar, inside its declared 0.1-10 bar)."""
+    low, high = -np.inf, np.inf
+    for coefficients in ((prm.PFZ1, 0.0), (prm.PPX1, prm.PPX2), (prm.PPY1, 0.0)):
+        roots = np.roots([coefficients[1], coefficients[0], 1.0]) if coefficients[1] else (
+            [-1.0 / coefficients[0]] if coefficients[0] else [])
+        for r in np.real(np.asarray(roots)[np.isreal(roots)]):
+            low, high = (max(low, r), high) if r < 0 else (low, min(high, r))
+    return low, high
+
+
 def _pressures(prm):
-    """PRESMIN, INFLPRES, PRESMAX, held to 0.7..1.3 NOMPRES (the TNO file states 0.1-10 bar, where the
-    load-deflection relation has no meaning)."""
-    lo, hi = max(prm.PRESMIN, 0.7 * prm.NOMPRES), min(prm.PRESMAX, 1.3 * prm.NOMPRES)
+    """PRESMIN, INFLPRES, PRESMAX: the whole declared range (the TNO file declares 0.1-10 bar), held inside the
+    range where the Magic Formula's own relations keep their sign (:func:`_mf_valid_dpi`), 98 % of the way from
+    NOMPRES to its edge. Only the TNO file is held: at 5.65 bar (Kya factor 0.02) its slowest mode decays at
+    -1.4 1/s; from 5.9 bar (Kya factor -0.05) the ring grows (+5 1/s at 7 m/s, 2 kN; +1000 1/s at 8 bar): the MF's
+    reversed cornering stiffness, not the ring. At 0.1 bar the MF is valid (Cz factor 0.32; 8 kN: loaded radius
+    0.212 m, 12 mm above bottoming) and every mode decays (slowest -0.41 1/s)."""
+    low, high = _mf_valid_dpi(prm)
+    lo = max(prm.PRESMIN, prm.NOMPRES * (1.0 + 0.98 * low))
+    hi = min(prm.PRESMAX, prm.NOMPRES * (1.0 + 0.98 * high))
     return sorted({lo, prm.INFLPRES, hi})
+
+
+def test_tno_pressure_range_is_held_only_where_the_mf_cornering_stiffness_reverses():
+    """The scan's pressures are each file's declared PRESMIN..PRESMAX except where the MF's own Kya changes sign
+    (TNO: 0.1 bar .. 5.65 bar of 0.1 .. 10 bar); the others run their whole range."""
+    tno = mftyre.load_tir(require_shared(SHARED / "reference" / "tir" / "TNO_car205_60R15.tir")).params
+    assert _pressures(tno)[0] == tno.PRESMIN == 1e4
+    assert _pressures(tno)[-1] == pytest.approx(tno.NOMPRES * (1 + 0.98 / 0.6249), rel=1e-9)
+    for _, path in _files()[:1] + _files()[2:]:
+        prm = mftyre.load_tir(path()).params
+        assert _pressures(prm) == sorted({prm.PRESMIN, prm.INFLPRES, prm.PRESMAX})
 
 
 @pytest.mark.parametrize("name, path", _files(), ids=[f[0] for f in _files()])

@@ -139,7 +139,7 @@ def test_fixed_step_agrees_with_adaptive(model):
 def test_dynamic_pressure_trend_over_cleat(model):
     """Fixed axle height (4 kN on the flat at each pressure), 10 x 50 mm cleat, low speed: higher pressure ->
     larger vertical and longitudinal force variation and a shorter response (Schmeitz et al. 2005, fig. 18), with
-    the default pressure terms of the sidewall (PFZ1, -PFZ1/2; issue 19). The response length is where |dFz|
+    the default pressure terms of the sidewall (PFZ1, f_d = 1/sqrt(f_c); issue 19). The response length is where |dFz|
     exceeds 5 % of its peak (a fixed 50 N threshold widens with the peak: 342 / 342 / 332 mm)."""
     V = 2.0
     peaks, lengths = [], []

@@ -4,17 +4,19 @@ belt-yaw slip, pressure-aware sidewall damping, warnings for unmodelled paramete
 from __future__ import annotations
 
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 import mftyre
 from mftyre.backend import NUMPY
+from mftyre.errors import ModelInputError
 from mftyre.formula import vertical
 from swift import Cleat, Flat, Sampled, Step, StepInputs, SwiftTyre, quasi_static
 from swift.ring import STATE_NAMES, RingConstants
 
-from conftest import TIR_FILES
+from conftest import SHARED, TIR_FILES, require_shared
 
 S = {n: i for i, n in enumerate(STATE_NAMES)}
 pytestmark = pytest.mark.filterwarnings("ignore:Q_BV", "ignore:road height range")
@@ -180,7 +182,7 @@ def test_yaw_compliance_acts_on_transient_not_steady_forces(model):
 
 def test_pressure_aware_sidewall_damping(model):
     """SWIFT_PSTIFF / SWIFT_PDAMP absent from the file (as in the sample file): derived from its vertical pressure
-    term, PFZ1 and -PFZ1/2 (swift.ring notes), the vertical belt mode stiffens and its damping ratio falls with
+    term, PFZ1 and f_d = 1/sqrt(f_c) (swift.ring notes), the vertical belt mode stiffens and its damping ratio falls with
     pressure, as the FE tyre of seed 001 decays fastest at the lowest pressure (issue 19; old default 0: the ratio
     rose, 0.112 -> 0.125 over PRESMIN..PRESMAX). Written as 0 in the file: no pressure effect on the sidewall (the
     ratio then rises through the stiffness-proportional residual damping); SWIFT_PDAMP < 0 alone also reverses it.
@@ -198,16 +200,50 @@ def test_pressure_aware_sidewall_damping(model):
         mode = ev[np.argmin(np.abs(np.abs(ev) / (2 * np.pi) - 82.0))]
         return -mode.real / abs(mode), abs(mode) / (2 * np.pi)
 
-    assert "SWIFT_PSTIFF" in prm.missing and pressure_coefficients(prm) == (prm.PFZ1, -prm.PFZ1 / 2)
+    assert "SWIFT_PSTIFF" in prm.missing and pressure_coefficients(prm) == (prm.PFZ1, None)
     low, high = prm.PRESMIN, prm.PRESMAX
     (z_low, f_low), (z_high, f_high) = vertical_mode(model, low), vertical_mode(model, high)
     assert z_low > z_high and f_low < f_high
     off = _with(model, SWIFT_PSTIFF=0.0, SWIFT_PDAMP=0.0)
     assert vertical_mode(off, low)[0] < vertical_mode(off, high)[0]
-    tuned = _with(off, SWIFT_PDAMP=-2.0)
+    tuned = _with(off, SWIFT_PDAMP=-1.5)  # (-2 is refused: f_d = 0 at 1.5 NOMPRES)
     assert vertical_mode(tuned, low)[0] > vertical_mode(tuned, high)[0]
     for m in (off, tuned):
         assert vertical_mode(m, prm.NOMPRES)[0] == pytest.approx(vertical_mode(model, prm.NOMPRES)[0], rel=1e-9)
+
+
+def test_default_damping_factor_stays_positive_over_the_declared_pressures():
+    """SWIFT_PDAMP absent: f_d = 1/sqrt(f_c) (the damping coefficients k_b = 2 DAMP f_d sqrt(c_b M) f_c-independent),
+    first-order slope -PFZ1/2 at NOMPRES as the old linear default; the linear one gave f_d = 1 - PFZ1/2 dpi =
+    -0.26 (negative damping) at the TNO file's PRESMAX 10 bar (dpi 3.5)."""
+    from swift.ring import _pressure_factors
+
+    tno = mftyre.load_tir(require_shared(SHARED / "reference" / "tir" / "TNO_car205_60R15.tir")).params
+    for prm in (tno, mftyre.load_tir(TIR_FILES / "car_205_60R15_mf62_swift.tir").params):
+        for p in np.linspace(prm.PRESMIN, prm.PRESMAX, 9):
+            f_c, f_d = _pressure_factors(prm, (p - prm.NOMPRES) / prm.NOMPRES, NUMPY)
+            assert f_c > 0 and f_d > 0 and np.sqrt(f_c) * f_d == pytest.approx(1.0, rel=1e-12)
+        h = 1e-6
+        slope = (_pressure_factors(prm, h, NUMPY)[1] - _pressure_factors(prm, -h, NUMPY)[1]) / (2 * h)
+        assert slope == pytest.approx(-prm.PFZ1 / 2, rel=1e-6)
+
+
+@pytest.mark.parametrize("changes, p_ratio, blamed", [({"SWIFT_PSTIFF": 1.5}, 0.3, "SWIFT_PSTIFF"),
+                                                      ({"SWIFT_PDAMP": -0.5}, 4.0, "SWIFT_PDAMP")])
+@pytest.mark.parametrize("compiled", [False, True])
+def test_pressure_with_a_non_positive_sidewall_factor_is_refused(model, changes, p_ratio, blamed, compiled):
+    """Explicit linear coefficients (legal over 0.5-1.5 NOMPRES) at a pressure where f_c = 1 + SWIFT_PSTIFF dpi or
+    f_d = 1 + SWIFT_PDAMP dpi <= 0: a ModelInputError naming the parameter and the pressure, from initial_state and
+    from a step (compiled: the C loop checks the factors), instead of a ring with negative stiffness or damping."""
+    m = model.with_params(**changes)
+    tyre = SwiftTyre(m, Flat(), x_range=(0.0, 3.0), compiled=compiled)
+    p = p_ratio * m.params.NOMPRES
+    u = StepInputs(x=1.0, vx=10.0, z=0.29, omega=33.0, p=p)
+    with pytest.raises(ModelInputError, match=rf"p = {p:g} Pa .*{blamed} dpi = -[0-9.]+ <= 0"):
+        tyre.initial_state(u)
+    state = tyre.initial_state(replace(u, p=m.params.NOMPRES))
+    with pytest.raises(ModelInputError, match=rf"p = {p:g} Pa .*{blamed}"):
+        tyre.step(state, u, 1e-3)
 
 
 def test_unmodelled_sidewall_parameters_warn(model):

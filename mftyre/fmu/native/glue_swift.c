@@ -75,6 +75,17 @@ int glue_validate(const double *q, const double *u, char *msg, size_t n) {
         snprintf(msg, n, "input p (inflation pressure) must be positive, got %g Pa", u[TYRE_U_P]);
         return 1;
     }
+    /* the sidewall stiffness and damping factors positive at this pressure (swift.ring.check_pressure) */
+    double dpi = (u[TYRE_U_P] - SWIFT_P_NOM) / SWIFT_P_NOM;
+    int stiffness = !(1.0 + SWIFT_P_STIFF * dpi > 0.0);
+    if (stiffness || !(1.0 + SWIFT_P_DAMP * dpi > 0.0)) {
+        const char *name = stiffness ? "SWIFT_PSTIFF" : "SWIFT_PDAMP", *what = stiffness ? "stiffness" : "damping";
+        double coef = stiffness ? SWIFT_P_STIFF : SWIFT_P_DAMP;
+        snprintf(msg, n, "input p (inflation pressure) = %g Pa gives a SWIFT sidewall %s factor 1 + %s dpi = %g <= 0 "
+                 "(%s = %g, NOMPRES = %g Pa): a ring with negative %s is no tyre", u[TYRE_U_P], what, name,
+                 1.0 + coef * dpi, name, coef, SWIFT_P_NOM, what);
+        return 1;
+    }
     if (!(q[TYRE_Q_MAX_STEP] > 0.0)) {
         snprintf(msg, n, "parameter max_step must be positive, got %g s", q[TYRE_Q_MAX_STEP]);
         return 1;
