@@ -10,16 +10,16 @@ Command line: ``mftyre gaps --dynamic DATA.csv --model BASE.tir [-o improved.tir
 :mod:`mftyre.gaps.dynamic_runs`.
 
 1. *Align*: the measurement chain, common to all runs (one rig): a time delay of the outputs relative to the
-   inputs and, where the data say so, a causal 4th-order Butterworth anti-alias filter (cutoff from a grid; kept
-   only when it lowers the chi-square by more than chance would), both fitted to the given model's prediction.
+   inputs and a causal 4th-order Butterworth anti-alias filter (cutoff from a grid including "none": the data
+   say which), both fitted by least squares to the given model's prediction.
    One delay for all runs on purpose: a delay per run would absorb the very lags (relaxation, enveloping) the
    finder must see. Refitted after every effect added (the given model's errors bend it).
 2. *Noise* from the data: in the quiet lead-in of every run (before the model's response departs from its level)
    the measured signal minus its mean is noise: its standard deviation per channel and its integrated
    autocorrelation time tau (samples), so that a run of n samples counts n/tau independent ones. Every
    chi-square below is sum(r^2)/(sigma^2 tau): from the noise, never from the residual being explained.
-3. *Locate* (:mod:`mftyre.gaps.dynamic_locate`): per run and channel the residual chi-square against
-   chi2(n/tau) and the engineers' features (peaks, peak-to-peak, response length, lag and build-up distance,
+3. *Locate* (:mod:`mftyre.gaps.dynamic_locate`): per run and channel the residual chi-square per independent
+   sample against the noise variance (F test with the noise's own independent samples) and the engineers' features (peaks, peak-to-peak, response length, lag and build-up distance,
    decay frequency and damping) measured beside model.
 4. *Name* (:mod:`mftyre.gaps.dynamic_catalogue`): the effects the runs can test (the rest listed with the
    reason) whose kinds and channels show a gap are screened by one Gauss-Newton step on the training runs
@@ -131,13 +131,16 @@ def _tau(e):
 
 
 def noise_from_data(runs, pred, chain) -> dict:
-    """channel -> dict(sigma, tau, samples, runs): the noise in the quiet lead-ins (pooled per channel)."""
+    """channel -> dict(sigma, tau, samples, runs): the noise in the quiet lead-ins (pooled per channel): the
+    measured signal less the aligned model, less its mean."""
     parts = {}
     for r in runs:
         for c, y in r.measured.items():
-            q = _quiet(chain(pred[r.name][c], r.dt), r.dt)
-            if q >= 30:
-                parts.setdefault(c, []).append(np.asarray(y[:q], float) - np.mean(y[:q]))
+            model_y = chain(pred[r.name][c], r.dt)
+            q = _quiet(model_y, r.dt)
+            if q >= 30:  # measured less the model (any slow settling), less the mean (a static model error)
+                e = np.asarray(y[:q], float) - model_y[:q]
+                parts.setdefault(c, []).append(e - np.mean(e))
     out = {}
     for c in {c for r in runs for c in r.measured}:
         segs = parts.get(c)
@@ -287,7 +290,7 @@ class DynamicGapReport:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        runs = runs or [r for r in self.runs if r.name in self.held_out]
+        runs = runs or [r for r in self.runs if r.name in self.held_out] or self.runs
         rows = [(r, c) for r in runs for c in r.measured]
         fig, axes = plt.subplots(len(rows), 1, figsize=(7, 1.8 * len(rows)), squeeze=False)
         for ax, (r, c) in zip(axes[:, 0], rows):
@@ -556,14 +559,17 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
 
 
 def _gaps(runs, prob, pred, alpha) -> set:
-    """(run kind, channel) pairs with a run whose chi-square exceeds chi2(n/tau) at ``alpha``: a gap beyond the
-    noise."""
+    """(run kind, channel) pairs with a run whose residual exceeds the noise at ``alpha``: an F test of its
+    chi-square per independent sample against the noise variance, which is itself estimated from the quiet
+    lead-ins (samples/tau independent samples), so a noise level known from few samples claims no gap."""
     res = prob.residuals(pred)
     out = set()
     for r in runs:
         for c in r.measured:
-            n_eff = r.t.size / prob.noise[c]["tau"]
-            if stats.chi2.sf(_chi2(res, {(r.name, c)}), n_eff) < alpha:
+            noise = prob.noise[c]
+            n_eff = r.t.size / noise["tau"]
+            ratio = _chi2(res, {(r.name, c)}) / n_eff
+            if stats.f.sf(ratio, n_eff, max(noise["samples"] / noise["tau"], 1.0)) < alpha:
                 out.add((r.kind, c))
     return out
 

@@ -137,14 +137,15 @@ def runs_from_frame(frame: pd.DataFrame, source: str = "", name: str | None = No
         frame = frame.assign(RUN=name)
     runs = []
     for run_name, grp in frame.groupby("RUN", sort=False):
-        road = grp["ROAD"].fillna("").astype(str).unique() if "ROAD" in grp else np.array([""])
+        road = grp["ROAD"].astype(object).fillna("").astype(str).unique() if "ROAD" in grp else np.array([""])
         if road.size != 1:
             raise DataError(f"{source}: run {run_name!r} has {road.size} different ROAD values; a run is one road")
-        inputs = {c: grp[c].to_numpy(float) for c in _INPUTS[1:] if c in grp}
+        # a column empty throughout a run is absent from it (a file mixing cleat runs and steer runs)
+        inputs = {c: grp[c].to_numpy(float) for c in _INPUTS[1:] if c in grp and grp[c].notna().any()}
         t = grp["TIME"].to_numpy(float)
         if "X" not in inputs and "VX" in inputs:
             inputs["X"] = np.concatenate([[0.0], np.cumsum(0.5 * (inputs["VX"][1:] + inputs["VX"][:-1]) * np.diff(t))])
-        measured = {c: grp[c].to_numpy(float) for c in OUTPUT_CHANNELS if c in grp}
+        measured = {c: grp[c].to_numpy(float) for c in OUTPUT_CHANNELS if c in grp and grp[c].notna().any()}
         run = DynamicRun(str(run_name), t, inputs, str(road[0]), measured, source=source)
         _check_run(run)
         runs.append(run)
@@ -322,5 +323,5 @@ def synthetic_runs(model, *, speeds=(20.0, 40.0, 60.0), pressures=None, loads=No
         psi = math.radians(steer_angle) * np.clip((t - lead) / 0.02, 0.0, 1.0)
         inputs = dict(X=v * t, VX=np.full(n, v), Z=np.full(n, rl), OMEGA=np.full(n, v / re), PSI=psi,
                       P=np.full(n, prm.NOMPRES))
-        runs.append(measure(f"steer_{v_kmh:g}kmh_{steer_angle:g}deg", inputs, "", ("FY", "MZ")))
+        runs.append(measure(f"steer_{v_kmh:g}kmh_{steer_angle:g}deg", inputs, "", ("FY", "MZ", "FZ")))
     return runs
