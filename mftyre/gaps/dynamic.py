@@ -417,12 +417,13 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
     sim = _Sim(runs)
     say(f"{len(runs)} runs; simulating the given model")
     pred0 = sim(model_given)
-    chain, chain_table = align(runs, pred0)
+    held = _holdout(runs, holdout, seed)
+    train = {r.name for r in runs} - held
+    train_runs = [r for r in runs if r.name in train]
+    chain, chain_table = align(train_runs, pred0)
     noise = noise_from_data(runs, pred0, chain)
     say(f"aligned: delay {1e3 * chain.delay:.2f} ms, filter {chain.cutoff} Hz; noise "
         + ", ".join(f"{c} {n['sigma']:.3g} (tau {n['tau']:.1f})" for c, n in noise.items()))
-    held = _holdout(runs, holdout, seed)
-    train = {r.name for r in runs} - held
     prob = _Problem(runs, chain, noise)
     testable, untestable = testable_effects(runs, model_given, catalogue)
 
@@ -478,8 +479,8 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
             if out is None:
                 cand.note = "refit failed (the model could not be built or simulated)"
                 continue
-            new_model, new_pred, delta, cov = out
-            res_new = prob.residuals(new_pred)
+            new_model, new_pred, delta, cov, prob_new = out
+            res_new = prob_new.residuals(new_pred)
             k = len(e.parameters)
             cand.chi2_train_before, cand.chi2_test_before = chi_train, chi_test
             cand.chi2_train_after = _chi2(res_new, set(keys_train))
@@ -517,7 +518,7 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
         _, cand, model, pred = best
         added.append(cand)
         # the measurement chain again, now fitted to the improved model (the given model's errors bent it)
-        chain, chain_table = align(runs, pred)
+        chain, chain_table = align(train_runs, pred)
         noise = noise_from_data(runs, pred, chain)
         prob = _Problem(runs, chain, noise)
         jac_cache.clear()
@@ -576,40 +577,47 @@ def _gaps(runs, prob, pred, alpha) -> set:
 
 def _refit(effect, model, pred, prob, sim, runs, train, keys_train, J):
     """Gauss-Newton from the screening sensitivity ``J`` with Broyden updates and step halving on the training
-    runs of the effect's kinds; (model, prediction on all runs, delta, covariance of delta) or None."""
+    runs of the effect's kinds; then the measurement chain refitted to the candidate (training runs) and a few
+    more steps with it, so that no candidate is judged through a chain bent by another model's errors.
+    (model, prediction on all runs, delta, covariance of delta, the candidate's _Problem) or None."""
     base = {p: model.params[p] for p in effect.parameters}
     sc = _scales(effect, base)
     sub = [r for r in runs if r.kind in effect.kinds]
     sub_train = [r for r in sub if r.name in train]
+    latest = {}
 
-    def resid(delta):
+    def resid(delta, problem):
         if not _bounds_ok(effect, base, delta, sc):
             return None
         try:
             p = sim(_with(model, effect, base, delta, sc), sub_train)
         except ModelInputError:
             return None
-        rr = prob.residuals({**pred, **p}, train)
+        latest["pred"] = {**pred, **p}
+        rr = problem.residuals(latest["pred"], train)
         v = np.concatenate([rr[k] for k in keys_train])
         return v if np.all(np.isfinite(v)) else None
 
+    def gauss_newton(delta, r, J, problem, iterations):
+        for _ in range(iterations):
+            step, *_ = np.linalg.lstsq(J, -r, rcond=None)
+            for _half in range(4):
+                r_new = resid(delta + step, problem)
+                if r_new is not None and r_new @ r_new < r @ r:
+                    break
+                step = step / 2
+            else:
+                break
+            J = J + np.outer(r_new - r - J @ step, step) / float(step @ step)  # Broyden
+            gain = (r @ r - r_new @ r_new) / max(r @ r, 1e-300)
+            delta, r = delta + step, r_new
+            if gain < 1e-4:
+                break
+        return delta, r, J
+
     delta = np.zeros(len(effect.parameters))
     r = np.concatenate([prob.residuals(pred, train)[k] for k in keys_train])
-    J = J.copy()
-    for _ in range(5):
-        step, *_ = np.linalg.lstsq(J, -r, rcond=None)
-        for _half in range(4):
-            r_new = resid(delta + step)
-            if r_new is not None and r_new @ r_new < r @ r:
-                break
-            step = step / 2
-        else:
-            break
-        J = J + np.outer(r_new - r - J @ step, step) / float(step @ step)  # Broyden
-        gain = (r @ r - r_new @ r_new) / max(r @ r, 1e-300)
-        delta, r = delta + step, r_new
-        if gain < 1e-3:
-            break
+    delta, r, J = gauss_newton(delta, r, J.copy(), prob, 8)
     if not np.any(delta):
         return None
     new_model = _with(model, effect, base, delta, sc)
@@ -617,8 +625,18 @@ def _refit(effect, model, pred, prob, sim, runs, train, keys_train, J):
         full = {**pred, **sim(new_model, sub)}
     except ModelInputError:
         return None
+    chain, _ = align([x for x in runs if x.name in train], full)
+    problem = _Problem(runs, chain, prob.noise)
+    r = resid(delta, problem)
+    if r is not None:
+        delta, r, J = gauss_newton(delta, r, J, problem, 3)
+        new_model = _with(model, effect, base, delta, sc)
+        try:
+            full = {**pred, **sim(new_model, sub)}
+        except ModelInputError:
+            return None
     cov = np.linalg.pinv(J.T @ J)
-    return new_model, full, delta, cov
+    return new_model, full, delta, cov, problem
 
 
 def _findings(runs, pred, chain, noise) -> list:
