@@ -28,8 +28,8 @@ Command line: ``mftyre gaps --dynamic DATA.csv --model BASE.tir [-o improved.tir
    training chi-square decrease is significant (chi2(k), Bonferroni over the candidates screened), its held-out
    decrease is significant too (chi2(k) at the same level), and the improved model is verified: it builds,
    :func:`mftyre.fit.verify.verify_tir` finds no new problem, every run simulates to finite values, and the
-   linearised SWIFT wheel at the static state of every condition is stable (eigenvalues of
-   :meth:`swift.SwiftTyre.jacobian`). The best accepted candidate (held-out decrease) is added; repeat.
+   linearised SWIFT wheel at the static state of every condition grows no faster than the given one (eigenvalues
+   of :meth:`swift.SwiftTyre.jacobian`: no new or worse instability; the given model's own are reported). The best accepted candidate (held-out decrease) is added; repeat.
 6. *Show*: RMS error per channel and condition before/after on the held-out runs beside the noise floor, features
    before/after, overlaid time histories (PNG), the improved .tir (never overwriting without ``overwrite``).
 """
@@ -281,6 +281,11 @@ class DynamicGapReport:
                 L.append(f"* round {i}: {c.name}: screened decrease {c.screened_decrease:.1f}"
                          + (f", held-out chi2 {c.chi2_test_before:.0f} -> {c.chi2_test_after:.0f}"
                             if math.isfinite(c.chi2_test_after) else "") + (f"; {c.note}" if c.note else ""))
+        unstable = {k: g for k, g in (self.growth_given or {}).items() if g > 1e-6}
+        if unstable:
+            L += ["", "## Stability of the given model", "", "Linearised at the static state, the given model grows "
+                  "at " + "; ".join(f"{k}: {g:.3g} 1/s" for k, g in unstable.items())
+                  + " (an improved model may not grow faster)."]
         L += ["", "## Effects not tried", ""] + [f"* {k}: {v}" for k, v in self.untestable.items()]
         return "\n".join(L) + "\n"
 
@@ -360,55 +365,72 @@ class _Sim:
             return simulate(model, runs, _Tyres(model, runs))
 
 
-def _with(model, effect, base, delta, scales):
-    return model.with_params(**{p: base[p] + d * s for p, d, s in zip(effect.parameters, delta, scales)})
+#: Refit coordinates: a positive parameter moves as value = base exp(0.2 delta) (scale-free, stays positive; a
+#: relaxation length ~ 1/stiffness is near linear in it); a parameter whose neutral value is 0 (``absolute``) as
+#: base + 0.5 delta.
+_LOG_STEP, _ABS_STEP = 0.2, 0.5
 
 
-def _scales(effect, params):
-    return [0.5 if p in effect.absolute and params[p] == 0 else 0.2 * abs(params[p]) or 0.2
-            for p in effect.parameters]
+def _value(effect, p, base, d):
+    if p in effect.absolute or base == 0:
+        return base + _ABS_STEP * d
+    return base * math.exp(_LOG_STEP * d)
 
 
-def _bounds_ok(effect, base, delta, scales):
-    return all(p in effect.absolute or base[p] + d * s > 0.05 * base[p]
-               for p, d, s in zip(effect.parameters, delta, scales))
+def _with(model, effect, base, delta):
+    return model.with_params(**{p: _value(effect, p, base[p], d) for p, d in zip(effect.parameters, delta)})
 
 
-def _stable(model, runs) -> str:
-    """'' or what is unstable: eigenvalues of the linearised SWIFT wheel at the static state of each distinct
-    (pressure, load) at the top speed."""
+def _slope(effect, p, value, base):
+    """d value / d delta at ``value`` (standard errors from the delta covariance)."""
+    return _ABS_STEP if p in effect.absolute or base == 0 else _LOG_STEP * abs(value)
+
+
+def _bounds_ok(effect, delta):
+    return bool(np.all(np.abs(delta) < 12.0))  # at most a factor e^2.4 = 11 either way, or +-6 absolute
+
+
+def _growth(model, runs) -> dict:
+    """Condition label -> largest real part [1/s] of the eigenvalues of the linearised SWIFT wheel at its static
+    state, for every distinct (speed, pressure, axle height or load) of the runs."""
     from swift import StepInputs
 
     seen = {}
     for r in runs:
-        key = (round(float(np.mean(r.inputs.get("P", [model.params.NOMPRES]))), -2), r.condition["load"], r.axle,
-               r.rim)
-        if key not in seen or np.mean(r.inputs["VX"]) > np.mean(seen[key].inputs["VX"]):
-            seen[key] = r
+        i = r.inputs
+        key = tuple(round(float(np.mean(i[k])), 4) if k in i else None for k in ("VX", "P", "Z", "LOAD")) + (
+            r.axle, r.rim)
+        seen.setdefault(key, r)
+    out = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         tyres = _Tyres(model, list(seen.values()))
         for r in seen.values():
-            tyre = tyres.tyre(r)
             i = r.inputs
-            u = StepInputs(x=float(i["X"][0]), vx=float(i["VX"][0]), z=float(i["Z"][0]) if "Z" in i else 0.0,
-                           load=float(i["LOAD"][0]) if "LOAD" in i else 0.0,
-                           omega=float(i["OMEGA"][0]) if "OMEGA" in i else 0.0,
-                           torque=float(i["TORQUE"][0]) if "TORQUE" in i else 0.0,
-                           p=float(i["P"][0]) if "P" in i else None)
-            state = tyre.initial_state(u)
-            jac = tyre.jacobian(state, u)
-            lam = np.linalg.eigvals(jac)
-            if not np.all(np.isfinite(lam)):
-                return f"{r.name}: non-finite linearisation"
-            if lam.real.max() > 1e-3:
-                return f"{r.name}: unstable eigenvalue {lam[np.argmax(lam.real)]:.3g} 1/s at the static state"
+            first = {k.lower(): float(i[k][0]) for k in ("X", "VX", "Z", "LOAD", "OMEGA", "TORQUE", "P") if k in i}
+            u = StepInputs(**first)
+            tyre = tyres.tyre(r)
+            lam = np.linalg.eigvals(tyre.jacobian(tyre.initial_state(u), u))
+            c = r.condition
+            out[f"{c['speed']:g} km/h, {c['pressure']:g} bar, {c['load']:.0f} N"] = (
+                float(lam.real.max()) if np.all(np.isfinite(lam)) else math.inf)
+    return out
+
+
+def _less_stable(new: dict, given: dict) -> str:
+    """'' or the condition where the improved model grows faster than the given one (beyond 0.05 1/s + 5 %)."""
+    for k, g in new.items():
+        ref = given.get(k, 0.0)
+        if g > 1e-6 and g > max(ref, 0.0) + 0.05 + 0.05 * abs(ref):
+            return f"{k}: an eigenvalue with real part {g:.3g} 1/s at the static state (given model {ref:.3g})"
     return ""
 
 
 def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alpha: float = 1e-3,
-                      max_effects: int = 3, catalogue=DYNAMIC_CATALOGUE, progress=None) -> DynamicGapReport:
-    """Locate, name and add the dynamic effects ``model`` misses in the runs ``data`` (module text)."""
+                      max_effects: int = 3, catalogue=DYNAMIC_CATALOGUE, refit_top: int = REFIT_TOP,
+                      progress=None) -> DynamicGapReport:
+    """Locate, name and add the dynamic effects ``model`` misses in the runs ``data`` (module text);
+    ``refit_top``: candidates refitted per round after the screening."""
     from ..fit.verify import verify_tir
 
     t_start = time.perf_counter()
@@ -436,7 +458,7 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
     for e in testable:
         if e not in candidates:
             untestable.setdefault(e.name, "testable, but no run of its kinds shows a gap in its channels")
-    jac_cache = {}
+    jac_cache, growth_given = {}, None
     while candidates and len(added) < max_effects:
         if added:  # only effects whose kinds and channels still show a gap beyond the noise
             gap_kinds = _gaps(runs, prob, pred, alpha)
@@ -452,13 +474,12 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
         for e in candidates:
             if e.name not in jac_cache:
                 base = {p: model.params[p] for p in e.parameters}
-                sc = _scales(e, base)
                 cols = []
                 for j in range(len(e.parameters)):
                     d = np.zeros(len(e.parameters))
                     d[j] = 0.25
                     try:
-                        pj = sim(_with(model, e, base, d, sc),
+                        pj = sim(_with(model, e, base, d),
                                  [r for r in runs if r.name in train and r.kind in e.kinds])
                         rj = prob.residuals({**pred, **pj}, train)
                         cols.append((np.concatenate([rj[k] for k in keys_train]) - r_train) / 0.25)
@@ -471,8 +492,8 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
             rnd.append(DynamicCandidate(e.name, e.parameters, screened_decrease=dec))
         rnd.sort(key=lambda c: -c.screened_decrease)
         m_tests = len(rnd)
-        best = None
-        for cand in rnd[:REFIT_TOP]:
+        best, growth = None, None
+        for cand in rnd[:refit_top]:
             e = next(x for x in candidates if x.name == cand.name)
             say(f"  refitting {e.name}")
             out = _refit(e, model, pred, prob, sim, runs, train, keys_train, jac_cache[e.name])
@@ -487,9 +508,9 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
             cand.chi2_test_after = _chi2(res_new, set(res_new) - set(keys_train))
             cand.p_train = float(stats.chi2.sf(max(chi_train - cand.chi2_train_after, 0.0), k))
             cand.p_test = float(stats.chi2.sf(max(chi_test - cand.chi2_test_after, 0.0), k)) if held else math.nan
-            sc = _scales(e, {p: model.params[p] for p in e.parameters})
             cand.values = {p: float(new_model.params[p]) for p in e.parameters}
-            cand.stderr = {p: float(math.sqrt(max(cov[j, j], 0.0)) * sc[j]) for j, p in enumerate(e.parameters)}
+            cand.stderr = {p: float(math.sqrt(max(cov[j, j], 0.0)) * _slope(e, p, cand.values[p], model.params[p]))
+                           for j, p in enumerate(e.parameters)}
             level = alpha / m_tests
             if not cand.p_train < level:
                 cand.note = f"training decrease not significant (p {cand.p_train:.2g} >= {level:.2g})"
@@ -504,7 +525,10 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
             if not all(np.all(np.isfinite(v)) for ch in new_pred.values() for v in ch.values()):
                 cand.note = "the improved model gives non-finite outputs"
                 continue
-            unstable = _stable(new_model, runs)
+            if growth is None:
+                growth = _growth(model, runs)
+                growth_given = growth_given or growth
+            unstable = _less_stable(_growth(new_model, runs), growth)
             if unstable:
                 cand.note = "unstable: " + unstable
                 continue
@@ -556,7 +580,7 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
                             untestable=untestable, chain=chain, chain_table=chain_table, noise=noise, held_out=held,
                             error_before=err_b, error_after=err_a, noise_floor=floor, by_condition=by_condition,
                             findings=findings, message=msg, runs=runs, pred_before=pred0, pred_after=pred,
-                            evaluations=sim.evaluations, seconds=time.perf_counter() - t_start)
+                            evaluations=sim.evaluations, growth_given=growth_given, seconds=time.perf_counter() - t_start)
 
 
 def _gaps(runs, prob, pred, alpha) -> set:
@@ -581,16 +605,15 @@ def _refit(effect, model, pred, prob, sim, runs, train, keys_train, J):
     more steps with it, so that no candidate is judged through a chain bent by another model's errors.
     (model, prediction on all runs, delta, covariance of delta, the candidate's _Problem) or None."""
     base = {p: model.params[p] for p in effect.parameters}
-    sc = _scales(effect, base)
     sub = [r for r in runs if r.kind in effect.kinds]
     sub_train = [r for r in sub if r.name in train]
     latest = {}
 
     def resid(delta, problem):
-        if not _bounds_ok(effect, base, delta, sc):
+        if not _bounds_ok(effect, delta):
             return None
         try:
-            p = sim(_with(model, effect, base, delta, sc), sub_train)
+            p = sim(_with(model, effect, base, delta), sub_train)
         except ModelInputError:
             return None
         latest["pred"] = {**pred, **p}
@@ -611,16 +634,16 @@ def _refit(effect, model, pred, prob, sim, runs, train, keys_train, J):
             J = J + np.outer(r_new - r - J @ step, step) / float(step @ step)  # Broyden
             gain = (r @ r - r_new @ r_new) / max(r @ r, 1e-300)
             delta, r = delta + step, r_new
-            if gain < 1e-4:
+            if gain < 1e-3:
                 break
         return delta, r, J
 
     delta = np.zeros(len(effect.parameters))
     r = np.concatenate([prob.residuals(pred, train)[k] for k in keys_train])
-    delta, r, J = gauss_newton(delta, r, J.copy(), prob, 8)
+    delta, r, J = gauss_newton(delta, r, J.copy(), prob, 6)
     if not np.any(delta):
         return None
-    new_model = _with(model, effect, base, delta, sc)
+    new_model = _with(model, effect, base, delta)
     try:
         full = {**pred, **sim(new_model, sub)}
     except ModelInputError:
@@ -629,8 +652,8 @@ def _refit(effect, model, pred, prob, sim, runs, train, keys_train, J):
     problem = _Problem(runs, chain, prob.noise)
     r = resid(delta, problem)
     if r is not None:
-        delta, r, J = gauss_newton(delta, r, J, problem, 3)
-        new_model = _with(model, effect, base, delta, sc)
+        delta, r, J = gauss_newton(delta, r, J, problem, 2)
+        new_model = _with(model, effect, base, delta)
         try:
             full = {**pred, **sim(new_model, sub)}
         except ModelInputError:
