@@ -632,7 +632,17 @@ def _refit(effect, model, pred, prob, sim, runs, train, keys_train, J):
         v = np.concatenate([rr[k] for k in keys_train])
         return v if np.all(np.isfinite(v)) else None
 
+    def fresh_jacobian(delta, r, problem):  # finite differences at delta (k simulations)
+        cols = []
+        for j in range(delta.size):
+            d = delta.copy()
+            d[j] += 0.1
+            rj = resid(d, problem)
+            cols.append(np.zeros_like(r) if rj is None else (rj - r) / 0.1)
+        return np.column_stack(cols)
+
     def gauss_newton(delta, r, J, problem, iterations):
+        fresh = False  # J from finite differences at delta (else the screening's or Broyden's)
         for _ in range(iterations):
             step, *_ = np.linalg.lstsq(J, -r, rcond=None)
             for _half in range(4):
@@ -641,17 +651,22 @@ def _refit(effect, model, pred, prob, sim, runs, train, keys_train, J):
                     break
                 step = step / 2
             else:
-                break
-            J = J + np.outer(r_new - r - J @ step, step) / float(step @ step)  # Broyden
-            gain = (r @ r - r_new @ r_new) / max(r @ r, 1e-300)
-            delta, r = delta + step, r_new
-            if gain < 1e-3:
-                break
+                r_new = None
+            gain = 0.0 if r_new is None else (r @ r - r_new @ r_new) / max(r @ r, 1e-300)
+            if r_new is not None:
+                J = J + np.outer(r_new - r - J @ step, step) / float(step @ step)  # Broyden
+                delta, r = delta + step, r_new
+            if gain < 1e-3:  # stalled: a stale Jacobian gets one refresh, a fresh one ends the search
+                if fresh:
+                    break
+                J, fresh = fresh_jacobian(delta, r, problem), True
+            else:
+                fresh = False
         return delta, r, J
 
     delta = np.zeros(len(effect.parameters))
     r = np.concatenate([prob.residuals(pred, train)[k] for k in keys_train])
-    delta, r, J = gauss_newton(delta, r, J.copy(), prob, 6)
+    delta, r, J = gauss_newton(delta, r, J.copy(), prob, 8)
     if not np.any(delta):
         return None
     new_model = _with(model, effect, base, delta)
@@ -663,7 +678,7 @@ def _refit(effect, model, pred, prob, sim, runs, train, keys_train, J):
     problem = _Problem(runs, chain, prob.noise)
     r = resid(delta, problem)
     if r is not None:
-        delta, r, J = gauss_newton(delta, r, J, problem, 2)
+        delta, r, J = gauss_newton(delta, r, J, problem, 3)
         new_model = _with(model, effect, base, delta)
         try:
             full = {**pred, **sim(new_model, sub)}
