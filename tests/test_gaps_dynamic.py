@@ -2,9 +2,10 @@
 measurement chain, naming a hidden changed effect among its rivals, the control, the command line.
 
 Hidden cases: runs generated from a file with one parameter changed (the generator's truth), through noise, a
-causal anti-alias filter and a delay; the finder gets the unchanged file. Tests compare against the generator's
-own settings (delay, cutoff, noise) and the changed parameter, never against snapshots of our output, so they hold
-while the SWIFT equations change.
+causal anti-alias filter and a delay; the finder gets the unchanged file and a few rivals from the catalogue (the
+whole catalogue: benchmarks/bench_dynamic_gaps.py). Tests compare against the generator's own settings (delay,
+cutoff, noise) and the changed parameter, never against snapshots of our output, so they hold while the SWIFT
+equations change. About 35 s of CPU together (the C compiler builds one SWIFT library per parameter set tried).
 """
 from __future__ import annotations
 
@@ -127,13 +128,13 @@ def _assert_found(rep, truth, name):
 def test_sidewall_pressure_effect_is_named_on_the_tno_file():
     model = mftyre.load_tir(require_shared(TNO))
     rep, truth = _hidden_case(model, {"SWIFT_PSTIFF": 0.6},
-                              ("SWIFT_PSTIFF", "SWIFT_PDAMP", "DAMP_LONG", "FREQ_LONG"))
+                              ("SWIFT_PSTIFF", "SWIFT_PDAMP", "DAMP_LONG"))
     _assert_found(rep, truth, "SWIFT_PSTIFF")
 
 
 def test_rolling_radius_variation_is_named_on_the_sample_file(sample):
     rep, truth = _hidden_case(sample, {"SWIFT_REVAR": 0.4},
-                              ("SWIFT_REVAR", "DAMP_LONG", "LONGITUDINAL_STIFFNESS"))
+                              ("SWIFT_REVAR", "LONGITUDINAL_STIFFNESS"))
     _assert_found(rep, truth, "SWIFT_REVAR")
 
 
