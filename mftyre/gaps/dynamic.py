@@ -26,7 +26,8 @@ Command line: ``mftyre gaps --dynamic DATA.csv --model BASE.tir [-o improved.tir
    (finite-difference sensitivity of the simulated histories); the most promising are refitted.
 5. *Add*: whole runs are held out (stratified over kind and condition). A candidate is accepted when its
    training chi-square decrease is significant (chi2(k), Bonferroni over the candidates screened), its held-out
-   decrease is significant too (chi2(k) at the same level), and the improved model is verified: it builds,
+   decrease is significant too (chi2(k) at the same level) and material (at least :data:`MATERIAL` of the held-out
+   chi-square above the noise), and the improved model is verified: it builds,
    :func:`mftyre.fit.verify.verify_tir` finds no new problem, every run simulates to finite values, and the
    linearised SWIFT wheel at the static state of every condition has no mode growing faster than a damping ratio
    of -1 % that the given model lacks (eigenvalues of :meth:`swift.SwiftTyre.jacobian`; the given model's own
@@ -55,6 +56,8 @@ __all__ = ["find_dynamic_gaps", "DynamicGapReport", "Chain", "align", "noise_fro
 
 #: Cutoffs [Hz] tried for the anti-alias filter (None: no filter).
 CUTOFFS = (None, 400.0, 300.0, 250.0, 200.0, 150.0, 120.0, 100.0, 80.0, 60.0)
+#: Share of the held-out chi-square above the noise (chi2 - n/tau) an effect must explain to be added.
+MATERIAL = 0.1
 #: Candidates refitted fully per round (after the linearised screening).
 REFIT_TOP = 3
 
@@ -528,6 +531,13 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
                 continue
             if held and not cand.p_test < level:
                 cand.note = f"held-out decrease not significant (p {cand.p_test:.2g} >= {level:.2g})"
+                continue
+            # and material: beside a large unexplained gap a tiny improvement is significant but names nothing
+            excess = (chi_test - prob.n_eff(held)) if held else (chi_train - prob.n_eff(train))
+            done = (chi_test - cand.chi2_test_after) if held else (chi_train - cand.chi2_train_after)
+            if done < MATERIAL * excess:
+                cand.note = (f"explains {100 * done / max(excess, 1e-300):.1f} % of the held-out chi-square above "
+                             f"the noise (needs {100 * MATERIAL:g} %)")
                 continue
             problems = [p for p in verify_tir(new_model) if p not in verify_tir(model)]
             if problems:
