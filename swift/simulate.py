@@ -576,7 +576,6 @@ class SwiftTyre:
         spin is an unknown too (``inputs.omega`` its first guess): the rim torque balances the input torque.
         Raises :class:`~mftyre.errors.ModelInputError` where the iteration ends without equilibrium (residual above
         :data:`EQUILIBRIUM_TOL`)."""
-
         prm = self.model.params
         c = self.constants
         p = prm.INFLPRES if inputs.p is None else inputs.p

@@ -1,9 +1,10 @@
 """``mftyre gaps DATA --model BASE.tir [-o improved.tir] [--report DIR] [--json report.json]``: find where a model
-and measurements disagree, name the missing effects, add them.
+and measurements disagree, name the missing effects, add them. ``mftyre gaps --dynamic RUNS.csv --model BASE.tir``:
+the same for dynamic runs (:mod:`mftyre.gaps.dynamic_command`).
 
 :func:`register` adds the ``gaps`` sub-command to an argparse sub-parsers object; :func:`run` is its handler
 (``args -> exit status``: 0 done, 1 error, 2 usage). DATA is a TYDEX, TTC or CSV file read with the options of
-:func:`mftyre.cli.add_data_options`.
+:func:`mftyre.arguments.add_data_options`.
 """
 from __future__ import annotations
 
@@ -24,7 +25,10 @@ def register(subparsers) -> None:
                     "improves held-out sweeps significantly, repeat. Prints findings and errors; writes the "
                     "improved .tir, a Markdown/PNG report and JSON.", epilog=data_epilog(),
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("data", help="measurement file: TYDEX, TTC (.dat/.mat) or CSV (see DATA below)")
+    p.add_argument("data", nargs="?", help="measurement file: TYDEX, TTC (.dat/.mat) or CSV (see DATA below)")
+    p.add_argument("--dynamic", metavar="DATA", help="dynamic runs instead (cleat, step steer: one CSV with a RUN "
+                                                    "column or a folder of CSVs; layout: mftyre.gaps.dynamic_runs); "
+                                                    "the model is the SWIFT wheel driven by the runs' inputs")
     p.add_argument("--model", required=True, help="the base .tir file")
     p.add_argument("-o", "--output", help="write the improved .tir file here")
     p.add_argument("--report", metavar="DIR", help="write report.md, PNG plots and gaps.json into this folder (an "
@@ -50,6 +54,13 @@ def run(args) -> int:
     from ..errors import MFTyreError
     from ..files import OutputError, check_outputs
     from .core import find_gaps
+
+    if (args.data is None) == (args.dynamic is None):
+        print("mftyre gaps: give either DATA (steady) or --dynamic DATA (time histories)", file=sys.stderr)
+        return 2
+    if args.dynamic is not None:
+        from .dynamic_command import run_dynamic
+        return run_dynamic(args)
 
     try:
         check_outputs({"-o": args.output, "--json": args.json}, {"DATA": args.data, "--model": args.model},

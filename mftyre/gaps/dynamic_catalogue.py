@@ -1,0 +1,150 @@
+"""The catalogue of dynamic effects: which .tir parameters of the SWIFT wheel an effect acts on, the runs that can
+test it and the signature it leaves in the time histories (channels and engineers' features of
+:mod:`mftyre.gaps.dynamic_locate`).
+
+Every parameter named here is checked against the schema (:data:`mftyre.params.PARAMETERS`) at import, and the
+meaning shown in reports is the schema's. ``scale``: the size of a change the refit starts from (relative to the
+value, or absolute where the neutral value is 0). ``needs``: run kinds (``cleat``: an obstacle; ``steer``: a yaw
+step), and ``pressures``/``loads``/``speeds``: at least two levels of that condition in those runs.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..params import PARAMETERS
+
+__all__ = ["DynamicEffect", "DYNAMIC_CATALOGUE", "NOT_TRIED", "testable_effects"]
+
+
+@dataclass(frozen=True)
+class DynamicEffect:
+    name: str
+    parameters: tuple          # .tir names refitted together
+    kinds: tuple               # run kinds in which the effect shows (any of them)
+    channels: tuple            # channels it changes
+    features: tuple            # features of the signature (dynamic_locate.FEATURES)
+    description: str
+    needs: tuple = ()          # "pressures", "loads", "speeds": at least two levels in the runs of ``kinds``
+    absolute: tuple = ()       # parameters whose refit step is absolute (neutral value 0)
+    lower: float = 0.0         # lower bound of the parameters (positive quantities) unless absolute
+
+    def meaning(self) -> dict:
+        return {p: PARAMETERS[p].description for p in self.parameters}
+
+
+_IN_PLANE = ("FX", "FZ")
+_LAT = ("FY", "MZ")
+DYNAMIC_CATALOGUE = (
+    DynamicEffect("longitudinal carcass stiffness (relaxation length K_xk/C_x)", ("LONGITUDINAL_STIFFNESS",),
+                  ("cleat",), ("FX",), ("peak_to_peak", "peak"),
+                  "the carcass compliance behind the patch sets the longitudinal relaxation length sigma_x = "
+                  "K_xk/C_x of the SWIFT wheel: Fx over an obstacle builds up and decays with it"),
+    DynamicEffect("lateral carcass stiffness (relaxation length K_ya/C_y)", ("LATERAL_STIFFNESS",),
+                  ("steer",), _LAT, ("lag", "build_up", "peak"),
+                  "sigma_y = K_ya/C_y of the SWIFT wheel: the build-up distance and phase lag of Fy after a steer "
+                  "step"),
+    DynamicEffect("yaw stiffness of the carcass", ("YAW_STIFFNESS",), ("steer",), ("MZ", "FY"),
+                  ("lag", "peak"), "the residual yaw compliance: the lag of Mz after a steer step"),
+    DynamicEffect("contact length (Q_RA1)", ("Q_RA1",), ("cleat",), _IN_PLANE,
+                  ("response_length", "peak", "peak_to_peak"),
+                  "the half contact length a sets the tandem base l_s = ELLIPS_SHIFT 2a: the length of the cleat "
+                  "response and the height of its peaks"),
+    DynamicEffect("contact length over load (Q_RA2)", ("Q_RA2",), ("cleat",), _IN_PLANE,
+                  ("response_length", "peak"), "the growth of the contact length with the deflection: response "
+                  "lengths and peaks differ between loads", needs=("loads",), absolute=("Q_RA2",)),
+    DynamicEffect("vertical stiffness over pressure (PFZ1)", ("PFZ1",), ("cleat",), _IN_PLANE,
+                  ("level", "peak", "response_length"),
+                  "the pressure dependence of the vertical stiffness (and of the contact length through F_z/C_z): "
+                  "static load, peaks and response length change with pressure", needs=("pressures",),
+                  absolute=("PFZ1",)),
+    DynamicEffect("tandem base (ELLIPS_SHIFT)", ("ELLIPS_SHIFT",), ("cleat",), _IN_PLANE,
+                  ("response_length", "peak_to_peak"),
+                  "the distance between the front and rear cams: the length of the enveloped response"),
+    DynamicEffect("cam shape (ELLIPS_LENGTH, ELLIPS_HEIGHT)", ("ELLIPS_LENGTH", "ELLIPS_HEIGHT"), ("cleat",),
+                  _IN_PLANE, ("response_length", "peak"),
+                  "the elliptical cam's semi-axes: how early the tyre feels the obstacle and how its edges are "
+                  "rounded"),
+    DynamicEffect("cam order (ELLIPS_ORDER)", ("ELLIPS_ORDER",), ("cleat",), _IN_PLANE,
+                  ("response_length", "peak"), "the cam's exponent: how square the enveloped edge is"),
+    DynamicEffect("in-plane sidewall stiffness (FREQ_LONG)", ("FREQ_LONG",), ("cleat",), _IN_PLANE,
+                  ("frequency", "peak"), "the belt's longitudinal and vertical mode: frequency of the free decay "
+                  "after the obstacle"),
+    DynamicEffect("in-plane sidewall damping (DAMP_LONG)", ("DAMP_LONG",), ("cleat",), _IN_PLANE,
+                  ("damping", "peak"), "the damping ratio of the belt's in-plane mode: the decay after the "
+                  "obstacle"),
+    DynamicEffect("wind-up mode (FREQ_WINDUP, DAMP_WINDUP)", ("FREQ_WINDUP", "DAMP_WINDUP"), ("cleat",), ("FX",),
+                  ("frequency", "damping", "peak_to_peak"),
+                  "the belt's rotation against the rim: the second frequency of the Fx decay"),
+    DynamicEffect("sidewall stiffness over pressure (SWIFT_PSTIFF)", ("SWIFT_PSTIFF",), ("cleat",), _IN_PLANE,
+                  ("frequency", "peak"), "the belt mode frequencies change with pressure",
+                  needs=("pressures",), absolute=("SWIFT_PSTIFF",)),
+    DynamicEffect("sidewall damping over pressure (SWIFT_PDAMP)", ("SWIFT_PDAMP",), ("cleat",), _IN_PLANE,
+                  ("damping",), "the belt mode damping changes with pressure", needs=("pressures",),
+                  absolute=("SWIFT_PDAMP",)),
+    DynamicEffect("belt mass (BELT_MASS)", ("BELT_MASS",), ("cleat",), _IN_PLANE, ("frequency", "peak"),
+                  "the ring's mass at fixed sidewall stiffness: lower frequency of the decay and higher force "
+                  "peaks at speed", needs=("speeds",)),
+    DynamicEffect("belt polar inertia (BELT_IYY)", ("BELT_IYY",), ("cleat",), ("FX",), ("frequency", "peak"),
+                  "the ring's rotational inertia: the wind-up frequency and the Fx peaks"),
+    DynamicEffect("rolling radius variation (SWIFT_REVAR)", ("SWIFT_REVAR",), ("cleat",), ("FX",),
+                  ("peak_to_peak", "peak"),
+                  "the effective rolling radius follows the effective road curvature: the belt spins up and down "
+                  "over the obstacle, Fx grows at low speed", absolute=("SWIFT_REVAR",)),
+    DynamicEffect("residual (patch) damping (DAMP_RESIDUAL)", ("DAMP_RESIDUAL",), ("cleat", "steer"),
+                  ("FX", "FY"), ("peak", "damping"), "the damping of the contact patch's residual springs"),
+    DynamicEffect("lateral belt mode (FREQ_LAT, DAMP_LAT)", ("FREQ_LAT", "DAMP_LAT"), ("steer",), _LAT,
+                  ("frequency", "peak", "lag"), "the belt's lateral mode: the overshoot of Fy after a steer step"),
+    DynamicEffect("yaw and camber belt mode (FREQ_YAW, DAMP_YAW)", ("FREQ_YAW", "DAMP_YAW"), ("steer",), _LAT,
+                  ("peak", "lag"), "the belt's yaw mode: the overshoot of Mz after a steer step"),
+)
+
+#: Effects the SWIFT wheel of this project cannot express, or no run here can show: never tried, with the reason.
+NOT_TRIED = {
+    "relaxation lengths PTX1-PTX3, PTY1-PTY2": "the SWIFT wheel does not use them: its relaxation follows from the "
+                                               "carcass stiffnesses (LONGITUDINAL_STIFFNESS, LATERAL_STIFFNESS: "
+                                               "sigma = K/C); the relaxed wheel (mftyre.transient) is not yet a "
+                                               "model of the dynamic gap finder",
+    "load and speed influence on the sidewall (Q_BVX, Q_BVT)": "not modelled in SWIFT (no published formula)",
+    "turn slip from the belt yaw rate": "not modelled in SWIFT (no parameter acts on it)",
+    "enveloping smoothing (ENV_C1, ENV_C2)": "not modelled in SWIFT (formula unpublished)",
+    "cam series length (ELLIPS_NLENGTH)": "not used: each cam's height is the exact maximum over the profile",
+    "vertical damping (VERTICAL_DAMPING)": "not used by the SWIFT wheel (damping comes from DAMP_LONG and "
+                                           "DAMP_RESIDUAL)",
+    "low-speed residual damping (DAMP_VLOW)": "acts below VXLOW only; dynamic runs are above it",
+}
+
+for _e in DYNAMIC_CATALOGUE:
+    for _p in _e.parameters:
+        if _p not in PARAMETERS:  # pragma: no cover - guards the table
+            raise RuntimeError(f"dynamic effect {_e.name!r} names {_p}, which the schema does not know")
+
+
+def _levels(runs, kinds, key):
+    vals = {r.condition[key] for r in runs if r.kind in kinds}
+    return len({v for v in vals if v == v})
+
+
+def testable_effects(runs, model, catalogue=DYNAMIC_CATALOGUE):
+    """(testable effects, {effect name: reason untestable}) for these runs and this model."""
+    ok, why = [], dict(NOT_TRIED)
+    kinds_present = {r.kind for r in runs}
+    channels = {c for r in runs for c in r.measured}
+    for e in catalogue:
+        kinds = [k for k in e.kinds if k in kinds_present]
+        if not kinds:
+            why[e.name] = f"needs {' or '.join(e.kinds)} runs; the data hold {', '.join(sorted(kinds_present))}"
+            continue
+        if not set(e.channels) & channels:
+            why[e.name] = f"needs a measured {' or '.join(e.channels)}"
+            continue
+        lacking = [n for n in e.needs if _levels(runs, kinds, {"pressures": "pressure", "loads": "load",
+                                                                 "speeds": "speed"}[n]) < 2]
+        if lacking:
+            why[e.name] = f"needs at least two {' and '.join(lacking)} in the {'/'.join(kinds)} runs"
+            continue
+        missing = [p for p in e.parameters if p not in model.params]
+        if missing:
+            why[e.name] = f"the model has no {', '.join(missing)}"
+            continue
+        ok.append(e)
+    return ok, why

@@ -1,0 +1,63 @@
+"""``mftyre gaps --dynamic RUNS.csv --model BASE.tir [-o improved.tir] [--report DIR] [--json FILE]``: the handler
+of the dynamic gap finder (:func:`mftyre.gaps.dynamic.find_dynamic_gaps`); options shared with ``mftyre gaps``
+(``--holdout``, ``--seed``, ``--alpha``, ``--max-effects``, ``--overwrite``, ``--quiet``)."""
+from __future__ import annotations
+
+import sys
+import time
+
+__all__ = ["run_dynamic"]
+
+
+def run_dynamic(args) -> int:
+    """args -> exit status (0 done, 1 error, 2 usage)."""
+    from ..errors import MFTyreError
+    from ..files import OutputError, check_outputs
+    from .dynamic import find_dynamic_gaps
+
+    if args.channels:
+        print("mftyre gaps: --channels is for steady data; dynamic runs use every measured channel", file=sys.stderr)
+        return 2
+    try:
+        check_outputs({"-o": args.output, "--json": args.json}, {"--dynamic": args.dynamic, "--model": args.model},
+                      folders={"--report": args.report}, overwrite=args.overwrite)
+    except OutputError as exc:
+        print(f"mftyre gaps: {exc}", file=sys.stderr)
+        return 2
+    t0 = time.perf_counter()
+
+    def progress(text):
+        if not args.quiet:
+            print(f"  [{time.perf_counter() - t0:6.1f} s] {text}", file=sys.stderr, flush=True)
+
+    try:
+        rep = find_dynamic_gaps(args.dynamic, args.model, holdout=args.holdout, seed=args.seed,
+                                alpha=args.alpha, max_effects=args.max_effects,
+                                progress=progress)
+        if args.output:
+            rep.write_tir(args.output, overwrite=args.overwrite)
+        if args.json:
+            rep.to_json(args.json, overwrite=args.overwrite)
+        if args.report:
+            rep.save(args.report, overwrite=args.overwrite)
+    except (MFTyreError, OSError) as exc:
+        print(f"mftyre gaps: {exc}", file=sys.stderr)
+        return 1
+    print(rep.message)
+    print(f"  measurement chain: delay {1e3 * rep.chain.delay:.2f} ms, anti-alias filter "
+          f"{'none' if rep.chain.cutoff is None else f'{rep.chain.cutoff:g} Hz'}")
+    for f in rep.findings[:5]:
+        print(f"  finding: {f['run']} {f['channel']} {f['feature']}: measured {f['measured']:.4g}, model "
+              f"{f['model']:.4g} ({f['z']:+.1f} uncertainties)")
+    for c in rep.effects_added:
+        vals = ", ".join(f"{k} = {v:.5g} +- {c.stderr.get(k, float('nan')):.2g}" for k, v in c.values.items())
+        print(f"  added {c.name}: {vals}")
+    for rnd in rep.rounds:
+        for c in rnd:
+            if c.note and not c.accepted:
+                print(f"  rejected {c.name}: {c.note}")
+    print(f"  {len(rep.untestable)} effects not tried (listed with the reason in the report)")
+    written = [x for x in (args.output, args.report, args.json) if x]
+    if written:
+        print("  wrote " + ", ".join(written))
+    return 0

@@ -1,0 +1,327 @@
+"""Dynamic tyre tests for the gap finder: runs (inputs and measured outputs over time), their CSV layout, the SWIFT
+wheel driven by exactly those inputs, and a generator of synthetic runs as messy as a rig's.
+
+A run (:class:`DynamicRun`) is one drive over a road at one condition, sampled at a fixed rate:
+
+========== ====== =================================================================================================
+column     unit   meaning
+========== ====== =================================================================================================
+RUN        -      run name (one file with several runs; in a folder of CSV files each file is a run, named by stem)
+TIME       s      sample time, equally spaced within a run
+X          m      axle position along the road (optional: integrated from VX, starting at 0)
+VX         m/s    forward speed of the axle
+Z          m      axle height above the road's zero (axle height imposed) - or -
+LOAD       N      downward force on the axle (axle load imposed)
+OMEGA      rad/s  rim spin (imposed; forward rolling > 0) - or - TORQUE [N m] drive/brake torque on the rim
+PSI        rad    yaw (heading of the wheel relative to the x axis; a steer step); optional, default 0
+P          Pa     inflation pressure; optional, default the .tir's NOMPRES
+ROAD       -      the road, the same in every row of a run: ``cleat(x0=1.5, length=0.02, height=0.01)``, a sum of
+                  such obstacles or a CSV profile (:func:`swift.road.parse_road`); empty = flat
+FX FY FZ   N      measured forces of the tyre on the axle (ISO-W; Fz > 0 pressing the tyre on the road: the
+MZ         N m    model's ``fz`` output), self-aligning moment; any subset, at least one. SPIN [rad/s]: measured
+                  rim spin (torque mode)
+========== ====== =================================================================================================
+
+Units SI, axes ISO-W. :func:`read_runs` reads one CSV (with RUN) or a folder of CSVs; :func:`write_runs` writes one;
+:func:`simulate` drives the SWIFT wheel (:class:`swift.SwiftTyre`, compiled) with the runs' inputs and returns the
+model's outputs at the runs' sample times; :func:`synthetic_runs` builds cleat and step-steer programmes from a
+model with measurement noise, a causal anti-alias filter and a time offset.
+"""
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..errors import DataError, ModelInputError
+
+__all__ = ["DynamicRun", "read_runs", "write_runs", "runs_frame", "simulate", "synthetic_runs", "OUTPUT_CHANNELS",
+           "MODEL_OUTPUT"]
+
+#: Measured channels the dynamic gap finder compares, and the SWIFT output each one is.
+MODEL_OUTPUT = {"FX": "fx", "FY": "fy", "FZ": "fz", "MZ": "mz", "SPIN": "omb"}
+OUTPUT_CHANNELS = tuple(MODEL_OUTPUT)
+_INPUTS = ("TIME", "X", "VX", "Z", "LOAD", "OMEGA", "TORQUE", "PSI", "P")
+
+
+@dataclass
+class DynamicRun:
+    """One run: ``name``, ``t`` (s, equally spaced), ``inputs`` (column -> array: VX, X, Z or LOAD, OMEGA or TORQUE,
+    PSI, P), ``road`` (text, :func:`swift.road.parse_road`), ``measured`` (channel -> array)."""
+
+    name: str
+    t: np.ndarray
+    inputs: dict
+    road: str
+    measured: dict
+    source: str = ""
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def dt(self) -> float:
+        return float(self.t[1] - self.t[0])
+
+    @property
+    def axle(self) -> str:
+        return "height" if "Z" in self.inputs else "load"
+
+    @property
+    def rim(self) -> str:
+        return "speed" if "OMEGA" in self.inputs else "torque"
+
+    @property
+    def kind(self) -> str:
+        """``cleat`` (an obstacle on the road), ``steer`` (a yaw change on a flat road) or ``flat``."""
+        if self.road.strip() not in ("", "flat()", "flat(0)"):
+            return "cleat"
+        psi = self.inputs.get("PSI")
+        if psi is not None and np.ptp(psi) > 1e-4:
+            return "steer"
+        return "flat"
+
+    @property
+    def condition(self) -> dict:
+        """Speed [km/h], load [N] (LOAD, or the measured Fz before the event), pressure [bar], as engineers name a
+        test condition."""
+        fz = self.inputs["LOAD"] if "LOAD" in self.inputs else self.measured.get("FZ")
+        n0 = max(3, int(0.1 * self.t.size))
+        load = float(np.median(fz[:n0])) if fz is not None else math.nan
+        p = self.inputs.get("P")
+        return dict(speed=round(float(np.mean(self.inputs["VX"])) * 3.6, 1), load=round(load, -1),
+                    pressure=round(float(np.mean(p)) / 1e5, 2) if p is not None else math.nan)
+
+    def label(self) -> str:
+        c = self.condition
+        return f"{self.name} ({self.kind}, {c['speed']:g} km/h, {c['load']:.0f} N, {c['pressure']:g} bar)"
+
+
+def _check_run(run: DynamicRun) -> None:
+    where = f"run {run.name!r}" + (f" in {run.source}" if run.source else "")
+    t = np.asarray(run.t, float)
+    if t.size < 20:
+        raise DataError(f"{where}: {t.size} samples; a dynamic run needs at least 20")
+    d = np.diff(t)
+    if not (np.all(np.isfinite(t)) and d.min() > 0 and np.ptp(d) < 1e-3 * d.mean()):
+        raise DataError(f"{where}: TIME must increase in equal steps (found steps {d.min():.3g} to {d.max():.3g} s)")
+    if "VX" not in run.inputs:
+        raise DataError(f"{where}: column VX (forward speed, m/s) is missing")
+    if ("Z" in run.inputs) == ("LOAD" in run.inputs):
+        raise DataError(f"{where}: give exactly one of Z (axle height, m) and LOAD (axle load, N)")
+    if ("OMEGA" in run.inputs) == ("TORQUE" in run.inputs):
+        raise DataError(f"{where}: give exactly one of OMEGA (rim spin, rad/s) and TORQUE (rim torque, N m)")
+    for k, v in run.inputs.items():
+        if not np.all(np.isfinite(v)):
+            raise DataError(f"{where}: column {k} has missing or non-finite values (first at TIME = "
+                            f"{t[np.flatnonzero(~np.isfinite(v))[0]]:.4g} s)")
+    if "P" in run.inputs and not np.all(run.inputs["P"] > 1e4):
+        raise DataError(f"{where}: P is the inflation pressure in Pa (e.g. 220000); found {run.inputs['P'].min():.4g}")
+    if not run.measured:
+        raise DataError(f"{where}: no measured output; give at least one of {', '.join(OUTPUT_CHANNELS)}")
+    for k, v in run.measured.items():
+        if np.mean(np.isfinite(v)) < 0.9:
+            raise DataError(f"{where}: channel {k} is missing in more than 10 % of the samples")
+
+
+def runs_from_frame(frame: pd.DataFrame, source: str = "", name: str | None = None) -> list:
+    """Runs from a table in the documented layout (RUN column, or one run named ``name``)."""
+    frame = frame.rename(columns={c: c.strip().upper() for c in frame.columns})
+    if "TIME" not in frame:
+        raise DataError(f"{source or 'data'}: column TIME is missing (columns: {', '.join(frame.columns)})")
+    if "RUN" not in frame:
+        if name is None:
+            raise DataError(f"{source or 'data'}: column RUN is missing (one file holding several runs needs it)")
+        frame = frame.assign(RUN=name)
+    runs = []
+    for run_name, grp in frame.groupby("RUN", sort=False):
+        road = grp["ROAD"].astype(object).fillna("").astype(str).unique() if "ROAD" in grp else np.array([""])
+        if road.size != 1:
+            raise DataError(f"{source}: run {run_name!r} has {road.size} different ROAD values; a run is one road")
+        # a column empty throughout a run is absent from it (a file mixing cleat runs and steer runs)
+        inputs = {c: grp[c].to_numpy(float) for c in _INPUTS[1:] if c in grp and grp[c].notna().any()}
+        t = grp["TIME"].to_numpy(float)
+        if "X" not in inputs and "VX" in inputs:
+            inputs["X"] = np.concatenate([[0.0], np.cumsum(0.5 * (inputs["VX"][1:] + inputs["VX"][:-1]) * np.diff(t))])
+        measured = {c: grp[c].to_numpy(float) for c in OUTPUT_CHANNELS if c in grp and grp[c].notna().any()}
+        run = DynamicRun(str(run_name), t, inputs, str(road[0]), measured, source=source)
+        _check_run(run)
+        runs.append(run)
+    if not runs:
+        raise DataError(f"{source}: no rows")
+    return runs
+
+
+def read_runs(path) -> list:
+    """Runs from one CSV file (with a RUN column) or a folder of CSV files (one run each, named by the file)."""
+    path = Path(path)
+    if path.is_dir():
+        files = sorted(path.glob("*.csv"))
+        if not files:
+            raise DataError(f"{path}: no .csv files in the folder")
+        return [r for f in files for r in runs_from_frame(_read_csv(f), str(f), f.stem)]
+    if not path.is_file():
+        raise DataError(f"{path}: no such file or folder")
+    return runs_from_frame(_read_csv(path), str(path))
+
+
+def _read_csv(path) -> pd.DataFrame:
+    try:
+        return pd.read_csv(path, comment="#")
+    except (pd.errors.ParserError, UnicodeDecodeError, pd.errors.EmptyDataError) as exc:
+        raise DataError(f"{path}: not a readable CSV table ({exc})") from None
+
+
+def runs_frame(runs) -> pd.DataFrame:
+    """The runs as one table in the documented layout."""
+    parts = []
+    for r in runs:
+        d = {"RUN": r.name, "TIME": r.t, **r.inputs, "ROAD": r.road, **r.measured}
+        parts.append(pd.DataFrame(d))
+    return pd.concat(parts, ignore_index=True)
+
+
+def write_runs(runs, path, *, overwrite: bool = False) -> Path:
+    """Write ``runs`` to one CSV file (RUN column); an existing file needs ``overwrite``."""
+    from ..files import write_atomically
+
+    path = Path(path)
+    if path.exists() and not overwrite:
+        raise DataError(f"{path} exists: pass overwrite=True to replace it")
+    return write_atomically(path, runs_frame(runs).to_csv(index=False, float_format="%.7g"))
+
+
+# ---------------------------------------------------------------------------------------------------- the model
+class _Tyres:
+    """SWIFT tyres of one model, one per (road, axle mode, rim mode): built once, reused by every run on that
+    road."""
+
+    def __init__(self, model, runs):
+        from swift import SwiftTyre
+        from swift.road import parse_road
+
+        self.tyres = {}
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the .tir's unmodelled parameters: said once by the caller
+            for r in runs:
+                key = (r.road, r.axle, r.rim)
+                lo, hi = self.tyres.get(key, (None, (math.inf, -math.inf)))[1]
+                x = r.inputs["X"]
+                self.tyres[key] = (None, (min(lo, float(x.min()) - 1.0), max(hi, float(x.max()) + 1.0)))
+            for key, (_, xr) in list(self.tyres.items()):
+                try:
+                    tyre = SwiftTyre(model, parse_road(key[0]), axle=key[1], rim=key[2], x_range=xr)
+                except ModelInputError as exc:
+                    raise ModelInputError(f"road {key[0]!r}: {exc}") from None
+                self.tyres[key] = (tyre, xr)
+
+    def tyre(self, run):
+        return self.tyres[(run.road, run.axle, run.rim)][0]
+
+
+def _step_inputs(run: DynamicRun, p_nominal: float):
+    from swift import StepInputs
+
+    i = run.inputs
+    n = run.t.size
+    z = i.get("Z")
+    vz = np.gradient(z, run.t) if z is not None else None
+    cols = dict(x=i["X"], vx=i["VX"], z=z, vz=vz, load=i.get("LOAD"), omega=i.get("OMEGA"), torque=i.get("TORQUE"),
+                psi=i.get("PSI"), p=i.get("P"))
+    cols = {k: v for k, v in cols.items() if v is not None}
+    if "p" not in cols:
+        cols["p"] = np.full(n, p_nominal)
+    return [StepInputs(**{k: float(v[k_]) for k, v in cols.items()}) for k_ in range(n)]
+
+
+def simulate(model, runs, tyres: _Tyres | None = None) -> dict:
+    """The SWIFT wheel driven by each run's inputs: run name -> channel -> model output at the run's sample times
+    (the channels the run measured). ``model``: an :class:`mftyre.MFModel` with [STRUCTURAL] and [CONTACT_PATCH]
+    sections. Raises :class:`ModelInputError` when the model cannot be built or a run leaves the road table."""
+    tyres = tyres or _Tyres(model, runs)
+    out = {}
+    for r in runs:
+        tyre = tyres.tyre(r)
+        rows = _step_inputs(r, model.params.NOMPRES)
+        res = tyre.run(r.t[-1] - r.t[0], lambda t, rows=rows, dt=r.dt: rows[min(int(round(t / dt)), len(rows) - 1)],
+                       dt=r.dt)
+        n = r.t.size
+        out[r.name] = {c: np.asarray(res[MODEL_OUTPUT[c]][:n], float) for c in r.measured}
+    return out
+
+
+# ---------------------------------------------------------------------------------------------------- synthetic
+#: Measurement noise (standard deviation at the sensor, before the anti-alias filter) of the generator.
+NOISE = {"FX": 20.0, "FY": 20.0, "FZ": 30.0, "MZ": 1.5, "SPIN": 0.05}
+
+
+def measurement_chain(signal: np.ndarray, dt: float, cutoff: float | None, delay: float, order: int = 4):
+    """What a rig's acquisition does to a true signal: a causal Butterworth low-pass (anti-alias; ``cutoff`` Hz,
+    None = none) started from rest at the first value, then a time delay (s, linear interpolation; the first value
+    held before)."""
+    from scipy import signal as sps
+
+    y = np.asarray(signal, float)
+    if cutoff:
+        sos = sps.butter(order, cutoff, fs=1.0 / dt, output="sos")
+        zi = sps.sosfilt_zi(sos) * y[0]
+        y = sps.sosfilt(sos, y, zi=zi)[0]
+    if delay:
+        k = np.arange(y.size) - delay / dt
+        y = np.interp(k, np.arange(y.size), y)
+    return y
+
+
+def synthetic_runs(model, *, speeds=(20.0, 40.0, 60.0), pressures=None, loads=None, steer_speeds=(40.0,),
+                   steer_angle=2.0, cleat=(0.02, 0.01), duration=0.8, dt=1e-3, lead=0.3, noise=NOISE,
+                   cutoff: float | None = 150.0, delay: float = 5e-3, seed: int = 0, truth=None) -> list:
+    """Cleat runs (every speed [km/h] x pressure [Pa] x load [N]; axle height fixed at the static loaded radius,
+    rim spin at the free-rolling speed) and step-steer runs (yaw step of ``steer_angle`` deg at every steer speed,
+    nominal pressure and first load) from ``truth`` (default ``model``) through :func:`measurement_chain`
+    (noise at the sensor, a causal anti-alias filter at ``cutoff`` Hz, a ``delay`` of the outputs in s);
+    the obstacle or the steer step comes ``lead`` s after the start. The inputs are recorded exactly; the ROAD
+    column names the cleat (``cleat`` = (length, height) m)."""
+    truth = truth or model
+    prm = truth.params
+    rng = np.random.default_rng(seed)
+    pressures = tuple(pressures or (prm.NOMPRES,))
+    loads = tuple(loads or (prm.FNOMIN,))
+    n = int(round(duration / dt)) + 1
+    t = dt * np.arange(n)
+    runs = []
+
+    def static(load, p, v):
+        rl = float(np.squeeze(model.evaluate(load, 0.0, 0.0, 0.0, 0.0, v, p)["rl"]))  # loaded radius of the file
+        re = float(np.squeeze(model.evaluate(load, 0.0, 0.0, 0.0, 0.0, v, p)["re"]))
+        return rl, re
+
+    def measure(name, inputs, road, channels):
+        inputs = {k: np.asarray(v, float) for k, v in inputs.items()}
+        run = DynamicRun(name, t.copy(), inputs, road, {c: np.zeros(n) for c in channels})
+        true = simulate(truth, [run])[name]
+        d = delay
+        run.measured = {c: measurement_chain(true[c] + noise[c] * rng.standard_normal(n), dt, cutoff, d)
+                        for c in channels}
+        run.meta = dict(delay=d, cutoff=cutoff)
+        return run
+
+    for v_kmh in speeds:
+        v = v_kmh / 3.6
+        x0 = v * lead + 0.25  # the cleat's leading edge: the tyre's front reaches it about lead s after the start
+        road = f"cleat(x0={x0:.4f}, length={cleat[0]:g}, height={cleat[1]:g})"
+        for p in pressures:
+            for load in loads:
+                rl, re = static(load, p, v)
+                inputs = dict(X=v * t, VX=np.full(n, v), Z=np.full(n, rl), OMEGA=np.full(n, v / re), P=np.full(n, p))
+                runs.append(measure(f"cleat_{v_kmh:g}kmh_{p / 1e5:g}bar_{load:.0f}N", inputs, road,
+                                    ("FX", "FZ")))
+    for v_kmh in steer_speeds:
+        v = v_kmh / 3.6
+        rl, re = static(loads[0], prm.NOMPRES, v)
+        psi = math.radians(steer_angle) * np.clip((t - lead) / 0.02, 0.0, 1.0)
+        inputs = dict(X=v * t, VX=np.full(n, v), Z=np.full(n, rl), OMEGA=np.full(n, v / re), PSI=psi,
+                      P=np.full(n, prm.NOMPRES))
+        runs.append(measure(f"steer_{v_kmh:g}kmh_{steer_angle:g}deg", inputs, "", ("FY", "MZ", "FZ")))
+    return runs

@@ -1,0 +1,161 @@
+"""The dynamic gap finder (mftyre.gaps.dynamic): data layout, alignment and noise against the generator's known
+measurement chain, naming a hidden changed effect among its rivals, the control, the command line.
+
+Hidden cases: runs generated from a file with one parameter changed (the generator's truth), through noise, a
+causal anti-alias filter and a delay; the finder gets the unchanged file and a few rivals from the catalogue (the
+whole catalogue: benchmarks/bench_dynamic_gaps.py). Tests compare against the generator's own settings (delay,
+cutoff, noise) and the changed parameter, never against snapshots of our output, so they hold while the SWIFT
+equations change. About 35 s of CPU together (the C compiler builds one SWIFT library per parameter set tried).
+"""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from scipy import signal as sps
+
+import mftyre
+from mftyre.errors import DataError
+from mftyre.gaps.dynamic import align, find_dynamic_gaps, noise_from_data
+from mftyre.gaps import dynamic_catalogue
+from mftyre.gaps.dynamic_runs import read_runs, simulate, synthetic_runs, write_runs
+
+from conftest import PROJECT, require_shared
+
+SAMPLE = PROJECT / "tir_files" / "car_205_60R15_mf62_swift.tir"
+TNO = PROJECT.parent / "shared" / "reference" / "tir" / "TNO_car205_60R15.tir"
+SHORT = dict(duration=0.45, lead=0.15)
+
+
+@pytest.fixture(scope="module")
+def sample():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return mftyre.load_tir(SAMPLE)
+
+
+def _effects(*names):
+    return tuple(e for e in dynamic_catalogue.DYNAMIC_CATALOGUE if set(names) & set(e.parameters))
+
+
+def test_csv_round_trip_and_errors(sample, tmp_path):
+    runs = synthetic_runs(sample, speeds=(30.0,), steer_speeds=(40.0,), **SHORT)
+    path = write_runs(runs, tmp_path / "runs.csv")
+    with pytest.raises(DataError, match="exists"):
+        write_runs(runs, path)
+    back = read_runs(path)
+    assert [r.name for r in back] == [r.name for r in runs]
+    assert [r.kind for r in back] == ["cleat", "steer"]
+    np.testing.assert_allclose(back[0].measured["FX"], runs[0].measured["FX"], rtol=1e-6, atol=1e-3)
+    assert back[0].road == runs[0].road
+    # a folder of CSV files, one run each, named by the file
+    folder = tmp_path / "runs"
+    folder.mkdir()
+    frame = __import__("pandas").read_csv(path)
+    for name, grp in frame.groupby("RUN"):
+        grp.drop(columns="RUN").to_csv(folder / f"{name}.csv", index=False)
+    assert sorted(r.name for r in read_runs(folder)) == sorted(r.name for r in runs)
+    # bad inputs name the run and the column
+    frame.drop(columns="VX").to_csv(tmp_path / "novx.csv", index=False)
+    with pytest.raises(DataError, match="VX"):
+        read_runs(tmp_path / "novx.csv")
+    bad = frame.copy()
+    bad["LOAD"] = 4000.0
+    bad.to_csv(tmp_path / "both.csv", index=False)
+    with pytest.raises(DataError, match="exactly one of Z"):
+        read_runs(tmp_path / "both.csv")
+
+
+def test_alignment_and_noise_recover_the_generators_chain(sample):
+    """Delay, anti-alias cutoff and the noise after the filter (sigma_sensor sqrt(sum h^2) of the filter's impulse
+    response) come back from the data."""
+    noise = {"FX": 20.0, "FZ": 30.0, "FY": 20.0, "MZ": 1.5}
+    runs = synthetic_runs(sample, speeds=(20.0, 50.0), cutoff=120.0, delay=7e-3, noise=noise, seed=3,
+                          duration=0.6, lead=0.3)
+    pred = simulate(sample, runs)
+    chain, _ = align(runs, pred)
+    assert chain.delay == pytest.approx(7e-3, abs=0.6e-3)
+    assert chain.cutoff in (100.0, 120.0, 150.0)
+    est = noise_from_data(runs, pred, chain)
+    sos = sps.butter(4, 120.0, fs=1000.0, output="sos")
+    h = sps.sosfilt(sos, np.r_[1.0, np.zeros(400)])
+    gain = float(np.sqrt(np.sum(h**2)))
+    for c in ("FX", "FZ"):
+        assert est[c]["sigma"] == pytest.approx(noise[c] * gain, rel=0.25)  # ~100 independent samples
+        assert est[c]["tau"] > 1.5  # the filter correlates the noise: fewer independent samples than rows
+
+
+def test_only_testable_effects_are_tried(sample):
+    runs = synthetic_runs(sample, speeds=(30.0,), steer_speeds=(), **SHORT)  # one pressure, one load, cleat only
+    ok, why = dynamic_catalogue.testable_effects(runs, sample)
+    names = [e.name for e in ok]
+    assert any("SWIFT_REVAR" in n for n in names)
+    assert "two pressures" in why["sidewall stiffness over pressure (SWIFT_PSTIFF)"]
+    assert "steer" in why["lateral carcass stiffness (relaxation length K_ya/C_y)"]
+    assert "relaxation lengths PTX1-PTX3, PTY1-PTY2" in why
+
+
+def test_control_adds_nothing(sample):
+    runs = synthetic_runs(sample, speeds=(20.0, 60.0), pressures=(1.9e5, 2.5e5), steer_speeds=(40.0,), seed=1,
+                          **SHORT)
+    rep = find_dynamic_gaps(runs, sample)
+    assert rep.effects_added == []
+    for c, e in rep.error_after.items():  # the given model is at the noise floor already
+        assert e < 1.25 * rep.noise_floor[c]
+
+
+def _hidden_case(model, change, rivals, **kw):
+    truth = model.with_params(**change)
+    settings = dict(speeds=(20.0, 60.0), pressures=(1.9e5, 2.5e5), steer_speeds=(), seed=7, **SHORT)
+    settings.update(kw)
+    runs = synthetic_runs(model, truth=truth, **settings)
+    rep = find_dynamic_gaps(runs, model, catalogue=_effects(*rivals), refit_top=2)
+    return rep, truth
+
+
+def _assert_found(rep, truth, name):
+    assert [c.parameters for c in rep.effects_added] == [(name,)], rep.effect_names
+    for c in rep.error_before:
+        # the held-out error shrinks to within 30 % above the noise floor wherever the change showed
+        if rep.error_before[c] > 1.5 * rep.noise_floor[c]:
+            assert rep.error_after[c] < 1.3 * rep.noise_floor[c]
+    (p, value), = rep.effects_added[0].values.items()
+    assert value == pytest.approx(truth.params[p], abs=4 * rep.effects_added[0].stderr[p] + 0.05 * abs(
+        truth.params[p]) + 0.02)
+
+
+def test_sidewall_pressure_effect_is_named_on_the_tno_file():
+    model = mftyre.load_tir(require_shared(TNO))
+    rep, truth = _hidden_case(model, {"SWIFT_PSTIFF": 0.6},
+                              ("SWIFT_PSTIFF", "SWIFT_PDAMP", "DAMP_LONG"))
+    _assert_found(rep, truth, "SWIFT_PSTIFF")
+
+
+def test_rolling_radius_variation_is_named_on_the_sample_file(sample):
+    rep, truth = _hidden_case(sample, {"SWIFT_REVAR": 0.4},
+                              ("SWIFT_REVAR", "LONGITUDINAL_STIFFNESS"))
+    _assert_found(rep, truth, "SWIFT_REVAR")
+
+
+def test_lateral_relaxation_is_named_from_step_steer(sample):
+    rep, truth = _hidden_case(sample, {"LATERAL_STIFFNESS": 0.7 * sample.params.LATERAL_STIFFNESS},
+                              ("LATERAL_STIFFNESS", "YAW_STIFFNESS", "FREQ_LAT"), speeds=(), pressures=None,
+                              steer_speeds=(20.0, 45.0, 70.0), duration=0.6, lead=0.2)
+    _assert_found(rep, truth, "LATERAL_STIFFNESS")
+
+
+def test_command_line(sample, tmp_path, capsys):
+    from mftyre.cli import main
+
+    runs = synthetic_runs(sample, speeds=(30.0,), steer_speeds=(40.0,), **SHORT)
+    data = write_runs(runs, tmp_path / "runs.csv")
+    out = tmp_path / "improved.tir"
+    assert main(["gaps", "--dynamic", str(data), "--model", str(SAMPLE), "-o", str(out), "--report",
+                 str(tmp_path / "rep"), "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "nothing added" in text and out.exists() and (tmp_path / "rep" / "histories.png").exists()
+    assert mftyre.load_tir(out).params.SWIFT_REVAR == sample.params.SWIFT_REVAR
+    # an existing output needs --overwrite; DATA and --dynamic exclude each other
+    assert main(["gaps", "--dynamic", str(data), "--model", str(SAMPLE), "-o", str(out), "--quiet"]) == 2
+    assert main(["gaps", str(data), "--dynamic", str(data), "--model", str(SAMPLE)]) == 2
