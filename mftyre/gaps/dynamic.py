@@ -50,7 +50,7 @@ from scipy import stats
 from ..errors import DataError, ModelInputError
 from .dynamic_catalogue import DYNAMIC_CATALOGUE, testable_effects
 from .dynamic_locate import compare, features
-from .dynamic_runs import DynamicRun, _Tyres, measurement_chain, read_runs, simulate
+from .dynamic_runs import DynamicRun, SwiftTyres, measurement_chain, read_runs, simulate
 
 __all__ = ["find_dynamic_gaps", "DynamicGapReport", "Chain", "align", "noise_from_data"]
 
@@ -366,7 +366,7 @@ class _Sim:
         self.evaluations += 1
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            return simulate(model, runs, _Tyres(model, runs))
+            return simulate(model, runs, SwiftTyres(model, runs))
 
 
 #: Refit coordinates: a positive parameter moves as value = base exp(0.2 delta) (scale-free, stays positive; a
@@ -408,7 +408,7 @@ def _growth(model, runs) -> dict:
     out = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        tyres = _Tyres(model, list(seen.values()))
+        tyres = SwiftTyres(model, list(seen.values()))
         for r in seen.values():
             i = r.inputs
             first = {k.lower(): float(i[k][0]) for k in ("X", "VX", "Z", "LOAD", "OMEGA", "TORQUE", "P") if k in i}

@@ -39,7 +39,7 @@ import pandas as pd
 
 from ..errors import DataError, ModelInputError
 
-__all__ = ["DynamicRun", "read_runs", "write_runs", "runs_frame", "simulate", "synthetic_runs", "OUTPUT_CHANNELS",
+__all__ = ["DynamicRun", "SwiftTyres", "read_runs", "write_runs", "runs_frame", "simulate", "synthetic_runs", "OUTPUT_CHANNELS",
            "MODEL_OUTPUT"]
 
 #: Measured channels the dynamic gap finder compares, and the SWIFT output each one is.
@@ -194,7 +194,7 @@ def write_runs(runs, path, *, overwrite: bool = False) -> Path:
 
 
 # ---------------------------------------------------------------------------------------------------- the model
-class _Tyres:
+class SwiftTyres:
     """SWIFT tyres of one model, one per (road, axle mode, rim mode): built once, reused by every run on that
     road."""
 
@@ -236,11 +236,11 @@ def _step_inputs(run: DynamicRun, p_nominal: float):
     return [StepInputs(**{k: float(v[k_]) for k, v in cols.items()}) for k_ in range(n)]
 
 
-def simulate(model, runs, tyres: _Tyres | None = None) -> dict:
+def simulate(model, runs, tyres: SwiftTyres | None = None) -> dict:
     """The SWIFT wheel driven by each run's inputs: run name -> channel -> model output at the run's sample times
     (the channels the run measured). ``model``: an :class:`mftyre.MFModel` with [STRUCTURAL] and [CONTACT_PATCH]
     sections. Raises :class:`ModelInputError` when the model cannot be built or a run leaves the road table."""
-    tyres = tyres or _Tyres(model, runs)
+    tyres = tyres or SwiftTyres(model, runs)
     out = {}
     for r in runs:
         tyre = tyres.tyre(r)
