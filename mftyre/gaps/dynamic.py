@@ -381,6 +381,19 @@ def _value(effect, p, base, d):
     return base * math.exp(_LOG_STEP * d)
 
 
+def given_values(model, parameters) -> dict:
+    """The values the SWIFT equations use for ``parameters``: the file's, or for SWIFT_PSTIFF / SWIFT_PDAMP absent
+    from the file the defaults derived from PFZ1 (:func:`swift.ring.pressure_coefficients`; for SWIFT_PDAMP the
+    slope -SWIFT_PSTIFF/2 of its default f_d = 1/sqrt(f_c) at NOMPRES), so that a refit starts from the tyre as
+    simulated, not from the schema's 0."""
+    from swift.ring import pressure_coefficients
+
+    prm = model.params
+    pstiff, pdamp = pressure_coefficients(prm)
+    used = {"SWIFT_PSTIFF": pstiff, "SWIFT_PDAMP": -0.5 * pstiff if pdamp is None else pdamp}
+    return {p: used[p] if p in used and p in prm.missing else float(prm[p]) for p in parameters}
+
+
 def _with(model, effect, base, delta):
     return model.with_params(**{p: _value(effect, p, base[p], d) for p, d in zip(effect.parameters, delta)})
 
@@ -487,7 +500,7 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
         say(f"round {len(rounds) + 1}: screening {len(candidates)} effects")
         for e in candidates:
             if e.name not in jac_cache:
-                base = {p: model.params[p] for p in e.parameters}
+                base = given_values(model, e.parameters)
                 cols = []
                 for j in range(len(e.parameters)):
                     d = np.zeros(len(e.parameters))
@@ -625,7 +638,7 @@ def _refit(effect, model, pred, prob, sim, runs, train, keys_train, J):
     runs of the effect's kinds; then the measurement chain refitted to the candidate (training runs) and a few
     more steps with it, so that no candidate is judged through a chain bent by another model's errors.
     (model, prediction on all runs, delta, covariance of delta, the candidate's _Problem) or None."""
-    base = {p: model.params[p] for p in effect.parameters}
+    base = given_values(model, effect.parameters)
     sub = [r for r in runs if r.kind in effect.kinds]
     sub_train = [r for r in sub if r.name in train]
     latest = {}
