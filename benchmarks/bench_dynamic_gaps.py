@@ -33,7 +33,7 @@ STEER = dict(speeds=(), steer_speeds=(20.0, 40.0, 60.0, 80.0))
 #: name -> (setting, {parameter: factor of its value, or ("=", value)}, the effect's catalogue parameter)
 CASES = {
     "control (cleat)": (CLEAT, {}, None),
-    "sidewall over pressure": (CLEAT, {"SWIFT_PSTIFF": ("=", 0.6)}, "SWIFT_PSTIFF"),
+    "sidewall over pressure": (CLEAT, {"SWIFT_PSTIFF": ("=", 1.4)}, "SWIFT_PSTIFF"),
     "contact length": (CLEAT, {"Q_RA1": 1.2}, "Q_RA1"),
     "in-plane damping": (CLEAT, {"DAMP_LONG": 2.0}, "DAMP_LONG"),
     "rolling radius variation": (CLEAT, {"SWIFT_REVAR": ("=", 0.4)}, "SWIFT_REVAR"),
