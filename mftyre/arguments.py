@@ -12,7 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["SWEEP_UNITS", "MAX_POINTS", "Sweep", "parse_sweep", "sweep_type", "number_type", "SweepAction",
-           "sweep_option", "join_negative_values", "DATA_HELP", "add_data_options", "data_epilog", "read_data_args"]
+           "sweep_option", "join_negative_values", "DATA_HELP", "add_data_options", "data_epilog", "read_data_args",
+           "progress_printer"]
 
 
 # Sweep inputs of `mftyre eval`: name -> (SI unit, {accepted unit (lower case): factor to SI}).
@@ -240,3 +241,18 @@ def read_data_args(args, path=None):
     with speaking_cli():
         return read_data(path or args.data, columns=args.columns, units=args.units, axes=args.axes,
                          defaults=args.constants, check=not args.no_check)
+
+
+def progress_printer(quiet: bool):
+    """A function ``say(text)`` printing ``  [  t s] text`` on stderr, t the seconds since this call (nothing when
+    ``quiet``): the progress lines of the long commands."""
+    import sys
+    import time
+
+    t0 = time.perf_counter()
+
+    def say(text: str) -> None:
+        if not quiet:
+            print(f"  [{time.perf_counter() - t0:6.1f} s] {text}", file=sys.stderr, flush=True)
+
+    return say

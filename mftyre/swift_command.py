@@ -8,7 +8,6 @@ from __future__ import annotations
 import argparse
 import sys
 import textwrap
-import time
 from pathlib import Path
 
 import numpy as np
@@ -77,6 +76,7 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
+    from .arguments import progress_printer
     from .errors import MFTyreError
     from .files import OutputError, check_outputs
 
@@ -99,11 +99,7 @@ def run(args) -> int:
     except OutputError as exc:
         print(f"mftyre swift: {exc}", file=sys.stderr)
         return 2
-    t0 = time.perf_counter()
-
-    def say(text):
-        if not args.quiet:
-            print(f"  [{time.perf_counter() - t0:6.1f} s] {text}", file=sys.stderr, flush=True)
+    say = progress_printer(args.quiet)
 
     try:
         import warnings

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 
 __all__ = ["register", "run"]
 
@@ -49,7 +48,7 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    from ..arguments import read_data_args
+    from ..arguments import progress_printer, read_data_args
     from ..data import speaking_cli
     from ..errors import MFTyreError
     from ..files import OutputError, check_outputs
@@ -75,11 +74,7 @@ def run(args) -> int:
         if bad:
             print(f"mftyre gaps: unknown channel(s) {', '.join(bad)}; channels: FX,FY,MZ,MX,MY,FZ", file=sys.stderr)
             return 2
-    t0 = time.perf_counter()
-
-    def progress(text):
-        if not args.quiet:
-            print(f"  [{time.perf_counter() - t0:6.1f} s] {text}", file=sys.stderr, flush=True)
+    progress = progress_printer(args.quiet)
 
     try:
         data = read_data_args(args)

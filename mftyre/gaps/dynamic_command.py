@@ -4,13 +4,13 @@ of the dynamic gap finder (:func:`mftyre.gaps.dynamic.find_dynamic_gaps`); optio
 from __future__ import annotations
 
 import sys
-import time
 
 __all__ = ["run_dynamic"]
 
 
 def run_dynamic(args) -> int:
     """args -> exit status (0 done, 1 error, 2 usage)."""
+    from ..arguments import progress_printer
     from ..errors import MFTyreError
     from ..files import OutputError, check_outputs
     from .dynamic import find_dynamic_gaps
@@ -24,11 +24,7 @@ def run_dynamic(args) -> int:
     except OutputError as exc:
         print(f"mftyre gaps: {exc}", file=sys.stderr)
         return 2
-    t0 = time.perf_counter()
-
-    def progress(text):
-        if not args.quiet:
-            print(f"  [{time.perf_counter() - t0:6.1f} s] {text}", file=sys.stderr, flush=True)
+    progress = progress_printer(args.quiet)
 
     try:
         rep = find_dynamic_gaps(args.dynamic, args.model, holdout=args.holdout, seed=args.seed,
