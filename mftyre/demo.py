@@ -33,6 +33,7 @@ def run_demo(out_dir="out", tir=None, *, seed: int = 1, echo=print, overwrite: b
     otherwise)."""
     from matplotlib.figure import Figure
 
+    from mftyre.errors import spelled
     from mftyre.files import check_outputs, make_output_folder, sample_tir, write_figure
 
     import mftyre
@@ -43,7 +44,7 @@ def run_demo(out_dir="out", tir=None, *, seed: int = 1, echo=print, overwrite: b
     tir = sample_tir(BUNDLED_TIR) if tir is None else Path(tir)
     out = Path(out_dir)
     check_outputs({}, {"tyre": tir}, folders={"--out": out}, overwrite=overwrite,
-                  option="--overwrite (overwrite=True)")
+                  option=spelled("overwrite=True", "--overwrite"))
     make_output_folder(out, "--out")
     truth = mftyre.load_tir(tir)
     prm = truth.params

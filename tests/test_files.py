@@ -18,6 +18,7 @@ from mftyre import cli
 from mftyre.data import TyreData, read_csv, read_tydex, trailer_programme, write_tydex
 from mftyre.errors import DataError, TirError
 from mftyre.files import OutputError, check_outputs, sample_tir
+from mftyre.demo import run_demo
 from mftyre.tir import parse_tir, read_tir, write_tir
 
 from conftest import PROJECT, TIR_FILES
@@ -206,8 +207,11 @@ def test_demo_refuses_a_folder_that_is_not_empty(tmp_path, capsys):
     out.mkdir()
     (out / "mine.txt").write_text("mine\n")
     assert cli.main(["demo", "--out", str(out)]) == 2
-    assert "--overwrite" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "--overwrite" in err and "overwrite=True" not in err  # the command line speaks its own options
     assert [p.name for p in out.iterdir()] == ["mine.txt"]
+    with pytest.raises(OutputError, match=r"overwrite=True"):  # Python speaks keywords
+        run_demo(out)
 
 
 def test_written_files_have_ordinary_permissions(tmp_path):
