@@ -4,6 +4,7 @@ modules."""
 from __future__ import annotations
 
 import ast
+from functools import lru_cache
 from pathlib import Path
 
 PROJECT = Path(__file__).resolve().parents[1]
@@ -22,6 +23,7 @@ def _modules() -> dict[str, Path]:
 MODULES = _modules()
 
 
+@lru_cache(maxsize=None)
 def _imports(name: str) -> list[tuple[str, list[str]]]:
     """(imported module, imported names) of every import statement in module ``name``, anywhere in it."""
     path = MODULES[name]
@@ -96,9 +98,10 @@ def test_the_circle_finder_finds_a_circle():
 
 
 def test_the_equations_import_nothing_of_ours_but_each_other():
+    graph = _graph()
     for m in MODULES:
         if m.startswith("mftyre.formula"):
-            outside = {t for t in _graph()[m] if not t.startswith("mftyre.formula")}
+            outside = {t for t in graph[m] if not t.startswith("mftyre.formula")}
             assert not outside, f"{m} imports {sorted(outside)}"
 
 
