@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import os
 import math
+import tempfile
 from ctypes import byref
 from pathlib import Path
 
@@ -67,7 +68,7 @@ class Slave:
         self.md = read_model_description(path)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.types = {v.name: v.type for v in self.md.modelVariables}
-        self.unzipped = extract(path, unzipdir=str(tmp_path / f"unz_{id(self)}"))
+        self.unzipped = extract(path, unzipdir=tempfile.mkdtemp(prefix="unz_", dir=tmp_path))
         self.messages = []
 
         def logger(env, name, status, category, message):

@@ -6,6 +6,7 @@ import argparse
 import math
 import shutil
 import subprocess
+import tempfile
 import warnings
 import zipfile
 from ctypes import byref
@@ -91,7 +92,7 @@ class Slave:
         self.md = read_model_description(path)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.outputs = [v.name for v in self.md.modelVariables if v.causality == "output"]
-        self.unzipped = extract(path, unzipdir=str(tmp_path / f"unz_{name}_{id(self)}"))
+        self.unzipped = extract(path, unzipdir=tempfile.mkdtemp(prefix=f"unz_{name}_", dir=tmp_path))
         self.messages = []
         self._cb = cb = _callbacks(self.messages)
         self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.unzipped,
