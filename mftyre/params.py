@@ -607,10 +607,11 @@ def _geometry_problems(prm) -> list[tuple[str, str]]:
     return out
 
 
-#: Pressures, relative to NOMPRES, over which the SWIFT sidewall factors f_c = 1 + SWIFT_PSTIFF dpi and
-#: f_d = 1 + SWIFT_PDAMP dpi (swift.ring notes) must stay positive: any real tyre runs at 0.5-1.5 NOMPRES (the
-#: published files declare 0.85-1.15, the TNO file 0.05-4.5, where f_d = 1/sqrt(f_c) when SWIFT_PDAMP is absent).
-_SWIFT_PRESSURE_SPAN = 0.5
+#: The pressures any real tyre runs at, relative to NOMPRES: (1 - span .. 1 + span) NOMPRES = 0.5-1.5 NOMPRES (the
+#: published files declare 0.85-1.15, the TNO file 0.05-4.5). The fit's verification checks this domain
+#: (fit.verify.physical_domain), and the SWIFT sidewall factors f_c = 1 + SWIFT_PSTIFF dpi and f_d = 1 +
+#: SWIFT_PDAMP dpi (swift.ring notes; f_d = 1/sqrt(f_c) when SWIFT_PDAMP is absent) must stay positive over it.
+PHYSICAL_PRESSURE_SPAN = 0.5
 _SWIFT_MASSES = {"BELT_MASS": "the belt mass", "BELT_IXX": "the belt's diametral inertia",
                  "BELT_IYY": "the belt's polar inertia"}
 _SWIFT_FREQUENCIES = {"FREQ_LONG": "BELT_MASS", "FREQ_LAT": "BELT_MASS", "FREQ_YAW": "BELT_IXX",
@@ -646,12 +647,12 @@ def swift_invalid_values(prm) -> list[tuple[str, str]]:
     for name in ("SWIFT_PSTIFF", "SWIFT_PDAMP"):
         if name in prm.missing:
             continue
-        factors = [1.0 + prm[name] * dpi for dpi in (-_SWIFT_PRESSURE_SPAN, _SWIFT_PRESSURE_SPAN)]
+        factors = [1.0 + prm[name] * dpi for dpi in (-PHYSICAL_PRESSURE_SPAN, PHYSICAL_PRESSURE_SPAN)]
         if not all(f > 0 for f in factors):
             what = "stiffness" if name == "SWIFT_PSTIFF" else "damping"
             out.append((name, f"makes the SWIFT sidewall {what} factor 1 + {name} (p - NOMPRES)/NOMPRES = "
-                              f"{min(factors)!r} <= 0 within {1 - _SWIFT_PRESSURE_SPAN:g}-{1 + _SWIFT_PRESSURE_SPAN:g} "
-                              f"NOMPRES (a negative {what}): expected |{name}| < {1 / _SWIFT_PRESSURE_SPAN:g} "
+                              f"{min(factors)!r} <= 0 within {1 - PHYSICAL_PRESSURE_SPAN:g}-{1 + PHYSICAL_PRESSURE_SPAN:g} "
+                              f"NOMPRES (a negative {what}): expected |{name}| < {1 / PHYSICAL_PRESSURE_SPAN:g} "
                               f"(published PFZ1: about 0.7-0.9), got {prm[name]!r}"))
     return out
 

@@ -42,6 +42,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..params import PHYSICAL_PRESSURE_SPAN
+
 __all__ = ["verify_tir", "verification", "Verification", "Problem", "Domain", "physical_domain", "data_domain",
            "check_speeds", "MARGINS", "STANDARD_PROGRAMME"]
 
@@ -128,7 +130,7 @@ def physical_domain(prm, data=None) -> Domain:
     fz0, p0 = prm.FNOMIN, prm.NOMPRES
     fz_lo = max(prm.FZMIN, 0.05 * fz0)
     loads = (fz_lo, min(prm.FZMAX, 2.5 * fz0) if prm.FZMAX > fz_lo else 2.5 * fz0)
-    pressures = (0.5 * p0, 1.5 * p0)
+    pressures = ((1.0 - PHYSICAL_PRESSURE_SPAN) * p0, (1.0 + PHYSICAL_PRESSURE_SPAN) * p0)
     if prm.PRESMAX > prm.PRESMIN > 0:
         pressures = _intersect(pressures, (prm.PRESMIN, prm.PRESMAX))
     return Domain(loads, pressures, _declared(prm.KPUMIN, prm.KPUMAX, (-0.1, 0.1)),
