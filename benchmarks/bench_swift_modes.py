@@ -17,6 +17,7 @@ import warnings
 from pathlib import Path
 
 import mftyre
+from mftyre.formula import vertical
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEEDS = (0.5, 2.0, 7.0, 15.0, 25.0, 40.0, 70.0, -7.0)
@@ -54,7 +55,7 @@ def main():
                 t0 = time.perf_counter()
                 rows = scan(tyre, GRID_SPEEDS, (2000.0, 5000.0, 8000.0), [p])
                 worst = max(rows, key=lambda r: r.max_real)
-                dpi = (p - prm.NOMPRES) / prm.NOMPRES
+                dpi = vertical.pressure_increment(prm, p)
                 print(f"p {p / 1e5:5.2f} bar (1 + PPY1 dpi = {1 + prm.PPY1 * dpi:6.3f}): {len(rows)} points "
                       f"({time.perf_counter() - t0:.1f} s), slowest decay {worst.max_real:9.2f} 1/s at vx {worst.vx} "
                       f"m/s, Fz {worst.fz:.0f} N")

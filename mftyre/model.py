@@ -344,11 +344,7 @@ class MFModel:
         a, dpi, r_omega = self._vertical_inputs(rl=rl, p=p, omega=omega, fx=fx, fy=fy, gamma=gamma)
         prm = self._params
         with np.errstate(all="ignore"):
-            if prm.version == "62":
-                return vertical.vertical_force_62(prm, a["rl"], r_omega, a["omega"], a["fx"], a["fy"], a["gamma"],
-                                                  dpi, NUMPY)
-            return vertical.vertical_force_61(prm, r_omega - a["rl"], r_omega, a["omega"], a["fx"], a["fy"], dpi,
-                                              NUMPY)
+            return vertical.vertical_force(prm, a["rl"], r_omega, a["omega"], a["fx"], a["fy"], a["gamma"], dpi, NUMPY)
 
     def loaded_radius(self, fz, p=None, omega=0.0, fx=0.0, fy=0.0, gamma=0.0):
         """(Rl, rho) [m] carrying the load ``fz`` [N]: the inverse of :meth:`vertical_force` (no limits applied)."""
@@ -356,12 +352,8 @@ class MFModel:
         prm = self._params
         fz_pos = np.maximum(a["fz"], 0.0)
         with np.errstate(all="ignore"):
-            if prm.version == "62":
-                rl, rho = vertical.loaded_radius_62(prm, fz_pos, r_omega, a["omega"], a["fx"], a["fy"], a["gamma"],
-                                                    dpi, NUMPY)
-                return rl.reshape(fz_pos.shape), rho.reshape(fz_pos.shape)
-            rho = vertical.deflection_61(prm, fz_pos, r_omega, a["omega"], a["fx"], a["fy"], dpi, NUMPY)
-            return np.maximum(r_omega - rho, 0.0), rho
+            rl, rho = vertical.loaded_radius(prm, fz_pos, r_omega, a["omega"], a["fx"], a["fy"], a["gamma"], dpi, NUMPY)
+            return rl.reshape(fz_pos.shape), rho.reshape(fz_pos.shape)
 
     def _vertical_inputs(self, p, **inputs):
         """Validated, broadcast, side-mirrored inputs of the vertical relations, dpi and R_omega."""
@@ -369,7 +361,7 @@ class MFModel:
         self._check_pressure(a["p"])
         if self.mirrored:
             a["fy"], a["gamma"] = -a["fy"], -a["gamma"]
-        dpi = (a["p"] - self._params.NOMPRES) / self._params.NOMPRES
+        dpi = vertical.pressure_increment(self._params, a["p"])
         return a, dpi, vertical.free_radius(self._params, a["omega"], NUMPY)
 
     @staticmethod

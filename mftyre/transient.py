@@ -183,10 +183,8 @@ def wheel_vertical_force(model, rl, p, omega, fx, fy, gamma, be):
 
     prm = model.params
     fy, gamma = (-fy, -gamma) if model.mirrored else (fy, gamma)
-    r_omega, dpi = vert.free_radius(prm, omega, be), (p - prm.NOMPRES) / prm.NOMPRES
-    if prm.version == "62":
-        return vert.vertical_force_62(prm, rl, r_omega, omega, fx, fy, gamma, dpi, be), r_omega
-    return vert.vertical_force_61(prm, r_omega - rl, r_omega, omega, fx, fy, dpi, be), r_omega
+    r_omega, dpi = vert.free_radius(prm, omega, be), vert.pressure_increment(prm, p)
+    return vert.vertical_force(prm, rl, r_omega, omega, fx, fy, gamma, dpi, be), r_omega
 
 
 def contact_load(fz, rl, r_omega, be):

@@ -320,7 +320,7 @@ def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mo
                               f"{iterations}")
     prm = model.params
     p = prm.INFLPRES if p is None else float(p)
-    dpi = (p - prm.NOMPRES) / prm.NOMPRES
+    dpi = vertical.pressure_increment(prm, p)
     cams = Cams.from_params(prm)
     x = np.asarray(x, dtype=float)
     shape, xs = x.shape, x.ravel()

@@ -307,7 +307,7 @@ def check_pressure(prm, p: float) -> None:
     """ModelInputError naming the parameter and the pressure where the sidewall stiffness or damping factor
     (module notes) is not positive at ``p`` [Pa]; the valid range from :func:`pressure_limits`."""
     pstiff, pdamp = pressure_coefficients(prm)
-    dpi = (p - prm.NOMPRES) / prm.NOMPRES
+    dpi = vertical.pressure_increment(prm, p)
     for name, coef, factor, what in (("SWIFT_PSTIFF", pstiff, "stiffness factor f_c", "stiffness"),
                                      ("SWIFT_PDAMP", pdamp, "damping factor f_d", "damping")):
         if coef is None or 1.0 + coef * dpi > 0:
@@ -355,7 +355,7 @@ def contact_start(model, rc: RingConstants, state, u, h_c):
     be = casadi_backend()
     prm = model.params
     s = {n: state[i] for i, n in enumerate(STATE_NAMES)}
-    dpi = (u[INPUT_NAMES.index("p")] - prm.NOMPRES) / prm.NOMPRES
+    dpi = vertical.pressure_increment(prm, u[INPUT_NAMES.index("p")])
     f_c, _ = _pressure_factors(prm, dpi, be)
     rho_r = vertical.free_radius(prm, s["omb"], be) - (s["zb"] - h_c)
     f_r, _ = residual_vertical(prm, rho_r, s["omb"], dpi, rc.cbx * f_c, be)
@@ -373,7 +373,7 @@ def contact_geometry(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x
     be = casadi_backend()
     prm = model.params
     s = {n: state[i] for i, n in enumerate(STATE_NAMES)}
-    dpi = (u[INPUT_NAMES.index("p")] - prm.NOMPRES) / prm.NOMPRES
+    dpi = vertical.pressure_increment(prm, u[INPUT_NAMES.index("p")])
     f_c, _ = _pressure_factors(prm, dpi, be)
     r_omega = vertical.free_radius(prm, s["omb"], be)
     xc_, ls_, hf_, hr_ = (ca.SX.sym(n) for n in ("xc", "ls", "hf", "hr"))
@@ -412,7 +412,7 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
     prm = model.params
     s = {n: state[i] for i, n in enumerate(STATE_NAMES)}
     v = {n: u[i] for i, n in enumerate(INPUT_NAMES)}
-    dpi = (v["p"] - prm.NOMPRES) / prm.NOMPRES
+    dpi = vertical.pressure_increment(prm, v["p"])
     f_c, f_d = _pressure_factors(prm, dpi, be)
     cbx, cby, cbg, cbth = rc.cbx * f_c, rc.cby * f_c, rc.cbg * f_c, rc.cbth * f_c
     g = be.sqrt(f_c) * f_d

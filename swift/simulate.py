@@ -547,9 +547,8 @@ class SwiftTyre:
         U = {name: u[i] for i, name in enumerate(INPUT_NAMES)}
         h = ca.interpolant("cam", "linear", [n], 2, {"lookup_mode": ["exact"]})(xa - x0w, grid, hw)[0]
         rl = be.fmin(za - h, prm.UNLOADED_RADIUS)  # as initial_state: model.vertical_force at no spin or slip
-        r0, dpi = vertical.free_radius(prm, 0.0, be), (U["p"] - prm.NOMPRES) / prm.NOMPRES
-        fz = (vertical.vertical_force_62(prm, rl, r0, 0.0, 0.0, 0.0, 0.0, dpi, be) if prm.version == "62"
-              else vertical.vertical_force_61(prm, r0 - rl, r0, 0.0, 0.0, 0.0, dpi, be))
+        r0, dpi = vertical.free_radius(prm, 0.0, be), vertical.pressure_increment(prm, U["p"])
+        fz = vertical.vertical_force(prm, rl, r0, 0.0, 0.0, 0.0, 0.0, dpi, be)
         guess = dict.fromkeys(STATE_NAMES, 0.0)
         guess.update(xa=xa, xb=xa, za=za, vza=vza, zb=za + be.fmax(fz, 0.0) / self.constants.cbx, vxb=U["vx"],
                      vyb=U["vy"], oma=omega, omb=omega, yb=U["y"], ya=U["y"], gb=U["gamma"], psb=U["psi"])

@@ -112,3 +112,49 @@ def test_no_private_name_imported_from_another_module():
             if target.split(".")[0] in PACKAGES and target != m:
                 private += [f"{m}: {target}.{n}" for n in names if n.startswith("_") and not n.startswith("__")]
     assert private == []
+
+
+# ------------------------------------------------------------------ facades where ideas fork (issue 22 item 2)
+#: Where the version facades of mftyre.formula.vertical must be used: everything of ours outside formula/.
+FACADE_USERS = [p for d in ("mftyre", "swift", "fmu", "benchmarks") if (PROJECT / d).is_dir()
+                for p in sorted((PROJECT / d).rglob("*.py")) if "formula" not in p.relative_to(PROJECT).parts]
+
+
+def _is_nompres(node) -> bool:
+    return (isinstance(node, ast.Attribute) and node.attr == "NOMPRES") or (
+        isinstance(node, ast.Name) and node.id == "NOMPRES")
+
+
+def _version_forks(source: str) -> list[str]:
+    """Lines that name an MF 6.1/6.2 vertical relation (``..._61``, ``..._62``) or write the pressure increment
+    (p - NOMPRES)/NOMPRES (or p/NOMPRES - 1) themselves instead of calling mftyre.formula.vertical's
+    vertical_force, loaded_radius, pressure_increment."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        name = (node.attr if isinstance(node, ast.Attribute) else node.id if isinstance(node, ast.Name)
+                else None)
+        names = [a.name for a in node.names] if isinstance(node, ast.ImportFrom) else [name]
+        found += [f"line {node.lineno}: {n}" for n in names if n and n.rstrip("_").endswith(("_61", "_62"))]
+        if isinstance(node, ast.BinOp):
+            left, op, right = node.left, node.op, node.right
+            divided = isinstance(op, ast.Div) and _is_nompres(right) and isinstance(left, ast.BinOp) and isinstance(
+                left.op, ast.Sub) and _is_nompres(left.right)
+            ratio_less_one = isinstance(op, ast.Sub) and isinstance(left, ast.BinOp) and isinstance(
+                left.op, ast.Div) and _is_nompres(left.right)
+            if divided or ratio_less_one:
+                found.append(f"line {node.lineno}: dpi written out")
+    return found
+
+
+def test_the_vertical_version_and_dpi_are_chosen_in_formula_only():
+    found = {str(p.relative_to(PROJECT)): f for p in FACADE_USERS if (f := _version_forks(p.read_text("utf-8")))}
+    assert found == {}
+
+
+def test_the_fork_finder_finds_forks():
+    assert _version_forks("from mftyre.formula.vertical import loaded_radius_62\n")
+    assert _version_forks("fz = vertical.vertical_force_61(prm, rho, r, w, fx, fy, dpi, be)\n")
+    assert _version_forks("dpi = (u['p'] - prm.NOMPRES) / prm.NOMPRES\n")
+    assert _version_forks("dpi = p / self.params.NOMPRES - 1.0\n")
+    assert not _version_forks("dpi = vertical.pressure_increment(prm, p)\nf = vertical.vertical_force(prm, rl)\n")
+    assert not _version_forks("x = fz / prm.FNOMIN - 1.0\np = 0.8 * prm.NOMPRES\n")

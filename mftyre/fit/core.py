@@ -240,10 +240,10 @@ class _BatchPredictor:
         with np.errstate(all="ignore"):
             if self.stage.output == "fz_from_rl":
                 v = self.vertical
-                dpi = (r["p"] - prm.NOMPRES) / prm.NOMPRES
+                dpi = vertical.pressure_increment(prm, r["p"])
                 r_omega = vertical.free_radius(prm, v["omega"], NUMPY)
-                rho = r_omega - v["rl"] if "rl" in v else v["rho"]
-                out = vertical.vertical_force_61(prm, rho, r_omega, v["omega"], v["fx"], v["fy"], dpi, NUMPY)
+                rl = v["rl"] if "rl" in v else r_omega - v["rho"]
+                out = vertical.vertical_force(prm, rl, r_omega, v["omega"], v["fx"], v["fy"], r["gamma"], dpi, NUMPY)
             else:
                 out = steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
                                    self.omega, self.omega_given, Modes(), NUMPY)[self.stage.output]
@@ -277,7 +277,7 @@ def _corners(data: TyreData, prm) -> dict:
     fz, p, g = data.array("FZ"), data.array("P"), data.array("IA")
     fz0 = prm.FNOMIN * prm.LFZO
     grid = np.array(np.meshgrid([fz.min(), fz.max()], [p.min(), p.max()], [g.min(), 0.0, g.max()])).reshape(3, -1)
-    return dict(dfz=(grid[0] - fz0) / fz0, dpi=(grid[1] - prm.NOMPRES) / prm.NOMPRES, gamma=grid[2])
+    return dict(dfz=(grid[0] - fz0) / fz0, dpi=vertical.pressure_increment(prm, grid[1]), gamma=grid[2])
 
 
 def physical_bounds(prm, data: TyreData) -> dict:
@@ -288,7 +288,7 @@ def physical_bounds(prm, data: TyreData) -> dict:
     PRESMIN..PRESMAX) and the data's pressures (PFZ1); shifts of a few percent (PHX1, PVX1, PHY1, PVY1)."""
     speed_ratio = float(check_speeds(prm, data)[-1]) / prm.LONGVL  # omega R0 / V0 at the top speed
     p = np.concatenate([data.array("P"), physical_domain(prm, data).pressures])
-    dpi = np.abs((p[p > 0] - prm.NOMPRES) / prm.NOMPRES)
+    dpi = np.abs(vertical.pressure_increment(prm, p[p > 0]))
     pfz1 = 0.9 / max(float(np.max(dpi)), 1e-3)
     return {"Q_V1": (0.0, 0.03 / speed_ratio**2), "Q_V2": (0.0, 0.4 / speed_ratio), "Q_RE0": (0.95, 1.05),
             "PFZ1": (-min(pfz1, 5.0), min(pfz1, 5.0)), "PHX1": (-0.05, 0.05), "PVX1": (-0.1, 0.1),

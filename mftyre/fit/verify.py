@@ -42,6 +42,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..backend import NUMPY
+from ..formula import vertical
 from ..params import PHYSICAL_PRESSURE_SPAN
 
 __all__ = ["verify_tir", "verification", "Verification", "Problem", "Domain", "physical_domain", "data_domain",
@@ -237,9 +239,6 @@ def problems_in(model, dom: Domain) -> list:
     Fs, Ps, Vs = np.meshgrid(loads, pressures, speeds, indexing="ij")
     out = run(Fs, 0.0, 0.0, 0.0, Vs, Ps, f"free rolling up to {speeds[-1]:.0f} m/s")
     if out is not None:
-        from ..backend import NUMPY
-        from ..formula import vertical
-
         r_omega = vertical.free_radius(prm, out.omega, NUMPY)
         growth = r_omega / (r0 * prm.Q_RE0) - 1.0
         if np.max(growth) > 0.05 or np.min(growth) < -0.01:
@@ -266,8 +265,8 @@ def problems_in(model, dom: Domain) -> list:
                                     f"1.05 R_omega (BREFF, DREFF, FREFF)"))
     # vertical stiffness: Fz increases with deflection at every pressure
     for p in pressures:
-        dpi = (p - prm.NOMPRES) / prm.NOMPRES
-        cz = prm.VERTICAL_STIFFNESS * (1.0 + prm.PFZ1 * dpi)
+        dpi = vertical.pressure_increment(prm, p)
+        cz = vertical.vertical_stiffness(prm, dpi)
         if not cz > 0 or prm.Q_FZ2 < 0:
             problems.append(Problem("vertical_stiffness",
                                     f"vertical stiffness not positive at p = {p:.0f} Pa (VERTICAL_STIFFNESS "

@@ -17,6 +17,7 @@ from __future__ import annotations
 from types import SimpleNamespace
 
 from .options import SMOOTH_LIMITS_MARGIN, SMOOTH_LIMITS_SLOPE
+from .vertical import pressure_increment
 
 __all__ = ["condition_inputs", "smooth_low_speed"]
 
@@ -69,7 +70,7 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
 
     s.Fz0p = prm.LFZO * prm.FNOMIN  # Fz0' (4.E1)
     s.dfz = (Fz - s.Fz0p) / s.Fz0p  # (4.E2a)
-    s.dpi = (p - prm.NOMPRES) / prm.NOMPRES  # (4.E2b)
+    s.dpi = pressure_increment(prm, p)  # (4.E2b)
     s.dfz2, s.dpi2 = s.dfz**2, s.dpi**2  # (their squares, shared by the equations)
 
     if modes.alpha_star:

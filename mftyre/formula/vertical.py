@@ -47,9 +47,35 @@ from __future__ import annotations
 
 
 __all__ = [
+    "pressure_increment", "vertical_force", "loaded_radius",
     "free_radius", "vertical_stiffness", "rolling_radius_reduction", "spin_and_radius",
     "vertical_force_61", "vertical_force_62", "deflection_61", "deflection_62", "loaded_radius_62", "contact_patch",
 ]
+
+
+def pressure_increment(prm, p=None):
+    """dpi = (p - NOMPRES)/NOMPRES (4.E2b), the pressure increment every pressure term multiplies; ``p`` None: the
+    file's INFLPRES (itself NOMPRES where the file does not give it, so dpi = 0)."""
+    if p is None:
+        p = prm.INFLPRES
+    return (p - prm.NOMPRES) / prm.NOMPRES
+
+
+def vertical_force(prm, rl, r_omega, omega, fx, fy, gamma, dpi, be):
+    """Fz at loaded radius ``rl`` by the file's relation: MF 6.2 (:func:`vertical_force_62`, with camber) for
+    FITTYP 62, else MF 6.1 (:func:`vertical_force_61`, rho = R_omega - Rl, no camber term)."""
+    if prm.version == "62":
+        return vertical_force_62(prm, rl, r_omega, omega, fx, fy, gamma, dpi, be)
+    return vertical_force_61(prm, r_omega - rl, r_omega, omega, fx, fy, dpi, be)
+
+
+def loaded_radius(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
+    """(Rl, rho) carrying the load ``fz`` by the file's relation, the inverse of :func:`vertical_force`: MF 6.2
+    (:func:`loaded_radius_62`) for FITTYP 62, else the MF 6.1 deflection with Rl = max(R_omega - rho, 0)."""
+    if prm.version == "62":
+        return loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be)
+    rho = deflection_61(prm, fz, r_omega, omega, fx, fy, dpi, be)
+    return be.fmax(r_omega - rho, 0.0), rho
 
 
 def free_radius(prm, omega, be):

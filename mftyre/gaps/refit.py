@@ -29,6 +29,7 @@ import numpy as np
 from ..data import TyreData, levels
 from ..fit.core import BOUNDS, bounded_parameters, physical_bounds
 from ..fit.verify import verify_tir
+from ..formula import vertical
 from ..fit.stages import STAGES, need_met, conditions, shape_violations, stage_rows  # need_met: the stages' own rule
 from ..model import MFModel
 from ..params import PARAMETERS
@@ -58,7 +59,7 @@ def _corners(data: TyreData, prm) -> dict:
     fz, p, g = data.array("FZ"), data.array("P"), data.array("IA")
     fz0 = prm.FNOMIN * prm.LFZO
     grid = np.array(np.meshgrid([fz.min(), fz.max()], [p.min(), p.max()], [g.min(), 0.0, g.max()])).reshape(3, -1)
-    return dict(dfz=(grid[0] - fz0) / fz0, dpi=(grid[1] - prm.NOMPRES) / prm.NOMPRES, gamma=grid[2])
+    return dict(dfz=(grid[0] - fz0) / fz0, dpi=vertical.pressure_increment(prm, grid[1]), gamma=grid[2])
 
 
 def refit(params, ev: Evaluator, names, channels=None, sigma: dict | None = None, *, start: dict | None = None,

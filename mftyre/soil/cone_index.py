@@ -75,7 +75,7 @@ class ConeIndexTyre:
             raise ModelInputError(f"inputs must be numeric and broadcast to one shape, got {values!r}") from None
         check_soil_inputs(args)
         fz, s, p, vx = args["fz"], args["slip"], args["p"], args["vx"]
-        dpi = (p - prm.NOMPRES) / prm.NOMPRES
+        dpi = vertical.pressure_increment(prm, p)
         r = vertical.free_radius(prm, 0.0, NUMPY)
         r_e = r - vertical.rolling_radius_reduction(prm, fz, dpi, NUMPY)
         rho, a_h, b_h = hard_ground_footprint(prm, fz, p, NUMPY)

@@ -192,13 +192,10 @@ def bulldozing_coefficients(phi):
 def hard_ground_footprint(prm, fz, p, be):
     """(rho, a, b) of the tyre on a flat rigid surface at load ``fz`` and pressure ``p`` (no slip, no spin):
     the .tir's Fz(rho, p) inverted and its contact patch (half length a, half width b)."""
-    dpi = (p - prm.NOMPRES) / prm.NOMPRES
+    dpi = vertical.pressure_increment(prm, p)
     zero = 0.0 * fz
     r_omega = vertical.free_radius(prm, zero, be)
-    if prm.version == "62":
-        _, rho = vertical.loaded_radius_62(prm, fz, r_omega, zero, zero, zero, zero, dpi, be)
-    else:
-        rho = vertical.deflection_61(prm, fz, r_omega, zero, zero, zero, dpi, be)
+    _, rho = vertical.loaded_radius(prm, fz, r_omega, zero, zero, zero, zero, dpi, be)
     a, b = vertical.contact_patch(prm, fz, dpi, be)
     return rho, a, b
 
@@ -321,7 +318,7 @@ def soft_soil(prm, soil, fz, slip, alpha, p, vx, be, effects=SoilEffects()):
     n = soil.n
     tan_phi = float(np.tan(soil.phi))
     zero = 0.0 * fz
-    dpi = (p - prm.NOMPRES) / prm.NOMPRES
+    dpi = vertical.pressure_increment(prm, p)
     r = vertical.free_radius(prm, zero, be)                               # free radius at rest
     r_e = r - vertical.rolling_radius_reduction(prm, fz, dpi, be)         # hard-ground rolling radius
     _, a_h, b_h = hard_ground_footprint(prm, fz, p, be)
