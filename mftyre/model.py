@@ -24,6 +24,7 @@ from .errors import ModelInputError
 from .inputs import check_finite, check_finite_outputs, check_pressure, input_ranges, saturate, warn_outside
 from .formula import OUTPUT_NAMES, Modes, steady_state, vertical
 from .backend import NUMPY, NUMPY_FOLDING
+from .params import SELECTS_FORM
 
 __all__ = ["MFModel", "MFOutputs", "load_tir", "OUTPUT_UNITS"]
 
@@ -373,11 +374,6 @@ class MFModel:
         return f"MFModel(FITTYP={self._params.fittyp}, side={self.side!r}, source={src!r})"
 
 
-#: Parameters that choose between forms of the equations (Python branches): they cannot be symbolic.
-STRUCTURAL_PARAMETERS = frozenset(["FITTYP", "TYRESIDE", "FZMIN", "Q_CAM1", "Q_CAM2", "Q_A1", "Q_A2", "PHYP4",
-                                   *(f"QSX{i}" for i in range(1, 15))])
-
-
 class _PlainParameters:
     """The values of a parameter set as plain attributes (the equations read hundreds of them per evaluation;
     TyreParameters' mapping lookup costs more than a single-point evaluation's arithmetic)."""
@@ -395,7 +391,7 @@ class _SymbolicParameters:
     """A parameter set in which some parameters are CasADi symbols (for :meth:`MFModel.casadi_function`)."""
 
     def __init__(self, params, symbols: dict):
-        fixed = sorted(set(symbols) & STRUCTURAL_PARAMETERS)
+        fixed = sorted(set(symbols) & SELECTS_FORM)  # (Python branches: they cannot be symbolic)
         if fixed:
             raise ModelInputError(f"parameter(s) {fixed} select the form of the equations and must stay numbers")
         unknown = sorted(n for n in symbols if n not in params)

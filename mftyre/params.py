@@ -48,6 +48,16 @@ A compound kind is a product/quotient of the base kinds ``length force mass time
 optional integer powers, e.g. ``"force*time/length"`` or ``"1/length^2"``; the conversion factor combines
 the factors of the base units.
 
+Fitting facts
+-------------
+The fit and the gap finder read four more facts off the schema (tables ``_FIT_BOUNDS``, ``_SELECTS_FORM``,
+``_NEUTRAL``, ``_STAGE`` below): ``bounds``, the range a fit keeps the parameter within (the data's physics may
+narrow it, :func:`mftyre.fit.core.physical_bounds`); ``selects_form``, the value picks the form of the
+equations (a branch, the side, the load floor), so a batch of parameter sets must share it; ``neutral``, the
+value that switches the parameter's effect off (the gap finder's "effect absent"); ``stage``, the fitting stage
+(:data:`mftyre.fit.stages.STAGES`) that fits it, or refits it although no stage group lists it
+(:data:`STAGE_MEMBERS` keeps each stage's members in the order the refits free them).
+
 Versions
 --------
 ``versions`` lists the model versions whose equations (MF steady state or MF-Swift dynamics) use the
@@ -80,6 +90,9 @@ __all__ = [
     "invalid_values",
     "implausible_values",
     "PLAUSIBLE_RANGES",
+    "STAGE_MEMBERS",
+    "FIT_BOUNDS",
+    "SELECTS_FORM",
 ]
 
 
@@ -98,6 +111,11 @@ class ParamSpec:
     description: str  # one line, the physical meaning
     versions: frozenset[str]  # model versions whose equations use it
     optional: bool = False  # True: neutral default meaning "effect absent"; absence not reported
+    # facts the fit and the gap finder read (see "Fitting facts" in the module notes)
+    bounds: tuple[float, float] | None = None  # (min, max) a fit keeps it within; None: free
+    selects_form: bool = False  # its value selects the form of the equations (a branch, not a smooth factor)
+    neutral: float | None = None  # the value that switches its effect off; None: no effect of its own to switch
+    stage: str | None = None  # the fitting stage that fits (or refits) it; None: no stage
 
     @property
     def is_string(self) -> bool:
@@ -491,20 +509,81 @@ _TABLE: dict[str, list[tuple]] = {
 }
 
 
+#: Fit bounds (min, max); parameters not listed are free.
+_FIT_BOUNDS: dict[str, tuple[float, float]] = {
+    "PCX1": (0.3, 3.0), "PCY1": (0.3, 3.0), "QCZ1": (0.3, 3.0), "RCX1": (0.3, 3.0), "RCY1": (0.3, 3.0),
+    "PDX1": (0.05, 5.0), "PDY1": (0.05, 5.0), "PKX1": (0.5, 300.0), "PKY1": (-300.0, -0.5), "PKY2": (0.1, 20.0),
+    "PKY4": (0.5, 3.0), "PEX1": (-30.0, 1.0), "PEY1": (-30.0, 1.0), "QEZ1": (-30.0, 1.0), "REX1": (-30.0, 1.0),
+    "REY1": (-30.0, 1.0), "QDZ1": (0.0, 1.0), "QBZ1": (0.3, 200.0), "QBZ9": (0.0, 200.0), "RBX1": (0.1, 300.0),
+    "RBY1": (0.1, 300.0), "RVY4": (0.0, 500.0), "RVY5": (-3.0, 3.0), "RVY6": (0.0, 200.0), "RBX2": (-300.0, 300.0),
+    "VERTICAL_STIFFNESS": (1.0e4, 1.0e7), "Q_FZ2": (0.0, 60.0), "Q_RE0": (0.8, 1.2), "BREFF": (0.0, 100.0),
+    "DREFF": (0.0, 5.0), "FREFF": (-2.0, 2.0), "QSY1": (-0.1, 0.1), "QSY7": (0.0, 3.0), "PFZ1": (-5.0, 5.0),
+    "QSX11": (0.0, 100.0),
+}
+
+#: Parameters whose value selects the form of the equations: the model version and side, the load floor, the MF
+#: 6.2 camber deflection (skipped when both Q_CAM1, Q_CAM2 are 0), the MF 5.2 patch default (Q_A1 = Q_A2 = 0),
+#: the sign branch of PHYP4 and the overturning-moment form (QSX1-QSX14).
+_SELECTS_FORM = frozenset(["FITTYP", "TYRESIDE", "FZMIN", "Q_CAM1", "Q_CAM2", "Q_A1", "Q_A2", "PHYP4",
+                           *(f"QSX{i}" for i in range(1, 15))])
+
+#: The value that switches a parameter's effect off: 0, except the load exponent of the rolling resistance.
+_NEUTRAL: dict[str, float] = {**dict.fromkeys("""
+    PPY1 PPY2 PPX1 PPX2 PPX3 PPX4 PPY3 PPY4 PPY5 PPZ1 PPZ2 PFZ1 PPMX1 QSY8 PKY3 PKY5 PKY6 PKY7 PVY3 PVY4 PDY3
+    PEY4 PEY5 PDX3 QBZ4 QBZ5 QDZ3 QDZ4 QEZ5 QHZ3 QHZ4 QDZ8 QDZ9 QDZ10 QDZ11 QSX2 QSX10 QSX12 QSY5 QSY6 RBX3 RBY4
+    RVY3 SSZ3 SSZ4 Q_CAM1 Q_CAM2 Q_CAM3 Q_FYS1 Q_FYS2 Q_FYS3 PDX2 PDY2 PEX2 PEX3 PEY2 PKX2 PKX3 QBZ2 QBZ3 QDZ2
+    QEZ2 QEZ3 QHZ2 QDZ7 PHX2 PVX2 PHY2 PVY2 REX2 REY2 RHY2 RVY2 LMUV QSY3 QSY4 Q_V1 Q_V2 RBX1 RBY1 RVY1 SSZ1
+    SSZ2 QSY2 PHX1 PVX1 PHY1 PVY1 QHZ1 PEX4 PEY3 QEZ4 QDZ6 QBZ10 QSX1 QSX3 QSX4 QSX13 QSX14 Q_FZ2 Q_FCX Q_FCY
+    Q_FCY2 PDXP1 PDYP1 PKYP1 QDTP1 QBRP1 QCRP1""".split(), 0.0), "QSY7": 1.0}
+
+#: The fitting stage of each parameter it fits or refits, in the order the refits free them (the stage's groups
+#: first, :data:`mftyre.fit.stages.STAGES`; then the parameters no group lists, refitted with the stage).
+_STAGE: dict[str, str] = {
+    "pure_fx": "PCX1 PDX1 PEX1 PKX1 PEX4 PHX1 PVX1 PDX2 PEX2 PKX2 PHX2 PVX2 PEX3 PKX3 PDX3 PPX1 PPX3 PPX2 PPX4 "
+               "PDXP1 PDXP2 PDXP3",
+    "pure_fy": "PCY1 PDY1 PEY1 PKY1 PEY3 PHY1 PVY1 PDY2 PEY2 PKY2 PHY2 PVY2 PKY4 PDY3 PEY4 PEY5 PKY3 PKY6 PVY3 PKY5 "
+               "PKY7 PVY4 PPY1 PPY3 PPY2 PPY4 PPY5 LMUV PDYP1 PDYP2 PDYP3 PDYP4 PKYP1 PHYP1 PHYP2 PHYP3 PHYP4 PECP1 "
+               "PECP2",
+    "mz": "QBZ1 QCZ1 QDZ1 QEZ1 QDZ6 QBZ9 QEZ4 QHZ1 QBZ2 QDZ2 QEZ2 QDZ7 QHZ2 QBZ3 QEZ3 QBZ4 QBZ5 QDZ3 QDZ4 QEZ5 QHZ3 "
+          "QDZ8 QDZ10 QHZ4 QDZ9 QDZ11 PPZ1 PPZ2 QBZ10 QDTP1 QCRP1 QCRP2 QBRP1 QDRP1 QDRP2",
+    "combined_fx": "RBX1 RBX2 RCX1 REX1 RHX1 REX2 RBX3",
+    "combined_fy": "RBY1 RBY2 RBY3 RCY1 REY1 RHY1 RVY1 RVY4 RVY5 RVY6 REY2 RHY2 RVY2 RBY4 RVY3",
+    "mz_combined": "SSZ1 SSZ2 SSZ3 SSZ4",
+    "mx": "QSX1 QSX3 QSX2 QSX10 QSX11 PPMX1 QSX4 QSX5 QSX6 QSX7 QSX8 QSX9 QSX12 QSX13 QSX14",
+    "my": "QSY1 QSY3 QSY4 QSY7 QSY5 QSY6 QSY8 QSY2",
+    "vertical": "VERTICAL_STIFFNESS Q_FZ2 Q_RE0 PFZ1 Q_V1 Q_V2 Q_FCX Q_FCY Q_FCY2 Q_CAM1 Q_CAM2 Q_CAM3 Q_FYS1 Q_FYS2 "
+                "Q_FYS3",
+    "rolling_radius": "BREFF DREFF FREFF",
+}
+
+#: Stage -> its parameters, in the order of :data:`_STAGE` (the order the refits free them).
+STAGE_MEMBERS: dict[str, tuple[str, ...]] = {stage: tuple(names.split()) for stage, names in _STAGE.items()}
+
+
 def _build() -> dict[str, ParamSpec]:
     out: dict[str, ParamSpec] = {}
+    stage_of = {n: stage for stage, names in STAGE_MEMBERS.items() for n in names}
     for section in SECTIONS:
         for row in _TABLE.get(section, ()):
             name, default, unit, vcode, desc = row[:5]
             optional = bool(row[5]) if len(row) > 5 else False
             if name in out:  # pragma: no cover - guards the table itself
                 raise RuntimeError(f"duplicate parameter {name} in the schema")
-            out[name] = ParamSpec(name, section, default, unit, desc, _V[vcode], optional)
+            out[name] = ParamSpec(name, section, default, unit, desc, _V[vcode], optional,
+                                  bounds=_FIT_BOUNDS.get(name), selects_form=name in _SELECTS_FORM,
+                                  neutral=_NEUTRAL.get(name), stage=stage_of.get(name))
+    unknown = (set(_FIT_BOUNDS) | _SELECTS_FORM | set(_NEUTRAL) | set(stage_of)) - set(out)
+    if unknown:  # pragma: no cover - guards the tables
+        raise RuntimeError(f"facts about parameters not in the schema: {sorted(unknown)}")
     return out
 
 
 #: The schema, in canonical order (section order, then the usual TNO order within a section).
 PARAMETERS: dict[str, ParamSpec] = _build()
+
+#: Views of the fitting facts: name -> fit bounds; the names whose value selects the equations' form.
+FIT_BOUNDS: dict[str, tuple[float, float]] = {n: s.bounds for n, s in PARAMETERS.items() if s.bounds is not None}
+SELECTS_FORM: frozenset[str] = frozenset(n for n, s in PARAMETERS.items() if s.selects_form)
 
 #: Parameters whose default is computed from other parameters when they are absent: name -> (source
 #: parameters, function of the values dict). Applied after all constant defaults are in place.

@@ -36,8 +36,8 @@ from ..backend import NUMPY
 from ..data import UNCHECKED, TyreData, check_plausible, read_data
 from ..formula import Modes, steady_state, vertical
 from ..inputs import warn_data_outside
-from ..model import STRUCTURAL_PARAMETERS, MFModel
-from ..params import TyreParameters
+from ..model import MFModel
+from ..params import FIT_BOUNDS, SELECTS_FORM, TyreParameters
 from .predict import predict_stage
 from ..programme import recognise
 from ..timeseries import effective_samples, needs_reduction, reduce_sweeps
@@ -50,17 +50,9 @@ from .verify import check_speeds, physical_domain, verification, verify_tir
 
 __all__ = ["fit_tir", "FitResult", "StageResult", "load_data", "COMPARED_STAGES", "BOUNDS", "bounded_parameters"]
 
-#: Bounds (min, max) of fitted parameters; parameters not listed are free.
-BOUNDS: dict[str, tuple[float, float]] = {
-    "PCX1": (0.3, 3.0), "PCY1": (0.3, 3.0), "QCZ1": (0.3, 3.0), "RCX1": (0.3, 3.0), "RCY1": (0.3, 3.0),
-    "PDX1": (0.05, 5.0), "PDY1": (0.05, 5.0), "PKX1": (0.5, 300.0), "PKY1": (-300.0, -0.5), "PKY2": (0.1, 20.0),
-    "PKY4": (0.5, 3.0), "PEX1": (-30.0, 1.0), "PEY1": (-30.0, 1.0), "QEZ1": (-30.0, 1.0), "REX1": (-30.0, 1.0),
-    "REY1": (-30.0, 1.0), "QDZ1": (0.0, 1.0), "QBZ1": (0.3, 200.0), "QBZ9": (0.0, 200.0), "RBX1": (0.1, 300.0),
-    "RBY1": (0.1, 300.0), "RVY4": (0.0, 500.0), "RVY5": (-3.0, 3.0), "RVY6": (0.0, 200.0), "RBX2": (-300.0, 300.0),
-    "VERTICAL_STIFFNESS": (1.0e4, 1.0e7), "Q_FZ2": (0.0, 60.0), "Q_RE0": (0.8, 1.2), "BREFF": (0.0, 100.0),
-    "DREFF": (0.0, 5.0), "FREFF": (-2.0, 2.0), "QSY1": (-0.1, 0.1), "QSY7": (0.0, 3.0), "PFZ1": (-5.0, 5.0),
-    "QSX11": (0.0, 100.0),
-}
+#: Bounds (min, max) of fitted parameters, the schema's (:data:`mftyre.params.FIT_BOUNDS`); parameters not listed
+#: are free.
+BOUNDS: dict[str, tuple[float, float]] = FIT_BOUNDS
 #: The characteristics of the paper's Table 2 (pure Fx, pure Fy, pure Mz).
 COMPARED_STAGES = ("pure_fx", "pure_fy", "mz")
 
@@ -206,12 +198,12 @@ class _BatchPredictor:
     """The stage's model output for many parameter vectors at once: the equations evaluated once with the varied
     parameters as column vectors (shape (K, 1)) against the data as a row (shape (1, N)), so a finite-difference
     Jacobian of K parameters costs one vectorised evaluation instead of K. Falls back to a loop when a varied
-    parameter selects the form of the equations (:data:`mftyre.model.STRUCTURAL_PARAMETERS`) in a way a batch
+    parameter selects the form of the equations (:data:`mftyre.params.SELECTS_FORM`) in a way a batch
     could switch."""
 
     def __init__(self, stage, prm, data, names, side):
         self.stage, self.prm, self.data, self.names, self.side = stage, prm, data, list(names), side
-        structural = set(names) & STRUCTURAL_PARAMETERS
+        structural = set(names) & SELECTS_FORM
         self.loop = (side is not None or bool(structural and any(prm[f"QSX{i}"] != 0 for i in (12, 13, 14)))
                      or (stage.output == "fz_from_rl" and prm.version == "62"))  # 6.2: branches on Q_FCY
         inp = data.inputs()
@@ -266,7 +258,7 @@ class _BatchParameters:
     def __getitem__(self, name):
         if name in self._columns:
             value = self._columns[name]
-            return float(np.ravel(value)[0]) if name in STRUCTURAL_PARAMETERS else value
+            return float(np.ravel(value)[0]) if name in SELECTS_FORM else value
         return self._params[name]
 
     def __contains__(self, name):

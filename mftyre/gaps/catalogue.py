@@ -2,13 +2,14 @@
 
 An :class:`Effect` is data: a name, a one-line physical description, the ``.tir`` parameters that are freed when
 the effect is added (``parameters``), the subset that switches it (``neutral``: parameter -> the value meaning
-"effect absent"; the other parameters are inert shape factors while the switches are neutral), typical values
+"effect absent", the schema's ``neutral``; the other parameters are inert shape factors while the switches are
+neutral), typical values
 to start a fit from where the neutral value leaves the fit without a gradient (``start``), the measured channels
 it acts on (the first is its primary channel) and the condition variables whose residual structure it explains.
 
 Everything else is derived from the parameter schema (:data:`mftyre.params.PARAMETERS`) and the fitting stages
-(:data:`mftyre.fit.STAGES`): the one-line meaning of each parameter, the model versions it exists in, the stage
-(rows and channel) on which it is refitted and the data conditions needed to determine it (the stage group's
+(:data:`mftyre.fit.STAGES`): the one-line meaning of each parameter, the model versions it exists in, its neutral
+value, the stage (rows and channel) on which it is refitted and the data conditions needed to determine it (the stage group's
 ``needs``: two or three load levels, two or three pressures, camber, two or three speeds...).
 
 :data:`BASE` are the stage parameters that belong to no effect (shape, peak, stiffness and shifts at the
@@ -20,7 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ..fit.stages import STAGES
-from ..params import PARAMETERS
+from ..params import PARAMETERS, STAGE_MEMBERS
 
 __all__ = ["Effect", "CATALOGUE", "BASE", "VARIABLES", "PARAM_STAGE", "parameter_needs", "SWEPT_INPUT", "coverage",
            "effect_state", "neutralise", "EXCLUDED"]
@@ -57,10 +58,11 @@ class Effect:
         return out
 
 
-def _e(name, description, params, channels, variables, neutral=None, start=None, needs=()):
+def _e(name, description, params, channels, variables, switches=None, start=None, needs=()):
+    """An effect; ``switches``: the parameters that switch it (default all), at their schema neutral values."""
     params = tuple(params.split())
-    neutral = {n: 0.0 for n in params} if neutral is None else neutral
-    return Effect(name, description, params, dict(neutral), tuple(channels.split()), tuple(variables.split()),
+    neutral = {n: PARAMETERS[n].neutral for n in (params if switches is None else switches.split())}
+    return Effect(name, description, params, neutral, tuple(channels.split()), tuple(variables.split()),
                   dict(start or {}), tuple(needs))
 
 
@@ -101,7 +103,7 @@ CATALOGUE: dict[str, Effect] = {e.name: e for e in (
     _e("camber_aligning_moment", "camber produces a residual aligning moment (camber moment of Mz)",
        "QDZ8 QDZ9 QDZ10 QDZ11", "MZ", "camber"),
     _e("camber_overturning", "camber produces an overturning moment Mx", "QSX2 QSX10 QSX11",
-       "MX", "camber", neutral={"QSX2": 0.0, "QSX10": 0.0}, start={"QSX11": 5.0}),
+       "MX", "camber", switches="QSX2 QSX10", start={"QSX11": 5.0}),
     _e("camber_squared_overturning", "an overturning moment growing with camber squared (MF-Tyre 6.1 term)",
        "QSX12", "MX", "camber"),
     _e("camber_rolling_resistance", "camber increases the rolling resistance", "QSY5 QSY6", "MY", "camber"),
@@ -126,7 +128,7 @@ CATALOGUE: dict[str, Effect] = {e.name: e for e in (
     _e("load_shift_x", "the Fx shifts (offsets at zero slip) change with load", "PHX2 PVX2", _FX, "load"),
     _e("load_shift_y", "ply steer and conicity (Fy shifts) change with load", "PHY2 PVY2", _FY, "load"),
     _e("load_rolling_resistance", "rolling resistance not proportional to load (exponent QSY7; neutral 1)",
-       "QSY7", "MY", "load", neutral={"QSY7": 1.0}),
+       "QSY7", "MY", "load"),
     _e("load_combined_fx", "the combined-slip curvature of Fx changes with load", "REX2", _FX, "load combined"),
     _e("load_combined_fy", "the combined-slip curvature, shift and kappa-induced Fy change with load",
        "REY2 RHY2 RVY2", _FY, "load combined"),
@@ -137,13 +139,13 @@ CATALOGUE: dict[str, Effect] = {e.name: e for e in (
     _e("speed_vertical", "the free radius and the vertical stiffness grow with speed", "Q_V1 Q_V2", "FZ", "speed"),
     # ---------------------------------------------------------------------------------- combined slip
     _e("combined_fx", "side slip reduces Fx (combined-slip weighting function G_xalpha)",
-       "RBX1 RBX2 RCX1 REX1 RHX1", _FX, "combined", neutral={"RBX1": 0.0},
+       "RBX1 RBX2 RCX1 REX1 RHX1", _FX, "combined", switches="RBX1",
        start={"RBX1": 15.0, "RBX2": 10.0, "RCX1": 1.0}),
     _e("combined_fy", "longitudinal slip reduces Fy (combined-slip weighting function G_ykappa)",
-       "RBY1 RBY2 RBY3 RCY1 REY1 RHY1", _FY, "combined", neutral={"RBY1": 0.0},
+       "RBY1 RBY2 RBY3 RCY1 REY1 RHY1", _FY, "combined", switches="RBY1",
        start={"RBY1": 10.0, "RBY2": 8.0, "RCY1": 1.0}),
     _e("kappa_induced_fy", "longitudinal slip induces a side force at a slip angle (S_Vykappa, ply steer of the "
-       "carcass under Fx)", "RVY1 RVY4 RVY5 RVY6", _FY, "combined", neutral={"RVY1": 0.0},
+       "carcass under Fx)", "RVY1 RVY4 RVY5 RVY6", _FY, "combined", switches="RVY1",
        start={"RVY4": 20.0, "RVY5": 2.0, "RVY6": 10.0}),
     _e("fx_moment_arm", "Fx acts on Mz through a lateral moment arm of the contact force", "SSZ1 SSZ2", "MZ",
        "combined"),
@@ -170,7 +172,7 @@ CATALOGUE: dict[str, Effect] = {e.name: e for e in (
     _e("lateral_force_overturning", "the lateral force produces an overturning moment (lateral shift of the "
        "contact force)", "QSX3", "MX", "slip_angle"),
     _e("combined_overturning", "load, lateral force and camber interact in Mx (MF-Tyre 6.1 sine term)",
-       "QSX4 QSX5 QSX6 QSX7 QSX8 QSX9", "MX", "camber slip_angle load", neutral={"QSX4": 0.0},
+       "QSX4 QSX5 QSX6 QSX7 QSX8 QSX9", "MX", "camber slip_angle load", switches="QSX4",
        start={"QSX4": 1.0, "QSX5": 1.0, "QSX6": 10.0, "QSX9": 0.4}),
     _e("lateral_force_overturning_camber", "lateral force induced Mx growing with camber (MF-Tyre 6.1 terms)",
        "QSX13 QSX14", "MX", "slip_angle camber"),
@@ -183,9 +185,9 @@ CATALOGUE: dict[str, Effect] = {e.name: e for e in (
        "(MF 6.2)", "Q_FCY2", "FZ", "slip"),
     # -------------------------------------------------------------------------------------- turn slip
     _e("turn_slip_fx", "turn slip (spin) reduces the peak longitudinal force", "PDXP1 PDXP2 PDXP3", _FX,
-       "turn_slip", neutral={"PDXP1": 0.0}, start={"PDXP1": 0.4}, needs=("turn_slip",)),
+       "turn_slip", switches="PDXP1", start={"PDXP1": 0.4}, needs=("turn_slip",)),
     _e("turn_slip_fy_peak", "turn slip (spin) reduces the peak lateral force", "PDYP1 PDYP2 PDYP3 PDYP4", _FY,
-       "turn_slip", neutral={"PDYP1": 0.0}, start={"PDYP1": 0.4}, needs=("turn_slip",)),
+       "turn_slip", switches="PDYP1", start={"PDYP1": 0.4}, needs=("turn_slip",)),
     _e("turn_slip_cornering_stiffness", "turn slip (spin) reduces the cornering stiffness", "PKYP1", _FY,
        "turn_slip", start={"PKYP1": 1.0}, needs=("turn_slip",)),
     _e("turn_slip_trail", "turn slip (spin) reduces the pneumatic trail", "QDTP1", "MZ", "turn_slip",
@@ -193,25 +195,14 @@ CATALOGUE: dict[str, Effect] = {e.name: e for e in (
     _e("turn_slip_residual_torque", "turn slip (spin) changes the slope of the residual torque", "QBRP1", "MZ",
        "turn_slip", start={"QBRP1": 0.1}, needs=("turn_slip",)),
     _e("turn_slip_moment", "the turning (spin) moment at turn slip, up to the parking torque",
-       "QCRP1 QCRP2 QDRP1 QDRP2", "MZ", "turn_slip", neutral={"QCRP1": 0.0},
+       "QCRP1 QCRP2 QDRP1 QDRP2", "MZ", "turn_slip", switches="QCRP1",
        start={"QCRP1": 0.2, "QCRP2": 0.1, "QDRP1": 1.0}, needs=("turn_slip",)),
 )}
 
-#: Parameters refitted with a stage although no stage group lists them: parameter -> stage.
-PARAM_STAGE: dict[str, str] = {}
-for _stage in STAGES.values():
-    for _needs, _names in _stage.groups:
-        for _n in _names:
-            PARAM_STAGE.setdefault(_n, _stage.name)
-PARAM_STAGE.update({
-    "LMUV": "pure_fy", "QSY2": "my", "QSX4": "mx", "QSX5": "mx", "QSX6": "mx", "QSX7": "mx", "QSX8": "mx",
-    "QSX9": "mx", "QSX12": "mx", "QSX13": "mx", "QSX14": "mx", "QBZ10": "mz", "Q_FCY2": "vertical",
-    "Q_CAM1": "vertical", "Q_CAM2": "vertical", "Q_CAM3": "vertical", "Q_FYS1": "vertical", "Q_FYS2": "vertical",
-    "Q_FYS3": "vertical", "PDXP1": "pure_fx", "PDXP2": "pure_fx", "PDXP3": "pure_fx",
-    **{n: "pure_fy" for n in ("PDYP1", "PDYP2", "PDYP3", "PDYP4", "PKYP1", "PHYP1", "PHYP2", "PHYP3", "PHYP4",
-                              "PECP1", "PECP2")},
-    **{n: "mz" for n in ("QDTP1", "QCRP1", "QCRP2", "QBRP1", "QDRP1", "QDRP2")},
-})
+#: Parameter -> the stage that fits or refits it (the schema's ``stage``, :data:`mftyre.params.STAGE_MEMBERS`): the
+#: stage groups' parameters first, then those refitted with a stage although no group lists them.
+PARAM_STAGE: dict[str, str] = {n: stage.name for stage in STAGES.values() for _, names in stage.groups for n in names}
+PARAM_STAGE.update({n: stage for stage, names in STAGE_MEMBERS.items() for n in names if n not in PARAM_STAGE})
 # turn-slip parameters without a neutral value: active whenever turn slip is evaluated
 _TURN_SLIP_BASE = ("PHYP1", "PHYP2", "PHYP3", "PHYP4", "PECP1", "PECP2")
 
