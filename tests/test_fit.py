@@ -227,3 +227,19 @@ def test_conditions(truth):
     data = trailer_programme(truth, loads=(0.5, 1.0), pressures=(1.0,), cambers_deg=(0.0,), points=11)
     cond = conditions(data)
     assert cond["pressures"] == 1 and not cond["camber"] and cond["fx"] and cond["fy"]
+
+
+def test_shape_checks_are_the_formula_coefficients_the_model_evaluates():
+    """The stage shape checks read the peak friction off the formula's coefficient functions: where a load term
+    drives mux below zero, the violation is the mux the model itself evaluates (kappa = 0, scale factors 1)."""
+    base = mftyre.load_tir(SAMPLE)
+    prm = base.params.replace(PDX2=-1.5, PDY2=-1.5, LMUX=1.0, LMUY=1.0)
+    model = mftyre.MFModel(prm)
+    fz = np.array([0.5, 1.0, 1.5, 2.0]) * prm.FNOMIN
+    p = np.array([0.9, 1.0, 1.1, 1.0]) * prm.NOMPRES
+    corners = dict(dfz=(fz - prm.FNOMIN) / prm.FNOMIN, dpi=(p - prm.NOMPRES) / prm.NOMPRES, gamma=0.0 * fz)
+    out = model.evaluate(fz=fz, kappa=0.0, alpha=0.0, p=p, limits=False)
+    assert np.any(out.mux < 0) and np.any(out.mux > 0)
+    for stage, mu in (("pure_fx", out.mux), ("pure_fy", out.muy)):
+        found = shape_violations(stage, prm, corners)
+        np.testing.assert_allclose(np.sort(found[found < 0]), np.sort(mu[mu < 0]), rtol=1e-12)

@@ -1,8 +1,8 @@
 """The fitting stages: which data, which measured channel, which parameters, in the order test engineers
 use (pure Fx, pure Fy, Mz, combined Fx and Fy, combined Mz, Mx, My, vertical, effective rolling radius).
 
-Every parameter named here is a schema parameter (:data:`mftyre.params.PARAMETERS`) of the stage's
-``.tir`` section; :func:`stage_parameters` checks that. A parameter group is fitted only when the stage's
+Every parameter named here is a schema parameter (:data:`mftyre.params.PARAMETERS`) whose schema ``stage`` is
+this stage (checked when the module loads). A parameter group is fitted only when the stage's
 data can determine it (``needs``):
 
 * ``loads``: two or more load levels (load-variation terms, dfz); ``loads3``: three or more (dfz^2,
@@ -28,7 +28,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..backend import NUMPY
 from ..data import TyreData, levels
+from ..formula import aligning, lateral, longitudinal
 from ..params import PARAMETERS
 from ..programme import cluster_levels
 
@@ -93,6 +95,10 @@ STAGES: dict[str, Stage] = {s.name: s for s in (
         _g("loads", "BREFF DREFF FREFF"),)),
 )}
 STAGE_NAMES: tuple[str, ...] = tuple(STAGES)
+_MISPLACED = [f"{n} (in stage {s.name})" for s in STAGES.values() for _, names in s.groups for n in names
+              if n not in PARAMETERS or PARAMETERS[n].stage != s.name]
+if _MISPLACED:  # pragma: no cover - guards the table: the schema's stage (mftyre.params.STAGE_MEMBERS) must agree
+    raise RuntimeError(f"stage parameters not of that stage in the schema: {_MISPLACED}")
 
 
 def stage_rows(stage: Stage, data: TyreData) -> np.ndarray:
@@ -262,9 +268,6 @@ def stage_parameters(stage: Stage, cond: dict, fit_pressure: bool):
     passes = {"base": [], "pressure": [], "camber": []}
     skipped = {}
     for needs, names in stage.groups:
-        for n in names:
-            if n not in PARAMETERS:  # pragma: no cover - guards the table
-                raise KeyError(f"stage {stage.name}: {n} is not a schema parameter")
         unmet = [n for n in needs if not need_met(n, cond, fit_pressure)]
         if unmet:
             skipped.update({n: SKIP_REASONS[unmet[0]] for n in names})
@@ -279,29 +282,34 @@ def stage_parameters(stage: Stage, cond: dict, fit_pressure: bool):
 def shape_violations(stage_name: str, prm, corners: dict) -> np.ndarray:
     """Amounts by which the Magic Formula shape conditions C > 0, D > 0, E <= 1 (and positive slip
     stiffness, trail and weighting slopes) are violated at the corners of the data range (``corners``:
-    arrays dfz, dpi, gamma); all zeros when they hold. The factors are those of the equations cited."""
+    arrays dfz, dpi, gamma); all zeros when they hold. The factors are the formula's coefficient functions
+    (4.E13-4.E15, 4.E23-4.E25, paper A58, A60, 4.E44, 4.E54-4.E56, 4.E62-4.E64) without the scale factors, at
+    gamma* = gamma."""
     dfz, dpi, g = corners["dfz"], corners["dpi"], corners["gamma"]
+    g2, dfz2, dpi2 = g**2, dfz**2, dpi**2
     checks = []
     if stage_name == "pure_fx":
-        mux = (prm.PDX1 + prm.PDX2 * dfz) * (1 + prm.PPX3 * dpi + prm.PPX4 * dpi**2) * (1 - prm.PDX3 * g**2)  # 4.E13
-        kxk = (prm.PKX1 + prm.PKX2 * dfz) * np.exp(prm.PKX3 * dfz) * (1 + prm.PPX1 * dpi + prm.PPX2 * dpi**2)  # 4.E15
-        ex = prm.PEX1 + prm.PEX2 * dfz + prm.PEX3 * dfz**2  # 4.E14
-        checks += [prm.PCX1, mux, kxk, 1 - ex * (1 + abs(prm.PEX4)), 1 - ex * (1 - abs(prm.PEX4))]
+        mux = longitudinal.friction_x(prm, dfz, dpi, dpi2, g2)
+        kxk = longitudinal.slip_stiffness_x(prm, 1.0, dfz, dpi, dpi2, NUMPY)
+        # Ex at both signs of kappa_x, the larger (1 + |PEX4|) first
+        ex = [longitudinal.curvature_x(prm, dfz, dfz2, sign) for sign in (-np.sign(prm.PEX4), np.sign(prm.PEX4))]
+        checks += [prm.PCX1, mux, kxk, 1 - ex[0], 1 - ex[1]]
     elif stage_name == "pure_fy":
-        muy = (prm.PDY1 + prm.PDY2 * dfz) * (1 + prm.PPY3 * dpi + prm.PPY4 * dpi**2) * (1 - prm.PDY3 * g**2)  # 4.E23
-        base = (prm.PEY1 + prm.PEY2 * dfz)  # 4.E24
-        for sgn in (-1.0, 1.0):
-            checks.append(1 - base * (1 + prm.PEY5 * g**2 - (prm.PEY3 + prm.PEY4 * g) * sgn))
-        checks += [prm.PCY1, muy, (prm.PKY2 + prm.PKY5 * g**2) * (1 + prm.PPY2 * dpi), 1 + prm.PPY1 * dpi]  # 4.E25
+        muy = lateral.friction_y(prm, dfz, dpi, dpi2, g2)
+        for sign in (-1.0, 1.0):
+            checks.append(1 - lateral.curvature_y(prm, dfz, g, g2, sign))
+        checks += [prm.PCY1, muy, lateral.cornering_peak_load(prm, g2, dpi),
+                   lateral.cornering_pressure_factor(prm, dpi)]
     elif stage_name == "mz":
-        dt = (prm.QDZ1 + prm.QDZ2 * dfz) * (1 - prm.PPZ1 * dpi) * (1 + prm.QDZ3 * g + prm.QDZ4 * g**2)  # paper A60
-        bt = (prm.QBZ1 + prm.QBZ2 * dfz + prm.QBZ3 * dfz**2) * (1 + prm.QBZ4 * g + prm.QBZ5 * np.abs(g))  # paper A58
-        et = prm.QEZ1 + prm.QEZ2 * dfz + prm.QEZ3 * dfz**2  # 4.E44, the atan factor in [-1, 1]
-        amp = np.abs(prm.QEZ4 + prm.QEZ5 * g)
-        checks += [prm.QCZ1, dt, bt, 1 - et * (1 + amp), 1 - et * (1 - amp)]
+        dt = aligning.peak_trail(prm, dfz, dpi, g, g2)
+        bt = aligning.trail_slope(prm, dfz, dfz2, g, np.abs(g))
+        # Et at the ends of the atan factor, the larger first
+        bend = np.sign(prm.QEZ4 + prm.QEZ5 * g) * (np.pi / 2)
+        et = [aligning.trail_curvature(prm, dfz, dfz2, g, b, NUMPY) for b in (bend, -bend)]
+        checks += [prm.QCZ1, dt, bt, 1 - et[0], 1 - et[1]]
     elif stage_name == "combined_fx":
-        checks += [prm.RCX1, prm.RBX1 + prm.RBX3 * g**2, 1 - (prm.REX1 + prm.REX2 * dfz)]  # 4.E54-4.E56
+        checks += [prm.RCX1, longitudinal.combined_slope_x(prm, g2), 1 - longitudinal.combined_curvature_x(prm, dfz)]
     elif stage_name == "combined_fy":
-        checks += [prm.RCY1, prm.RBY1 + prm.RBY4 * g**2, 1 - (prm.REY1 + prm.REY2 * dfz)]  # 4.E62-4.E64
+        checks += [prm.RCY1, lateral.combined_slope_y(prm, g2), 1 - lateral.combined_curvature_y(prm, dfz)]
     values = np.concatenate([np.ravel(np.asarray(c, dtype=float)) for c in checks]) if checks else np.zeros(0)
     return np.minimum(values, 0.0)

@@ -16,7 +16,24 @@ from types import SimpleNamespace
 
 from .normalisation import smooth_low_speed
 
-__all__ = ["aligning_coefficients", "aligning_torque"]
+__all__ = ["aligning_coefficients", "aligning_torque", "peak_trail", "trail_slope", "trail_curvature"]
+
+
+def peak_trail(prm, dfz, dpi, gamma, gamma2):
+    """Dt over Fz R0/Fz0' LTR: (QDZ1 + QDZ2 dfz)(1 - PPZ1 dpi)(1 + QDZ3 gamma + QDZ4 gamma^2) (paper A60)."""
+    return (prm.QDZ1 + prm.QDZ2 * dfz) * (1.0 - prm.PPZ1 * dpi) * (1.0 + prm.QDZ3 * gamma + prm.QDZ4 * gamma2)
+
+
+def trail_slope(prm, dfz, dfz2, gamma, abs_gamma):
+    """Bt over LKY/LMUY*: (QBZ1 + QBZ2 dfz + QBZ3 dfz^2)(1 + QBZ4 gamma + QBZ5 |gamma|) (paper A58)."""
+    return (prm.QBZ1 + prm.QBZ2 * dfz + prm.QBZ3 * dfz2) * (1.0 + prm.QBZ4 * gamma + prm.QBZ5 * abs_gamma)
+
+
+def trail_curvature(prm, dfz, dfz2, gamma_star, bend, be):
+    """Et = (QEZ1 + QEZ2 dfz + QEZ3 dfz^2)(1 + (QEZ4 + QEZ5 gamma*) (2/pi) bend), bend = atan(Bt Ct alpha_t)
+    (4.E44)."""
+    return ((prm.QEZ1 + prm.QEZ2 * dfz + prm.QEZ3 * dfz2)
+            * (1.0 + (prm.QEZ4 + prm.QEZ5 * gamma_star) * (2.0 / be.pi) * bend))
 
 
 def _load_for_moments(s, modes, be):
@@ -37,13 +54,10 @@ def aligning_coefficients(prm, s, lat, gyk, modes, be) -> SimpleNamespace:
     c.alpha_r = s.alpha_star + SHf  # (4.E37)
     c.alpha_t = s.alpha_star + SHt  # (4.E34)
     zeta5 = s.zeta5 if modes.turn_slip else 1.0
-    c.Dt = ((prm.QDZ1 + prm.QDZ2 * dfz) * (1.0 - prm.PPZ1 * dpi)
-            * (1.0 + prm.QDZ3 * s.gamma + prm.QDZ4 * s.gamma2) * Fz * (R0 / s.Fz0p) * prm.LTR * zeta5)  # paper A60
-    c.Bt = ((prm.QBZ1 + prm.QBZ2 * dfz + prm.QBZ3 * s.dfz2) * (1.0 + prm.QBZ4 * s.gamma + prm.QBZ5 * be.of("angle").abs(s.gamma))
-            * prm.LKY / s.LMUY_star)  # paper A58
+    c.Dt = peak_trail(prm, dfz, dpi, s.gamma, s.gamma2) * Fz * (R0 / s.Fz0p) * prm.LTR * zeta5  # paper A60
+    c.Bt = trail_slope(prm, dfz, s.dfz2, s.gamma, be.of("angle").abs(s.gamma)) * prm.LKY / s.LMUY_star  # paper A58
     c.Ct = prm.QCZ1  # (4.E41)
-    c.Et = ((prm.QEZ1 + prm.QEZ2 * dfz + prm.QEZ3 * s.dfz2)
-            * (1.0 + (prm.QEZ4 + prm.QEZ5 * gs) * (2.0 / be.pi) * be.atan(c.Bt * c.Ct * c.alpha_t)))  # (4.E44)
+    c.Et = trail_curvature(prm, dfz, s.dfz2, gs, be.atan(c.Bt * c.Ct * c.alpha_t), be)  # (4.E44)
     if modes.limits:
         c.Et = be.fmin(c.Et, 1.0)
 

@@ -10,14 +10,46 @@ from types import SimpleNamespace
 from .normalisation import smooth_low_speed
 from .turnslip import lateral_shift_turn_slip
 
-__all__ = ["pure_lateral", "combined_lateral"]
+__all__ = ["pure_lateral", "combined_lateral", "friction_y", "curvature_y", "cornering_pressure_factor",
+           "cornering_peak_load", "combined_slope_y", "combined_curvature_y"]
+
+
+def friction_y(prm, dfz, dpi, dpi2, gamma_star2):
+    """muy before the friction scaling LMUY*: (PDY1 + PDY2 dfz)(1 + PPY3 dpi + PPY4 dpi^2)(1 - PDY3 gamma*^2)
+    (4.E23)."""
+    return (prm.PDY1 + prm.PDY2 * dfz) * (1.0 + prm.PPY3 * dpi + prm.PPY4 * dpi2) * (1.0 - prm.PDY3 * gamma_star2)
+
+
+def curvature_y(prm, dfz, gamma_star, gamma_star2, sign):
+    """Ey before LEY: (PEY1 + PEY2 dfz)(1 + PEY5 gamma*^2 - (PEY3 + PEY4 gamma*) sgn(alpha_y)) (4.E24)."""
+    return (prm.PEY1 + prm.PEY2 * dfz) * (1.0 + prm.PEY5 * gamma_star2 - (prm.PEY3 + prm.PEY4 * gamma_star) * sign)
+
+
+def cornering_pressure_factor(prm, dpi):
+    """The pressure factor of Kya: 1 + PPY1 dpi (4.E25)."""
+    return 1.0 + prm.PPY1 * dpi
+
+
+def cornering_peak_load(prm, gamma_star2, dpi):
+    """The load, over Fz0', at which Kya peaks: (PKY2 + PKY5 gamma*^2)(1 + PPY2 dpi) (4.E25)."""
+    return (prm.PKY2 + prm.PKY5 * gamma_star2) * (1.0 + prm.PPY2 * dpi)
+
+
+def combined_slope_y(prm, gamma_star2):
+    """The load-free part of Byk: RBY1 + RBY4 gamma*^2 (4.E62)."""
+    return prm.RBY1 + prm.RBY4 * gamma_star2
+
+
+def combined_curvature_y(prm, dfz):
+    """Eyk = REY1 + REY2 dfz (4.E64)."""
+    return prm.REY1 + prm.REY2 * dfz
 
 
 def _cornering_stiffness(prm, s, gamma_star, gamma_star2, zeta3, be):
     """Kya (4.E25) at inclination gamma_star (gamma_star2 = gamma_star^2)."""
-    return (prm.PKY1 * s.Fz0p * (1.0 + prm.PPY1 * s.dpi) * (1.0 - prm.PKY3 * be.of("angle").abs(gamma_star))
-            * be.sin(prm.PKY4 * be.atan((s.Fz / s.Fz0p)
-                                        / ((prm.PKY2 + prm.PKY5 * gamma_star2) * (1.0 + prm.PPY2 * s.dpi))))
+    return (prm.PKY1 * s.Fz0p * cornering_pressure_factor(prm, s.dpi)
+            * (1.0 - prm.PKY3 * be.of("angle").abs(gamma_star))
+            * be.sin(prm.PKY4 * be.atan((s.Fz / s.Fz0p) / cornering_peak_load(prm, gamma_star2, s.dpi)))
             * zeta3 * prm.LKY)
 
 
@@ -55,12 +87,9 @@ def pure_lateral(prm, s, gamma_star, modes, be) -> SimpleNamespace:
 
     alpha_y = s.alpha_star + SHy  # (4.E20)
     Cy = prm.PCY1 * prm.LCY  # (4.E21)
-    muy = ((prm.PDY1 + prm.PDY2 * dfz) * (1.0 + prm.PPY3 * dpi + prm.PPY4 * s.dpi2)
-           * (1.0 - prm.PDY3 * gamma_star2) * s.LMUY_star)  # (4.E23)
+    muy = friction_y(prm, dfz, dpi, s.dpi2, gamma_star2) * s.LMUY_star  # (4.E23)
     Dy = muy * Fz * zeta2  # (4.E22)
-    Ey = ((prm.PEY1 + prm.PEY2 * dfz)
-          * (1.0 + prm.PEY5 * gamma_star2 - (prm.PEY3 + prm.PEY4 * gamma_star) * be.sign_nz(alpha_y))
-          * prm.LEY)  # (4.E24)
+    Ey = curvature_y(prm, dfz, gamma_star, gamma_star2, be.sign_nz(alpha_y)) * prm.LEY  # (4.E24)
     if modes.limits:
         Ey = be.fmin(Ey, 1.0)
     By = Kya / (Cy * Dy + 1e-6 * be.sign_nz(Dy))  # (4.E26)
@@ -80,11 +109,11 @@ def combined_lateral(prm, s, fy0, muy, modes, be):
             * be.cos_atan(prm.RVY4 * s.alpha_star) * zeta2)  # (4.E67)
     SVyk = DVyk * be.sin(prm.RVY5 * be.atan(prm.RVY6 * s.kappa)) * prm.LVYKA  # (4.E66)
     SHyk = prm.RHY1 + prm.RHY2 * dfz  # (4.E65)
-    Eyk = prm.REY1 + prm.REY2 * dfz  # (4.E64)
+    Eyk = combined_curvature_y(prm, dfz)  # (4.E64)
     if modes.limits:
         Eyk = be.fmin(Eyk, 1.0)
     Cyk = prm.RCY1  # (4.E63)
-    Byk = (prm.RBY1 + prm.RBY4 * s.gamma_star2) * be.cos_atan(prm.RBY2 * (s.alpha_star - prm.RBY3)) * prm.LYKA  # (4.E62)
+    Byk = combined_slope_y(prm, s.gamma_star2) * be.cos_atan(prm.RBY2 * (s.alpha_star - prm.RBY3)) * prm.LYKA  # (4.E62)
     kappa_s = s.kappa + SHyk  # (4.E61)
 
     def weight(x):
