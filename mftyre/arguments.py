@@ -13,7 +13,7 @@ import numpy as np
 
 __all__ = ["SWEEP_UNITS", "MAX_POINTS", "Sweep", "parse_sweep", "sweep_type", "number_type", "SweepAction",
            "sweep_option", "join_negative_values", "DATA_HELP", "add_data_options", "data_epilog", "read_data_args",
-           "progress_printer"]
+           "progress_printer", "command_parser", "closing_options", "command_error", "refused_outputs"]
 
 
 # Sweep inputs of `mftyre eval`: name -> (SI unit, {accepted unit (lower case): factor to SI}).
@@ -256,3 +256,49 @@ def progress_printer(quiet: bool):
             print(f"  [{time.perf_counter() - t0:6.1f} s] {text}", file=sys.stderr, flush=True)
 
     return say
+
+
+# ------------------------------------------------------------------------------------ commands
+def command_parser(subparsers, name: str, run, *, data: bool = False, **options) -> argparse.ArgumentParser:
+    """The parser of the sub-command ``name``, handled by ``run`` (args -> exit status; ``args.parser`` is this
+    parser). ``data``: the command reads a measurement file (the DATA section as its epilog, kept as written);
+    ``options``: those of ``add_parser`` (help, description, epilog...)."""
+    if data:
+        options.update(epilog=data_epilog(), formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = subparsers.add_parser(name, **options)
+    parser.set_defaults(func=run, parser=parser)
+    return parser
+
+
+def closing_options(parser, *, overwrite: str, quiet: str | None = None, short_quiet: bool = False,
+                    data: bool = False) -> None:
+    """The options a command's list ends with: ``--overwrite`` (help ``overwrite``), ``--quiet`` (also ``-q`` with
+    ``short_quiet``; help ``quiet``, none without it), then the options that read DATA (``data``,
+    :func:`add_data_options`). ``parser``: a parser or an argument group."""
+    parser.add_argument("--overwrite", action="store_true", help=overwrite)
+    if quiet:
+        parser.add_argument(*(("-q", "--quiet") if short_quiet else ("--quiet",)), action="store_true", help=quiet)
+    if data:
+        add_data_options(parser)
+
+
+def command_error(command: str, message, status: int = 2) -> int:
+    """Say ``mftyre COMMAND: MESSAGE`` on stderr and return the exit status ``status`` (2: a usage error, found
+    before any work; 1: the work failed)."""
+    import sys
+
+    print(f"mftyre {command}: {message}", file=sys.stderr)
+    return status
+
+
+def refused_outputs(command: str, outputs: dict, inputs: dict | None = None, *, folders: dict | None = None,
+                    overwrite: bool = False, prefix: str = "") -> int | None:
+    """The output rule (:func:`mftyre.files.check_outputs`) before a command's work: None when its outputs may be
+    written, else the exit status 2 after saying why (``mftyre COMMAND: PREFIX<reason>``)."""
+    from .files import OutputError, check_outputs
+
+    try:
+        check_outputs(outputs, inputs, folders=folders, overwrite=overwrite)
+    except OutputError as exc:
+        return command_error(command, f"{prefix}{exc}")
+    return None

@@ -28,8 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .arguments import (MAX_POINTS, SWEEP_UNITS, SweepAction, join_negative_values, sweep_option,
-                        sweep_type)
+from .arguments import (MAX_POINTS, SWEEP_UNITS, SweepAction, closing_options, command_error, command_parser,
+                        join_negative_values, sweep_option, sweep_type)
 from .errors import speaking_cli
 from .grid_results import check_request, format_table, grid_frame, plot_grid, sweep_grid, write_results
 
@@ -101,8 +101,8 @@ def _outputs_type(text: str) -> tuple[str, ...]:
 
 
 def _add_eval(sub) -> None:
-    p = sub.add_parser(
-        "eval",
+    p = command_parser(
+        sub, "eval", _cmd_eval,
         help="evaluate the model on a grid of inputs (table, CSV, plot)",
         formatter_class=argparse.RawDescriptionHelpFormatter,
         description="""\
@@ -157,9 +157,9 @@ command line.""",
     out.add_argument("--csv", metavar="OUT.csv", help="write the table as CSV (column names 'name [unit]')")
     out.add_argument("--plot", metavar="OUT.png", help="draw the outputs against the swept input, save as PNG")
     out.add_argument("--x", choices=tuple(SWEEP_UNITS), help="swept input for the plot's x axis")
-    out.add_argument("--overwrite", action="store_true", help="replace existing --csv/--plot files")
-    out.add_argument("-q", "--quiet", action="store_true", help="do not print the table")
-    p.set_defaults(func=_cmd_eval, parser=p, sweep_order=None)
+    closing_options(out, overwrite="replace existing --csv/--plot files", quiet="do not print the table",
+                    short_quiet=True)
+    p.set_defaults(sweep_order=None)
 
 
 def _cmd_eval(args) -> int:
@@ -211,11 +211,9 @@ def _cmd_eval(args) -> int:
 
         write_results(args, table, lambda: _eval_plot(args, results, swept, shape, args.outputs or _DEFAULT_OUTPUTS))
     except MFTyreError as exc:
-        print(f"mftyre eval: error: {exc}", file=sys.stderr)
-        return 1
+        return command_error("eval", f"error: {exc}", 1)
     except OSError as exc:
-        print(f"mftyre eval: error: cannot write output: {exc}", file=sys.stderr)
-        return 1
+        return command_error("eval", f"error: cannot write output: {exc}", 1)
     return 0
 
 

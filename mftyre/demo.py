@@ -123,25 +123,22 @@ def _check_grid(truth, fitted, prm) -> dict:
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser("demo", help="run the main job on the bundled tyre: evaluate, synthetic trailer "
-                                           "data, fit", description=__doc__.split("\n\n")[0])
-    p.add_argument("--out", default="out", help="output folder (default: out)")
-    from mftyre.arguments import number_type
+    from mftyre.arguments import closing_options, command_parser, number_type
 
+    p = command_parser(subparsers, "demo", _run, help="run the main job on the bundled tyre: evaluate, synthetic "
+                                                      "trailer data, fit", description=__doc__.split("\n\n")[0])
+    p.add_argument("--out", default="out", help="output folder (default: out)")
     p.add_argument("--seed", type=number_type(0, integer=True), default=1,
                    help="seed of the measurement noise (default 1)")
-    p.add_argument("--overwrite", action="store_true", help="write into an output folder that is not empty")
-    p.set_defaults(func=_run)
+    closing_options(p, overwrite="write into an output folder that is not empty")
 
 
 def _run(args) -> int:
-    import sys
-
+    from mftyre.arguments import command_error
     from mftyre.errors import MFTyreError
 
     try:
         run_demo(args.out, seed=args.seed, overwrite=args.overwrite)
     except MFTyreError as exc:
-        print(f"mftyre demo: error: {exc}", file=sys.stderr)
-        return 2
+        return command_error("demo", f"error: {exc}")
     return 0

@@ -13,6 +13,7 @@ import importlib.resources
 import sys
 import time
 
+from .arguments import closing_options, command_error, command_parser, refused_outputs
 from .errors import MFTyreError
 
 __all__ = ["register", "run", "fmu_sources"]
@@ -31,8 +32,8 @@ def register(subparsers) -> argparse.ArgumentParser:
                     "variables.")
     sub = fmu.add_subparsers(dest="fmu_command", metavar="SUBCOMMAND")
     sub.required = True
-    build = sub.add_parser(
-        "build", help="build an FMU from a .tir file",
+    build = command_parser(
+        sub, "build", run, help="build an FMU from a .tir file",
         description="Build an FMI 2.0 co-simulation FMU embedding a .tir file. Default backend native: C code "
                     "generated from the model's equations, compiled here with the system C compiler and shipped "
                     "as sources too; runs without Python. Backend pythonfmu: a Python slave (needs numpy and "
@@ -59,21 +60,16 @@ def register(subparsers) -> argparse.ArgumentParser:
                        help="native steady/transient: the MF with turn slip, from the input yaw_rate")
     build.add_argument("--backend", choices=("native", "pythonfmu"), default="native",
                        help="native (compiled C, default) or pythonfmu (Python slave)")
-    build.add_argument("--overwrite", action="store_true", help="replace an existing output file")
-    build.set_defaults(func=run)
+    closing_options(build, overwrite="replace an existing output file")
     return fmu
 
 
 def run(args) -> int:
     """Handler of ``mftyre fmu build``: returns the exit status (1 with a message on stderr on failure, 2 when the
     output rule of :mod:`mftyre.files` refuses the output)."""
-    from .files import OutputError, check_outputs
-
-    try:
-        check_outputs({"-o": args.output}, {"FILE.tir": args.tir}, overwrite=args.overwrite)
-    except OutputError as exc:
-        print(f"mftyre fmu build: error: {exc}", file=sys.stderr)
-        return 2
+    if refused := refused_outputs("fmu build", {"-o": args.output}, {"FILE.tir": args.tir}, overwrite=args.overwrite,
+                                  prefix="error: "):
+        return refused
     try:
         if args.backend == "native":
             if args.input_mode is not None:
@@ -102,5 +98,4 @@ def run(args) -> int:
                                              input_mode=args.input_mode or "vehicle", vertical_input=args.vertical,
                                              no_compile=False))
     except (MFTyreError, OSError, ValueError, ImportError) as exc:  # the builders' errors: a message, no traceback
-        print(f"mftyre fmu build: error: {exc}", file=sys.stderr)
-        return 1
+        return command_error("fmu build", f"error: {exc}", 1)

@@ -9,7 +9,6 @@ per model. The error of each model on every measured channel (RMS and normalised
 """
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 import warnings
@@ -28,41 +27,34 @@ _STYLE_NAMES = ("solid", "dashed", "dotted", "dash-dot")
 
 
 def register(subparsers) -> None:
-    from .arguments import add_data_options, data_epilog
+    from .arguments import closing_options, command_parser
 
-    p = subparsers.add_parser(
-        "plot", help="plot measured data against .tir models, sweep by sweep (no fitting)",
+    p = command_parser(
+        subparsers, "plot", run, data=True, help="plot measured data against .tir models, sweep by sweep (no fitting)",
         description="Recognise the test programme of DATA and plot every slip-angle sweep (FY, MZ, MX against SA) "
                     "and slip-ratio sweep (FX, FY against SL): measured samples as dots, each --model evaluated at "
                     "the measured inputs as a line (one colour per sweep, one line style per model). Prints the "
-                    "error of each model per channel.", epilog=data_epilog(),
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+                    "error of each model per channel.")
     p.add_argument("data", help="measurement file: TYDEX, TTC (.dat/.mat) or CSV (see DATA below)")
     p.add_argument("--model", nargs="+", metavar="FILE.tir", default=[], help="one or more .tir files to compare")
     p.add_argument("-o", "--output", required=True, metavar="OUT.png", help="the figure to write (PNG, SVG, PDF)")
     p.add_argument("--max-sweeps", type=int, default=12, metavar="N",
                    help="draw at most N sweeps per kind, spread over the programme (default 12)")
     p.add_argument("--side", choices=("left", "right"), help="side the tyre is mounted on (default: TYRESIDE)")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
-    add_data_options(p)
-    p.set_defaults(func=run)
+    closing_options(p, overwrite="replace an existing output file", data=True)
 
 
 def run(args) -> int:
-    from .arguments import read_data_args
+    from .arguments import command_error, read_data_args, refused_outputs
     from .data import speaking_cli
     from .errors import MFTyreError
-    from .files import OutputError, check_outputs
 
     if args.max_sweeps < 1:
-        print("mftyre plot: --max-sweeps: expected an integer >= 1", file=sys.stderr)
-        return 2
-    try:
-        check_outputs({"-o": args.output}, {"DATA": args.data, **{f"--model {m}": m for m in args.model}},
-                      overwrite=args.overwrite)
-    except OutputError as exc:
-        print(f"mftyre plot: {exc}", file=sys.stderr)
-        return 2
+        return command_error("plot", "--max-sweeps: expected an integer >= 1")
+    if refused := refused_outputs("plot", {"-o": args.output},
+                                  {"DATA": args.data, **{f"--model {m}": m for m in args.model}},
+                                  overwrite=args.overwrite):
+        return refused
     try:
         from .model import load_tir
         from .programme import recognise
@@ -83,8 +75,7 @@ def run(args) -> int:
         make_output_folder(Path(args.output).parent)
         write_figure(fig, args.output)
     except (MFTyreError, OSError) as exc:
-        print(f"mftyre plot: {exc}", file=sys.stderr)
-        return 1
+        return command_error("plot", exc, 1)
     print(f"wrote {args.output} ({shown})")
     return 0
 

@@ -40,10 +40,10 @@ def _quantity(name):
 
 
 def register(subparsers) -> None:
-    from .arguments import number_type
+    from .arguments import closing_options, command_parser, number_type
 
-    p = subparsers.add_parser(
-        "swift", help="SWIFT tyre over a road profile or obstacle: time histories (CSV, plot)",
+    p = command_parser(
+        subparsers, "swift", run, help="SWIFT tyre over a road profile or obstacle: time histories (CSV, plot)",
         description="Roll the SWIFT tyre of FILE.tir (rigid ring, tandem-cam effective road, Magic Formula slip) at "
                     "constant speed over ROAD, free rolling (rim spin V / Re), from the static equilibrium. "
                     "--axle height holds the axle at the static loaded radius of --fz (a rig with a fixed axle); "
@@ -70,35 +70,26 @@ def register(subparsers) -> None:
                    help="output (and step) interval [s] (default 0.001)")
     p.add_argument("--csv", metavar="OUT.csv", help="write the time histories here")
     p.add_argument("--plot", metavar="OUT.png", help="write the plot here (PNG, SVG, PDF)")
-    p.add_argument("--overwrite", action="store_true", help="replace existing output files")
-    p.add_argument("--quiet", action="store_true", help="no progress output")
-    p.set_defaults(func=run)
+    closing_options(p, overwrite="replace existing output files", quiet="no progress output")
 
 
 def run(args) -> int:
-    from .arguments import progress_printer
+    from .arguments import command_error, progress_printer, refused_outputs
     from .errors import MFTyreError
-    from .files import OutputError, check_outputs
 
     if args.speed <= 0:
-        print("mftyre swift: --speed: expected a forward speed above 0", file=sys.stderr)
-        return 2
+        return command_error("swift", "--speed: expected a forward speed above 0")
     for option, value in (("--fz", args.fz), ("--p", args.p)):
         if value is not None and not value > 0:
-            print(f"mftyre swift: {option}: expected a value above 0, got {value:g}", file=sys.stderr)
-            return 2
+            return command_error("swift", f"{option}: expected a value above 0, got {value:g}")
     steps = args.distance / args.speed / args.dt
     if steps > MAX_STEPS:
-        print(f"mftyre swift: --distance {args.distance:g} m at {args.speed:g} m/s in steps of --dt {args.dt:g} s is "
-              f"{steps:.3g} steps, more than the {MAX_STEPS:,} one run writes; shorten --distance or raise --dt",
-              file=sys.stderr)
-        return 2
-    try:
-        check_outputs({"--csv": args.csv, "--plot": args.plot}, {"FILE.tir": args.file, "--road": _road_file(args)},
-                      overwrite=args.overwrite)
-    except OutputError as exc:
-        print(f"mftyre swift: {exc}", file=sys.stderr)
-        return 2
+        return command_error("swift", f"--distance {args.distance:g} m at {args.speed:g} m/s in steps of --dt "
+                                      f"{args.dt:g} s is {steps:.3g} steps, more than the {MAX_STEPS:,} one run "
+                                      "writes; shorten --distance or raise --dt")
+    if refused := refused_outputs("swift", {"--csv": args.csv, "--plot": args.plot},
+                                  {"FILE.tir": args.file, "--road": _road_file(args)}, overwrite=args.overwrite):
+        return refused
     say = progress_printer(args.quiet)
 
     try:
@@ -126,8 +117,7 @@ def run(args) -> int:
             write_figure(_figure(frame, road, args, info), args.plot)
             say(f"wrote {args.plot}")
     except (MFTyreError, OSError) as exc:
-        print(f"mftyre swift: {exc}", file=sys.stderr)
-        return 1
+        return command_error("swift", exc, 1)
     return 0
 
 

@@ -252,3 +252,49 @@ def test_python_dash_m(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "mftyre", "eval", str(TIR61), "--alpha", "1:2:x"],
                          capture_output=True, text=True, env=env, cwd=tmp_path, timeout=300)
     assert bad.returncode == 2 and "argument --alpha" in bad.stderr and "Traceback" not in bad.stderr
+
+
+_STAGES = "pure_fx, pure_fy, mz, combined_fx, combined_fy, mz_combined, mx, my, vertical, rolling_radius"
+
+
+@pytest.mark.parametrize("argv, message", [
+    ("fit t.tir -o out.tir --stages pure_fx,bogus", f"mftyre fit: unknown stage(s) bogus; stages: {_STAGES}"),
+    ("fit t.tir -o out.tir", "mftyre fit: -o out.tir: exists; pass --overwrite to replace"),
+    ("gaps --model t.tir", "mftyre gaps: give either DATA (steady) or --dynamic DATA (time histories)"),
+    ("gaps d.csv --dynamic r.csv --model t.tir",
+     "mftyre gaps: give either DATA (steady) or --dynamic DATA (time histories)"),
+    ("gaps t.tir --model t.tir --channels FX,QQ", "mftyre gaps: unknown channel(s) QQ; channels: FX,FY,MZ,MX,MY,FZ"),
+    ("gaps t.tir --model t.tir -o out.tir", "mftyre gaps: -o out.tir: exists; pass --overwrite to replace"),
+    ("gaps --dynamic r.csv --model t.tir -o out.tir", "mftyre gaps: -o out.tir: exists; pass --overwrite to replace"),
+    ("plot t.tir -o out.png --max-sweeps 0", "mftyre plot: --max-sweeps: expected an integer >= 1"),
+    ("plot t.tir -o out.csv", "mftyre plot: -o out.csv: exists; pass --overwrite to replace"),
+    ("swift t.tir --speed 0", "mftyre swift: --speed: expected a forward speed above 0"),
+    ("swift t.tir --speed 10 --fz -1", "mftyre swift: --fz: expected a value above 0, got -1"),
+    ("swift t.tir --speed 10 --csv out.csv", "mftyre swift: --csv out.csv: exists; pass --overwrite to replace"),
+    ("fmu build t.tir -o out.csv", "mftyre fmu build: error: -o out.csv: exists; pass --overwrite to replace"),
+    ("demo --out full",
+     "mftyre demo: error: --out full (a folder that is not empty): exists; pass --overwrite to replace"),
+    ("gaps --dynamic r.csv --model t.tir --channels FX",
+     "mftyre gaps: --channels is for steady data; dynamic runs use every measured channel"),
+    ("swift t.tir --speed 1e-3 --distance 100 --dt 1e-5", "mftyre swift: --distance 100 m at 0.001 m/s in steps of "
+     "--dt 1e-05 s is 1e+10 steps, more than the 10,000,000 one run writes; shorten --distance or raise --dt"),
+    # failures (exit 1): the same one line
+    ("fit nofile.csv -o new.tir --quiet", "mftyre fit: nofile.csv: file not found: expected an existing measurement "
+                                          "file"),
+    ("gaps nofile.csv --model t.tir", "mftyre gaps: nofile.csv: file not found: expected an existing measurement file"),
+    ("plot nofile.csv -o new.png", "mftyre plot: nofile.csv: file not found: expected an existing measurement file"),
+    ("swift t.tir --speed 10 --road nofile.csv", "mftyre swift: road file 'nofile.csv' not found"),
+    ("fmu build nofile.tir -o x.fmu", "mftyre fmu build: error: no such property file: 'nofile.tir'"),
+    ("eval nofile.tir", "mftyre eval: error: nofile.tir: file not found: expected an existing .tir property file"),
+])
+def test_command_errors_one_line_with_the_command_named(argv, message, tmp_path, monkeypatch, capsys):
+    """Every command's errors as one line on stderr naming the command: usage errors (bad options, outputs the
+    output rule refuses) exit 2 before any work, failures exit 1."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "t.tir").write_bytes(TIR61.read_bytes())
+    for name in ("out.tir", "out.csv", "full/a"):
+        (tmp_path / name).parent.mkdir(exist_ok=True)
+        (tmp_path / name).write_text("x")
+    rc = cli.main(argv.split())
+    captured = capsys.readouterr()
+    assert (rc, captured.err, captured.out) == (1 if "nofile" in argv else 2, message + "\n", "")

@@ -30,18 +30,17 @@ def _integer(minimum):
 
 
 def register(subparsers) -> None:
-    from ..arguments import add_data_options, data_epilog
+    from ..arguments import closing_options, command_parser
     from .stages import STAGE_NAMES
 
-    p = subparsers.add_parser(
-        "fit", help="fit Magic Formula parameters to tyre measurements and write a .tir file",
+    p = command_parser(
+        subparsers, "fit", run, data=True, help="fit Magic Formula parameters to tyre measurements and write a .tir file",
         description="Fit Magic Formula parameters (MF 6.1, or MF 6.2 with an MF 6.2 --start), stage by stage (pure Fx, pure Fy, Mz, combined, Mx, My, vertical, "
                     "rolling radius), to TYDEX (.tdx) or CSV data; pressure terms when the data have several "
                     "pressures. The test programme is recognised first and printed; stages whose result fails "
                     "the physical checks are rejected with their reason. Writes the .tir file and optionally a "
                     "Markdown report with plots. Time series (100 Hz and more) are reduced per sweep to binned means, "
-                    "up and down branches averaged.", epilog=data_epilog(),
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+                    "up and down branches averaged.")
     p.add_argument("data", help="measurement file: TYDEX, TTC (.dat/.mat) or CSV (see DATA below)")
     p.add_argument("-o", "--output", required=True, help="the .tir file to write")
     p.add_argument("--start", help="start parameters from this .tir file (default: neutral values and estimates "
@@ -56,17 +55,13 @@ def register(subparsers) -> None:
                    help="bins per sweep when a time series is reduced (integer >= 3, default 40)")
     p.add_argument("--max-nfev", type=_integer(1), default=None,
                    help="residual evaluations per pass at most (integer >= 1; default 30 x (parameters + 1))")
-    p.add_argument("--overwrite", action="store_true", help="replace existing output files")
-    p.add_argument("--quiet", action="store_true", help="no progress output")
-    add_data_options(p)
-    p.set_defaults(func=run)
+    closing_options(p, overwrite="replace existing output files", quiet="no progress output", data=True)
 
 
 def run(args) -> int:
-    from ..arguments import read_data_args
+    from ..arguments import command_error, read_data_args, refused_outputs
     from ..data import speaking_cli
     from ..errors import MFTyreError
-    from ..files import OutputError, check_outputs
     from .core import fit_tir
     from .stages import STAGE_NAMES
 
@@ -74,17 +69,13 @@ def run(args) -> int:
     stages = [s.strip() for s in args.stages.split(",") if s.strip()]
     unknown = [s for s in stages if s not in STAGE_NAMES]
     if unknown:
-        print(f"mftyre fit: unknown stage(s) {', '.join(unknown)}; stages: {', '.join(STAGE_NAMES)}", file=sys.stderr)
-        return 2
+        return command_error("fit", f"unknown stage(s) {', '.join(unknown)}; stages: {', '.join(STAGE_NAMES)}")
     outputs = {"-o": out, "--report": args.report}
     if args.report:  # the report's plots beside it (mftyre.fit.report.save_report)
         report = Path(args.report)
         outputs.update({f"--report plot of {s}": report.with_name(f"{report.stem}_{s}.png") for s in stages})
-    try:
-        check_outputs(outputs, {"DATA": args.data, "--start": args.start}, overwrite=args.overwrite)
-    except OutputError as exc:
-        print(f"mftyre fit: {exc}", file=sys.stderr)
-        return 2
+    if refused := refused_outputs("fit", outputs, {"DATA": args.data, "--start": args.start}, overwrite=args.overwrite):
+        return refused
     t0 = time.perf_counter()
 
     terminal = sys.stderr.isatty()
@@ -112,8 +103,7 @@ def run(args) -> int:
     except (MFTyreError, OSError) as exc:
         if not args.quiet and terminal:
             print(file=sys.stderr)
-        print(f"mftyre fit: {exc}", file=sys.stderr)
-        return 1
+        return command_error("fit", exc, 1)
     fitted = (f"{len(data)} rows ({len(result.data)} points after reduction)" if result.reduction is not None
               else f"{len(data)} points")
     print(f"fitted {fitted} in {result.seconds:.1f} s; wrote {out}" + (f" and {args.report}" if args.report else ""))

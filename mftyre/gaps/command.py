@@ -8,22 +8,18 @@ the same for dynamic runs (:mod:`mftyre.gaps.dynamic_command`).
 """
 from __future__ import annotations
 
-import argparse
-import sys
-
 __all__ = ["register", "run"]
 
 
 def register(subparsers) -> None:
-    from ..arguments import add_data_options, data_epilog, number_type
+    from ..arguments import closing_options, command_parser, number_type
 
-    p = subparsers.add_parser(
-        "gaps", help="find the effects a .tir model misses in measured data, add them, show the gap shrink",
+    p = command_parser(
+        subparsers, "gaps", run, data=True, help="find the effects a .tir model misses in measured data, add them, show the gap shrink",
         description="Refit the model's active parameters to the data, locate residual structure beyond measurement "
                     "noise, name the missing effect from a catalogue of .tir parameter groups, add it when it "
                     "improves held-out sweeps significantly, repeat. Prints findings and errors; writes the "
-                    "improved .tir, a Markdown/PNG report and JSON.", epilog=data_epilog(),
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+                    "improved .tir, a Markdown/PNG report and JSON.")
     p.add_argument("data", nargs="?", help="measurement file: TYDEX, TTC (.dat/.mat) or CSV (see DATA below)")
     p.add_argument("--dynamic", metavar="DATA", help="dynamic runs instead (cleat, step steer: one CSV with a RUN "
                                                     "column or a folder of CSVs; layout: mftyre.gaps.dynamic_runs); "
@@ -41,39 +37,31 @@ def register(subparsers) -> None:
     p.add_argument("--max-effects", type=number_type(0, integer=True), default=5,
                    help="add at most this many effects (default 5)")
     p.add_argument("--channels", help="comma-separated channels to use (default: all measured of FX,FY,MZ,MX,MY,FZ)")
-    p.add_argument("--overwrite", action="store_true", help="replace existing output files")
-    p.add_argument("--quiet", action="store_true", help="no progress output")
-    add_data_options(p)
-    p.set_defaults(func=run)
+    closing_options(p, overwrite="replace existing output files", quiet="no progress output", data=True)
 
 
 def run(args) -> int:
-    from ..arguments import progress_printer, read_data_args
+    from ..arguments import command_error, progress_printer, read_data_args, refused_outputs
     from ..data import speaking_cli
     from ..errors import MFTyreError
-    from ..files import OutputError, check_outputs
     from .core import find_gaps
 
     if (args.data is None) == (args.dynamic is None):
-        print("mftyre gaps: give either DATA (steady) or --dynamic DATA (time histories)", file=sys.stderr)
-        return 2
+        return command_error("gaps", "give either DATA (steady) or --dynamic DATA (time histories)")
     if args.dynamic is not None:
         from .dynamic_command import run_dynamic
         return run_dynamic(args)
 
-    try:
-        check_outputs({"-o": args.output, "--json": args.json}, {"DATA": args.data, "--model": args.model},
-                      folders={"--report": args.report}, overwrite=args.overwrite)
-    except OutputError as exc:
-        print(f"mftyre gaps: {exc}", file=sys.stderr)
-        return 2
+    if refused := refused_outputs("gaps", {"-o": args.output, "--json": args.json},
+                                  {"DATA": args.data, "--model": args.model}, folders={"--report": args.report},
+                                  overwrite=args.overwrite):
+        return refused
     channels = None
     if args.channels:
         channels = [c.strip().upper() for c in args.channels.split(",") if c.strip()]
         bad = [c for c in channels if c not in ("FX", "FY", "MZ", "MX", "MY", "FZ")]
         if bad:
-            print(f"mftyre gaps: unknown channel(s) {', '.join(bad)}; channels: FX,FY,MZ,MX,MY,FZ", file=sys.stderr)
-            return 2
+            return command_error("gaps", f"unknown channel(s) {', '.join(bad)}; channels: FX,FY,MZ,MX,MY,FZ")
     progress = progress_printer(args.quiet)
 
     try:
@@ -88,8 +76,7 @@ def run(args) -> int:
         if args.report:
             rep.save(args.report)
     except (MFTyreError, OSError) as exc:
-        print(f"mftyre gaps: {exc}", file=sys.stderr)
-        return 1
+        return command_error("gaps", exc, 1)
     print(rep.message)
     if rep.programme:
         print(f"  test programme: {rep.programme}")

@@ -3,27 +3,21 @@ of the dynamic gap finder (:func:`mftyre.gaps.dynamic.find_dynamic_gaps`); optio
 (``--holdout``, ``--seed``, ``--alpha``, ``--max-effects``, ``--overwrite``, ``--quiet``)."""
 from __future__ import annotations
 
-import sys
-
 __all__ = ["run_dynamic"]
 
 
 def run_dynamic(args) -> int:
     """args -> exit status (0 done, 1 error, 2 usage)."""
-    from ..arguments import progress_printer
+    from ..arguments import command_error, progress_printer, refused_outputs
     from ..errors import MFTyreError
-    from ..files import OutputError, check_outputs
     from .dynamic import find_dynamic_gaps
 
     if args.channels:
-        print("mftyre gaps: --channels is for steady data; dynamic runs use every measured channel", file=sys.stderr)
-        return 2
-    try:
-        check_outputs({"-o": args.output, "--json": args.json}, {"--dynamic": args.dynamic, "--model": args.model},
-                      folders={"--report": args.report}, overwrite=args.overwrite)
-    except OutputError as exc:
-        print(f"mftyre gaps: {exc}", file=sys.stderr)
-        return 2
+        return command_error("gaps", "--channels is for steady data; dynamic runs use every measured channel")
+    if refused := refused_outputs("gaps", {"-o": args.output, "--json": args.json},
+                                  {"--dynamic": args.dynamic, "--model": args.model},
+                                  folders={"--report": args.report}, overwrite=args.overwrite):
+        return refused
     progress = progress_printer(args.quiet)
 
     try:
@@ -37,8 +31,7 @@ def run_dynamic(args) -> int:
         if args.report:
             rep.save(args.report, overwrite=args.overwrite)
     except (MFTyreError, OSError) as exc:
-        print(f"mftyre gaps: {exc}", file=sys.stderr)
-        return 1
+        return command_error("gaps", exc, 1)
     print(rep.message)
     print(f"  measurement chain: delay {1e3 * rep.chain.delay:.2f} ms, anti-alias filter "
           f"{'none' if rep.chain.cutoff is None else f'{rep.chain.cutoff:g} Hz'}")

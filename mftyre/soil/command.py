@@ -9,7 +9,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
-import sys
 from pathlib import Path
 
 __all__ = ["register", "run"]
@@ -66,10 +65,10 @@ def _outputs_type(text):
 
 def register(subparsers) -> argparse.ArgumentParser:
     """Add the ``soil`` command to an argparse subparsers object."""
-    from ..arguments import SweepAction
+    from ..arguments import SweepAction, closing_options, command_parser
 
-    p = subparsers.add_parser(
-        "soil", help="evaluate the tyre on soft soil (Bekker/Janosi-Hanamoto, deflecting tyre) on a grid",
+    p = command_parser(
+        subparsers, "soil", run, help="evaluate the tyre on soft soil (Bekker/Janosi-Hanamoto, deflecting tyre) on a grid",
         formatter_class=argparse.RawDescriptionHelpFormatter,
         description="""\
 Evaluate the tyre of a .tir file on soft soil (mftyre.soil: Bekker pressure-sinkage, Janosi-Hanamoto shear,
@@ -110,13 +109,14 @@ swept input with the most values (or --x). Existing output files need --overwrit
     out.add_argument("--csv", metavar="OUT.csv", help="write the table as CSV")
     out.add_argument("--plot", metavar="OUT.png", help="plot the outputs against the swept input")
     out.add_argument("--x", choices=tuple(_SWEEPS), help="swept input for the plot's x axis")
-    out.add_argument("--overwrite", action="store_true", help="replace existing --csv/--plot files")
-    out.add_argument("-q", "--quiet", action="store_true", help="do not print the table")
-    p.set_defaults(func=run, parser=p, sweep_order=None)
+    closing_options(out, overwrite="replace existing --csv/--plot files", quiet="do not print the table",
+                    short_quiet=True)
+    p.set_defaults(sweep_order=None)
     return p
 
 
 def run(args) -> int:
+    from ..arguments import command_error
     from ..errors import MFTyreError
     from ..grid_results import check_request, format_table, sweep_grid, write_results
     from .equations import OUTPUTS
@@ -162,11 +162,9 @@ def run(args) -> int:
         write_results(args, lambda: _frame(args, out, swept, shape, args.outputs or tuple(OUTPUTS)),
                       lambda: _plot(args, tyre, out, swept, shape, columns))
     except MFTyreError as exc:
-        print(f"mftyre soil: error: {exc}", file=sys.stderr)
-        return 1
+        return command_error("soil", f"error: {exc}", 1)
     except OSError as exc:
-        print(f"mftyre soil: error: cannot write output: {exc}", file=sys.stderr)
-        return 1
+        return command_error("soil", f"error: cannot write output: {exc}", 1)
     return 0
 
 
