@@ -38,13 +38,8 @@ def steady_state(prm, fz, kappa, alpha, gamma, phit, vx, p, omega, omega_given, 
     mx = moments.overturning_moment(prm, s, fy, be)
     my = moments.rolling_resistance_moment(prm, s, fx, be)
 
-    if prm.version == "62":
-        rl, rho = vertical.loaded_radius_62(prm, s.Fz, r_omega, omega, fx, fy, s.gamma, s.dpi, be)
-        fz_cz = s.Fz
-    else:
-        rho = vertical.deflection_61(prm, s.Fz_low, r_omega, omega, fx, fy, s.dpi, be)
-        rl = be.fmax(r_omega - rho, 0.0)
-        fz_cz = s.Fz_low
+    fz_cz = s.Fz if prm.version == "62" else s.Fz_low  # FZMIN raises the load of the MF 6.1 deflection only
+    rl, rho = vertical.loaded_radius(prm, fz_cz, r_omega, omega, fx, fy, s.gamma, s.dpi, be)
     cz = fz_cz / be.where(fz_cz == 0, 1e-6, rho)
     a, b = vertical.contact_patch(prm, s.Fz, s.dpi, be)
     cx, cy, sigmax, sigmay = derived.carcass_stiffness_and_relaxation(prm, s, lon.Kxk, lat.Kya, be)
