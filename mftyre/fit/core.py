@@ -43,8 +43,8 @@ from ..programme import recognise
 from ..timeseries import effective_samples, needs_reduction, reduce_sweeps
 from ..tir import read_tir, write_tir
 from .metrics import normalised_rms
-from .stages import (STAGE_NAMES, STAGES, conditions, level_labels, shape_violations, stage_parameters,
-                     stage_rows, supported_parameters)
+from .stages import (STAGE_NAMES, STAGES, conditions, data_corners, level_labels, shape_violations,
+                     stage_parameters, stage_rows, supported_parameters)
 from .start import estimate_stage, start_parameters
 from .verify import check_speeds, physical_domain, verification, verify_tir
 
@@ -265,13 +265,6 @@ class _BatchParameters:
         return name in self._params
 
 
-def _corners(data: TyreData, prm) -> dict:
-    fz, p, g = data.array("FZ"), data.array("P"), data.array("IA")
-    fz0 = prm.FNOMIN * prm.LFZO
-    grid = np.array(np.meshgrid([fz.min(), fz.max()], [p.min(), p.max()], [g.min(), 0.0, g.max()])).reshape(3, -1)
-    return dict(dfz=(grid[0] - fz0) / fz0, dpi=vertical.pressure_increment(prm, grid[1]), gamma=grid[2])
-
-
 def physical_bounds(prm, data: TyreData) -> dict:
     """Bounds that follow from physics and the data's range, tighter than :data:`BOUNDS` where they apply:
     free-radius growth with speed (Q_V1) at most 3 % and the speed stiffening (Q_V2) at most 40 % at the top
@@ -307,7 +300,7 @@ class _Problem:
         self.measured = data.array(stage.channel)
         self.scale = float(np.sqrt(np.mean(self.measured**2))) or 1.0
         self.weights = prm.FNOMIN / data.array("FZ") if weighting == "load" else np.ones(len(data))
-        self.corners = _corners(data, prm)
+        self.corners = data_corners(data, prm)
         self.penalty = 10.0 * math.sqrt(len(data))
         self.params = bounded_parameters(prm, names, bounds)
         self.predict = _BatchPredictor(stage, prm, data, names, side)

@@ -30,11 +30,11 @@ import numpy as np
 
 from ..backend import NUMPY
 from ..data import TyreData, levels
-from ..formula import aligning, lateral, longitudinal
+from ..formula import aligning, lateral, longitudinal, vertical
 from ..params import PARAMETERS
 from ..programme import cluster_levels
 
-__all__ = ["Stage", "STAGES", "STAGE_NAMES", "conditions", "stage_parameters", "shape_violations",
+__all__ = ["Stage", "STAGES", "STAGE_NAMES", "conditions", "stage_parameters", "shape_violations", "data_corners",
            "supported_parameters"]
 
 _KAPPA_TOL = 0.005
@@ -279,6 +279,15 @@ def stage_parameters(stage: Stage, cond: dict, fit_pressure: bool):
 
 
 # ------------------------------------------------------------------------------------- shape checks
+def data_corners(data: TyreData, prm) -> dict:
+    """The corners of the data's range where :func:`shape_violations` checks: (dfz, dpi, gamma) arrays over the
+    lowest and highest load and pressure and the lowest, zero and highest inclination."""
+    fz, p, g = data.array("FZ"), data.array("P"), data.array("IA")
+    fz0 = prm.FNOMIN * prm.LFZO
+    grid = np.array(np.meshgrid([fz.min(), fz.max()], [p.min(), p.max()], [g.min(), 0.0, g.max()])).reshape(3, -1)
+    return dict(dfz=(grid[0] - fz0) / fz0, dpi=vertical.pressure_increment(prm, grid[1]), gamma=grid[2])
+
+
 def shape_violations(stage_name: str, prm, corners: dict) -> np.ndarray:
     """Amounts by which the Magic Formula shape conditions C > 0, D > 0, E <= 1 (and positive slip
     stiffness, trail and weighting slopes) are violated at the corners of the data range (``corners``:

@@ -29,8 +29,7 @@ import numpy as np
 from ..data import TyreData, levels
 from ..fit.core import BOUNDS, bounded_parameters, physical_bounds
 from ..fit.verify import verify_tir
-from ..formula import vertical
-from ..fit.stages import STAGES, need_met, conditions, shape_violations, stage_rows  # need_met: the stages' own rule
+from ..fit.stages import STAGES, data_corners, need_met, conditions, shape_violations, stage_rows  # need_met: the stages' own rule
 from ..model import MFModel
 from ..params import PARAMETERS
 from .catalogue import BASE, CATALOGUE, PARAM_STAGE, TURN_SLIP_BASE, effect_state, parameter_needs
@@ -53,13 +52,6 @@ class RefitResult:
     nfev: int
     success: bool
     problems: tuple = ()
-
-
-def _corners(data: TyreData, prm) -> dict:
-    fz, p, g = data.array("FZ"), data.array("P"), data.array("IA")
-    fz0 = prm.FNOMIN * prm.LFZO
-    grid = np.array(np.meshgrid([fz.min(), fz.max()], [p.min(), p.max()], [g.min(), 0.0, g.max()])).reshape(3, -1)
-    return dict(dfz=(grid[0] - fz0) / fz0, dpi=vertical.pressure_increment(prm, grid[1]), gamma=grid[2])
 
 
 def refit(params, ev: Evaluator, names, channels=None, sigma: dict | None = None, *, start: dict | None = None,
@@ -88,7 +80,7 @@ def refit(params, ev: Evaluator, names, channels=None, sigma: dict | None = None
     if not names or n == 0:
         return prm, RefitResult(names, {}, {}, chi2_before, chi2_before, n, 0, True)
     stage_set = sorted({PARAM_STAGE.get(k) for k in names} & set(STAGES))
-    corners = _corners(ev.data, prm)
+    corners = data_corners(ev.data, prm)
     penalty = 10.0 * math.sqrt(max(n, 1)) * max(1.0, float(np.sqrt(np.mean(r0**2))))
     lp = bounded_parameters(prm, names, {**BOUNDS, **physical_bounds(prm, ev.data)})   # the fit's physics
 
