@@ -166,6 +166,7 @@ class SwiftTyre:
             raise ModelInputError(f"axle must be 'height' or 'load', rim 'speed' or 'torque'; got {axle!r}, {rim!r}")
         self.model, self.axle, self.rim = model, axle, rim
         self._p_nominal = model.params.INFLPRES  # the default inflation pressure (the parameters are immutable)
+        self._p_factors, self._p_range = model.pressure_factors, model.input_range("p")
         for name, message in swift_invalid_values(model.params):  # parameters built by hand skip the reader's check
             raise ModelInputError(f"SWIFT parameter {name} {message}")
         self.constants = RingConstants.from_model(model, axle_mass, rim_extra_inertia)
@@ -405,6 +406,8 @@ class SwiftTyre:
                        inputs.omega, dt, 1.0, src, k)
             except struct.error:
                 raise _not_a_number(inputs, dt) from None
+            if p is not None and not self._p_factors.low < p < self._p_factors.high:
+                self._warn_pressure(p, p)
             code = c.step1(b.args)
             if not code:
                 b.row, b.last = k + 1, b.xs[k]
@@ -430,6 +433,7 @@ class SwiftTyre:
         if not row[INPUT_NAMES.index("p")] > 0:
             raise ModelInputError(f"input 'p' (inflation pressure) must be positive [Pa], got {inputs.p!r}")
         check_pressure(self.model.params, row[INPUT_NAMES.index("p")])
+        self._warn_pressure(row[INPUT_NAMES.index("p")], row[INPUT_NAMES.index("p")])
         state = self._impose(state, inputs)
         u = self._u(inputs)
         n = max(1, math.ceil(abs(inputs.vx) * dt / self._reach), math.ceil(dt / self._max_call - 1e-9))
@@ -462,8 +466,16 @@ class SwiftTyre:
                 rows = np.tile(np.array(self._row(inputs), dtype=float), (n, 1))
                 for i, speed in ((_U_Y, inputs.vy), (_NU, inputs.vx), (_NU + 1, inputs.vz)):
                     rows[:, i] += speed * t
+            if n:
+                self._warn_pressure(float(np.min(rows[:, _U_P])), float(np.max(rows[:, _U_P])))
             states[1:], outs[1:] = self._compiled.run(state, rows, dt)
         return SimResult(dt * np.arange(n + 1), states, dict(zip(OUTPUT_NAMES, outs.T)))
+
+    def _warn_pressure(self, p_min, p_max):
+        """The model's warning (once per factor) where a pressure factor of the file has changed sign at the pressures
+        used (saturated to PRESMIN..PRESMAX as the slip model uses them): :class:`mftyre.inputs.PressureFactorCheck`."""
+        lo, hi = self._p_range
+        self._p_factors(min(max(p_min, lo), hi), min(max(p_max, lo), hi), stacklevel=4)
 
     def outputs(self, state, inputs: StepInputs) -> np.ndarray:
         """Outputs at ``state`` (no time step), in the order of OUTPUT_NAMES."""
@@ -580,6 +592,7 @@ class SwiftTyre:
         c = self.constants
         p = prm.INFLPRES if inputs.p is None else inputs.p
         check_pressure(prm, p)
+        self._warn_pressure(p, p)
         s = np.zeros(len(STATE_NAMES))
         s[_S["xa"]] = s[_S["xb"]] = inputs.x
         h = float(self.table(inputs.x))
@@ -680,6 +693,7 @@ def _remember_contact(x, out):
 
 _NU = len(INPUT_NAMES)
 _U_Y = INPUT_NAMES.index("y")  # the lateral position in the input vector
+_U_P = INPUT_NAMES.index("p")  # the inflation pressure in the input vector
 #: One row of the compiled loop (:meth:`SwiftTyre._row`): the ring's inputs, then the imposed axle x, z, vz, spin.
 _ROW = (*INPUT_NAMES, "x", "z", "vz", "omega")
 _NI = len(_ROW)
