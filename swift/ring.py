@@ -83,12 +83,13 @@ kappa_e = d beta_y/dx = cos^2(beta_y) (h_f' - h_r')/l_s, and
       R_e + Delta r_e. Over a convex crest r_e drops (the belt must spin
       faster), in a concave dip (entry and exit of a cleat) it grows; at -6/+12 mm over a 10 x 20 mm cleat
       (4 kN). Output ``dre`` = Delta r_e from the current effective curvature (kappa_s = cos(beta_y) kappa_e; the
-      steady value; 1 - t floored at 0.2 where a concave corner is tighter than 1/(R_e - r_c) [chosen guard]). In the slip, beta_dot is the actual rate
-      of the effective slope (with the forward shift and the tandem base moving): the slope filtered over the
-      contact half-length a of travel, state ``betaf``, beta_dot = |V_cx| (beta_y - betaf)/sigma_f, sigma_f =
-      max(a, |V_cx| h/2) (the rolling radius is a property of the belt along the whole contact patch, the same
-      length over which the patch slip relaxes), which is exact on a constant curvature and keeps the right-hand
-      side continuous where a cam first touches an edge (the slope has a kink there) [chosen]. (Old: a numerical
+      steady value; 1 - t floored at 0.2 where a concave corner is tighter than 1/(R_e - r_c) [chosen guard]). In
+      the slip, beta_dot is the actual rate of the effective slope (with the tandem base moving): the slope
+      filtered over the contact half-length a of travel, state ``betaf``, beta_dot = |V_cx| (beta_y - betaf) /
+      sigma_f, sigma_f = max(a, |V_cx| h/2) (the rolling radius is a property of the belt along the whole contact
+      patch, the same length over which the patch slip relaxes), which is exact on a constant curvature and keeps
+      the right-hand side continuous where a cam first touches an edge (the slope has a kink there) [chosen]. (Old:
+      a numerical
       4 mm filter, or half a step's travel above 57 km/h at 1 ms; the term's Fx at 60 km/h was +238 / +151 /
       -74 N with a 4 / 8 / 16 mm filter; now independent of the step, test_swift_revar.) The filter runs at a
       pace of at least 0.1 VXLOW (betaf_dot = max(|V_cx|, 0.1 VXLOW) (beta_y - betaf)/sigma_f), so that the
@@ -152,7 +153,14 @@ stiffness: no published formula could be read; a non-zero value gives a warning.
 pages, code and issues corpora (the MF-Tyre/MF-Swift 6.2 help and equation manuals and the Simcenter 2020.2 user
 manual appear only as title pages; public code has the names in .tir parsers and parameter structs only, described
 "load and speed influence on in-plane translation / rotation stiffness"), NOTES sec. 4.2 and 9.7), rotating-damper
-coupling terms, turn slip from the belt yaw rate, ENV_C1/ENV_C2.
+coupling terms, ENV_C1/ENV_C2, turn slip from the belt yaw rate: the MF's turn-slip moment (Pacejka 2012
+(4.93)-(4.98)) has the slope K_zgamma,r0 R0/(1 - eps_gamma) in phi, with the sign of QDZ8 + QDZ9 dfz, negative
+at 2-8 kN on every SWIFT file here (sample, TNO, MFeval 6.1/6.2; sample file, lateral shift PHYP2 off:
+dMz/dphit -58 / -112 / -210 N m per 1/m at 2 / 4 / 8 kN; with it -43 / -48 / +88, and dFy/dphit -2253 N per 1/m
+at 4 kN): with
+phi = -psi_dot/V it pushes the patch along its yaw rate instead of damping it. Tried for issue 19 as the MF's
+increment over phi = 0 with phi relaxed over sigma_c: the linearised ring grew at +2310 1/s (-1 m/s, 8 kN) with the
+force and moment increments, +7e7 1/s (70 m/s, 8 kN) without the side-force increment; not landed.
 """
 from __future__ import annotations
 
