@@ -85,3 +85,12 @@ def test_swift_warns_beyond_the_edge():
     u = StepInputs(x=0.5, vx=10.0, z=float(rl), omega=10.0 / 0.3, p=6e5)
     caught = _caught(lambda: tyre.initial_state(u))
     assert len(caught) == 1 and "PPY1" in str(caught[0].message) and "600000" in str(caught[0].message)
+
+
+def test_eval_command_names_the_file_once(capsys):
+    from mftyre import cli
+
+    path = _tno_path()
+    assert cli.main(["eval", str(path), "--p", "6bar"]) == 0
+    err = [line for line in capsys.readouterr().err.splitlines() if "PPY1" in line]
+    assert len(err) == 1 and err[0].count(path.name) == 1 and "5.72 bar" in err[0]
