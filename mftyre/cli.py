@@ -191,7 +191,8 @@ def _cmd_eval(args) -> int:
                 out = model.evaluate(**inputs, turn_slip=args.turn_slip, alpha_star=args.alpha_star,
                                      limits=not args.no_limits, turn_slip_form=args.turn_slip_form)
             for w in caught:
-                print(f"mftyre eval: warning: {file}: {w.message}", file=sys.stderr)
+                named = str(w.message).startswith(str(model.params.source))  # the message names the file already
+                print(f"mftyre eval: warning: {'' if named else f'{file}: '}{w.message}", file=sys.stderr)
             results.append((file, model, out))
         table_cols = args.outputs or _DEFAULT_OUTPUTS
         if not args.quiet:

@@ -47,6 +47,11 @@ class ModelInputError(MFTyreError, ValueError):
     """An input passed to the model is invalid (NaN, non-positive pressure, bad shape...)."""
 
 
+class PressureFactorWarning(UserWarning):
+    """The model is used at an inflation pressure where one of the file's pressure factors (e.g. 1 + PPY1 dpi of
+    the cornering stiffness) has changed sign, although the file may declare the pressure valid."""
+
+
 class InputClippedWarning(UserWarning):
     """Inputs outside the .tir ranges were saturated to them (``limits=True``); the message names each such input,
     its range and how many points."""

@@ -16,14 +16,16 @@ the same as :func:`saturate` here.
 """
 from __future__ import annotations
 
+import threading
 import warnings
 
 import numpy as np
 
-from .errors import InputClippedWarning, ModelInputError, spelled
+from .errors import InputClippedWarning, ModelInputError, PressureFactorWarning, spelled
 
 __all__ = ["RANGE_PARAMETERS", "input_ranges", "saturate", "check_finite", "check_pressure", "warn_outside",
-           "check_finite_outputs", "saturate_inputs", "warn_data_outside"]
+           "check_finite_outputs", "saturate_inputs", "warn_data_outside", "PRESSURE_FACTORS", "pressure_factor_edges",
+           "PressureFactorCheck"]
 
 #: input -> (.tir parameter of the lower bound or None, of the upper bound, unit): the ranges ``limits=True``
 #: saturates the inputs to (see the module docstring for Fz and FZMIN).
@@ -50,6 +52,74 @@ def input_ranges(params, mirrored: bool = False) -> dict:
         bounds = f"{lo_name}..{hi_name}" if lo_name else hi_name
         ranges[name] = (lo, hi, f"{bounds} = [{lo:.6g}, {hi:.6g}] {unit}")
     return ranges
+
+
+#: The pressure factors of the equations, 1 + sign (c1 dpi + c2 dpi^2) with c1, c2 the named parameters (None: no
+#: quadratic term), and what each scales. Fitted over the measured pressures, a factor can reach zero inside the
+#: file's PRESMIN..PRESMAX (TNO_car205_60R15.tir: PPY1 = -0.6249 at 5.72 bar, PRESMAX 10 bar): beyond it the
+#: property has the wrong sign (a cornering stiffness pushing the wrong way), which :class:`PressureFactorCheck`
+#: warns about.
+PRESSURE_FACTORS = (
+    ("PPX1", "PPX2", 1, "longitudinal slip stiffness K_xk (4.E15)"),
+    ("PPX3", "PPX4", 1, "longitudinal friction mu_x (4.E13)"),
+    ("PPY1", None, 1, "cornering stiffness K_ya (4.E25)"),
+    ("PPY2", None, 1, "load at the peak of the cornering stiffness (4.E25)"),
+    ("PPY3", "PPY4", 1, "lateral friction mu_y (4.E23)"),
+    ("PPY5", None, 1, "camber stiffness K_yg0 (4.E30)"),
+    ("PPZ1", None, -1, "pneumatic trail D_t (paper A60)"),
+    ("PFZ1", None, 1, "vertical stiffness C_z (paper (5))"),
+    ("PCFX3", None, 1, "longitudinal carcass stiffness C_x (paper (17))"),
+    ("PCFY3", None, 1, "lateral carcass stiffness C_y (paper (18))"),
+)
+
+
+def pressure_factor_edges(params) -> list[tuple[float, int, str, str]]:
+    """[(p_edge [Pa], side, parameters, what)]: the pressures nearest NOMPRES, above (side +1) or below (side -1),
+    at which a factor of :data:`PRESSURE_FACTORS` reaches zero (at NOMPRES every factor is 1); beyond p_edge on
+    that side the factor is <= 0. Only positive pressures; ``parameters`` as written, e.g. 'PPY1 = -0.6249'."""
+    edges = []
+    for c1_name, c2_name, sign, what in PRESSURE_FACTORS:
+        c1 = sign * float(params[c1_name]) if c1_name in params else 0.0
+        c2 = sign * float(params[c2_name]) if c2_name is not None and c2_name in params else 0.0
+        roots = np.roots([c2, c1, 1.0]) if (c1 or c2) else np.array([])  # c2 dpi^2 + c1 dpi + 1 = 0
+        real = np.sort(roots[np.abs(np.imag(roots)) <= 1e-12 * np.abs(roots)].real)
+        names = f"{c1_name} = {params[c1_name]:g}" + (f", {c2_name} = {params[c2_name]:g}" if c2 else "")
+        for side, candidates in ((1, real[real > 0]), (-1, real[(real < 0) & (real > -1)][::-1])):
+            if candidates.size:
+                edges.append((float(params.NOMPRES * (1.0 + candidates[0])), side, names, what))
+    return edges
+
+
+class PressureFactorCheck:
+    """Warns (:class:`PressureFactorWarning`, once per factor) where a model is used at a pressure beyond one of
+    :func:`pressure_factor_edges`, naming the file, the parameters and the pressure; the file is not rejected (its
+    fit may only cover the measured pressures). Thread-safe; the common case (every pressure inside) costs two
+    comparisons."""
+
+    def __init__(self, params):
+        self._edges = pressure_factor_edges(params)
+        self._source = getattr(params, "source", None) or "the parameter set"
+        self.low = max([p for p, side, _, _ in self._edges if side < 0], default=-np.inf)
+        self.high = min([p for p, side, _, _ in self._edges if side > 0], default=np.inf)
+        self._warned: set = set()
+        self._lock = threading.Lock()
+
+    def __call__(self, p_min: float, p_max: float, stacklevel: int = 3) -> None:
+        """Warn for the factors that are <= 0 somewhere in the pressures used, ``p_min``..``p_max`` [Pa]."""
+        if self.low < p_min and p_max < self.high:
+            return
+        for edge, side, names, what in self._edges:
+            crossed = p_max >= edge if side > 0 else p_min <= edge
+            with self._lock:
+                if not crossed or names in self._warned:
+                    continue
+                self._warned.add(names)
+            used = p_max if side > 0 else p_min
+            warnings.warn(f"{self._source}: {names} makes the {what} factor change sign at p = {edge:.6g} Pa "
+                          f"({edge / 1e5:.3g} bar); the model is used at p = {used:.6g} Pa, "
+                          f"{'above' if side > 0 else 'below'} it, where that property has the wrong sign (the "
+                          f"file's PRESMIN..PRESMAX does not exclude it)", PressureFactorWarning,
+                          stacklevel=stacklevel)
 
 
 def saturate(values, bounds) -> tuple[np.ndarray, int]:

@@ -21,7 +21,8 @@ import functools
 import numpy as np
 
 from .errors import ModelInputError
-from .inputs import check_finite, check_finite_outputs, check_pressure, input_ranges, saturate, warn_outside
+from .inputs import PressureFactorCheck, check_finite, check_finite_outputs, check_pressure, input_ranges, saturate, \
+    warn_outside
 from .formula import OUTPUT_NAMES, Modes, steady_state, vertical
 from .backend import NUMPY, NUMPY_FOLDING
 from .params import SELECTS_FORM
@@ -191,11 +192,20 @@ class MFModel:
                       omega=0.0 if omega is None else omega)
         arrays = as_float_arrays(inputs, copy=False)
         self._check_pressure(arrays["p"])
+        p_min, p_max = float(np.min(arrays["p"])), float(np.max(arrays["p"]))
         if limits:
             ranges = self._input_ranges
             counts = {name: saturate(arrays[name], ranges[name])[1] for name in ranges}
             warn_outside(counts, arrays["fz"].size, ranges)
+            p_min, p_max = (min(max(v, ranges["p"][0]), ranges["p"][1]) for v in (p_min, p_max))
+        self.pressure_factors(p_min, p_max)
         return MFOutputs(**self._evaluate_arrays(arrays, omega is not None, modes, check_finite=True))
+
+    @functools.cached_property
+    def pressure_factors(self) -> PressureFactorCheck:
+        """Warns once per factor where the model is used at a pressure at which a pressure factor of the file has
+        changed sign (:class:`mftyre.inputs.PressureFactorCheck`); call with the least and greatest pressure used."""
+        return PressureFactorCheck(self._params)
 
     def input_range(self, name: str) -> tuple[float, float]:
         """(lo, hi) that ``limits=True`` saturates input ``name`` to (:mod:`mftyre.inputs`), in the mounted side's

@@ -31,6 +31,7 @@ from typing import Any
 
 from .errors import ModelInputError, TirError, spelled
 from .files import TIR_MAX_BYTES, read_user_file, same_file, write_atomically
+from .inputs import pressure_factor_edges
 from .params import (
     CORE_PARAMETERS,
     PARAMETERS,
@@ -639,6 +640,11 @@ def check_tir(path) -> list[Finding]:
                        "are meaningless); mftyre uses a form that stays finite"))
     checks.append(((v.PRESMIN <= v.PRESMAX) and not (v.PRESMIN <= v.INFLPRES <= v.PRESMAX), "warning", "INFLPRES",
                    f"{v.INFLPRES!r} Pa is outside PRESMIN..PRESMAX = {v.PRESMIN!r}..{v.PRESMAX!r} Pa"))
+    for edge, side, names, what in pressure_factor_edges(v):
+        checks.append((v.PRESMIN <= edge <= v.PRESMAX, "warning", names.split(" ")[0],
+                       f"{names} makes the {what} factor change sign at {edge:.6g} Pa, inside PRESMIN..PRESMAX = "
+                       f"{v.PRESMIN!r}..{v.PRESMAX!r} Pa: {'above' if side > 0 else 'below'} it that property has "
+                       "the wrong sign (the evaluator and SWIFT warn when used there)"))
     for cond, sev, name, msg in checks:
         if cond:
             add(sev, name, msg)

@@ -38,12 +38,11 @@ exact), plus every road breakpoint inside the window evaluated exactly, so flat 
 sampling error.
 
 Quasi-static tyre (:func:`quasi_static`): the MF vertical spring Fz(rho, p) normal to the effective plane,
-rho = R_Omega - d with d the normal distance from the wheel centre to the plane, the tandem centred at the foot
-of that normal, x_c = x + d sin(beta_y) (the forward shift of the contact point, as in :mod:`swift.ring`), free
+rho = R_Omega - d with d the normal distance from the wheel centre to the plane; the tandem is centred under the
+wheel centre, the cams moving only vertically (Schmeitz et al. 2005 sec. 3.1, as in :mod:`swift.ring`); free
 rolling (in-plane force F'_x = 0), so the wheel-centre forces are Fx = -F'_z sin(beta_y), Fz = F'_z cos(beta_y)
-(NOTES sec. 3.5). ``QuasiStatic.road`` holds the effective road at the contact centres. Load, tandem base and
-contact centre are solved to convergence (bracketed; the solution can fold and jump where a cam meets an edge; it
-is continued along x, see :func:`quasi_static`), with a residual check.
+(NOTES sec. 3.5). ``QuasiStatic.road`` holds the effective road at the wheel positions. Load and tandem base are
+solved to convergence (bracketed, continued along x, see :func:`quasi_static`), with a residual check.
 """
 from __future__ import annotations
 
@@ -298,20 +297,14 @@ def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mo
     ``mode="fixed_axle"``: axle height fixed where the flat road at the height of ``x[0]`` carries ``fz0``;
     ``mode="constant_load"``: the vertical wheel-centre force stays ``fz0`` and the axle follows.
 
-    The contact load F'_z, the tandem base l_s = ELLIPS_SHIFT 2a(F'_z) and the contact centre x_c (foot of the
-    normal, x_c = x + d sin(beta_y)) depend on each other; where a cam meets an edge the load raises l_s, which
-    pushes the cam further onto the obstacle, and the consistent solution can fold (several roots; the one being
-    followed can vanish and the load jump). Solved as a bracketed problem in F'_z: for a load F, l_s(F) and x_c
-    by bisection of the foot-of-normal equation over x +- R_Omega; the load residual F'(F) - F changes sign
-    between F = 0 and the load at the deepest possible deflection, so a root always exists. Every sign change on a
-    grid of loads is refined by bisection (``iterations`` halvings of each bracket) and, at each x, the root
-    nearest the previous point's load is taken (continuation along x, as a tyre creeping forward follows its
-    branch); where that jumps (in load or contact centre), the previous solution is followed where it continues: from
-    the previous x_c and load, each walked in the direction of its residual to the first sign change (two roots in
-    one grid cell near a fold; the foot of the normal is not unique in concave corners tighter than the belt). Cam
-    heights from a table at ``table_step`` (cam heights exact at ``dx`` resolution, linear between);
-    raises :class:`ModelInputError` if a consistency residual exceeds ``tol`` (load: relative to ``fz0``; contact
-    centre: relative to R0).
+    The tandem is centred under the wheel centre (the cams move only vertically, module notes); the contact load
+    F'_z and the tandem base l_s = ELLIPS_SHIFT 2a(F'_z) depend on each other. Solved as a bracketed problem in
+    F'_z: the load residual F'(F) - F changes sign between F = 0 and the load at the deepest possible deflection,
+    so a root always exists; every sign change on a grid of loads is refined by bisection (``iterations``
+    halvings) and, at each x, the root nearest the previous point's load is taken (continuation along x, as a tyre
+    creeping forward follows its branch; with the cams under the centre there is one root on the obstacles tried).
+    Cam heights from a table at ``table_step`` (cam heights exact at ``dx`` resolution, linear between); raises
+    :class:`ModelInputError` if the load residual exceeds ``tol`` relative to ``fz0``.
     """
     if mode not in ("fixed_axle", "constant_load"):
         raise ModelInputError(f"mode must be 'fixed_axle' or 'constant_load', got {mode!r}")
@@ -332,63 +325,25 @@ def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mo
         f_max = float(model.vertical_force(min(z_axle - hi_road, r_omega), p=p))
     else:
         f_max = float(fz0) / np.cos(np.radians(80.0))
-    l_max = float(tandem_base(prm, f_max, dpi))
-    reach = 1.05 * r_omega + l_max
+    reach = float(tandem_base(prm, f_max, dpi)) / 2
     x0 = xs.min() - reach - 2 * table_step
     samples = x0 + table_step * np.arange(int(np.ceil((xs.max() - xs.min() + 2 * reach) / table_step)) + 5)
     table = CamTable(float(x0), float(table_step), cam_height(road, samples, cams, dx=min(dx, 5e-4)))
 
-    def plane(xc, ls):  # (w, beta, cos beta) of the tandem centred at xc
-        hf, hr = table(xc + ls / 2), table(xc - ls / 2)
-        beta = np.arctan((hf - hr) / np.maximum(ls, 1e-9))
-        return (hf + hr) / 2, beta, np.cos(beta)
-
-    def distance(w, cosb, radius):  # normal distance wheel centre - plane: fixed axle, or the loaded radius
-        return np.minimum((z_axle - w) / cosb, r_omega) if mode == "fixed_axle" else radius
-
-    def first_change(fun, start, side, span, bounds=(-np.inf, np.inf)):
-        """Bracket (lo, hi, found) of the first sign change of ``fun`` walking from ``start`` (arrays) by ``side``
-        (+-1) in geometric steps up to ``span``, within ``bounds``."""
-        steps = np.concatenate(([0.0], span * 1e-7 * 1.25 ** np.arange(73)))  # 0, 1e-7 .. ~1.1 span
-        trial = np.clip(start[..., None] + side[..., None] * steps, *bounds)
-        value = fun(trial)
-        change = np.sign(value[..., 1:]) != np.sign(value[..., :1])
-        k = np.argmax(change, axis=-1)[..., None]
-        lo, hi = np.take_along_axis(trial, k, -1)[..., 0], np.take_along_axis(trial, k + 1, -1)[..., 0]
-        return lo, hi, np.take_along_axis(change, k, -1)[..., 0]
-
-    def centre(xw, f, start=None):
-        """(x_c, l_s) solving x_c = x + d sin(beta) at the load f (tandem base l_s(f)): anywhere in x +- R_Omega,
-        or (``start``) the root reached from ``start`` in the direction of its residual (the foot of the normal is
-        not unique in concave corners tighter than the belt; continuation follows one)."""
+    def load(xw, f):  # (load of the plane of the tandem at the base l_s(f) under xw, distance d, w, beta)
         ls = tandem_base(prm, f, dpi)
-        radius = model.loaded_radius(f, p=p)[0] if mode == "constant_load" else 0.0
-
-        def foot(xc):
-            xw_, r_, ls_ = (np.asarray(v)[..., None] if np.ndim(xc) > np.ndim(v) else v for v in (xw, radius, ls))
-            w, beta, cosb = plane(xc, ls_)
-            return xc - xw_ - distance(w, cosb, r_) * np.sin(beta)
-        if start is None:
-            return _bisect(foot, xw - 1.05 * r_omega, xw + 1.05 * r_omega, iterations + 10), ls
-        side = np.where(foot(start) > 0, -1.0, 1.0)
-        lo, hi, _ = first_change(foot, start, side, 1.05 * r_omega)
-        return _bisect(foot, lo, hi, iterations + 10), ls
-
-    def load(xc, ls, f):  # (load of the plane at the solution for f, d, w, beta)
-        w, beta, cosb = plane(xc, ls)
-        d = distance(w, cosb, model.loaded_radius(f, p=p)[0] if mode == "constant_load" else 0.0)
-        if mode == "fixed_axle":
+        hf, hr = table(xw + ls / 2), table(xw - ls / 2)
+        w, beta = (hf + hr) / 2, np.arctan((hf - hr) / np.maximum(ls, 1e-9))
+        cosb = np.cos(beta)
+        if mode == "fixed_axle":  # normal distance of the axle from the plane through (xw, w)
+            d = np.minimum((z_axle - w) * cosb, r_omega)
             return np.maximum(model.vertical_force(d, p=p), 0.0), d, w, beta
-        return fz0 / cosb, d, w, beta
-
-    def residual(xw, f, start=None):
-        xc, ls = centre(xw, f, start)
-        return load(xc, ls, f)[0] - f
+        return fz0 / cosb, model.loaded_radius(f, p=p)[0], w, beta
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the vertical relation's range warnings on the trial loads
         grid = np.linspace(0.0, f_max, 161)
-        r = residual(xs[:, None] + 0 * grid, grid[None, :] + 0 * xs[:, None])
+        r = load(xs[:, None] + 0 * grid, grid[None, :] + 0 * xs[:, None])[0] - grid
         change = np.sign(r[:, :-1]) != np.sign(r[:, 1:])
         change[:, -1] |= r[:, -1] == 0.0
         roots = np.full((xs.size, 4), np.nan)
@@ -397,38 +352,20 @@ def quasi_static(model, road: Road, x, fz0: float, *, p: float | None = None, mo
             has = change[np.arange(xs.size), first]
             if not has.any():
                 break
-            f_root = _bisect(lambda f: residual(xs, f), grid[first], grid[first + 1], iterations)
+            f_root = _bisect(lambda f: load(xs, f)[0] - f, grid[first], grid[first + 1], iterations)
             roots[has, k] = f_root[has]
             change[np.arange(xs.size), first] = False
-        some = np.isfinite(roots)
-        centres = np.full(roots.shape, np.nan)
-        centres[some] = centre(np.broadcast_to(xs[:, None], roots.shape)[some], roots[some])[0]
-        f, xc = np.empty(xs.size), np.empty(xs.size)
+        f = np.empty(xs.size)
         for i in range(xs.size):  # continuation: the root nearest the previous load
-            k = np.nanargmin(np.abs(roots[i] - (f[i - 1] if i else fz0)))
-            f[i], xc[i] = roots[i, k], centres[i, k]
-            if i and (abs(f[i] - f[i - 1]) > 0.02 * fz0 or abs(xc[i] - xs[i] - xc[i - 1] + xs[i - 1]) > 2e-3):
-                # a jump of the load or of the contact centre: follow the previous solution where it continues
-                # (two roots in one grid cell near a fold, or another foot of the normal), walking from the
-                # previous load in the direction of its residual to the first sign change
-                x_i, start = xs[i:i + 1], xc[i - 1:i] + xs[i] - xs[i - 1]
-                local = lambda q: residual(np.broadcast_to(x_i, q.shape), q, np.broadcast_to(start, q.shape))  # noqa
-                side = np.where(local(f[i - 1:i]) > 0, 1.0, -1.0)
-                lo, hi, found = first_change(local, f[i - 1:i], side, f_max, (0.0, f_max))
-                if found[0]:
-                    f_loc = _bisect(local, np.minimum(lo, hi), np.maximum(lo, hi), iterations)
-                    xc_loc = centre(x_i, f_loc, start)[0]
-                    if abs(load(xc_loc, tandem_base(prm, f_loc, dpi), f_loc)[0][0] - f_loc[0]) < tol * fz0:
-                        f[i], xc[i] = f_loc[0], xc_loc[0]
+            f[i] = roots[i, np.nanargmin(np.abs(roots[i] - (f[i - 1] if i else fz0)))]
         ls = tandem_base(prm, f, dpi)
-        fzn, d, w, beta = load(xc, ls, f)
-        foot_res = np.abs(xc - xs - d * np.sin(beta))
-    bad = np.maximum(np.abs(fzn - f) / max(fz0, 1.0), foot_res / prm.UNLOADED_RADIUS)
+        fzn, d, w, beta = load(xs, f)
+    bad = np.abs(fzn - f) / max(fz0, 1.0)
     if np.any(bad > tol):
         i = int(np.argmax(bad))
         raise ModelInputError(f"quasi-static contact solution did not converge at x = {xs[i]:.4f} m: load residual "
-                              f"{fzn[i] - f[i]:.3g} N, foot residual {foot_res[i]:.3g} m")
-    eff = effective_road(road, xc, ls, cams, dx=dx)
+                              f"{fzn[i] - f[i]:.3g} N")
+    eff = effective_road(road, xs, ls, cams, dx=dx)
     cosb = np.cos(beta)
     dz = np.zeros_like(xs) if mode == "fixed_axle" else w + d / cosb - z_axle
     rs = lambda a: np.reshape(a, shape)  # noqa: E731

@@ -11,9 +11,9 @@ spin Omega_b, Omega_a; axle z_a, its velocity, axle x_a and rim lateral position
 from the inputs x, y and moving with vx, vy within the step: a rim position held over a step while the belt moves
 on stretched the sidewall by c_by vy h/2, steady cornering 9-119 % off at 1-5 ms); belt camber gamma_b and yaw psi_b with rates; residual
 (patch) deflections u_x, u_y, residual yaw psi_r; transient slips kappa', alpha'; the filtered effective slope
-betaf (for the rate at which the effective plane turns, below); the contact solution of the last step, x_c - x_b
-and l_s (memory, not integrated: the stepper starts its Newton pass there and stores the new solution after each
-step; the exact right-hand side solves from scratch).
+betaf (for the rate at which the effective plane turns, below); the tandem base l_s of the last step (memory,
+not integrated: the stepper starts its Newton pass there and stores the new solution after each step; the exact
+right-hand side solves from scratch).
 
 Sidewall (rim -> belt) [chosen from the parameter comments "undamped frequency / dimensionless damping of the
 ... mode", NOTES sec. 4.2], pressure-aware through this project's own parameters SWIFT_PSTIFF, SWIFT_PDAMP
@@ -53,12 +53,18 @@ Residual springs in series so that the static stiffness of ring + residual is th
     residual damping k_r = (DAMP_RESIDUAL + DAMP_VLOW max(0, 1 - |V|/VXLOW)) f_d c_r [chosen: stiffness
     proportional, DAMP_VLOW faded in linearly below VXLOW]
 Effective road, five inputs (Pacejka 2012 sec. 10.1.4; NOTES sec. 3): from the tandem cam heights h_f, h_r at
-x_c +- l_s/2 the height w = (h_f + h_r)/2, forward slope beta_y = atan((h_f - h_r)/l_s), road camber beta_x
+x_b +- l_s/2 the height w = (h_f + h_r)/2, forward slope beta_y = atan((h_f - h_r)/l_s), road camber beta_x
 (ELLIPS_NWIDTH tracks over the contact width at nominal load: atan of the least-squares slope of the track
 heights, :class:`swift.enveloping.CamTable`, plus the input ``road_camber``), effective curvature
 kappa_e = d beta_y/dx = cos^2(beta_y) (h_f' - h_r')/l_s, and
-    * the forward shift of the contact point: the tandem is centred at the foot of the normal from the belt centre
-      to the effective plane, x_c = x_b + r_c sin(beta_y), r_c = (z_b - w)/cos(beta_y) [chosen: NOTES sec. 3.5];
+    * the cams move only vertically, the tandem centred under the belt centre (seed 002, Schmeitz et al. 2005
+      sec. 3.1: "each cam ... is allowed to move vertically"; Schmeitz 2004) [published]; the plane passes through
+      (x_b, w) with slope beta_y, r_c = (z_b - w) cos(beta_y) is the normal distance of the belt centre from it and
+      the contact point is the foot of that normal, x_c = x_b + r_c sin(beta_y) (output ``x_c``; NOTES sec. 3.5).
+      (Old [chosen]: the tandem moved with the foot of the normal, x_c = x_b + r_c sin(beta_y) solved together
+      with l_s; where a cam met an edge the forward shift and the load's l_s pushed it further on, the solution
+      folded and jumped: Fz +364 N within 0.5 mm at the first touch of a 20 mm step or 20 x 20 mm cleat, creep
+      10 % off the quasi-static model at the fold; tests/test_swift_contact.py);
     * the effective rolling radius variation [derived here; chosen: the published relation (Pacejka 2012 sec.
       10.1.4, Schmeitz 2004) could not be read (searched: public docs, pages, code and issues corpora; no .tir
       names a coefficient)]. Kinematics of the rigid ring with an inextensible belt band: on the flat the band
@@ -68,21 +74,22 @@ kappa_e = d beta_y/dx = cos^2(beta_y) (h_f' - h_r')/l_s, and
       beta_dot. The tread's speed over the fixed road, the difference, is the slip velocity
           V_sx = V_cx - Omega_b R_e - SWIFT_REVAR beta_dot (R_e - r_c),
       zero for a rigid wheel (R_e = r_c rolls without slip on any curve). On a road of constant curvature
-      kappa_s = d beta_y/ds (> 0 concave) the foot moves at V_cx/(1 - r_c kappa_s), beta_dot = kappa_s V_cx /
-      (1 - r_c kappa_s), and free rolling (V_sx = 0) gives
-          r_e = V_cx/Omega_b = R_e (1 - r_c kappa_s)/(1 - R_e kappa_s),  Delta r_e = R_e kappa_s (R_e - r_c) /
-          (1 - R_e kappa_s),
-      i.e. V_sx = (1 - t)(V_cx - Omega_b (R_e + Delta r_e)), t = kappa_s (R_e - r_c)/(1 - r_c kappa_s): the
-      slip of a tyre of rolling radius R_e + Delta r_e. Over a convex crest r_e drops (the belt must spin
+      kappa_s = d beta_y/ds (> 0 concave) the tandem under the belt centre turns at beta_dot = kappa_s V_cx (a
+      rigid wheel's contact tangent turns at kappa_s V_cx/(1 - r_c kappa_s), its foot of the normal moving
+      faster than the centre; the tandem model turns the plane about the point under the centre: a difference
+      of order r_c kappa_s, 3 % of Delta r_e on an 11 m hump), and free rolling (V_sx = 0) gives
+          r_e = V_cx/Omega_b = R_e/(1 - t),  Delta r_e = R_e t/(1 - t),  t = kappa_s (R_e - r_c),
+      i.e. V_sx = (1 - t)(V_cx - Omega_b (R_e + Delta r_e)): the slip of a tyre of rolling radius
+      R_e + Delta r_e. Over a convex crest r_e drops (the belt must spin
       faster), in a concave dip (entry and exit of a cleat) it grows; at -6/+12 mm over a 10 x 20 mm cleat
       (4 kN). Output ``dre`` = Delta r_e from the current effective curvature (kappa_s = cos(beta_y) kappa_e; the
-      steady value; 1 - r_c kappa_s and 1 - t floored at 0.2 where a concave corner is tighter than the belt
-      centre distance, e.g. the foot of a 50 mm kerb [chosen guard]). In the slip, beta_dot is the actual rate
-      of the effective slope (with the forward shift and the tandem base moving): the slope filtered over the
-      contact half-length a of travel, state ``betaf``, beta_dot = |V_cx| (beta_y - betaf)/sigma_f, sigma_f =
-      max(a, |V_cx| h/2) (the rolling radius is a property of the belt along the whole contact patch, the same
-      length over which the patch slip relaxes), which is exact on a constant curvature and keeps the right-hand
-      side continuous where a cam first touches an edge (the slope has a kink there) [chosen]. (Old: a numerical
+      steady value; 1 - t floored at 0.2 where a concave corner is tighter than 1/(R_e - r_c) [chosen guard]). In
+      the slip, beta_dot is the actual rate of the effective slope (with the tandem base moving): the slope
+      filtered over the contact half-length a of travel, state ``betaf``, beta_dot = |V_cx| (beta_y - betaf) /
+      sigma_f, sigma_f = max(a, |V_cx| h/2) (the rolling radius is a property of the belt along the whole contact
+      patch, the same length over which the patch slip relaxes), which is exact on a constant curvature and keeps
+      the right-hand side continuous where a cam first touches an edge (the slope has a kink there) [chosen]. (Old:
+      a numerical
       4 mm filter, or half a step's travel above 57 km/h at 1 ms; the term's Fx at 60 km/h was +238 / +151 /
       -74 N with a 4 / 8 / 16 mm filter; now independent of the step, test_swift_revar.) The filter runs at a
       pace of at least 0.1 VXLOW (betaf_dot = max(|V_cx|, 0.1 VXLOW) (beta_y - betaf)/sigma_f), so that the
@@ -91,15 +98,11 @@ kappa_e = d beta_y/dx = cos^2(beta_y) (h_f' - h_r')/l_s, and
       kinematics above, 0 = off. The default is not neutral on uneven roads (Fx over a 10 x 20 mm cleat, fixed
       axle, free rim: peak-to-peak 1119 -> 1254 N at 30 km/h, 963 -> 648 N at 60 km/h); on a flat road
       Delta r_e = 0 exactly, on a constant grade to round-off (1e-14 m);
-    * the tandem base l_s = ELLIPS_SHIFT 2a(F_r) at the current (static part of the) contact load F_r, solved
-      together with x_c by Newton passes (``CONTACT_PASSES`` from an estimate, one per stage in the stepper from
-      the previous solution) [published l_s = p_ls 2a, Zegelaar eq. 4.15]. Where a cam meets an edge the load
-      raises l_s, which pushes that cam further onto the edge: the consistent solution folds and the root being
-      followed can vanish (20 x 20 mm cleat at 0.4 m, 4 kN: x_c jumps 8 mm and Fz 315 N at x = 0.2448 m; the
-      quasi-static model, :func:`swift.enveloping.quasi_static`, jumps at the same place). The passes are Newton
-      by block elimination with the slope of the x_c equation and the reduced slope of the l_s equation floored
-      (``_SLOPE_FLOOR``), so a pass always moves l_s the way its residual points and the solution jumps to the
-      remaining root instead of holding to the vanished one [chosen].
+    * the tandem base l_s = ELLIPS_SHIFT 2a(F_r) at the current (static part of the) contact load F_r, solved by
+      Newton passes (``CONTACT_PASSES`` from an estimate, one per stage in the stepper from the previous solution)
+      [published l_s = p_ls 2a, Zegelaar eq. 4.15]. A longer base puts a cam further onto an edge, which raises the
+      load and the base again; with the cams under the belt centre that feedback stays well below 1 (no fold), the
+      slope of the l_s equation is floored (``_SLOPE_FLOOR``) as a guard [chosen].
 Contact (normal to the effective plane):
     rho_r = R_Omega - r_c,  F'_z = max(0, F_r(rho_r) + k_rz d(rho_r)/dt)   (no pull)
     V_cx = xdot_b cos(beta_y) + zdot_b sin(beta_y),  V_sx = V_cx - Omega_b R_e - SWIFT_REVAR beta_dot (R_e - r_c)
@@ -146,8 +149,18 @@ Equations of motion (NOTES sec. 4.3, gyroscopic terms from dH/dt = M with H = I_
                    zdot_a); gravity acts on the belt only, F_load is everything else pushing the rim down)
     rim "torque":  I_a Omegadot_a = T + c_bth theta_w + k_bth (Omega_b - Omega_a)
 Not modelled (open in the literature, NOTES sec. 9): Q_BVX/Q_BVT (load and speed influence on the sidewall
-stiffness: no published formula; a non-zero value gives a warning), rotating-damper coupling terms, turn slip from
-the belt yaw rate, ENV_C1/ENV_C2.
+stiffness: no published formula could be read; a non-zero value gives a warning. Searched for issue 19: the docs,
+pages, code and issues corpora (the MF-Tyre/MF-Swift 6.2 help and equation manuals and the Simcenter 2020.2 user
+manual appear only as title pages; public code has the names in .tir parsers and parameter structs only, described
+"load and speed influence on in-plane translation / rotation stiffness"), NOTES sec. 4.2 and 9.7), rotating-damper
+coupling terms, ENV_C1/ENV_C2, turn slip from the belt yaw rate: the MF's turn-slip moment (Pacejka 2012
+(4.93)-(4.98)) has the slope K_zgamma,r0 R0/(1 - eps_gamma) in phi, with the sign of QDZ8 + QDZ9 dfz, negative
+at 2-8 kN on every SWIFT file here (sample, TNO, MFeval 6.1/6.2; sample file, lateral shift PHYP2 off:
+dMz/dphit -58 / -112 / -210 N m per 1/m at 2 / 4 / 8 kN; with it -43 / -48 / +88, and dFy/dphit -2253 N per 1/m
+at 4 kN): with
+phi = -psi_dot/V it pushes the patch along its yaw rate instead of damping it. Tried for issue 19 as the MF's
+increment over phi = 0 with phi relaxed over sigma_c: the linearised ring grew at +2310 1/s (-1 m/s, 8 kN) with the
+force and moment increments, +7e7 1/s (70 m/s, 8 kN) without the side-force increment; not landed.
 """
 from __future__ import annotations
 
@@ -165,7 +178,7 @@ __all__ = ["RingConstants", "STATE_NAMES", "INPUT_NAMES", "OUTPUT_NAMES", "CONTA
            "residual_compliance", "contact_start", "contact_geometry", "ring_equations"]
 
 STATE_NAMES = ("xb", "vxb", "zb", "vzb", "thw", "omb", "oma", "za", "vza", "xa", "ya",
-               "ux", "kappa", "yb", "vyb", "gb", "wgb", "psb", "wpsb", "uy", "alpha", "psr", "betaf", "xcs", "lsm")
+               "ux", "kappa", "yb", "vyb", "gb", "wgb", "psb", "wpsb", "uy", "alpha", "psr", "betaf", "lsm")
 #: Inputs of one step. x/z/omega of the axle enter through the state (imposed parts are set by the stepper).
 INPUT_NAMES = ("vx", "load", "torque", "p", "y", "vy", "gamma", "psi", "road_camber")
 OUTPUT_NAMES = ("fx", "fy", "fz", "mx", "my", "mz",            # forces and moments of the tyre on the rim
@@ -173,19 +186,19 @@ OUTPUT_NAMES = ("fx", "fy", "fz", "mx", "my", "mz",            # forces and mome
                 "rho", "rl", "re", "a", "ls", "w", "beta",     # deflection, radii, patch, effective road
                 "kappa", "alpha", "vcx", "curvature", "dre", "x_c", "beta_x")
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
-#: Newton passes of the (contact centre, tandem base) solution from the start estimate (quadratic convergence).
+#: Newton passes of the tandem-base solution from the start estimate (quadratic convergence).
 CONTACT_PASSES = 3
-#: Floors of the contact solution's slopes (x_c equation, reduced l_s equation), :func:`contact_geometry`.
-_SLOPE_FLOOR = (0.2, 0.1)
+#: Floor of the slope 1 - dl_s(F)/dl_s of the tandem-base equation (:func:`contact_geometry`) [chosen guard].
+_SLOPE_FLOOR = 0.1
 #: Time constant [s] with which the transient slips relax to zero while the tyre is off the road.
 AIR_TIME = 5e-3
 #: Load floor [N] of the slip model and contact length: keeps derivatives finite off the road (sqrt(Fz) at 0).
 _FZ_FLOOR = 1e-3
 #: Least residual compliance as a fraction of the overall 1/C_x, 1/C_y (:func:`residual_compliance`).
 RESIDUAL_FLOOR = 0.02
-#: Floor of 1 - r_c kappa_s (and of 1 - turn): where the effective road is concave more tightly than the belt centre
-#: distance the foot of the normal is not unique (foot of a 50 mm kerb: r_c kappa_s up to 1.17) [chosen guard].
-_FOOT_FLOOR = 0.2
+#: Floor of 1 - t, t = kappa_s (R_e - r_c), in the reported rolling radius variation ``dre`` (a concave corner
+#: tighter than 1/(R_e - r_c)) [chosen guard].
+_TURN_FLOOR = 0.2
 
 
 @dataclass(frozen=True)
@@ -335,11 +348,11 @@ def residual_vertical(prm, rho_r, omega, dpi, cbz, be):
 
 
 def _plane(hf, hr, ls, zb, be):
-    """(w, beta_y, r_c): effective height and slope of the tandem, distance from a centre at height zb to the
-    plane with the tandem centred at the foot of the normal."""
+    """(w, beta_y, r_c): effective height and slope of the tandem, and the normal distance to that plane from a
+    centre at height zb above the tandem's midpoint (the cams sit under the belt centre, module notes)."""
     w = (hf + hr) / 2
     beta = be.atan((hf - hr) / ls)
-    return w, beta, (zb - w) / be.cos(beta)
+    return w, beta, (zb - w) * be.cos(beta)
 
 
 def _tandem_base(prm, fz, dpi, be):
@@ -348,8 +361,8 @@ def _tandem_base(prm, fz, dpi, be):
 
 
 def contact_start(model, rc: RingConstants, state, u, h_c):
-    """(x_c, l_s) to start the contact passes: centre under the belt, l_s at the load of the residual spring with
-    the cam height ``h_c`` under the belt centre."""
+    """l_s to start the contact passes: at the load of the residual spring with the cam height ``h_c`` under the
+    belt centre."""
     from mftyre.backend import casadi_backend
 
     be = casadi_backend()
@@ -359,14 +372,12 @@ def contact_start(model, rc: RingConstants, state, u, h_c):
     f_c, _ = _pressure_factors(prm, dpi, be)
     rho_r = vertical.free_radius(prm, s["omb"], be) - (s["zb"] - h_c)
     f_r, _ = residual_vertical(prm, rho_r, s["omb"], dpi, rc.cbx * f_c, be)
-    return s["xb"], _tandem_base(prm, f_r, dpi, be)
+    return _tandem_base(prm, f_r, dpi, be)
 
 
-def contact_geometry(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c):
-    """One Newton pass of the contact solution from the cam heights ``hf``, ``hr`` (slopes ``dhf``, ``dhr``) at
-    ``x_c`` +- ``ls``/2: (x_c, l_s) solving x_c = x_b + r_c sin(beta_y) (foot of the normal) and
-    l_s = ELLIPS_SHIFT 2a(F_r(R_Omega - r_c)) together (plain substitution barely contracts over short obstacles:
-    d(r_c sin beta)/dx_c reaches -1)."""
+def contact_geometry(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls):
+    """One Newton pass of the tandem base from the cam heights ``hf``, ``hr`` (slopes ``dhf``, ``dhr``) at
+    x_b +- ``ls``/2: the new l_s solving l_s = ELLIPS_SHIFT 2a(F_r(R_Omega - r_c)) (module notes)."""
     import casadi as ca
     from mftyre.backend import casadi_backend
 
@@ -376,32 +387,23 @@ def contact_geometry(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x
     dpi = vertical.pressure_increment(prm, u[INPUT_NAMES.index("p")])
     f_c, _ = _pressure_factors(prm, dpi, be)
     r_omega = vertical.free_radius(prm, s["omb"], be)
-    xc_, ls_, hf_, hr_ = (ca.SX.sym(n) for n in ("xc", "ls", "hf", "hr"))
-    _, beta, r_c = _plane(hf_, hr_, ls_, s["zb"], be)
+    ls_, hf_, hr_ = (ca.SX.sym(n) for n in ("ls", "hf", "hr"))
+    _, _, r_c = _plane(hf_, hr_, ls_, s["zb"], be)
     f_r, _ = residual_vertical(prm, r_omega - r_c, s["omb"], dpi, rc.cbx * f_c, be)
-    res = ca.vertcat(xc_ - s["xb"] - r_c * be.sin(beta), ls_ - _tandem_base(prm, f_r, dpi, be))
-    # chain rule through the cam heights: d(hf)/d(x_c, l_s) = dhf (1, 1/2), d(hr)/d(x_c, l_s) = dhr (1, -1/2)
-    jac = (ca.jacobian(res, ca.vertcat(xc_, ls_)) + ca.jacobian(res, hf_) @ ca.horzcat(dhf, dhf / 2)
-           + ca.jacobian(res, hr_) @ ca.horzcat(dhr, -dhr / 2))
-    res, jac = ca.substitute([res, jac], [xc_, ls_, hf_, hr_], [x_c, ls, hf, hr])
-    # Newton by block elimination, the x_c equation first: its slope d(res_1)/dx_c = 1 - d(r_c sin beta)/dx_c
-    # (in [1, 2] except in concave corners tighter than r_c) and the reduced slope of the l_s equation along its
-    # solution, 1 - dl_s(F)/dl_s (< 0 where the load's feedback on the tandem base runs away: past a fold, where
-    # the root being followed has vanished) floored, so that every pass moves l_s toward the root in the direction
-    # its residual says (l_s - 2a p_ls < 0 at small l_s, > 0 at large l_s): exact Newton wherever the slopes are
-    # above their floors, and never held at (or sent away from) a root that has vanished [chosen]
-    j11 = be.fmax(jac[0, 0], _SLOPE_FLOOR[0])
-    reduced = be.fmax(jac[1, 1] - jac[1, 0] * jac[0, 1] / j11, _SLOPE_FLOOR[1])
-    d_ls = -(res[1] - jac[1, 0] * res[0] / j11) / reduced
-    d_xc = -(res[0] + jac[0, 1] * d_ls) / j11
-    return x_c + d_xc, be.fmax(ls + d_ls, 1e-6)
+    res = ls_ - _tandem_base(prm, f_r, dpi, be)
+    # chain rule through the cam heights at x_b +- l_s/2: d(hf)/dl_s = dhf/2, d(hr)/dl_s = -dhr/2
+    slope = ca.jacobian(res, ls_) + ca.jacobian(res, hf_) * dhf / 2 - ca.jacobian(res, hr_) * dhr / 2
+    res, slope = ca.substitute([res, slope], [ls_, hf_, hr_], [ls, hf, hr])
+    # Newton with the slope 1 - dl_s(F)/dl_s floored: the load's feedback on the tandem base (a longer base puts a
+    # cam further onto an edge) stays well below 1 with the cams under the belt centre, the floor only guards
+    return be.fmax(ls - res / be.fmax(slope, _SLOPE_FLOOR), 1e-6)
 
 
-def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c=None, *, axle: str, rim: str,
-                   h=0.0, road_camber=0.0):
+def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, *, axle: str, rim: str, h=0.0,
+                   road_camber=0.0):
     """State derivative and outputs (CasADi vectors) of the ring at ``state`` (STATE_NAMES) and inputs ``u``
     (INPUT_NAMES), with the front/rear cam heights ``hf``, ``hr`` and their slopes along x at the cam positions
-    x_c +- ``ls``/2 (``x_c``: the contact centre, reported only). ``axle``: "height" (imposed, z_a and its rate
+    x_b +- ``ls``/2 (under the belt centre). ``axle``: "height" (imposed, z_a and its rate
     from the state, held by the stepper) or "load"; ``rim``: "speed" (imposed spin) or "torque"; ``h``: the
     integration step (limits the relaxation rate, module notes; 0 = the exact model); ``road_camber``: the
     multi-track road camber beta_x of a 3D road [rad] (added to the input ``road_camber``)."""
@@ -419,7 +421,7 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
     kbx, kby, kbg, kbth = rc.kbx * g, rc.kby * g, rc.kbg * g, rc.kbth * g
     r_omega = vertical.free_radius(prm, s["omb"], be)
 
-    # effective road: height, slope, curvature; contact point at the foot of the normal
+    # effective road: height, slope, curvature of the tandem under the belt centre; contact at the foot of the normal
     w, beta, r_c = _plane(hf, hr, ls, s["zb"], be)
     dw = (dhf + dhr) / 2
     cb, sb = be.cos(beta), be.sin(beta)
@@ -470,9 +472,8 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
     vsx = vcx - s["omb"] * re - prm.SWIFT_REVAR * beta_rate * (re - r_c)
     # reported: the free-rolling radius change on a road of the current effective curvature (steady value)
     kappa_s = curvature * cb  # d beta_y / ds along the effective road
-    # beta_dot (R_e - r_c) / V_cx on a constant curvature:
-    turn = prm.SWIFT_REVAR * kappa_s * (re - r_c) / be.fmax(1.0 - r_c * kappa_s, _FOOT_FLOOR)
-    dre = re * turn / be.fmax(1.0 - turn, _FOOT_FLOOR)  # V_cx / Omega_b = R_e + dre at zero slip
+    turn = prm.SWIFT_REVAR * kappa_s * (re - r_c)  # beta_dot (R_e - r_c) / V_cx on a constant curvature
+    dre = re * turn / be.fmax(1.0 - turn, _TURN_FLOOR)  # V_cx / Omega_b = R_e + dre at zero slip
     vcy = s["vyb"] + r_c * s["wgb"] + uydot - vcx * (s["psb"] + s["psr"])
     kappa_dot = be.where(contact, (-(vsx + uxdot) - be.abs(vcx) * s["kappa"]) / sigma_c, -s["kappa"] / AIR_TIME)
     alpha_dot = be.where(contact, (vcy + be.abs(vcx) * (twist - s["alpha"])) / sigma_c, -s["alpha"] / AIR_TIME)
@@ -501,10 +502,10 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, x_c
         "gb": s["wgb"], "wgb": (-mwx + r_c * fyc + mxc + rc.iby * s["omb"] * s["wpsb"]) / rc.ibx,
         "psb": s["wpsb"], "wpsb": (-mwz + mzc - rc.iby * s["omb"] * s["wgb"]) / rc.ibx,
         "uy": uydot, "alpha": alpha_dot, "psr": psrdot, "betaf": betaf_dot,
-        "xcs": 0.0 * s["xcs"], "lsm": 0.0 * s["lsm"],
+        "lsm": 0.0 * s["lsm"],
     }
     out = dict(fx=fwx - f_bottom * sb, fy=fwy, fz=fwz + f_bottom * cb, mx=mwx, my=mwy, mz=mwz, fx_c=fxc,
                fy_c=fyc, fz_c=fzc, mz_c=mzc, rho=r_omega - r_a, rl=r_c, re=re, a=a, ls=ls, w=w, beta=beta,
                kappa=s["kappa"], alpha=alpha_mf, vcx=vcx, curvature=curvature, dre=dre, beta_x=beta_x,
-               x_c=s["xb"] + r_c * sb if x_c is None else x_c)
+               x_c=s["xb"] + r_c * sb)
     return ca.vertcat(*(d[n] for n in STATE_NAMES)), ca.vertcat(*(out[n] for n in OUTPUT_NAMES))

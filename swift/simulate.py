@@ -79,8 +79,8 @@ _S = {n: i for i, n in enumerate(STATE_NAMES)}
 #: The compiled functions' cache key includes the equations' source, so an edit never reuses an old library.
 _SOURCE_HASH = hashlib.sha256(b"".join(Path(__file__).with_name(n).read_bytes()
                                        for n in ("ring.py", "simulate.py"))).hexdigest()
-#: Distance [m] the cam lookups may reach beyond the belt centre: half the tandem base plus the forward shift of
-#: the contact centre (0.1 m each would need a 2a of 0.24 m and a slope of 20 deg).
+#: Distance [m] the cam lookups may reach beyond the belt centre: half the tandem base (0.25 m would need a
+#: 2a of 0.6 m), with margin.
 TANDEM_REACH = 0.25
 #: Longest RK4 step [s]. At standstill the patch deflections and transient slips form a stiff loop (the lateral one
 #: (alpha', u_y with the belt's lateral and camber motion) decays at up to ~1700 1/s on the sample file parked on a
@@ -166,6 +166,7 @@ class SwiftTyre:
             raise ModelInputError(f"axle must be 'height' or 'load', rim 'speed' or 'torque'; got {axle!r}, {rim!r}")
         self.model, self.axle, self.rim = model, axle, rim
         self._p_nominal = model.params.INFLPRES  # the default inflation pressure (the parameters are immutable)
+        self._p_factors, self._p_range = model.pressure_factors, model.input_range("p")
         for name, message in swift_invalid_values(model.params):  # parameters built by hand skip the reader's check
             raise ModelInputError(f"SWIFT parameter {name} {message}")
         self.constants = RingConstants.from_model(model, axle_mass, rim_extra_inertia)
@@ -197,8 +198,8 @@ class SwiftTyre:
         constant-time table accesses (an index computed from x into the window, no search). ``h``: the integration
         step that bounds the relaxation rate (0: the exact model). The contact solution: ``CONTACT_PASSES`` Newton
         passes from an estimate, or (``warm``, the stepper) ``WARM_PASSES`` from the solution stored in the state.
-        ``stage`` (an RK stage of the stepper): (dx, the contact solution x_c - x_b, l_s) instead, without the
-        expressions only the outputs need."""
+        ``stage`` (an RK stage of the stepper): (dx, the tandem base l_s) instead, without the expressions only the
+        outputs need."""
         import casadi as ca
 
         x = ca.MX.sym("x", len(STATE_NAMES))
@@ -208,15 +209,13 @@ class SwiftTyre:
 
         # the physics as SX functions (compact C), the table lookups as MX calls between them
         m, c = self.model, self.constants
-        xs, us, hs = ca.SX.sym("x", len(STATE_NAMES)), ca.SX.sym("u", len(INPUT_NAMES)), ca.SX.sym("h", 7)
+        xs, us, hs = ca.SX.sym("x", len(STATE_NAMES)), ca.SX.sym("u", len(INPUT_NAMES)), ca.SX.sym("h", 6)
         hstep = ca.SX.sym("hstep")
-        start = ca.Function("contact_start", [xs, us, hs[0]], [ca.vertcat(*contact_start(m, c, xs, us, hs[0]))],
-                            {"cse": True})
-        geometry = ca.Function("contact_geometry", [xs, us, hs[:6]],
-                               [ca.vertcat(*contact_geometry(m, c, xs, us, *(hs[i] for i in range(6))))],
-                               {"cse": True})
-        dx_sx, out_sx = ring_equations(m, c, xs, us, *(hs[i] for i in range(6)), axle=self.axle, rim=self.rim,
-                                       h=hstep, road_camber=ca.atan(hs[6]))
+        start = ca.Function("contact_start", [xs, us, hs[0]], [contact_start(m, c, xs, us, hs[0])], {"cse": True})
+        geometry = ca.Function("contact_geometry", [xs, us, hs[:5]],
+                               [contact_geometry(m, c, xs, us, *(hs[i] for i in range(5)))], {"cse": True})
+        dx_sx, out_sx = ring_equations(m, c, xs, us, *(hs[i] for i in range(5)), axle=self.axle, rim=self.rim,
+                                       h=hstep, road_camber=ca.atan(hs[5]))
         physics = ca.Function("ring", [xs, us, hs, hstep], [dx_sx] if stage else [dx_sx, out_sx], {"cse": True})
 
         spacing = grid[1] - grid[0]
@@ -228,19 +227,18 @@ class SwiftTyre:
             h0, h1, c0, c1 = hw[2 * i], hw[2 * i + 2], hw[2 * i + 1], hw[2 * i + 3]
             return h0 + w * (h1 - h0), (h1 - h0) / spacing, c0 + w * (c1 - c0)
 
+        xc = x[_S["xb"]]  # the tandem under the belt centre
         if warm:
-            xc, ls, passes = x[_S["xb"]] + x[_S["xcs"]], x[_S["lsm"]], WARM_PASSES
+            ls, passes = x[_S["lsm"]], WARM_PASSES
         else:
-            first = start(x, u, cam(x[_S["xb"]])[0])
-            xc, ls, passes = first[0], first[1], CONTACT_PASSES
-        for _ in range(passes):  # contact centre and tandem base at the current load, solved together
+            ls, passes = start(x, u, cam(xc)[0]), CONTACT_PASSES
+        for _ in range(passes):  # the tandem base at the current load
             (hf, dhf, _), (hr, dhr, _) = cam(xc + ls / 2), cam(xc - ls / 2)
-            nxt = geometry(x, u, ca.vertcat(hf, dhf, hr, dhr, ls, xc))
-            xc, ls = nxt[0], nxt[1]
+            ls = geometry(x, u, ca.vertcat(hf, dhf, hr, dhr, ls))
         (hf, dhf, cf), (hr, dhr, cr) = cam(xc + ls / 2), cam(xc - ls / 2)
-        results = physics.call([x, u, ca.vertcat(hf, dhf, hr, dhr, ls, xc, (cf + cr) / 2), h])
+        results = physics.call([x, u, ca.vertcat(hf, dhf, hr, dhr, ls, (cf + cr) / 2), h])
         if stage:
-            return ca.Function("rhs_stage", [x, u, x0w, grid, hw, h], [results[0], ca.vertcat(xc - x[_S["xb"]], ls)])
+            return ca.Function("rhs_stage", [x, u, x0w, grid, hw, h], [results[0], ls])
         return ca.Function("rhs", [x, u, x0w, grid, hw, h], results)
 
     @_with_casadi
@@ -254,13 +252,13 @@ class SwiftTyre:
         grid, hw = ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
         h = dt / self.substeps
 
-        def with_memory(s, memory):  # s with its contact solution to start from
-            return ca.vertcat(s[:_S["xcs"]], memory, s[_S["lsm"] + 1:])
+        def with_memory(s, memory):  # s with its tandem base to start from
+            return ca.vertcat(s[:_S["lsm"]], memory, s[_S["lsm"] + 1:])
 
-        def f(s, memory):  # (dx, the contact solution) at s, its contact solution started from ``memory``
+        def f(s, memory):  # (dx, the tandem base) at s, its tandem base started from ``memory``
             return rhs_stage(with_memory(s, memory), u, x0w, grid, hw, h)
 
-        xs, memory = x, x[_S["xcs"]:_S["lsm"] + 1]
+        xs, memory = x, x[_S["lsm"]]
         for _ in range(self.substeps):  # classical RK4; each stage starts from the previous stage's contact
             k1, memory = f(xs, memory)
             k2, memory = f(xs + h / 2 * k1, memory)
@@ -277,8 +275,8 @@ class SwiftTyre:
         """The CasADi step ``swift_step(x, u, dt, x0w, grid, hw) -> (x_next, out)`` that :meth:`step` runs
         (compiled): state and inputs in the order of STATE_NAMES / INPUT_NAMES, the window ``hw`` of ``window``
         samples of (cam height, road-camber slope) pairs, interleaved (:class:`swift.enveloping.CamTable`), on
-        the local grid ``grid`` (= table.dx * arange(window)) starting at x = ``x0w``. The state's ``xcs``,
-        ``lsm`` entries carry the contact solution from step to step (:meth:`initial_state` sets them; l_s must be
+        the local grid ``grid`` (= table.dx * arange(window)) starting at x = ``x0w``. The state's ``lsm`` entry
+        carries the tandem base from step to step (:meth:`initial_state` sets them; l_s must be
         positive). For code generation (FMU)."""
         return self._step_fn
 
@@ -343,12 +341,11 @@ class SwiftTyre:
 
     @_with_casadi
     def _store_contact(self, state, u):
-        """Write the converged contact solution (x_c - x_b, l_s) of ``state`` into its memory entries."""
+        """Write the converged tandem base l_s of ``state`` into its memory entry."""
         if self._compiled is not None:
             out = self._compiled.rhs(state, u, self._rhs_args(state)[0], self._window_start(state[_S["xb"]]))[1]
         else:
             out = np.asarray(self._rhs_window(state, u, *self._rhs_args(state))[1]).ravel()
-        state[_S["xcs"]] = out[OUTPUT_NAMES.index("x_c")] - state[_S["xb"]]
         state[_S["lsm"]] = out[OUTPUT_NAMES.index("ls")]
 
     def _window_start(self, xb):
@@ -405,6 +402,8 @@ class SwiftTyre:
                        inputs.omega, dt, 1.0, src, k)
             except struct.error:
                 raise _not_a_number(inputs, dt) from None
+            if p is not None and not self._p_factors.low < p < self._p_factors.high:
+                self._warn_pressure(p, p)
             code = c.step1(b.args)
             if not code:
                 b.row, b.last = k + 1, b.xs[k]
@@ -430,6 +429,7 @@ class SwiftTyre:
         if not row[INPUT_NAMES.index("p")] > 0:
             raise ModelInputError(f"input 'p' (inflation pressure) must be positive [Pa], got {inputs.p!r}")
         check_pressure(self.model.params, row[INPUT_NAMES.index("p")])
+        self._warn_pressure(row[INPUT_NAMES.index("p")], row[INPUT_NAMES.index("p")])
         state = self._impose(state, inputs)
         u = self._u(inputs)
         n = max(1, math.ceil(abs(inputs.vx) * dt / self._reach), math.ceil(dt / self._max_call - 1e-9))
@@ -462,8 +462,16 @@ class SwiftTyre:
                 rows = np.tile(np.array(self._row(inputs), dtype=float), (n, 1))
                 for i, speed in ((_U_Y, inputs.vy), (_NU, inputs.vx), (_NU + 1, inputs.vz)):
                     rows[:, i] += speed * t
+            if n:
+                self._warn_pressure(float(np.min(rows[:, _U_P])), float(np.max(rows[:, _U_P])))
             states[1:], outs[1:] = self._compiled.run(state, rows, dt)
         return SimResult(dt * np.arange(n + 1), states, dict(zip(OUTPUT_NAMES, outs.T)))
+
+    def _warn_pressure(self, p_min, p_max):
+        """The model's warning (once per factor) where a pressure factor of the file has changed sign at the pressures
+        used (saturated to PRESMIN..PRESMAX as the slip model uses them): :class:`mftyre.inputs.PressureFactorCheck`."""
+        lo, hi = self._p_range
+        self._p_factors(min(max(p_min, lo), hi), min(max(p_max, lo), hi), stacklevel=4)
 
     def outputs(self, state, inputs: StepInputs) -> np.ndarray:
         """Outputs at ``state`` (no time step), in the order of OUTPUT_NAMES."""
@@ -579,6 +587,7 @@ class SwiftTyre:
         c = self.constants
         p = prm.INFLPRES if inputs.p is None else inputs.p
         check_pressure(prm, p)
+        self._warn_pressure(p, p)
         s = np.zeros(len(STATE_NAMES))
         s[_S["xa"]] = s[_S["xb"]] = inputs.x
         h = float(self.table(inputs.x))
@@ -670,15 +679,15 @@ def _newton_inverse(jac):
 
 
 def _remember_contact(x, out):
-    """The state ``x`` (CasADi) with the contact solution of its outputs ``out`` in the memory entries xcs, lsm."""
+    """The state ``x`` (CasADi) with the tandem base of its outputs ``out`` in the memory entry lsm."""
     import casadi as ca
 
-    memory = ca.vertcat(out[OUTPUT_NAMES.index("x_c")] - x[_S["xb"]], out[OUTPUT_NAMES.index("ls")])
-    return ca.vertcat(x[:_S["xcs"]], memory, x[_S["lsm"] + 1:])
+    return ca.vertcat(x[:_S["lsm"]], out[OUTPUT_NAMES.index("ls")], x[_S["lsm"] + 1:])
 
 
 _NU = len(INPUT_NAMES)
 _U_Y = INPUT_NAMES.index("y")  # the lateral position in the input vector
+_U_P = INPUT_NAMES.index("p")  # the inflation pressure in the input vector
 #: One row of the compiled loop (:meth:`SwiftTyre._row`): the ring's inputs, then the imposed axle x, z, vz, spin.
 _ROW = (*INPUT_NAMES, "x", "z", "vz", "omega")
 _NI = len(_ROW)

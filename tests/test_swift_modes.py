@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import mftyre
+from mftyre.inputs import pressure_factor_edges
 from swift import Flat, StepInputs, SwiftTyre
 from swift.modes import scan
 
@@ -36,15 +37,13 @@ def _tyre(path, rim, length=3.0):
 
 def _mf_valid_dpi(prm):
     """(lowest, highest) dpi = (p - NOMPRES)/NOMPRES around 0 at which the Magic Formula's own pressure factors keep
-    their sign: vertical stiffness 1 + PFZ1 dpi, slip stiffnesses Kxk 1 + PPX1 dpi + PPX2 dpi^2 (4.E15), Kya
-    1 + PPY1 dpi (4.E25). Beyond, the MF's steady-state tyre pushes along the slip (TNO file: PPY1 = -0.6249, Kya
-    changes sign at dpi = 1.60, 5.72 bar, inside its declared 0.1-10 bar)."""
-    low, high = -np.inf, np.inf
-    for coefficients in ((prm.PFZ1, 0.0), (prm.PPX1, prm.PPX2), (prm.PPY1, 0.0)):
-        roots = np.roots([coefficients[1], coefficients[0], 1.0]) if coefficients[1] else (
-            [-1.0 / coefficients[0]] if coefficients[0] else [])
-        for r in np.real(np.asarray(roots)[np.isreal(roots)]):
-            low, high = (max(low, r), high) if r < 0 else (low, min(high, r))
+    their sign (:func:`mftyre.inputs.pressure_factor_edges`: vertical stiffness 1 + PFZ1 dpi, slip stiffnesses
+    1 + PPX1 dpi + PPX2 dpi^2 (4.E15) and 1 + PPY1 dpi (4.E25), ...). Beyond, the MF's steady-state tyre pushes
+    along the slip (TNO file: PPY1 = -0.6249, Kya changes sign at dpi = 1.60, 5.72 bar, inside its declared
+    0.1-10 bar)."""
+    edges = pressure_factor_edges(prm)
+    low = max([p / prm.NOMPRES - 1.0 for p, side, _, _ in edges if side < 0], default=-np.inf)
+    high = min([p / prm.NOMPRES - 1.0 for p, side, _, _ in edges if side > 0], default=np.inf)
     return low, high
 
 

@@ -61,8 +61,9 @@ def test_constant_grade_no_variation(model):
 def test_constant_curvature_gives_the_closed_form(model, V):
     """A circular hump of radius 11.3 m (>> the tyre), rolled over at 5 m/s forwards and backwards with the axle
     height following the road and a free rim: at the crest the free-rolling radius V_cx/Omega_b is R_e + Delta r_e,
-    Delta r_e = R_e kappa (R_e - r_c)/(1 - R_e kappa) with kappa = -1/R (convex), against the same run without
-    the term; the reported dre is that value."""
+    Delta r_e = R_e t/(1 - t), t = kappa (R_e - r_c) with kappa = -1/R (convex), against the same run without
+    the term; the reported dre is that value (the tandem under the belt centre turns at kappa V_cx; with the tandem
+    at the foot of the normal it was R_e kappa (R_e - r_c)/(1 - R_e kappa), 3 % smaller)."""
     hump = CircularBump(1.0, 3.0, 0.1)
     kappa = -1.0 / hump.radius
     rl, _ = model.loaded_radius(4000.0)
@@ -80,7 +81,7 @@ def test_constant_curvature_gives_the_closed_form(model, V):
     # the effective road is the road (long wavelength), to the secant slopes of the 1 mm cam-height table
     assert on["curvature"] == pytest.approx(kappa, rel=1e-2)
     re, rc = on["re"], on["rl"]
-    expected = re * kappa * (re - rc) / (1.0 - re * kappa)
+    expected = re * kappa * (re - rc) / (1.0 - kappa * (re - rc))
     assert expected < -2e-4  # r_e drops on a crest by a measurable amount (0.3 mm)
     measured = on["vcx"] / on["omb"] - off["vcx"] / off["omb"]
     assert measured == pytest.approx(expected, rel=0.03)

@@ -48,7 +48,7 @@ def test_static_force_equals_vertical_relation_to_bottoming(model):
 
 def test_creep_over_cleat_equals_quasi_static(model):
     """0.1 m/s over a 10 x 20 mm cleat, free-rolling rim, fixed axle: the dynamic model is the quasi-static one
-    (tandem base at the contact load and contact centre solved in both): Fz within 5 % of the peak, Fx within
+    (tandem under the wheel centre, tandem base at the contact load in both): Fz within 5 % of the peak, Fx within
     5 % of its range, l_s within 1.5 mm (old: l_s 143 mm against 121 mm, dFz 112 N against 653 N at the cleat centre)."""
     rl, _ = model.loaded_radius(4000.0)
     road = Cleat(0.4, 0.02, 0.01)
@@ -266,7 +266,7 @@ def test_multi_track_road_camber_in_the_ring(model):
     tyre = SwiftTyre(model, road, axle="load", x_range=(0.0, 2.5))
     V = 5.0
     res = tyre.run(0.4, StepInputs(x=0.3, vx=V, load=4000.0, omega=V / 0.3044))
-    ref = effective_road_3d(road, res["x_c"], res["ls"], float(b), tyre.cams)
+    ref = effective_road_3d(road, res.states[:, S["xb"]], res["ls"], float(b), tyre.cams)  # tandem under the belt
     assert np.max(np.abs(ref.beta_x)) > 0.03
     assert np.max(np.abs(res["beta_x"] - ref.beta_x)) < 2e-4
     bank = np.arctan(0.05)
@@ -306,51 +306,46 @@ def test_unused_ellips_nlength_warns_once_per_model(model, tmp_path):
     assert nlength_warnings(lambda: SwiftTyre(quiet, Flat(), x_range=(0.0, 1.0))) == []
 
 
-def _consistency(model, road, qs):
-    """(foot, load, base) residuals of a quasi-static solution from the exact cam heights: x_c = x + d sin(beta),
-    F'_z = Fz(d) (fixed axle), l_s = ELLIPS_SHIFT 2a(F'_z)."""
+def _consistency(model, road, qs, z_axle):
+    """(distance, load, base) residuals of a fixed-axle quasi-static solution from the exact cam heights under the
+    wheel centre: d = (z_axle - w) cos(beta), F'_z = Fz(d), l_s = ELLIPS_SHIFT 2a(F'_z)."""
     from swift.enveloping import Cams, effective_road, tandem_base
     prm = model.params
-    eff = effective_road(road, qs.road.x, qs.ls, Cams.from_params(prm, warn=False))
+    eff = effective_road(road, qs.x, qs.ls, Cams.from_params(prm, warn=False))
     r_omega = float(vertical.free_radius(prm, 0.0, NUMPY))
     d = r_omega - qs.rho
-    foot = qs.road.x - qs.x - d * np.sin(eff.beta)
+    distance = d - np.minimum((z_axle - eff.w) * np.cos(eff.beta), r_omega)
     load = np.maximum(model.vertical_force(d), 0.0) - qs.fz_normal
     base = qs.ls - tandem_base(prm, qs.fz_normal, (prm.INFLPRES - prm.NOMPRES) / prm.NOMPRES)
-    return foot, load, base
+    return distance, load, base
 
 
 def test_quasi_static_converged_on_mfeval_file():
     """MFeval's MF 6.2 file, 20 x 10 mm cleat at fixed axle: the answer does not depend on the iteration setting and
     satisfies the consistency equations (old: 4000 N at x = 0.511 with 12 and 200 passes, 4805 N with 50; 4000 N
-    at x = 0.29 where the only consistent load is 4754 N)."""
+    at x = 0.29 where the only consistent load was 4754 N)."""
     from conftest import MFEVAL_DIR, require_shared
     m = mftyre.load_tir(require_shared(MFEVAL_DIR / "MagicFormula62_Parameters.tir"))
     road = Cleat(0.4, 0.02, 0.01)
     x = np.linspace(0.1, 0.7, 601)
     a, b = (quasi_static(m, road, x, 4000.0, iterations=n) for n in (40, 70))
     assert np.max(np.abs(a.fz - b.fz)) < 1e-6
-    foot, load, base = _consistency(m, road, a)
+    distance, load, base = _consistency(m, road, a, float(m.loaded_radius(4000.0)[0]))
     # exact cam heights against the solver's 0.1 mm table: residuals of interpolation size
-    assert np.max(np.abs(foot)) < 1e-4 and np.max(np.abs(load)) < 10.0 and np.max(np.abs(base)) < 1e-4
-    assert a.fz[np.argmin(np.abs(x - 0.29))] == pytest.approx(4754.0, abs=10.0)  # wheel-centre Fz
-    assert a.fz[np.argmin(np.abs(x - 0.511))] > 4500.0
+    assert np.max(np.abs(distance)) < 1e-5 and np.max(np.abs(load)) < 10.0 and np.max(np.abs(base)) < 1e-4
+    assert a.fz[0] == pytest.approx(4000.0, rel=1e-6) and np.max(a.fz) > 5000.0
 
 
 def _creep_errors(model, road, x0=0.15, t_end=5.5):
-    """0.1 m/s, fixed axle, free rim, 2 ms steps (the errors are the same at 0.5 ms): (Fz error away from the jumps
-    of the quasi-static solution, its maximum anywhere, l_s error away from the jumps, the quasi-static peak)."""
+    """0.1 m/s, fixed axle, free rim, 2 ms steps (the errors are the same at 0.5 ms): (the largest Fz error, the
+    largest l_s error relative to l_s, the quasi-static peak)."""
     rl, _ = model.loaded_radius(4000.0)
     tyre = SwiftTyre(model, road, rim="torque", x_range=(-0.5, 1.2))
     res = tyre.run(t_end, StepInputs(x=x0, vx=0.1, z=float(rl), omega=0.1 / model.params.UNLOADED_RADIUS), dt=2e-3)
     qs = quasi_static(model, road, res.x, 4000.0)
     peak = np.max(qs.fz - qs.fz[0])
     err = np.abs((res["fz"] - res["fz"][0]) - (qs.fz - qs.fz[0]))
-    # where the consistent solution folds (the load raises l_s, which pushes a cam further onto the edge) the load
-    # jumps; the belt follows within ~1 mm of travel and rings for a few mm (its 80 Hz mode, 10 ms per mm)
-    jumps = res.x[1:][np.abs(np.diff(qs.fz)) > 0.05 * peak]
-    away = np.all((res.x[:, None] < jumps - 1e-3) | (res.x[:, None] > jumps + 5e-3), axis=1)
-    return err[away].max(), err.max(), np.max(np.abs(res["ls"] - qs.ls)[away]), peak
+    return err.max(), np.max(np.abs(res["ls"] / qs.ls - 1.0)), peak
 
 
 _CLEATS = {"20x10": Cleat(0.4, 0.02, 0.01), "20x15": Cleat(0.4, 0.02, 0.015), "10x20": Cleat(0.4, 0.01, 0.02),
@@ -360,12 +355,12 @@ _CLEATS = {"20x10": Cleat(0.4, 0.02, 0.01), "20x15": Cleat(0.4, 0.02, 0.015), "1
 
 @pytest.mark.parametrize("name", list(_CLEATS))
 def test_creep_equals_converged_quasi_static(model, name):
-    """Creep over cleats and steps up to 20 x 20 mm and 50 mm equals the converged quasi-static model within 5 % of
-    the peak away from the jumps of the quasi-static solution (1 mm before to 5 mm after), l_s within 1 mm there,
-    and within 30 % at the jumps (old: 18-41 % anywhere and l_s up to 2.15 m: the contact solution stayed on a root
-    that had vanished)."""
-    away, anywhere, ls, peak = _creep_errors(model, _CLEATS[name])
-    assert away < 0.05 * peak and ls < 1e-3 and anywhere < 0.3 * peak
+    """Creep over cleats and steps up to 20 x 20 mm and 50 mm equals the converged quasi-static model within 3 % of
+    the peak everywhere (1 % measured), l_s within 1 % (0.5 %) (with the tandem at the foot of the normal the
+    solution folded: 5 % away from the jumps, up to 30 % at them; before that 18-41 % anywhere and l_s up to
+    2.15 m: the contact solution stayed on a root that had vanished)."""
+    anywhere, ls, peak = _creep_errors(model, _CLEATS[name])
+    assert anywhere < 0.03 * peak and ls < 0.01
 
 
 @pytest.mark.parametrize("where", [("reference", "tir", "TNO_car205_60R15.tir"),
@@ -374,5 +369,5 @@ def test_creep_equals_converged_quasi_static_other_files(where):
     """The 20 x 10 mm cleat on the TNO and MFeval MF 6.2 files (MFeval old: 48 %, the reference not converged)."""
     from conftest import SHARED, require_shared
     m = mftyre.load_tir(require_shared(SHARED.joinpath(*where)))
-    away, anywhere, ls, peak = _creep_errors(m, _CLEATS["20x10"])
-    assert away < 0.05 * peak and ls < 1e-3 and anywhere < 0.3 * peak
+    anywhere, ls, peak = _creep_errors(m, _CLEATS["20x10"])
+    assert anywhere < 0.03 * peak and ls < 0.01
