@@ -667,6 +667,19 @@ def compile_function(function, key: str, directory: Path | None = None, output_n
     return cached_library("mftyre", key, generate, directory)
 
 
+@functools.lru_cache(maxsize=None)
+def equations_digest() -> str:
+    """SHA-256 of the sources the compiled model is generated from (formula/, backend, model, inputs, this
+    module): a library compiled from other equations (another checkout, an edit) is never taken from the cache
+    for these, whatever the version number says."""
+    here = Path(__file__).resolve().parent
+    digest = hashlib.sha256()
+    for path in sorted([*here.glob("formula/*.py"), *(here / name for name in ("backend.py", "model.py", "inputs.py",
+                                                                               "compiled.py"))]):
+        digest.update(path.name.encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()
+
+
 def _key(model, options: dict) -> str:
     import casadi as ca
 
@@ -674,7 +687,7 @@ def _key(model, options: dict) -> str:
 
     prm = model.params
     payload = {"parameters": {k: repr(prm[k]) for k in prm}, "side": model.side, "options": options,
-               "mftyre": __version__, "casadi": ca.__version__}
+               "mftyre": __version__, "equations": equations_digest(), "casadi": ca.__version__}
     return hashlib.sha256(json.dumps(payload, sort_keys=True, default=repr).encode()).hexdigest()
 
 

@@ -164,7 +164,7 @@ def _deflection_61(prm, fz, r_omega, correction, be):
 
 
 _RHO_FLOOR = 1e-12  # m, the smallest MF 6.2 deflection
-_NEWTON_STEPS = 7  # unrolled (CasADi) Newton steps of the MF 6.2 loaded radius, see the module notes
+_NEWTON_STEPS = 6  # unrolled (CasADi) Newton steps of the MF 6.2 loaded radius, see the module notes
 _NEWTON_STEPS_FROM_TOP = 8  # the same where the lifted roots have no bound below R_omega + R0
 
 
@@ -303,25 +303,42 @@ def _lift_bound_62(prm, fz, terms, top, be):
 
 def _with_side_force_62(prm, fz, rho, free_deflection, terms, be):
     """The start ``free_deflection`` (R_omega - Rl) of the loaded-radius search, whose deflection ``rho`` carries
-    ``fz`` without the side-force term, moved by one Newton step on the relation in rho with the side-force term
-    (S_Fygamma and the camber deflection held at the start): an analytic step much cheaper than one of the search."""
+    ``fz`` without the side-force term, moved by one Newton step on the relation with the side-force term
+    (S_Fygamma and the camber deflection held at the start) and the rim's bottoming force: the relation taken
+    as its tangent plus the bottoming kink (piecewise linear in the deflection, solved exactly), an analytic
+    step much cheaper than one of the search. Where the side-force term takes more than half the load factor
+    there (a side force far above the load; Q_FCY2 < 0), the step starts from the deflection where it takes half:
+    the root lies beyond the one where it takes all."""
     r_omega, free_share, _, correction, stiffness, fy, gamma = terms
     R0 = prm.UNLOADED_RADIUS
     deflected = rho > 0
     x = be.where(deflected, rho, R0) / R0  # no deflection: no step (and finite derivatives through it, CasADi)
+    start = free_deflection
     ratio = (r_omega - free_deflection) / r_omega
     s_fygamma = (prm.Q_FYS1 + (prm.Q_FYS2 + prm.Q_FYS3 * ratio) * ratio) * gamma
     side2 = (x ** prm.Q_FCY2 * (fy - s_fygamma) * (prm.Q_FCY / prm.FNOMIN)) ** 2
+    if prm.Q_FCY2 < 0.0:  # side^2 ~ x^(2 Q_FCY2): x where it is half the load factor, if above x
+        heavy = be.logical_and(2.0 * side2 > correction, correction > 0)
+        x_half = x * (correction / be.where(heavy, 2.0 * side2, correction)) ** (0.5 / prm.Q_FCY2)
+        free_deflection = be.where(heavy, free_deflection + (x_half - x) * R0 / free_share, free_deflection)
+        x, side2 = be.where(heavy, x_half, x), be.where(heavy, 0.5 * correction, side2)
     q_fz1 = _q_fz1(prm, be)
     load = stiffness * x * (q_fz1 + prm.Q_FZ2 * x)
     net = correction - side2
-    # d/dx of net load: net dload/dx - 2 Q_FCY2 side^2 load / x
-    slope = net * stiffness * (q_fz1 + 2.0 * prm.Q_FZ2 * x) - 2.0 * prm.Q_FCY2 * side2 * load / x
+    # d/dx of net load: net dload/dx - 2 Q_FCY2 side^2 load / x; per unit free deflection: times free_share / R0
+    slope = (net * stiffness * (q_fz1 + 2.0 * prm.Q_FZ2 * x) - 2.0 * prm.Q_FCY2 * side2 * load / x) * (
+        free_share / R0)
     rising = be.logical_and(slope > 0, deflected)
-    step = (fz - net * load) / be.where(rising, slope, 1.0) * R0 / free_share
-    # a correction, not a new start: kept where the relation rises and the step is at most half the deflection
-    return be.where(be.logical_and(rising, be.abs(step) <= 0.5 * free_deflection), free_deflection + step,
-                    free_deflection)
+    # tangent plus bottoming: g(d) = base + slope d + K max(d - d_b, 0), d_b the free deflection at the onset
+    d_b = r_omega - prm.RIM_RADIUS - prm.BOTTOM_OFFST
+    K = prm.BOTTOM_STIFF
+    base = net * load - slope * free_deflection
+    safe = be.where(rising, slope, 1.0)
+    above = (fz - base) / safe  # root where it lies above the onset (no bottoming)
+    below = (fz - base + K * d_b) / (safe + K)  # root in bottoming
+    moved = be.where(above <= d_b, above, below)
+    # kept where the relation rises and the step stays inside (0, R_omega)
+    return be.where(be.logical_and(rising, be.logical_and(moved > 0, moved < r_omega)), moved, start)
 
 
 def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
@@ -373,7 +390,7 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     # stop at steps below 1e-15 m (or an error estimated that small after the step) or once the load is matched to
     # 1e-12 relative (floor 1e-12 N); CasADi unrolls a fixed number of steps (see solve_newton)
     rl = be.solve_newton(residual, x, f, df, lo, hi, xtol=1e-15, ftol=1e-12 * be.fmax(fz, 1.0), max_iter=200,
-                         unrolled=steps)
+                         unrolled=steps, kink=prm.RIM_RADIUS + prm.BOTTOM_OFFST)
     rl = be.where(found, rl, r_omega)
     return rl, _deflection_62(prm, rl, r_omega, free_share, camber, be)
 
