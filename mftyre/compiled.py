@@ -75,6 +75,8 @@ _FLAGS = ("-O1", "-ftree-loop-vectorize", "-fno-tree-dominator-opts", "-fPIC", "
           "-freciprocal-math", "-ffp-contract=off", "-fopenmp-simd")
 _PACKED = 4096  # batches of at most this many points are passed as one packed copy of the inputs
 _FLAG_BITS = 16  # flags of the single-point entry: bit k non-finite input k, 16+k non-positive, 32+k outside
+_INPUT_FLAGS = (1 << (3 * _FLAG_BITS)) - 1  # (and bit 48: an output not finite)
+_OUTPUT_FLAG = 1 << (3 * _FLAG_BITS)
 
 
 #: the hash of this module, the backend and the equations: part of every cache key, so that a changed generator or
@@ -289,7 +291,7 @@ static void kernel_point(const double *const *in, double *const *out)
 }}
 
 /* one point, inputs then outputs in xy: returns flags (bit k: input k not finite; 16+k: not positive;
-   32+k: outside its range); evaluates unless an input is not finite or not positive */
+   32+k: outside its range; 48: an output not finite); evaluates unless an input is not finite or not positive */
 int64_t mft_point(double *xy)
 {{
   const double *x = xy;
@@ -308,6 +310,8 @@ int64_t mft_point(double *xy)
   if (flags & (((int64_t)1 << {2 * _FLAG_BITS}) - 1)) return flags;
   for (k = 0; k < N_OUT; ++k) out[k] = y + k;
   kernel_point(in, out);
+  for (k = 0; k < N_OUT; ++k)
+    if (!(y[k] - y[k] == 0.0)) return flags | ((int64_t)1 << {3 * _FLAG_BITS});
   return flags;
 }}
 
@@ -462,11 +466,11 @@ class CompiledFunction:
             xy[:n_in] = [_real(name, v) for name, v in zip(self.inputs, values)]
         flags = self._point(xy)
         if flags:
-            self._report(lambda k, kind: (flags >> (kind * _FLAG_BITS + k)) & 1, 1, xy[:n_in])
-        result = self._unpack(xy, 8 * n_in)
-        if self._finite_outputs and not all(map(math.isfinite, result)):
-            self._check_outputs(result, xy[:n_in], ())
-        return result
+            if flags & _INPUT_FLAGS:
+                self._report(lambda k, kind: (flags >> (kind * _FLAG_BITS + k)) & 1, 1, xy[:n_in])
+            if flags & _OUTPUT_FLAG and self._finite_outputs:  # (checked in C: a tenth of the cost in Python)
+                self._check_outputs(self._unpack(xy, 8 * n_in), xy[:n_in], ())
+        return self._unpack(xy, 8 * n_in)
 
     def batch(self, *arrays, threads: int = 1):
         """Many points: one array (or number) per input, broadcast together; one array per output.
@@ -667,19 +671,6 @@ def compile_function(function, key: str, directory: Path | None = None, output_n
     return cached_library("mftyre", key, generate, directory)
 
 
-@functools.lru_cache(maxsize=None)
-def equations_digest() -> str:
-    """SHA-256 of the sources the compiled model is generated from (formula/, backend, model, inputs, this
-    module): a library compiled from other equations (another checkout, an edit) is never taken from the cache
-    for these, whatever the version number says."""
-    here = Path(__file__).resolve().parent
-    digest = hashlib.sha256()
-    for path in sorted([*here.glob("formula/*.py"), *(here / name for name in ("backend.py", "model.py", "inputs.py",
-                                                                               "compiled.py"))]):
-        digest.update(path.name.encode() + b"\0" + path.read_bytes())
-    return digest.hexdigest()
-
-
 def _key(model, options: dict) -> str:
     import casadi as ca
 
@@ -687,7 +678,7 @@ def _key(model, options: dict) -> str:
 
     prm = model.params
     payload = {"parameters": {k: repr(prm[k]) for k in prm}, "side": model.side, "options": options,
-               "mftyre": __version__, "equations": equations_digest(), "casadi": ca.__version__}
+               "mftyre": __version__, "casadi": ca.__version__}
     return hashlib.sha256(json.dumps(payload, sort_keys=True, default=repr).encode()).hexdigest()
 
 

@@ -475,3 +475,27 @@ def test_mf62_with_side_force_term_matches_numpy_at_low_loads(tmp_path):
     assert np.sum(ref.rl > r_omega) > 200  # lifted roots among them
     for name, value in zip(f.outputs, out):
         np.testing.assert_allclose(value, ref[name], rtol=1e-10, atol=1e-6, err_msg=name)
+
+
+def test_one_point_with_non_finite_output_raises_or_returns_it(tmp_path):
+    """The single-point entry flags a non-finite output in C (bit 48): with ``finite_outputs`` the call raises the
+    error of MFModel.evaluate naming the output and the inputs, without it the value is returned; finite outputs
+    pass unflagged, also beside an input outside its range (only warned)."""
+    import casadi as ca
+
+    from mftyre.compiled import compile_function
+
+    x, y = ca.SX.sym("x"), ca.SX.sym("y")
+    function = ca.Function("f", [x, y], [ca.sqrt(x) + y, x / y], ["x", "y"], ["root", "ratio"])
+    library = compile_function(function, "non-finite-output", directory=tmp_path,
+                               checks=[{"range": [-1.0, 4.0]}, {}])
+    strict, lenient = CompiledFunction(library, finite_outputs=True), CompiledFunction(library)
+    assert strict(4.0, 2.0) == (4.0, 2.0)
+    with pytest.raises(ModelInputError, match=r"non-finite root at 1 of 1 point.*x=-1, y=1"):
+        strict(-1.0, 1.0)
+    with pytest.raises(ModelInputError, match=r"non-finite ratio"):
+        strict(1.0, 0.0)
+    root, ratio = lenient(-1.0, 0.0)
+    assert np.isnan(root) and np.isinf(ratio)
+    with pytest.warns(InputClippedWarning):
+        assert strict(9.0, 1.0) == (4.0, 9.0)
