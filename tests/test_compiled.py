@@ -499,3 +499,26 @@ def test_one_point_with_non_finite_output_raises_or_returns_it(tmp_path):
     assert np.isnan(root) and np.isinf(ratio)
     with pytest.warns(InputClippedWarning):
         assert strict(9.0, 1.0) == (4.0, 9.0)
+
+
+def test_jacobian_of_adjoint_equals_casadis_and_is_cheaper():
+    """compile_external's second derivatives (symmetric Hessian of lambda^T f and J^T) equal CasADi's own Jacobian
+    of the adjoint, block for block with the same names and sparsity, in fewer operations (lane-change tyre)."""
+    import casadi as ca
+
+    from mftyre.compiled import _jacobian_of_adjoint
+
+    model = mftyre.load_tir(TIR_FILES / FILES["mf61"])
+    f = model.casadi_function(("fz", "kappa", "alpha", "vx", "p"), ("fx", "fy", "mz"), limits="smooth", smooth=True)
+    sx = f.sx_in()
+    f = ca.Function("tyre", sx, f.call(sx), f.name_in(), f.name_out(), {"cse": True})
+    ours, casadis = _jacobian_of_adjoint(f), f.reverse(1).jacobian()
+    assert ours.name() == casadis.name() and ours.name_in() == casadis.name_in()
+    assert ours.name_out() == casadis.name_out()
+    assert all(ours.sparsity_out(k) == casadis.sparsity_out(k) for k in range(ours.n_out()))
+    assert ours.n_instructions() < 0.85 * casadis.n_instructions()
+    for point in ([4000.0, 0.05, 0.1, 20.0, 2.2e5], [6500.0, -0.1, -0.04, 35.0, 1.9e5], [2500.0, 0.0, 0.2, 8.0, 2.6e5]):
+        args = point + [0.0] * 3 + [1.3, -0.7, 0.4] + [0.0] * 5
+        a = np.array([float(v) for v in ours(*args)])
+        b = np.array([float(v) for v in casadis(*args)])
+        np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12 * np.abs(b).max())

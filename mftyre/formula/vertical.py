@@ -24,9 +24,13 @@ Newton's method with the relation's analytic slope, kept inside a bracket (bisec
 to 1e-15 m (a step, or the error left after the last step as the slope's change over the step before estimates
 it) or 1e-12 relative in the load. In contact (the free tyre carries less than the load) it starts from the MF 6.1
 deflection without the side-force term, corrected for the camber deflection and, where the relation has the
-side-force term, by one Newton step in rho on it with S_Fygamma and the camber deflection held, inside
-[0, R_omega]. NumPy in the benchmark: one step of the search after the start's evaluation on the sample file, one
-and for ~8 % of the points two on the TNO 205/60 R15 file (Q_FCY).
+side-force term, by one step on its tangent in rho with S_Fygamma and the camber deflection held plus the rim's
+bottoming kink (piecewise linear, solved exactly; from the deflection where the side-force term takes half the load
+factor where it takes more at the start: a side force far above the load), inside [0, R_omega]. A Newton step that
+crosses the bottoming onset stops there (the slope jumps by BOTTOM_STIFF; a root just beside the onset otherwise
+takes many bisections). NumPy in the benchmark (measured with the start before the tangent and kink): one step of
+the search after the start's evaluation on the sample file, one and for ~8 % of the points two on the TNO 205/60 R15
+file (Q_FCY).
 When even zero free deflection already gives more than the requested load (a cambered tyre at almost no load: the
 camber deflection rho_zgamma alone carries more), the relation's root lies above R_omega, where the camber
 asymmetry S_Fygamma, growing with Rl/R_omega, brings the load down. There the side-force term takes what the load
@@ -39,9 +43,10 @@ Newton on A - B, the side-force term A = |x^Q_FCY2 Q_FCY (Fy - S_Fygamma)/Fz0| a
 Fz/load), nearly quadratic in Rl where Fz itself falls like a quartic. Where the relation has no root there (no
 camber, no S_Fygamma, or a camber so small that the root lies more than R0 above the free radius: a wheel lifted by
 more than its own radius is not in contact) the loaded radius is R_omega, where the camber deflection carries a
-small load. CasADi (and so the compiled C) unrolls 7 steps, 9 relation evaluations in all: 6 carry the load to
-1e-9 at all 180,000 extreme points per file tried (of the kind in tests/test_vertical_relation, three MF 6.2 files),
-5 miss one in 60,000; without the bound 8 steps (7 miss some).
+small load. CasADi (and so the compiled C) unrolls 7 steps, 9 relation evaluations in all. On ~680,000 extreme and
+bottoming-onset points per file (of the kinds in tests/test_vertical_relation, three MF 6.2 files) the tyres in
+contact carry the load to 1e-9 after 5 steps, the lifted ones (root above R_omega, Newton from the bound) after 7:
+with 6, 3 lifted points of the 2 million fall short; without the bound 8 steps (7 miss some).
 """
 from __future__ import annotations
 
@@ -164,7 +169,7 @@ def _deflection_61(prm, fz, r_omega, correction, be):
 
 
 _RHO_FLOOR = 1e-12  # m, the smallest MF 6.2 deflection
-_NEWTON_STEPS = 6  # unrolled (CasADi) Newton steps of the MF 6.2 loaded radius, see the module notes
+_NEWTON_STEPS = 7  # unrolled (CasADi) Newton steps of the MF 6.2 loaded radius, see the module notes
 _NEWTON_STEPS_FROM_TOP = 8  # the same where the lifted roots have no bound below R_omega + R0
 
 
