@@ -342,6 +342,29 @@ def test_external_function_with_or_without_hessian_inside_ipopt(tmp_path, hessia
                                rtol=1e-7, atol=1e-10)
 
 
+def test_external_without_hessian_keeps_exact_first_derivatives(tmp_path):
+    """compile_external(hessian=False): the Jacobian CasADi takes of it in a graph (an MX Jacobian, as IPOPT's
+    constraint Jacobian) is the compiled exact one, equal to hessian=True's to rounding; only the second derivatives
+    are differences (they were differences of differences: the first derivatives were differenced too, ~1e-6 off)."""
+    import casadi as ca
+
+    model = mftyre.load_tir(TIR_FILES / FILES["mf61"])
+    inputs, outputs = ("fz", "kappa", "alpha"), ("fx", "fy")
+    exact = compile_external(model, inputs, outputs, hessian=True, directory=tmp_path, name="tyre_h")
+    no_hessian = compile_external(model, inputs, outputs, hessian=False, directory=tmp_path, name="tyre_j")
+    x = ca.MX.sym("x", 3)
+    jac = {k: ca.Function("j", [x], [ca.jacobian(ca.vertcat(*f(x[0], x[1], x[2])), x)]) for k, f in
+           (("exact", exact), ("no_hessian", no_hessian))}
+    for point in ([4000.0, 0.05, 0.1], [6500.0, -0.1, -0.04], [2500.0, 0.0, 0.2]):
+        a, b = np.array(jac["no_hessian"](point)), np.array(jac["exact"](point))
+        np.testing.assert_allclose(a, b, rtol=1e-13, atol=1e-13 * np.abs(b).max())
+    # its second derivatives exist (differences of that Jacobian) and are close to the exact ones
+    hess = {k: ca.Function("h", [x], [ca.hessian(f(x[0], x[1], x[2])[1], x)[0]]) for k, f in
+            (("exact", exact), ("no_hessian", no_hessian))}
+    h_fd, h_exact = np.array(hess["no_hessian"]([4000.0, 0.05, 0.1])), np.array(hess["exact"]([4000.0, 0.05, 0.1]))
+    np.testing.assert_allclose(h_fd, h_exact, rtol=1e-3, atol=1e-4 * np.abs(h_exact).max())
+
+
 @pytest.mark.parametrize("table, tir", [("mf61_random", "MagicFormula61_Parameters.tir"),
                                         ("mf62_random", "MagicFormula62_Parameters.tir")])
 def test_compiled_reproduces_reference_tables(mfeval_dir, tmp_path, table, tir):
