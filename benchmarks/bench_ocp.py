@@ -10,7 +10,9 @@ Rows: tyre x route (see mftyre.lane_change: "sx" MX graph calling the SX tyre, "
 limited-memory quasi-Newton, "jit" (--jit only: the expanded NLP compiled by CasADi's jit, minutes of gcc for the
 MF tyre). Columns: iterations, CPU time of the solve in this thread (best of --repeat; IPOPT and the tyre run in
 it), per iteration, its ratio to the simple tyre's fastest route, and the one-off build time (graph, compile or
-cache). Target (issue 24): the MF tyre <= 1.15x the simple tyre per iteration on the fastest routes.
+cache). Target (issue 24): the MF tyre <= 1.15x the simple tyre per iteration on the fastest routes. Then where
+the time per iteration goes (nlpsol's statistics per callback, IPOPT's own work) and the compiled MF tyre's own cost
+per point (the tyre, its Jacobian, its second derivatives).
 """
 from __future__ import annotations
 
@@ -41,6 +43,34 @@ def _external_fd(problem):
     return tyre_function
 
 
+def _callbacks(stats, solve):
+    """(Hessian, constraint Jacobian, other callbacks, the rest of ``solve``) in seconds, from nlpsol's stats."""
+    hessian, jacobian = stats.get("t_proc_nlp_hess_l", 0.0), stats.get("t_proc_nlp_jac_g", 0.0)
+    other = sum(v for k, v in stats.items() if k.startswith("t_proc_nlp_")) - hessian - jacobian
+    return hessian, jacobian, other, max(solve - hessian - jacobian - other, 0.0)
+
+
+def _kernels(problem):
+    """The compiled MF tyre alone (route "external"): thread CPU time per point of the tyre, its Jacobian and its
+    second derivatives (Jacobian of the adjoint), each mapped over the problem's 4 x (intervals + 1) points."""
+    import casadi as ca
+    import numpy as np
+
+    tyre = problem._tyre_function("FL", "mf", "external")
+    n = 4 * (problem.intervals + 1)
+    rng = np.random.default_rng(0)
+    lo, hi = problem.pressure_bounds
+    x = [rng.uniform(2500.0, 5500.0, n), rng.uniform(-0.1, 0.1, n), rng.uniform(-0.2, 0.2, n),
+         rng.uniform(10.0, 25.0, n), rng.uniform(lo, hi, n)]
+    print(f"\nthe compiled MF tyre over {n} points (thread CPU time, per point):")
+    for label, function in (("tyre (fx, fy, mz)", tyre), ("Jacobian", tyre.jacobian()),
+                            ("Jacobian of the adjoint (Hessian)", tyre.reverse(1).jacobian())):
+        mapped = function.map(n)
+        args = [ca.DM(v).T for v in x] + [ca.DM.ones(1, n)] * (function.n_in() - len(x))
+        t = best_time(lambda: mapped(*args), 5, cpu=True)
+        print(f"  {label:36}{1e6 * t / n:>7.2f} us  ({1e3 * t:.2f} ms for all)")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tir", default=str(ROOT / "tir_files" / "car_205_60R15_mf61.tir"))
@@ -69,9 +99,11 @@ def main(argv=None):
             solve = best_time(lambda: solver(**arguments), args.repeat, cpu=True)
             stats = solver.stats()
             iterations = int(stats["iter_count"])
+            t0 = time.thread_time()  # one more solve: its callbacks and its own time, for where the time goes
             T = unpack(solver(**arguments)["x"])[2]
+            parts = _callbacks(solver.stats(), time.thread_time() - t0)
             rows.append((tyre, route, iterations, solve, solve / max(iterations, 1), build, stats["return_status"],
-                         T))
+                         T, parts))
     simple_best = min(r[4] for r in rows if r[0] == "simple")
     mf_best = min(rows, key=lambda r: r[3] if r[0] == "mf" and r[6] == "Solve_Succeeded" else float("inf"))
     print(f"\nminimum-time lane change, {args.intervals} intervals, 4 tyres x {args.intervals + 1} nodes, "
@@ -79,9 +111,16 @@ def main(argv=None):
           "compare the ratios)")
     print(f"{'tyre':7}{'route':16}{'iterations':>11}{'solve [ms]':>12}{'ms/iter':>9}{'/simple':>9}{'build [s]':>11}"
           f"  {'T [s]':>8}  status")
-    for tyre, route, iterations, solve, per, build, status, T in rows:
+    for tyre, route, iterations, solve, per, build, status, T, _ in rows:
         print(f"{tyre:7}{route:16}{iterations:>11}{1e3 * solve:>12.1f}{1e3 * per:>9.2f}{per / simple_best:>9.2f}"
               f"{build:>11.1f}  {T:>8.4f}  {status}")
+    print("\nwhere the time per iteration goes [ms/iter] (one more solve, CasADi's statistics: the Hessian of the "
+          "Lagrangian, the constraint Jacobian, the other callbacks; IPOPT: the rest of that solve, its own work)")
+    print(f"{'tyre':7}{'route':16}{'Hessian':>9}{'Jacobian':>10}{'other':>8}{'IPOPT':>8}")
+    for tyre, route, iterations, *_, parts in rows:
+        print(f"{tyre:7}{route:16}" + "".join(f"{1e3 * v / max(iterations, 1):>{w}.2f}"
+                                              for v, w in zip(parts, (9, 10, 8, 8))))
+    _kernels(problem)
     ratio = mf_best[4] / simple_best
     print(f"fastest MF route by solve time: {mf_best[1]} ({1e3 * mf_best[3]:.1f} ms, {mf_best[2]} iterations); "
           f"per iteration {ratio:.2f}x the simple tyre's fastest route (target <= {TARGET_RATIO}: "

@@ -277,10 +277,12 @@ class NumpyBackend:
                               "the range the model was fitted for?")
 
     @staticmethod
-    def solve_newton(fun, x, f, df, lo, hi, xtol, ftol=0.0, max_iter=100, unrolled=None):
+    def solve_newton(fun, x, f, df, lo, hi, xtol, ftol=0.0, max_iter=100, unrolled=None, kink=None):
         """Root of ``fun`` in [lo, hi], element-wise, where fun(lo) > 0 >= fun(hi) (a function falling through its
         root; lo < hi), from ``x`` with ``f = fun(x)`` and slope ``df``. ``fun(x, idx) -> (value, slope)``
         evaluates the elements ``idx`` (a tuple of index arrays, None while every element is still iterating).
+        ``kink``: a point (a number) where the slope jumps; a Newton step across it stops there (the slope of the
+        side it starts from says nothing of the other), and is not taken as converged.
 
         Safeguarded Newton: a Newton step that would leave the bracket (or a slope that is not negative) is replaced
         by bisection of the bracket narrowed by the evaluated points (narrowed on the steps where some element
@@ -306,6 +308,11 @@ class NumpyBackend:
             descending = df < 0
             step = f / where(descending, df, -1.0)
             newton = x - step
+            crossed = np.False_
+            if kink is not None:
+                crossed = (x - kink) * (newton - kink) < 0
+                newton = where(crossed, kink, newton)
+                step = x - newton
             ok = descending & (newton >= lo) & (newton <= hi)  # the same in the bracket narrowed by x
             all_newton = ok if scalar else ok.all()
             if not all_newton:  # x narrows the bracket (only needed for bisection: a mixed where is dear)
@@ -313,10 +320,10 @@ class NumpyBackend:
                 lo, hi = where(falling, x, lo), where(falling, hi, x)
             size = np.abs(step)
             tol = xtol + _ULP4 * np.abs(x)
-            done = (np.abs(f) <= ftol) | (hi - lo <= tol) | (ok & (size <= tol))
+            done = (np.abs(f) <= ftol) | (hi - lo <= tol) | (ok & ~crossed & (size <= tol))
             if previous is not None:  # the error left after this step: (f''/2f') s1^2, f'' from the slopes' change
                 left_after = 2.0 * np.abs(df - df_previous) * size * size  # times 1 / (|df| previous): 4x the error
-                done |= ok & (previous > 0) & (left_after <= np.abs(df) * previous * tol)
+                done |= ok & ~crossed & (previous > 0) & (left_after <= np.abs(df) * previous * tol)
             moved = where(ok, newton, x)
             if scalar:
                 if done:
@@ -465,20 +472,23 @@ class CasadiBackend:
             x, aux = step(x)
         return x, aux
 
-    def solve_newton(self, fun, x, f, df, lo, hi, xtol, ftol=0.0, max_iter=100, unrolled=12):
+    def solve_newton(self, fun, x, f, df, lo, hi, xtol, ftol=0.0, max_iter=100, unrolled=12, kink=None):
         """``unrolled`` steps of :meth:`NumpyBackend.solve_newton` (no stopping test: at the root a Newton step
-        stays put), then the final Newton step, whose derivatives are those of the implicit function."""
+        stays put), then the final Newton step (never stopped at the ``kink``), whose derivatives are those of the
+        implicit function."""
         ca = self.ca
 
-        def step(x, f, df, lo, hi):
+        def step(x, f, df, lo, hi, kink=None):
             falling = f > 0
             lo, hi = ca.if_else(falling, x, lo), ca.if_else(falling, hi, x)
             newton = x - f / ca.if_else(df < 0, df, -1.0)
+            if kink is not None:
+                newton = ca.if_else((x - kink) * (newton - kink) < 0, kink, newton)
             ok = ca.logic_and(df < 0, ca.logic_and(newton >= lo, newton <= hi))
             return newton, ok, lo, hi
 
         for _ in range(unrolled):
-            newton, ok, lo, hi = step(x, f, df, lo, hi)
+            newton, ok, lo, hi = step(x, f, df, lo, hi, kink)
             x = ca.if_else(ok, newton, 0.5 * (lo + hi))
             f, df = fun(x, None)
         newton, ok, _, _ = step(x, f, df, lo, hi)

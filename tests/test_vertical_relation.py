@@ -166,7 +166,7 @@ def test_vertical_force_is_zero_above_the_free_radius(path):
 
 @pytest.mark.parametrize("key", [*FILES, "tno_without_lift_bound"])
 def test_casadi_loaded_radius_carries_its_load_at_extreme_inputs(key):
-    """The unrolled CasADi solver (7 safeguarded Newton steps; with 5 one of these 60,000 points falls short)
+    """The unrolled CasADi solver (7 safeguarded Newton steps; with 5 a lifted one of these 60,000 points falls short)
     against the relation itself at zero, few-newton and low loads up to 250 rad/s (the cambered tyre's root above
     R_omega), 15 kN with |Fx|, |Fy| up to 1.2 Fz, any pressure and camber in range: Rl carries the load to 1e-9
     relative wherever NumPy finds a root, and the two agree. Also with Q_CAM2 < 0, where the lifted roots are not

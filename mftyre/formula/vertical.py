@@ -24,9 +24,13 @@ Newton's method with the relation's analytic slope, kept inside a bracket (bisec
 to 1e-15 m (a step, or the error left after the last step as the slope's change over the step before estimates
 it) or 1e-12 relative in the load. In contact (the free tyre carries less than the load) it starts from the MF 6.1
 deflection without the side-force term, corrected for the camber deflection and, where the relation has the
-side-force term, by one Newton step in rho on it with S_Fygamma and the camber deflection held, inside
-[0, R_omega]. NumPy in the benchmark: one step of the search after the start's evaluation on the sample file, one
-and for ~8 % of the points two on the TNO 205/60 R15 file (Q_FCY).
+side-force term, by one step on its tangent in rho with S_Fygamma and the camber deflection held plus the rim's
+bottoming kink (piecewise linear, solved exactly; from the deflection where the side-force term takes half the load
+factor where it takes more at the start: a side force far above the load), inside [0, R_omega]. A Newton step that
+crosses the bottoming onset stops there (the slope jumps by BOTTOM_STIFF; a root just beside the onset otherwise
+takes many bisections). NumPy in the benchmark (measured with the start before the tangent and kink): one step of
+the search after the start's evaluation on the sample file, one and for ~8 % of the points two on the TNO 205/60 R15
+file (Q_FCY).
 When even zero free deflection already gives more than the requested load (a cambered tyre at almost no load: the
 camber deflection rho_zgamma alone carries more), the relation's root lies above R_omega, where the camber
 asymmetry S_Fygamma, growing with Rl/R_omega, brings the load down. There the side-force term takes what the load
@@ -39,9 +43,10 @@ Newton on A - B, the side-force term A = |x^Q_FCY2 Q_FCY (Fy - S_Fygamma)/Fz0| a
 Fz/load), nearly quadratic in Rl where Fz itself falls like a quartic. Where the relation has no root there (no
 camber, no S_Fygamma, or a camber so small that the root lies more than R0 above the free radius: a wheel lifted by
 more than its own radius is not in contact) the loaded radius is R_omega, where the camber deflection carries a
-small load. CasADi (and so the compiled C) unrolls 7 steps, 9 relation evaluations in all: 6 carry the load to
-1e-9 at all 180,000 extreme points per file tried (of the kind in tests/test_vertical_relation, three MF 6.2 files),
-5 miss one in 60,000; without the bound 8 steps (7 miss some).
+small load. CasADi (and so the compiled C) unrolls 7 steps, 9 relation evaluations in all. On ~680,000 extreme and
+bottoming-onset points per file (of the kinds in tests/test_vertical_relation, three MF 6.2 files) the tyres in
+contact carry the load to 1e-9 after 5 steps, the lifted ones (root above R_omega, Newton from the bound) after 7:
+with 6, 3 lifted points of the 2 million fall short; without the bound 8 steps (7 miss some).
 """
 from __future__ import annotations
 
@@ -329,25 +334,42 @@ def _lift_bound_62(prm, fz, terms, top, be):
 
 def _with_side_force_62(prm, fz, rho, free_deflection, terms, be):
     """The start ``free_deflection`` (R_omega - Rl) of the loaded-radius search, whose deflection ``rho`` carries
-    ``fz`` without the side-force term, moved by one Newton step on the relation in rho with the side-force term
-    (S_Fygamma and the camber deflection held at the start): an analytic step much cheaper than one of the search."""
+    ``fz`` without the side-force term, moved by one Newton step on the relation with the side-force term
+    (S_Fygamma and the camber deflection held at the start) and the rim's bottoming force: the relation taken
+    as its tangent plus the bottoming kink (piecewise linear in the deflection, solved exactly), an analytic
+    step much cheaper than one of the search. Where the side-force term takes more than half the load factor
+    there (a side force far above the load; Q_FCY2 < 0), the step starts from the deflection where it takes half:
+    the root lies beyond the one where it takes all."""
     r_omega, free_share, _, correction, stiffness, fy, gamma = terms
     R0 = prm.UNLOADED_RADIUS
     deflected = rho > 0
     x = be.where(deflected, rho, R0) / R0  # no deflection: no step (and finite derivatives through it, CasADi)
+    start = free_deflection
     ratio = (r_omega - free_deflection) / r_omega
     s_fygamma = (prm.Q_FYS1 + (prm.Q_FYS2 + prm.Q_FYS3 * ratio) * ratio) * gamma
     side2 = (x ** prm.Q_FCY2 * (fy - s_fygamma) * (prm.Q_FCY / prm.FNOMIN)) ** 2
+    if prm.Q_FCY2 < 0.0:  # side^2 ~ x^(2 Q_FCY2): x where it is half the load factor, if above x
+        heavy = be.logical_and(2.0 * side2 > correction, correction > 0)
+        x_half = x * (correction / be.where(heavy, 2.0 * side2, correction)) ** (0.5 / prm.Q_FCY2)
+        free_deflection = be.where(heavy, free_deflection + (x_half - x) * R0 / free_share, free_deflection)
+        x, side2 = be.where(heavy, x_half, x), be.where(heavy, 0.5 * correction, side2)
     q_fz1 = _q_fz1(prm, be)
     load = stiffness * x * (q_fz1 + prm.Q_FZ2 * x)
     net = correction - side2
-    # d/dx of net load: net dload/dx - 2 Q_FCY2 side^2 load / x
-    slope = net * stiffness * (q_fz1 + 2.0 * prm.Q_FZ2 * x) - 2.0 * prm.Q_FCY2 * side2 * load / x
+    # d/dx of net load: net dload/dx - 2 Q_FCY2 side^2 load / x; per unit free deflection: times free_share / R0
+    slope = (net * stiffness * (q_fz1 + 2.0 * prm.Q_FZ2 * x) - 2.0 * prm.Q_FCY2 * side2 * load / x) * (
+        free_share / R0)
     rising = be.logical_and(slope > 0, deflected)
-    step = (fz - net * load) / be.where(rising, slope, 1.0) * R0 / free_share
-    # a correction, not a new start: kept where the relation rises and the step is at most half the deflection
-    return be.where(be.logical_and(rising, be.abs(step) <= 0.5 * free_deflection), free_deflection + step,
-                    free_deflection)
+    # tangent plus bottoming: g(d) = base + slope d + K max(d - d_b, 0), d_b the free deflection at the onset
+    d_b = r_omega - prm.RIM_RADIUS - prm.BOTTOM_OFFST
+    K = prm.BOTTOM_STIFF
+    base = net * load - slope * free_deflection
+    safe = be.where(rising, slope, 1.0)
+    above = (fz - base) / safe  # root where it lies above the onset (no bottoming)
+    below = (fz - base + K * d_b) / (safe + K)  # root in bottoming
+    moved = be.where(above <= d_b, above, below)
+    # kept where the relation rises and the step stays inside (0, R_omega)
+    return be.where(be.logical_and(rising, be.logical_and(moved > 0, moved < r_omega)), moved, start)
 
 
 def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
@@ -399,7 +421,7 @@ def loaded_radius_62(prm, fz, r_omega, omega, fx, fy, gamma, dpi, be):
     # stop at steps below 1e-15 m (or an error estimated that small after the step) or once the load is matched to
     # 1e-12 relative (floor 1e-12 N); CasADi unrolls a fixed number of steps (see solve_newton)
     rl = be.solve_newton(residual, x, f, df, lo, hi, xtol=1e-15, ftol=1e-12 * be.fmax(fz, 1.0), max_iter=200,
-                         unrolled=steps)
+                         unrolled=steps, kink=prm.RIM_RADIUS + prm.BOTTOM_OFFST)
     rl = be.where(found, rl, r_omega)
     return rl, _deflection_62(prm, rl, r_omega, free_share, camber, be)
 
