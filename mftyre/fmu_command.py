@@ -1,7 +1,7 @@
 """``mftyre fmu build FILE.tir -o tyre.fmu [--model steady|transient|swift] [--backend native|pythonfmu]``: the
-tyre as an FMI 2.0 co-simulation FMU. The builders live in :mod:`mftyre.fmu` (``native_build``: C generated
-from the equations + the C wrapper in ``mftyre/fmu/native``; ``build``: the pythonfmu slave; see
-mftyre/fmu/README.md); this module only wires them into the command line:
+tyre as an FMI 2.0 co-simulation FMU. The builders live in :mod:`fmu` (``native_build``: C generated
+from the equations + the C wrapper in ``fmu/native``; ``build``: the pythonfmu slave; see
+fmu/README.md); this module only wires them into the command line:
 
     from mftyre.fmu_command import register
     register(subparsers)          # adds the 'fmu' command with its 'build' subcommand; handler: run(args)
@@ -19,15 +19,15 @@ __all__ = ["register", "run", "fmu_sources"]
 
 
 def fmu_sources():
-    """The FMU sources shipped in the package (``mftyre/fmu``: builders, C wrapper, README) as a resource."""
-    return importlib.resources.files("mftyre.fmu")
+    """The FMU sources shipped in the package (``fmu``: builders, C wrapper, README) as a resource."""
+    return importlib.resources.files("fmu")
 
 
 def register(subparsers) -> argparse.ArgumentParser:
     """Add the ``fmu`` command (subcommand ``build``) to an argparse subparsers object."""
     fmu = subparsers.add_parser(
         "fmu", help="package the tyre as an FMI 2.0 co-simulation FMU",
-        description="Package the tyre as an FMI 2.0 co-simulation FMU. See mftyre/fmu/README.md for the FMU's "
+        description="Package the tyre as an FMI 2.0 co-simulation FMU. See fmu/README.md for the FMU's "
                     "variables.")
     sub = fmu.add_subparsers(dest="fmu_command", metavar="SUBCOMMAND")
     sub.required = True
@@ -80,7 +80,7 @@ def run(args) -> int:
                 raise ValueError("--input-mode is an option of --backend pythonfmu")
             if args.model == "swift" and args.vertical == "load":
                 raise ValueError("the native swift FMU takes the wheel-centre height (--vertical position)")
-            from .fmu.native_build import build_native_fmu
+            from fmu.native_build import build_native_fmu
 
             started = time.perf_counter()
 
@@ -96,7 +96,7 @@ def run(args) -> int:
         if args.road is not None or args.x_start != 0.0:
             raise ValueError("with --backend pythonfmu the road and x_start are FMU parameters set at run time "
                              "(road, x_start), not build options")
-        from .fmu import build
+        from fmu import build
 
         return build.run(argparse.Namespace(tir=args.tir, output=args.output, model=args.model, side=args.side,
                                              input_mode=args.input_mode or "vehicle", vertical_input=args.vertical,

@@ -8,7 +8,7 @@ from functools import lru_cache
 from pathlib import Path
 
 PROJECT = Path(__file__).resolve().parents[1]
-PACKAGES = ("mftyre", "swift")
+PACKAGES = ("mftyre", "swift", "fmu")
 
 
 def _modules() -> dict[str, Path]:

@@ -1,4 +1,4 @@
-"""The pythonfmu tyre FMU (mftyre/fmu, `mftyre fmu build --backend pythonfmu`): built into tmp paths, run with fmpy.
+"""The pythonfmu tyre FMU (fmu, `mftyre fmu build --backend pythonfmu`): built into tmp paths, run with fmpy.
 
 Evidence used: MFModel.evaluate / vertical_force on the slips, load and radius the FMU reports (1e-9), the
 kinematic slip definitions and their signs written out independently, fmpy's model-description validation, and

@@ -162,7 +162,7 @@ def test_separate_tyres_sharing_one_library_step_from_threads_at_once(model, cac
 def test_libraries_shipped_in_an_fmu_are_installed_verified_and_loaded_without_a_compiler(model, tmp_path,
                                                                                           monkeypatch):
     from mftyre import compiled
-    from mftyre.fmu import __file__ as fmu_init
+    from fmu import __file__ as fmu_init
 
     monkeypatch.syspath_prepend(os.path.dirname(fmu_init))  # the FMU's own core module, as the FMU imports it
     import mftyre_fmu_core as core
