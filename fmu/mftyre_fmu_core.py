@@ -46,38 +46,33 @@ from pathlib import Path
 #: MF outputs taken from the model (names of :data:`mftyre.model.OUTPUT_UNITS`).
 MF_OUTPUTS = ("fx", "fy", "fz", "mx", "my", "mz", "omega", "re", "rho", "rl", "a", "b", "t", "mux", "muy")
 
-#: Outputs of the tyre: name -> (unit, description). The unit "1" means dimensionless.
-OUTPUTS = {
-    "Fx": ("N", "longitudinal force on the tyre (at the wheel centre, ISO-W axes)"),
-    "Fy": ("N", "lateral force on the tyre (at the wheel centre, ISO-W axes)"),
-    "Fz": ("N", "vertical force on the tyre, >= 0 (at the wheel centre, ISO-W axes)"),
-    "Mx": ("N.m", "moment about x at the wheel centre, ISO-W axes"),
-    "My": ("N.m", "moment about y at the wheel centre, ISO-W axes (-Rl Fx + rolling resistance)"),
-    "Mz": ("N.m", "moment about z at the wheel centre, ISO-W axes"),
-    "Mx_c": ("N.m", "overturning moment at the contact point (MF output)"),
-    "My_c": ("N.m", "rolling-resistance moment at the contact point (MF output)"),
-    "Mz_c": ("N.m", "self-aligning moment at the contact point (MF output)"),
-    "kappa": ("1", "longitudinal slip given to the MF, -Vsx / Vx (kinematic or the rig input: relative to the "
-                   "direction of travel, -1 = locked wheel; swift: the transient slip -Vsx / |Vcx|, its MF runs at "
-                   "|Vcx|)"),
-    "alpha": ("rad", "slip angle given to the MF (kinematic, or the rig input)"),
-    "Vsx": ("m/s", "longitudinal slip speed of the contact point, -kappa vx (swift: -kappa |Vcx|)"),
-    "Vsy": ("m/s", "lateral slip speed of the contact point, tan(alpha) |vx|"),
-    "omega_used": ("rad/s", "spin speed used (the input; in rig mode estimated from kappa and vx)"),
-    "rho": ("m", "vertical tyre deflection"),
-    "Rl": ("m", "loaded radius (wheel centre to contact point, in the wheel plane)"),
-    "Re": ("m", "effective rolling radius"),
-    "contact_length": ("m", "contact patch length 2a"),
-    "contact_width": ("m", "contact patch width 2b"),
-    "trail": ("m", "pneumatic trail"),
-    "mux": ("1", "longitudinal friction coefficient"),
-    "muy": ("1", "lateral friction coefficient"),
-    "Fz_c": ("N", "normal contact force (swift: normal to the effective road plane; steady: = Fz)"),
-    "road_w": ("m", "effective road height under the wheel (swift: tandem cams + road_z; steady: road_z, or 0 "
-                    "with vertical_input=load)"),
-    "road_slope": ("rad", "effective forward road slope beta_y (swift; 0 in steady mode)"),
-    "x_road": ("m", "wheel-centre position along the road profile: x_start + integral of vx dt"),
+#: Outputs of the tyre: name -> Variable (mftyre.variables: one vocabulary with the native FMU's wheels).
+OUTPUT_NAMES = ("Fx", "Fy", "Fz", "Mx", "My", "Mz", "Mx_c", "My_c", "Mz_c", "kappa", "alpha", "Vsx", "Vsy", "omega_used",
+                "rho", "Rl", "Re", "contact_length", "contact_width", "trail", "mux", "muy", "Fz_c", "road_w",
+                "road_slope", "x_road")
+#: What the pythonfmu FMU says more about some outputs than the vocabulary (its modes: steady vehicle/rig, swift).
+OUTPUT_NOTES = {
+    "Fz": "vertical force on the tyre, >= 0 (at the wheel centre, ISO-W axes)",
+    "My": "moment about y at the wheel centre, ISO-W axes (-Rl Fx + rolling resistance)",
+    "kappa": "longitudinal slip given to the MF, -Vsx / Vx (kinematic or the rig input: relative to the direction of "
+             "travel, -1 = locked wheel; swift: the transient slip -Vsx / |Vcx|, its MF runs at |Vcx|)",
+    "alpha": "slip angle given to the MF (kinematic, or the rig input)",
+    "Vsx": "longitudinal slip speed of the contact point, -kappa vx (swift: -kappa |Vcx|)",
+    "Vsy": "lateral slip speed of the contact point, tan(alpha) |vx|",
+    "omega_used": "spin speed used (the input; in rig mode estimated from kappa and vx)",
+    "Fz_c": "normal contact force (swift: normal to the effective road plane; steady: = Fz)",
+    "road_w": "effective road height under the wheel (swift: tandem cams + road_z; steady: road_z, or 0 with "
+              "vertical_input=load)",
+    "road_slope": "effective forward road slope beta_y (swift; 0 in steady mode)",
 }
+
+
+def outputs():
+    """The outputs: name -> Variable (needs mftyre importable: the host's or the FMU's vendored copy)."""
+    from mftyre.variables import pick
+
+    return pick("output", *OUTPUT_NAMES, describe=OUTPUT_NOTES)
+
 
 EVALUATORS = ("auto", "compiled", "casadi", "numpy")
 

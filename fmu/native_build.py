@@ -27,16 +27,12 @@ from xml.sax.saxutils import escape
 
 from mftyre.errors import MFTyreError
 from mftyre.files import OutputError, check_outputs, make_output_folder, write_atomically
+from mftyre.variables import UNIT_BASES
 
 #: The hand-written C files (package data of fmu, so installed wheels can build FMUs).
 C_DIR = importlib.resources.files("fmu") / "native"
 MODELS = ("steady", "transient", "swift")
 
-_UNIT_BASES = {
-    "N": dict(kg=1, m=1, s=-2), "N.m": dict(kg=1, m=2, s=-2), "m": dict(m=1), "m/s": dict(m=1, s=-1),
-    "rad": dict(rad=1), "rad/s": dict(rad=1, s=-1), "Pa": dict(kg=1, m=-1, s=-2), "s": dict(s=1),
-    "kg": dict(kg=1), "N/m": dict(kg=1, s=-2), "1/m": dict(m=-1),
-}
 
 
 class NativeBuildError(MFTyreError):
@@ -96,7 +92,8 @@ def write_config(path: Path, spec, guid: str, extra: str = "") -> None:
         text += f"#define TYRE_U_{n.upper()} {i}\n"
     for i, n in enumerate(spec.parameter_names):
         text += f"#define TYRE_Q_{n.upper()} {i}\n"
-    text += _c_array("TYRE_Q_START", spec.parameter_starts) + _c_array("TYRE_U_START", spec.input_starts)
+    text += _c_array("TYRE_Q_START", [v.start for v in spec.parameters])
+    text += _c_array("TYRE_U_START", [v.start for v in spec.inputs])
     text += _c_strings("TYRE_Q_NAMES", spec.parameter_names) + _c_strings("TYRE_U_NAMES", u)
     text += extra + "#endif\n"
     path.write_text(text)
@@ -104,7 +101,7 @@ def write_config(path: Path, spec, guid: str, extra: str = "") -> None:
 
 def model_description(spec, model_id: str, guid: str, description: str, sources: list[str]) -> str:
     """modelDescription.xml: parameters, inputs (start values), outputs with their true input dependencies."""
-    units = sorted({*spec.parameter_units, *spec.input_units, *spec.output_units} - {"1"})
+    units = sorted({v.unit for v in (*spec.parameters, *spec.inputs, *spec.outputs)} - {"1"})
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
              f'<fmiModelDescription fmiVersion="2.0" modelName="{escape(model_id)}" guid="{guid}" '
              f'description="{escape(description, {chr(34): "&quot;"})}" generationTool="mftyre (native, CasADi '
@@ -117,7 +114,7 @@ def model_description(spec, model_id: str, guid: str, description: str, sources:
              '    <SourceFiles>'] + [f'      <File name="{s}"/>' for s in sources] + [
              '    </SourceFiles>', '  </CoSimulation>', '  <UnitDefinitions>']
     for un in units:
-        base = " ".join(f'{k}="{v}"' for k, v in _UNIT_BASES[un].items())
+        base = " ".join(f'{k}="{v}"' for k, v in UNIT_BASES[un].items())
         lines.append(f'    <Unit name="{un}"><BaseUnit {base}/></Unit>')
     lines += ['  </UnitDefinitions>',
               '  <LogCategories>',
@@ -138,13 +135,11 @@ def model_description(spec, model_id: str, guid: str, description: str, sources:
                      '</ScalarVariable>')
         vr += 1
 
-    for n, unit, d, s in zip(spec.parameter_names, spec.parameter_units, spec.parameter_descriptions,
-                             spec.parameter_starts):
-        var(n, "parameter", "fixed", unit, d, float(s), "exact")
-    for n, unit, d, s in zip(spec.input_names, spec.input_units, spec.input_descriptions, spec.input_starts):
-        var(n, "input", "continuous", unit, d, float(s))
-    for n, unit, d in zip(spec.output_names, spec.output_units, spec.output_descriptions):
-        var(n, "output", "continuous", unit, d, None, "calculated")
+    variability = {"parameter": "fixed", "input": "continuous", "output": "continuous"}
+    initial = {"parameter": "exact", "input": None, "output": "calculated"}
+    for v in (*spec.parameters, *spec.inputs, *spec.outputs):  # mftyre.variables.Variable, in vector order
+        var(v.name, v.causality, variability[v.causality], v.unit, v.description,
+            None if v.start is None else float(v.start), initial[v.causality])
     lines += ['  </ModelVariables>', '  <ModelStructure>', '    <Outputs>']
     nq, nu, ny = len(spec.parameter_names), len(spec.input_names), len(spec.output_names)
     deps = spec.output_dependencies  # per output: indices of the inputs it depends on directly
@@ -185,26 +180,27 @@ def generate_sources(spec, sources: Path, guid: str) -> list[str]:
 
 
 def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_start: float = 0.0,
-               turn_slip: bool = False):
+               turn_slip: bool = False, input_mode: str = "vehicle"):
     """What the FMU is made of: the CasADi functions (:mod:`mftyre.transient` for steady/transient,
     :mod:`swift.fmu_model` for swift), its variables and the glue file that calls them."""
     import casadi as ca
 
     if kind in ("steady", "transient"):
-        from mftyre.transient import OUTPUTS, PARAMETERS, input_table, wheel_functions
+        from mftyre.transient import wheel_functions
 
-        f = wheel_functions(model, kind, vertical, turn_slip=turn_slip)
-        inputs, outputs, params, glue, extra = input_table(vertical, turn_slip), OUTPUTS, PARAMETERS, "glue_wheel.c", ""
-        directional = True
+        f = wheel_functions(model, kind, vertical, turn_slip=turn_slip, input_mode=input_mode)
+        glue, extra, directional = "glue_wheel.c", "", True
     elif kind == "swift":
         if turn_slip:
             raise NativeBuildError("--turn-slip is available for --model steady and transient (the SWIFT ring has no "
                                    "turn slip)")
-        from swift.fmu_model import OUTPUTS, PARAMETERS, INPUTS, swift_functions
+        if input_mode != "vehicle":
+            raise NativeBuildError("--input-mode rig is a mode of --model steady (the SWIFT ring takes the wheel's "
+                                   "motion)")
+        from swift.fmu_model import swift_functions
 
         f = swift_functions(model, road, x_start=x_start)
-        inputs, outputs, params, glue, extra = INPUTS, OUTPUTS, PARAMETERS, "glue_swift.c", f.config_extra
-        directional = False
+        glue, extra, directional = "glue_swift.c", f.config_extra, False
     else:
         raise NativeBuildError(f"--model must be one of {', '.join(MODELS)}, got {kind!r}")
     functions = [f.init, f.step, f.out]
@@ -220,21 +216,17 @@ def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_sta
         deps = f.output_dependencies
     return SimpleNamespace(
         functions=functions, state_names=f.state_names, glue=glue, config_extra=extra, directional=directional,
-        input_names=f.input_names, input_starts=f.input_starts,
-        input_units=[inputs[n][0] for n in f.input_names], input_descriptions=[inputs[n][2] for n in f.input_names],
-        parameter_names=f.parameter_names, parameter_starts=f.parameter_starts,
-        parameter_units=[params[n][0] for n in f.parameter_names],
-        parameter_descriptions=[params[n][1] for n in f.parameter_names],
-        output_names=f.output_names, output_units=[outputs[n][0] for n in f.output_names],
-        output_descriptions=[outputs[n][1] for n in f.output_names], output_dependencies=deps,
+        parameters=f.parameters, inputs=f.inputs, outputs=f.outputs, input_names=f.input_names,
+        parameter_names=f.parameter_names, output_names=f.output_names, output_dependencies=deps,
         fingerprint=hashlib.sha256("".join(fn.serialize() for fn in functions).encode()).hexdigest() + extra)
 
 
 def build_native_fmu(tir, output, *, model: str = "steady", side: str | None = None, vertical: str = "position",
-                     road=None, x_start: float = 0.0, turn_slip: bool = False, overwrite: bool = False,
-                     quiet: bool = True, progress=None) -> Path:
+                     road=None, x_start: float = 0.0, turn_slip: bool = False, input_mode: str = "vehicle",
+                     overwrite: bool = False, quiet: bool = True, progress=None) -> Path:
     """Build the native FMU of ``tir`` at ``output``; returns the path. ``road``: swift only, a
-    :class:`swift.road.Road`, a road expression or a CSV file with columns x, z. ``progress``: callable(text)
+    :class:`swift.road.Road`, a road expression or a CSV file with columns x, z. ``input_mode``: "vehicle" or
+    "rig" (steady: load and slips as inputs, :func:`mftyre.transient.wheel_functions`). ``progress``: callable(text)
     told each stage (equations, C generation, compilation, packing)."""
     import mftyre
     from mftyre.errors import MFTyreError
@@ -256,13 +248,15 @@ def build_native_fmu(tir, output, *, model: str = "steady", side: str | None = N
     try:
         tyre = mftyre.load_tir(tir, side=side)
         say(f"building the {model} equations from {tir.name} (CasADi)")
-        spec = model_spec(tyre, model, vertical=vertical, road=road, x_start=x_start, turn_slip=turn_slip)
+        spec = model_spec(tyre, model, vertical=vertical, road=road, x_start=x_start, turn_slip=turn_slip,
+                          input_mode=input_mode)
     except MFTyreError as exc:
         raise NativeBuildError(f"cannot build the {model} FMU from {tir}: {exc}") from None
     model_id = f"mftyre_{model}"
     tir_bytes = tir.read_bytes()
-    digest = hashlib.sha256(tir_bytes + repr((model, tyre.side, vertical, turn_slip, spec.fingerprint,
-                                              mftyre.__version__)).encode()).hexdigest()
+    mode = (model, tyre.side, vertical, turn_slip, spec.fingerprint, mftyre.__version__)
+    digest = hashlib.sha256(tir_bytes + repr(mode if input_mode == "vehicle" else (*mode, input_mode)).encode()
+                            ).hexdigest()
     guid = "{" + str(uuid.UUID(digest[:32])) + "}"
     with tempfile.TemporaryDirectory(prefix="mftyre_native_") as tmp:
         root = Path(tmp) / "fmu"

@@ -53,8 +53,8 @@ def register(subparsers) -> argparse.ArgumentParser:
                        help="native steady/transient: the vertical input is the wheel-centre height z (position, "
                             "default) or the load Fz_in")
     build.add_argument("--input-mode", choices=("vehicle", "rig"),
-                       help="pythonfmu: default of the FMU's input_mode parameter (rig: slips and load as inputs; "
-                            "default vehicle)")
+                       help="rig: the load Fz_in and the slips kappa_in, alpha_in as inputs (steady); default vehicle "
+                            "(pythonfmu: the default of the FMU's input_mode parameter)")
     build.add_argument("--turn-slip", action="store_true",
                        help="native steady/transient: the MF with turn slip, from the input yaw_rate")
     build.add_argument("--backend", choices=("native", "pythonfmu"), default="native",
@@ -76,8 +76,6 @@ def run(args) -> int:
         return 2
     try:
         if args.backend == "native":
-            if args.input_mode is not None:
-                raise ValueError("--input-mode is an option of --backend pythonfmu")
             if args.model == "swift" and args.vertical == "load":
                 raise ValueError("the native swift FMU takes the wheel-centre height (--vertical position)")
             from fmu.native_build import build_native_fmu
@@ -89,7 +87,8 @@ def run(args) -> int:
 
             build_native_fmu(args.tir, args.output, model=args.model, side=args.side,
                              vertical=args.vertical, road=args.road, x_start=args.x_start,
-                             turn_slip=args.turn_slip, overwrite=args.overwrite, quiet=False, progress=progress)
+                             turn_slip=args.turn_slip, input_mode=args.input_mode or "vehicle",
+                             overwrite=args.overwrite, quiet=False, progress=progress)
             return 0
         if args.model == "transient" or args.turn_slip:
             raise ValueError("--model transient and --turn-slip are only available with --backend native")

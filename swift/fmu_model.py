@@ -35,6 +35,7 @@ import numpy as np
 
 from mftyre.errors import ModelInputError
 from mftyre.transient import StateFunctions, free_rolling_start
+from mftyre.variables import pick
 
 from .enveloping import Cams
 from .ring import INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, check_pressure, pressure_coefficients
@@ -53,51 +54,29 @@ NEWTON_STEPS = 30
 #: swift.SwiftTyre's default accuracy (two RK4 steps per ms: 0.9 %) at twice the cost.
 SUBSTEPS = 1
 
-INPUTS = {  # name -> (unit, start, description)
-    "vx": ("m/s", 10.0, "wheel-centre velocity along ISO-W x (wheel heading projected on the road)"),
-    "vy": ("m/s", 0.0, "wheel-centre velocity along ISO-W y (to the left)"),
-    "omega": ("rad/s", float("nan"), "rim spin speed (imposed; positive rolling forwards; start: free rolling at "
-              "the start vx under FNOMIN)"),
-    "gamma": ("rad", 0.0, "rim inclination (camber) about ISO-W x"),
-    "z": ("m", float("nan"), "wheel-centre height above the road datum, ISO-W z (imposed; start: the loaded radius "
-          "at FNOMIN)"),
-    "vz": ("m/s", 0.0, "wheel-centre vertical velocity (z moves with it within a step)"),
-    "p": ("Pa", float("nan"), "inflation pressure (start: the .tir INFLPRES)"),
-    "road_z": ("m", 0.0, "height of the whole road profile above the road datum (the tyre meets z - road_z)"),
-    "road_camber": ("rad", 0.0, "road camber angle about ISO-W x (> 0: the road rises to the left), added to the "
-                    "profile's own multi-track camber"),
-}
-PARAMETERS = {
-    "x_start": ("m", "wheel-centre position on the road profile at the start"),
-    "max_step": ("s", "longest internal RK4 step (steps are never longer than swift.simulate.MAX_RK4_STEP = 1 ms, "
-                 "the longest a parked tyre is stable with)"),
-}
-OUTPUTS = {  # name -> (unit, description, ring output or state)
-    "Fx": ("N", "force on the rim along ISO-W x, at the wheel centre"),
-    "Fy": ("N", "force on the rim along ISO-W y, at the wheel centre"),
-    "Fz": ("N", "force on the rim along ISO-W z (up), at the wheel centre"),
-    "Mx": ("N.m", "moment on the rim about ISO-W x"),
-    "My": ("N.m", "moment on the rim about ISO-W y (about the axle)"),
-    "Mz": ("N.m", "moment on the rim about ISO-W z"),
-    "Fx_c": ("N", "longitudinal contact force in the effective road plane"),
-    "Fy_c": ("N", "lateral contact force"),
-    "Fz_c": ("N", "normal contact force (normal to the effective road plane)"),
-    "Mz_c": ("N.m", "self-aligning moment of the contact patch"),
-    "kappa": ("1", "transient longitudinal slip of the contact patch"),
-    "alpha": ("rad", "transient slip angle of the contact patch"),
-    "rho": ("m", "tyre deflection normal to the effective road"),
-    "Rl": ("m", "lever arm of the contact forces (belt centre to contact point)"),
-    "Re": ("m", "effective rolling radius"),
-    "contact_length": ("m", "contact patch length 2a"),
-    "road_w": ("m", "effective road height (tandem cams)"),
-    "road_slope": ("rad", "effective forward road slope beta_y (> 0 rising ahead)"),
-    "road_curvature": ("1/m", "effective road curvature d beta_y / dx"),
-    "Re_variation": ("m", "effective rolling radius variation over the curved effective road (free-rolling "
-                             "steady value; 0 on a flat road or a grade)"),
-    "road_camber_eff": ("rad", "effective road camber beta_x: the profile's multi-track camber plus road_camber"),
-    "x_contact": ("m", "contact centre on the road (x_road plus the forward shift to the foot of the normal)"),
-    "x_road": ("m", "wheel-centre position on the road: x_start + integral of vx dt"),
-}
+#: The wheel's variables: name -> Variable (mftyre.variables), in the order of the vectors.
+INPUTS = pick("input", "vx", "vy", "omega", "gamma", "z", "vz", "p", "road_z", "road_camber", describe={
+    "omega": "rim spin speed (imposed; positive rolling forwards; start: free rolling at the start vx under FNOMIN)",
+    "gamma": "rim inclination (camber) about ISO-W x",
+    "z": "wheel-centre height above the road datum, ISO-W z (imposed; start: the loaded radius at FNOMIN)",
+    "road_z": "height of the whole road profile above the road datum (the tyre meets z - road_z)",
+    "road_camber": "road camber angle about ISO-W x (> 0: the road rises to the left), added to the profile's own "
+                   "multi-track camber"})
+PARAMETERS = pick("parameter", "x_start", "max_step")
+OUTPUTS = pick(
+    "output", "Fx", "Fy", "Fz", "Mx", "My", "Mz", "Fx_c", "Fy_c", "Fz_c", "Mz_c", "kappa", "alpha", "rho", "Rl", "Re",
+    "contact_length", "road_w", "road_slope", "road_curvature", "Re_variation", "road_camber_eff", "x_contact",
+    "x_road", describe={
+        "Fx": "force on the rim along ISO-W x, at the wheel centre",
+        "Fy": "force on the rim along ISO-W y, at the wheel centre",
+        "Fz": "force on the rim along ISO-W z (up), at the wheel centre",
+        "Mx": "moment on the rim about ISO-W x", "My": "moment on the rim about ISO-W y (about the axle)",
+        "Mz": "moment on the rim about ISO-W z", "Mz_c": "self-aligning moment of the contact patch",
+        "kappa": "transient longitudinal slip of the contact patch",
+        "alpha": "transient slip angle of the contact patch",
+        "rho": "tyre deflection normal to the effective road",
+        "Rl": "lever arm of the contact forces (belt centre to contact point)",
+        "road_w": "effective road height (tandem cams)"})
 _RING = {"Fx": "fx", "Fy": "fy", "Fz": "fz", "Mx": "mx", "My": "my", "Mz": "mz", "Fx_c": "fx_c", "Fy_c": "fy_c",
          "Fz_c": "fz_c", "Mz_c": "mz_c", "kappa": "kappa", "alpha": "alpha", "rho": "rho", "Rl": "rl", "Re": "re",
          "road_slope": "beta", "road_curvature": "curvature", "Re_variation": "dre", "road_camber_eff": "beta_x",
@@ -193,11 +172,12 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
              + "/* cam height and road-camber slope per sample, interleaved */\n"
              + "static const double ROAD_H[2 * ROAD_N] = {" + ",".join(repr(float(v)) for v in h) + "};\n"
              + "static const double ROAD_GRID[ROAD_WINDOW] = {" + ",".join(repr(float(v)) for v in grid_v) + "};\n")
-    omega0, z0 = free_rolling_start(model, INPUTS["vx"][1])
-    starts = tuple({"p": prm.INFLPRES, "omega": omega0, "z": z0}.get(n, v[1]) for n, v in INPUTS.items())
-    return SwiftFunctions(init=init, step=step, out=outw, state_names=STATE_NAMES, input_names=tuple(INPUTS),
-                          parameter_names=tuple(PARAMETERS), output_names=tuple(OUTPUTS),
-                          parameter_starts=(float(x_start), 1e-3), input_starts=starts, table_x0=float(table.x0),
+    omega0, z0 = free_rolling_start(model, INPUTS["vx"].start)
+    computed = {"p": float(prm.INFLPRES), "omega": omega0, "z": z0}
+    inputs = tuple(v.but(start=computed[n]) if n in computed else v for n, v in INPUTS.items())
+    parameters = (PARAMETERS["x_start"].but(start=float(x_start)), PARAMETERS["max_step"])
+    return SwiftFunctions(init=init, step=step, out=outw, state_names=STATE_NAMES, inputs=inputs,
+                          parameters=parameters, outputs=tuple(OUTPUTS.values()), table_x0=float(table.x0),
                           table_dx=float(table.dx), table_h=h, grid=grid_v, output_dependencies=deps,
                           config_extra=extra)
 
