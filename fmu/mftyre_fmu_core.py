@@ -47,8 +47,8 @@ from pathlib import Path
 MF_OUTPUTS = ("fx", "fy", "fz", "mx", "my", "mz", "omega", "re", "rho", "rl", "a", "b", "t", "mux", "muy")
 
 #: Outputs of the tyre: name -> Variable (mftyre.variables: one vocabulary with the native FMU's wheels).
-OUTPUT_NAMES = ("Fx", "Fy", "Fz", "Mx", "My", "Mz", "Mx_c", "My_c", "Mz_c", "kappa", "alpha", "Vsx", "Vsy", "omega_used",
-                "rho", "Rl", "Re", "contact_length", "contact_width", "trail", "mux", "muy", "Fz_c", "road_w",
+OUTPUT_NAMES = ("Fx", "Fy", "Fz", "Mx", "My", "Mz", "Mx_c", "My_c", "Mz_c", "kappa", "alpha", "Vsx", "Vsy",
+                "omega_used", "rho", "Rl", "Re", "contact_length", "contact_width", "trail", "mux", "muy", "Fz_c", "road_w",
                 "road_slope", "x_road")
 #: What the pythonfmu FMU says more about some outputs than the vocabulary (its modes: steady vehicle/rig, swift).
 OUTPUT_NOTES = {
@@ -297,12 +297,8 @@ def _floats(values):
 
 
 # ------------------------------------------------------------------------------------------ SWIFT (rigid ring)
-#: Cam-height table of the SWIFT road: grid step [m] (nodes at multiples of it) and samples seen by one step.
-SWIFT_TABLE_DX = 1e-3
-SWIFT_WINDOW = 1024
-#: Largest wheel travel [m] within one internal SWIFT step (the cam-height window is fixed over a step).
-SWIFT_MAX_TRAVEL = 0.2
-STEP_RATE_LIMIT = 1e6  # internal steps per simulated second one step may take (as the native FMU)
+# The SWIFT road table (grid step, window), the stepping rule and its constants are those of the native FMU's
+# wheel: swift.fmu_model (TABLE_DX, WINDOW, SUBSTEPS, internal_steps).
 
 
 def parse_road(spec, base_dir=None):
@@ -334,14 +330,15 @@ def export_swift_libraries(model, directory) -> dict:
     import shutil
 
     from swift import Flat, SwiftTyre
+    from swift.fmu_model import SUBSTEPS, TABLE_DX, WINDOW
 
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     names = []
     for axle in ("height", "load"):
         for rim in ("speed", "torque"):
-            tyre = SwiftTyre(model, Flat(), axle=axle, rim=rim, x_range=(0.0, 1.0), table_dx=SWIFT_TABLE_DX,
-                             window=SWIFT_WINDOW, compiled=True)
+            tyre = SwiftTyre(model, Flat(), axle=axle, rim=rim, x_range=(0.0, 1.0), table_dx=TABLE_DX,
+                             window=WINDOW, substeps=SUBSTEPS, compiled=True)
             library = Path(tyre._compiled._lib._name)
             for src in (library, library.with_suffix(".json")):  # the library and its verified description
                 shutil.copy2(src, directory / src.name)
@@ -382,9 +379,9 @@ class SwiftCore:
     Mapping (see README.md here): ``vertical`` "position" -> axle height imposed (``z - road_z``, moving with
     ``vz`` inside the step), "load" -> ``Fz_in`` pushes the axle (mass ``axle_mass``) down; ``rim`` "speed" ->
     spin ``omega`` imposed, "torque" -> drive torque ``torque`` on the rim. The road is the profile ``road``
-    (:func:`parse_road`) plus the input ``road_z``. The communication step is split into
-    ceil(h / max_step) equal steps of :meth:`swift.SwiftTyre.step` (also short enough that the wheel travels at most
-    SWIFT_MAX_TRAVEL per step). Inputs are held over the step (zero-order hold) except the axle height in
+    (:func:`parse_road`) plus the input ``road_z``. The communication step is split into equal steps of
+    :meth:`swift.SwiftTyre.step` by the native FMU's rule (:func:`swift.fmu_model.internal_steps`, with its RK4
+    substeps, road table and window). Inputs are held over the step (zero-order hold) except the axle height in
     position mode (first-order hold with ``vz``) and the positions x, y, which advance with vx, vy.
 
     State frames (exact, no approximation): vertical positions are kept relative to ``road_z`` (a change of
@@ -400,6 +397,7 @@ class SwiftCore:
         from mftyre import transient
         from mftyre.backend import NUMPY
         from swift import Cams, SwiftTyre
+        from swift.fmu_model import SUBSTEPS, TABLE_DX, WINDOW
         from swift.ring import STATE_NAMES
 
         self.wheel, self.be = transient, NUMPY  # the wheel's equations, on floats
@@ -419,7 +417,7 @@ class SwiftCore:
         self.road = parse_road(road, base_dir)
         self.S = {n: i for i, n in enumerate(STATE_NAMES)}
         cams = Cams.from_params(model.params)
-        dx, span = SWIFT_TABLE_DX, SWIFT_WINDOW * SWIFT_TABLE_DX
+        dx, span = TABLE_DX, WINDOW * TABLE_DX
         bps = self.road.breakpoints if self.road is not None else ()
         reach = cams.ae + 2 * dx  # beyond, the cam height is constant (the road is)
         lo, hi = (min(bps) - reach, max(bps) + reach) if bps else (float(x_start), float(x_start))
@@ -437,7 +435,7 @@ class SwiftCore:
             except Exception as exc:  # read-only cache...: compiled now instead
                 log(f"shipped SWIFT libraries not installed: {exc}")
         kwargs = dict(axle="height" if vertical == "position" else "load", rim=rim, x_range=x_range, table_dx=dx,
-                      window=SWIFT_WINDOW, axle_mass=float(axle_mass))
+                      window=WINDOW, substeps=SUBSTEPS, axle_mass=float(axle_mass))
         self.path = "casadi"
         if evaluator in ("auto", "compiled"):
             try:
@@ -500,17 +498,15 @@ class SwiftCore:
     def advance(self, u, h):
         """Advance over a communication step of length ``h`` with the inputs ``u``; returns the outputs. On an
         error the state is left as it was (the exception says why)."""
+        from swift.fmu_model import internal_steps
+
         np = self._np
         S = self.S
         saved = (self.x_offset, self.road_z)
         state = self.state.copy()
         try:
             self._set_road_z(state, u["road_z"])
-            n = max(1, math.ceil(h / self.max_step - 1e-9), math.ceil(abs(u["vx"]) * h / SWIFT_MAX_TRAVEL))
-            if not (n <= math.ceil(h * STEP_RATE_LIMIT) and n < 1e7):  # the native FMU's time budget (glue_swift.c)
-                raise TyreFMUError(f"the step of {h!r} s needs {n:.3g} internal steps, more than its time budget "
-                                   f"({STEP_RATE_LIMIT:g} per simulated second): max_step too small or the speed too "
-                                   "high for this model")
+            n = internal_steps(h, self.max_step, u["vx"])  # the native FMU's rule (glue_swift.c)
             dt = h / n
             out = None
             for k in range(n):

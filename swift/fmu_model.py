@@ -42,7 +42,8 @@ from .ring import INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, check_pressure, pressu
 from .road import parse_road
 from .simulate import MAX_RK4_STEP
 
-__all__ = ["SwiftWheel", "swift_functions", "INPUTS", "OUTPUTS", "PARAMETERS", "TABLE_DX", "WINDOW"]
+__all__ = ["SwiftWheel", "swift_functions", "internal_steps", "INPUTS", "OUTPUTS", "PARAMETERS", "TABLE_DX", "WINDOW",
+           "MAX_TRAVEL", "SUBSTEPS", "STEP_RATE_LIMIT"]
 
 TABLE_DX = 1e-3
 WINDOW = 1024
@@ -53,6 +54,8 @@ NEWTON_STEPS = 30
 #: Fz over a 10 mm cleat at 10 m/s within 1.7 % of its swing from a 0.25 ms solution; max_step = 0.5 ms gives
 #: swift.SwiftTyre's default accuracy (two RK4 steps per ms: 0.9 %) at twice the cost.
 SUBSTEPS = 1
+#: Internal steps per simulated second one communication step may take (the time budget of a step).
+STEP_RATE_LIMIT = 1e6
 
 #: The wheel's variables: name -> Variable (mftyre.variables), in the order of the vectors.
 INPUTS = pick("input", "vx", "vy", "omega", "gamma", "z", "vz", "p", "road_z", "road_camber", describe={
@@ -82,6 +85,19 @@ _RING = {"Fx": "fx", "Fy": "fy", "Fz": "fz", "Mx": "mx", "My": "my", "Mz": "mz",
          "road_slope": "beta", "road_curvature": "curvature", "Re_variation": "dre", "road_camber_eff": "beta_x",
          "x_contact": "x_c"}
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
+
+
+def internal_steps(h: float, max_step: float, vx: float) -> int:
+    """How many equal RK4 steps a communication step of ``h`` [s] is split into (module notes; the C wrapper
+    glue_swift.c spells the same rule): steps of at most ``max_step`` and MAX_RK4_STEP, and short enough that the
+    wheel travels at most MAX_TRAVEL in one. A step that would need more than STEP_RATE_LIMIT internal steps per
+    simulated second (or 1e7) is refused (ModelInputError)."""
+    n = max(math.ceil(h / min(max_step, MAX_RK4_STEP) - 1e-9), math.ceil(abs(vx) * h / MAX_TRAVEL))
+    if not (n <= math.ceil(h * STEP_RATE_LIMIT) and n < 1e7):
+        raise ModelInputError(f"the step of {h!r} s needs {n:.3g} internal steps, more than its time budget "
+                              f"({STEP_RATE_LIMIT:g} per simulated second): max_step too small or the speed too high "
+                              "for this model")
+    return max(1, n)
 
 
 @dataclass(frozen=True)
@@ -165,7 +181,7 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
     pstiff, pdamp = pressure_coefficients(prm)  # the factors' signs checked by glue_validate (ring.check_pressure)
     extra = (f"#define ROAD_N {table.h.size}\n#define ROAD_WINDOW {WINDOW}\n#define ROAD_X0 {table.x0!r}\n"
              f"#define ROAD_DX {table.dx!r}\n#define SWIFT_MAX_TRAVEL {MAX_TRAVEL!r}\n"
-             f"#define SWIFT_MAX_RK4_STEP {MAX_RK4_STEP!r}\n"
+             f"#define SWIFT_MAX_RK4_STEP {MAX_RK4_STEP!r}\n#define STEP_RATE_LIMIT {STEP_RATE_LIMIT!r}\n"
              f"#define SWIFT_P_NOM {float(prm.NOMPRES)!r}\n#define SWIFT_P_STIFF {pstiff!r}\n"
              f"#define SWIFT_P_DAMP {0.0 if pdamp is None else pdamp!r}\n"
              + "".join(f"#define S_{n.upper()} {i}\n" for i, n in enumerate(STATE_NAMES))
@@ -226,7 +242,7 @@ class SwiftWheel:
         U = dict(zip(self.functions.input_names, self.u))
         x = self.state.copy()
         x[_S["za"]], x[_S["vza"]], x[_S["oma"]] = U["z"], U["vz"], U["omega"]
-        n = max(1, math.ceil(h / min(self.q[1], MAX_RK4_STEP) - 1e-9), math.ceil(abs(U["vx"]) * h / MAX_TRAVEL))
+        n = internal_steps(h, self.q[1], U["vx"])
         for _ in range(n):
             x = np.asarray(self.functions.step(x, self.u, h / n, *self._window(x[_S["xb"]])), dtype=float).ravel()
         self.state = x
