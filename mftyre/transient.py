@@ -84,11 +84,14 @@ SIGMA_MIN = 1e-4
 #: Outputs: name -> Variable (mftyre.variables). Forces/moments at the wheel centre, ISO-W axes.
 OUTPUTS = pick(
     "output", "Fx", "Fy", "Fz", "Mx", "My", "Mz", "Mx_c", "My_c", "Mz_c", "kappa", "alpha", "Rl", "Re", "rho",
-    "contact_length", "trail", "mux", "muy", "u_x", "u_y",
+    "contact_length", "trail", "mux", "muy", "u_x", "u_y", "Vsx", "Vsy", "omega_used", "contact_width",
     describe={"Fz": "vertical force on the tyre at the wheel centre, ISO-W z (up), >= 0",
               "My": "moment about ISO-W y at the wheel centre (-Rl Fx + rolling resistance)",
               "kappa": "longitudinal slip given to the MF (transient: kappa')",
-              "alpha": "slip angle given to the MF (transient: alpha')"})
+              "alpha": "slip angle given to the MF (transient: alpha')",
+              "Vsx": "longitudinal slip speed of the slips given to the MF, -kappa vx",
+              "Vsy": "lateral slip speed of the slips given to the MF, tan(alpha) |vx|",
+              "omega_used": "spin speed used (the input; rig mode: estimated by the MF from kappa and vx)"})
 
 #: Parameters: name -> Variable (start: NaN, computed from the tyre by :func:`default_tau_vlow`).
 PARAMETERS = pick("parameter", "tau_vlow")
@@ -290,7 +293,7 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
     h = ca.SX.sym("h")
 
     mf_in = ("fz", "kappa", "alpha", "gamma", "phit", "vx", "p", "omega")
-    mf_out = ("fx", "fy", "mx", "my", "mz", "re", "rho", "rl", "a", "t", "mux", "muy")
+    mf_out = ("fx", "fy", "mx", "my", "mz", "re", "rho", "rl", "a", "b", "t", "mux", "muy")
     mf = model.casadi_function(inputs=mf_in, outputs=mf_out, parameters=("LMUX", "LMUY"), turn_slip=turn_slip,
                                name="mf")
     free = model.casadi_function(inputs=("fz", "gamma", "vx", "p", "omega"),
@@ -342,14 +345,16 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
     kappa = mf_slip(kappa, vx_mf, be)  # the MF's slip is relative to the direction of travel (module notes)
     # turn slip (4.75): psi_dot = -phit Vc', Vc' = max(Vc, VXLOW); not relaxed in the transient model [chosen]
     phit = -U["yaw_rate"] / be.fmax(be.sqrt(vx**2 + vy**2), prm.VXLOW) if turn_slip else 0.0 * vx
-    fx, fy, mx, my, mz, _, rho, rl_mf, a, t, mux, muy = mf(fz, kappa, alpha, gamma, phit, vx_mf, p, omega, lmux,
-                                                           lmuy)
+    fx, fy, mx, my, mz, _, rho, rl_mf, a, b, t, mux, muy = mf(fz, kappa, alpha, gamma, phit, vx_mf, p, omega, lmux,
+                                                              lmuy)
     rl = rl_geo if vertical == "position" else rl_mf
     mx_w, my_w, mz_w = wheel_centre_moments(fx, fy, fz, mx, my, mz, rl, gamma, be)
     y = {"Fx": fx, "Fy": fy, "Fz": fz, "Mx": mx_w, "My": my_w, "Mz": mz_w,
          "Mx_c": mx, "My_c": my, "Mz_c": mz, "kappa": kappa, "alpha": alpha, "Rl": rl, "Re": re,
          "rho": rho if vertical == "load" else be.where(fz > 0, ro - rl_geo, 0.0),
-         "contact_length": 2.0 * a, "trail": t, "mux": mux, "muy": muy, "u_x": ux, "u_y": uy}
+         "contact_length": 2.0 * a, "trail": t, "mux": mux, "muy": muy, "u_x": ux, "u_y": uy,
+         "omega_used": omega, "contact_width": 2.0 * b}
+    y["Vsx"], y["Vsy"] = slip_speeds(kappa, alpha, vx, be)
     return _wheel(x, u, q, h, x0, x_next, y, inputs, parameters, kind=kind, vertical=vertical)
 
 
@@ -374,15 +379,17 @@ def _rig_functions(model, u, U, q, x, h, gamma, lmux, lmuy, inputs, parameters) 
 
     be = casadi_backend()
     mf = model.casadi_function(inputs=("fz", "kappa", "alpha", "gamma", "vx", "p"),
-                               outputs=("fx", "fy", "mx", "my", "mz", "re", "rho", "rl", "a", "t", "mux", "muy"),
-                               parameters=("LMUX", "LMUY"), name="mf_rig")
+                               outputs=("fx", "fy", "mx", "my", "mz", "omega", "re", "rho", "rl", "a", "b", "t", "mux",
+                                        "muy"), parameters=("LMUX", "LMUY"), name="mf_rig")
     fz, kappa, alpha = be.fmax(U["Fz_in"], 0.0), U["kappa_in"], U["alpha_in"]
-    fx, fy, mx, my, mz, re, rho, rl, a, t, mux, muy = mf(fz, kappa, alpha, gamma, U["vx"], U["p"], lmux, lmuy)
+    fx, fy, mx, my, mz, omega, re, rho, rl, a, b, t, mux, muy = mf(fz, kappa, alpha, gamma, U["vx"], U["p"], lmux,
+                                                                   lmuy)
     mx_w, my_w, mz_w = wheel_centre_moments(fx, fy, fz, mx, my, mz, rl, gamma, be)
     none = 0.0 * U["vx"]
     y = {"Fx": fx, "Fy": fy, "Fz": fz, "Mx": mx_w, "My": my_w, "Mz": mz_w, "Mx_c": mx, "My_c": my, "Mz_c": mz,
          "kappa": kappa, "alpha": alpha, "Rl": rl, "Re": re, "rho": rho, "contact_length": 2.0 * a, "trail": t,
-         "mux": mux, "muy": muy, "u_x": none, "u_y": none}
+         "mux": mux, "muy": muy, "u_x": none, "u_y": none, "omega_used": omega, "contact_width": 2.0 * b}
+    y["Vsx"], y["Vsy"] = slip_speeds(kappa, alpha, U["vx"], be)
     return _wheel(x, u, q, h, ca.SX(0, 1), ca.SX(0, 1), y, inputs, parameters, kind="steady", vertical="load",
                   input_mode="rig")
 

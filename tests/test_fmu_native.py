@@ -188,8 +188,9 @@ def _slalom(t):
 
 
 #: Floors of the 1e-9 relative comparison, by unit: FNOMIN-sized forces, FNOMIN R0 moments, R0 lengths (1/R0
-#: curvatures).
-SCALE = {"N": 4000.0, "N.m": 4000.0 * 0.3, "m": 0.3, "rad": 1.0, "1": 1.0, "1/m": 1.0 / 0.3}
+#: curvatures), 30 m/s speeds (slip speeds) and their spin.
+SCALE = {"N": 4000.0, "N.m": 4000.0 * 0.3, "m": 0.3, "rad": 1.0, "1": 1.0, "1/m": 1.0 / 0.3, "m/s": 30.0,
+         "rad/s": 30.0 / 0.3}
 
 
 def _assert_close(py, nat, units, where):
