@@ -89,7 +89,6 @@ class MFTyre(Fmi2Slave):
     description = ("Magic Formula 6.1/6.2 tyre from a .tir file (mftyre): steady state, or the SWIFT rigid ring "
                    "with tandem-cam enveloping (model=swift); ISO-W axes, SI units. "
                    "Needs Python with numpy and casadi (see documentation).")
-    version = "0.1.0"
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -102,7 +101,10 @@ class MFTyre(Fmi2Slave):
         for name in _PARAMETERS:
             setattr(self, name, str(params.get(name, "")))
         self._import_mftyre(self.resources or ".")
+        import mftyre
         from mftyre.variables import WHEEL
+
+        self.version = mftyre.__version__  # the one version string (pyproject reads it too)
         from mftyre_fmu_core import outputs
 
         outputs = outputs()

@@ -37,6 +37,9 @@ def wheel(tmp_path_factory) -> Path:
 
 
 def test_wheel_holds_every_package_and_the_sample_files(wheel):
+    import mftyre
+
+    assert wheel.name.startswith(f"mftyre-{mftyre.__version__}-")  # one version string (pyproject reads it)
     names = set(zipfile.ZipFile(wheel).namelist())
     packages = {str(p.parent.relative_to(PROJECT)) for top in ("mftyre", "swift", "fmu")
                 for p in (PROJECT / top).rglob("__init__.py")}
