@@ -112,3 +112,10 @@ def test_no_private_name_imported_from_another_module():
             if target.split(".")[0] in PACKAGES and target != m:
                 private += [f"{m}: {target}.{n}" for n in names if n.startswith("_") and not n.startswith("__")]
     assert private == []
+
+
+def test_the_vocabulary_imports_nothing_of_ours():
+    """mftyre/variables.py (one Variable per name for the wheels, both FMU backends, MFModel and soil) sits on the
+    ground floor beside the equations: every floor may use it."""
+    assert _graph()["mftyre.variables"] == set()
+    assert "mftyre.variables" in _graph()["fmu.native_build"]  # the builders speak it
