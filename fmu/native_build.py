@@ -180,7 +180,7 @@ def generate_sources(spec, sources: Path, guid: str) -> list[str]:
 
 
 def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_start: float = 0.0,
-               turn_slip: bool = False, input_mode: str = "vehicle"):
+               turn_slip: bool = False, input_mode: str = "vehicle", rim: str = "speed"):
     """What the FMU is made of: the CasADi functions (:mod:`mftyre.transient` for steady/transient,
     :mod:`swift.fmu_model` for swift), its variables and the glue file that calls them."""
     import casadi as ca
@@ -188,6 +188,9 @@ def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_sta
     if kind in ("steady", "transient"):
         from mftyre.transient import wheel_functions
 
+        if rim != "speed":
+            raise NativeBuildError("--rim torque is a mode of --model swift (the steady and transient wheels take the "
+                                   "spin)")
         f = wheel_functions(model, kind, vertical, turn_slip=turn_slip, input_mode=input_mode)
         glue, extra, directional = "glue_wheel.c", "", True
     elif kind == "swift":
@@ -199,7 +202,7 @@ def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_sta
                                    "motion)")
         from swift.fmu_model import swift_functions
 
-        f = swift_functions(model, road, x_start=x_start)
+        f = swift_functions(model, road, x_start=x_start, rim=rim)
         glue, extra, directional = "glue_swift.c", f.config_extra, False
     else:
         raise NativeBuildError(f"--model must be one of {', '.join(MODELS)}, got {kind!r}")
@@ -223,10 +226,11 @@ def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_sta
 
 def build_native_fmu(tir, output, *, model: str = "steady", side: str | None = None, vertical: str = "position",
                      road=None, x_start: float = 0.0, turn_slip: bool = False, input_mode: str = "vehicle",
-                     overwrite: bool = False, quiet: bool = True, progress=None) -> Path:
+                     rim: str = "speed", overwrite: bool = False, quiet: bool = True, progress=None) -> Path:
     """Build the native FMU of ``tir`` at ``output``; returns the path. ``road``: swift only, a
     :class:`swift.road.Road`, a road expression or a CSV file with columns x, z. ``input_mode``: "vehicle" or
-    "rig" (steady: load and slips as inputs, :func:`mftyre.transient.wheel_functions`). ``progress``: callable(text)
+    "rig" (steady: load and slips as inputs, :func:`mftyre.transient.wheel_functions`). ``rim``: swift, "speed"
+    (input omega imposed) or "torque" (input torque drives the rim). ``progress``: callable(text)
     told each stage (equations, C generation, compilation, packing)."""
     import mftyre
     from mftyre.errors import MFTyreError
@@ -249,7 +253,7 @@ def build_native_fmu(tir, output, *, model: str = "steady", side: str | None = N
         tyre = mftyre.load_tir(tir, side=side)
         say(f"building the {model} equations from {tir.name} (CasADi)")
         spec = model_spec(tyre, model, vertical=vertical, road=road, x_start=x_start, turn_slip=turn_slip,
-                          input_mode=input_mode)
+                          input_mode=input_mode, rim=rim)
     except MFTyreError as exc:
         raise NativeBuildError(f"cannot build the {model} FMU from {tir}: {exc}") from None
     model_id = f"mftyre_{model}"

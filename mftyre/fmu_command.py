@@ -55,6 +55,9 @@ def register(subparsers) -> argparse.ArgumentParser:
     build.add_argument("--input-mode", choices=("vehicle", "rig"),
                        help="rig: the load Fz_in and the slips kappa_in, alpha_in as inputs (steady); default vehicle "
                             "(pythonfmu: the default of the FMU's input_mode parameter)")
+    build.add_argument("--rim", choices=("speed", "torque"),
+                       help="native swift: the input omega spins the rim (speed, default) or the input torque drives "
+                            "it (torque); pythonfmu: the FMU parameter rim, set at run time")
     build.add_argument("--turn-slip", action="store_true",
                        help="native steady/transient: the MF with turn slip, from the input yaw_rate")
     build.add_argument("--backend", choices=("native", "pythonfmu"), default="native",
@@ -87,14 +90,14 @@ def run(args) -> int:
 
             build_native_fmu(args.tir, args.output, model=args.model, side=args.side,
                              vertical=args.vertical, road=args.road, x_start=args.x_start,
-                             turn_slip=args.turn_slip, input_mode=args.input_mode or "vehicle",
+                             turn_slip=args.turn_slip, input_mode=args.input_mode or "vehicle", rim=args.rim or "speed",
                              overwrite=args.overwrite, quiet=False, progress=progress)
             return 0
         if args.model == "transient" or args.turn_slip:
             raise ValueError("--model transient and --turn-slip are only available with --backend native")
-        if args.road is not None or args.x_start != 0.0:
-            raise ValueError("with --backend pythonfmu the road and x_start are FMU parameters set at run time "
-                             "(road, x_start), not build options")
+        if args.road is not None or args.x_start != 0.0 or args.rim is not None:
+            raise ValueError("with --backend pythonfmu the road, x_start and rim are FMU parameters set at run time "
+                             "(road, x_start, rim), not build options")
         from fmu import build
 
         return build.run(argparse.Namespace(tir=args.tir, output=args.output, model=args.model, side=args.side,

@@ -42,7 +42,8 @@ from .ring import INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, check_pressure, pressu
 from .road import parse_road
 from .simulate import MAX_RK4_STEP
 
-__all__ = ["SwiftWheel", "swift_functions", "internal_steps", "INPUTS", "OUTPUTS", "PARAMETERS", "TABLE_DX", "WINDOW",
+__all__ = ["SwiftWheel", "swift_functions", "internal_steps", "input_table", "RIM_MODES", "INPUTS", "OUTPUTS",
+           "PARAMETERS", "TABLE_DX", "WINDOW",
            "MAX_TRAVEL", "SUBSTEPS", "STEP_RATE_LIMIT"]
 
 TABLE_DX = 1e-3
@@ -65,6 +66,19 @@ INPUTS = pick("input", "vx", "vy", "omega", "gamma", "z", "vz", "p", "road_z", "
     "road_z": "height of the whole road profile above the road datum (the tyre meets z - road_z)",
     "road_camber": "road camber angle about ISO-W x (> 0: the road rises to the left), added to the profile's own "
                    "multi-track camber"})
+#: speed: the rim spins at the input omega; torque: the input torque drives the rim (omega: its start guess).
+RIM_MODES = ("speed", "torque")
+
+
+def input_table(rim: str = "speed") -> dict:
+    """The wheel's inputs (name -> Variable) with the rim mode ``rim``."""
+    if rim == "speed":
+        return INPUTS
+    start = INPUTS["omega"].but(description="rim spin speed at the start (static equilibrium); the torque drives it "
+                                            "afterwards")
+    return {**{n: start if n == "omega" else v for n, v in INPUTS.items()}, **pick("input", "torque")}
+
+
 PARAMETERS = pick("parameter", "x_start", "max_step")
 OUTPUTS = pick(
     "output", "Fx", "Fy", "Fz", "Mx", "My", "Mz", "Fx_c", "Fy_c", "Fz_c", "Mz_c", "kappa", "alpha", "rho", "Rl", "Re",
@@ -113,6 +127,7 @@ class SwiftFunctions(StateFunctions):
     grid: np.ndarray
     output_dependencies: list
     config_extra: str
+    rim: str = "speed"
 
     def window_start(self, xb: float) -> int:
         """First table sample of the window around the belt at ``xb``, clamped to the table."""
@@ -120,7 +135,7 @@ class SwiftFunctions(StateFunctions):
         return min(max(i0, 0), self.table_h.size // 2 - WINDOW)
 
 
-def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions:
+def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed") -> SwiftFunctions:
     """The functions of the SWIFT wheel of ``model`` on ``road`` (a :class:`swift.road.Road`, an expression or a
     CSV file, see :func:`swift.road.parse_road`); ``x_start``: default start position. The ring is
     :class:`swift.simulate.SwiftTyre`'s (its step, outputs and static equilibrium); here only the FMU's inputs are
@@ -129,6 +144,9 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
 
     from .simulate import SwiftTyre
 
+    if rim not in RIM_MODES:
+        raise ModelInputError(f"rim must be one of {', '.join(RIM_MODES)}; got {rim!r}")
+    table_u = input_table(rim)
     road = parse_road(road)
     prm = model.params
     cams = Cams.from_params(prm, warn=False)  # the tyre below warns
@@ -136,14 +154,14 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
     bps = tuple(road.breakpoints)
     reach = cams.ae + 2 * dx
     lo, hi = (min(bps) - reach, max(bps) + reach) if bps else (0.0, 1.0)
-    tyre = SwiftTyre(model, road, axle="height", rim="speed", x_range=(math.floor(lo / dx) * dx,
+    tyre = SwiftTyre(model, road, axle="height", rim=rim, x_range=(math.floor(lo / dx) * dx,
                      math.ceil(hi / dx) * dx), table_dx=dx, window=WINDOW, substeps=SUBSTEPS, compiled=False)
     nx = len(STATE_NAMES)
-    x, u, q = ca.MX.sym("x", nx), ca.MX.sym("u", len(INPUTS)), ca.MX.sym("q", len(PARAMETERS))
+    x, u, q = ca.MX.sym("x", nx), ca.MX.sym("u", len(table_u)), ca.MX.sym("q", len(PARAMETERS))
     x0w, grid, hw, dt = ca.MX.sym("x0w"), ca.MX.sym("grid", WINDOW), ca.MX.sym("hw", 2 * WINDOW), ca.MX.sym("dt")
-    U = {n: u[i] for i, n in enumerate(INPUTS)}
-    ring_u = {"vx": U["vx"], "load": 0, "torque": 0, "p": U["p"], "y": 0, "vy": U["vy"], "gamma": U["gamma"],
-              "psi": 0, "road_camber": U["road_camber"]}
+    U = {n: u[i] for i, n in enumerate(table_u)}
+    ring_u = {"vx": U["vx"], "load": 0, "torque": U.get("torque", 0), "p": U["p"], "y": 0, "vy": U["vy"],
+              "gamma": U["gamma"], "psi": 0, "road_camber": U["road_camber"]}
     uring = ca.vertcat(*(ring_u[n] for n in INPUT_NAMES))
 
     def lifted(state, dz):  # belt and axle heights moved by dz (between the datum and the ring's road frame)
@@ -190,20 +208,20 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
              + "static const double ROAD_GRID[ROAD_WINDOW] = {" + ",".join(repr(float(v)) for v in grid_v) + "};\n")
     omega0, z0 = free_rolling_start(model, INPUTS["vx"].start)
     computed = {"p": float(prm.INFLPRES), "omega": omega0, "z": z0}
-    inputs = tuple(v.but(start=computed[n]) if n in computed else v for n, v in INPUTS.items())
+    inputs = tuple(v.but(start=computed[n]) if n in computed else v for n, v in table_u.items())
     parameters = (PARAMETERS["x_start"].but(start=float(x_start)), PARAMETERS["max_step"])
     return SwiftFunctions(init=init, step=step, out=outw, state_names=STATE_NAMES, inputs=inputs,
                           parameters=parameters, outputs=tuple(OUTPUTS.values()), table_x0=float(table.x0),
                           table_dx=float(table.dx), table_h=h, grid=grid_v, output_dependencies=deps,
-                          config_extra=extra)
+                          config_extra=extra, rim=rim)
 
 
 class SwiftWheel:
     """The SWIFT wheel in Python (module notes): ``set_inputs``, ``set_parameters``, ``initialise``, ``step``,
     ``outputs``, ``state``. The same functions and the same window placement as the native FMU."""
 
-    def __init__(self, model, road=None, *, x_start: float = 0.0):
-        self.functions = f = swift_functions(model, road, x_start=x_start)
+    def __init__(self, model, road=None, *, x_start: float = 0.0, rim: str = "speed"):
+        self.functions = f = swift_functions(model, road, x_start=x_start, rim=rim)
         self._params = model.params
         self.u = np.array(f.input_starts, dtype=float)
         self.q = np.array(f.parameter_starts, dtype=float)
@@ -211,8 +229,8 @@ class SwiftWheel:
 
     def set_inputs(self, **values):
         for k, v in values.items():
-            if k not in INPUTS:
-                raise ModelInputError(f"unknown input {k!r}; inputs are {', '.join(INPUTS)}")
+            if k not in self.functions.input_names:
+                raise ModelInputError(f"unknown input {k!r}; inputs are {', '.join(self.functions.input_names)}")
             if not math.isfinite(v):
                 raise ModelInputError(f"input {k} must be finite, got {v!r}")
             self.u[self.functions.input_names.index(k)] = v
@@ -241,7 +259,9 @@ class SwiftWheel:
         check_pressure(self._params, float(self.u[self.functions.input_names.index("p")]))
         U = dict(zip(self.functions.input_names, self.u))
         x = self.state.copy()
-        x[_S["za"]], x[_S["vza"]], x[_S["oma"]] = U["z"], U["vz"], U["omega"]
+        x[_S["za"]], x[_S["vza"]] = U["z"], U["vz"]
+        if self.functions.rim == "speed":  # the rim spin imposed (as glue_swift.c)
+            x[_S["oma"]] = U["omega"]
         n = internal_steps(h, self.q[1], U["vx"])
         for _ in range(n):
             x = np.asarray(self.functions.step(x, self.u, h / n, *self._window(x[_S["xb"]])), dtype=float).ravel()

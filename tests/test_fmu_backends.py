@@ -30,6 +30,7 @@ ONLY_NATIVE = {
     "rig": {"road_camber", "mu_scale", "u_x", "u_y"},
     "swift": {"road_camber", "Fx_c", "Fy_c", "road_curvature", "Re_variation", "road_camber_eff", "x_contact"},
 }
+ONLY_NATIVE["swift_torque"] = ONLY_NATIVE["swift"]
 #: Names the SWIFT backends give different meanings (see fmu/README.md): Rl is the lever arm of the contact forces
 #: (belt centre to contact point) in the native FMU, (wheel centre - effective road height) cos(slope) in pythonfmu.
 SWIFT_DIFFERENT = {"Rl"}
@@ -46,6 +47,7 @@ def fmus(tmp_path_factory):
         ("native", "steady"): [TIR61, "--vertical", "load"],
         ("native", "rig"): [TIR61, "--input-mode", "rig"],
         ("native", "swift"): [TIR62, "--model", "swift", "--road", CLEAT],
+        ("native", "swift_torque"): [TIR62, "--model", "swift", "--road", CLEAT, "--rim", "torque"],
         ("pythonfmu", "steady"): [TIR61, "--backend", "pythonfmu", "--vertical", "load"],
         ("pythonfmu", "swift"): [TIR62, "--backend", "pythonfmu", "--model", "swift", "--vertical", "position"],
     }
@@ -54,6 +56,7 @@ def fmus(tmp_path_factory):
         paths[backend, mode] = out / f"{backend}_{mode}.fmu"
         assert _build([args[0], "-o", paths[backend, mode], *args[1:]]) == 0, (backend, mode)
     paths["pythonfmu", "rig"] = paths["pythonfmu", "steady"]  # one FMU, input_mode chosen at run time
+    paths["pythonfmu", "swift_torque"] = paths["pythonfmu", "swift"]  # rim chosen at run time
     return paths
 
 
@@ -61,7 +64,7 @@ def _variables(path):
     return {v.name: v for v in fmpy.read_model_description(path).modelVariables if v.type == "Real"}
 
 
-@pytest.mark.parametrize("mode", ["steady", "rig", "swift"])
+@pytest.mark.parametrize("mode", ["steady", "rig", "swift", "swift_torque"])
 def test_both_backends_speak_one_vocabulary(fmus, mode):
     native, python = _variables(fmus["native", mode]), _variables(fmus["pythonfmu", mode])
     for name, v in {**native, **python}.items():  # every Real variable of both is a word of the vocabulary
@@ -117,17 +120,19 @@ def test_both_backends_give_the_same_steady_results(fmus, tmp_path, mode):
             assert a[name] == pytest.approx(b[name], rel=1e-9, abs=1e-7), (mode, i, name, steps[i - 1] if i else {})
 
 
-def test_both_backends_give_the_same_swift_run_over_a_cleat(fmus, tmp_path):
-    """Axle height and spin imposed, the wheel rolling over a 10 mm cleat at 10 m/s in 5 ms communication steps:
-    both backends step the same rigid ring with the same internal step (max_step 1 ms)."""
+@pytest.mark.parametrize("rim", ["speed", "torque"])
+def test_both_backends_give_the_same_swift_run_over_a_cleat(fmus, tmp_path, rim):
+    """Axle height imposed, the spin imposed or the rim driven by a torque (100 N m from 0.1 s), the wheel rolling
+    over a 10 mm cleat at 10 m/s in 5 ms communication steps: both backends step the same rigid ring with the same
+    internal step (max_step 1 ms)."""
     from mftyre import load_tir
     from mftyre.transient import free_rolling_start
 
     omega, z = free_rolling_start(load_tir(TIR62), 10.0)
     start = {"vx": 10.0, "omega": omega, "z": z}
-    steps = [{}] * 30  # 0.15 s: over the cleat at 0.8 m and off it
-    native = _run(fmus["native", "swift"], tmp_path, start, steps, 5e-3)
-    python = _run(fmus["pythonfmu", "swift"], tmp_path, {**start, "road": CLEAT}, steps, 5e-3)
+    steps = [{}] * 20 + [{"torque": 100.0}] * 10 if rim == "torque" else [{}] * 30  # 0.15 s: over the cleat at 0.8 m
+    native = _run(fmus["native", "swift" if rim == "speed" else "swift_torque"], tmp_path, start, steps, 5e-3)
+    python = _run(fmus["pythonfmu", "swift"], tmp_path, {**start, "road": CLEAT, "rim": rim}, steps, 5e-3)
     swing = max(r["Fz"] for r in native) - min(r["Fz"] for r in native)
     assert swing > 300.0  # the cleat is felt
     shared = native[0].keys() & python[0].keys()

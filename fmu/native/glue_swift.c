@@ -127,7 +127,9 @@ int glue_step(GlueWork *g, double *x, const double *u, const double *q, double h
     n = nd < 1 ? 1 : (long)nd;
     x[S_ZA] = u[TYRE_U_Z];
     x[S_VZA] = u[TYRE_U_VZ];
+#ifndef TYRE_U_TORQUE /* rim speed imposed; with the input torque the rim spins freely (swift.fmu_model) */
     x[S_OMA] = u[TYRE_U_OMEGA];
+#endif
     for (long k = 0; k < n; k++) {
         double dt = h / (double)n, x0w;
         g->arg[0] = x;
