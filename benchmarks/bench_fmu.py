@@ -117,8 +117,8 @@ int main(int argc, char **argv) {
 def build_all(tmp: Path) -> dict:
     import time
 
-    from mftyre.fmu.build import build_fmu
-    from mftyre.fmu.native_build import build_native_fmu
+    from fmu.build import build_fmu
+    from fmu.native_build import build_native_fmu
 
     paths = {}
     for backend, kind, tir, kwargs in (("native", "steady", TIR61, {}), ("native", "transient", TIR61, {}),

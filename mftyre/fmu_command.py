@@ -1,7 +1,7 @@
 """``mftyre fmu build FILE.tir -o tyre.fmu [--model steady|transient|swift] [--backend native|pythonfmu]``: the
-tyre as an FMI 2.0 co-simulation FMU. The builders live in :mod:`mftyre.fmu` (``native_build``: C generated
-from the equations + the C wrapper in ``mftyre/fmu/native``; ``build``: the pythonfmu slave; see
-mftyre/fmu/README.md); this module only wires them into the command line:
+tyre as an FMI 2.0 co-simulation FMU. The builders live in :mod:`fmu` (``native_build``: C generated
+from the equations + the C wrapper in ``fmu/native``; ``build``: the pythonfmu slave; see
+fmu/README.md); this module only wires them into the command line:
 
     from mftyre.fmu_command import register
     register(subparsers)          # adds the 'fmu' command with its 'build' subcommand; handler: run(args)
@@ -20,15 +20,15 @@ __all__ = ["register", "run", "fmu_sources"]
 
 
 def fmu_sources():
-    """The FMU sources shipped in the package (``mftyre/fmu``: builders, C wrapper, README) as a resource."""
-    return importlib.resources.files("mftyre.fmu")
+    """The FMU sources shipped in the package (``fmu``: builders, C wrapper, README) as a resource."""
+    return importlib.resources.files("fmu")
 
 
 def register(subparsers) -> argparse.ArgumentParser:
     """Add the ``fmu`` command (subcommand ``build``) to an argparse subparsers object."""
     fmu = subparsers.add_parser(
         "fmu", help="package the tyre as an FMI 2.0 co-simulation FMU",
-        description="Package the tyre as an FMI 2.0 co-simulation FMU. See mftyre/fmu/README.md for the FMU's "
+        description="Package the tyre as an FMI 2.0 co-simulation FMU. See fmu/README.md for the FMU's "
                     "variables.")
     sub = fmu.add_subparsers(dest="fmu_command", metavar="SUBCOMMAND")
     sub.required = True
@@ -54,8 +54,11 @@ def register(subparsers) -> argparse.ArgumentParser:
                        help="native steady/transient: the vertical input is the wheel-centre height z (position, "
                             "default) or the load Fz_in")
     build.add_argument("--input-mode", choices=("vehicle", "rig"),
-                       help="pythonfmu: default of the FMU's input_mode parameter (rig: slips and load as inputs; "
-                            "default vehicle)")
+                       help="rig: the load Fz_in and the slips kappa_in, alpha_in as inputs (steady); default vehicle "
+                            "(pythonfmu: the default of the FMU's input_mode parameter)")
+    build.add_argument("--rim", choices=("speed", "torque"),
+                       help="native swift: the input omega spins the rim (speed, default) or the input torque drives "
+                            "it (torque); pythonfmu: the FMU parameter rim, set at run time")
     build.add_argument("--turn-slip", action="store_true",
                        help="native steady/transient: the MF with turn slip, from the input yaw_rate")
     build.add_argument("--backend", choices=("native", "pythonfmu"), default="native",
@@ -72,11 +75,9 @@ def run(args) -> int:
         return refused
     try:
         if args.backend == "native":
-            if args.input_mode is not None:
-                raise ValueError("--input-mode is an option of --backend pythonfmu")
             if args.model == "swift" and args.vertical == "load":
                 raise ValueError("the native swift FMU takes the wheel-centre height (--vertical position)")
-            from .fmu.native_build import build_native_fmu
+            from fmu.native_build import build_native_fmu
 
             started = time.perf_counter()
 
@@ -85,14 +86,15 @@ def run(args) -> int:
 
             build_native_fmu(args.tir, args.output, model=args.model, side=args.side,
                              vertical=args.vertical, road=args.road, x_start=args.x_start,
-                             turn_slip=args.turn_slip, overwrite=args.overwrite, quiet=False, progress=progress)
+                             turn_slip=args.turn_slip, input_mode=args.input_mode or "vehicle", rim=args.rim or "speed",
+                             overwrite=args.overwrite, quiet=False, progress=progress)
             return 0
         if args.model == "transient" or args.turn_slip:
             raise ValueError("--model transient and --turn-slip are only available with --backend native")
-        if args.road is not None or args.x_start != 0.0:
-            raise ValueError("with --backend pythonfmu the road and x_start are FMU parameters set at run time "
-                             "(road, x_start), not build options")
-        from .fmu import build
+        if args.road is not None or args.x_start != 0.0 or args.rim is not None:
+            raise ValueError("with --backend pythonfmu the road, x_start and rim are FMU parameters set at run time "
+                             "(road, x_start, rim), not build options")
+        from fmu import build
 
         return build.run(argparse.Namespace(tir=args.tir, output=args.output, model=args.model, side=args.side,
                                              input_mode=args.input_mode or "vehicle", vertical_input=args.vertical,

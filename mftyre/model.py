@@ -26,41 +26,12 @@ from .inputs import PressureFactorCheck, check_finite, check_finite_outputs, che
 from .formula import OUTPUT_NAMES, Modes, steady_state, vertical
 from .backend import NUMPY, NUMPY_FOLDING
 from .params import SELECTS_FORM
+from .variables import MF_OUTPUTS, unit_table
 
 __all__ = ["MFModel", "MFOutputs", "load_tir", "OUTPUT_UNITS"]
 
-#: Unit and meaning of every output.
-OUTPUT_UNITS = {
-    "fx": ("N", "longitudinal force"),
-    "fy": ("N", "lateral force"),
-    "fz": ("N", "vertical load (input, negative values set to 0)"),
-    "mx": ("N m", "overturning moment"),
-    "my": ("N m", "rolling-resistance moment (negative rolling forwards)"),
-    "mz": ("N m", "self-aligning moment"),
-    "kappa": ("-", "longitudinal slip as used (low-speed scaled, not saturated)"),
-    "alpha": ("rad", "slip angle as used (0 at standstill, not saturated)"),
-    "gamma": ("rad", "inclination angle (input)"),
-    "phit": ("1/m", "turn slip as used"),
-    "vx": ("m/s", "longitudinal speed of the wheel centre"),
-    "p": ("Pa", "inflation pressure as used (saturated to the .tir range with limits)"),
-    "omega": ("rad/s", "wheel spin (input or estimated from kappa and Vx)"),
-    "re": ("m", "effective rolling radius"),
-    "rho": ("m", "vertical deflection"),
-    "rl": ("m", "loaded radius"),
-    "a": ("m", "contact patch half length"),
-    "b": ("m", "contact patch half width"),
-    "t": ("m", "pneumatic trail"),
-    "mzr": ("N m", "residual aligning moment"),
-    "mux": ("-", "longitudinal friction coefficient"),
-    "muy": ("-", "lateral friction coefficient"),
-    "cx": ("N/m", "longitudinal carcass stiffness"),
-    "cy": ("N/m", "lateral carcass stiffness"),
-    "cz": ("N/m", "vertical stiffness Fz/rho"),
-    "kya": ("N/rad", "cornering stiffness (negative in ISO-W)"),
-    "kxk": ("N", "longitudinal slip stiffness"),
-    "sigmax": ("m", "longitudinal relaxation length"),
-    "sigmay": ("m", "lateral relaxation length"),
-}
+#: Unit and meaning of every output (the table :data:`mftyre.variables.MF_OUTPUTS`).
+OUTPUT_UNITS = unit_table(MF_OUTPUTS)
 assert tuple(OUTPUT_UNITS) == OUTPUT_NAMES
 
 _INPUT_ORDER = ("fz", "kappa", "alpha", "gamma", "phit", "vx", "p", "omega")

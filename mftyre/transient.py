@@ -64,70 +64,46 @@ import numpy as np
 
 from .backend import NUMPY
 from .errors import ModelInputError
+from .variables import pick
 
-__all__ = ["StateFunctions", "WheelFunctions", "wheel_functions", "free_rolling_start", "WheelTyre", "KINDS", "VERTICAL_MODES", "VX_MIN",
+__all__ = ["StateFunctions", "WheelFunctions", "wheel_functions", "free_rolling_start", "WheelTyre", "KINDS",
+           "VERTICAL_MODES", "INPUT_MODES", "VX_MIN",
            "input_table", "OUTPUTS", "PARAMETERS", "default_tau_vlow", "kinematic_slips", "mf_slip", "slip_speeds",
            "wheel_vertical_force", "contact_load", "vertical_couples_forces", "load_at_radius",
            "wheel_centre_moments"]
 
 KINDS = ("steady", "transient")
 VERTICAL_MODES = ("position", "load")
+#: vehicle: the wheel-centre motion and spin are the inputs; rig: the load and the slips (steady only).
+INPUT_MODES = ("vehicle", "rig")
 #: Below this |vx| [m/s] the steady kinematic slip uses VX_MIN in the denominator (finite at standstill).
 VX_MIN = 1e-3
 #: Floor of the relaxation lengths [m] (they vanish with the load).
 SIGMA_MIN = 1e-4
 
-#: Outputs: name -> (unit, description). Forces/moments at the wheel centre, ISO-W axes.
-OUTPUTS = {
-    "Fx": ("N", "longitudinal force on the tyre at the wheel centre, ISO-W x (wheel heading on the road)"),
-    "Fy": ("N", "lateral force on the tyre at the wheel centre, ISO-W y (to the left)"),
-    "Fz": ("N", "vertical force on the tyre at the wheel centre, ISO-W z (up), >= 0"),
-    "Mx": ("N.m", "moment about ISO-W x at the wheel centre"),
-    "My": ("N.m", "moment about ISO-W y at the wheel centre (-Rl Fx + rolling resistance)"),
-    "Mz": ("N.m", "moment about ISO-W z at the wheel centre"),
-    "Mx_c": ("N.m", "overturning moment at the contact point (MF)"),
-    "My_c": ("N.m", "rolling-resistance moment at the contact point (MF)"),
-    "Mz_c": ("N.m", "self-aligning moment at the contact point (MF)"),
-    "kappa": ("1", "longitudinal slip given to the MF (transient: kappa')"),
-    "alpha": ("rad", "slip angle given to the MF (transient: alpha')"),
-    "Rl": ("m", "loaded radius (wheel centre to contact point, in the wheel plane)"),
-    "Re": ("m", "effective rolling radius"),
-    "rho": ("m", "vertical tyre deflection"),
-    "contact_length": ("m", "contact patch length 2a"),
-    "trail": ("m", "pneumatic trail"),
-    "mux": ("1", "longitudinal friction coefficient"),
-    "muy": ("1", "lateral friction coefficient"),
-    "u_x": ("m", "longitudinal contact-point deflection (transient; 0 for steady)"),
-    "u_y": ("m", "lateral contact-point deflection (transient; 0 for steady)"),
-}
+#: Outputs: name -> Variable (mftyre.variables). Forces/moments at the wheel centre, ISO-W axes.
+OUTPUTS = pick(
+    "output", "Fx", "Fy", "Fz", "Mx", "My", "Mz", "Mx_c", "My_c", "Mz_c", "kappa", "alpha", "Rl", "Re", "rho",
+    "contact_length", "trail", "mux", "muy", "u_x", "u_y", "Vsx", "Vsy", "omega_used", "contact_width",
+    describe={"Fz": "vertical force on the tyre at the wheel centre, ISO-W z (up), >= 0",
+              "My": "moment about ISO-W y at the wheel centre (-Rl Fx + rolling resistance)",
+              "kappa": "longitudinal slip given to the MF (transient: kappa')",
+              "alpha": "slip angle given to the MF (transient: alpha')",
+              "Vsx": "longitudinal slip speed of the slips given to the MF, -kappa vx",
+              "Vsy": "lateral slip speed of the slips given to the MF, tan(alpha) |vx|",
+              "omega_used": "spin speed used (the input; rig mode: estimated by the MF from kappa and vx)"})
+
+#: Parameters: name -> Variable (start: NaN, computed from the tyre by :func:`default_tau_vlow`).
+PARAMETERS = pick("parameter", "tau_vlow")
 
 
-#: Parameters: name -> (unit, description).
-PARAMETERS = {"tau_vlow": ("s", "transient: low-speed damping time constant of the contact deflections (module notes)")}
-
-
-def input_table(vertical: str, turn_slip: bool = False) -> dict:
-    """Inputs: name -> (unit, start, description), in the order of the input vector."""
-    common = {
-        "vx": ("m/s", 10.0, "wheel-centre velocity along ISO-W x (wheel heading projected on the road)"),
-        "vy": ("m/s", 0.0, "wheel-centre velocity along ISO-W y (to the left)"),
-        "omega": ("rad/s", float("nan"), "wheel spin speed about the axle (positive rolling forwards; start: free "
-                  "rolling at the start vx under FNOMIN)"),
-        "gamma": ("rad", 0.0, "inclination (camber) of the wheel plane about ISO-W x"),
-        "road_camber": ("rad", 0.0, "road camber (banking) about ISO-W x; the MF gets gamma - road_camber"),
-        "p": ("Pa", float("nan"), "inflation pressure (start: the .tir INFLPRES)"),
-        "mu_scale": ("1", 1.0, "friction scaling: multiplies LMUX and LMUY of the .tir"),
-    }
-    if vertical == "position":
-        common.update({"z": ("m", float("nan"), "wheel-centre height, ISO-W z (same datum as road_z; start: the "
-                             "loaded radius at FNOMIN)"),
-                       "road_z": ("m", 0.0, "road height under the wheel, ISO-W z")})
-    else:
-        common["Fz_in"] = ("N", float("nan"), "vertical load on the tyre (negative = no contact; start: FNOMIN)")
-    if turn_slip:
-        common["yaw_rate"] = ("rad/s", 0.0, "yaw velocity of the wheel about ISO-W z (vehicle yaw rate + steer rate); "
-                                            "turn slip phit = -yaw_rate / max(Vc, VXLOW)")
-    return common
+def input_table(vertical: str, turn_slip: bool = False, input_mode: str = "vehicle") -> dict:
+    """Inputs: name -> Variable (mftyre.variables), in the order of the input vector."""
+    if input_mode == "rig":  # the slips and the load imposed, as on a test rig (module notes)
+        return pick("input", "vx", "gamma", "road_camber", "p", "mu_scale", "Fz_in", "kappa_in", "alpha_in")
+    names = ["vx", "vy", "omega", "gamma", "road_camber", "p", "mu_scale"]
+    names += ["z", "road_z"] if vertical == "position" else ["Fz_in"]
+    return pick("input", *names, *(["yaw_rate"] if turn_slip else []))
 
 
 def free_rolling_start(model, vx: float) -> tuple[float, float]:
@@ -228,19 +204,38 @@ def wheel_centre_moments(fx, fy, fz, mx, my, mz, rl, gamma, be):
 
 @dataclass(frozen=True)
 class StateFunctions:
-    """A tyre with state as CasADi functions, the form the native FMU is generated from (fmu/native_build.py):
-    ``init``, ``step``, ``out`` (their arguments in the subclasses) and the names and start values of the vectors
-    they take: state x, inputs u, parameters q, outputs y."""
+    """A tyre with state as CasADi functions, the one definition both FMU backends and the Python steppers drive:
+    ``init``, ``step``, ``out`` (their arguments in the subclasses), the state names, and the variables
+    (:class:`mftyre.variables.Variable`, in the order of the vectors the functions take): inputs u, parameters q,
+    outputs y (start values as the wheel computed them for this tyre)."""
 
     init: object
     step: object
     out: object
     state_names: tuple
-    input_names: tuple
-    parameter_names: tuple
-    output_names: tuple
-    parameter_starts: tuple
-    input_starts: tuple
+    inputs: tuple
+    parameters: tuple
+    outputs: tuple
+
+    @property
+    def input_names(self) -> tuple:
+        return tuple(v.name for v in self.inputs)
+
+    @property
+    def input_starts(self) -> tuple:
+        return tuple(v.start for v in self.inputs)
+
+    @property
+    def parameter_names(self) -> tuple:
+        return tuple(v.name for v in self.parameters)
+
+    @property
+    def parameter_starts(self) -> tuple:
+        return tuple(v.start for v in self.parameters)
+
+    @property
+    def output_names(self) -> tuple:
+        return tuple(v.name for v in self.outputs)
 
 
 @dataclass(frozen=True)
@@ -250,18 +245,29 @@ class WheelFunctions(StateFunctions):
 
     kind: str
     vertical: str
+    input_mode: str = "vehicle"
 
 
 def wheel_functions(model, kind: str = "steady", vertical: str = "position",
-                    tau_vlow: float | None = None, turn_slip: bool = False) -> WheelFunctions:
+                    tau_vlow: float | None = None, turn_slip: bool = False,
+                    input_mode: str = "vehicle") -> WheelFunctions:
     """CasADi functions of the ``kind`` ("steady" or "transient") tyre with the ``vertical`` input mode;
-    ``turn_slip``: the MF with turn slip (input ``yaw_rate``, module notes)."""
+    ``turn_slip``: the MF with turn slip (input ``yaw_rate``, module notes); ``input_mode`` "rig": the steady tyre
+    with the load ``Fz_in`` and the slips ``kappa_in`` (relative to the direction of travel, as the MF takes it),
+    ``alpha_in`` imposed, the spin estimated by the MF from kappa and vx (``vertical`` is then "load")."""
     import casadi as ca
 
     from .backend import casadi_backend
 
     if kind not in KINDS:
         raise ModelInputError(f"model must be one of {', '.join(KINDS)}; got {kind!r}")
+    if input_mode not in INPUT_MODES:
+        raise ModelInputError(f"input mode must be one of {', '.join(INPUT_MODES)}; got {input_mode!r}")
+    rig = input_mode == "rig"
+    if rig and (kind != "steady" or turn_slip):
+        raise ModelInputError("rig mode (slips and load imposed) is a mode of the steady tyre without turn slip: the "
+                              "transient tyre and turn slip take the wheel's motion")
+    vertical = "load" if rig else vertical
     if vertical not in VERTICAL_MODES:
         raise ModelInputError(f"vertical input must be one of {', '.join(VERTICAL_MODES)}; got {vertical!r}")
     prm = model.params
@@ -269,29 +275,34 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
     if vertical == "position" and vertical_couples_forces(prm):
         warnings.warn("Q_FCX/Q_FCY (Fx/Fy influence on the vertical stiffness) are not included in the wheel "
                       "model's vertical force", stacklevel=2)
-    table = input_table(vertical, turn_slip)
-    omega0, z0 = free_rolling_start(model, table["vx"][1])
-    starts = [{"p": prm.INFLPRES, "omega": omega0, "z": z0, "Fz_in": prm.FNOMIN}.get(n, s)
-              for n, (_, s, _) in table.items()]
+    table = input_table(vertical, turn_slip, input_mode)
+    omega0, z0 = free_rolling_start(model, table["vx"].start)
+    computed = {"p": float(prm.INFLPRES), "omega": omega0, "z": z0, "Fz_in": float(prm.FNOMIN)}
+    inputs = tuple(v.but(start=computed[n]) if n in computed else v for n, v in table.items())
     u = ca.SX.sym("u", len(table))
     U = {n: u[i] for i, n in enumerate(table)}
-    q_names = ("tau_vlow",) if kind == "transient" else ()
-    q_starts = ((default_tau_vlow(model) if tau_vlow is None else float(tau_vlow)),) if kind == "transient" else ()
-    q = ca.SX.sym("q", len(q_names))
+    parameters = ()
+    if kind == "transient":
+        tau_start = default_tau_vlow(model) if tau_vlow is None else float(tau_vlow)
+        parameters = (PARAMETERS["tau_vlow"].but(start=tau_start),)
+    q = ca.SX.sym("q", len(parameters))
     nx = 2 if kind == "transient" else 0
     x = ca.SX.sym("x", nx)
     h = ca.SX.sym("h")
 
     mf_in = ("fz", "kappa", "alpha", "gamma", "phit", "vx", "p", "omega")
-    mf_out = ("fx", "fy", "mx", "my", "mz", "re", "rho", "rl", "a", "t", "mux", "muy")
+    mf_out = ("fx", "fy", "mx", "my", "mz", "re", "rho", "rl", "a", "b", "t", "mux", "muy")
     mf = model.casadi_function(inputs=mf_in, outputs=mf_out, parameters=("LMUX", "LMUY"), turn_slip=turn_slip,
                                name="mf")
     free = model.casadi_function(inputs=("fz", "gamma", "vx", "p", "omega"),
                                  outputs=("re", "sigmax", "sigmay"), fixed=dict(kappa=0.0, alpha=0.0),
                                  parameters=("LMUX", "LMUY"), name="free_rolling")
-    vx, vy, omega, p = U["vx"], U["vy"], U["omega"], U["p"]
+    vx, p = U["vx"], U["p"]
     gamma = U["gamma"] - U["road_camber"]
     lmux, lmuy = prm.LMUX * U["mu_scale"], prm.LMUY * U["mu_scale"]
+    if rig:
+        return _rig_functions(model, u, U, q, x, h, gamma, lmux, lmuy, inputs, parameters)
+    vy, omega = U["vy"], U["omega"]
 
     # vertical load
     if vertical == "position":
@@ -332,21 +343,53 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
     kappa = mf_slip(kappa, vx_mf, be)  # the MF's slip is relative to the direction of travel (module notes)
     # turn slip (4.75): psi_dot = -phit Vc', Vc' = max(Vc, VXLOW); not relaxed in the transient model [chosen]
     phit = -U["yaw_rate"] / be.fmax(be.sqrt(vx**2 + vy**2), prm.VXLOW) if turn_slip else 0.0 * vx
-    fx, fy, mx, my, mz, _, rho, rl_mf, a, t, mux, muy = mf(fz, kappa, alpha, gamma, phit, vx_mf, p, omega, lmux,
-                                                           lmuy)
+    fx, fy, mx, my, mz, _, rho, rl_mf, a, b, t, mux, muy = mf(fz, kappa, alpha, gamma, phit, vx_mf, p, omega, lmux,
+                                                              lmuy)
     rl = rl_geo if vertical == "position" else rl_mf
     mx_w, my_w, mz_w = wheel_centre_moments(fx, fy, fz, mx, my, mz, rl, gamma, be)
     y = {"Fx": fx, "Fy": fy, "Fz": fz, "Mx": mx_w, "My": my_w, "Mz": mz_w,
          "Mx_c": mx, "My_c": my, "Mz_c": mz, "kappa": kappa, "alpha": alpha, "Rl": rl, "Re": re,
          "rho": rho if vertical == "load" else be.where(fz > 0, ro - rl_geo, 0.0),
-         "contact_length": 2.0 * a, "trail": t, "mux": mux, "muy": muy, "u_x": ux, "u_y": uy}
-    y_vec = ca.vertcat(*(y[n] for n in OUTPUTS))
+         "contact_length": 2.0 * a, "trail": t, "mux": mux, "muy": muy, "u_x": ux, "u_y": uy,
+         "omega_used": omega, "contact_width": 2.0 * b}
+    y["Vsx"], y["Vsy"] = slip_speeds(kappa, alpha, vx, be)
+    return _wheel(x, u, q, h, x0, x_next, y, inputs, parameters, kind=kind, vertical=vertical)
+
+
+def _wheel(x, u, q, h, x0, x_next, y: dict, inputs, parameters, **mode) -> WheelFunctions:
+    """The three functions of a wheel from its expressions: initial state ``x0``, state after a step ``x_next``,
+    outputs ``y`` (by name, :data:`OUTPUTS`)."""
+    import casadi as ca
+
     init = ca.Function("tyre_init", [u, q], [x0], ["u", "q"], ["x0"])
     step = ca.Function("tyre_step", [x, u, q, h], [x_next], ["x", "u", "q", "h"], ["x_next"])
-    out = ca.Function("tyre_out", [x, u, q], [y_vec], ["x", "u", "q"], ["y"])
-    return WheelFunctions(init=init, step=step, out=out, state_names=("u_x", "u_y")[:nx], input_names=tuple(table),
-                          parameter_names=q_names, output_names=tuple(OUTPUTS), parameter_starts=q_starts,
-                          input_starts=tuple(starts), kind=kind, vertical=vertical)
+    out = ca.Function("tyre_out", [x, u, q], [ca.vertcat(*(y[n] for n in OUTPUTS))], ["x", "u", "q"], ["y"])
+    return WheelFunctions(init=init, step=step, out=out, state_names=("u_x", "u_y")[:x.numel()], inputs=inputs,
+                          parameters=parameters, outputs=tuple(OUTPUTS.values()), **mode)
+
+
+def _rig_functions(model, u, U, q, x, h, gamma, lmux, lmuy, inputs, parameters) -> WheelFunctions:
+    """The steady tyre on a rig: the MF at the imposed load and slips (kappa_in relative to the direction of
+    travel, as MFModel.evaluate takes it), its spin estimated from kappa and vx; Rl, rho and Re the MF's."""
+    import casadi as ca
+
+    from .backend import casadi_backend
+
+    be = casadi_backend()
+    mf = model.casadi_function(inputs=("fz", "kappa", "alpha", "gamma", "vx", "p"),
+                               outputs=("fx", "fy", "mx", "my", "mz", "omega", "re", "rho", "rl", "a", "b", "t", "mux",
+                                        "muy"), parameters=("LMUX", "LMUY"), name="mf_rig")
+    fz, kappa, alpha = be.fmax(U["Fz_in"], 0.0), U["kappa_in"], U["alpha_in"]
+    fx, fy, mx, my, mz, omega, re, rho, rl, a, b, t, mux, muy = mf(fz, kappa, alpha, gamma, U["vx"], U["p"], lmux,
+                                                                   lmuy)
+    mx_w, my_w, mz_w = wheel_centre_moments(fx, fy, fz, mx, my, mz, rl, gamma, be)
+    none = 0.0 * U["vx"]
+    y = {"Fx": fx, "Fy": fy, "Fz": fz, "Mx": mx_w, "My": my_w, "Mz": mz_w, "Mx_c": mx, "My_c": my, "Mz_c": mz,
+         "kappa": kappa, "alpha": alpha, "Rl": rl, "Re": re, "rho": rho, "contact_length": 2.0 * a, "trail": t,
+         "mux": mux, "muy": muy, "u_x": none, "u_y": none, "omega_used": omega, "contact_width": 2.0 * b}
+    y["Vsx"], y["Vsy"] = slip_speeds(kappa, alpha, U["vx"], be)
+    return _wheel(x, u, q, h, ca.SX(0, 1), ca.SX(0, 1), y, inputs, parameters, kind="steady", vertical="load",
+                  input_mode="rig")
 
 
 class StepError(ModelInputError):
@@ -360,8 +403,8 @@ class WheelTyre:
     Inputs are held over a step; a rejected step (StepError) leaves state and outputs as they were."""
 
     def __init__(self, model, kind: str = "steady", vertical: str = "position", tau_vlow: float | None = None,
-                 turn_slip: bool = False):
-        self.functions = f = wheel_functions(model, kind, vertical, tau_vlow, turn_slip)
+                 turn_slip: bool = False, input_mode: str = "vehicle"):
+        self.functions = f = wheel_functions(model, kind, vertical, tau_vlow, turn_slip, input_mode)
         self.u = np.array(f.input_starts, dtype=float)
         self.q = np.array(f.parameter_starts, dtype=float)
         self.state = np.zeros(len(f.state_names))

@@ -35,13 +35,16 @@ import numpy as np
 
 from mftyre.errors import ModelInputError
 from mftyre.transient import StateFunctions, free_rolling_start
+from mftyre.variables import pick
 
 from .enveloping import Cams
 from .ring import INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, check_pressure, pressure_coefficients
 from .road import parse_road
 from .simulate import MAX_RK4_STEP
 
-__all__ = ["SwiftWheel", "swift_functions", "INPUTS", "OUTPUTS", "PARAMETERS", "TABLE_DX", "WINDOW"]
+__all__ = ["SwiftWheel", "swift_functions", "internal_steps", "input_table", "RIM_MODES", "INPUTS", "OUTPUTS",
+           "PARAMETERS", "TABLE_DX", "WINDOW",
+           "MAX_TRAVEL", "SUBSTEPS", "STEP_RATE_LIMIT"]
 
 TABLE_DX = 1e-3
 WINDOW = 1024
@@ -52,57 +55,63 @@ NEWTON_STEPS = 30
 #: Fz over a 10 mm cleat at 10 m/s within 1.7 % of its swing from a 0.25 ms solution; max_step = 0.5 ms gives
 #: swift.SwiftTyre's default accuracy (two RK4 steps per ms: 0.9 %) at twice the cost.
 SUBSTEPS = 1
+#: Internal steps per simulated second one communication step may take (the time budget of a step).
+STEP_RATE_LIMIT = 1e6
 
-INPUTS = {  # name -> (unit, start, description)
-    "vx": ("m/s", 10.0, "wheel-centre velocity along ISO-W x (wheel heading projected on the road)"),
-    "vy": ("m/s", 0.0, "wheel-centre velocity along ISO-W y (to the left)"),
-    "omega": ("rad/s", float("nan"), "rim spin speed (imposed; positive rolling forwards; start: free rolling at "
-              "the start vx under FNOMIN)"),
-    "gamma": ("rad", 0.0, "rim inclination (camber) about ISO-W x"),
-    "z": ("m", float("nan"), "wheel-centre height above the road datum, ISO-W z (imposed; start: the loaded radius "
-          "at FNOMIN)"),
-    "vz": ("m/s", 0.0, "wheel-centre vertical velocity (z moves with it within a step)"),
-    "p": ("Pa", float("nan"), "inflation pressure (start: the .tir INFLPRES)"),
-    "road_z": ("m", 0.0, "height of the whole road profile above the road datum (the tyre meets z - road_z)"),
-    "road_camber": ("rad", 0.0, "road camber angle about ISO-W x (> 0: the road rises to the left), added to the "
-                    "profile's own multi-track camber"),
-}
-PARAMETERS = {
-    "x_start": ("m", "wheel-centre position on the road profile at the start"),
-    "max_step": ("s", "longest internal RK4 step (steps are never longer than swift.simulate.MAX_RK4_STEP = 1 ms, "
-                 "the longest a parked tyre is stable with)"),
-}
-OUTPUTS = {  # name -> (unit, description, ring output or state)
-    "Fx": ("N", "force on the rim along ISO-W x, at the wheel centre"),
-    "Fy": ("N", "force on the rim along ISO-W y, at the wheel centre"),
-    "Fz": ("N", "force on the rim along ISO-W z (up), at the wheel centre"),
-    "Mx": ("N.m", "moment on the rim about ISO-W x"),
-    "My": ("N.m", "moment on the rim about ISO-W y (about the axle)"),
-    "Mz": ("N.m", "moment on the rim about ISO-W z"),
-    "Fx_c": ("N", "longitudinal contact force in the effective road plane"),
-    "Fy_c": ("N", "lateral contact force"),
-    "Fz_c": ("N", "normal contact force (normal to the effective road plane)"),
-    "Mz_c": ("N.m", "self-aligning moment of the contact patch"),
-    "kappa": ("1", "transient longitudinal slip of the contact patch"),
-    "alpha": ("rad", "transient slip angle of the contact patch"),
-    "rho": ("m", "tyre deflection normal to the effective road"),
-    "Rl": ("m", "lever arm of the contact forces (belt centre to contact point)"),
-    "Re": ("m", "effective rolling radius"),
-    "contact_length": ("m", "contact patch length 2a"),
-    "road_w": ("m", "effective road height (tandem cams)"),
-    "road_slope": ("rad", "effective forward road slope beta_y (> 0 rising ahead)"),
-    "road_curvature": ("1/m", "effective road curvature d beta_y / dx"),
-    "Re_variation": ("m", "effective rolling radius variation over the curved effective road (free-rolling "
-                             "steady value; 0 on a flat road or a grade)"),
-    "road_camber_eff": ("rad", "effective road camber beta_x: the profile's multi-track camber plus road_camber"),
-    "x_contact": ("m", "contact centre on the road (x_road plus the forward shift to the foot of the normal)"),
-    "x_road": ("m", "wheel-centre position on the road: x_start + integral of vx dt"),
-}
+#: The wheel's variables: name -> Variable (mftyre.variables), in the order of the vectors.
+INPUTS = pick("input", "vx", "vy", "omega", "gamma", "z", "vz", "p", "road_z", "road_camber", describe={
+    "omega": "rim spin speed (imposed; positive rolling forwards; start: free rolling at the start vx under FNOMIN)",
+    "gamma": "rim inclination (camber) about ISO-W x",
+    "z": "wheel-centre height above the road datum, ISO-W z (imposed; start: the loaded radius at FNOMIN)",
+    "road_z": "height of the whole road profile above the road datum (the tyre meets z - road_z)",
+    "road_camber": "road camber angle about ISO-W x (> 0: the road rises to the left), added to the profile's own "
+                   "multi-track camber"})
+#: speed: the rim spins at the input omega; torque: the input torque drives the rim (omega: its start guess).
+RIM_MODES = ("speed", "torque")
+
+
+def input_table(rim: str = "speed") -> dict:
+    """The wheel's inputs (name -> Variable) with the rim mode ``rim``."""
+    if rim == "speed":
+        return INPUTS
+    start = INPUTS["omega"].but(description="rim spin speed at the start (static equilibrium); the torque drives it "
+                                            "afterwards")
+    return {**{n: start if n == "omega" else v for n, v in INPUTS.items()}, **pick("input", "torque")}
+
+
+PARAMETERS = pick("parameter", "x_start", "max_step")
+OUTPUTS = pick(
+    "output", "Fx", "Fy", "Fz", "Mx", "My", "Mz", "Fx_c", "Fy_c", "Fz_c", "Mz_c", "kappa", "alpha", "rho", "Rl", "Re",
+    "contact_length", "road_w", "road_slope", "road_curvature", "Re_variation", "road_camber_eff", "x_contact",
+    "x_road", describe={
+        "Fx": "force on the rim along ISO-W x, at the wheel centre",
+        "Fy": "force on the rim along ISO-W y, at the wheel centre",
+        "Fz": "force on the rim along ISO-W z (up), at the wheel centre",
+        "Mx": "moment on the rim about ISO-W x", "My": "moment on the rim about ISO-W y (about the axle)",
+        "Mz": "moment on the rim about ISO-W z", "Mz_c": "self-aligning moment of the contact patch",
+        "kappa": "transient longitudinal slip of the contact patch",
+        "alpha": "transient slip angle of the contact patch",
+        "rho": "tyre deflection normal to the effective road",
+        "Rl": "lever arm of the contact forces (belt centre to contact point)",
+        "road_w": "effective road height (tandem cams)"})
 _RING = {"Fx": "fx", "Fy": "fy", "Fz": "fz", "Mx": "mx", "My": "my", "Mz": "mz", "Fx_c": "fx_c", "Fy_c": "fy_c",
          "Fz_c": "fz_c", "Mz_c": "mz_c", "kappa": "kappa", "alpha": "alpha", "rho": "rho", "Rl": "rl", "Re": "re",
          "road_slope": "beta", "road_curvature": "curvature", "Re_variation": "dre", "road_camber_eff": "beta_x",
          "x_contact": "x_c"}
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
+
+
+def internal_steps(h: float, max_step: float, vx: float) -> int:
+    """How many equal RK4 steps a communication step of ``h`` [s] is split into (module notes; the C wrapper
+    glue_swift.c spells the same rule): steps of at most ``max_step`` and MAX_RK4_STEP, and short enough that the
+    wheel travels at most MAX_TRAVEL in one. A step that would need more than STEP_RATE_LIMIT internal steps per
+    simulated second (or 1e7) is refused (ModelInputError)."""
+    n = max(math.ceil(h / min(max_step, MAX_RK4_STEP) - 1e-9), math.ceil(abs(vx) * h / MAX_TRAVEL))
+    if not (n <= math.ceil(h * STEP_RATE_LIMIT) and n < 1e7):
+        raise ModelInputError(f"the step of {h!r} s needs {n:.3g} internal steps, more than its time budget "
+                              f"({STEP_RATE_LIMIT:g} per simulated second): max_step too small or the speed too high "
+                              "for this model")
+    return max(1, n)
 
 
 @dataclass(frozen=True)
@@ -118,6 +127,7 @@ class SwiftFunctions(StateFunctions):
     grid: np.ndarray
     output_dependencies: list
     config_extra: str
+    rim: str = "speed"
 
     def window_start(self, xb: float) -> int:
         """First table sample of the window around the belt at ``xb``, clamped to the table."""
@@ -125,7 +135,7 @@ class SwiftFunctions(StateFunctions):
         return min(max(i0, 0), self.table_h.size // 2 - WINDOW)
 
 
-def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions:
+def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed") -> SwiftFunctions:
     """The functions of the SWIFT wheel of ``model`` on ``road`` (a :class:`swift.road.Road`, an expression or a
     CSV file, see :func:`swift.road.parse_road`); ``x_start``: default start position. The ring is
     :class:`swift.simulate.SwiftTyre`'s (its step, outputs and static equilibrium); here only the FMU's inputs are
@@ -134,6 +144,9 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
 
     from .simulate import SwiftTyre
 
+    if rim not in RIM_MODES:
+        raise ModelInputError(f"rim must be one of {', '.join(RIM_MODES)}; got {rim!r}")
+    table_u = input_table(rim)
     road = parse_road(road)
     prm = model.params
     cams = Cams.from_params(prm, warn=False)  # the tyre below warns
@@ -141,14 +154,14 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
     bps = tuple(road.breakpoints)
     reach = cams.ae + 2 * dx
     lo, hi = (min(bps) - reach, max(bps) + reach) if bps else (0.0, 1.0)
-    tyre = SwiftTyre(model, road, axle="height", rim="speed", x_range=(math.floor(lo / dx) * dx,
+    tyre = SwiftTyre(model, road, axle="height", rim=rim, x_range=(math.floor(lo / dx) * dx,
                      math.ceil(hi / dx) * dx), table_dx=dx, window=WINDOW, substeps=SUBSTEPS, compiled=False)
     nx = len(STATE_NAMES)
-    x, u, q = ca.MX.sym("x", nx), ca.MX.sym("u", len(INPUTS)), ca.MX.sym("q", len(PARAMETERS))
+    x, u, q = ca.MX.sym("x", nx), ca.MX.sym("u", len(table_u)), ca.MX.sym("q", len(PARAMETERS))
     x0w, grid, hw, dt = ca.MX.sym("x0w"), ca.MX.sym("grid", WINDOW), ca.MX.sym("hw", 2 * WINDOW), ca.MX.sym("dt")
-    U = {n: u[i] for i, n in enumerate(INPUTS)}
-    ring_u = {"vx": U["vx"], "load": 0, "torque": 0, "p": U["p"], "y": 0, "vy": U["vy"], "gamma": U["gamma"],
-              "psi": 0, "road_camber": U["road_camber"]}
+    U = {n: u[i] for i, n in enumerate(table_u)}
+    ring_u = {"vx": U["vx"], "load": 0, "torque": U.get("torque", 0), "p": U["p"], "y": 0, "vy": U["vy"],
+              "gamma": U["gamma"], "psi": 0, "road_camber": U["road_camber"]}
     uring = ca.vertcat(*(ring_u[n] for n in INPUT_NAMES))
 
     def lifted(state, dz):  # belt and axle heights moved by dz (between the datum and the ring's road frame)
@@ -186,28 +199,29 @@ def swift_functions(model, road=None, *, x_start: float = 0.0) -> SwiftFunctions
     pstiff, pdamp = pressure_coefficients(prm)  # the factors' signs checked by glue_validate (ring.check_pressure)
     extra = (f"#define ROAD_N {table.h.size}\n#define ROAD_WINDOW {WINDOW}\n#define ROAD_X0 {table.x0!r}\n"
              f"#define ROAD_DX {table.dx!r}\n#define SWIFT_MAX_TRAVEL {MAX_TRAVEL!r}\n"
-             f"#define SWIFT_MAX_RK4_STEP {MAX_RK4_STEP!r}\n"
+             f"#define SWIFT_MAX_RK4_STEP {MAX_RK4_STEP!r}\n#define STEP_RATE_LIMIT {STEP_RATE_LIMIT!r}\n"
              f"#define SWIFT_P_NOM {float(prm.NOMPRES)!r}\n#define SWIFT_P_STIFF {pstiff!r}\n"
              f"#define SWIFT_P_DAMP {0.0 if pdamp is None else pdamp!r}\n"
              + "".join(f"#define S_{n.upper()} {i}\n" for i, n in enumerate(STATE_NAMES))
              + "/* cam height and road-camber slope per sample, interleaved */\n"
              + "static const double ROAD_H[2 * ROAD_N] = {" + ",".join(repr(float(v)) for v in h) + "};\n"
              + "static const double ROAD_GRID[ROAD_WINDOW] = {" + ",".join(repr(float(v)) for v in grid_v) + "};\n")
-    omega0, z0 = free_rolling_start(model, INPUTS["vx"][1])
-    starts = tuple({"p": prm.INFLPRES, "omega": omega0, "z": z0}.get(n, v[1]) for n, v in INPUTS.items())
-    return SwiftFunctions(init=init, step=step, out=outw, state_names=STATE_NAMES, input_names=tuple(INPUTS),
-                          parameter_names=tuple(PARAMETERS), output_names=tuple(OUTPUTS),
-                          parameter_starts=(float(x_start), 1e-3), input_starts=starts, table_x0=float(table.x0),
+    omega0, z0 = free_rolling_start(model, INPUTS["vx"].start)
+    computed = {"p": float(prm.INFLPRES), "omega": omega0, "z": z0}
+    inputs = tuple(v.but(start=computed[n]) if n in computed else v for n, v in table_u.items())
+    parameters = (PARAMETERS["x_start"].but(start=float(x_start)), PARAMETERS["max_step"])
+    return SwiftFunctions(init=init, step=step, out=outw, state_names=STATE_NAMES, inputs=inputs,
+                          parameters=parameters, outputs=tuple(OUTPUTS.values()), table_x0=float(table.x0),
                           table_dx=float(table.dx), table_h=h, grid=grid_v, output_dependencies=deps,
-                          config_extra=extra)
+                          config_extra=extra, rim=rim)
 
 
 class SwiftWheel:
     """The SWIFT wheel in Python (module notes): ``set_inputs``, ``set_parameters``, ``initialise``, ``step``,
     ``outputs``, ``state``. The same functions and the same window placement as the native FMU."""
 
-    def __init__(self, model, road=None, *, x_start: float = 0.0):
-        self.functions = f = swift_functions(model, road, x_start=x_start)
+    def __init__(self, model, road=None, *, x_start: float = 0.0, rim: str = "speed"):
+        self.functions = f = swift_functions(model, road, x_start=x_start, rim=rim)
         self._params = model.params
         self.u = np.array(f.input_starts, dtype=float)
         self.q = np.array(f.parameter_starts, dtype=float)
@@ -215,8 +229,8 @@ class SwiftWheel:
 
     def set_inputs(self, **values):
         for k, v in values.items():
-            if k not in INPUTS:
-                raise ModelInputError(f"unknown input {k!r}; inputs are {', '.join(INPUTS)}")
+            if k not in self.functions.input_names:
+                raise ModelInputError(f"unknown input {k!r}; inputs are {', '.join(self.functions.input_names)}")
             if not math.isfinite(v):
                 raise ModelInputError(f"input {k} must be finite, got {v!r}")
             self.u[self.functions.input_names.index(k)] = v
@@ -245,8 +259,10 @@ class SwiftWheel:
         check_pressure(self._params, float(self.u[self.functions.input_names.index("p")]))
         U = dict(zip(self.functions.input_names, self.u))
         x = self.state.copy()
-        x[_S["za"]], x[_S["vza"]], x[_S["oma"]] = U["z"], U["vz"], U["omega"]
-        n = max(1, math.ceil(h / min(self.q[1], MAX_RK4_STEP) - 1e-9), math.ceil(abs(U["vx"]) * h / MAX_TRAVEL))
+        x[_S["za"]], x[_S["vza"]] = U["z"], U["vz"]
+        if self.functions.rim == "speed":  # the rim spin imposed (as glue_swift.c)
+            x[_S["oma"]] = U["omega"]
+        n = internal_steps(h, self.q[1], U["vx"])
         for _ in range(n):
             x = np.asarray(self.functions.step(x, self.u, h / n, *self._window(x[_S["xb"]])), dtype=float).ravel()
         self.state = x

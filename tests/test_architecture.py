@@ -8,7 +8,7 @@ from functools import lru_cache
 from pathlib import Path
 
 PROJECT = Path(__file__).resolve().parents[1]
-PACKAGES = ("mftyre", "swift")
+PACKAGES = ("mftyre", "swift", "fmu")
 
 
 def _modules() -> dict[str, Path]:
@@ -158,3 +158,10 @@ def test_the_fork_finder_finds_forks():
     assert _version_forks("dpi = p / self.params.NOMPRES - 1.0\n")
     assert not _version_forks("dpi = vertical.pressure_increment(prm, p)\nf = vertical.vertical_force(prm, rl)\n")
     assert not _version_forks("x = fz / prm.FNOMIN - 1.0\np = 0.8 * prm.NOMPRES\n")
+
+
+def test_the_vocabulary_imports_nothing_of_ours():
+    """mftyre/variables.py (one Variable per name for the wheels, both FMU backends, MFModel and soil) sits on the
+    ground floor beside the equations: every floor may use it."""
+    assert _graph()["mftyre.variables"] == set()
+    assert "mftyre.variables" in _graph()["fmu.native_build"]  # the builders speak it

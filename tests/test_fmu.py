@@ -1,4 +1,4 @@
-"""The pythonfmu tyre FMU (mftyre/fmu, `mftyre fmu build --backend pythonfmu`): built into tmp paths, run with fmpy.
+"""The pythonfmu tyre FMU (fmu, `mftyre fmu build --backend pythonfmu`): built into tmp paths, run with fmpy.
 
 Evidence used: MFModel.evaluate / vertical_force on the slips, load and radius the FMU reports (1e-9), the
 kinematic slip definitions and their signs written out independently, fmpy's model-description validation, and
@@ -143,6 +143,7 @@ def test_model_description_validates(fmus):
     for path in fmus.values():
         assert validate_fmu(str(path)) == []
     md = fmpy.read_model_description(fmus["61"])
+    assert md.version == mftyre.__version__  # the one version string
     units = {v.name: v.unit for v in md.modelVariables}
     assert units["Fx"] == "N" and units["Mz"] == "N.m" and units["p"] == "Pa" and units["omega"] == "rad/s"
     causality = {v.name: v.causality for v in md.modelVariables}

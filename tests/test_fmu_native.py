@@ -188,8 +188,9 @@ def _slalom(t):
 
 
 #: Floors of the 1e-9 relative comparison, by unit: FNOMIN-sized forces, FNOMIN R0 moments, R0 lengths (1/R0
-#: curvatures).
-SCALE = {"N": 4000.0, "N.m": 4000.0 * 0.3, "m": 0.3, "rad": 1.0, "1": 1.0, "1/m": 1.0 / 0.3}
+#: curvatures), 30 m/s speeds (slip speeds) and their spin.
+SCALE = {"N": 4000.0, "N.m": 4000.0 * 0.3, "m": 0.3, "rad": 1.0, "1": 1.0, "1/m": 1.0 / 0.3, "m/s": 30.0,
+         "rad/s": 30.0 / 0.3}
 
 
 def _assert_close(py, nat, units, where):
@@ -839,7 +840,10 @@ def test_outputs_in_initialisation_mode_are_those_of_the_initial_state(fmus, tmp
 
 
 @pytest.mark.parametrize("args, text", [
-    (["--input-mode", "rig"], "--input-mode is an option of --backend pythonfmu"),
+    (["--model", "transient", "--input-mode", "rig"], "rig mode (slips and load imposed) is a mode of the steady"),
+    (["--model", "swift", "--input-mode", "rig"], "--input-mode rig is a mode of --model steady"),
+    (["--model", "transient", "--rim", "torque"], "--rim torque is a mode of --model swift"),
+    (["--backend", "pythonfmu", "--rim", "torque"], "set at run time"),
     (["--model", "swift", "--vertical", "load"], "takes the wheel-centre height"),
     (["--backend", "pythonfmu", "--road", "cleat(x0=1, length=0.05, height=0.01)"], "set at run time"),
 ])

@@ -135,7 +135,7 @@ def test_demo_never_writes_through_a_link_in_its_folder_and_reports_an_unwritabl
 def test_native_fmu_build_never_writes_through_a_planted_partial_link(tmp_path, monkeypatch):
     """The zip went to the predictable `.<name>.<pid>.partial` opened with ZipFile(path, "w"), following a link
     planted there; now it is zipped in memory and written by write_atomically (random name, O_EXCL|O_NOFOLLOW)."""
-    from mftyre.fmu import native_build
+    from fmu import native_build
 
     def fake_compile(sources, library):  # the compiler is not what is tested here
         library.parent.mkdir(parents=True, exist_ok=True)

@@ -27,7 +27,7 @@ def wheel(tmp_path_factory) -> Path:
     src = tmp_path_factory.mktemp("src")
     for name in ("pyproject.toml", "README.md"):
         shutil.copy2(PROJECT / name, src / name)
-    for name in ("mftyre", "swift", "tir_files"):
+    for name in ("mftyre", "swift", "fmu", "tir_files"):
         shutil.copytree(PROJECT / name, src / name, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
     dist = tmp_path_factory.mktemp("dist")
     _run([sys.executable, "-m", "pip", "wheel", str(src), "--no-deps", "--no-build-isolation", "--no-index",
@@ -37,13 +37,19 @@ def wheel(tmp_path_factory) -> Path:
 
 
 def test_wheel_holds_every_package_and_the_sample_files(wheel):
+    import mftyre
+
+    assert wheel.name.startswith(f"mftyre-{mftyre.__version__}-")  # one version string (pyproject reads it)
     names = set(zipfile.ZipFile(wheel).namelist())
-    packages = {str(p.parent.relative_to(PROJECT)) for top in ("mftyre", "swift")
+    packages = {str(p.parent.relative_to(PROJECT)) for top in ("mftyre", "swift", "fmu")
                 for p in (PROJECT / top).rglob("__init__.py")}
     for package in packages:  # pyproject lists the packages: a new one must be added there
         assert f"{package}/__init__.py" in names, f"package {package} is not in the wheel (pyproject.toml)"
     for tir in (PROJECT / "tir_files").glob("*.tir"):
         assert f"mftyre/tir_files/{tir.name}" in names
+    for source in [*(PROJECT / "fmu" / "native").glob("*.[ch]"), PROJECT / "fmu" / "README.md"]:
+        # `mftyre fmu build` compiles the native FMU from these at the user's site (package data of fmu)
+        assert f"fmu/{source.relative_to(PROJECT / 'fmu').as_posix()}" in names, f"{source.name} is not in the wheel"
 
 
 def test_installed_wheel_runs_on_its_bundled_files_from_any_folder(wheel, tmp_path):
@@ -63,11 +69,13 @@ def test_installed_wheel_runs_on_its_bundled_files_from_any_folder(wheel, tmp_pa
     work = tmp_path / "work"
     work.mkdir()
     code = ("import mftyre, mftyre.files as f; print(mftyre.__file__); "
-            "print(f.sample_tir('car_205_60R15_mf61.tir')); print(f.sample_tir('car_205_60R15_mf62_swift.tir'))")
+            "print(f.sample_tir('car_205_60R15_mf61.tir')); print(f.sample_tir('car_205_60R15_mf62_swift.tir')); "
+            "import fmu.native_build as nb; print(nb.__file__); print(nb.C_DIR / 'fmi2_tyre.c')")
     lines = _run([str(python), "-c", code], cwd=work, env=env).stdout.split()
     site = venv.resolve()
     assert all(Path(line).resolve().is_relative_to(site) for line in lines), lines
     sample = lines[1]
+    assert Path(lines[4]).is_file()  # the installed fmu package finds its C wrapper (`mftyre fmu build`)
     out = _run([str(python), "-m", "mftyre", "eval", sample, "--alpha", "0deg,4deg", "--outputs", "fy"],
                cwd=work, env=env).stdout
     assert "fy [N]" in out

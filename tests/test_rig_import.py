@@ -382,7 +382,7 @@ def test_swift_from_the_command_line(tmp_path, capsys):
 
 def test_fmu_build_reports_progress(tmp_path, capsys, monkeypatch):
     """`mftyre fmu build` says what it is doing (the compilation takes seconds); the compiler is stubbed here."""
-    from mftyre.fmu import native_build
+    from fmu import native_build
 
     def fake_compile(sources, library):
         library.parent.mkdir(parents=True, exist_ok=True)

@@ -162,7 +162,7 @@ def test_separate_tyres_sharing_one_library_step_from_threads_at_once(model, cac
 def test_libraries_shipped_in_an_fmu_are_installed_verified_and_loaded_without_a_compiler(model, tmp_path,
                                                                                           monkeypatch):
     from mftyre import compiled
-    from mftyre.fmu import __file__ as fmu_init
+    from fmu import __file__ as fmu_init
 
     monkeypatch.syspath_prepend(os.path.dirname(fmu_init))  # the FMU's own core module, as the FMU imports it
     import mftyre_fmu_core as core
@@ -180,7 +180,9 @@ def test_libraries_shipped_in_an_fmu_are_installed_verified_and_loaded_without_a
         raise AssertionError("compiled instead of loading the shipped library")
 
     monkeypatch.setattr(compiled, "compile_c", no_compiler)
-    grid = dict(table_dx=core.SWIFT_TABLE_DX, window=core.SWIFT_WINDOW)
+    from swift.fmu_model import SUBSTEPS, TABLE_DX, WINDOW
+
+    grid = dict(table_dx=TABLE_DX, window=WINDOW, substeps=SUBSTEPS)
     assert _steps(_tyre(model, compiled=True, **grid), n=3)[1]["fz"] > 3000.0
     other = _tyre(model, axle="load", rim="torque", **grid)  # nothing loaded: its library may be damaged here
     library = _build(other)

@@ -100,6 +100,7 @@ import numpy as np
 
 from ..errors import ModelInputError
 from ..formula import moments, vertical
+from ..variables import SOIL_OUTPUTS, unit_table
 
 __all__ = ["SoilEffects", "rigid_wheel_sinkage", "critical_pressure", "compaction_resistance",
            "bulldozing_coefficients", "hard_ground_footprint", "carcass_pressure", "flat_load", "soft_soil",
@@ -116,31 +117,8 @@ _BALANCE_STEPS = 14
 _LOG_STEP = 1e-6  # step in ln F_t of the difference slope of the balance
 
 #: name -> (SI unit, meaning) of every output of :func:`soft_soil`
-OUTPUTS = {
-    "sinkage": ("m", "depth z of the rut below the soil surface"),
-    "contact_length": ("m", "projected length of the soil contact (front arc + flat part)"),
-    "flat_length": ("m", "length 2 a_t of the flat part (the .tir's contact length at the load F_t)"),
-    "contact_width": ("m", "width B of the soil contact (arc and flat part): the section width WIDTH"),
-    "ground_pressure": ("Pa", "normal stress under the flat part, F_t / (2 a_t B) = k z_0^n"),
-    "flat_load": ("N", "load F_t carried by the flat part (the rest by the front arc)"),
-    "carcass_pressure": ("Pa", "carcass stiffness pressure p_c = max(Fz / (4 a_h b_h) - p_i, 0) on hard ground at "
-                               "this load (see carcass_pressure)"),
-    "deflection": ("m", "tyre deflection: the .tir's Fz(rho, p) at the flat load F_t"),
-    "rolling_radius": ("m", "radius r_f of the tread speed omega r_f on the flat part (.tir's Re at F_t)"),
-    "compaction_resistance": ("N", "compaction resistance R_c (horizontal part of the arc's normal stress)"),
-    "bulldozing_resistance": ("N", "bulldozing resistance R_b (0 unless the bulldozing option is on)"),
-    "motion_resistance": ("N", "soil motion resistance R_c + R_b"),
-    "gross_traction": ("N", "gross traction (thrust) H from the shear"),
-    "drawbar_pull": ("N", "drawbar pull DP = H - R_c - R_b (net longitudinal force)"),
-    "hysteresis_moment": ("N m", "tyre hysteresis moment M_h = -My of the .tir at the flat load (>= 0 forward)"),
-    "torque": ("N m", "driving torque on the wheel: the shear at each tread's speed plus M_h"),
-    "fy": ("N", "lateral force (ISO-W, shear only)"),
-    "omega": ("rad/s", "wheel spin V / ((1 - i) Re)"),
-    "power": ("W", "wheel input power T omega"),
-    "slip_power": ("W", "shear-slip loss: the shear stress times the slip velocity of the tread, over the contact"),
-    "efficiency": ("-", "tractive efficiency DP V / (T omega); NaN where T omega <= 1e-9 Fz V (not driven)"),
-    "slip": ("-", "slip i = 1 - V / (omega Re), Re the hard-ground rolling radius (input)"),
-}
+#: Unit and meaning of every output (the table :data:`mftyre.variables.SOIL_OUTPUTS`).
+OUTPUTS = unit_table(SOIL_OUTPUTS)
 
 
 @dataclass(frozen=True)

@@ -1,9 +1,9 @@
 """Build the tyre FMU (FMI 2.0 co-simulation, pythonfmu) from a .tir file.
 
-    python -m mftyre.fmu.build FILE.tir -o tyre.fmu [--model steady|swift] [--side left|right]
+    python -m fmu.build FILE.tir -o tyre.fmu [--model steady|swift] [--side left|right]
     mftyre fmu build FILE.tir -o tyre.fmu ...                   (the same, through the mftyre command line)
 
-    from mftyre.fmu.build import build_fmu
+    from fmu.build import build_fmu
     build_fmu("tir_files/car_205_60R15_mf61.tir", "tyre.fmu", side="left")
 
 What goes into the FMU (``resources/``): the slave ``MFTyre.py`` and ``mftyre_fmu_core.py``; ``tyre.tir`` (the
@@ -127,7 +127,7 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
                 warnings.warn(f"not shipping a compiled SWIFT step: {exc}", stacklevel=2)
         vendor = stage / "vendor" / "mftyre"
         shutil.copytree(Path(mftyre.__file__).parent, vendor,
-                        ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.so", "fmu"))
+                        ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.so"))
         try:
             import swift
         except ImportError:

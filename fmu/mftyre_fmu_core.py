@@ -46,38 +46,33 @@ from pathlib import Path
 #: MF outputs taken from the model (names of :data:`mftyre.model.OUTPUT_UNITS`).
 MF_OUTPUTS = ("fx", "fy", "fz", "mx", "my", "mz", "omega", "re", "rho", "rl", "a", "b", "t", "mux", "muy")
 
-#: Outputs of the tyre: name -> (unit, description). The unit "1" means dimensionless.
-OUTPUTS = {
-    "Fx": ("N", "longitudinal force on the tyre (at the wheel centre, ISO-W axes)"),
-    "Fy": ("N", "lateral force on the tyre (at the wheel centre, ISO-W axes)"),
-    "Fz": ("N", "vertical force on the tyre, >= 0 (at the wheel centre, ISO-W axes)"),
-    "Mx": ("N.m", "moment about x at the wheel centre, ISO-W axes"),
-    "My": ("N.m", "moment about y at the wheel centre, ISO-W axes (-Rl Fx + rolling resistance)"),
-    "Mz": ("N.m", "moment about z at the wheel centre, ISO-W axes"),
-    "Mx_c": ("N.m", "overturning moment at the contact point (MF output)"),
-    "My_c": ("N.m", "rolling-resistance moment at the contact point (MF output)"),
-    "Mz_c": ("N.m", "self-aligning moment at the contact point (MF output)"),
-    "kappa": ("1", "longitudinal slip given to the MF, -Vsx / Vx (kinematic or the rig input: relative to the "
-                   "direction of travel, -1 = locked wheel; swift: the transient slip -Vsx / |Vcx|, its MF runs at "
-                   "|Vcx|)"),
-    "alpha": ("rad", "slip angle given to the MF (kinematic, or the rig input)"),
-    "Vsx": ("m/s", "longitudinal slip speed of the contact point, -kappa vx (swift: -kappa |Vcx|)"),
-    "Vsy": ("m/s", "lateral slip speed of the contact point, tan(alpha) |vx|"),
-    "omega_used": ("rad/s", "spin speed used (the input; in rig mode estimated from kappa and vx)"),
-    "rho": ("m", "vertical tyre deflection"),
-    "Rl": ("m", "loaded radius (wheel centre to contact point, in the wheel plane)"),
-    "Re": ("m", "effective rolling radius"),
-    "contact_length": ("m", "contact patch length 2a"),
-    "contact_width": ("m", "contact patch width 2b"),
-    "trail": ("m", "pneumatic trail"),
-    "mux": ("1", "longitudinal friction coefficient"),
-    "muy": ("1", "lateral friction coefficient"),
-    "Fz_c": ("N", "normal contact force (swift: normal to the effective road plane; steady: = Fz)"),
-    "road_w": ("m", "effective road height under the wheel (swift: tandem cams + road_z; steady: road_z, or 0 "
-                    "with vertical_input=load)"),
-    "road_slope": ("rad", "effective forward road slope beta_y (swift; 0 in steady mode)"),
-    "x_road": ("m", "wheel-centre position along the road profile: x_start + integral of vx dt"),
+#: Outputs of the tyre: name -> Variable (mftyre.variables: one vocabulary with the native FMU's wheels).
+OUTPUT_NAMES = ("Fx", "Fy", "Fz", "Mx", "My", "Mz", "Mx_c", "My_c", "Mz_c", "kappa", "alpha", "Vsx", "Vsy",
+                "omega_used", "rho", "Rl", "Re", "contact_length", "contact_width", "trail", "mux", "muy", "Fz_c", "road_w",
+                "road_slope", "x_road")
+#: What the pythonfmu FMU says more about some outputs than the vocabulary (its modes: steady vehicle/rig, swift).
+OUTPUT_NOTES = {
+    "Fz": "vertical force on the tyre, >= 0 (at the wheel centre, ISO-W axes)",
+    "My": "moment about y at the wheel centre, ISO-W axes (-Rl Fx + rolling resistance)",
+    "kappa": "longitudinal slip given to the MF, -Vsx / Vx (kinematic or the rig input: relative to the direction of "
+             "travel, -1 = locked wheel; swift: the transient slip -Vsx / |Vcx|, its MF runs at |Vcx|)",
+    "alpha": "slip angle given to the MF (kinematic, or the rig input)",
+    "Vsx": "longitudinal slip speed of the contact point, -kappa vx (swift: -kappa |Vcx|)",
+    "Vsy": "lateral slip speed of the contact point, tan(alpha) |vx|",
+    "omega_used": "spin speed used (the input; in rig mode estimated from kappa and vx)",
+    "Fz_c": "normal contact force (swift: normal to the effective road plane; steady: = Fz)",
+    "road_w": "effective road height under the wheel (swift: tandem cams + road_z; steady: road_z, or 0 with "
+              "vertical_input=load)",
+    "road_slope": "effective forward road slope beta_y (swift; 0 in steady mode)",
 }
+
+
+def outputs():
+    """The outputs: name -> Variable (needs mftyre importable: the host's or the FMU's vendored copy)."""
+    from mftyre.variables import pick
+
+    return pick("output", *OUTPUT_NAMES, describe=OUTPUT_NOTES)
+
 
 EVALUATORS = ("auto", "compiled", "casadi", "numpy")
 
@@ -302,12 +297,8 @@ def _floats(values):
 
 
 # ------------------------------------------------------------------------------------------ SWIFT (rigid ring)
-#: Cam-height table of the SWIFT road: grid step [m] (nodes at multiples of it) and samples seen by one step.
-SWIFT_TABLE_DX = 1e-3
-SWIFT_WINDOW = 1024
-#: Largest wheel travel [m] within one internal SWIFT step (the cam-height window is fixed over a step).
-SWIFT_MAX_TRAVEL = 0.2
-STEP_RATE_LIMIT = 1e6  # internal steps per simulated second one step may take (as the native FMU)
+# The SWIFT road table (grid step, window), the stepping rule and its constants are those of the native FMU's
+# wheel: swift.fmu_model (TABLE_DX, WINDOW, SUBSTEPS, internal_steps).
 
 
 def parse_road(spec, base_dir=None):
@@ -339,14 +330,15 @@ def export_swift_libraries(model, directory) -> dict:
     import shutil
 
     from swift import Flat, SwiftTyre
+    from swift.fmu_model import SUBSTEPS, TABLE_DX, WINDOW
 
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     names = []
     for axle in ("height", "load"):
         for rim in ("speed", "torque"):
-            tyre = SwiftTyre(model, Flat(), axle=axle, rim=rim, x_range=(0.0, 1.0), table_dx=SWIFT_TABLE_DX,
-                             window=SWIFT_WINDOW, compiled=True)
+            tyre = SwiftTyre(model, Flat(), axle=axle, rim=rim, x_range=(0.0, 1.0), table_dx=TABLE_DX,
+                             window=WINDOW, substeps=SUBSTEPS, compiled=True)
             library = Path(tyre._compiled._lib._name)
             for src in (library, library.with_suffix(".json")):  # the library and its verified description
                 shutil.copy2(src, directory / src.name)
@@ -387,9 +379,9 @@ class SwiftCore:
     Mapping (see README.md here): ``vertical`` "position" -> axle height imposed (``z - road_z``, moving with
     ``vz`` inside the step), "load" -> ``Fz_in`` pushes the axle (mass ``axle_mass``) down; ``rim`` "speed" ->
     spin ``omega`` imposed, "torque" -> drive torque ``torque`` on the rim. The road is the profile ``road``
-    (:func:`parse_road`) plus the input ``road_z``. The communication step is split into
-    ceil(h / max_step) equal steps of :meth:`swift.SwiftTyre.step` (also short enough that the wheel travels at most
-    SWIFT_MAX_TRAVEL per step). Inputs are held over the step (zero-order hold) except the axle height in
+    (:func:`parse_road`) plus the input ``road_z``. The communication step is split into equal steps of
+    :meth:`swift.SwiftTyre.step` by the native FMU's rule (:func:`swift.fmu_model.internal_steps`, with its RK4
+    substeps, road table and window). Inputs are held over the step (zero-order hold) except the axle height in
     position mode (first-order hold with ``vz``) and the positions x, y, which advance with vx, vy.
 
     State frames (exact, no approximation): vertical positions are kept relative to ``road_z`` (a change of
@@ -405,6 +397,7 @@ class SwiftCore:
         from mftyre import transient
         from mftyre.backend import NUMPY
         from swift import Cams, SwiftTyre
+        from swift.fmu_model import SUBSTEPS, TABLE_DX, WINDOW
         from swift.ring import STATE_NAMES
 
         self.wheel, self.be = transient, NUMPY  # the wheel's equations, on floats
@@ -424,7 +417,7 @@ class SwiftCore:
         self.road = parse_road(road, base_dir)
         self.S = {n: i for i, n in enumerate(STATE_NAMES)}
         cams = Cams.from_params(model.params)
-        dx, span = SWIFT_TABLE_DX, SWIFT_WINDOW * SWIFT_TABLE_DX
+        dx, span = TABLE_DX, WINDOW * TABLE_DX
         bps = self.road.breakpoints if self.road is not None else ()
         reach = cams.ae + 2 * dx  # beyond, the cam height is constant (the road is)
         lo, hi = (min(bps) - reach, max(bps) + reach) if bps else (float(x_start), float(x_start))
@@ -442,7 +435,7 @@ class SwiftCore:
             except Exception as exc:  # read-only cache...: compiled now instead
                 log(f"shipped SWIFT libraries not installed: {exc}")
         kwargs = dict(axle="height" if vertical == "position" else "load", rim=rim, x_range=x_range, table_dx=dx,
-                      window=SWIFT_WINDOW, axle_mass=float(axle_mass))
+                      window=WINDOW, substeps=SUBSTEPS, axle_mass=float(axle_mass))
         self.path = "casadi"
         if evaluator in ("auto", "compiled"):
             try:
@@ -505,17 +498,15 @@ class SwiftCore:
     def advance(self, u, h):
         """Advance over a communication step of length ``h`` with the inputs ``u``; returns the outputs. On an
         error the state is left as it was (the exception says why)."""
+        from swift.fmu_model import internal_steps
+
         np = self._np
         S = self.S
         saved = (self.x_offset, self.road_z)
         state = self.state.copy()
         try:
             self._set_road_z(state, u["road_z"])
-            n = max(1, math.ceil(h / self.max_step - 1e-9), math.ceil(abs(u["vx"]) * h / SWIFT_MAX_TRAVEL))
-            if not (n <= math.ceil(h * STEP_RATE_LIMIT) and n < 1e7):  # the native FMU's time budget (glue_swift.c)
-                raise TyreFMUError(f"the step of {h!r} s needs {n:.3g} internal steps, more than its time budget "
-                                   f"({STEP_RATE_LIMIT:g} per simulated second): max_step too small or the speed too "
-                                   "high for this model")
+            n = internal_steps(h, self.max_step, u["vx"])  # the native FMU's rule (glue_swift.c)
             dt = h / n
             out = None
             for k in range(n):

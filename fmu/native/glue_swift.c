@@ -112,12 +112,10 @@ int glue_init(GlueWork *g, const double *u, const double *q, double *x, char *ms
     return 0;
 }
 
-/* internal steps per simulated second allowed in one call (see glue_step) */
-#define STEP_RATE_LIMIT 1e6
-
 int glue_step(GlueWork *g, double *x, const double *u, const double *q, double h) {
     double x_next[TYRE_NX];
-    /* RK4 steps of at most max_step and never above SWIFT_MAX_RK4_STEP (stability of the parked tyre) */
+    /* the stepping rule of swift.fmu_model.internal_steps (its constants generated into tyre_config.h):
+     * RK4 steps of at most max_step and never above SWIFT_MAX_RK4_STEP (stability of the parked tyre) */
     double n1 = ceil(h / fmin(q[TYRE_Q_MAX_STEP], SWIFT_MAX_RK4_STEP) - 1e-9);
     double n2 = ceil(fabs(u[TYRE_U_VX]) * h / SWIFT_MAX_TRAVEL);
     double nd = n1 > n2 ? n1 : n2;
@@ -129,7 +127,9 @@ int glue_step(GlueWork *g, double *x, const double *u, const double *q, double h
     n = nd < 1 ? 1 : (long)nd;
     x[S_ZA] = u[TYRE_U_Z];
     x[S_VZA] = u[TYRE_U_VZ];
+#ifndef TYRE_U_TORQUE /* rim speed imposed; with the input torque the rim spins freely (swift.fmu_model) */
     x[S_OMA] = u[TYRE_U_OMEGA];
+#endif
     for (long k = 0; k < n; k++) {
         double dt = h / (double)n, x0w;
         g->arg[0] = x;

@@ -37,26 +37,21 @@ from xml.etree.ElementTree import Element, SubElement
 from pythonfmu import Fmi2Causality, Fmi2Initial, Fmi2Slave, Fmi2Variability, Integer, Real, String
 from pythonfmu.enums import Fmi2Status
 
-# Units of the variables (FMI unit names) and their SI base-unit exponents for <UnitDefinitions>.
-_UNIT_BASES = {
-    "N": dict(kg=1, m=1, s=-2), "N.m": dict(kg=1, m=2, s=-2), "m": dict(m=1), "m/s": dict(m=1, s=-1),
-    "rad": dict(rad=1), "rad/s": dict(rad=1, s=-1), "Pa": dict(kg=1, m=-1, s=-2), "s": dict(s=1),
-    "kg": dict(kg=1),
-}
-
-_INPUTS = {  # name -> (unit, description); start values come from config.json
-    "vx": ("m/s", "wheel-centre velocity along the wheel heading x (ISO-W); rig mode: the rig speed"),
-    "vy": ("m/s", "vehicle mode: wheel-centre velocity along y (ISO-W, to the left)"),
-    "omega": ("rad/s", "vehicle mode: wheel spin speed (positive rolling forwards)"),
-    "gamma": ("rad", "inclination (camber) angle, ISO-W"),
-    "z": ("m", "vehicle mode, vertical_input=position: wheel-centre height (same reference as road_z)"),
-    "road_z": ("m", "vehicle mode, vertical_input=position: road height under the wheel"),
-    "vz": ("m/s", "swift, vertical_input=position: wheel-centre vertical speed (z moves with it inside the step)"),
-    "Fz_in": ("N", "vertical load (vertical_input=load, and rig mode; swift: downward force on the axle)"),
-    "p": ("Pa", "inflation pressure (may change during the run)"),
-    "kappa_in": ("1", "rig mode: longitudinal slip"),
-    "alpha_in": ("rad", "rig mode: slip angle (ISO-W)"),
-    "torque": ("N.m", "swift, rim=torque: drive (+) or brake (-) torque on the rim about its axle"),
+#: Inputs (Real): name -> what this FMU's modes make of it; units from mftyre.variables.WHEEL, start values from
+#: config.json.
+_INPUTS = {
+    "vx": "wheel-centre velocity along the wheel heading x (ISO-W); rig mode: the rig speed",
+    "vy": "vehicle mode: wheel-centre velocity along y (ISO-W, to the left)",
+    "omega": "vehicle mode: wheel spin speed (positive rolling forwards)",
+    "gamma": "inclination (camber) angle, ISO-W",
+    "z": "vehicle mode, vertical_input=position: wheel-centre height (same reference as road_z)",
+    "road_z": "vehicle mode, vertical_input=position: road height under the wheel",
+    "vz": "swift, vertical_input=position: wheel-centre vertical speed (z moves with it inside the step)",
+    "Fz_in": "vertical load (vertical_input=load, and rig mode; swift: downward force on the axle)",
+    "p": "inflation pressure (may change during the run)",
+    "kappa_in": "rig mode: longitudinal slip",
+    "alpha_in": "rig mode: slip angle (ISO-W)",
+    "torque": "swift, rim=torque: drive (+) or brake (-) torque on the rim about its axle",
 }
 
 _PARAMETERS = {  # name -> description; start values come from config.json
@@ -70,10 +65,11 @@ _PARAMETERS = {  # name -> description; start values come from config.json
     "rim": "swift: speed (the omega input is imposed) or torque (the torque input drives the rim)",
 }
 
-_REAL_PARAMETERS = {  # name -> (unit, default, description)
-    "x_start": ("m", 0.0, "swift: wheel-centre position on the road profile at the start"),
-    "max_step": ("s", 1e-3, "swift: longest internal step (a communication step is split into equal steps)"),
-    "axle_mass": ("kg", 30.0, "swift, vertical_input=load: mass of the axle the Fz_in input pushes down"),
+#: Real parameters: name -> description; units and defaults from mftyre.variables.WHEEL.
+_REAL_PARAMETERS = {
+    "x_start": "swift: wheel-centre position on the road profile at the start",
+    "max_step": "swift: longest internal step (a communication step is split into equal steps)",
+    "axle_mass": "swift, vertical_input=load: mass of the axle the Fz_in input pushes down",
 }
 
 
@@ -93,7 +89,6 @@ class MFTyre(Fmi2Slave):
     description = ("Magic Formula 6.1/6.2 tyre from a .tir file (mftyre): steady state, or the SWIFT rigid ring "
                    "with tandem-cam enveloping (model=swift); ISO-W axes, SI units. "
                    "Needs Python with numpy and casadi (see documentation).")
-    version = "0.1.0"
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
@@ -105,12 +100,19 @@ class MFTyre(Fmi2Slave):
         params = cfg.get("parameters", {})
         for name in _PARAMETERS:
             setattr(self, name, str(params.get(name, "")))
-        for name, (_, default, _) in _REAL_PARAMETERS.items():
-            setattr(self, name, float(params.get(name, default)))
-        from mftyre_fmu_core import OUTPUTS
+        self._import_mftyre(self.resources or ".")
+        import mftyre
+        from mftyre.variables import WHEEL
 
-        self._output_units = {k: v[0] for k, v in OUTPUTS.items()}
-        for name in OUTPUTS:
+        self.version = mftyre.__version__  # the one version string (pyproject reads it too)
+        from mftyre_fmu_core import outputs
+
+        outputs = outputs()
+        for name in _REAL_PARAMETERS:
+            setattr(self, name, float(params.get(name, WHEEL[name].start)))
+        self._units = {v.name: v.unit for v in outputs.values()}
+        self._units.update({n: WHEEL[n].unit for n in (*_INPUTS, *_REAL_PARAMETERS)})
+        for name in outputs:
             setattr(self, name, 0.0)
         self.status = 0
         self._core = None
@@ -121,15 +123,15 @@ class MFTyre(Fmi2Slave):
         for name, description in _PARAMETERS.items():
             self.register_variable(String(name, causality=Fmi2Causality.parameter,
                                           variability=Fmi2Variability.fixed, description=description))
-        for name, (unit, _, description) in _REAL_PARAMETERS.items():
+        for name, description in _REAL_PARAMETERS.items():
             self.register_variable(Real(name, causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed,
                                         description=description))
-        for name, (unit, description) in _INPUTS.items():
+        for name, description in _INPUTS.items():
             self.register_variable(Real(name, causality=Fmi2Causality.input, variability=Fmi2Variability.continuous,
                                         description=description))
-        for name, (unit, description) in OUTPUTS.items():
-            self.register_variable(Real(name, causality=Fmi2Causality.output, variability=Fmi2Variability.continuous,
-                                        initial=Fmi2Initial.calculated, description=description))
+        for v in outputs.values():
+            self.register_variable(Real(v.name, causality=Fmi2Causality.output, variability=Fmi2Variability.continuous,
+                                        initial=Fmi2Initial.calculated, description=v.description))
         self.register_variable(Integer("status", causality=Fmi2Causality.output, variability=Fmi2Variability.discrete,
                                        initial=Fmi2Initial.calculated,
                                        description="0 ok; 1 last input rejected (non-finite), outputs held; "
@@ -141,14 +143,13 @@ class MFTyre(Fmi2Slave):
         options = dict(model_options)
         options.update(canGetAndSetFMUstate=True, canSerializeFMUstate=True)  # the whole state: _get_fmu_state
         root = super().to_xml(options)
-        units = dict(self._output_units)
-        units.update({k: v[0] for k, v in _INPUTS.items()})
-        units.update({k: v[0] for k, v in _REAL_PARAMETERS.items()})
-        units = {k: u for k, u in units.items() if u != "1"}
+        units = {k: u for k, u in self._units.items() if u != "1"}
+        from mftyre.variables import UNIT_BASES
+
         defs = Element("UnitDefinitions")
         for unit in sorted(set(units.values())):
             SubElement(SubElement(defs, "Unit", name=unit), "BaseUnit",
-                       {k: str(v) for k, v in _UNIT_BASES[unit].items()})
+                       {k: str(v) for k, v in UNIT_BASES[unit].items()})
         position = list(root).index(root.find("CoSimulation")) + 1
         root.insert(position, defs)
         outputs = []
