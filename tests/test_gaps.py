@@ -169,6 +169,39 @@ def test_holdout_takes_whole_sweeps_of_every_kind():
     assert 0.15 < mask.mean() < 0.35
 
 
+def _sweep_medians(data, mask, kind, column):
+    sweep, kinds = data.frame["SWEEP"].to_numpy(), data.frame["TEST"].to_numpy()
+    held, kept = set(), set()
+    for s in np.unique(sweep[kinds == kind]):
+        rows = sweep == s
+        level = round(float(np.median(data.array(column)[rows])) / {"FZ": 1000.0, "P": 1e4, "IA": 0.01}[column])
+        (held if mask[rows].all() else kept).add(level)
+    return held, kept
+
+
+def test_holdout_is_stratified_over_load_pressure_and_camber():
+    """Issue 18: every 4th sweep in data order held out only nominal-load sweeps of a drive/brake programme (3
+    loads, one sweep each), where a load effect is nil; the held-out sweeps now cover the levels of every
+    condition, and each level stays in the training data."""
+    model = _tyre_a()
+    full = trailer_programme(model, points=5, noise=0.0, seed=1)
+    mask = holdout_mask(full, 0.25, seed=0)
+    for column in ("FZ", "P", "IA"):
+        held, kept = _sweep_medians(full, mask, "pure_lateral", column)
+        assert held == kept and len(held) == 3, (column, held, kept)
+    d = trailer_programme(model, points=5, noise=0.0, seed=1, pressures=(1.0,), cambers_deg=(0.0,),
+                          combined_alpha_deg=(-3.0, -6.0))
+    test = d.frame["TEST"].to_numpy()
+    d = d.select((test == "pure_longitudinal") | (test == "combined") | (test == "free_rolling"))
+    for seed in (0, 1, 2):
+        mask = holdout_mask(d, 0.25, seed=seed)
+        held, kept = _sweep_medians(d, mask, "pure_longitudinal", "FZ")
+        nominal = round(model.params.FNOMIN / 1000.0)
+        assert held and nominal not in held, (seed, held)
+        loads = held | _sweep_medians(d, mask, "combined", "FZ")[0] | _sweep_medians(d, mask, "free_rolling", "FZ")[0]
+        assert len(loads) == 3, (seed, loads)
+
+
 # --------------------------------------------------------------------------------- hidden-effect evidence
 CASES = {
     # id: (tyre, hidden effects, partial range)

@@ -221,7 +221,10 @@ class _BatchPredictor:
         if stage.output == "fz_from_rl":
             def chan(name):
                 return np.nan_to_num(data.array(name))[None, :] if name in data else np.zeros((1, len(data)))
+            # the spin: OMEGA, else the model's estimate (wheel_spin), per parameter set in __call__
+            self.spin_measured = data.has("OMEGA") and bool(np.all(np.isfinite(data.array("OMEGA"))))
             self.vertical = dict(omega=chan("OMEGA"), fx=chan("FX"), fy=chan("FY"))
+            self.loop |= data.has("OMEGA") and not self.spin_measured   # partly measured: the rule row by row
             if data.has("RL"):
                 self.vertical["rl"] = data.array("RL")[None, :]
             else:
@@ -240,10 +243,13 @@ class _BatchPredictor:
         with np.errstate(all="ignore"):
             if self.stage.output == "fz_from_rl":
                 v = self.vertical
+                omega = v["omega"] if self.spin_measured else \
+                    steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
+                                 self.omega, False, Modes(), NUMPY)["omega"]
                 dpi = (r["p"] - prm.NOMPRES) / prm.NOMPRES
-                r_omega = vertical.free_radius(prm, v["omega"], NUMPY)
+                r_omega = vertical.free_radius(prm, omega, NUMPY)
                 rho = r_omega - v["rl"] if "rl" in v else v["rho"]
-                out = vertical.vertical_force_61(prm, rho, r_omega, v["omega"], v["fx"], v["fy"], dpi, NUMPY)
+                out = vertical.vertical_force_61(prm, rho, r_omega, omega, v["fx"], v["fy"], dpi, NUMPY)
             else:
                 out = steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
                                    self.omega, self.omega_given, Modes(), NUMPY)[self.stage.output]
