@@ -69,3 +69,15 @@ def test_spin_without_omega_is_the_rolling_spin(model):
                                        fx=sub_wo.array("FX"), fy=sub_wo.array("FY"), gamma=sub_wo.array("IA"))
     assert np.max(np.abs(fz_without - fz)) < 1e-6 * np.max(fz)
     assert np.max(np.abs(fz_standing - fz)) > 1e-3 * np.max(fz)
+
+
+def test_rows_without_loaded_radius_are_not_predicted(model):
+    """Rows where neither RL nor RHO is measured get NaN for FZ (the gap finder leaves them out), not an error."""
+    data = _vertical_data(model, False)
+    frame = data.frame.copy()
+    frame.loc[frame.index[:4], "RL"] = np.nan
+    data = data.with_frame(frame, "RL missing in 4 rows")
+    fz = predict(model, data, ["FZ"])["FZ"]
+    assert np.isnan(fz[:4]).all() and np.isfinite(fz[4:]).all()
+    ev = Evaluator(data, channels=["FZ"])
+    assert ev.residuals(model)["FZ"].size == len(data) - 4

@@ -41,14 +41,19 @@ def wheel_spin(model: MFModel, data: TyreData, inputs: dict | None = None) -> np
 
 
 def vertical_prediction(model: MFModel, data: TyreData, inputs: dict) -> np.ndarray:
-    """Fz [N] of every row from the measured loaded radius (or deflection), Fx, Fy, camber, pressure and spin."""
+    """Fz [N] of every row from the measured loaded radius (or deflection), Fx, Fy, camber, pressure and spin;
+    NaN where neither is measured."""
     omega = wheel_spin(model, data, inputs)
     if data.has("RL"):
         rl = data.array("RL")
     else:  # measured deflection: the loaded radius it means for the model
         rl = vertical.free_radius(model.params, omega, NUMPY) - data.array("RHO")
-    return model.vertical_force(rl, p=inputs["p"], omega=omega, fx=_channel(data, "FX"), fy=_channel(data, "FY"),
-                                gamma=inputs["gamma"])
+    out = np.full(len(data), np.nan)
+    ok = np.isfinite(rl)
+    if ok.any():
+        out[ok] = model.vertical_force(rl[ok], p=inputs["p"][ok], omega=omega[ok], fx=_channel(data, "FX")[ok],
+                                       fy=_channel(data, "FY")[ok], gamma=inputs["gamma"][ok])
+    return out
 
 
 def predict(model: MFModel, data: TyreData, channels, inputs: dict | None = None, *,
