@@ -106,16 +106,21 @@ def test_rig_fit_is_reduced_accurate_and_sane(truth, rig_fit):
 
 def test_every_fitted_parameter_is_determined(rig_fit):
     """A parameter whose standard error exceeds its size (or > 0.99 correlated) goes back to its start value
-    and is reported; what stays fitted is determined by the data (old code: PEY5 = 3265 +- 8760 accepted)."""
+    and is reported; what stays fitted is determined by the data (old code: PEY5 = 3265 +- 8760 accepted). A pair
+    correlated beyond 0.99 whose reset costs the fit significantly (issue 18 item 6) stays, named in the notes."""
     _, result = rig_fit
     for st in result.stages.values():
+        kept = {w for x in st.notes if x.startswith("kept although correlated")
+                for w in x.split(": ", 1)[1].replace(",", " ").split()}
         for n in st.fitted:
-            assert st.stderr[n] is not None and st.stderr[n] <= abs(st.values[n]), (st.name, n)
+            assert st.stderr[n] is not None, (st.name, n)
+            assert st.stderr[n] <= abs(st.values[n]) or n in kept, (st.name, n)
             assert result.params[n] == st.values[n]
         for n, why in st.reset.items():
             assert n not in st.fitted and why
             assert result.params[n] == result.start[n]
-        assert all(abs(c) <= 0.99 for c in st.correlations.values()), st.correlations
+        assert all(abs(c) <= 0.99 or (a in kept and b in kept) for (a, b), c in st.correlations.items()), \
+            (st.correlations, st.notes)
     # the effective number of independent samples is used (autocorrelated binned residuals)
     assert all(st.n_eff <= st.n_points for st in result.stages.values() if st.fitted)
     # the optimiser stops on the relative change of the cost (old: 1,463 evaluations for pure Fy)

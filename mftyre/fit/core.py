@@ -31,6 +31,7 @@ from pathlib import Path
 import lmfit
 import numpy as np
 import pandas as pd
+from scipy import stats
 
 from ..backend import NUMPY
 from ..data import UNCHECKED, TyreData, check_plausible, read_data
@@ -213,7 +214,10 @@ class _BatchPredictor:
         if stage.output == "fz_from_rl":
             def chan(name):
                 return np.nan_to_num(data.array(name))[None, :] if name in data else np.zeros((1, len(data)))
+            # the spin: OMEGA, else the model's estimate (wheel_spin), per parameter set in __call__
+            self.spin_measured = data.has("OMEGA") and bool(np.all(np.isfinite(data.array("OMEGA"))))
             self.vertical = dict(omega=chan("OMEGA"), fx=chan("FX"), fy=chan("FY"))
+            self.loop |= data.has("OMEGA") and not self.spin_measured   # partly measured: the rule row by row
             if data.has("RL"):
                 self.vertical["rl"] = data.array("RL")[None, :]
             else:
@@ -232,10 +236,13 @@ class _BatchPredictor:
         with np.errstate(all="ignore"):
             if self.stage.output == "fz_from_rl":
                 v = self.vertical
+                omega = v["omega"] if self.spin_measured else \
+                    steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
+                                 self.omega, False, Modes(), NUMPY)["omega"]
                 dpi = vertical.pressure_increment(prm, r["p"])
-                r_omega = vertical.free_radius(prm, v["omega"], NUMPY)
+                r_omega = vertical.free_radius(prm, omega, NUMPY)
                 rl = v["rl"] if "rl" in v else r_omega - v["rho"]
-                out = vertical.vertical_force(prm, rl, r_omega, v["omega"], v["fx"], v["fy"], r["gamma"], dpi, NUMPY)
+                out = vertical.vertical_force(prm, rl, r_omega, omega, v["fx"], v["fy"], r["gamma"], dpi, NUMPY)
             else:
                 out = steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
                                    self.omega, self.omega_given, Modes(), NUMPY)[self.stage.output]
@@ -396,23 +403,40 @@ def _uncertainties(problem, prm, data):
     return stderr, corr, n_eff
 
 
-def _undetermined(names, values, stderr, corr):
+def _undetermined(names, values, stderr, corr, needed=frozenset()):
     """{name: reason} of the parameters the data do not determine, in order: those without effect on the data;
     of each pair correlated beyond |r| = 0.99 the later one in the stage's order (the higher-order term: PKY2
     rather than PKY1); only when no such pair is left, those whose standard error exceeds their size (a
-    collinear pair inflates the errors of both, so pairs are resolved first)."""
+    collinear pair inflates the errors of both, so pairs are resolved first). ``needed``: parameters of pairs
+    whose reset cost the fit significantly (:func:`_reset_costs`): the data determine what they do together, so
+    neither their correlation nor their standard errors reset them."""
     out = {n: "no effect on the data" for n in names if stderr.get(n) is None}
     order = {n: i for i, n in enumerate(names)}
     for (a, b), c in sorted(corr.items(), key=lambda kv: -abs(kv[1])):
-        if abs(c) > 0.99 and a not in out and b not in out:
+        if abs(c) > 0.99 and a not in out and b not in out and not {a, b} <= needed:
             later, earlier = (a, b) if order[a] > order[b] else (b, a)
             out[later] = f"correlated {c:+.4f} with {earlier}"
     if out:
         return out
     for n in names:
-        if stderr[n] > abs(values[n]):
+        if n not in needed and stderr[n] > abs(values[n]):
             out[n] = f"standard error {stderr[n]:.3g} exceeds its size {values[n]:.3g}"
     return out
+
+
+#: Significance level at which a reset that raises the stage's residual sum of squares is refused.
+RESET_ALPHA = 1e-3
+
+
+def _reset_costs(rss_before: float, rss_after: float, n: int, n_eff: float, k_free: int, k_reset: int) -> bool:
+    """Whether resetting ``k_reset`` parameters raised the residual sum of squares significantly: F test of the
+    increase against the residual variance of the fuller fit, counting n_eff of the n residuals as independent
+    (as the gap finder's :func:`mftyre.gaps.core.f_test`)."""
+    if rss_after <= rss_before:
+        return False
+    var = rss_before / max(n - k_free, 1)
+    fstat = (rss_after - rss_before) * (n_eff / max(n, 1)) / k_reset / max(var, 1e-300)
+    return float(stats.f.sf(fstat, k_reset, max(n_eff - k_free, 1))) < RESET_ALPHA
 
 
 def _free_radius_from_rl(data: TyreData) -> float | None:
@@ -503,21 +527,36 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
         passes.append((label, res))
     # parameters the data do not determine go back to their default (the start parameter set) and the rest
     # is refitted, until every fitted parameter is determined
+    # (except a correlated pair whose reset costs the fit significantly: amplitude and rate of one term, such as
+    # QSX10 atan(QSX11 Fz/Fz0), are correlated by their form while the data determine the term)
     free = list(names_all)
-    reset = {}
-    for _ in range(4):
+    reset, needed = {}, set()
+    for _ in range(6):
         values = {n: float(prm[n]) for n in free}
         stderr, corr, n_eff = _uncertainties(problem, prm, sub)
-        drop = _undetermined(free, values, stderr, corr)
+        drop = _undetermined(free, values, stderr, corr, needed)
         if not drop:
             break
+        rest = [n for n in free if n not in drop]
+        trial = prm.replace(**{n: float(baseline[n]) for n in drop})
+        if rest:
+            trial, trial_res, trial_problem = _fit_pass(stage, trial, side, sub, rest, weighting, progress,
+                                                        "after resetting undetermined", max_nfev, bounds)
+        pairs = {n: w.split(" with ")[1] for n, w in drop.items() if w.startswith("correlated")}
+        if pairs and rest:
+            rss = [float(np.sum(pr.residuals(np.array([[float(p_[n]) for n in pr.names]]))[0][:pr.n_data] ** 2))
+                   for pr, p_ in ((problem, prm), (trial_problem, trial))]
+            if _reset_costs(rss[0], rss[1], len(sub), n_eff, len(free), len(drop)):
+                needed |= set(pairs) | set(pairs.values())
+                notes.append("kept although correlated beyond 0.99 (resetting raised the residual sum of squares "
+                             f"from {rss[0]:.4g} to {rss[1]:.4g}, significant): "
+                             + ", ".join(f"{a} with {b}" for a, b in pairs.items()))
+                continue
         reset.update(drop)
-        free = [n for n in free if n not in drop]
-        prm = prm.replace(**{n: float(baseline[n]) for n in drop})
+        free, prm = rest, trial
         if not free:
             break
-        prm, res, problem = _fit_pass(stage, prm, side, sub, free, weighting, progress,
-                                      "after resetting undetermined", max_nfev, bounds)
+        res, problem = trial_res, trial_problem
         passes.append(("after resetting undetermined", res))
     values = {n: float(prm[n]) for n in names_all}
     stderr, corr, n_eff = _uncertainties(problem, prm, sub) if free else ({}, {}, float(len(sub)))

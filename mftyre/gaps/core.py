@@ -448,20 +448,32 @@ def _find_small(data, given, start, fair, candidates, untestable, ev, ts, max_ef
         small_data=True, parameter_stderr=se)
 
 
-def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float = 1e-3,
-              max_effects: int = 5, channels=None, effects=None, turn_slip: bool | None = None,
-              max_nfev: int | None = None, progress=None) -> GapReport:
-    """Find where ``model`` and the measurements ``data`` disagree, name the missing effects, add them.
+@dataclass
+class _Run:
+    """What every phase of one gap-finder run reads: the data (reduced when a time series), the split into
+    training and held-out sweeps, their evaluators and the settings."""
 
-    ``data``: :class:`mftyre.data.TyreData` or a ``.tdx``/``.csv`` path; ``model``: :class:`mftyre.MFModel`,
-    parameters or a ``.tir`` path. ``holdout``: fraction of the sweeps held out (whole sweeps); ``seed``: which;
-    ``alpha``: family-wise significance level of the residual tests and of the candidate tests; ``max_effects``:
-    at most this many effects are added; ``channels``: restrict to these channels (default all measured);
-    ``effects``: restrict the candidates to these catalogue names; ``turn_slip``: evaluate with turn slip
-    (default: when the data have turn slip); ``max_nfev``: evaluations per refit; ``progress``: callable(text).
-    """
-    t0 = time.perf_counter()
-    say = progress or (lambda text: None)
+    data: TyreData
+    raw: TyreData
+    reduction: object
+    programme: object
+    given: object
+    ts: bool
+    series: bool               # a time series (correlated noise), not point data
+    small: bool
+    test_mask: np.ndarray
+    train: TyreData
+    ev_train: Evaluator
+    ev_test: Evaluator
+    ev_all: Evaluator
+    alpha: float
+    max_nfev: int | None
+    say: object
+    t0: float
+
+
+def _prepare(data, model, holdout, seed, channels, turn_slip, alpha, max_nfev, say, t0) -> _Run:
+    """Read the data and the model, reduce a time series to binned means, hold out whole sweeps."""
     data = load_data(data)
     programme = recognise(data)
     say("test programme: " + programme.summary())
@@ -474,7 +486,6 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
         model = load_tir(model)
     if not isinstance(model, MFModel):
         model = MFModel(model)
-    given = model.params
     warn_data_outside(model, data.inputs(), f"{data.source or 'the data'} against the given model")
     ts = bool(np.any(data.array("PHIT") != 0)) if turn_slip is None else bool(turn_slip)
     # point data (one row per condition, or binned means) have independent noise; a time series has not
@@ -489,165 +500,196 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
     ev_all = Evaluator(data, ev_train.channels, ts)
     say(f"{len(train)} training points, {len(test)} held-out points (whole sweeps); channels "
         f"{' '.join(ev_train.channels)}")
+    return _Run(data, raw, reduction, programme, model.params, ts, series, small, test_mask, train, ev_train,
+                ev_test, ev_all, alpha, max_nfev, say, t0)
 
-    # 1. fair start, never worse on the held-out data than the values as given
-    error_given = _errors(ev_test, given)
-    active = active_parameters(given, ts)        # what the given model has switched on, fixed from here
+
+def _fair_start(run: _Run):
+    """(start, {stage: result}, active parameters): the stages refitted to the training data, never worse on the
+    held-out data than the values as given; ``active``: what the given model has switched on."""
+    active = active_parameters(run.given, run.ts)
 
     def held_out_worse(old, new):
-        before, after = _errors(ev_test, old), _errors(ev_test, new)
+        before, after = _errors(run.ev_test, old), _errors(run.ev_test, new)
         worse = [f"{c} {before[c]:.3g} -> {after[c]:.3g} %" for c in before if after[c] > before[c] * (1 + 1e-9)]
         return "worse on the held-out data (" + ", ".join(worse) + ")" if worse else None
 
-    prm, fair = refit_stages(given, train, turn_slip=ts, channels=ev_train.channels, max_nfev=max_nfev,
-                             progress=say, active=active, min_points=2 if small else 10,
-                             judge=None if small else held_out_worse)
-    start = prm
-    pool = [CATALOGUE[n] for n in (effects or CATALOGUE)]
-    candidates, untestable = _candidates(pool, given, train, ts)
-    if small:
-        say(f"small data ({len(data)} rows): effects judged by AICc and leave-one-out over all points")
-        return _find_small(data, given, start, fair, candidates, untestable, ev_all, ts, max_effects, t0, say)
-    res_train = ev_train.residuals(prm)
-    sigma = noise_levels(ev_train, res_train)
-    if reduction is not None:
-        kind = programme.rows["KIND"].to_numpy()
-        segments = np.where(kind != "transition", programme.rows["SEGMENT"].to_numpy(), -1)
-        sigma.update(noise_of_means(raw, segments, data, ev_train.channels, float(given.VERTICAL_STIFFNESS)))
-    say("noise: " + ", ".join(f"{c} {s:.3g}" for c, (s, _) in sigma.items()))
+    start, fair = refit_stages(run.given, run.train, turn_slip=run.ts, channels=run.ev_train.channels,
+                               max_nfev=run.max_nfev, progress=run.say, active=active,
+                               min_points=2 if run.small else 10, judge=None if run.small else held_out_worse)
+    return start, fair, active
 
-    transient = sweep_hysteresis(reduction, raw, MFModel(start), sigma, alpha)
-    for t in transient:
-        say("transient: " + t["text"])
 
-    # 2. locate
-    findings = locate(ev_train, res_train, sigma, alpha)
-    findings_before = findings
-    say(f"{len(findings)} significant findings" + (f"; strongest: {findings[0].text}" if findings else ""))
+def _noise(run: _Run, start) -> dict:
+    """Channel -> (sigma, method): the measurement noise (of the binned means for a reduced time series)."""
+    sigma = noise_levels(run.ev_train, run.ev_train.residuals(start))
+    if run.reduction is not None:
+        kind = run.programme.rows["KIND"].to_numpy()
+        segments = np.where(kind != "transition", run.programme.rows["SEGMENT"].to_numpy(), -1)
+        sigma.update(noise_of_means(run.raw, segments, run.data, run.ev_train.channels,
+                                    float(run.given.VERTICAL_STIFFNESS)))
+    run.say("noise: " + ", ".join(f"{c} {s:.3g}" for c, (s, _) in sigma.items()))
+    return sigma
 
-    # 3-4. name and add
-    rounds, added, candidates_all, rejected = [], [], {}, {}
 
-    def polish(new, e, names):
+class _Search:
+    """The naming and adding phase: rounds of candidate effects against the current model ``prm``."""
+
+    def __init__(self, run: _Run, start, sigma: dict, candidates: dict, active: set):
+        self.run, self.prm, self.sigma, self.candidates, self.active = run, start, sigma, candidates, active
+        self.rounds, self.added, self.added_effects, self.rejected = [], [], {}, {}
+        self.n_test_rows = {c: run.ev_test.measured[c].size for c in run.ev_test.channels}
+
+    def polish(self, new, e: Effect, names):
         """Refit from the current model: the stages of the effect's parameters and of its channels, with the
         new parameters active; kept when it lowers the training chi-square."""
+        run = self.run
         stages = [st for st in FAIR_STAGES if st in {PARAM_STAGE.get(k) for k in names}
                   or STAGES[st].channel in e.channels]
-        polished, _ = refit_stages(new, train, stages, turn_slip=ts, channels=ev_train.channels,
-                                   max_nfev=max_nfev, extra=tuple(names), active=active, baseline=given)
-        if _chi2(ev_train, polished, sigma, ev_train.channels) <= _chi2(ev_train, new, sigma, ev_train.channels):
+        polished, _ = refit_stages(new, run.train, stages, turn_slip=run.ts, channels=run.ev_train.channels,
+                                   max_nfev=run.max_nfev, extra=tuple(names), active=self.active,
+                                   baseline=run.given)
+        chans = run.ev_train.channels
+        if _chi2(run.ev_train, polished, self.sigma, chans) <= _chi2(run.ev_train, new, self.sigma, chans):
             return polished
         return new
 
-    def score(e, keep, why, new, rr, m, extra_note=""):
+    def score(self, e: Effect, keep, why, new, rr, m, extra_note=""):
         """Training F test and held-out score of a candidate model ``new`` against the current ``prm``.
 
-        The training F test counts the effective number of independent residuals (n_eff, the AR(1) rule within
-        sweeps) rather than rows, and so does the held-out score (chi-square decrease x n_eff / n - k ln n_eff, a
-        BIC-type penalty); with enough held-out sweeps the held-out test is also by whole sweeps: the chi-square decrease of each held-out
-        sweep, a one-sided signed-rank test (so a gain a few sweeps carry, or 7.120 -> 7.119 %, is not
-        significant)."""
+        The training F test counts the effective number of independent residuals (n_eff, from the noise) rather
+        than rows, and so does the held-out score (chi-square decrease x n_eff / n - k ln n_eff, a BIC-type
+        penalty); with enough held-out sweeps the held-out test is also by whole sweeps: the chi-square decrease
+        of each held-out sweep, a one-sided signed-rank test (so a gain a few sweeps carry, or 7.120 -> 7.119 %,
+        is not significant)."""
+        run, sigma, prm = self.run, self.sigma, self.prm
+        ev_train, ev_test = run.ev_train, run.ev_test
         ch = [c for c in e.channels if c in ev_train.channels]
         k = len(keep)
         c_tr0, c_tr1 = _chi2(ev_train, prm, sigma, ch), _chi2(ev_train, new, sigma, ch)
         c_te0, c_te1 = _chi2(ev_test, prm, sigma, ch), _chi2(ev_test, new, sigma, ch)
         n_tr = int(sum(ev_train.measured[c].size for c in ch))
-        n_te = int(sum(n_test_rows[c] for c in ch))
-        n_eff = _n_eff(ev_train, new, ch, series)
+        n_te = int(sum(self.n_test_rows[c] for c in ch))
+        n_eff = _n_eff(ev_train, new, ch, run.series)
         fstat, p = f_test(c_tr0, c_tr1, n_tr, n_eff, k)
-        n_eff_te = _n_eff(ev_test, new, ch, series)
+        n_eff_te = _n_eff(ev_test, new, ch, run.series)
         sc = (c_te0 - c_te1) * n_eff_te / max(n_te, 1) - k * math.log(max(n_eff_te, 2.0))
         gain = (c_te0 - c_te1) / c_te0 if c_te0 > 0 else 0.0
         p_sweeps, n_sweeps = _sweep_test(ev_test, prm, new, sigma, ch)
-        sig = p < alpha / m and sc > 0 and (n_sweeps < MIN_HELD_OUT_SWEEPS or p_sweeps < HELD_OUT_ALPHA)
+        sig = p < run.alpha / m and sc > 0 and (n_sweeps < MIN_HELD_OUT_SWEEPS or p_sweeps < HELD_OUT_ALPHA)
         note = "; ".join([f"{k2} not freed ({v})" for k2, v in why.items()] + ([extra_note] if extra_note else []))
         return (Candidate(e.name, list(keep), c_tr0, c_tr1, c_te0, c_te1, n_tr, n_te, fstat, p, sc, gain, sig,
                           {k: float(new[k]) for k in keep}, rr.stderr, note, n_eff, p_sweeps, n_sweeps,
                           _n_eff_of_residual(ev_train, prm, ch)), new, rr)
-    n_test_rows = {c: ev_test.measured[c].size for c in ev_test.channels}
-    while findings and len(added) < max_effects:
-        tried = [(e, keep, why) for e, keep, why in candidates.values() if _matches(e, findings)]
-        if not tried:
-            say("no catalogue effect matches the findings")
-            break
-        results = []
+
+    def try_candidates(self, tried) -> list:
+        """(candidate, model, refit result) of every effect in ``tried`` refitted alone, best score first; when
+        none is significant, the strongest few again with their stages refitted around them (the fair start may
+        have bent other parameters towards the missing effect)."""
+        run, results = self.run, []
+        ev_train = run.ev_train
         for i, (e, keep, why) in enumerate(tried):
             if not any(c in ev_train.channels for c in e.channels):
                 continue
-            say(f"round {len(rounds) + 1}: candidate {i + 1}/{len(tried)} {e.name} ({' '.join(keep)})")
-            startv = {k: e.start.get(k, e.neutral.get(k, float(prm[k]))) for k in keep}
-            new, rr = refit(prm, ev_train, keep, [c for c in e.channels if c in ev_train.channels], sigma,
-                            start=startv, max_nfev=max_nfev)
-            results.append(score(e, keep, why, new, rr, len(tried)))
+            run.say(f"round {len(self.rounds) + 1}: candidate {i + 1}/{len(tried)} {e.name} ({' '.join(keep)})")
+            startv = {k: e.start.get(k, e.neutral.get(k, float(self.prm[k]))) for k in keep}
+            new, rr = refit(self.prm, ev_train, keep, [c for c in e.channels if c in ev_train.channels],
+                            self.sigma, start=startv, max_nfev=run.max_nfev)
+            results.append(self.score(e, keep, why, new, rr, len(tried)))
         if results and not any(r[0].significant for r in results):
-            # the fair start may have bent other parameters towards the missing effect: retry the strongest
-            # candidates with their stages refitted around them (the same test, the same held-out data)
             results.sort(key=lambda t: -t[0].score)
             deep = []
             for cand, new, rr in results[:DEEP_RETRIES]:
-                e = candidates[cand.name][0]
-                say(f"round {len(rounds) + 1}: {e.name} with its stages refitted")
-                new = polish(new, e, cand.parameters)
-                deep.append(score(e, cand.parameters, candidates[cand.name][2], new, rr, len(tried),
-                                  "scored with its stages refitted"))
+                e = self.candidates[cand.name][0]
+                run.say(f"round {len(self.rounds) + 1}: {e.name} with its stages refitted")
+                new = self.polish(new, e, cand.parameters)
+                deep.append(self.score(e, cand.parameters, self.candidates[cand.name][2], new, rr, len(tried),
+                                       "scored with its stages refitted"))
             results = deep + results[DEEP_RETRIES:]
         results.sort(key=lambda t: -t[0].score)
-        rounds.append([r[0] for r in results])
-        best = None
+        return results
+
+    def accept(self, results, m: int):
+        """The best significant candidate whose determined parameters (:func:`_prune`) still explain the data and
+        whose .tir passes verification against the given one, or None; the others rejected with the reason."""
+        run = self.run
         for cand, new, rr in (r for r in results if r[0].significant):
-            e = candidates[cand.name][0]
+            e = self.candidates[cand.name][0]
             if "stages refitted" not in cand.note:
-                new = polish(new, e, cand.parameters)
-            new, kept, why_not = _prune(new, prm, e, cand.parameters, ev_train, sigma, alpha, series)
+                new = self.polish(new, e, cand.parameters)
+            new, kept, why_not = _prune(new, self.prm, e, cand.parameters, run.ev_train, self.sigma, run.alpha,
+                                        run.series)
             if kept and len(kept) < len(cand.parameters):
                 # a partial effect: the parameters the data determine are added when they still explain the
                 # training data significantly and gain on the held-out data (the effect as a whole passed the
                 # held-out test by sweeps; the rest stay at their values, the note says which)
-                again = score(e, kept, candidates[cand.name][2], new, rr, len(tried), why_not)[0]
-                if not (again.p_value < alpha / len(tried) and again.score > 0):
+                again = self.score(e, kept, self.candidates[cand.name][2], new, rr, m, why_not)[0]
+                if not (again.p_value < run.alpha / m and again.score > 0):
                     kept, why_not = [], why_not + "; what is left is not significant"
                 else:
                     why_not = f"partly added ({' '.join(kept)}): " + why_not
-            problems = verify_tir(new, data, baseline=given) if kept else []
+            problems = verify_tir(new, run.data, baseline=run.given) if kept else []
             if not kept or problems:
                 reason = why_not if not kept else "the improved .tir fails verification: " + "; ".join(problems)
                 cand.significant, cand.note = False, "; ".join(x for x in (cand.note, "rejected: " + reason) if x)
-                rejected[e.name] = reason
-                del candidates[e.name]
-                say(f"rejected {e.name}: {reason}")
+                self.rejected[e.name] = reason
+                del self.candidates[e.name]
+                run.say(f"rejected {e.name}: {reason}")
                 continue
             cand.parameters, cand.note = kept, "; ".join(x for x in (cand.note, why_not) if x)
-            best = (cand, new, rr)
-            break
-        if best is None:
-            say("no candidate is significant on the held-out data" + (" and passes verification" if rejected else ""))
-            break
-        cand, new, rr = best
-        e = candidates[cand.name][0]
-        before_err = _errors(ev_test, prm)
-        se = standard_errors(new, ev_train, cand.parameters, e.channels, sigma)
-        prm = new
-        after_err = _errors(ev_test, prm)
+            return cand, new, rr
+        return None
+
+    def add(self, cand, new):
+        """Make ``new`` the current model and record the effect with its held-out gain per channel."""
+        run = self.run
+        e = self.candidates[cand.name][0]
+        before_err = _errors(run.ev_test, self.prm)
+        se = standard_errors(new, run.ev_train, cand.parameters, e.channels, self.sigma)
+        self.prm = new
+        after_err = _errors(run.ev_test, new)
         by_ch = {c: (before_err[c] - after_err[c]) / before_err[c] for c in e.channels
                  if c in before_err and before_err[c] > 0}
-        added.append(AddedEffect(e.name, e.description,
-                                 {k: dict(value=float(prm[k]), stderr=se.get(k),
-                                          meaning=e.parameter_descriptions()[k]) for k in cand.parameters},
-                                 cand.held_out_gain, by_ch, cand.p_value, cand.score, len(rounds), cand.note))
-        say(f"added {e.name}: held-out chi2 {cand.chi2_test_before:.0f} -> {cand.chi2_test_after:.0f}")
-        candidates_all[e.name] = e
-        active |= set(cand.parameters)
-        del candidates[e.name]
-        findings = locate(ev_train, ev_train.residuals(prm), sigma, alpha)
-    if added:
-        # final values and standard errors of every added parameter, jointly at the final model
-        names = [k for a in added for k in a.parameters]
-        chans = sorted({c for a in added for c in candidates_all[a.name].channels if c in ev_train.channels})
-        se = standard_errors(prm, ev_train, names, chans, sigma)
-        for a in added:
-            for k in a.parameters:
-                a.parameters[k].update(value=float(prm[k]), stderr=se.get(k))
-    findings_after = locate(ev_train, ev_train.residuals(prm), sigma, alpha)
+        self.added.append(AddedEffect(e.name, e.description,
+                                      {k: dict(value=float(new[k]), stderr=se.get(k),
+                                               meaning=e.parameter_descriptions()[k]) for k in cand.parameters},
+                                      cand.held_out_gain, by_ch, cand.p_value, cand.score, len(self.rounds),
+                                      cand.note))
+        run.say(f"added {e.name}: held-out chi2 {cand.chi2_test_before:.0f} -> {cand.chi2_test_after:.0f}")
+        self.added_effects[e.name] = e
+        self.active |= set(cand.parameters)
+        del self.candidates[e.name]
+
+    def search(self, findings, max_effects: int):
+        """Rounds until no finding is left, none is explained, or ``max_effects`` are added."""
+        run = self.run
+        while findings and len(self.added) < max_effects:
+            tried = [(e, keep, why) for e, keep, why in self.candidates.values() if _matches(e, findings)]
+            if not tried:
+                run.say("no catalogue effect matches the findings")
+                break
+            results = self.try_candidates(tried)
+            self.rounds.append([r[0] for r in results])
+            best = self.accept(results, len(tried))
+            if best is None:
+                run.say("no candidate is significant on the held-out data"
+                        + (" and passes verification" if self.rejected else ""))
+                break
+            self.add(best[0], best[1])
+            findings = locate(run.ev_train, run.ev_train.residuals(self.prm), self.sigma, run.alpha)
+        if self.added:
+            # final values and standard errors of every added parameter, jointly at the final model
+            names = [k for a in self.added for k in a.parameters]
+            chans = sorted({c for a in self.added for c in self.added_effects[a.name].channels
+                            if c in run.ev_train.channels})
+            se = standard_errors(self.prm, run.ev_train, names, chans, self.sigma)
+            for a in self.added:
+                for k in a.parameters:
+                    a.parameters[k].update(value=float(self.prm[k]), stderr=se.get(k))
+
+
+def _verdict(findings_before, added, findings_after, transient) -> str:
+    """The outcome in one sentence."""
     if not findings_before:
         message = ("the model already explains the data: no residual structure beyond measurement noise; "
                    "nothing added")
@@ -662,13 +704,55 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
         message += "; transient (named, not fitted): " + ", ".join(
             f"{t['channel']} up/down hysteresis +-{t['rms']:.3g} (relaxation length, {t['parameters']})"
             for t in transient)
-    say(message)
+    return message
+
+
+def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float = 1e-3,
+              max_effects: int = 5, channels=None, effects=None, turn_slip: bool | None = None,
+              max_nfev: int | None = None, progress=None) -> GapReport:
+    """Find where ``model`` and the measurements ``data`` disagree, name the missing effects, add them.
+
+    ``data``: :class:`mftyre.data.TyreData` or a ``.tdx``/``.csv`` path; ``model``: :class:`mftyre.MFModel`,
+    parameters or a ``.tir`` path. ``holdout``: fraction of the sweeps held out (whole sweeps); ``seed``: which;
+    ``alpha``: family-wise significance level of the residual tests and of the candidate tests; ``max_effects``:
+    at most this many effects are added; ``channels``: restrict to these channels (default all measured);
+    ``effects``: restrict the candidates to these catalogue names; ``turn_slip``: evaluate with turn slip
+    (default: when the data have turn slip); ``max_nfev``: evaluations per refit; ``progress``: callable(text).
+
+    Phases: prepare (split), fair start, noise, locate, name and add (:class:`_Search`), report.
+    """
+    say = progress or (lambda text: None)
+    run = _prepare(data, model, holdout, seed, channels, turn_slip, alpha, max_nfev, say, time.perf_counter())
+    start, fair, active = _fair_start(run)
+    pool = [CATALOGUE[n] for n in (effects or CATALOGUE)]
+    candidates, untestable = _candidates(pool, run.given, run.train, run.ts)
+    if run.small:
+        say(f"small data ({len(run.data)} rows): effects judged by AICc and leave-one-out over all points")
+        return _find_small(run.data, run.given, start, fair, candidates, untestable, run.ev_all, run.ts,
+                           max_effects, run.t0, say)
+    sigma = _noise(run, start)
+    transient = sweep_hysteresis(run.reduction, run.raw, MFModel(start), sigma, alpha)
+    for t in transient:
+        say("transient: " + t["text"])
+    findings = locate(run.ev_train, run.ev_train.residuals(start), sigma, alpha)
+    say(f"{len(findings)} significant findings" + (f"; strongest: {findings[0].text}" if findings else ""))
+    search = _Search(run, start, sigma, candidates, active)
+    search.search(findings, max_effects)
+    return _report(run, start, search, findings, transient, untestable)
+
+
+def _report(run: _Run, start, search: _Search, findings_before, transient, untestable) -> GapReport:
+    prm, ev_train, ev_test = search.prm, run.ev_train, run.ev_test
+    findings_after = locate(ev_train, ev_train.residuals(prm), search.sigma, run.alpha)
+    message = _verdict(findings_before, search.added, findings_after, transient)
+    run.say(message)
     return GapReport(
-        model_given=MFModel(given), model_start=MFModel(start), model=MFModel(prm), effects_added=added,
-        findings_before=findings_before, findings_after=findings_after, error_given=error_given,
-        error_before=_errors(ev_test, start), error_after=_errors(ev_test, prm),
-        error_train_before=_errors(ev_train, start), error_train_after=_errors(ev_train, prm),
-        noise=sigma, rounds=rounds, untestable=untestable, rejected=rejected, message=message, data=data,
-        test_mask=test_mask, transient=transient, programme=programme.summary(), reduction=reduction.summary() if reduction else None,
-        evaluator=ev_all, data_summary=_summary(data), seconds=time.perf_counter() - t0, turn_slip=ts,
-        small_data=False)
+        model_given=MFModel(run.given), model_start=MFModel(start), model=MFModel(prm),
+        effects_added=search.added, findings_before=findings_before, findings_after=findings_after,
+        error_given=_errors(ev_test, run.given), error_before=_errors(ev_test, start),
+        error_after=_errors(ev_test, prm), error_train_before=_errors(ev_train, start),
+        error_train_after=_errors(ev_train, prm), noise=search.sigma, rounds=search.rounds, untestable=untestable,
+        rejected=search.rejected, message=message, data=run.data, test_mask=run.test_mask, transient=transient,
+        programme=run.programme.summary(), reduction=run.reduction.summary() if run.reduction else None,
+        evaluator=run.ev_all, data_summary=_summary(run.data), seconds=time.perf_counter() - run.t0,
+        turn_slip=run.ts, small_data=False)

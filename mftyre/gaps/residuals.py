@@ -1,9 +1,7 @@
 """Residuals of a model on measured data, per channel; the measurement-noise estimate; held-out sweeps.
 
-Channels: FX FY MZ MX MY (model outputs at the measured Fz, kappa, alpha, gamma, phit, Vx, p, as the fitting
-stages predict them) and FZ: the vertical force from the measured loaded radius, speed, Fx, Fy and camber (the
-``vertical`` stage's relation). Where RL is absent and RHO present, RL = R_omega - RHO (free radius of the
-model at the measured spin, or at Vx/R0 without OMEGA). A channel is used where it is measured (finite).
+Channels: FX FY MZ MX MY and FZ (the vertical force from the measured loaded radius or deflection), predicted
+by the fit's one rule (:func:`mftyre.fit.predict.predict`). A channel is used where it is measured (finite).
 
 Noise (:func:`noise_levels`): the standard deviation of the measurement noise per channel, from the residual
 differences between *repeated* points (same sweep, same nominal slip, camber, speed, pressure and turn slip, load
@@ -15,9 +13,10 @@ Reduced time series (:func:`noise_of_means`): the noise of a binned mean of N ra
 AR(1) noise (sigma and lag-one correlation from the second differences of the samples within sweeps, where the
 swept signal's own curvature is negligible), never from the reduced curve's neighbours.
 
-Held-out data (:func:`holdout_mask`): whole sweeps, every k-th sweep of each kind of test (``TEST`` when present,
-else pure lateral / pure longitudinal / combined / free rolling / other from the slip values), so every kind of
-test and the whole operating range are represented in both parts.
+Held-out data (:func:`holdout_mask`): whole sweeps, a quarter of the sweeps of each kind of test (``TEST`` when
+present, else pure lateral / pure longitudinal / combined / free rolling / other from the slip values), stratified
+over the levels of load, pressure, camber, speed and held slip, so every kind of test and the whole operating range
+are represented in both parts.
 """
 from __future__ import annotations
 
@@ -26,9 +25,7 @@ import math
 import numpy as np
 
 from ..data import TyreData, split_sweeps
-from ..formula.vertical import free_radius
-from ..inputs import saturate_inputs
-from ..backend import NUMPY
+from ..fit.predict import predict
 from ..model import MFModel
 
 __all__ = ["CHANNELS", "UNITS", "Evaluator", "noise_levels", "noise_of_means", "holdout_mask", "test_kind"]
@@ -36,7 +33,6 @@ __all__ = ["CHANNELS", "UNITS", "Evaluator", "noise_levels", "noise_of_means", "
 #: Channels the gap finder maps, in report order.
 CHANNELS = ("FX", "FY", "MZ", "MX", "MY", "FZ")
 UNITS = {"FX": "N", "FY": "N", "FZ": "N", "MX": "N m", "MY": "N m", "MZ": "N m"}
-_OUT = {"FX": "fx", "FY": "fy", "MZ": "mz", "MX": "mx", "MY": "my"}
 _KAPPA_TOL, _ALPHA_TOL = 0.005, math.radians(0.25)
 
 
@@ -73,36 +69,12 @@ class Evaluator:
             return np.isfinite(d.array("RL"))
         return np.isfinite(d.array("RHO"))
 
-    def _chan(self, name):
-        return np.nan_to_num(self.data.array(name)) if name in self.data else np.zeros(len(self.data))
-
-    def vertical(self, model: MFModel) -> np.ndarray:
-        """Fz from the loaded radius (all rows)."""
-        d, prm = self.data, model.params
-        if d.has("OMEGA"):
-            omega = self._chan("OMEGA")
-        else:
-            omega = self.inputs["vx"] / (0.97 * prm.UNLOADED_RADIUS)
-        if d.has("RL"):
-            rl = d.array("RL")
-        else:
-            rl = free_radius(prm, omega, NUMPY) - d.array("RHO")
-        return model.vertical_force(np.nan_to_num(rl, nan=prm.UNLOADED_RADIUS), p=self.inputs["p"], omega=omega,
-                                    fx=self._chan("FX"), fy=self._chan("FY"), gamma=self.inputs["gamma"])
-
     def predict(self, params, channels=None) -> dict:
-        """Channel -> model values at the channel's rows."""
+        """Channel -> model values at the channel's rows (the fit's rule, :func:`mftyre.fit.predict.predict`)."""
         model = params if isinstance(params, MFModel) else MFModel(params)
         channels = self.channels if channels is None else [c for c in channels if c in self.channels]
-        out = {}
-        force = [c for c in channels if c != "FZ"]
-        if force:
-            res = model.evaluate(**saturate_inputs(model, self.inputs), turn_slip=self.turn_slip)
-            for c in force:
-                out[c] = np.asarray(res[_OUT[c]], float)[self.rows[c]]
-        if "FZ" in channels:
-            out["FZ"] = np.asarray(self.vertical(model), float)[self.rows["FZ"]]
-        return out
+        pred = predict(model, self.data, channels, self.inputs, turn_slip=self.turn_slip)
+        return {c: pred[c][self.rows[c]] for c in channels}
 
     def residuals(self, params, channels=None) -> dict:
         """Channel -> model - measured at the channel's rows."""
@@ -173,24 +145,79 @@ def test_kind(data: TyreData) -> np.ndarray:
     return kind
 
 
+#: Factors the held-out sweeps are spread over, with the step that separates two levels (absolute, and relative to
+#: the largest magnitude): load, pressure, camber, speed and the slip held fixed during a sweep.
+_LEVEL_STEPS = {"FZ": (0.0, 0.08), "P": (0.0, 0.05), "IA": (math.radians(0.5), 0.0), "VX": (0.5, 0.05),
+                "HELD_SLIP": (0.01, 0.05)}
+
+
+def _levels(values: np.ndarray, absolute: float, relative: float) -> np.ndarray:
+    """Level index of each value: sorted values split where neighbours differ by more than the step."""
+    step = absolute + relative * float(np.max(np.abs(values), initial=0.0))
+    order = np.argsort(values, kind="stable")
+    jumps = np.concatenate([[0], np.cumsum(np.diff(values[order]) > step)])
+    out = np.empty(values.size, int)
+    out[order] = jumps
+    return out
+
+
+def _sweep_conditions(data: TyreData, sweep: np.ndarray, ids: list) -> np.ndarray:
+    """(sweeps x factors) level indices of each sweep's median load, pressure, camber, speed and held slip (the
+    slip angle of a slip-ratio sweep, the slip ratio of a slip-angle sweep: whichever varies less)."""
+    cols = {c: data.array(c) for c in ("FZ", "P", "IA", "VX", "SA", "SL")}
+    med = {c: np.zeros(len(ids)) for c in _LEVEL_STEPS}
+    for i, s in enumerate(ids):
+        rows = sweep == s
+        for c in ("FZ", "P", "IA", "VX"):
+            med[c][i] = np.nanmedian(cols[c][rows]) if np.isfinite(cols[c][rows]).any() else 0.0
+        sa, sl = np.nan_to_num(cols["SA"][rows]), np.nan_to_num(cols["SL"][rows])
+        held = sa if np.ptp(sa) / math.radians(1.0) < np.ptp(sl) / 0.01 else sl
+        med["HELD_SLIP"][i] = np.median(held)
+    return np.stack([_levels(med[c], *_LEVEL_STEPS[c]) for c in _LEVEL_STEPS], axis=1)
+
+
 def holdout_mask(data: TyreData, fraction: float = 0.25, seed: int = 0) -> np.ndarray:
-    """Boolean mask of the held-out rows: whole sweeps, systematically every 1/fraction-th sweep of each kind of
-    test (starting at an offset drawn with ``seed``); kinds with fewer than three sweeps are not held out."""
+    """Boolean mask of the held-out rows: whole sweeps, a ``fraction`` of the sweeps of each kind of test (kinds
+    with fewer than three sweeps are not held out), stratified, sweep by sweep (kinds in turn): never the last
+    training sweep of a level if another choice keeps every level in the training data; then the one whose load,
+    pressure, camber, speed and held-slip levels are least held out so far within its kind, then over all kinds;
+    then the one farthest from the middle levels (a condition's effect is nil at its nominal level, so sweeps
+    held out at nominal conditions cannot show it); ties broken in an order drawn with
+    ``seed``. Every level of every condition is held out somewhere when the sweeps allow it, and none vanishes
+    from the training data."""
     sweep = sweep_labels(data)
     kind = test_kind(data)
-    rng = np.random.default_rng(seed)
     mask = np.zeros(len(data), bool)
     if fraction <= 0:
         return mask
-    step = max(int(round(1.0 / fraction)), 2)
-    for k in sorted(set(kind)):
-        sweeps = list(dict.fromkeys(sweep[kind == k]))   # in data order
-        if len(sweeps) < 3:
+    ids = list(dict.fromkeys(sweep))
+    level = _sweep_conditions(data, sweep, ids)
+    kind_of = np.array([kind[np.argmax(sweep == s)] for s in ids])
+    rank = np.random.default_rng(seed).permutation(len(ids))
+    n_factors = level.shape[1]
+    # distance of each sweep's levels from the middle level of each condition (in levels)
+    off_centre = np.sum(np.abs(level - 0.5 * level.max(axis=0)), axis=1)
+    held_count = [dict() for _ in range(n_factors)]             # factor -> level -> held-out sweeps
+    train_count = [dict(zip(*np.unique(level[:, f], return_counts=True))) for f in range(n_factors)]
+    held = np.zeros(len(ids), bool)
+    for k in sorted(set(kind_of)):
+        pool = list(np.flatnonzero(kind_of == k))
+        if len(pool) < 3:
             continue
-        offset = int(rng.integers(0, min(step, len(sweeps))))
-        chosen = sweeps[offset::step]
-        mask |= (kind == k) & np.isin(sweep, chosen)
-    return mask
+        for _ in range(max(1, int(round(len(pool) * fraction)))):
+            def priority(i):
+                vanish = sum(train_count[f][level[i, f]] <= 1 for f in range(n_factors))
+                in_kind = sum(np.count_nonzero(held & (kind_of == k) & (level[:, f] == level[i, f]))
+                              for f in range(n_factors))
+                spread = sum(held_count[f].get(level[i, f], 0) for f in range(n_factors))
+                return vanish, in_kind, spread, -off_centre[i], rank[i]
+            best = min(pool, key=priority)
+            pool.remove(best)
+            held[best] = True
+            for f in range(n_factors):
+                held_count[f][level[best, f]] = held_count[f].get(level[best, f], 0) + 1
+                train_count[f][level[best, f]] -= 1
+    return np.isin(sweep, np.asarray(ids)[held])
 
 
 def _ar1_from_second_differences(x: np.ndarray, segments: np.ndarray):
