@@ -5,13 +5,15 @@
 and which are transitions between conditions, and so which effects the data can determine.
 
 Levels (:func:`cluster_levels`) are the modes of the distribution of a condition channel: a histogram of
-bin width set by the channel's own short-term scatter (samples against the running median of their
-neighbours; for a channel that steps every row, the distance to the third-nearest value), smoothed, whose
+bin width set by the channel's own short-term scatter (samples against the median of their four neighbours,
+over the samples that scatter at all: exact plateaus and straight ramps say nothing about it; for a channel
+that steps every row between settings, the distance to the third-nearest value), smoothed, whose
 peaks are merged only when the valley between them is shallow (above half the lower peak). A level is
 therefore separated from its neighbour by the empty room between them, however close they are relative to
 the largest value (1650 / 2200 / 2750 N with a few percent scatter are three levels), and a slow ramp between
 levels is no level. Samples far from every level (more than 4 robust standard deviations of their nearest
-level, and more than the bin width) are off-level (label -1): ramps, load sweeps, transients. With a handful
+level, and more than the bin width; a value held exactly over consecutive samples counts once in that
+spread) are off-level (label -1): ramps, load sweeps, transients. With a handful
 of points (< 50) distinct values whose separations are far below the others (a jump of 8x in the sorted
 separations) are merged: repeated settings that scatter.
 
@@ -61,19 +63,61 @@ _KIND = {"SA": "slip_angle", "SL": "slip_ratio", "VX": "speed", "FZ": "load"}
 
 # ------------------------------------------------------------------------------------------------- levels
 def _short_term_scatter(x: np.ndarray) -> float:
-    """Robust standard deviation of the samples about the running median of 5 neighbours (0 when < 20). When
-    that exceeds 5 % of the range, neighbouring rows are not repeated settings (the channel steps every row, as
-    the speeds of a free-rolling test): the median distance to the third-nearest value instead."""
+    """Short-term standard deviation of a channel in its order (0 when < 20 values): the robust spread of each
+    sample about the median of its four neighbours, over the samples that scatter at all. The sample itself is
+    left out of that median (a median that includes it returns it wherever the samples run monotonically, so
+    that noisy data show ~40 % exact zeros), and samples that sit exactly on it (exact plateaus such as a
+    generated warm-up, straight ramps) tell nothing about the scatter and are left out too, unless they are
+    nearly all (> 95 %): exact settings. When the spread exceeds 5 % of the range and the values sit on discrete
+    settings (:func:`_on_settings`), neighbouring rows are not repeated settings (the channel steps every row):
+    the median distance to the third-nearest value instead."""
     if x.size < 20:
         return 0.0
-    from scipy.ndimage import median_filter
-
-    dev = x - median_filter(x, size=5, mode="nearest")
-    scatter = 1.4826 * float(np.median(np.abs(dev))) * 1.25  # 1.25: the median of 5 itself scatters
-    if scatter <= 0.05 * float(np.ptp(x)):
+    padded = np.pad(x, 2, mode="reflect")
+    neighbours = np.stack([padded[:-4], padded[1:-3], padded[3:-1], padded[4:]])
+    dev = np.abs(x - np.median(neighbours, axis=0))
+    scatters = dev > 1e-9 * max(float(np.max(np.abs(x))), 1e-300)
+    if scatters.sum() < max(10, 0.05 * x.size):
+        return 0.0
+    scatter = _MAD_TO_SD / _NEIGHBOUR_MEDIAN_GAIN * float(np.median(dev[scatters]))
+    if scatter <= 0.05 * float(np.ptp(x)) or not _on_settings(x, scatter):
         return scatter
     v = np.sort(x)
-    return float(np.median(np.minimum(v[3:] - v[:-3], np.inf)))
+    return float(np.median(v[3:] - v[:-3]))
+
+
+_MAD_TO_SD = 1.4826  # standard deviation / median absolute deviation of a normal distribution
+#: |x - median of its 4 neighbours| of white noise has 1.146 times the median absolute deviation of x itself
+_NEIGHBOUR_MEDIAN_GAIN = 1.146
+
+
+def _spread(values: np.ndarray, centre: float) -> float:
+    """Robust standard deviation of a level's values (in their order) about its centre, 0 when none. A value
+    held exactly over consecutive samples (an exact plateau: a generated warm-up, a quantised channel at rest)
+    is one observation, not one per sample: otherwise it would collapse the spread of a level whose other
+    visits scatter."""
+    if values.size == 0:
+        return 0.0
+    new = np.concatenate([[True], values[1:] != values[:-1]])
+    return _MAD_TO_SD * float(np.median(np.abs(values[new] - centre)))
+
+
+def _on_settings(x: np.ndarray, scatter: float) -> bool:
+    """Whether the values sit on discrete settings rather than spreading continuously: more than half of the
+    bins between their 5 % and 95 % quantiles are empty (bins holding 5 values on average where the values
+    spread evenly). A single level of quantised noise (its distinct values a contiguous grid no coarser than
+    ``scatter``) spreads continuously."""
+    lo, hi = np.quantile(x, [0.05, 0.95])
+    if hi <= lo:
+        return True
+    inner = x[(x >= lo) & (x <= hi)]
+    counts, _ = np.histogram(inner, int(min(max(inner.size / 5, 4), 20000)), (lo, hi))
+    if np.mean(counts == 0) <= 0.5:
+        return False
+    distinct = np.unique(inner)
+    gaps = np.diff(distinct)
+    grid = distinct.size >= 4 and float(np.ptp(gaps)) <= 1e-6 * float(gaps.max()) and float(gaps.max()) <= scatter
+    return not grid
 
 
 def cluster_levels(values, *, scatter: float | None = None):
@@ -122,8 +166,7 @@ def cluster_levels(values, *, scatter: float | None = None):
     out_centres = []
     for k in range(centres.size):
         sel = idx == k
-        dev = xs[sel] - centres[k]
-        sd = 1.4826 * float(np.median(np.abs(dev))) if sel.any() else 0.0
+        sd = _spread(xs[sel], centres[k])
         near = sel & (np.abs(xs - centres[k]) <= max(4.0 * sd, h, 1e-9 * scale))
         if near.any():
             lab[near] = len(out_centres)
@@ -140,7 +183,7 @@ def _assign(x, lab, centres):
     if centres.size == 0 or not free.any():
         return out
     near = _nearest(x[free], centres)
-    reach = np.array([max(4.0 * 1.4826 * float(np.median(np.abs(x[lab == k] - centres[k]))),
+    reach = np.array([max(4.0 * _spread(x[lab == k], centres[k]),
                           float(np.ptp(x[lab == k]))) if np.any(lab == k) else 0.0 for k in range(centres.size)])
     ok = np.abs(x[free] - centres[near]) <= reach[near]
     out[np.flatnonzero(free)[ok]] = near[ok]
@@ -154,8 +197,7 @@ def _stays(x, lab, centres, *, penalty, block):
     ``block`` samples). A wander of the load scatter towards the next level does not end a stay; a ramp that
     passes a level quickly does not make one. ``lab``: labels of the held samples (their spread per level)."""
     n = x.size
-    spread = np.array([1.4826 * float(np.median(np.abs(x[lab == k] - c))) if np.any(lab == k) else 0.0
-                       for k, c in enumerate(centres)])
+    spread = np.array([_spread(x[lab == k], c) for k, c in enumerate(centres)])
     gaps = np.diff(np.sort(centres))
     spread = np.maximum(spread, 1e-9 * max(float(np.max(np.abs(centres))), 1e-300))
     if gaps.size:
