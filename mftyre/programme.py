@@ -12,7 +12,7 @@ peaks are merged only when the valley between them is shallow (above half the lo
 therefore separated from its neighbour by the empty room between them, however close they are relative to
 the largest value (1650 / 2200 / 2750 N with a few percent scatter are three levels), and a slow ramp between
 levels is no level. Samples far from every level (more than 4 robust standard deviations of their nearest
-level, and more than the bin width; a value held exactly over consecutive samples counts once in that
+level, and more than the bin width; when an exact plateau sits beside visits that scatter, those visits'
 spread) are off-level (label -1): ramps, load sweeps, transients. With a handful
 of points (< 50) distinct values whose separations are far below the others (a jump of 8x in the sorted
 separations) are merged: repeated settings that scatter.
@@ -92,14 +92,18 @@ _NEIGHBOUR_MEDIAN_GAIN = 1.146
 
 
 def _spread(values: np.ndarray, centre: float) -> float:
-    """Robust standard deviation of a level's values (in their order) about its centre, 0 when none. A value
-    held exactly over consecutive samples (an exact plateau: a generated warm-up, a quantised channel at rest)
-    is one observation, not one per sample: otherwise it would collapse the spread of a level whose other
-    visits scatter."""
+    """Robust standard deviation of a level's values (in their order) about its centre, 0 when none. When a
+    fifth or more of them (and at least 20) scatter while the others sit on values held exactly over
+    consecutive samples (an exact plateau such as a generated warm-up, beside visits to the level that
+    scatter), the spread of those that scatter, if larger: the plateau would otherwise collapse it to 0."""
     if values.size == 0:
         return 0.0
-    new = np.concatenate([[True], values[1:] != values[:-1]])
-    return _MAD_TO_SD * float(np.median(np.abs(values[new] - centre)))
+    spread = _MAD_TO_SD * float(np.median(np.abs(values - centre)))
+    same = values[1:] == values[:-1]
+    free = ~(np.concatenate([[False], same]) | np.concatenate([same, [False]]))
+    if free.sum() >= max(20, 0.2 * values.size):
+        spread = max(spread, _MAD_TO_SD * float(np.median(np.abs(values[free] - centre))))
+    return spread
 
 
 def _on_settings(x: np.ndarray, scatter: float) -> bool:
