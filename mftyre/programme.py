@@ -6,8 +6,8 @@ and which are transitions between conditions, and so which effects the data can 
 
 Levels (:func:`cluster_levels`) are the modes of the distribution of a condition channel: a histogram of
 bin width set by the channel's own short-term scatter (samples against the median of their four neighbours,
-over the samples that scatter at all: exact plateaus and straight ramps say nothing about it; for a channel
-that steps every row between settings, the distance to the third-nearest value), smoothed, whose
+over the samples that scatter at all: exact plateaus, ramps and staircases say nothing about it; for point
+data that step every row between settings, the distance to the third-nearest value), smoothed, whose
 peaks are merged only when the valley between them is shallow (above half the lower peak). A level is
 therefore separated from its neighbour by the empty room between them, however close they are relative to
 the largest value (1650 / 2200 / 2750 N with a few percent scatter are three levels), and a slow ramp between
@@ -62,33 +62,38 @@ _KIND = {"SA": "slip_angle", "SL": "slip_ratio", "VX": "speed", "FZ": "load"}
 
 
 # ------------------------------------------------------------------------------------------------- levels
-def _short_term_scatter(x: np.ndarray) -> float:
+def _short_term_scatter(x: np.ndarray, *, every_row: bool = True) -> float:
     """Short-term standard deviation of a channel in its order (0 when < 20 values): the robust spread of each
     sample about the median of its four neighbours, over the samples that scatter at all. The sample itself is
     left out of that median (a median that includes it returns it wherever the samples run monotonically, so
-    that noisy data show ~40 % exact zeros), and samples that sit exactly on it (exact plateaus such as a
-    generated warm-up, straight ramps) tell nothing about the scatter and are left out too, unless they are
-    nearly all (> 95 %): exact settings. When the spread exceeds 5 % of the range and the values sit on discrete
-    settings (:func:`_on_settings`), neighbouring rows are not repeated settings (the channel steps every row):
-    the median distance to the third-nearest value instead."""
+    that noisy data show ~40 % exact zeros); samples on an exact plateau (a generated warm-up) or in a monotone
+    run of five (a ramp, a staircase of settings) tell nothing about the scatter and are left out too. Noise
+    leaves 98 % of the samples (of white noise) in no monotone run, exact settings only the few at their
+    reversals and resets: when fewer than a quarter remain, the scatter is 0 (exact settings). ``every_row``: when the spread exceeds 5 % of the
+    range, neighbouring rows are not repeated settings (the channel steps every row, as the conditions of a
+    table of random points): the median distance to the third-nearest value instead. A time series has no such
+    channel (``every_row=False``): a single noisy level (a speed held at 16.7 +- 0.02 m/s) is noise."""
     if x.size < 20:
         return 0.0
     padded = np.pad(x, 2, mode="reflect")
-    neighbours = np.stack([padded[:-4], padded[1:-3], padded[3:-1], padded[4:]])
-    dev = np.abs(x - np.median(neighbours, axis=0))
-    scatters = dev > 1e-9 * max(float(np.max(np.abs(x))), 1e-300)
-    if scatters.sum() < max(10, 0.05 * x.size):
+    window = np.stack([padded[:-4], padded[1:-3], padded[2:-2], padded[3:-1], padded[4:]])
+    dev = np.abs(x - np.median(window[[0, 1, 3, 4]], axis=0))
+    steps = np.diff(window, axis=0)
+    monotone = np.all(steps >= 0, axis=0) | np.all(steps <= 0, axis=0)
+    scatters = (dev > 1e-9 * max(float(np.max(np.abs(x))), 1e-300)) & ~monotone
+    if scatters.sum() < max(10, 0.25 * x.size):
         return 0.0
     scatter = _MAD_TO_SD / _NEIGHBOUR_MEDIAN_GAIN * float(np.median(dev[scatters]))
-    if scatter <= 0.05 * float(np.ptp(x)) or not _on_settings(x, scatter):
+    if not every_row or scatter <= 0.05 * float(np.ptp(x)):
         return scatter
     v = np.sort(x)
     return float(np.median(v[3:] - v[:-3]))
 
 
 _MAD_TO_SD = 1.4826  # standard deviation / median absolute deviation of a normal distribution
-#: |x - median of its 4 neighbours| of white noise has 1.146 times the median absolute deviation of x itself
-_NEIGHBOUR_MEDIAN_GAIN = 1.146
+#: |x - median of its 4 neighbours| of white noise (monotone runs of five left out) has 1.166 times the median
+#: absolute deviation of x itself
+_NEIGHBOUR_MEDIAN_GAIN = 1.166
 
 
 def _spread(values: np.ndarray, centre: float) -> float:
@@ -104,24 +109,6 @@ def _spread(values: np.ndarray, centre: float) -> float:
     if free.sum() >= max(20, 0.2 * values.size):
         spread = max(spread, _MAD_TO_SD * float(np.median(np.abs(values[free] - centre))))
     return spread
-
-
-def _on_settings(x: np.ndarray, scatter: float) -> bool:
-    """Whether the values sit on discrete settings rather than spreading continuously: more than half of the
-    bins between their 5 % and 95 % quantiles are empty (bins holding 5 values on average where the values
-    spread evenly). A single level of quantised noise (its distinct values a contiguous grid no coarser than
-    ``scatter``) spreads continuously."""
-    lo, hi = np.quantile(x, [0.05, 0.95])
-    if hi <= lo:
-        return True
-    inner = x[(x >= lo) & (x <= hi)]
-    counts, _ = np.histogram(inner, int(min(max(inner.size / 5, 4), 20000)), (lo, hi))
-    if np.mean(counts == 0) <= 0.5:
-        return False
-    distinct = np.unique(inner)
-    gaps = np.diff(distinct)
-    grid = distinct.size >= 4 and float(np.ptp(gaps)) <= 1e-6 * float(gaps.max()) and float(gaps.max()) <= scatter
-    return not grid
 
 
 def cluster_levels(values, *, scatter: float | None = None):
@@ -392,13 +379,14 @@ def _local_range(x: np.ndarray, w: int) -> np.ndarray:
     return maximum_filter1d(x, size, mode="nearest") - minimum_filter1d(x, size, mode="nearest")
 
 
-def _held(x: np.ndarray, w: int) -> np.ndarray:
+def _held(x: np.ndarray, w: int, every_row: bool = True) -> np.ndarray:
     """Samples at which ``x`` is held (its local range within 5 short-term standard deviations and 2 % of its
-    range), all samples when fewer than 50 or when under 20 % would be held (point data stepping every row)."""
+    range), all samples when fewer than 50 or when under 20 % would be held (point data stepping every row).
+    ``every_row``: see :func:`_short_term_scatter`."""
     ok = np.isfinite(x)
     if x.size < 50 or not ok.all() or np.ptp(x) == 0:
         return ok
-    held = _local_range(x, w) <= max(5.0 * _short_term_scatter(x), 0.02 * float(np.ptp(x)))
+    held = _local_range(x, w) <= max(5.0 * _short_term_scatter(x, every_row=every_row), 0.02 * float(np.ptp(x)))
     return held if held.mean() >= 0.2 else ok
 
 
@@ -465,8 +453,10 @@ def recognise(data: TyreData) -> Programme:
     labels, levels = {}, {}
     for ch in cond_ch:
         x = data.array(ch)
-        held = _held(x, w)
-        lab, centres = cluster_levels(np.where(held, x, np.nan))  # levels from the held samples
+        held = _held(x, w, every_row=not time_series)
+        ok = held & np.isfinite(x)
+        scatter = _short_term_scatter(x[ok], every_row=False) if time_series else None
+        lab, centres = cluster_levels(np.where(ok, x, np.nan), scatter=scatter)  # levels from the held samples
         if time_series and centres.size:
             lab = _stays(x, lab, centres, penalty=4.0 * short_run, block=max(1, short_run // 5))
         else:
@@ -573,7 +563,9 @@ def recognise(data: TyreData) -> Programme:
     per_row = pd.DataFrame({"SEGMENT": seg_id, "SWEEP": sweep_id, "KIND": kind, "BRANCH": branch, "STEADY": steady,
                             **{f"{ch}_LEVEL": key[:, i] for i, ch in enumerate(cond_ch)}})
     slip_tests = np.isin(kind, ("slip_angle", "slip_ratio", "steady"))
-    levels["VX"] = cluster_levels(vx[slip_tests])[1] if slip_tests.any() else np.zeros(0)
+    vx_tests = vx[slip_tests & np.isfinite(vx)]
+    levels["VX"] = cluster_levels(vx_tests, scatter=_short_term_scatter(vx_tests, every_row=False) if time_series
+                                  else None)[1] if vx_tests.size else np.zeros(0)
     def beyond(x, threshold):  # slip applied on purpose: more than a few noise spikes beyond the threshold
         return bool(np.sum(np.abs(x) > threshold) >= max(10, 0.005 * n))
 

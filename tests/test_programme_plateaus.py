@@ -107,15 +107,15 @@ def test_cluster_levels_of_exact_plateaus_beside_noisy_levels():
     assert np.mean(labels[6000:] >= 0) > 0.99
 
 
-@pytest.mark.parametrize("step", [0.0, 0.01])
-def test_one_noisy_level_is_one_level(step):
-    """A speed held at 16.7 m/s with 0.02 m/s noise, recorded exactly or to 0.01 m/s: one level, not the modes of
-    its noise (old code: the scatter exceeded 5 % of the range, the noise was taken for settings stepping every
-    row)."""
-    x = np.random.default_rng(5).normal(16.7, 0.02, 1700)
-    if step:
-        x = np.round(x / step) * step
-    assert cluster_levels(x)[1].size == 1
+@pytest.mark.parametrize("table, channel, column", [("mf61_camber", "IA", "gamma"), ("mf61_load", "FZ", "Fz"),
+                                                    ("mf62_combined", "IA", "gamma"), ("mf61_combined", "FZ", "Fz")])
+def test_exact_settings_of_tables_we_did_not_write_are_each_a_level(mfeval_dir, table, channel, column):
+    """MFeval's reference tables hold their conditions exactly, in staircases (21 cambers, 7 rows each), ramps
+    (51 loads, a sawtooth) or blocks: every distinct setting is a level. Neither staircase steps nor sawtooth
+    resets may pass for scatter (they would merge the settings)."""
+    d = pd.read_csv(mfeval_dir / f"{table}.csv")
+    frame = pd.DataFrame({"FZ": d.Fz, "SA": d.alpha, "IA": d.gamma, "SL": d.kappa, "VX": d.Vx, "P": d.P})
+    assert recognise(TyreData(frame)).levels[channel].size == np.unique(d[column]).size
 
 
 def test_settings_stepping_every_row_are_still_levels():
