@@ -5,13 +5,15 @@
 and which are transitions between conditions, and so which effects the data can determine.
 
 Levels (:func:`cluster_levels`) are the modes of the distribution of a condition channel: a histogram of
-bin width set by the channel's own short-term scatter (samples against the running median of their
-neighbours; for a channel that steps every row, the distance to the third-nearest value), smoothed, whose
+bin width set by the channel's own short-term scatter (samples against the median of their four neighbours,
+over the samples that scatter at all: exact plateaus, ramps and staircases say nothing about it; for point
+data that step every row between settings, the distance to the third-nearest value), smoothed, whose
 peaks are merged only when the valley between them is shallow (above half the lower peak). A level is
 therefore separated from its neighbour by the empty room between them, however close they are relative to
 the largest value (1650 / 2200 / 2750 N with a few percent scatter are three levels), and a slow ramp between
 levels is no level. Samples far from every level (more than 4 robust standard deviations of their nearest
-level, and more than the bin width) are off-level (label -1): ramps, load sweeps, transients. With a handful
+level, and more than the bin width; when an exact plateau sits beside visits that scatter, those visits'
+spread) are off-level (label -1): ramps, load sweeps, transients. With a handful
 of points (< 50) distinct values whose separations are far below the others (a jump of 8x in the sorted
 separations) are merged: repeated settings that scatter.
 
@@ -60,20 +62,53 @@ _KIND = {"SA": "slip_angle", "SL": "slip_ratio", "VX": "speed", "FZ": "load"}
 
 
 # ------------------------------------------------------------------------------------------------- levels
-def _short_term_scatter(x: np.ndarray) -> float:
-    """Robust standard deviation of the samples about the running median of 5 neighbours (0 when < 20). When
-    that exceeds 5 % of the range, neighbouring rows are not repeated settings (the channel steps every row, as
-    the speeds of a free-rolling test): the median distance to the third-nearest value instead."""
+def _short_term_scatter(x: np.ndarray, *, every_row: bool = True) -> float:
+    """Short-term standard deviation of a channel in its order (0 when < 20 values): the robust spread of each
+    sample about the median of its four neighbours, over the samples that scatter at all. The sample itself is
+    left out of that median (a median that includes it returns it wherever the samples run monotonically, so
+    that noisy data show ~40 % exact zeros); samples on an exact plateau (a generated warm-up) or in a monotone
+    run of five (a ramp, a staircase of settings) tell nothing about the scatter and are left out too. Noise
+    leaves 98 % of the samples (of white noise) in no monotone run, exact settings only the few at their
+    reversals and resets: when fewer than a quarter remain, the scatter is 0 (exact settings). ``every_row``: when the spread exceeds 5 % of the
+    range, neighbouring rows are not repeated settings (the channel steps every row, as the conditions of a
+    table of random points): the median distance to the third-nearest value instead. A time series has no such
+    channel (``every_row=False``): a single noisy level (a speed held at 16.7 +- 0.02 m/s) is noise."""
     if x.size < 20:
         return 0.0
-    from scipy.ndimage import median_filter
-
-    dev = x - median_filter(x, size=5, mode="nearest")
-    scatter = 1.4826 * float(np.median(np.abs(dev))) * 1.25  # 1.25: the median of 5 itself scatters
-    if scatter <= 0.05 * float(np.ptp(x)):
+    padded = np.pad(x, 2, mode="reflect")
+    window = np.stack([padded[:-4], padded[1:-3], padded[2:-2], padded[3:-1], padded[4:]])
+    dev = np.abs(x - np.median(window[[0, 1, 3, 4]], axis=0))
+    steps = np.diff(window, axis=0)
+    monotone = np.all(steps >= 0, axis=0) | np.all(steps <= 0, axis=0)
+    scatters = (dev > 1e-9 * max(float(np.max(np.abs(x))), 1e-300)) & ~monotone
+    if scatters.sum() < max(10, 0.25 * x.size):
+        return 0.0
+    scatter = _MAD_TO_SD / _NEIGHBOUR_MEDIAN_GAIN * float(np.median(dev[scatters]))
+    if not every_row or scatter <= 0.05 * float(np.ptp(x)):
         return scatter
     v = np.sort(x)
-    return float(np.median(np.minimum(v[3:] - v[:-3], np.inf)))
+    return float(np.median(v[3:] - v[:-3]))
+
+
+_MAD_TO_SD = 1.4826  # standard deviation / median absolute deviation of a normal distribution
+#: |x - median of its 4 neighbours| of white noise (monotone runs of five left out) has 1.166 times the median
+#: absolute deviation of x itself
+_NEIGHBOUR_MEDIAN_GAIN = 1.166
+
+
+def _spread(values: np.ndarray, centre: float) -> float:
+    """Robust standard deviation of a level's values (in their order) about its centre, 0 when none. When a
+    fifth or more of them (and at least 20) scatter while the others sit on values held exactly over
+    consecutive samples (an exact plateau such as a generated warm-up, beside visits to the level that
+    scatter), the spread of those that scatter, if larger: the plateau would otherwise collapse it to 0."""
+    if values.size == 0:
+        return 0.0
+    spread = _MAD_TO_SD * float(np.median(np.abs(values - centre)))
+    same = values[1:] == values[:-1]
+    free = ~(np.concatenate([[False], same]) | np.concatenate([same, [False]]))
+    if free.sum() >= max(20, 0.2 * values.size):
+        spread = max(spread, _MAD_TO_SD * float(np.median(np.abs(values[free] - centre))))
+    return spread
 
 
 def cluster_levels(values, *, scatter: float | None = None):
@@ -122,8 +157,7 @@ def cluster_levels(values, *, scatter: float | None = None):
     out_centres = []
     for k in range(centres.size):
         sel = idx == k
-        dev = xs[sel] - centres[k]
-        sd = 1.4826 * float(np.median(np.abs(dev))) if sel.any() else 0.0
+        sd = _spread(xs[sel], centres[k])
         near = sel & (np.abs(xs - centres[k]) <= max(4.0 * sd, h, 1e-9 * scale))
         if near.any():
             lab[near] = len(out_centres)
@@ -140,7 +174,7 @@ def _assign(x, lab, centres):
     if centres.size == 0 or not free.any():
         return out
     near = _nearest(x[free], centres)
-    reach = np.array([max(4.0 * 1.4826 * float(np.median(np.abs(x[lab == k] - centres[k]))),
+    reach = np.array([max(4.0 * _spread(x[lab == k], centres[k]),
                           float(np.ptp(x[lab == k]))) if np.any(lab == k) else 0.0 for k in range(centres.size)])
     ok = np.abs(x[free] - centres[near]) <= reach[near]
     out[np.flatnonzero(free)[ok]] = near[ok]
@@ -154,8 +188,7 @@ def _stays(x, lab, centres, *, penalty, block):
     ``block`` samples). A wander of the load scatter towards the next level does not end a stay; a ramp that
     passes a level quickly does not make one. ``lab``: labels of the held samples (their spread per level)."""
     n = x.size
-    spread = np.array([1.4826 * float(np.median(np.abs(x[lab == k] - c))) if np.any(lab == k) else 0.0
-                       for k, c in enumerate(centres)])
+    spread = np.array([_spread(x[lab == k], c) for k, c in enumerate(centres)])
     gaps = np.diff(np.sort(centres))
     spread = np.maximum(spread, 1e-9 * max(float(np.max(np.abs(centres))), 1e-300))
     if gaps.size:
@@ -346,13 +379,14 @@ def _local_range(x: np.ndarray, w: int) -> np.ndarray:
     return maximum_filter1d(x, size, mode="nearest") - minimum_filter1d(x, size, mode="nearest")
 
 
-def _held(x: np.ndarray, w: int) -> np.ndarray:
+def _held(x: np.ndarray, w: int, every_row: bool = True) -> np.ndarray:
     """Samples at which ``x`` is held (its local range within 5 short-term standard deviations and 2 % of its
-    range), all samples when fewer than 50 or when under 20 % would be held (point data stepping every row)."""
+    range), all samples when fewer than 50 or when under 20 % would be held (point data stepping every row).
+    ``every_row``: see :func:`_short_term_scatter`."""
     ok = np.isfinite(x)
     if x.size < 50 or not ok.all() or np.ptp(x) == 0:
         return ok
-    held = _local_range(x, w) <= max(5.0 * _short_term_scatter(x), 0.02 * float(np.ptp(x)))
+    held = _local_range(x, w) <= max(5.0 * _short_term_scatter(x, every_row=every_row), 0.02 * float(np.ptp(x)))
     return held if held.mean() >= 0.2 else ok
 
 
@@ -419,8 +453,10 @@ def recognise(data: TyreData) -> Programme:
     labels, levels = {}, {}
     for ch in cond_ch:
         x = data.array(ch)
-        held = _held(x, w)
-        lab, centres = cluster_levels(np.where(held, x, np.nan))  # levels from the held samples
+        held = _held(x, w, every_row=not time_series)
+        ok = held & np.isfinite(x)
+        scatter = _short_term_scatter(x[ok], every_row=False) if time_series else None
+        lab, centres = cluster_levels(np.where(ok, x, np.nan), scatter=scatter)  # levels from the held samples
         if time_series and centres.size:
             lab = _stays(x, lab, centres, penalty=4.0 * short_run, block=max(1, short_run // 5))
         else:
@@ -527,7 +563,9 @@ def recognise(data: TyreData) -> Programme:
     per_row = pd.DataFrame({"SEGMENT": seg_id, "SWEEP": sweep_id, "KIND": kind, "BRANCH": branch, "STEADY": steady,
                             **{f"{ch}_LEVEL": key[:, i] for i, ch in enumerate(cond_ch)}})
     slip_tests = np.isin(kind, ("slip_angle", "slip_ratio", "steady"))
-    levels["VX"] = cluster_levels(vx[slip_tests])[1] if slip_tests.any() else np.zeros(0)
+    vx_tests = vx[slip_tests & np.isfinite(vx)]
+    levels["VX"] = cluster_levels(vx_tests, scatter=_short_term_scatter(vx_tests, every_row=False) if time_series
+                                  else None)[1] if vx_tests.size else np.zeros(0)
     def beyond(x, threshold):  # slip applied on purpose: more than a few noise spikes beyond the threshold
         return bool(np.sum(np.abs(x) > threshold) >= max(10, 0.005 * n))
 

@@ -343,3 +343,46 @@ def test_one_sided_drive_brake_run_writes_a_tir_with_warnings(truth, tmp_path, c
     assert fitted.params.PHY1 == 0.0 and fitted.params.PVY1 == 0.0
     fy = fitted.evaluate(truth.params.FNOMIN, 0.0, np.radians([-6.0, 6.0]), 0.0, limits=False).fy
     assert 1 / 1.5 < abs(fy[1] / fy[0]) < 1.5
+
+
+_AGRI = TIR_FILES / "agri_460_85R34_mf61.tir"
+
+
+@pytest.mark.parametrize("tir, seed", [
+    (SAMPLE, 2),
+    pytest.param(_AGRI, 3, marks=pytest.mark.xfail(strict=True, reason=(
+        "known defect (issue 26, not fixed): on this agricultural tyre's run the first pure_fy pass is "
+        "ill-conditioned (PCY1/PDY1 correlated -0.9999: the data do not separate shape and peak) and its optimiser "
+        "path differs at 1e-8 (40 against 92 evaluations); the reset thresholds then flip: pure_fy 23 % kept against 8.4 % rejected, mz 187 % "
+        "against 280 %"))),
+], ids=["car", "agri"])
+def test_csv_and_ttc_round_trips_of_one_run_give_one_fit(truth, tmp_path, tir, seed):
+    """The same rig run read from an ISO-W SI CSV (17 digits) and from a TTC .dat (SAE axes, metric units, 8
+    significant digits: the inputs differ by ~1e-8 relative) gives the same fit: the same parameters reset as
+    undetermined and the same fit errors per stage (issue 26: mz 32.6 % against 52.6 % was reported for such a
+    pair; a fit must not hinge on the 9th digit of the data)."""
+    from test_rig_import import TTC_NAMES, TTC_UNITS, _ttc_columns
+
+    from mftyre.data import read_data
+
+    run = rig_programme(mftyre.load_tir(tir), loads=(0.6, 1.2), pressures=(1.0,), cambers_deg=(0.0,),
+                        longitudinal=False, seed=seed)
+    frame = run.frame.drop(columns=["TEST"])
+    frame.to_csv(tmp_path / "run.csv", index=False)
+    cols = _ttc_columns(frame) | {"ET": frame["TIME"].to_numpy()}
+    table = np.column_stack([np.asarray(cols[n], float) for n in TTC_NAMES])
+    lines = ["rig run (synthetic)", "\t".join(TTC_NAMES), "\t".join(TTC_UNITS)]
+    lines += ["\t".join(f"{v:.8g}" for v in row) for row in table]
+    (tmp_path / "run.dat").write_text("\n".join(lines) + "\n")
+    stages = ("pure_fy", "mz", "mx", "vertical", "rolling_radius") if tir == SAMPLE else ("pure_fy", "mz")
+    fits = [fit_tir(read_data(tmp_path / name), stages=stages, compare=False) for name in ("run.csv", "run.dat")]
+    a, b = fits
+    for name in stages:
+        sa, sb = a.stages[name], b.stages[name]
+        assert sa.rejected == sb.rejected, name
+        assert sorted(sa.reset) == sorted(sb.reset), name
+        assert sb.fit_error == pytest.approx(sa.fit_error, rel=1e-3), name
+        for p in sa.fitted:
+            assert b.params[p] == pytest.approx(a.params[p], rel=1e-3, abs=1e-6), (name, p)
+    if tir == SAMPLE:  # and the fit is a good one: the run is the tyre's own
+        assert a.stages["mz"].fit_error < 2.0 and not any(st.rejected for st in a.stages.values())
