@@ -5,7 +5,8 @@ Hidden cases: runs generated from a file with one parameter changed (the generat
 causal anti-alias filter and a delay; the finder gets the unchanged file and a few rivals from the catalogue (the
 whole catalogue: benchmarks/bench_dynamic_gaps.py). Tests compare against the generator's own settings (delay,
 cutoff, noise) and the changed parameter, never against snapshots of our output, so they hold while the SWIFT
-equations change. About 35 s of CPU together (the C compiler builds one SWIFT library per parameter set tried).
+equations change. About 35 s of CPU together when the SWIFT library of the structure is in the cache (parameters are
+its run-time input: a refit compiles nothing).
 """
 from __future__ import annotations
 
