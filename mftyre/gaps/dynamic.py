@@ -695,10 +695,9 @@ def _refit(effect, model, pred, prob, sim, runs, train, keys_train, J):
     the chain's delay and cutoff (nuisance parameters) by Levenberg-Marquardt with Broyden updates. Jointly because
     a lag the model adds (a relaxation length, a softer sidewall) and the chain's lag trade off: fitted in turn,
     the chain kept part of the gap and the parameter stopped short (PTY1 of the MF 5.2 file: 1.31 +- 0.012 for a
-    truth of 1.22). The parameters' covariance is the marginal one (chain included), scaled by the training
-    chi-square per independent sample where that exceeds 1 (model error the noise does not explain: the fit is not
-    better known than its residual says). (model, prediction on all runs, delta, covariance of delta, the
-    candidate's _Problem) or None."""
+    truth of 1.22). The parameters' covariance is the marginal one (chain included, :func:`_covariance`: model
+    error and the correlation within runs counted). (model, prediction on all runs, delta, covariance of delta,
+    the candidate's _Problem) or None."""
     k = len(effect.parameters)
     base = given_values(model, effect.parameters)
     sub = [r for r in runs if r.kind in effect.kinds]
@@ -796,9 +795,33 @@ def _refit(effect, model, pred, prob, sim, runs, train, keys_train, J):
         full = {**pred, **sim(new_model, sub)}
     except ModelInputError:
         return None
-    scale = max(1.0, float(r @ r) / prob.n_eff(train))
-    cov = np.linalg.pinv(J.T @ J)[:k, :k] * scale
-    return new_model, full, delta[:k], cov, _Problem(runs, _chain_at(chain0, delta[k:]), prob.noise)
+    return new_model, full, delta[:k], _covariance(J, r, runs, keys_train, prob.n_eff(train))[:k, :k], \
+        _Problem(runs, _chain_at(chain0, delta[k:]), prob.noise)
+
+
+def _covariance(J, r, runs, keys, n_eff):
+    """Covariance of the refitted coordinates at the optimum (Jacobian ``J`` of the weighted residuals ``r``, the
+    concatenation over ``keys`` = (run, channel)): the larger, per coordinate, of (a) (J'J)^-1 scaled by the
+    chi-square per independent sample where above 1 (model error the noise does not explain) and (b) the
+    run-clustered sandwich (J'J)^-1 (sum over runs of g g') (J'J)^-1 G/(G-1), g = J_run' r_run: the runs as
+    independent blocks, whatever the correlation and the model error within a run (with a handful of runs a rough
+    estimate, hence the larger of the two). Off-diagonal terms: (a)'s."""
+    bread = np.linalg.pinv(J.T @ J)
+    model_based = bread * max(1.0, float(r @ r) / n_eff)
+    length = {run.name: run.t.size for run in runs}
+    blocks, start = {}, 0
+    for run_name, _ in keys:
+        blocks.setdefault(run_name, []).append(slice(start, start + length[run_name]))
+        start += length[run_name]
+    scores = [sum(J[sl].T @ r[sl] for sl in parts) for parts in blocks.values()]
+    g = len(scores)
+    if g < 2:
+        return model_based
+    meat = sum(np.outer(x, x) for x in scores) * g / (g - 1)
+    clustered = bread @ meat @ bread
+    cov = model_based.copy()
+    np.fill_diagonal(cov, np.maximum(np.diag(model_based), np.diag(clustered)))
+    return cov
 
 
 def _findings(runs, pred, chain, noise) -> list:
