@@ -160,6 +160,7 @@ class SwiftTyre:
     ``axle``: "height" (imposed) or "load"; ``rim``: "speed" (imposed) or "torque"; ``x_range``: wheel
     positions the cam-height table covers; ``table_dx`` its step; ``substeps`` RK4 steps per call of
     :meth:`step`; ``window`` cam-height samples visible to one step (covers the tandem and the travel).
+    ``theta``: the parameter values the compiled step takes at run time (:func:`_run_time_parameters`).
     """
 
     def __init__(self, model, road: Road | CamTable, *, axle: str = "height", rim: str = "speed",
