@@ -4,7 +4,7 @@ step-steer and braking runs of a public MF 5.2 file we did not write, the contro
 
 Hidden cases: runs generated from the file with one parameter changed, through noise, a causal anti-alias filter
 and a delay (mftyre.gaps.dynamic_runs.synthetic_runs); the finder gets the unchanged file and the whole catalogue.
-About 10 s of CPU together (the relaxed wheel runs on the CasADi VM, one call per run).
+About 13 s of CPU together (the relaxed wheel runs on the CasADi VM, one call per run).
 """
 from __future__ import annotations
 
@@ -99,3 +99,19 @@ def test_model_kind_auto_and_the_relaxed_wheels_limits(mf52):
     cleat = synthetic_runs(swift_file, speeds=(30.0,), steer_speeds=(), duration=0.3, lead=0.1)
     with pytest.raises(ModelInputError, match=f"{cleat[0].name}.*SWIFT"):
         simulate(swift_file, cleat, model_kind="relaxed")
+
+
+def test_command_line_model_kind(mf52, tmp_path, capsys):
+    """``--model-kind relaxed`` from the command line: the CSV round trip of braking and steer runs (the kind
+    "brake" read back from OMEGA), the hidden PTX1 named and written into the improved file."""
+    from mftyre.cli import main
+    from mftyre.gaps.dynamic_runs import read_runs, write_runs
+
+    truth = mf52.with_params(PTX1=1.4 * mf52.params.PTX1)
+    data = write_runs(synthetic_runs(mf52, truth=truth, **RUNS), tmp_path / "runs.csv")
+    assert sorted({r.kind for r in read_runs(data)}) == ["brake", "steer"]
+    out = tmp_path / "improved.tir"
+    assert main(["gaps", "--dynamic", str(data), "--model", str(MF52), "--model-kind", "relaxed", "-o", str(out),
+                 "--quiet"]) == 0
+    assert "longitudinal relaxation length (PTX1)" in capsys.readouterr().out
+    assert _load(out).params.PTX1 == pytest.approx(truth.params.PTX1, rel=0.05)
