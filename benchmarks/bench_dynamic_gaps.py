@@ -5,7 +5,9 @@
 Each case generates runs from the file with ONE parameter changed (the truth), with noise, a causal 4th-order
 anti-alias filter at 150 Hz and a 5 ms delay, and gives the finder the unchanged file and the whole catalogue.
 Cleat cases: 12 runs (10, 40, 70 km/h x 1.8, 2.6 bar x 3, 5 kN), ``--duration`` s each at 1 kHz (2 s: the
-issue's speed case). Steer cases: 4 step-steer runs (2 deg; 20-80 km/h). A case passes when the finder adds exactly
+issue's speed case). Steer cases: 4 step-steer runs (2 deg; 20-80 km/h). Relaxed-wheel cases (model kind relaxed,
+truth and finder): 4 step steers and 6 braking steps (-5 % slip; 20, 50, 80 km/h x 2 loads), on the TNO file (MF 6.2:
+relaxation lengths K/C) and on the public MF 5.2 file of MFeval (PTX*/PTY*). A case passes when the finder adds exactly
 the changed effect (control: nothing) and every channel whose held-out RMS error was above 1.5 x the noise floor
 ends within 1.3 x of it; a change that leaves every channel within 1.1 x the noise floor is reported "invisible"
 (no run shows it). A changed file must pass verify_tir like the base file (else the case is not a tyre). Time: CPU seconds of this process plus its children (the C compiler), i.e. on one core.
@@ -30,6 +32,8 @@ from mftyre.gaps.dynamic_runs import synthetic_runs  # noqa: E402
 
 CLEAT = dict(speeds=(10.0, 40.0, 70.0), pressures=(1.8e5, 2.6e5), loads=(3000.0, 5000.0), steer_speeds=())
 STEER = dict(speeds=(), steer_speeds=(20.0, 40.0, 60.0, 80.0))
+RELAXED = dict(speeds=(), steer_speeds=(20.0, 40.0, 60.0, 80.0), brake_speeds=(20.0, 50.0, 80.0), model_kind="relaxed")
+MF52 = ROOT.parent / "shared" / "reference" / "mfeval" / "MagicFormula52_Parameters.tir"
 #: name -> (setting, {parameter: factor of its value, or ("=", value)}, the effect's catalogue parameter)
 CASES = {
     "control (cleat)": (CLEAT, {}, None),
@@ -42,6 +46,14 @@ CASES = {
     "control (steer)": (STEER, {}, None),
     "lateral relaxation": (STEER, {"LATERAL_STIFFNESS": 0.7}, "LATERAL_STIFFNESS"),
     "yaw stiffness": (STEER, {"YAW_STIFFNESS": 0.7}, "YAW_STIFFNESS"),
+    "relaxed: control": (dict(RELAXED, loads=(3000.0, 5000.0)), {}, None),
+    "relaxed: lateral relaxation": (dict(RELAXED, loads=(3000.0, 5000.0)), {"LATERAL_STIFFNESS": 0.7},
+                                    "LATERAL_STIFFNESS"),
+    "relaxed: longitudinal relaxation": (dict(RELAXED, loads=(3000.0, 5000.0)), {"LONGITUDINAL_STIFFNESS": 1.4},
+                                         "LONGITUDINAL_STIFFNESS"),
+    "relaxed MF 5.2: control": (dict(RELAXED, loads=(6000.0, 9000.0), tir=MF52), {}, None),
+    "relaxed MF 5.2: PTY1": (dict(RELAXED, loads=(6000.0, 9000.0), tir=MF52), {"PTY1": 0.75}, "PTY1"),
+    "relaxed MF 5.2: PTX1": (dict(RELAXED, loads=(6000.0, 9000.0), tir=MF52), {"PTX1": 1.4}, "PTX1"),
 }
 
 
@@ -52,6 +64,11 @@ def cpu() -> float:
 
 def run_case(model, name, duration, seed=11):
     setting, change, param = CASES[name]
+    setting = dict(setting)
+    if "tir" in setting:  # a case on another file
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            model = mftyre.load_tir(setting.pop("tir"))
     values = {p: (v[1] if isinstance(v, tuple) else model.params[p] * v) for p, v in change.items()}
     truth = model.with_params(**values)
     new_problems = [p for p in verify_tir(truth) if p not in verify_tir(model)]
@@ -59,7 +76,7 @@ def run_case(model, name, duration, seed=11):
         raise SystemExit(f"case {name!r}: the changed file fails verification: {new_problems[0]}")
     runs = synthetic_runs(model, truth=truth, duration=duration, lead=0.3, seed=seed, **setting)
     t0, w0 = cpu(), time.perf_counter()
-    rep = find_dynamic_gaps(runs, model)
+    rep = find_dynamic_gaps(runs, model, model_kind=setting.get("model_kind", "auto"))
     seconds, wall = cpu() - t0, time.perf_counter() - w0
     names = rep.effect_names
     named = (names == [] if param is None else len(names) == 1 and f"{param}" in " ".join(

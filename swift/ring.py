@@ -288,8 +288,8 @@ def pressure_coefficients(prm) -> tuple[float, float | None]:
     SWIFT_PDAMP None (the damping factor f_d = 1/sqrt(f_c): damping coefficients independent of pressure, module
     notes)."""
     pstiff = prm.PFZ1 if "SWIFT_PSTIFF" in prm.missing else prm.SWIFT_PSTIFF
-    pdamp = None if "SWIFT_PDAMP" in prm.missing else float(prm.SWIFT_PDAMP)
-    return float(pstiff), pdamp
+    pdamp = None if "SWIFT_PDAMP" in prm.missing else prm.SWIFT_PDAMP
+    return pstiff, pdamp  # (numbers, or symbols where the compiled step takes the parameters at run time)
 
 
 def _pressure_factors(prm, dpi, be):

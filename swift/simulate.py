@@ -37,8 +37,9 @@ Step API (for an FMU): ``state_next, outputs = step(state, inputs, dt)``.
   (:data:`mftyre.compiled.CASADI_LOCK`).
 
 Integration: classical Runge-Kutta (RK4), ``substeps`` per step, all in one compiled CasADi function (C, built
-and loaded through :func:`mftyre.compiled.cached_library`: verified before loading, keyed by the parameters and the
-equations' source); the cam heights come from a window of ``window`` samples of the cam-height table around the
+and loaded through :func:`mftyre.compiled.cached_library`: verified before loading, keyed by the model's structure
+and the equations' source, not by the parameter values: those are a run-time input ``theta``, so a changed
+parameter set (a refit's trial) compiles nothing and adds nothing to the cache); the cam heights come from a window of ``window`` samples of the cam-height table around the
 wheel, passed by pointer (no copy), so one compiled function serves any road. The window must cover the wheel's
 travel in one step plus ``TANDEM_REACH``: a longer step is split into equal parts, so results do not depend on
 speed, step size or start position; so is a step longer than ``substeps`` RK4 steps of :data:`MAX_RK4_STEP` (the
@@ -56,6 +57,7 @@ import math
 import os
 import struct
 import threading
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -65,6 +67,7 @@ import numpy as np
 from mftyre.compiled import CASADI_LOCK, cached_library  # the verified cache of every compiled library
 from mftyre.backend import NUMPY
 from mftyre.errors import ModelInputError
+from mftyre.model import STRUCTURAL_PARAMETERS
 from mftyre.params import swift_invalid_values
 from mftyre.formula import vertical
 
@@ -157,6 +160,7 @@ class SwiftTyre:
     ``axle``: "height" (imposed) or "load"; ``rim``: "speed" (imposed) or "torque"; ``x_range``: wheel
     positions the cam-height table covers; ``table_dx`` its step; ``substeps`` RK4 steps per call of
     :meth:`step`; ``window`` cam-height samples visible to one step (covers the tandem and the travel).
+    ``theta``: the parameter values the compiled step takes at run time (:func:`_run_time_parameters`).
     """
 
     def __init__(self, model, road: Road | CamTable, *, axle: str = "height", rim: str = "speed",
@@ -185,38 +189,45 @@ class SwiftTyre:
         self._grid = np.ascontiguousarray(self.table.dx * np.arange(self.window))
         camber = np.zeros(self.table.h.size) if self.table.camber is None else self.table.camber
         self._h = np.ascontiguousarray(np.column_stack([self.table.h, camber]).ravel(), dtype=float)  # interleaved
-        self._rhs_window = self._rhs(self.window)
-        self._rhs_warm = self._rhs(self.window, warm=True)
-        self._step_fn = self._build_step()
-        self._compiled = _Compiled(self, self._key("step")) if compiled else None
-        self._equilibrium = None  # static equations for initial_state, built on first use
+        self._numeric = {}  # the equations with this model's values in the graph (CasADi VM, FMU), built on first use
+        self._names, self.theta = _run_time_parameters(model.params, self.constants)
+        self._structure = _structure(self) if compiled else None  # not compiled: the numeric graphs only
+        self._compiled = _Compiled(self, self._structure.key) if compiled else None
 
     # ------------------------------------------------------------------ equations
     @_with_casadi
-    def _rhs(self, n_window, warm=False, stage=False):
+    def _rhs(self, n_window, warm=False, stage=False, parametric=False):
         """rhs(x, u, x0w, grid, hw, h) -> (dx, out): MX graph, so that the cam-height lookups stay compiled
         constant-time table accesses (an index computed from x into the window, no search). ``h``: the integration
         step that bounds the relaxation rate (0: the exact model). The contact solution: ``CONTACT_PASSES`` Newton
         passes from an estimate, or (``warm``, the stepper) ``WARM_PASSES`` from the solution stored in the state.
         ``stage`` (an RK stage of the stepper): (dx, the tandem base l_s) instead, without the expressions only the
-        outputs need."""
+        outputs need. ``parametric``: the numeric parameters are a further input ``theta`` (:attr:`theta`: run-time
+        values, one graph per model structure) instead of numbers in the graph."""
         import casadi as ca
 
         x = ca.MX.sym("x", len(STATE_NAMES))
         u = ca.MX.sym("u", len(INPUT_NAMES))
         x0w, grid, h = ca.MX.sym("x0w"), ca.MX.sym("grid", n_window), ca.MX.sym("h")
         hw = ca.MX.sym("hw", 2 * n_window)  # cam height and road-camber slope, interleaved
+        theta = ca.MX.sym("theta", len(self.theta)) if parametric else ca.MX(0, 1)
 
         # the physics as SX functions (compact C), the table lookups as MX calls between them
-        m, c = self.model, self.constants
+        ts = ca.SX.sym("theta", len(self.theta) if parametric else 0)
+        m = _ParametricModel(self.model, self._names, self.constants, ts) if parametric else self.model
+        c = m.constants if parametric else self.constants
         xs, us, hs = ca.SX.sym("x", len(STATE_NAMES)), ca.SX.sym("u", len(INPUT_NAMES)), ca.SX.sym("h", 6)
         hstep = ca.SX.sym("hstep")
-        start = ca.Function("contact_start", [xs, us, hs[0]], [contact_start(m, c, xs, us, hs[0])], {"cse": True})
-        geometry = ca.Function("contact_geometry", [xs, us, hs[:5]],
-                               [contact_geometry(m, c, xs, us, *(hs[i] for i in range(5)))], {"cse": True})
-        dx_sx, out_sx = ring_equations(m, c, xs, us, *(hs[i] for i in range(5)), axle=self.axle, rim=self.rim,
-                                       h=hstep, road_camber=ca.atan(hs[5]))
-        physics = ca.Function("ring", [xs, us, hs, hstep], [dx_sx] if stage else [dx_sx, out_sx], {"cse": True})
+        with warnings.catch_warnings():  # numpy's sqrt of a parameter (a symbol here): CasADi's notice, not ours
+            warnings.simplefilter("ignore", FutureWarning)
+            start_sx = contact_start(m, c, xs, us, hs[0])
+            geometry_sx = contact_geometry(m, c, xs, us, *(hs[i] for i in range(5)))
+            dx_sx, out_sx = ring_equations(m, c, xs, us, *(hs[i] for i in range(5)), axle=self.axle, rim=self.rim,
+                                           h=hstep, road_camber=ca.atan(hs[5]))
+        start = ca.Function("contact_start", [xs, us, hs[0], ts], [start_sx], {"cse": True})
+        geometry = ca.Function("contact_geometry", [xs, us, hs[:5], ts], [geometry_sx], {"cse": True})
+        physics = ca.Function("ring", [xs, us, hs, hstep, ts], [dx_sx] if stage else [dx_sx, out_sx],
+                              {"cse": True})
 
         spacing = grid[1] - grid[0]
 
@@ -231,32 +242,36 @@ class SwiftTyre:
         if warm:
             ls, passes = x[_S["lsm"]], WARM_PASSES
         else:
-            ls, passes = start(x, u, cam(xc)[0]), CONTACT_PASSES
+            ls, passes = start(x, u, cam(xc)[0], theta), CONTACT_PASSES
         for _ in range(passes):  # the tandem base at the current load
             (hf, dhf, _), (hr, dhr, _) = cam(xc + ls / 2), cam(xc - ls / 2)
-            ls = geometry(x, u, ca.vertcat(hf, dhf, hr, dhr, ls))
+            ls = geometry(x, u, ca.vertcat(hf, dhf, hr, dhr, ls), theta)
         (hf, dhf, cf), (hr, dhr, cr) = cam(xc + ls / 2), cam(xc - ls / 2)
-        results = physics.call([x, u, ca.vertcat(hf, dhf, hr, dhr, ls, (cf + cr) / 2), h])
+        results = physics.call([x, u, ca.vertcat(hf, dhf, hr, dhr, ls, (cf + cr) / 2), h, theta])
+        extra = [theta] if parametric else []
         if stage:
-            return ca.Function("rhs_stage", [x, u, x0w, grid, hw, h], [results[0], ls])
-        return ca.Function("rhs", [x, u, x0w, grid, hw, h], results)
+            return ca.Function("rhs_stage", [x, u, x0w, grid, hw, h, *extra], [results[0], ls])
+        return ca.Function("rhs", [x, u, x0w, grid, hw, h, *extra], results)
 
     @_with_casadi
-    def _build_step(self):
+    def _build_step(self, parametric=False):
+        """``swift_step(x, u, dt, x0w, grid, hw[, theta]) -> (x_next, out)`` (:attr:`step_function`)."""
         import casadi as ca
 
-        rhs, rhs_stage = self._rhs_warm, self._rhs(self.window, warm=True, stage=True)
+        rhs = self._rhs(self.window, warm=True, parametric=parametric)
+        rhs_stage = self._rhs(self.window, warm=True, stage=True, parametric=parametric)
         x = ca.MX.sym("x", len(STATE_NAMES))
         u = ca.MX.sym("u", len(INPUT_NAMES))
         dt, x0w = ca.MX.sym("dt"), ca.MX.sym("x0w")
         grid, hw = ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
+        extra = [ca.MX.sym("theta", len(self.theta))] if parametric else []
         h = dt / self.substeps
 
         def with_memory(s, memory):  # s with its tandem base to start from
             return ca.vertcat(s[:_S["lsm"]], memory, s[_S["lsm"] + 1:])
 
         def f(s, memory):  # (dx, the tandem base) at s, its tandem base started from ``memory``
-            return rhs_stage(with_memory(s, memory), u, x0w, grid, hw, h)
+            return rhs_stage(with_memory(s, memory), u, x0w, grid, hw, h, *extra)
 
         xs, memory = x, x[_S["lsm"]]
         for _ in range(self.substeps):  # classical RK4; each stage starts from the previous stage's contact
@@ -265,10 +280,48 @@ class SwiftTyre:
             k3, memory = f(xs + h / 2 * k2, memory)
             k4, memory = f(xs + h * k3, memory)
             xs = xs + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        out = rhs(with_memory(xs, memory), u, x0w, grid, hw, h)[1]
+        out = rhs(with_memory(xs, memory), u, x0w, grid, hw, h, *extra)[1]
         xs = _remember_contact(xs, out)  # the contact solution for the next step
-        return ca.Function("swift_step", [x, u, dt, x0w, grid, hw], [xs, out],
-                           ["x", "u", "dt", "x0w", "grid", "hw"], ["x_next", "out"])
+        return ca.Function("swift_step", [x, u, dt, x0w, grid, hw, *extra], [xs, out],
+                           ["x", "u", "dt", "x0w", "grid", "hw", *(["theta"] if parametric else [])],
+                           ["x_next", "out"])
+
+    def _numeric_function(self, name):
+        """The equations with this model's values in the graph, built on first use: ``rhs`` (exact model, contact
+        solved afresh), ``warm`` (contact from the state's memory), ``step``."""
+        with CASADI_LOCK:
+            if name not in self._numeric:
+                self._numeric[name] = (self._build_step() if name == "step"
+                                       else self._rhs(self.window, warm=name == "warm"))
+            return self._numeric[name]
+
+    def _equilibrium_function(self, unknown, eqs):
+        """(x, u, x0w, grid, hw) -> (the static equations, the Newton step's matrix in the unknowns), for
+        :meth:`initial_state`; built on first use."""
+        import casadi as ca
+
+        rhs = self._rhs_window
+        with CASADI_LOCK:
+            key = ("equilibrium", tuple(unknown), tuple(eqs))
+            if key not in self._numeric:
+                xs, us = ca.MX.sym("x", len(STATE_NAMES)), ca.MX.sym("u", len(INPUT_NAMES))
+                x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
+                d = rhs(xs, us, x0w, grid, hw, 0.0)[0][eqs]
+                self._numeric[key] = ca.Function("equilibrium", [xs, us, x0w, grid, hw],
+                                                 [d, _newton_inverse(ca.jacobian(d, xs)[:, unknown])])
+            return self._numeric[key]
+
+    @property
+    def _rhs_window(self):
+        return self._numeric_function("rhs")
+
+    @property
+    def _rhs_warm(self):
+        return self._numeric_function("warm")
+
+    @property
+    def _step_fn(self):
+        return self._numeric_function("step")
 
     @property
     def step_function(self):
@@ -281,13 +334,16 @@ class SwiftTyre:
         return self._step_fn
 
     def _key(self, kind):
+        """The key of the model's structure: everything that shapes the equations' code (the parameters that select
+        a form of the equations, which are absent, the run-time parameters' names and order, the modes, the
+        integration, the equations' source, CasADi, the compiler flags), not the run-time values :attr:`theta`."""
         import casadi as ca
 
         prm = self.model.params
-        payload = {"p": {k: repr(prm[k]) for k in prm}, "pressure": pressure_coefficients(prm),  # (absent: derived)
-                   "side": self.model.side, "axle": self.axle,
-                   "rim": self.rim, "window": self.window, "substeps": self.substeps,
-                   "constants": repr(self.constants), "kind": kind,
+        payload = {"fixed": {k: repr(prm[k]) for k in prm if k not in self._names}, "theta": self._names,
+                   "missing": sorted(prm.missing), "version": prm.version, "side": self.model.side,
+                   "axle": self.axle, "rim": self.rim, "window": self.window, "substeps": self.substeps,
+                   "lever": (self.constants.lever_x, self.constants.lever_y), "kind": kind,
                    "passes": (CONTACT_PASSES, WARM_PASSES), "cflags": _CFLAGS,
                    "equations": _SOURCE_HASH, "casadi": ca.__version__}
         return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
@@ -604,13 +660,14 @@ class SwiftTyre:
         s[_S["yb"]] = s[_S["ya"]] = inputs.y
         s[_S["gb"]], s[_S["psb"]] = inputs.gamma, inputs.psi
         unknown, eqs = self.equilibrium_unknowns
-        if self._equilibrium is None:
-            self._build_equilibrium(unknown, eqs)
+        # the Jacobian from the graph with this model's values, as the FMU's equilibrium_function: at standstill it
+        # is singular and the regularised step amplifies the round-off in which two graphs differ (~1e-7 m)
+        equilibrium = self._equilibrium_function(unknown, eqs)
         u, window, i0 = self._u(inputs), self._rhs_args(s)[:3], self._window_start(s[_S["xb"]])
         inverse, last = None, np.inf
         for _ in range(iterations):  # Newton; compiled, the Jacobian is kept while the steps shrink tenfold
             if inverse is None or self._compiled is None:
-                r, inverse = (np.asarray(v) for v in self._equilibrium(s, u, *window))
+                r, inverse = (np.asarray(v) for v in equilibrium(s, u, *window))
             else:
                 r = self._compiled.rhs(s, u, window[0], i0)[0][eqs]
             step = -inverse @ r.ravel()
@@ -622,7 +679,7 @@ class SwiftTyre:
                 inverse = None
             last = size
         r = (self._compiled.rhs(s, u, window[0], i0)[0][eqs] if self._compiled is not None
-             else np.asarray(self._equilibrium(s, u, *window)[0])).ravel()
+             else np.asarray(equilibrium(s, u, *window)[0])).ravel()
         finite = bool(np.all(np.isfinite(r)) and np.all(np.isfinite(s)))
         worst = int(np.argmax(np.abs(r))) if finite else int(np.argmin(np.isfinite(r)))
         at = (f"vx = {inputs.vx} m/s, " + (f"load = {inputs.load} N" if self.axle == "load" else f"z = {inputs.z} m")
@@ -642,17 +699,89 @@ class SwiftTyre:
         self._store_contact(s, u)
         return s
 
-    @_with_casadi
-    def _build_equilibrium(self, unknown, eqs):
-        """The static equations and their Jacobian in the unknowns, built once (for :meth:`initial_state`)."""
-        import casadi as ca
 
-        if self._equilibrium is None:
-            xs, us = ca.MX.sym("x", len(STATE_NAMES)), ca.MX.sym("u", len(INPUT_NAMES))
-            x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
-            d = self._rhs_window(xs, us, x0w, grid, hw, 0.0)[0][eqs]
-            self._equilibrium = ca.Function("equilibrium", [xs, us, x0w, grid, hw],
-                                            [d, _newton_inverse(ca.jacobian(d, xs)[:, unknown])])
+
+class _ParametricValues:
+    """A parameter set whose numeric parameters ``names`` are the entries of the symbol vector ``theta``; the rest
+    (the forms of the equations, integers, texts) read from ``params``."""
+
+    def __init__(self, params, names, theta):
+        self._params, self._symbols = params, {n: theta[i] for i, n in enumerate(names)}
+        self.version, self.fittyp, self.missing = params.version, params.fittyp, params.missing
+
+    def __getattr__(self, name):
+        symbols = self.__dict__["_symbols"]
+        return symbols[name] if name in symbols else getattr(self.__dict__["_params"], name)
+
+    def __getitem__(self, name):
+        return self._symbols[name] if name in self._symbols else self._params[name]
+
+    def __contains__(self, name):
+        return name in self._params
+
+    def __iter__(self):
+        return iter(self._params)
+
+
+class _ParametricModel:
+    """Stands in for the MFModel while the SWIFT equations are built with run-time parameters: ``params`` the
+    :class:`_ParametricValues`, ``casadi_function`` the model's with those parameters bound to the same symbols;
+    ``constants`` the ring constants as the entries of ``theta`` after the parameters."""
+
+    def __init__(self, model, names, constants, theta):
+        self._model, self._names, self.side = model, list(names), model.side
+        self._symbols = [theta[i] for i in range(len(names))]
+        self.params = _ParametricValues(model.params, names, theta)
+        self.constants = replace(constants, **{f: theta[len(names) + i] for i, f in enumerate(_RING_FIELDS)})
+
+    def casadi_function(self, **options):
+        function = self._model.casadi_function(parameters=self._names, **options)
+        return lambda *inputs: function(*inputs, *self._symbols)
+
+
+#: The numeric fields of :class:`swift.ring.RingConstants`, run-time parameters after the .tir's.
+_RING_FIELDS = ("mb", "ibx", "iby", "cbx", "cby", "cbg", "cbth", "kbx", "kby", "kbg", "kbth", "axle_mass",
+                "rim_inertia")
+
+
+#: Parameters whose values choose a form of the equations (Python branches): numbers in the compiled code (keyed).
+#: :data:`mftyre.model.STRUCTURAL_PARAMETERS`, and those the MF 6.2 loaded-radius solver tests (its lifted-root
+#: bounds: formula/vertical.py).
+_FORM_PARAMETERS = STRUCTURAL_PARAMETERS | {"Q_FCY", "Q_FCY2", "Q_FYS2", "Q_FYS3", "Q_FZ2"}
+
+
+def _run_time_parameters(params, constants):
+    """(names, values): the .tir parameters the compiled step takes at run time and their values, followed by the
+    ring constants (:data:`_RING_FIELDS`). Every real number except those that select a form of the equations
+    (:data:`_FORM_PARAMETERS`) and those at 0: a parameter at 0 switches its effect off (the
+    equations test some for 0, e.g. Q_FCY; and the compiler drops the terms they multiply), so which are 0 is part
+    of the structure (:meth:`SwiftTyre._key`): a refit that moves one away from 0 builds one more library."""
+    names = [n for n in params if isinstance(params[n], float) and params[n] != 0.0 and n not in _FORM_PARAMETERS]
+    values = [params[n] for n in names] + [float(getattr(constants, f)) for f in _RING_FIELDS]
+    return names, np.ascontiguousarray(values, dtype=float)
+
+
+class _Structure:
+    """The equations of one model structure (:meth:`SwiftTyre._key`) with the parameters as the run-time input
+    ``theta``: ``step`` and ``rhs``, compiled into the library. Shared by every tyre of the structure."""
+
+    def __init__(self, key, tyre):
+        self.key = key
+        self.step = tyre._build_step(parametric=True)
+        self.rhs = tyre._rhs(tyre.window, parametric=True)
+
+
+#: Model structures built in this process (key -> :class:`_Structure`): a tyre of a known structure builds no
+#: equations and compiles nothing; its parameters are passed per call.
+_STRUCTURES: dict = {}
+
+
+def _structure(tyre) -> _Structure:
+    key = tyre._key("step")
+    with CASADI_LOCK:
+        if key not in _STRUCTURES:
+            _STRUCTURES[key] = _Structure(key, tyre)
+        return _STRUCTURES[key]
 
 
 #: Tikhonov weight of the static Newton step on the equilibrated Jacobian (rows and columns of unit norm): small
@@ -710,8 +839,9 @@ def _advancing(inputs: StepInputs):
 #: configuration uses (``USED``) are checked (finite, p > 0), the imposed axle x, z, vz and rim spin are written into
 #: the state (as :meth:`SwiftTyre._impose`), the step is split into equal parts where the wheel would travel
 #: further than ``reach`` (cfg[3]) or the step is longer than ``substeps`` RK4 steps of MAX_RK4_STEP (cfg[4]), and
-#: the window of the cam table (``table``, cfg: x0, dx, samples, reach, longest call) starts
-#: ``WINDOW / 2`` samples behind the belt centre. ``in``: one row of NI values per step (:data:`_ROW`); ``scal``: dt,
+#: the window of the cam table (``table``, cfg: x0, dx, samples, reach, longest call, then NOMPRES and the sidewall
+#: pressure coefficients of the check) starts ``WINDOW / 2`` samples behind the belt centre; p[12]: the run-time
+#: parameters ``theta`` (:attr:`SwiftTyre.theta`). ``in``: one row of NI values per step (:data:`_ROW`); ``scal``: dt,
 #: number of steps; all pointers in one array ``p`` (one argument: the cheapest ctypes call). Returns 0, k + 1
 #: when step k leaves the table, -1 for a non-finite or negative step or a travel beyond 1e6 windows, -2 for an
 #: evaluation error, -3 for a bad input (:meth:`_Compiled._bad_input` says which), -4 when the state holds no
@@ -722,12 +852,13 @@ _DRIVER = """
 #define NU %(nu)d
 #define NI %(ni)d
 #define WINDOW %(window)d
-#define P_NOM %(p_nom)r
-#define P_STIFF %(p_stiff)r
-#define P_DAMP %(p_damp)r
+#define P_NOM cfg[5]
+#define P_STIFF cfg[6]
+#define P_DAMP cfg[7]
 static const int USED[NI] = {%(used)s};
 CASADI_SYMBOL_EXPORT int swift_run(void** p) {
   const casadi_real *x_init = p[0], *in = p[1], *scal = p[2], *cfg = p[3], *grid = p[4], *table = p[5];
+  const casadi_real* theta = p[12];
   casadi_real *xs = p[6], *ys = p[7], *w = p[11], s[NX], dt = scal[0], h, x0w, parts, start;
   const casadi_real** arg = p[8];
   casadi_real** res = p[9];
@@ -754,6 +885,7 @@ CASADI_SYMBOL_EXPORT int swift_run(void** p) {
       if (!(start >= 0 && start + WINDOW <= cfg[2])) return k + 1;
       x0w = cfg[0] + start * cfg[1];
       arg[0] = s; arg[1] = u; arg[2] = &h; arg[3] = &x0w; arg[4] = grid; arg[5] = table + 2 * (casadi_int) start;
+      arg[6] = theta;
       res[0] = xs + k * NX; res[1] = ys + k * NY;
       if (swift_step(arg, res, iw, w, 0)) return -2;
       for (i = 0; i < NX; ++i) s[i] = xs[k * NX + i];
@@ -764,10 +896,10 @@ CASADI_SYMBOL_EXPORT int swift_run(void** p) {
 /* one step: p as for swift_run, but p[1] = io: the NI inputs, dt, 1, the row of the state in the block p[6]
    (< 0: the state is p[0]), the row of p[6] and p[7] to write */
 CASADI_SYMBOL_EXPORT int swift_step1(void** p) {
-  void* q[12];
+  void* q[13];
   casadi_real* io = p[1];
   casadi_int src = (casadi_int) io[NI + 2], dst = (casadi_int) io[NI + 3], i;
-  for (i = 0; i < 12; ++i) q[i] = p[i];
+  for (i = 0; i < 13; ++i) q[i] = p[i];
   if (src >= 0) q[0] = (casadi_real*) p[6] + src * NX;
   q[2] = io + NI;
   q[6] = (casadi_real*) p[6] + dst * NX;
@@ -791,19 +923,18 @@ def _library(tyre, key: str) -> Path:
     :data:`_DRIVER`."""
     import casadi as ca
 
-    stiff, damp = pressure_coefficients(tyre.model.params)  # (f_d = 1/sqrt(f_c) is positive where f_c is)
+    structure = tyre._structure or _structure(tyre)
 
     def generate(folder):
         gen = ca.CodeGenerator("swift.c", {"with_header": False})
-        for function in (tyre.step_function, tyre.rhs_function):
+        for function in (structure.step, structure.rhs):
             gen.add(function)
         source = Path(gen.generate(str(folder) + os.sep))
         with source.open("a") as f:
             f.write(_DRIVER % dict(nx=len(STATE_NAMES), ny=len(OUTPUT_NAMES), nu=_NU, ni=_NI, window=tyre.window,
                                    height=int(tyre.axle == "height"), speed=int(tyre.rim == "speed"),
                                    used=", ".join(str(int(u)) for u in _used(tyre)), p=INPUT_NAMES.index("p"),
-                                   y=INPUT_NAMES.index("y"), p_nom=float(tyre.model.params.NOMPRES),
-                                   p_stiff=stiff, p_damp=0.0 if damp is None else damp, **_S))
+                                   y=INPUT_NAMES.index("y"), **_S))
         meta = {"inputs": list(INPUT_NAMES), "outputs": list(OUTPUT_NAMES), "checks": [], "states": list(STATE_NAMES)}
         return source, (*_CFLAGS, "-fPIC", "-shared"), ("-lm",), meta
 
@@ -873,29 +1004,31 @@ class _Compiled:
         self.work_sizes = tuple(v.value for v in sz)
         self._tyre, self.lock = tyre, threading.Lock()
         self._used = np.array(_used(tyre))
-        self._cfg = np.array([tyre.table.x0, tyre.table.dx, tyre.table.h.size, tyre._reach, tyre._max_call])
-        self._fn = self._lib.swift_run  # called with one ctypes array of 12 pointers (no argtypes: no conversion)
+        stiff, damp = pressure_coefficients(tyre.model.params)  # (f_d = 1/sqrt(f_c) is positive where f_c is)
+        self._cfg = np.array([tyre.table.x0, tyre.table.dx, tyre.table.h.size, tyre._reach, tyre._max_call,
+                              tyre.model.params.NOMPRES, stiff, 0.0 if damp is None else damp])
+        self._fn = self._lib.swift_run  # called with one ctypes array of 13 pointers (no argtypes: no conversion)
         self.step1 = self._lib.swift_step1  # one step: inputs, dt, 1, source and target rows in io
         self.pack = struct.Struct(f"{_NI + 4}d").pack_into
         self.free = [_StepBuffers(self)]
-        self._rhs = _Generated(self._lib, tyre.rhs_function)
+        self._rhs = _Generated(self._lib, tyre._structure.rhs)
 
     def rhs(self, state, u, x0w, i0):
         """The right-hand side (:attr:`SwiftTyre.rhs_function`, the exact model: h = 0) on the cam window that
         starts at sample ``i0`` (x = ``x0w``): (dx, out)."""
         with self.lock:
-            return self._rhs((state, u, x0w, None, None, 0.0), self._tyre._grid.ctypes.data,
+            return self._rhs((state, u, x0w, None, None, 0.0, self._tyre.theta), self._tyre._grid.ctypes.data,
                              self._tyre._h.ctypes.data + 16 * i0)
 
     def pointers(self, x, rows, scal, xs, ys, work):  # the driver's argument array (addresses of the buffers)
         t = self._tyre
-        return (ctypes.c_void_p * 12)(x, rows, scal, self._cfg.ctypes.data, t._grid.ctypes.data, t._h.ctypes.data,
-                                      xs, ys, *(ctypes.addressof(v) for v in work))
+        return (ctypes.c_void_p * 13)(x, rows, scal, self._cfg.ctypes.data, t._grid.ctypes.data, t._h.ctypes.data,
+                                      xs, ys, *(ctypes.addressof(v) for v in work), t.theta.ctypes.data)
 
     def work(self):
         """Fresh work arrays of the generated step (arg, res, iw, w)."""
         sz_arg, sz_res, sz_iw, sz_w = self.work_sizes
-        return ((ctypes.c_void_p * max(sz_arg, 6))(), (ctypes.c_void_p * max(sz_res, 2))(),
+        return ((ctypes.c_void_p * max(sz_arg, 7))(), (ctypes.c_void_p * max(sz_res, 2))(),
                 (ctypes.c_longlong * max(sz_iw, 1))(), (ctypes.c_double * max(sz_w, 1))())
 
     def check(self, code, xb, rows, dt):

@@ -5,10 +5,12 @@ Hidden cases: runs generated from a file with one parameter changed (the generat
 causal anti-alias filter and a delay; the finder gets the unchanged file and a few rivals from the catalogue (the
 whole catalogue: benchmarks/bench_dynamic_gaps.py). Tests compare against the generator's own settings (delay,
 cutoff, noise) and the changed parameter, never against snapshots of our output, so they hold while the SWIFT
-equations change. About 35 s of CPU together (the C compiler builds one SWIFT library per parameter set tried).
+equations change. About 35 s of CPU together when the SWIFT library of the structure is in the cache (parameters are
+its run-time input: a refit compiles nothing).
 """
 from __future__ import annotations
 
+import math
 import warnings
 
 import numpy as np
@@ -159,3 +161,36 @@ def test_command_line(sample, tmp_path, capsys):
     # an existing output needs --overwrite; DATA and --dynamic exclude each other
     assert main(["gaps", "--dynamic", str(data), "--model", str(SAMPLE), "-o", str(out), "--quiet"]) == 2
     assert main(["gaps", str(data), "--dynamic", str(data), "--model", str(SAMPLE)]) == 2
+
+
+def test_stated_uncertainty_covers_the_truth_with_correlated_noise_and_model_error():
+    """The refit's standard error (mftyre.gaps.dynamic._covariance) on a linear model whose 8 runs carry AR(1) noise
+    (rho 0.8, weighted by its integrated autocorrelation time as the finder does) and, in the second set, a
+    run-level model error (a slope error of sd 0.2 per run, which no noise estimate sees): +- 2 standard errors
+    hold the truth in 85-99.5 % of 200 Monte Carlo repetitions either way (88-98 % over three seeds), where the plain least-squares error
+    (J'J)^-1 covers only ~65 % with the model error (the stated 0.532 +- 0.009 for 0.6 of notebook 08)."""
+    from types import SimpleNamespace
+
+    from mftyre.gaps.dynamic import _covariance
+
+    rng = np.random.default_rng(1)
+    runs_, n, rho = 8, 400, 0.8
+    tau = (1 + rho) / (1 - rho)
+    runs = [SimpleNamespace(name=f"r{g}", t=np.zeros(n)) for g in range(runs_)]
+    keys = [(r.name, "FX") for r in runs]
+    x = np.concatenate([np.sin(np.linspace(0, 3 + g, n)) * (1 + 0.2 * g) for g in range(runs_)])
+    J = (x / np.sqrt(tau))[:, None]
+
+    def trial(spread):
+        e = np.concatenate([sps.lfilter([np.sqrt(1 - rho**2)], [1, -rho], rng.standard_normal(n))
+                            + rng.normal(0, spread) * x[g * n:(g + 1) * n] for g in range(runs_)])
+        y = x + e  # the true slope 1
+        slope = float(x @ y / (x @ x))
+        se = math.sqrt(_covariance(J, (slope * x - y) / np.sqrt(tau), runs, keys, runs_ * n / tau)[0, 0])
+        return abs(slope - 1.0), se, math.sqrt(np.linalg.pinv(J.T @ J)[0, 0])
+
+    for spread in (0.0, 0.2):
+        err, se, plain = np.array([trial(spread) for _ in range(200)]).T
+        assert 0.85 <= np.mean(err < 2 * se) <= 0.995
+        if spread:
+            assert np.mean(err < 2 * plain) < 0.8

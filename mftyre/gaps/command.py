@@ -21,9 +21,13 @@ def register(subparsers) -> None:
                     "improves held-out sweeps significantly, repeat. Prints findings and errors; writes the "
                     "improved .tir, a Markdown/PNG report and JSON.")
     p.add_argument("data", nargs="?", help="measurement file: TYDEX, TTC (.dat/.mat) or CSV (see DATA below)")
-    p.add_argument("--dynamic", metavar="DATA", help="dynamic runs instead (cleat, step steer: one CSV with a RUN "
-                                                    "column or a folder of CSVs; layout: mftyre.gaps.dynamic_runs); "
-                                                    "the model is the SWIFT wheel driven by the runs' inputs")
+    p.add_argument("--dynamic", metavar="DATA", help="dynamic runs instead (cleat, step steer, braking step: one CSV "
+                                                    "with a RUN column or a folder of CSVs; layout: "
+                                                    "mftyre.gaps.dynamic_runs); the model is the SWIFT or the "
+                                                    "relaxed wheel driven by the runs' inputs (--model-kind)")
+    p.add_argument("--model-kind", choices=("auto", "swift", "relaxed"), default="auto",
+                   help="dynamic runs: the SWIFT wheel, the relaxed wheel (MF behind relaxation lengths; flat road, "
+                        "rim speed imposed) or auto: SWIFT when the file has its sections, else relaxed")
     p.add_argument("--model", required=True, help="the base .tir file")
     p.add_argument("-o", "--output", help="write the improved .tir file here")
     p.add_argument("--report", metavar="DIR", help="write report.md, PNG plots and gaps.json into this folder (an "

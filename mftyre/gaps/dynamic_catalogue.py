@@ -5,7 +5,14 @@ test it and the signature it leaves in the time histories (channels and engineer
 Every parameter named here is checked against the schema (:data:`mftyre.params.PARAMETERS`) at import, and the
 meaning shown in reports is the schema's. ``scale``: the size of a change the refit starts from (relative to the
 value, or absolute where the neutral value is 0). ``needs``: run kinds (``cleat``: an obstacle; ``steer``: a yaw
-step), and ``pressures``/``loads``/``speeds``: at least two levels of that condition in those runs.
+step; ``brake``: a step of the rim's slip), and ``pressures``/``loads``/``speeds``: at least two levels of that
+condition in those runs. ``models``: the dynamic models the effect is a parameter of (``swift``: the rigid ring;
+``relaxed``: the MF behind relaxation lengths, :mod:`mftyre.transient`); ``versions``: the MF versions whose
+equations use the parameters (empty: all).
+
+The relaxed wheel's relaxation lengths: MF 6.1/6.2 sigma_x = K_xk/C_x and sigma_y = K_ya/C_y with the carcass
+stiffnesses C_x = LONGITUDINAL_STIFFNESS (1 + PCFX1 dfz + PCFX2 dfz^2)(1 + PCFX3 dpi) (C_y likewise with
+LATERAL_STIFFNESS, PCFY1-3); MF 5.2 the PTX1-PTX3, PTY1-PTY2 formulas (:mod:`mftyre.formula.derived`).
 """
 from __future__ import annotations
 
@@ -13,7 +20,7 @@ from dataclasses import dataclass
 
 from ..params import PARAMETERS
 
-__all__ = ["DynamicEffect", "DYNAMIC_CATALOGUE", "NOT_TRIED", "testable_effects"]
+__all__ = ["DynamicEffect", "DYNAMIC_CATALOGUE", "NOT_TRIED", "NOT_TRIED_RELAXED", "testable_effects"]
 
 
 @dataclass(frozen=True)
@@ -27,6 +34,8 @@ class DynamicEffect:
     needs: tuple = ()          # "pressures", "loads", "speeds": at least two levels in the runs of ``kinds``
     absolute: tuple = ()       # parameters whose refit step is absolute (neutral value 0)
     lower: float = 0.0         # lower bound of the parameters (positive quantities) unless absolute
+    models: tuple = ("swift",)  # dynamic models with these parameters
+    versions: tuple = ()       # MF versions ("52", "61", "62") whose equations use them; () all
 
     def meaning(self) -> dict:
         return {p: PARAMETERS[p].description for p in self.parameters}
@@ -34,6 +43,7 @@ class DynamicEffect:
 
 _IN_PLANE = ("FX", "FZ")
 _LAT = ("FY", "MZ")
+_MF6 = ("61", "62")
 DYNAMIC_CATALOGUE = (
     DynamicEffect("longitudinal carcass stiffness (relaxation length K_xk/C_x)", ("LONGITUDINAL_STIFFNESS",),
                   ("cleat",), ("FX",), ("peak_to_peak", "peak"),
@@ -96,14 +106,46 @@ DYNAMIC_CATALOGUE = (
                   ("frequency", "peak", "lag"), "the belt's lateral mode: the overshoot of Fy after a steer step"),
     DynamicEffect("yaw and camber belt mode (FREQ_YAW, DAMP_YAW)", ("FREQ_YAW", "DAMP_YAW"), ("steer",), _LAT,
                   ("peak", "lag"), "the belt's yaw mode: the overshoot of Mz after a steer step"),
+    # the relaxed wheel: MF 6.1/6.2 relaxation lengths K/C (carcass stiffness, its load and pressure terms)
+    DynamicEffect("longitudinal relaxation length (LONGITUDINAL_STIFFNESS)", ("LONGITUDINAL_STIFFNESS",),
+                  ("brake",), ("FX",), ("lag", "build_up"),
+                  "sigma_x = K_xk/C_x: the lag and build-up distance of Fx after a braking step",
+                  models=("relaxed",), versions=_MF6),
+    DynamicEffect("longitudinal relaxation length over load (PCFX1, PCFX2)", ("PCFX1", "PCFX2"), ("brake",),
+                  ("FX",), ("lag", "build_up"), "C_x over load: the Fx lag differs between loads",
+                  needs=("loads",), absolute=("PCFX1", "PCFX2"), models=("relaxed",), versions=_MF6),
+    DynamicEffect("longitudinal relaxation length over pressure (PCFX3)", ("PCFX3",), ("brake",), ("FX",),
+                  ("lag", "build_up"), "C_x over pressure: the Fx lag differs between pressures",
+                  needs=("pressures",), absolute=("PCFX3",), models=("relaxed",), versions=_MF6),
+    DynamicEffect("lateral relaxation length (LATERAL_STIFFNESS)", ("LATERAL_STIFFNESS",), ("steer",), _LAT,
+                  ("lag", "build_up"), "sigma_y = K_ya/C_y: the lag and build-up distance of Fy and Mz after a "
+                  "steer step", models=("relaxed",), versions=_MF6),
+    DynamicEffect("lateral relaxation length over load (PCFY1, PCFY2)", ("PCFY1", "PCFY2"), ("steer",), _LAT,
+                  ("lag", "build_up"), "C_y over load: the Fy lag differs between loads", needs=("loads",),
+                  absolute=("PCFY1", "PCFY2"), models=("relaxed",), versions=_MF6),
+    DynamicEffect("lateral relaxation length over pressure (PCFY3)", ("PCFY3",), ("steer",), _LAT,
+                  ("lag", "build_up"), "C_y over pressure: the Fy lag differs between pressures",
+                  needs=("pressures",), absolute=("PCFY3",), models=("relaxed",), versions=_MF6),
+    # MF 5.2: the relaxation lengths' own formulas
+    DynamicEffect("longitudinal relaxation length (PTX1)", ("PTX1",), ("brake",), ("FX",), ("lag", "build_up"),
+                  "sigma_x at the nominal load: the lag and build-up distance of Fx after a braking step",
+                  models=("relaxed",), versions=("52",)),
+    DynamicEffect("longitudinal relaxation length over load (PTX2, PTX3)", ("PTX2", "PTX3"), ("brake",), ("FX",),
+                  ("lag", "build_up"), "sigma_x over load: the Fx lag differs between loads", needs=("loads",),
+                  absolute=("PTX2", "PTX3"), models=("relaxed",), versions=("52",)),
+    DynamicEffect("lateral relaxation length (PTY1)", ("PTY1",), ("steer",), _LAT, ("lag", "build_up"),
+                  "the peak of sigma_y/R0 over load: the lag and build-up distance of Fy after a steer step",
+                  models=("relaxed",), versions=("52",)),
+    DynamicEffect("lateral relaxation length over load (PTY2)", ("PTY2",), ("steer",), _LAT, ("lag", "build_up"),
+                  "the load (Fz/Fz0) of the largest sigma_y: the Fy lag differs between loads", needs=("loads",),
+                  models=("relaxed",), versions=("52",)),
 )
 
 #: Effects the SWIFT wheel of this project cannot express, or no run here can show: never tried, with the reason.
 NOT_TRIED = {
     "relaxation lengths PTX1-PTX3, PTY1-PTY2": "the SWIFT wheel does not use them: its relaxation follows from the "
                                                "carcass stiffnesses (LONGITUDINAL_STIFFNESS, LATERAL_STIFFNESS: "
-                                               "sigma = K/C); the relaxed wheel (mftyre.transient) is not yet a "
-                                               "model of the dynamic gap finder",
+                                               "sigma = K/C); the relaxed wheel does (model kind relaxed)",
     "load and speed influence on the sidewall (Q_BVX, Q_BVT)": "not modelled in SWIFT (no published formula)",
     "turn slip from the belt yaw rate": "not modelled in SWIFT (no parameter acts on it)",
     "enveloping smoothing (ENV_C1, ENV_C2)": "not modelled in SWIFT (formula unpublished)",
@@ -111,6 +153,16 @@ NOT_TRIED = {
     "vertical damping (VERTICAL_DAMPING)": "not used by the SWIFT wheel (damping comes from DAMP_LONG and "
                                            "DAMP_RESIDUAL)",
     "low-speed residual damping (DAMP_VLOW)": "acts below VXLOW only; dynamic runs are above it",
+}
+
+#: ... and the relaxed wheel.
+NOT_TRIED_RELAXED = {
+    "relaxation length scaling (LSGKP, LSGAL)": "user scaling factors (1 in a fitted file); PTX1/PTY1 set the same "
+                                                "lengths",
+    "turn slip from the yaw rate": "the relaxed wheel of the dynamic gap finder runs without turn slip",
+    "low-speed damping of the deflections (tau_vlow)": "acts below VXLOW only; dynamic runs are above it",
+    "everything of the ring, the enveloping and the vertical dynamics": "not in the relaxed wheel: use the SWIFT "
+                                                                        "model (model kind swift)",
 }
 
 for _e in DYNAMIC_CATALOGUE:
@@ -124,12 +176,20 @@ def _levels(runs, kinds, key):
     return len({v for v in vals if v == v})
 
 
-def testable_effects(runs, model, catalogue=DYNAMIC_CATALOGUE):
-    """(testable effects, {effect name: reason untestable}) for these runs and this model."""
-    ok, why = [], dict(NOT_TRIED)
+def testable_effects(runs, model, catalogue=DYNAMIC_CATALOGUE, model_kind: str = "swift"):
+    """(testable effects, {effect name: reason untestable}) for these runs, this model and the dynamic model
+    ``model_kind`` (effects of the other model are left out silently)."""
+    ok, why = [], dict(NOT_TRIED_RELAXED if model_kind == "relaxed" else NOT_TRIED)
     kinds_present = {r.kind for r in runs}
     channels = {c for r in runs for c in r.measured}
+    version = model.params.version
     for e in catalogue:
+        if model_kind not in e.models:
+            continue
+        if e.versions and version not in e.versions:
+            why[e.name] = (f"MF {'/'.join(v[0] + '.' + v[1] for v in e.versions)} only; the file is MF "
+                           f"{version[0]}.{version[1]}")
+            continue
         kinds = [k for k in e.kinds if k in kinds_present]
         if not kinds:
             why[e.name] = f"needs {' or '.join(e.kinds)} runs; the data hold {', '.join(sorted(kinds_present))}"

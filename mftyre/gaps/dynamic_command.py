@@ -1,6 +1,6 @@
 """``mftyre gaps --dynamic RUNS.csv --model BASE.tir [-o improved.tir] [--report DIR] [--json FILE]``: the handler
 of the dynamic gap finder (:func:`mftyre.gaps.dynamic.find_dynamic_gaps`); options shared with ``mftyre gaps``
-(``--holdout``, ``--seed``, ``--alpha``, ``--max-effects``, ``--overwrite``, ``--quiet``)."""
+(``--holdout``, ``--seed``, ``--alpha``, ``--max-effects``, ``--overwrite``, ``--quiet``); ``--model-kind``."""
 from __future__ import annotations
 
 __all__ = ["run_dynamic"]
@@ -22,7 +22,7 @@ def run_dynamic(args) -> int:
 
     try:
         rep = find_dynamic_gaps(args.dynamic, args.model, holdout=args.holdout, seed=args.seed,
-                                alpha=args.alpha, max_effects=args.max_effects,
+                                alpha=args.alpha, max_effects=args.max_effects, model_kind=args.model_kind,
                                 progress=progress)
         if args.output:
             rep.write_tir(args.output, overwrite=args.overwrite)

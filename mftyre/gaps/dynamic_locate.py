@@ -1,7 +1,7 @@
 """Locating a dynamic gap in the terms engineers use, per run (condition) and channel: the level before the
 event, peak values, peak-to-peak, the response length (travel over which the signal departs from its level by
-more than 10 % of its largest departure), for a steer step the phase lag (time to 63 % of the final change) and
-its build-up distance (lag x speed), and the frequency and damping ratio of the free decay after the obstacle
+more than 10 % of its largest departure), for a steer or braking step the phase lag (time to 63 % of the final
+change) and its build-up distance (lag x speed), and the frequency and damping ratio of the free decay after the obstacle
 (a damped sine fitted to the tail).
 
 :func:`features` computes them from one signal; :func:`compare` puts measured beside model values with the
@@ -64,7 +64,7 @@ def features(y, t, x, kind: str, quiet: int, *, decay_from: int | None = None, s
     big = np.flatnonzero(np.abs(dev) > max(0.1 * np.max(np.abs(dev)), 4 * sigma))
     out["response_length"] = float(x[big[-1]] - x[big[0]]) if big.size > 1 else math.nan
     out["lag"] = out["build_up"] = math.nan
-    if kind == "steer":
+    if kind in ("steer", "brake"):
         final = float(np.mean(y[-max(10, y.size // 10):]))
         change = final - level
         after = np.flatnonzero(np.sign(change) * (y[q:] - level) >= 0.632 * abs(change))

@@ -39,11 +39,17 @@ import pandas as pd
 
 from ..errors import DataError, ModelInputError
 
-__all__ = ["DynamicRun", "SwiftTyres", "read_runs", "write_runs", "runs_frame", "simulate", "synthetic_runs", "OUTPUT_CHANNELS",
-           "MODEL_OUTPUT"]
+__all__ = ["DynamicRun", "SwiftTyres", "read_runs", "write_runs", "runs_frame", "simulate", "simulate_relaxed",
+           "synthetic_runs", "OUTPUT_CHANNELS", "MODEL_OUTPUT", "RELAXED_OUTPUT", "MODEL_KINDS"]
 
 #: Measured channels the dynamic gap finder compares, and the SWIFT output each one is.
 MODEL_OUTPUT = {"FX": "fx", "FY": "fy", "FZ": "fz", "MZ": "mz", "SPIN": "omb"}
+#: ... and the relaxed wheel's (:mod:`mftyre.transient`, the wheel-centre loads); it has no belt spin.
+RELAXED_OUTPUT = {"FX": "Fx", "FY": "Fy", "FZ": "Fz", "MZ": "Mz"}
+#: The dynamic models: the SWIFT wheel (rigid ring, tandem cams; any run) and the relaxed wheel (the MF behind
+#: first-order relaxation of the contact deflections, :mod:`mftyre.transient`; flat-road runs with the rim speed
+#: imposed).
+MODEL_KINDS = ("swift", "relaxed")
 OUTPUT_CHANNELS = tuple(MODEL_OUTPUT)
 _INPUTS = ("TIME", "X", "VX", "Z", "LOAD", "OMEGA", "TORQUE", "PSI", "P")
 
@@ -75,12 +81,20 @@ class DynamicRun:
 
     @property
     def kind(self) -> str:
-        """``cleat`` (an obstacle on the road), ``steer`` (a yaw change on a flat road) or ``flat``."""
+        """``cleat`` (an obstacle on the road), ``steer`` (a yaw change on a flat road), ``brake`` (a change of
+        the rim's slip on a flat road: the ratio OMEGA/VX changes by more than 0.1 %, or TORQUE by more than
+        1 N m) or ``flat``."""
         if self.road.strip() not in ("", "flat()", "flat(0)"):
             return "cleat"
         psi = self.inputs.get("PSI")
         if psi is not None and np.ptp(psi) > 1e-4:
             return "steer"
+        if "OMEGA" in self.inputs:
+            ratio = self.inputs["OMEGA"] / np.maximum(np.abs(self.inputs["VX"]), 1e-3)
+            if np.ptp(ratio) > 1e-3 * max(np.max(np.abs(ratio)), 1e-12):
+                return "brake"
+        elif np.ptp(self.inputs["TORQUE"]) > 1.0:
+            return "brake"
         return "flat"
 
     @property
@@ -236,10 +250,15 @@ def _step_inputs(run: DynamicRun, p_nominal: float):
     return [StepInputs(**{k: float(v[k_]) for k, v in cols.items()}) for k_ in range(n)]
 
 
-def simulate(model, runs, tyres: SwiftTyres | None = None) -> dict:
-    """The SWIFT wheel driven by each run's inputs: run name -> channel -> model output at the run's sample times
-    (the channels the run measured). ``model``: an :class:`mftyre.MFModel` with [STRUCTURAL] and [CONTACT_PATCH]
-    sections. Raises :class:`ModelInputError` when the model cannot be built or a run leaves the road table."""
+def simulate(model, runs, tyres: SwiftTyres | None = None, *, model_kind: str = "swift") -> dict:
+    """The SWIFT wheel (or with ``model_kind="relaxed"`` the relaxed wheel, :func:`simulate_relaxed`) driven by
+    each run's inputs: run name -> channel -> model output at the run's sample times (the channels the run
+    measured). ``model``: an :class:`mftyre.MFModel` with [STRUCTURAL] and [CONTACT_PATCH] sections. Raises
+    :class:`ModelInputError` when the model cannot be built or a run leaves the road table."""
+    if model_kind == "relaxed":
+        return simulate_relaxed(model, runs)
+    if model_kind != "swift":
+        raise ModelInputError(f"model kind must be one of {', '.join(MODEL_KINDS)}; got {model_kind!r}")
     tyres = tyres or SwiftTyres(model, runs)
     out = {}
     for r in runs:
@@ -249,6 +268,56 @@ def simulate(model, runs, tyres: SwiftTyres | None = None) -> dict:
                        dt=r.dt)
         n = r.t.size
         out[r.name] = {c: np.asarray(res[MODEL_OUTPUT[c]][:n], float) for c in r.measured}
+    return out
+
+
+def relaxed_inputs(run: DynamicRun, names, p_nominal: float) -> np.ndarray:
+    """The relaxed wheel's input vectors (rows: ``names``, :func:`mftyre.transient.input_table`) for every sample
+    of ``run``: the axle's road velocity (VX along x) in the wheel's axes turned by the yaw PSI (vx = VX cos PSI,
+    vy = -VX sin PSI), the rim spin, the axle height over a flat road (or the load), the pressure."""
+    i, n = run.inputs, run.t.size
+    psi = i.get("PSI", np.zeros(n))
+    cols = dict(vx=i["VX"] * np.cos(psi), vy=-i["VX"] * np.sin(psi), omega=i["OMEGA"], gamma=np.zeros(n),
+                road_camber=np.zeros(n), p=i.get("P", np.full(n, p_nominal)), mu_scale=np.ones(n), road_z=np.zeros(n))
+    if "Z" in i:
+        cols["z"] = i["Z"]
+    else:
+        cols["Fz_in"] = i["LOAD"]
+    return np.array([cols[k] for k in names], dtype=float)
+
+
+def simulate_relaxed(model, runs) -> dict:
+    """The relaxed wheel (:func:`mftyre.transient.wheel_functions`, kind "transient": the same state functions as
+    its FMU) driven by each run's inputs, started in its steady state at the first sample, inputs held over each
+    step: run name -> channel -> output (:data:`RELAXED_OUTPUT`) at the run's sample times. Flat-road runs with
+    the rim speed imposed only (it has no road enveloping and no rim dynamics): else :class:`ModelInputError`."""
+    import casadi as ca
+
+    from ..transient import wheel_functions
+
+    bad = [r.name for r in runs if r.kind == "cleat" or "OMEGA" not in r.inputs]
+    if bad:
+        raise ModelInputError(f"the relaxed wheel runs on a flat road with the rim speed (OMEGA) imposed; run(s) "
+                              f"{', '.join(bad[:3])} have an obstacle or a rim torque: use the SWIFT model")
+    funcs, out = {}, {}
+    for r in runs:
+        vertical = "position" if "Z" in r.inputs else "load"
+        if vertical not in funcs:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # the file's unmodelled parameters: said once by the caller
+                funcs[vertical] = wheel_functions(model, "transient", vertical)
+        f = funcs[vertical]
+        u = relaxed_inputs(r, f.input_names, model.params.NOMPRES)
+        n = r.t.size
+        q = np.array(f.parameter_starts, dtype=float)
+        x0 = f.init(u[:, 0], q)
+        xs = f.step.mapaccum(n - 1)(x0, u[:, :-1], ca.repmat(q, 1, n - 1), r.dt)  # the state after each step
+        ys = np.asarray(f.out.map(n)(ca.horzcat(x0, xs), u, ca.repmat(q, 1, n)))
+        names = list(f.output_names)
+        out[r.name] = {c: ys[names.index(RELAXED_OUTPUT[c])].copy() for c in r.measured if c in RELAXED_OUTPUT}
+        missing = [c for c in r.measured if c not in RELAXED_OUTPUT]
+        if missing:
+            raise ModelInputError(f"run {r.name!r}: the relaxed wheel has no output for {', '.join(missing)}")
     return out
 
 
@@ -276,13 +345,16 @@ def measurement_chain(signal: np.ndarray, dt: float, cutoff: float | None, delay
 
 def synthetic_runs(model, *, speeds=(20.0, 40.0, 60.0), pressures=None, loads=None, steer_speeds=(40.0,),
                    steer_angle=2.0, cleat=(0.02, 0.01), duration=0.8, dt=1e-3, lead=0.3, noise=NOISE,
-                   cutoff: float | None = 150.0, delay: float = 5e-3, seed: int = 0, truth=None) -> list:
+                   cutoff: float | None = 150.0, delay: float = 5e-3, seed: int = 0, truth=None, brake_speeds=(),
+                   brake_slip=-0.05, model_kind: str = "swift") -> list:
     """Cleat runs (every speed [km/h] x pressure [Pa] x load [N]; axle height fixed at the static loaded radius,
-    rim spin at the free-rolling speed) and step-steer runs (yaw step of ``steer_angle`` deg at every steer speed,
-    nominal pressure and first load) from ``truth`` (default ``model``) through :func:`measurement_chain`
-    (noise at the sensor, a causal anti-alias filter at ``cutoff`` Hz, a ``delay`` of the outputs in s);
-    the obstacle or the steer step comes ``lead`` s after the start. The inputs are recorded exactly; the ROAD
-    column names the cleat (``cleat`` = (length, height) m)."""
+    rim spin at the free-rolling speed), step-steer runs (yaw step of ``steer_angle`` deg at every steer speed,
+    nominal pressure and first load) and braking steps (the rim's slip ramped from free rolling to ``brake_slip``
+    in 20 ms at every brake speed, each load, nominal pressure) from ``truth`` (default ``model``) simulated as
+    ``model_kind`` (:data:`MODEL_KINDS`) through :func:`measurement_chain` (noise at the sensor, a causal
+    anti-alias filter at ``cutoff`` Hz, a ``delay`` of the outputs in s); the obstacle, the steer step or the
+    braking step comes ``lead`` s after the start. The inputs are recorded exactly; the ROAD column names the
+    cleat (``cleat`` = (length, height) m)."""
     truth = truth or model
     prm = truth.params
     rng = np.random.default_rng(seed)
@@ -300,7 +372,7 @@ def synthetic_runs(model, *, speeds=(20.0, 40.0, 60.0), pressures=None, loads=No
     def measure(name, inputs, road, channels):
         inputs = {k: np.asarray(v, float) for k, v in inputs.items()}
         run = DynamicRun(name, t.copy(), inputs, road, {c: np.zeros(n) for c in channels})
-        true = simulate(truth, [run])[name]
+        true = simulate(truth, [run], model_kind=model_kind)[name]
         d = delay
         run.measured = {c: measurement_chain(true[c] + noise[c] * rng.standard_normal(n), dt, cutoff, d)
                         for c in channels}
@@ -324,4 +396,13 @@ def synthetic_runs(model, *, speeds=(20.0, 40.0, 60.0), pressures=None, loads=No
         inputs = dict(X=v * t, VX=np.full(n, v), Z=np.full(n, rl), OMEGA=np.full(n, v / re), PSI=psi,
                       P=np.full(n, prm.NOMPRES))
         runs.append(measure(f"steer_{v_kmh:g}kmh_{steer_angle:g}deg", inputs, "", ("FY", "MZ", "FZ")))
+    for v_kmh in brake_speeds:
+        v = v_kmh / 3.6
+        for load in loads:
+            rl, re = static(load, prm.NOMPRES, v)
+            slip = brake_slip * np.clip((t - lead) / 0.02, 0.0, 1.0)
+            inputs = dict(X=v * t, VX=np.full(n, v), Z=np.full(n, rl), OMEGA=v * (1.0 + slip) / re,
+                          P=np.full(n, prm.NOMPRES))
+            runs.append(measure(f"brake_{v_kmh:g}kmh_{load:.0f}N_{100 * brake_slip:g}pct", inputs, "",
+                                ("FX", "FZ")))
     return runs
