@@ -67,8 +67,7 @@ import numpy as np
 from mftyre.compiled import CASADI_LOCK, cached_library  # the verified cache of every compiled library
 from mftyre.backend import NUMPY
 from mftyre.errors import ModelInputError
-from mftyre.model import STRUCTURAL_PARAMETERS
-from mftyre.params import swift_invalid_values
+from mftyre.params import SELECTS_FORM, swift_invalid_values
 from mftyre.formula import vertical
 
 from .enveloping import Cams, CamTable
@@ -745,9 +744,9 @@ _RING_FIELDS = ("mb", "ibx", "iby", "cbx", "cby", "cbg", "cbth", "kbx", "kby", "
 
 
 #: Parameters whose values choose a form of the equations (Python branches): numbers in the compiled code (keyed).
-#: :data:`mftyre.model.STRUCTURAL_PARAMETERS`, and those the MF 6.2 loaded-radius solver tests (its lifted-root
+#: :data:`mftyre.params.SELECTS_FORM` (the schema's fact), and those the MF 6.2 loaded-radius solver tests (its lifted-root
 #: bounds: formula/vertical.py).
-_FORM_PARAMETERS = STRUCTURAL_PARAMETERS | {"Q_FCY", "Q_FCY2", "Q_FYS2", "Q_FYS3", "Q_FZ2"}
+_FORM_PARAMETERS = SELECTS_FORM | {"Q_FCY", "Q_FCY2", "Q_FYS2", "Q_FYS3", "Q_FZ2"}
 
 
 def _run_time_parameters(params, constants):
