@@ -372,7 +372,8 @@ class _SymbolicParameters:
     """A parameter set in which some parameters are CasADi symbols (for :meth:`MFModel.casadi_function`)."""
 
     def __init__(self, params, symbols: dict):
-        fixed = sorted(set(symbols) & SELECTS_FORM)  # (Python branches: they cannot be symbolic)
+        form = SELECTS_FORM | (vertical.FORM_PARAMETERS_62 if params.version == "62" else frozenset())
+        fixed = sorted(set(symbols) & form)  # (Python branches: they cannot be symbolic)
         if fixed:
             raise ModelInputError(f"parameter(s) {fixed} select the form of the equations and must stay numbers")
         unknown = sorted(n for n in symbols if n not in params)

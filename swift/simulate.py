@@ -744,9 +744,8 @@ _RING_FIELDS = ("mb", "ibx", "iby", "cbx", "cby", "cbg", "cbth", "kbx", "kby", "
 
 
 #: Parameters whose values choose a form of the equations (Python branches): numbers in the compiled code (keyed).
-#: :data:`mftyre.params.SELECTS_FORM` (the schema's fact), and those the MF 6.2 loaded-radius solver tests (its lifted-root
-#: bounds: formula/vertical.py).
-_FORM_PARAMETERS = SELECTS_FORM | {"Q_FCY", "Q_FCY2", "Q_FYS2", "Q_FYS3", "Q_FZ2"}
+#: :data:`mftyre.params.SELECTS_FORM` (the schema's fact) and those the MF 6.2 loaded-radius solver branches on.
+_FORM_PARAMETERS = SELECTS_FORM | vertical.FORM_PARAMETERS_62
 
 
 def _run_time_parameters(params, constants):

@@ -59,3 +59,13 @@ def test_casadi_function_rejects_unknown_names():
         model.casadi_function(inputs=("fz", "slip"))
     with pytest.raises(ModelInputError, match="unknown output"):
         model.casadi_function(outputs=("fy", "force"))
+
+
+@pytest.mark.parametrize("name", ["Q_FCY", "Q_FZ2"])
+def test_symbolic_mf62_solver_form_parameters_are_refused_by_name(name):
+    """The MF 6.2 loaded-radius solver branches on Q_FCY, Q_FCY2, Q_FYS2, Q_FYS3, Q_FZ2 in Python: as symbols they
+    raised CasADi's 'Cannot compute the truth value' from deep inside the solver; now an error naming them."""
+    model = mftyre.load_tir(TIR_FILES / "car_205_60R15_mf62_swift.tir")
+    with pytest.raises(ModelInputError, match=f"{name}.*must stay numbers"):
+        model.casadi_function(parameters=(name,))
+    mftyre.load_tir(TIR_FILES / "car_205_60R15_mf61.tir").casadi_function(parameters=(name,))  # MF 6.1: smooth
