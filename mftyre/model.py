@@ -372,7 +372,7 @@ class _SymbolicParameters:
     """A parameter set in which some parameters are CasADi symbols (for :meth:`MFModel.casadi_function`)."""
 
     def __init__(self, params, symbols: dict):
-        form = SELECTS_FORM | (vertical.FORM_PARAMETERS_62 if params.version == "62" else frozenset())
+        form = SELECTS_FORM | (vertical.MF62_SOLVER_FORM_PARAMETERS if params.version == "62" else frozenset())
         fixed = sorted(set(symbols) & form)  # (Python branches: they cannot be symbolic)
         if fixed:
             raise ModelInputError(f"parameter(s) {fixed} select the form of the equations and must stay numbers")

@@ -745,7 +745,7 @@ _RING_FIELDS = ("mb", "ibx", "iby", "cbx", "cby", "cbg", "cbth", "kbx", "kby", "
 
 #: Parameters whose values choose a form of the equations (Python branches): numbers in the compiled code (keyed).
 #: :data:`mftyre.params.SELECTS_FORM` (the schema's fact) and those the MF 6.2 loaded-radius solver branches on.
-_FORM_PARAMETERS = SELECTS_FORM | vertical.FORM_PARAMETERS_62
+_FORM_PARAMETERS = SELECTS_FORM | vertical.MF62_SOLVER_FORM_PARAMETERS
 
 
 def _run_time_parameters(params, constants):

@@ -55,12 +55,12 @@ __all__ = [
     "pressure_increment", "vertical_force", "loaded_radius",
     "free_radius", "vertical_stiffness", "rolling_radius_reduction", "spin_and_radius",
     "vertical_force_61", "vertical_force_62", "deflection_61", "deflection_62", "loaded_radius_62", "contact_patch",
-    "FORM_PARAMETERS_62",
+    "MF62_SOLVER_FORM_PARAMETERS",
 ]
 
 #: Parameters the MF 6.2 loaded-radius solver branches on in Python (side-force term present, its bounds of the
 #: lifted roots): numbers, never symbols, in an MF 6.2 graph.
-FORM_PARAMETERS_62 = frozenset({"Q_FCY", "Q_FCY2", "Q_FYS2", "Q_FYS3", "Q_FZ2"})
+MF62_SOLVER_FORM_PARAMETERS = frozenset({"Q_FCY", "Q_FCY2", "Q_FYS2", "Q_FYS3", "Q_FZ2"})
 
 
 def pressure_increment(prm, p=None):
