@@ -26,9 +26,9 @@ CLEAT = "cleat(x0=0.8, length=0.05, height=0.01)"
 
 #: Variables one backend has in a mode and the other has not (the gaps left; see fmu/README.md).
 ONLY_NATIVE = {
-    "steady": {"road_camber", "mu_scale", "u_x", "u_y"},
-    "rig": {"road_camber", "mu_scale", "u_x", "u_y"},
-    "swift": {"road_camber", "Fx_c", "Fy_c", "road_curvature", "Re_variation", "road_camber_eff", "x_contact"},
+    "steady": set(),
+    "rig": set(),
+    "swift": {"Fx_c", "Fy_c", "road_curvature", "Re_variation", "road_camber_eff", "x_contact"},
 }
 ONLY_NATIVE["swift_torque"] = ONLY_NATIVE["swift"]
 #: Names the SWIFT backends give different meanings (see fmu/README.md): Rl is the lever arm of the contact forces
@@ -36,6 +36,7 @@ ONLY_NATIVE["swift_torque"] = ONLY_NATIVE["swift"]
 SWIFT_DIFFERENT = {"Rl"}
 #: pythonfmu: one FMU for every mode (String parameters choose), so its extra variables are the other modes' too.
 ONLY_PYTHONFMU = {"vy", "omega", "z", "vz", "road_z", "torque", "kappa_in", "alpha_in", "Fz_in", "axle_mass",
+                  "mu_scale", "u_x", "u_y",
                   "x_start", "max_step", "Vsx", "Vsy", "omega_used", "contact_width", "Fz_c", "road_w", "road_slope",
                   "x_road", "Mx_c", "My_c", "trail", "mux", "muy"}
 
