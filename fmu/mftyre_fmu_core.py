@@ -23,8 +23,9 @@ from pathlib import Path
 #: MF outputs taken from the model (names of :data:`mftyre.model.OUTPUT_UNITS`).
 MF_OUTPUTS = ("fx", "fy", "fz", "mx", "my", "mz", "omega", "re", "rho", "rl", "a", "b", "t", "mux", "muy")
 
-#: Outputs the FMU adds to the wheel's (mftyre.transient.OUTPUTS), in every mode.
-EXTRA_OUTPUTS = ("Fz_c", "road_w", "road_slope", "x_road")
+#: Outputs the FMU adds to the wheel's (mftyre.transient.OUTPUTS), in every mode (the SWIFT wheel's).
+EXTRA_OUTPUTS = ("Fz_c", "road_w", "road_slope", "x_road", "Fx_c", "Fy_c", "road_curvature", "Re_variation",
+                 "road_camber_eff", "x_contact")
 #: What the pythonfmu FMU says more about some outputs than the vocabulary (its modes: steady vehicle/rig, swift).
 OUTPUT_NOTES = {
     "Fz": "vertical force on the tyre, >= 0 (at the wheel centre, ISO-W axes)",
@@ -166,10 +167,6 @@ class _Bundle:
         self.mf = fns["mf"]
 
 
-def _floats(values):
-    return tuple(float(v) for v in values)
-
-
 # ------------------------------------------------------------------------------------------ SWIFT (rigid ring)
 # The SWIFT road table (grid step, window), the stepping rule and its constants are those of the native FMU's
 # wheel: swift.fmu_model (TABLE_DX, WINDOW, SUBSTEPS, internal_steps).
@@ -290,13 +287,12 @@ class SwiftCore:
     def __init__(self, model, road="", *, vertical="load", rim="speed", x_start=0.0, max_step=1e-3,
                  axle_mass=30.0, evaluator="auto", functions_dir=None, index=None, log=None, base_dir=None):
         import numpy as np
-        from mftyre import transient
         from mftyre.backend import NUMPY
         from swift import Cams, SwiftTyre
         from swift.fmu_model import SUBSTEPS, TABLE_DX, WINDOW
         from swift.ring import STATE_NAMES
 
-        self.wheel, self.be = transient, NUMPY  # the wheel's equations, on floats
+        self.be = NUMPY  # the wheel's equations (swift.fmu_model.contact_extras), on floats
 
         log = log or (lambda msg: None)
         if vertical not in ("load", "position"):
@@ -372,7 +368,7 @@ class SwiftCore:
 
         return StepInputs(x=float(state[self.S["xa"]]), vx=u["vx"], z=u["z"] - self.road_z + dz, vz=u["vz"],
                           load=u["Fz_in"], omega=u["omega"], torque=u["torque"], p=u["p"], y=0.0, vy=u["vy"],
-                          gamma=u["gamma"], psi=0.0, road_camber=0.0)
+                          gamma=u["gamma"], psi=0.0, road_camber=u["road_camber"])
 
     # ------------------------------------------------------------------------------------------------ stepping
     def initialise(self, u):
@@ -422,24 +418,25 @@ class SwiftCore:
         return self._outputs(state, out, u)
 
     def _outputs(self, state, o, u):
+        from swift.fmu_model import contact_extras
+
         S = self.S
-        fzc = float(o["fz_c"])
-        kappa, alpha, vcx = float(o["kappa"]), float(o["alpha"]), float(o["vcx"])
-        # the MF's extras at the ring's slip state, its slip -Vsx / |Vcx| given as the wheel's (mf_slip: reversing)
-        kappa_mf = float(self.wheel.mf_slip(kappa, vcx, self.be))
-        mf = self.fn.mf(max(fzc, 1e-3), kappa_mf, alpha, u["gamma"], vcx, u["p"], float(state[S["omb"]]))
-        _, _, _, mx_c, my_c, _, _, _, _, _, _, b, t, mux, muy = mf
+        picked = [MF_OUTPUTS.index(n) for n in ("mx", "my", "b", "t", "mux", "muy")]
+
+        def mf(*args):  # the MF extras of the native wheel (swift.fmu_model.contact_extras), on this evaluator
+            values = self.fn.mf(*(float(a) for a in args))
+            return [values[i] for i in picked]
+
+        extras = contact_extras(self.model, o, u["gamma"], u["p"], float(state[S["omb"]]), self.be, mf)
         beta = float(o["beta"])
-        vsx, vsy = _floats(self.wheel.slip_speeds(kappa, alpha, abs(vcx), self.be))  # the ring's MF speed
-        return {
-            "Fx": float(o["fx"]), "Fy": float(o["fy"]), "Fz": float(o["fz"]),
-            "Mx": float(o["mx"]), "My": float(o["my"]), "Mz": float(o["mz"]),
-            "Mx_c": mx_c, "My_c": my_c, "Mz_c": float(o["mz_c"]),
-            "kappa": kappa, "alpha": alpha, "Vsx": vsx, "Vsy": vsy,
-            "omega_used": float(state[S["oma"]]),
-            "rho": float(o["rho"]), "Rl": (float(state[S["za"]]) - float(o["w"])) * math.cos(beta),
-            "Re": float(o["re"]), "contact_length": 2.0 * float(o["a"]), "contact_width": 2.0 * b, "trail": t,
-            "mux": mux, "muy": muy,
-            "road_w": float(o["w"]) + self.road_z, "road_slope": beta,
-            "x_road": float(state[S["xa"]]) + self.x_offset, "Fz_c": fzc,
+        out = {
+            "Fx": o["fx"], "Fy": o["fy"], "Fz": o["fz"], "Mx": o["mx"], "My": o["my"], "Mz": o["mz"],
+            "Fx_c": o["fx_c"], "Fy_c": o["fy_c"], "Fz_c": o["fz_c"], "Mz_c": o["mz_c"],
+            "kappa": o["kappa"], "alpha": o["alpha"], "omega_used": state[S["oma"]],
+            "rho": o["rho"], "Rl": (float(state[S["za"]]) - float(o["w"])) * math.cos(beta),  # the loaded radius
+            "Re": o["re"], "contact_length": 2.0 * float(o["a"]),
+            "road_w": float(o["w"]) + self.road_z, "road_slope": beta, "road_curvature": o["curvature"],
+            "Re_variation": o["dre"], "road_camber_eff": o["beta_x"],
+            "x_road": float(state[S["xa"]]) + self.x_offset, "x_contact": float(o["x_c"]) + self.x_offset, **extras,
         }
+        return {k: float(v) for k, v in out.items()}

@@ -83,7 +83,7 @@ PARAMETERS = pick("parameter", "x_start", "max_step")
 OUTPUTS = pick(
     "output", "Fx", "Fy", "Fz", "Mx", "My", "Mz", "Fx_c", "Fy_c", "Fz_c", "Mz_c", "kappa", "alpha", "rho", "Rl", "Re",
     "contact_length", "road_w", "road_slope", "road_curvature", "Re_variation", "road_camber_eff", "x_contact",
-    "x_road", describe={
+    "x_road", "Mx_c", "My_c", "contact_width", "trail", "mux", "muy", "Vsx", "Vsy", "omega_used", describe={
         "Fx": "force on the rim along ISO-W x, at the wheel centre",
         "Fy": "force on the rim along ISO-W y, at the wheel centre",
         "Fz": "force on the rim along ISO-W z (up), at the wheel centre",
@@ -92,10 +92,15 @@ OUTPUTS = pick(
         "kappa": "transient longitudinal slip of the contact patch",
         "alpha": "transient slip angle of the contact patch",
         "rho": "tyre deflection normal to the effective road",
-        "Rl": "lever arm of the contact forces (belt centre to contact point)",
+        "Rl": "loaded radius: wheel centre to the effective road plane, (z - road_w) cos(road_slope)",
+        "Vsx": "longitudinal slip speed of the contact patch, -kappa |Vcx|",
+        "Vsy": "lateral slip speed of the contact patch, tan(alpha) |Vcx|",
+        "omega_used": "rim spin speed (the input, or driven by the torque)",
         "road_w": "effective road height (tandem cams)"})
+#: The outputs taken from the MF at the ring's contact state (the ring does not report them).
+_MF_EXTRAS = {"Mx_c": "mx", "My_c": "my", "contact_width": "b", "trail": "t", "mux": "mux", "muy": "muy"}
 _RING = {"Fx": "fx", "Fy": "fy", "Fz": "fz", "Mx": "mx", "My": "my", "Mz": "mz", "Fx_c": "fx_c", "Fy_c": "fy_c",
-         "Fz_c": "fz_c", "Mz_c": "mz_c", "kappa": "kappa", "alpha": "alpha", "rho": "rho", "Rl": "rl", "Re": "re",
+         "Fz_c": "fz_c", "Mz_c": "mz_c", "kappa": "kappa", "alpha": "alpha", "rho": "rho", "Re": "re",
          "road_slope": "beta", "road_curvature": "curvature", "Re_variation": "dre", "road_camber_eff": "beta_x",
          "x_contact": "x_c"}
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
@@ -112,6 +117,24 @@ def internal_steps(h: float, max_step: float, vx: float) -> int:
                               f"({STEP_RATE_LIMIT:g} per simulated second): max_step too small or the speed too high "
                               "for this model")
     return max(1, n)
+
+
+def contact_extras(model, ring_out, gamma, p, omega_belt, be, mf=None) -> dict:
+    """The outputs the ring does not report, from the MF at its contact state (``ring_out``: the ring's outputs by
+    name): Mx_c, My_c, contact_width, trail, mux, muy at the load Fz_c (at least 1 mN), the slip -Vsx / Vcx given
+    as the wheel's (:func:`mftyre.transient.mf_slip`), the belt spin; Vsx, Vsy of the ring's slips at |Vcx|.
+    ``mf``: the MF (fz, kappa, alpha, gamma, vx, p, omega) -> (mx, my, b, t, mux, muy), default the model's."""
+    from mftyre.transient import mf_slip, slip_speeds
+
+    if mf is None:
+        mf = model.casadi_function(inputs=("fz", "kappa", "alpha", "gamma", "vx", "p", "omega"),
+                                   outputs=tuple(_MF_EXTRAS.values()), name="mf_extras")
+    kappa, alpha, vcx = ring_out["kappa"], ring_out["alpha"], ring_out["vcx"]
+    values = mf(be.fmax(ring_out["fz_c"], 1e-3), mf_slip(kappa, vcx, be), alpha, gamma, vcx, p, omega_belt)
+    extras = dict(zip(_MF_EXTRAS, values))
+    extras["contact_width"] = 2.0 * extras["contact_width"]
+    extras["Vsx"], extras["Vsy"] = slip_speeds(kappa, alpha, be.abs(vcx), be)
+    return extras
 
 
 @dataclass(frozen=True)
@@ -141,6 +164,8 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
     :class:`swift.simulate.SwiftTyre`'s (its step, outputs and static equilibrium); here only the FMU's inputs are
     mapped onto it: the state holds heights above the road datum, the ring sees them above ``road_z``."""
     import casadi as ca
+
+    from mftyre.backend import casadi_backend
 
     from .simulate import SwiftTyre
 
@@ -180,8 +205,12 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
                        ["x_next"])
     ring_out = dict(zip(OUTPUT_NAMES, ca.vertsplit(tyre.output_function(lifted(x, -U["road_z"]), uring, x0w,
                                                                          grid, hw))))
-    special = {"contact_length": 2 * ring_out["a"], "x_road": x[_S["xa"]], "road_w": ring_out["w"] + U["road_z"]}
+    special = {"contact_length": 2 * ring_out["a"], "x_road": x[_S["xa"]], "road_w": ring_out["w"] + U["road_z"],
+               "Rl": (x[_S["za"]] - U["road_z"] - ring_out["w"]) * ca.cos(ring_out["beta"]),
+               "omega_used": x[_S["oma"]]}
+    special.update(contact_extras(model, ring_out, U["gamma"], U["p"], x[_S["omb"]], be=casadi_backend()))
     y = [special[n] if n in special else ring_out[_RING[n]] for n in OUTPUTS]
+    y = [ca.MX(v) if not isinstance(v, ca.MX) else v for v in y]
     outw = ca.Function("swift_out", [x, u, x0w, grid, hw], [ca.vertcat(*y)], ["x", "u", "x0w", "grid", "hw"], ["y"])
 
     # static equilibrium at x_start (SwiftTyre's, axle height imposed), in the road frame

@@ -3,8 +3,8 @@
 the same mode, give the same outputs. Modes: steady with the load imposed, steady on a rig (load and slips
 imposed), SWIFT with axle height and spin imposed over a cleat.
 
-What the backends do not share yet is pinned below (ONLY_NATIVE, ONLY_PYTHONFMU), so that closing a gap shows
-here."""
+What the backends do not share is pinned below (ONLY_NATIVE: nothing left; ONLY_PYTHONFMU: the pythonfmu FMU is
+one FMU for every mode, so it has the other modes' variables), so that a new gap shows here."""
 from __future__ import annotations
 
 import math
@@ -18,33 +18,24 @@ fmpy = pytest.importorskip("fmpy")
 
 from mftyre.variables import WHEEL  # noqa: E402
 from test_fmu import TIR61, TIR62, Slave  # noqa: E402
-from test_fmu_native import _build  # noqa: E402  (mftyre fmu build, any backend)
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler (cc) to build native FMUs")
 
 CLEAT = "cleat(x0=0.8, length=0.05, height=0.01)"
 
 #: Variables one backend has in a mode and the other has not (the gaps left; see fmu/README.md).
-ONLY_NATIVE = {
-    "steady": set(),
-    "rig": set(),
-    "swift": {"Fx_c", "Fy_c", "road_curvature", "Re_variation", "road_camber_eff", "x_contact"},
-}
-ONLY_NATIVE["swift_torque"] = ONLY_NATIVE["swift"]
-#: Names the SWIFT backends give different meanings (see fmu/README.md): Rl is the lever arm of the contact forces
-#: (belt centre to contact point) in the native FMU, (wheel centre - effective road height) cos(slope) in pythonfmu.
-SWIFT_DIFFERENT = {"Rl"}
+ONLY_NATIVE = {"steady": set(), "rig": set(), "swift": set(), "swift_torque": set()}
 #: pythonfmu: one FMU for every mode (String parameters choose), so its extra variables are the other modes' too.
 ONLY_PYTHONFMU = {"vy", "omega", "z", "vz", "road_z", "torque", "kappa_in", "alpha_in", "Fz_in", "axle_mass",
-                  "mu_scale", "u_x", "u_y",
+                  "mu_scale", "u_x", "u_y", "Fx_c", "Fy_c", "road_curvature", "Re_variation", "road_camber_eff",
+                  "x_contact",
                   "x_start", "max_step", "Vsx", "Vsy", "omega_used", "contact_width", "Fz_c", "road_w", "road_slope",
                   "x_road", "Mx_c", "My_c", "trail", "mux", "muy"}
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
-    out = tmp_path_factory.mktemp("backends")
-    builds = {
+def fmus(built_fmu):
+    builds = {  # the pythonfmu steady and swift FMUs and the native steady one are test_fmu's and test_fmu_swift's
         ("native", "steady"): [TIR61, "--vertical", "load"],
         ("native", "rig"): [TIR61, "--input-mode", "rig"],
         ("native", "swift"): [TIR62, "--model", "swift", "--road", CLEAT],
@@ -52,10 +43,7 @@ def fmus(tmp_path_factory):
         ("pythonfmu", "steady"): [TIR61, "--backend", "pythonfmu", "--vertical", "load"],
         ("pythonfmu", "swift"): [TIR62, "--backend", "pythonfmu", "--model", "swift", "--vertical", "position"],
     }
-    paths = {}
-    for (backend, mode), args in builds.items():
-        paths[backend, mode] = out / f"{backend}_{mode}.fmu"
-        assert _build([args[0], "-o", paths[backend, mode], *args[1:]]) == 0, (backend, mode)
+    paths = {key: built_fmu(*args) for key, args in builds.items()}
     paths["pythonfmu", "rig"] = paths["pythonfmu", "steady"]  # one FMU, input_mode chosen at run time
     paths["pythonfmu", "swift_torque"] = paths["pythonfmu", "swift"]  # rim chosen at run time
     return paths
@@ -137,9 +125,10 @@ def test_both_backends_give_the_same_swift_run_over_a_cleat(fmus, tmp_path, rim)
     swing = max(r["Fz"] for r in native) - min(r["Fz"] for r in native)
     assert swing > 300.0  # the cleat is felt
     shared = native[0].keys() & python[0].keys()
-    assert {"Fx", "Fz", "My", "kappa", "rho", "Re", "road_w", "road_slope", "x_road"} <= shared
+    assert {"Fx", "Fz", "My", "kappa", "rho", "Rl", "Re", "road_w", "road_slope", "x_road", "Mx_c", "My_c", "trail",
+            "mux", "contact_width", "Vsx", "omega_used", "Fx_c", "x_contact", "road_curvature"} <= shared
     for i, (a, b) in enumerate(zip(native, python)):
-        for name in shared - SWIFT_DIFFERENT:
+        for name in shared:
             scale = 1e-6 * (swing if name[0] in "FM" else 1.0)
             assert a[name] == pytest.approx(b[name], rel=1e-6, abs=scale), (i, name)
     assert math.isclose(native[-1]["x_road"], 10.0 * 0.15, rel_tol=1e-9)
