@@ -13,7 +13,8 @@ rigid ring of :mod:`swift.ring` stepped by :class:`swift.simulate.SwiftTyre`'s R
     wheel.step(1e-3); wheel.outputs()["Fz"]
 
 Modes: axle height imposed (input ``z``, wheel-centre height above the road datum, moving with ``vz`` within a
-step), spin imposed (``omega``); the road is the profile lifted by ``road_z`` (held over a step) and tilted by
+step) or (``axle="load"``) the axle of AXLE_MASS pushed down by the input ``Fz_in``; spin imposed (``omega``) or
+(``rim="torque"``) the rim driven by the input ``torque``; the road is the profile lifted by ``road_z`` (held over a step) and tilted by
 ``road_camber`` (the ring's input, added to the multi-track camber of a 3D profile). The wheel starts at
 ``x_start`` on the road (x_road = x_start + integral of vx dt: obstacles are met where they are, whatever the
 start) in static equilibrium (the Newton iteration of
@@ -68,15 +69,25 @@ INPUTS = pick("input", "vx", "vy", "omega", "gamma", "z", "vz", "p", "road_z", "
                    "multi-track camber"})
 #: speed: the rim spins at the input omega; torque: the input torque drives the rim (omega: its start guess).
 RIM_MODES = ("speed", "torque")
+#: height: the axle height z (and vz) imposed; load: the downward force Fz_in on the axle (mass AXLE_MASS) moves it.
+AXLE_MODES = ("height", "load")
+#: Mass [kg] of the axle the load input pushes down (axle="load"; swift.SwiftTyre's default, the pythonfmu FMU's
+#: axle_mass start).
+AXLE_MASS = 30.0
 
 
-def input_table(rim: str = "speed") -> dict:
-    """The wheel's inputs (name -> Variable) with the rim mode ``rim``."""
-    if rim == "speed":
-        return INPUTS
-    start = INPUTS["omega"].but(description="rim spin speed at the start (static equilibrium); the torque drives it "
-                                            "afterwards")
-    return {**{n: start if n == "omega" else v for n, v in INPUTS.items()}, **pick("input", "torque")}
+def input_table(rim: str = "speed", axle: str = "height") -> dict:
+    """The wheel's inputs (name -> Variable) with the rim mode ``rim`` and the axle mode ``axle``."""
+    table = dict(INPUTS)
+    if rim == "torque":
+        table["omega"] = INPUTS["omega"].but(description="rim spin speed at the start (static equilibrium); the "
+                                                         "torque drives it afterwards")
+        table.update(pick("input", "torque"))
+    if axle == "load":
+        del table["z"], table["vz"]
+        table.update(pick("input", "Fz_in", describe={"Fz_in": f"downward force on the axle (mass {AXLE_MASS:g} kg), "
+                                                                "which moves under it and the tyre's force"}))
+    return table
 
 
 PARAMETERS = pick("parameter", "x_start", "max_step")
@@ -151,6 +162,7 @@ class SwiftFunctions(StateFunctions):
     output_dependencies: list
     config_extra: str
     rim: str = "speed"
+    axle: str = "height"
 
     def window_start(self, xb: float) -> int:
         """First table sample of the window around the belt at ``xb``, clamped to the table."""
@@ -158,9 +170,11 @@ class SwiftFunctions(StateFunctions):
         return min(max(i0, 0), self.table_h.size // 2 - WINDOW)
 
 
-def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed") -> SwiftFunctions:
+def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed",
+                    axle: str = "height") -> SwiftFunctions:
     """The functions of the SWIFT wheel of ``model`` on ``road`` (a :class:`swift.road.Road`, an expression or a
-    CSV file, see :func:`swift.road.parse_road`); ``x_start``: default start position. The ring is
+    CSV file, see :func:`swift.road.parse_road`); ``x_start``: default start position; ``rim``, ``axle``: the modes
+    (:data:`RIM_MODES`, :data:`AXLE_MODES`). The ring is
     :class:`swift.simulate.SwiftTyre`'s (its step, outputs and static equilibrium); here only the FMU's inputs are
     mapped onto it: the state holds heights above the road datum, the ring sees them above ``road_z``."""
     import casadi as ca
@@ -171,7 +185,9 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
 
     if rim not in RIM_MODES:
         raise ModelInputError(f"rim must be one of {', '.join(RIM_MODES)}; got {rim!r}")
-    table_u = input_table(rim)
+    if axle not in AXLE_MODES:
+        raise ModelInputError(f"axle must be one of {', '.join(AXLE_MODES)}; got {axle!r}")
+    table_u = input_table(rim, axle)
     road = parse_road(road)
     prm = model.params
     cams = Cams.from_params(prm, warn=False)  # the tyre below warns
@@ -179,13 +195,14 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
     bps = tuple(road.breakpoints)
     reach = cams.ae + 2 * dx
     lo, hi = (min(bps) - reach, max(bps) + reach) if bps else (0.0, 1.0)
-    tyre = SwiftTyre(model, road, axle="height", rim=rim, x_range=(math.floor(lo / dx) * dx,
-                     math.ceil(hi / dx) * dx), table_dx=dx, window=WINDOW, substeps=SUBSTEPS, compiled=False)
+    tyre = SwiftTyre(model, road, axle=axle, rim=rim, x_range=(math.floor(lo / dx) * dx,
+                     math.ceil(hi / dx) * dx), table_dx=dx, window=WINDOW, substeps=SUBSTEPS, axle_mass=AXLE_MASS,
+                     compiled=False)
     nx = len(STATE_NAMES)
     x, u, q = ca.MX.sym("x", nx), ca.MX.sym("u", len(table_u)), ca.MX.sym("q", len(PARAMETERS))
     x0w, grid, hw, dt = ca.MX.sym("x0w"), ca.MX.sym("grid", WINDOW), ca.MX.sym("hw", 2 * WINDOW), ca.MX.sym("dt")
     U = {n: u[i] for i, n in enumerate(table_u)}
-    ring_u = {"vx": U["vx"], "load": 0, "torque": U.get("torque", 0), "p": U["p"], "y": 0, "vy": U["vy"],
+    ring_u = {"vx": U["vx"], "load": U.get("Fz_in", 0), "torque": U.get("torque", 0), "p": U["p"], "y": 0, "vy": U["vy"],
               "gamma": U["gamma"], "psi": 0, "road_camber": U["road_camber"]}
     uring = ca.vertcat(*(ring_u[n] for n in INPUT_NAMES))
 
@@ -213,9 +230,10 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
     y = [ca.MX(v) if not isinstance(v, ca.MX) else v for v in y]
     outw = ca.Function("swift_out", [x, u, x0w, grid, hw], [ca.vertcat(*y)], ["x", "u", "x0w", "grid", "hw"], ["y"])
 
-    # static equilibrium at x_start (SwiftTyre's, axle height imposed), in the road frame
+    # static equilibrium at x_start (SwiftTyre's), in the road frame
     equilibrium = tyre.equilibrium_function(NEWTON_STEPS)
-    x_eq = equilibrium(q[0], U["z"] - U["road_z"], U["vz"], U["omega"], uring, x0w, grid, hw)
+    height = (U["z"] - U["road_z"], U["vz"]) if axle == "height" else (0.0, 0.0)  # load: solved for
+    x_eq = equilibrium(q[0], *height, U["omega"], uring, x0w, grid, hw)
     init = ca.Function("swift_init", [u, q, x0w, grid, hw], [lifted(x_eq, U["road_z"])],
                        ["u", "q", "x0w", "grid", "hw"], ["x0"])
 
@@ -236,21 +254,22 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
              + "static const double ROAD_H[2 * ROAD_N] = {" + ",".join(repr(float(v)) for v in h) + "};\n"
              + "static const double ROAD_GRID[ROAD_WINDOW] = {" + ",".join(repr(float(v)) for v in grid_v) + "};\n")
     omega0, z0 = free_rolling_start(model, INPUTS["vx"].start)
-    computed = {"p": float(prm.INFLPRES), "omega": omega0, "z": z0}
+    computed = {"p": float(prm.INFLPRES), "omega": omega0, "z": z0,
+                "Fz_in": float(prm.FNOMIN)}
     inputs = tuple(v.but(start=computed[n]) if n in computed else v for n, v in table_u.items())
     parameters = (PARAMETERS["x_start"].but(start=float(x_start)), PARAMETERS["max_step"])
     return SwiftFunctions(init=init, step=step, out=outw, state_names=STATE_NAMES, inputs=inputs,
                           parameters=parameters, outputs=tuple(OUTPUTS.values()), table_x0=float(table.x0),
                           table_dx=float(table.dx), table_h=h, grid=grid_v, output_dependencies=deps,
-                          config_extra=extra, rim=rim)
+                          config_extra=extra, rim=rim, axle=axle)
 
 
 class SwiftWheel:
     """The SWIFT wheel in Python (module notes): ``set_inputs``, ``set_parameters``, ``initialise``, ``step``,
     ``outputs``, ``state``. The same functions and the same window placement as the native FMU."""
 
-    def __init__(self, model, road=None, *, x_start: float = 0.0, rim: str = "speed"):
-        self.functions = f = swift_functions(model, road, x_start=x_start, rim=rim)
+    def __init__(self, model, road=None, *, x_start: float = 0.0, rim: str = "speed", axle: str = "height"):
+        self.functions = f = swift_functions(model, road, x_start=x_start, rim=rim, axle=axle)
         self._params = model.params
         self.u = np.array(f.input_starts, dtype=float)
         self.q = np.array(f.parameter_starts, dtype=float)
@@ -288,7 +307,8 @@ class SwiftWheel:
         check_pressure(self._params, float(self.u[self.functions.input_names.index("p")]))
         U = dict(zip(self.functions.input_names, self.u))
         x = self.state.copy()
-        x[_S["za"]], x[_S["vza"]] = U["z"], U["vz"]
+        if self.functions.axle == "height":  # the axle height imposed (as glue_swift.c)
+            x[_S["za"]], x[_S["vza"]] = U["z"], U["vz"]
         if self.functions.rim == "speed":  # the rim spin imposed (as glue_swift.c)
             x[_S["oma"]] = U["omega"]
         n = internal_steps(h, self.q[1], U["vx"])
