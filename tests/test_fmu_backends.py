@@ -24,7 +24,7 @@ pytestmark = pytest.mark.skipif(shutil.which("cc") is None, reason="no C compile
 CLEAT = "cleat(x0=0.8, length=0.05, height=0.01)"
 
 #: Variables one backend has in a mode and the other has not (the gaps left; see fmu/README.md).
-ONLY_NATIVE = {"steady": set(), "rig": set(), "swift": set(), "swift_torque": set(), "swift_load": set()}
+ONLY_NATIVE = {"steady": set(), "rig": set(), "swift": set(), "swift_load_torque": set()}
 #: pythonfmu: one FMU for every mode (String parameters choose), so its extra variables are the other modes' too.
 ONLY_PYTHONFMU = {"vy", "omega", "z", "vz", "road_z", "torque", "kappa_in", "alpha_in", "Fz_in", "axle_mass",
                   "mu_scale", "u_x", "u_y", "Fx_c", "Fy_c", "road_curvature", "Re_variation", "road_camber_eff",
@@ -39,15 +39,14 @@ def fmus(built_fmu):
         ("native", "steady"): [TIR61, "--vertical", "load"],
         ("native", "rig"): [TIR61, "--input-mode", "rig"],
         ("native", "swift"): [TIR62, "--model", "swift", "--road", CLEAT],
-        ("native", "swift_torque"): [TIR62, "--model", "swift", "--road", CLEAT, "--rim", "torque"],
-        ("native", "swift_load"): [TIR62, "--model", "swift", "--road", CLEAT, "--vertical", "load"],
+        ("native", "swift_load_torque"): [TIR62, "--model", "swift", "--road", CLEAT, "--vertical", "load", "--rim",
+                                          "torque"],
         ("pythonfmu", "steady"): [TIR61, "--backend", "pythonfmu", "--vertical", "load"],
         ("pythonfmu", "swift"): [TIR62, "--backend", "pythonfmu", "--model", "swift", "--vertical", "position"],
     }
     paths = {key: built_fmu(*args) for key, args in builds.items()}
     paths["pythonfmu", "rig"] = paths["pythonfmu", "steady"]  # one FMU, input_mode chosen at run time
-    paths["pythonfmu", "swift_torque"] = paths["pythonfmu", "swift"]  # rim chosen at run time
-    paths["pythonfmu", "swift_load"] = paths["pythonfmu", "swift"]  # vertical_input chosen at run time
+    paths["pythonfmu", "swift_load_torque"] = paths["pythonfmu", "swift"]  # vertical_input, rim chosen at run time
     return paths
 
 
@@ -55,7 +54,7 @@ def _variables(path):
     return {v.name: v for v in fmpy.read_model_description(path).modelVariables if v.type == "Real"}
 
 
-@pytest.mark.parametrize("mode", ["steady", "rig", "swift", "swift_torque", "swift_load"])
+@pytest.mark.parametrize("mode", ["steady", "rig", "swift", "swift_load_torque"])
 def test_both_backends_speak_one_vocabulary(fmus, mode):
     native, python = _variables(fmus["native", mode]), _variables(fmus["pythonfmu", mode])
     for name, v in {**native, **python}.items():  # every Real variable of both is a word of the vocabulary
@@ -111,20 +110,21 @@ def test_both_backends_give_the_same_steady_results(fmus, tmp_path, mode):
             assert a[name] == pytest.approx(b[name], rel=1e-9, abs=1e-7), (mode, i, name, steps[i - 1] if i else {})
 
 
-@pytest.mark.parametrize("mode", ["swift", "swift_torque", "swift_load"])
+@pytest.mark.parametrize("mode", ["swift", "swift_load_torque"])
 def test_both_backends_give_the_same_swift_run_over_a_cleat(fmus, tmp_path, mode):
-    """Axle height imposed (or the axle pushed down by a load of 4000 N, swift_load), the spin imposed or the rim
-    driven by a torque (100 N m from 0.1 s), the wheel rolling over a 10 mm cleat at 10 m/s in 5 ms communication
-    steps: both backends step the same rigid ring with the same internal step (max_step 1 ms)."""
+    """The wheel rolling over a 10 mm cleat at 10 m/s in 5 ms communication steps, with the axle height and the
+    spin imposed (swift), or the axle pushed down by a load of 4000 N and the rim driven by a torque (100 N m from
+    0.1 s; swift_load_torque): both backends step the same rigid ring with the same internal step (max_step 1 ms)."""
     from mftyre import load_tir
     from mftyre.transient import free_rolling_start
 
     omega, z = free_rolling_start(load_tir(TIR62), 10.0)
-    start = {"vx": 10.0, "omega": omega, **({"Fz_in": 4000.0} if mode == "swift_load" else {"z": z})}
-    steps = [{}] * 20 + [{"torque": 100.0}] * 10 if mode == "swift_torque" else [{}] * 30  # 0.15 s: the cleat at 0.8 m
+    loaded = mode == "swift_load_torque"
+    start = {"vx": 10.0, "omega": omega, **({"Fz_in": 4000.0} if loaded else {"z": z})}
+    steps = [{}] * 20 + [{"torque": 100.0}] * 10 if loaded else [{}] * 30  # 0.15 s: over the cleat at 0.8 m
     native = _run(fmus["native", mode], tmp_path, start, steps, 5e-3)
-    python = _run(fmus["pythonfmu", mode], tmp_path, {**start, "road": CLEAT, "rim": "torque" if mode == "swift_torque"
-                  else "speed", "vertical_input": "load" if mode == "swift_load" else "position"}, steps, 5e-3)
+    python = _run(fmus["pythonfmu", mode], tmp_path, {**start, "road": CLEAT, "rim": "torque" if loaded else "speed",
+                                                      "vertical_input": "load" if loaded else "position"}, steps, 5e-3)
     swing = max(r["Fz"] for r in native) - min(r["Fz"] for r in native)
     assert swing > 300.0  # the cleat is felt
     shared = native[0].keys() & python[0].keys()
