@@ -49,6 +49,8 @@ _INPUTS = {
     "vz": "swift, vertical_input=position: wheel-centre vertical speed (z moves with it inside the step)",
     "Fz_in": "vertical load (vertical_input=load, and rig mode; swift: downward force on the axle)",
     "p": "inflation pressure (may change during the run)",
+    "road_camber": "road camber angle about ISO-W x (steady: the MF takes gamma - road_camber; swift: the ring's)",
+    "mu_scale": "steady: friction scale, multiplies LMUX and LMUY of the .tir (swift: must stay 1)",
     "kappa_in": "rig mode: longitudinal slip",
     "alpha_in": "rig mode: slip angle (ISO-W)",
     "torque": "swift, rim=torque: drive (+) or brake (-) torque on the rim about its axle",
@@ -60,7 +62,7 @@ _PARAMETERS = {  # name -> description; start values come from config.json
     "side": "side the tyre is mounted on: left or right (mirrors the lateral behaviour)",
     "input_mode": "vehicle (wheel-centre velocities, spin, vertical position or load) or rig (kappa, alpha, Fz)",
     "vertical_input": "vehicle mode: load (Fz_in is the load) or position (Fz from z - road_z)",
-    "evaluator": "auto (compiled C, else CasADi VM), compiled, casadi or numpy (reference, slow)",
+    "evaluator": "auto (compiled C, else CasADi VM), compiled or casadi",
     "road": "swift: road profile, e.g. cleat(x0=2, length=0.05, height=0.01); empty = flat (see documentation)",
     "rim": "swift: speed (the omega input is imposed) or torque (the torque input drives the rim)",
 }
@@ -94,9 +96,6 @@ class MFTyre(Fmi2Slave):
         super().__init__(**kwargs)
         self._config = self._read_config()
         cfg = self._config
-        starts = cfg.get("inputs", {})
-        for name in _INPUTS:
-            setattr(self, name, float(starts.get(name, 0.0)))
         params = cfg.get("parameters", {})
         for name in _PARAMETERS:
             setattr(self, name, str(params.get(name, "")))
@@ -104,6 +103,10 @@ class MFTyre(Fmi2Slave):
         import mftyre
         from mftyre.variables import WHEEL
 
+        starts = cfg.get("inputs", {})
+        for name in _INPUTS:
+            start = WHEEL[name].start
+            setattr(self, name, float(starts.get(name, start if math.isfinite(start) else 0.0)))
         self.version = mftyre.__version__  # the one version string (pyproject reads it too)
         from mftyre_fmu_core import outputs
 
@@ -223,7 +226,8 @@ class MFTyre(Fmi2Slave):
         resources = self.resources or "."
         self._import_mftyre(resources, swift=model_name == "swift")
         import mftyre
-        from mftyre_fmu_core import SteadyTyre, SwiftCore
+        from mftyre.transient import WheelTyre
+        from mftyre_fmu_core import SwiftCore, install_libraries
 
         tir = self.tir_file.strip()
         embedded = not tir
@@ -235,6 +239,8 @@ class MFTyre(Fmi2Slave):
         functions_dir = os.path.join(resources, "functions") if shipped else None
         index = cfg.get("functions") if shipped else None
         evaluator = self.evaluator.strip().lower() or "auto"
+        if evaluator not in ("auto", "compiled", "casadi"):
+            raise ValueError(f"parameter evaluator must be one of auto, compiled, casadi; got {self.evaluator!r}")
         warn = lambda m: self.log(m, Fmi2Status.warning)  # noqa: E731
         self._x_road = float(self.x_start)
         if model_name == "swift":
@@ -246,10 +252,15 @@ class MFTyre(Fmi2Slave):
             detail = (f"model swift (rim {rim}, road {self.road.strip() or 'flat'}), vertical_input {vertical}, "
                       f"step {self._core.path}, evaluator {self._core.mf_path}")
         else:
-            self._core = SteadyTyre(model, evaluator, functions_dir, index, log=warn)
+            if functions_dir is not None and index.get("wheel"):  # the compiled wheels shipped for this platform
+                try:
+                    install_libraries(os.path.join(functions_dir, "wheel"), index["wheel"])
+                except Exception as exc:  # read-only cache...: compiled now instead
+                    warn(f"shipped wheel libraries not installed: {exc}")
+            self._core = WheelTyre(model, "steady", vertical, input_mode=mode, evaluator=evaluator)
             self._mode = "rig" if mode == "rig" else vertical
             detail = (f"input_mode {mode}{'' if mode == 'rig' else ', vertical_input ' + vertical}, "
-                      f"evaluator {self._core.path}")
+                      f"evaluator {self._core.evaluator}")
         self.log(f"{cfg.get('tir_name', os.path.basename(path)) if embedded else path}: FITTYP "
                  f"{model.params.fittyp}, mounted {model.side}, {detail}", Fmi2Status.ok)
 
@@ -311,12 +322,7 @@ class MFTyre(Fmi2Slave):
         mode = self._mode
         if mode == "swift":
             return self._compute_swift(step_size)
-        if mode == "rig":
-            names = ("Fz_in", "kappa_in", "alpha_in", "gamma", "vx", "p")
-        elif mode == "load":
-            names = ("vx", "vy", "omega", "gamma", "p", "Fz_in")
-        else:
-            names = ("vx", "vy", "omega", "gamma", "p", "z", "road_z")
+        names = core.functions.input_names  # the wheel's inputs in this mode (mftyre.transient.input_table)
         values = [getattr(self, n) for n in names]
         bad = [f"{n}={v!r}" for n, v in zip(names, values) if not math.isfinite(v)]
         if not bad and not values[names.index("p")] > 0:
@@ -325,12 +331,8 @@ class MFTyre(Fmi2Slave):
             self._error(f"input rejected: {', '.join(bad)}; outputs keep their last valid values")
             self.status = 1
             return False
-        if mode == "rig":
-            out = core.step_rig(*values)
-        elif mode == "load":
-            out = core.step_vehicle(*values[:5], fz=values[5])
-        else:
-            out = core.step_vehicle(*values[:5], height=values[5] - values[6])
+        core.set_inputs(**dict(zip(names, values)))
+        out = core.outputs()
         if not all(math.isfinite(v) for v in out.values()):
             self._error(f"the model returned non-finite outputs for {dict(zip(names, values))}; outputs held")
             self.status = 1
@@ -346,13 +348,15 @@ class MFTyre(Fmi2Slave):
         self.status = 0
         return True
 
-    _SWIFT_INPUTS = ("vx", "vy", "omega", "gamma", "z", "vz", "road_z", "Fz_in", "torque", "p")
+    _SWIFT_INPUTS = ("vx", "vy", "omega", "gamma", "z", "vz", "road_z", "road_camber", "Fz_in", "torque", "p")
 
     def _compute_swift(self, step_size):
         u = {n: getattr(self, n) for n in self._SWIFT_INPUTS}
         bad = [f"{n}={v!r}" for n, v in u.items() if not math.isfinite(v)]
         if not bad and not u["p"] > 0:
             bad = [f"p={u['p']!r} (the inflation pressure must be positive)"]
+        if not bad and self.mu_scale != 1.0:
+            bad = [f"mu_scale={self.mu_scale!r} (the SWIFT model has no friction scale: leave it at 1)"]
         if not bad and step_size is not None and not step_size >= 0:
             bad = [f"communication step size {step_size!r}"]
         if bad:

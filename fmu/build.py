@@ -72,7 +72,7 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
 
     sys.path.insert(0, str(HERE))
     try:
-        from mftyre_fmu_core import export_functions, export_swift_libraries
+        from mftyre_fmu_core import export_functions, export_swift_libraries, export_wheel_libraries
     finally:
         sys.path.remove(str(HERE))
     try:
@@ -120,6 +120,11 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
             warnings.warn(f"shipping CasADi functions only (no compiled C): {exc}", stacklevel=2)
             shutil.rmtree(stage / "functions", ignore_errors=True)
             index = export_functions(tyre, stage / "functions", compile_c=False)
+        if index["mf"]["compiled"]:  # the compiled steady wheels for this platform
+            try:
+                index["wheel"] = export_wheel_libraries(tyre, stage / "functions" / "wheel")
+            except Exception as exc:
+                warnings.warn(f"not shipping compiled steady wheels: {exc}", stacklevel=2)
         if model == "swift" and index["mf"]["compiled"]:  # the compiled SWIFT step for this platform
             try:
                 index["swift"] = export_swift_libraries(tyre, stage / "functions" / "swift")
@@ -150,7 +155,8 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
                            "x_start": 0.0, "max_step": 1e-3, "axle_mass": 30.0},
             "inputs": {"vx": float(prm.LONGVL), "vy": 0.0, "omega": omega0, "gamma": 0.0,
                        "z": float(rl0), "road_z": 0.0, "Fz_in": float(prm.FNOMIN), "p": float(prm.INFLPRES),
-                       "kappa_in": 0.0, "alpha_in": 0.0, "vz": 0.0, "torque": 0.0},
+                       "kappa_in": 0.0, "alpha_in": 0.0, "vz": 0.0, "torque": 0.0, "road_camber": 0.0,
+                       "mu_scale": 1.0},
         }
         (stage / "config.json").write_text(json.dumps(config, indent=1))
         docs = Path(tmp) / "documentation"

@@ -1,39 +1,16 @@
-"""The computation behind the pythonfmu tyre FMU (``--backend pythonfmu``), free of any FMI machinery.
+"""The SWIFT tyre of the pythonfmu FMU (``--backend pythonfmu``, model=swift), free of any FMI machinery, and the
+compiled libraries the FMU ships.
 
-The native FMU (the default) does not use this module: its models are :mod:`mftyre.transient` (steady,
-transient) and :mod:`swift.fmu_model` (SWIFT), Python classes and CasADi functions beside the equations. The
-classes here (rig mode, SWIFT load/torque modes, evaluator choices) remain for the pythonfmu slave only.
-
-    core = SteadyTyre(model, evaluator="auto", functions_dir=None)
-    out = core.step_vehicle(vx, vy, omega, gamma, p, fz=4000.0)            # load given
-    out = core.step_vehicle(vx, vy, omega, gamma, p, height=0.30)          # wheel-centre height above the road
-    out = core.step_rig(fz, kappa, alpha, gamma, vx, p)                    # slip-driven test rig
-    out["Fx"], out["My"], out["kappa"], ...                                # see OUTPUTS
+The steady tyre of both FMU backends is one definition, :mod:`mftyre.transient` (``wheel_functions``; the
+pythonfmu slave drives :class:`mftyre.transient.WheelTyre`, the native FMU its generated C). The SWIFT tyre of the
+native FMU is :mod:`swift.fmu_model`; the pythonfmu slave still drives :class:`swift.SwiftTyre` here (SwiftCore:
+it has the axle-load mode the native wheel lacks), with the native FMU's stepping rule.
 
     core = SwiftCore(model, road="cleat(x0=2, length=0.05, height=0.01)", vertical="position")   # SWIFT
     out = core.initialise(inputs)        # static equilibrium; inputs: dict of the FMU inputs by name
     out = core.advance(inputs, h)        # one communication step (see SwiftCore)
 
-Axes and units: ISO-W (TYDEX W), SI. The x axis is the wheel heading projected on the road, y to the left, z up;
-the origin of the MF quantities is the contact point C. ``vx`` and ``vy`` are the velocity components of the wheel
-centre in these axes (the road is at rest).
-
-The tyre's equations are mftyre's: the kinematic slips, the vertical force with its lift-off and the
-wheel-centre moments are those of :mod:`mftyre.transient` (its module notes; the native FMU's steady tyre), the
-MF is :class:`mftyre.MFModel`, SWIFT is :class:`swift.SwiftTyre`. This module chooses the evaluators and maps
-the FMU's modes onto them:
-
-* vehicle mode, ``fz`` given: the load (negative values mean no contact, Fz = 0); Rl is the model's loaded radius.
-* vehicle mode, ``height`` given (wheel-centre height above the road, along the road normal): Rl = height /
-  cos(gamma) and the load is the vertical force at Rl, lifted off above the free radius; where the .tir couples
-  Fz to Fx/Fy (Q_FCX, Q_FCY != 0) the load is solved by fixed-point iteration (mftyre.transient.load_at_radius).
-* rig mode: the MF at the given slips and load (spin estimated from kappa and vx).
-* The MF is evaluated with the given spin (no re-estimation), the .tir limits and its low-speed model (below
-  VXLOW the slips are faded out: the steady model has no standstill force; use SWIFT for that).
-* Reversing (vx < 0): the MF gets the native wheel's slip, kappa_MF = -Vsx / Vx (mftyre.transient.mf_slip and its
-  module notes), so a locked wheel brakes the motion in both directions and both FMUs give the same forces; the
-  output ``kappa`` is that slip. In rig mode ``kappa`` is taken as kappa_MF (-1 = locked either way, as
-  MFModel.evaluate and MFeval).
+Axes and units: ISO-W (TYDEX W), SI.
 """
 from __future__ import annotations
 
@@ -46,10 +23,9 @@ from pathlib import Path
 #: MF outputs taken from the model (names of :data:`mftyre.model.OUTPUT_UNITS`).
 MF_OUTPUTS = ("fx", "fy", "fz", "mx", "my", "mz", "omega", "re", "rho", "rl", "a", "b", "t", "mux", "muy")
 
-#: Outputs of the tyre: name -> Variable (mftyre.variables: one vocabulary with the native FMU's wheels).
-OUTPUT_NAMES = ("Fx", "Fy", "Fz", "Mx", "My", "Mz", "Mx_c", "My_c", "Mz_c", "kappa", "alpha", "Vsx", "Vsy",
-                "omega_used", "rho", "Rl", "Re", "contact_length", "contact_width", "trail", "mux", "muy", "Fz_c", "road_w",
-                "road_slope", "x_road")
+#: Outputs the FMU adds to the wheel's (mftyre.transient.OUTPUTS), in every mode (the SWIFT wheel's).
+EXTRA_OUTPUTS = ("Fz_c", "road_w", "road_slope", "x_road", "Fx_c", "Fy_c", "road_curvature", "Re_variation",
+                 "road_camber_eff", "x_contact")
 #: What the pythonfmu FMU says more about some outputs than the vocabulary (its modes: steady vehicle/rig, swift).
 OUTPUT_NOTES = {
     "Fz": "vertical force on the tyre, >= 0 (at the wheel centre, ISO-W axes)",
@@ -69,12 +45,13 @@ OUTPUT_NOTES = {
 
 def outputs():
     """The outputs: name -> Variable (needs mftyre importable: the host's or the FMU's vendored copy)."""
+    from mftyre.transient import OUTPUTS
     from mftyre.variables import pick
 
-    return pick("output", *OUTPUT_NAMES, describe=OUTPUT_NOTES)
+    return pick("output", *OUTPUTS, *EXTRA_OUTPUTS, describe=OUTPUT_NOTES)
 
 
-EVALUATORS = ("auto", "compiled", "casadi", "numpy")
+EVALUATORS = ("auto", "compiled", "casadi")
 
 
 class TyreFMUError(Exception):
@@ -83,29 +60,11 @@ class TyreFMUError(Exception):
 
 # --------------------------------------------------------------------------------------- CasADi functions
 def casadi_functions(model) -> dict:
-    """The CasADi functions the FMU evaluates, built from the model's one set of equations.
-
-    mf(fz, kappa, alpha, gamma, vx, p, omega) -> MF_OUTPUTS       (spin given)
-    rig(fz, kappa, alpha, gamma, vx, p) -> MF_OUTPUTS             (spin estimated from kappa and vx)
-    re(fz, gamma, vx, p, omega) -> re                             (effective rolling radius, kappa = alpha = 0)
-    vertical(rl, p, omega, fx, fy, gamma) -> (fz, r_omega)        (= MFModel.vertical_force, free radius)
-    """
-    import casadi as ca
-    from mftyre.backend import casadi_backend
-    from mftyre.transient import wheel_vertical_force
-
+    """The CasADi function SwiftCore evaluates for the outputs the ring does not report, from the model's one set
+    of equations: mf(fz, kappa, alpha, gamma, vx, p, omega) -> MF_OUTPUTS (spin given)."""
     mf = model.casadi_function(inputs=("fz", "kappa", "alpha", "gamma", "vx", "p", "omega"), outputs=MF_OUTPUTS,
                                name="mf")
-    rig = model.casadi_function(inputs=("fz", "kappa", "alpha", "gamma", "vx", "p"), outputs=MF_OUTPUTS,
-                                name="rig")
-    re = model.casadi_function(inputs=("fz", "gamma", "vx", "p", "omega"), outputs=("re",),
-                               fixed=dict(kappa=0.0, alpha=0.0), name="re")
-    # the vertical force exactly as MFModel.vertical_force (mirroring, unclipped pressure, bottoming)
-    rl, p, omega, fx, fy, gamma = (ca.SX.sym(n) for n in ("rl", "p", "omega", "fx", "fy", "gamma"))
-    fz, r_omega = wheel_vertical_force(model, rl, p, omega, fx, fy, gamma, casadi_backend())
-    vert = ca.Function("vertical", [rl, p, omega, fx, fy, gamma], [fz, r_omega],
-                       ["rl", "p", "omega", "fx", "fy", "gamma"], ["fz_v", "r_omega"])
-    return {"mf": mf, "rig": rig, "re": re, "vertical": vert}
+    return {"mf": mf}
 
 
 def function_key(tir_text: str, side: str) -> str:
@@ -152,43 +111,16 @@ class _CasadiEval:
         return tuple(float(r) for r in res)
 
 
-class _NumpyEvaluators:
-    """The same four functions through MFModel.evaluate / vertical_force (the reference, slowest)."""
-
-    def __init__(self, model):
-        self.model = model
-
-    def mf(self, fz, kappa, alpha, gamma, vx, p, omega):
-        o = self.model.evaluate(fz, kappa, alpha, gamma, 0.0, vx, p, omega)
-        return tuple(float(o[k]) for k in MF_OUTPUTS)
-
-    def rig(self, fz, kappa, alpha, gamma, vx, p):
-        o = self.model.evaluate(fz, kappa, alpha, gamma, 0.0, vx, p)
-        return tuple(float(o[k]) for k in MF_OUTPUTS)
-
-    def re(self, fz, gamma, vx, p, omega):
-        return (float(self.model.evaluate(fz, 0.0, 0.0, gamma, 0.0, vx, p, omega).re),)
-
-    def vertical(self, rl, p, omega, fx, fy, gamma):
-        from mftyre.backend import NUMPY
-        from mftyre.formula.vertical import free_radius
-
-        fz = float(self.model.vertical_force(rl, p, omega, fx, fy, gamma))
-        return fz, float(free_radius(self.model.params, omega, NUMPY))
-
-
 def load_evaluators(model, evaluator="auto", functions_dir=None, index=None, log=None):
-    """(name of the path used, object with mf/rig/re/vertical callables).
+    """(name of the path used, object with the callable mf).
 
     ``compiled``: the shipped C libraries (``functions_dir``), else compiled now with the C compiler (cached);
-    ``casadi``: the shipped serialised functions, else built now from the model; ``numpy``: MFModel itself;
-    ``auto``: compiled, falling back to casadi."""
+    ``casadi``: the shipped serialised functions, else built now from the model; ``auto``: compiled, falling back
+    to casadi."""
     log = log or (lambda msg: None)
     if evaluator not in EVALUATORS:
         raise TyreFMUError(f"parameter evaluator must be one of {', '.join(EVALUATORS)}; got {evaluator!r}")
-    if evaluator == "numpy":
-        return "numpy", _NumpyEvaluators(model)
-    names = ("mf", "rig", "re", "vertical")
+    names = ("mf",)
     errors = []
     if evaluator in ("auto", "compiled"):
         from mftyre.compiled import CompiledFunction
@@ -232,68 +164,7 @@ def _tir_identity(model) -> str:
 
 class _Bundle:
     def __init__(self, fns):
-        self.mf, self.rig, self.re, self.vertical = fns["mf"], fns["rig"], fns["re"], fns["vertical"]
-
-
-# ------------------------------------------------------------------------------------------------- the tyre
-class SteadyTyre:
-    """The steady-state Magic Formula tyre with the FMU's kinematics, vertical model and wheel-centre loads."""
-
-    def __init__(self, model, evaluator="auto", functions_dir=None, index=None, log=None):
-        from mftyre import transient
-        from mftyre.backend import NUMPY
-
-        self.model = model
-        self.wheel, self.be = transient, NUMPY  # the wheel's equations, on floats
-        prm = model.params
-        self.path, self.fn = load_evaluators(model, evaluator, functions_dir, index, log)
-        self.fcoupled = transient.vertical_couples_forces(prm)
-        self.fnomin = float(prm.FNOMIN)
-
-    # --------------------------------------------------------------------------------------------- modes
-    def step_vehicle(self, vx, vy, omega, gamma, p, fz=None, height=None):
-        """Vehicle mode: wheel-centre velocity, spin, inclination, pressure, and either the load ``fz`` or the
-        wheel-centre ``height`` above the road. Returns a dict of :data:`OUTPUTS`."""
-        fn, wheel = self.fn, self.wheel
-
-        def rolling(load):
-            re = fn.re(load, gamma, vx, p, omega)[0]
-            kappa, alpha = wheel.kinematic_slips(vx, vy, omega, re, self.be)
-            kappa, alpha = _floats((wheel.mf_slip(kappa, vx, self.be), alpha))  # the native wheel's slips
-            mf = fn.mf(load, kappa, alpha, gamma, vx, p, omega)
-            return mf[0], mf[1], (mf, kappa, alpha)
-
-        if height is None:
-            _, _, (mf, kappa, alpha) = rolling(max(fz, 0.0))
-            return self._outputs(mf, kappa, alpha, gamma, vx, rl_lever=None, rho=None)
-        rl = height / math.cos(gamma)
-        _, r_omega, (mf, kappa, alpha) = wheel.load_at_radius(lambda fx, fy: fn.vertical(rl, p, omega, fx, fy, gamma),
-                                                              rolling, rl, self.fcoupled, 1e-11 * self.fnomin)
-        return self._outputs(mf, kappa, alpha, gamma, vx, rl_lever=rl, rho=max(r_omega - rl, 0.0))
-
-    def step_rig(self, fz, kappa, alpha, gamma, vx, p):
-        """Slip-driven test rig: the MF at the given slips and load (spin estimated from kappa and vx)."""
-        mf = self.fn.rig(max(fz, 0.0), kappa, alpha, gamma, vx, p)
-        return self._outputs(mf, kappa, alpha, gamma, vx, rl_lever=None, rho=None)
-
-    # -------------------------------------------------------------------------------------------- helpers
-    def _outputs(self, mf, kappa, alpha, gamma, vx, rl_lever, rho):
-        fx, fy, fz, mx, my, mz, omega, re, rho_mf, rl, a, b, t, mux, muy = mf
-        lever = rl if rl_lever is None else rl_lever
-        mx_w, my_w, mz_w = _floats(self.wheel.wheel_centre_moments(fx, fy, fz, mx, my, mz, lever, gamma, self.be))
-        vsx, vsy = _floats(self.wheel.slip_speeds(kappa, alpha, vx, self.be))
-        return {
-            "Fx": fx, "Fy": fy, "Fz": fz, "Mx": mx_w, "My": my_w, "Mz": mz_w,
-            "Mx_c": mx, "My_c": my, "Mz_c": mz,
-            "kappa": kappa, "alpha": alpha, "Vsx": vsx, "Vsy": vsy,
-            "omega_used": omega,
-            "rho": rho_mf if rho is None else rho, "Rl": lever, "Re": re,
-            "contact_length": 2.0 * a, "contact_width": 2.0 * b, "trail": t, "mux": mux, "muy": muy,
-        }
-
-
-def _floats(values):
-    return tuple(float(v) for v in values)
+        self.mf = fns["mf"]
 
 
 # ------------------------------------------------------------------------------------------ SWIFT (rigid ring)
@@ -346,9 +217,31 @@ def export_swift_libraries(model, directory) -> dict:
     return {"platform": _platform(), "files": names}
 
 
-def install_swift_libraries(directory, entry) -> int:
-    """Copy shipped SWIFT libraries (see :func:`export_swift_libraries`) into mftyre's compile cache, where
-    :class:`swift.SwiftTyre` finds them, when built for this platform and not there yet; returns how many."""
+def export_wheel_libraries(model, directory) -> dict:
+    """Compile the steady wheel's outputs (mftyre.transient.WheelTyre, evaluator compiled) for the FMU's modes
+    (vertical load, vertical position, rig) and copy the libraries to ``directory``, as
+    :func:`export_swift_libraries`. Returns {"platform": ..., "files": [names]}."""
+    import shutil
+    import warnings
+
+    from mftyre.transient import WheelTyre
+
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    names = []
+    for vertical, mode in (("load", "vehicle"), ("position", "vehicle"), ("load", "rig")):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            library = WheelTyre(model, "steady", vertical, input_mode=mode, evaluator="compiled")._compiled.library
+        for src in (library, library.with_suffix(".json")):
+            shutil.copy2(src, directory / src.name)
+            names.append(src.name)
+    return {"platform": _platform(), "files": names}
+
+
+def install_libraries(directory, entry) -> int:
+    """Copy shipped libraries (see :func:`export_swift_libraries`, :func:`export_wheel_libraries`) into mftyre's
+    compile cache, where the tyres find them, when built for this platform and not there yet; returns how many."""
     import shutil
 
     from mftyre.compiled import cache_dir
@@ -394,13 +287,12 @@ class SwiftCore:
     def __init__(self, model, road="", *, vertical="load", rim="speed", x_start=0.0, max_step=1e-3,
                  axle_mass=30.0, evaluator="auto", functions_dir=None, index=None, log=None, base_dir=None):
         import numpy as np
-        from mftyre import transient
         from mftyre.backend import NUMPY
         from swift import Cams, SwiftTyre
         from swift.fmu_model import SUBSTEPS, TABLE_DX, WINDOW
         from swift.ring import STATE_NAMES
 
-        self.wheel, self.be = transient, NUMPY  # the wheel's equations, on floats
+        self.be = NUMPY  # the wheel's equations (swift.fmu_model.contact_extras), on floats
 
         log = log or (lambda msg: None)
         if vertical not in ("load", "position"):
@@ -431,7 +323,7 @@ class SwiftCore:
         road_obj = self.road if self.road is not None else Flat()
         if functions_dir is not None and index is not None and index.get("swift"):
             try:
-                install_swift_libraries(Path(functions_dir) / "swift", index["swift"])
+                install_libraries(Path(functions_dir) / "swift", index["swift"])
             except Exception as exc:  # read-only cache...: compiled now instead
                 log(f"shipped SWIFT libraries not installed: {exc}")
         kwargs = dict(axle="height" if vertical == "position" else "load", rim=rim, x_range=x_range, table_dx=dx,
@@ -448,8 +340,7 @@ class SwiftCore:
         if self.path == "casadi":
             self.tyre = SwiftTyre(model, road_obj, compiled=False, **kwargs)
         # the MF at the contact-patch state gives the outputs the ring does not report (Mx_c, My_c, b, trail, mu)
-        self.mf_path, self.fn = load_evaluators(model, "casadi" if evaluator == "numpy" else evaluator,
-                                                functions_dir, index, log)
+        self.mf_path, self.fn = load_evaluators(model, evaluator, functions_dir, index, log)
         self._np = np
         self.x_offset = 0.0  # road x = state x + x_offset
         self.road_z = 0.0  # vertical positions in the state are relative to this road height
@@ -477,7 +368,7 @@ class SwiftCore:
 
         return StepInputs(x=float(state[self.S["xa"]]), vx=u["vx"], z=u["z"] - self.road_z + dz, vz=u["vz"],
                           load=u["Fz_in"], omega=u["omega"], torque=u["torque"], p=u["p"], y=0.0, vy=u["vy"],
-                          gamma=u["gamma"], psi=0.0, road_camber=0.0)
+                          gamma=u["gamma"], psi=0.0, road_camber=u["road_camber"])
 
     # ------------------------------------------------------------------------------------------------ stepping
     def initialise(self, u):
@@ -527,24 +418,25 @@ class SwiftCore:
         return self._outputs(state, out, u)
 
     def _outputs(self, state, o, u):
+        from swift.fmu_model import contact_extras
+
         S = self.S
-        fzc = float(o["fz_c"])
-        kappa, alpha, vcx = float(o["kappa"]), float(o["alpha"]), float(o["vcx"])
-        # the MF's extras at the ring's slip state, its slip -Vsx / |Vcx| given as the wheel's (mf_slip: reversing)
-        kappa_mf = float(self.wheel.mf_slip(kappa, vcx, self.be))
-        mf = self.fn.mf(max(fzc, 1e-3), kappa_mf, alpha, u["gamma"], vcx, u["p"], float(state[S["omb"]]))
-        _, _, _, mx_c, my_c, _, _, _, _, _, _, b, t, mux, muy = mf
+        picked = [MF_OUTPUTS.index(n) for n in ("mx", "my", "b", "t", "mux", "muy")]
+
+        def mf(*args):  # the MF extras of the native wheel (swift.fmu_model.contact_extras), on this evaluator
+            values = self.fn.mf(*(float(a) for a in args))
+            return [values[i] for i in picked]
+
+        extras = contact_extras(self.model, o, u["gamma"], u["p"], float(state[S["omb"]]), self.be, mf)
         beta = float(o["beta"])
-        vsx, vsy = _floats(self.wheel.slip_speeds(kappa, alpha, abs(vcx), self.be))  # the ring's MF speed
-        return {
-            "Fx": float(o["fx"]), "Fy": float(o["fy"]), "Fz": float(o["fz"]),
-            "Mx": float(o["mx"]), "My": float(o["my"]), "Mz": float(o["mz"]),
-            "Mx_c": mx_c, "My_c": my_c, "Mz_c": float(o["mz_c"]),
-            "kappa": kappa, "alpha": alpha, "Vsx": vsx, "Vsy": vsy,
-            "omega_used": float(state[S["oma"]]),
-            "rho": float(o["rho"]), "Rl": (float(state[S["za"]]) - float(o["w"])) * math.cos(beta),
-            "Re": float(o["re"]), "contact_length": 2.0 * float(o["a"]), "contact_width": 2.0 * b, "trail": t,
-            "mux": mux, "muy": muy,
-            "road_w": float(o["w"]) + self.road_z, "road_slope": beta,
-            "x_road": float(state[S["xa"]]) + self.x_offset, "Fz_c": fzc,
+        out = {
+            "Fx": o["fx"], "Fy": o["fy"], "Fz": o["fz"], "Mx": o["mx"], "My": o["my"], "Mz": o["mz"],
+            "Fx_c": o["fx_c"], "Fy_c": o["fy_c"], "Fz_c": o["fz_c"], "Mz_c": o["mz_c"],
+            "kappa": o["kappa"], "alpha": o["alpha"], "omega_used": state[S["oma"]],
+            "rho": o["rho"], "Rl": (float(state[S["za"]]) - float(o["w"])) * math.cos(beta),  # the loaded radius
+            "Re": o["re"], "contact_length": 2.0 * float(o["a"]),
+            "road_w": float(o["w"]) + self.road_z, "road_slope": beta, "road_curvature": o["curvature"],
+            "Re_variation": o["dre"], "road_camber_eff": o["beta_x"],
+            "x_road": float(state[S["xa"]]) + self.x_offset, "x_contact": float(o["x_c"]) + self.x_offset, **extras,
         }
+        return {k: float(v) for k, v in out.items()}

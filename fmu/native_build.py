@@ -202,7 +202,7 @@ def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_sta
                                    "motion)")
         from swift.fmu_model import swift_functions
 
-        f = swift_functions(model, road, x_start=x_start, rim=rim)
+        f = swift_functions(model, road, x_start=x_start, rim=rim, axle="load" if vertical == "load" else "height")
         glue, extra, directional = "glue_swift.c", f.config_extra, False
     else:
         raise NativeBuildError(f"--model must be one of {', '.join(MODELS)}, got {kind!r}")

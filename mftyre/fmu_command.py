@@ -51,8 +51,8 @@ def register(subparsers) -> argparse.ArgumentParser:
     build.add_argument("--x-start", type=float, default=0.0, metavar="M",
                        help="swift: default wheel-centre position on the road at the start (parameter x_start)")
     build.add_argument("--vertical", choices=("position", "load"), default="position",
-                       help="native steady/transient: the vertical input is the wheel-centre height z (position, "
-                            "default) or the load Fz_in")
+                       help="native: the vertical input is the wheel-centre height z (position, default) or the "
+                            "load Fz_in (swift: the downward force on the axle)")
     build.add_argument("--input-mode", choices=("vehicle", "rig"),
                        help="rig: the load Fz_in and the slips kappa_in, alpha_in as inputs (steady); default vehicle "
                             "(pythonfmu: the default of the FMU's input_mode parameter)")
@@ -75,8 +75,6 @@ def run(args) -> int:
         return refused
     try:
         if args.backend == "native":
-            if args.model == "swift" and args.vertical == "load":
-                raise ValueError("the native swift FMU takes the wheel-centre height (--vertical position)")
             from fmu.native_build import build_native_fmu
 
             started = time.perf_counter()

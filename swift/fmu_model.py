@@ -13,7 +13,8 @@ rigid ring of :mod:`swift.ring` stepped by :class:`swift.simulate.SwiftTyre`'s R
     wheel.step(1e-3); wheel.outputs()["Fz"]
 
 Modes: axle height imposed (input ``z``, wheel-centre height above the road datum, moving with ``vz`` within a
-step), spin imposed (``omega``); the road is the profile lifted by ``road_z`` (held over a step) and tilted by
+step) or (``axle="load"``) the axle of AXLE_MASS pushed down by the input ``Fz_in``; spin imposed (``omega``) or
+(``rim="torque"``) the rim driven by the input ``torque``; the road is the profile lifted by ``road_z`` (held over a step) and tilted by
 ``road_camber`` (the ring's input, added to the multi-track camber of a 3D profile). The wheel starts at
 ``x_start`` on the road (x_road = x_start + integral of vx dt: obstacles are met where they are, whatever the
 start) in static equilibrium (the Newton iteration of
@@ -68,22 +69,32 @@ INPUTS = pick("input", "vx", "vy", "omega", "gamma", "z", "vz", "p", "road_z", "
                    "multi-track camber"})
 #: speed: the rim spins at the input omega; torque: the input torque drives the rim (omega: its start guess).
 RIM_MODES = ("speed", "torque")
+#: height: the axle height z (and vz) imposed; load: the downward force Fz_in on the axle (mass AXLE_MASS) moves it.
+AXLE_MODES = ("height", "load")
+#: Mass [kg] of the axle the load input pushes down (axle="load"; swift.SwiftTyre's default, the pythonfmu FMU's
+#: axle_mass start).
+AXLE_MASS = 30.0
 
 
-def input_table(rim: str = "speed") -> dict:
-    """The wheel's inputs (name -> Variable) with the rim mode ``rim``."""
-    if rim == "speed":
-        return INPUTS
-    start = INPUTS["omega"].but(description="rim spin speed at the start (static equilibrium); the torque drives it "
-                                            "afterwards")
-    return {**{n: start if n == "omega" else v for n, v in INPUTS.items()}, **pick("input", "torque")}
+def input_table(rim: str = "speed", axle: str = "height") -> dict:
+    """The wheel's inputs (name -> Variable) with the rim mode ``rim`` and the axle mode ``axle``."""
+    table = dict(INPUTS)
+    if rim == "torque":
+        table["omega"] = INPUTS["omega"].but(description="rim spin speed at the start (static equilibrium); the "
+                                                         "torque drives it afterwards")
+        table.update(pick("input", "torque"))
+    if axle == "load":
+        del table["z"], table["vz"]
+        table.update(pick("input", "Fz_in", describe={"Fz_in": f"downward force on the axle (mass {AXLE_MASS:g} kg), "
+                                                                "which moves under it and the tyre's force"}))
+    return table
 
 
 PARAMETERS = pick("parameter", "x_start", "max_step")
 OUTPUTS = pick(
     "output", "Fx", "Fy", "Fz", "Mx", "My", "Mz", "Fx_c", "Fy_c", "Fz_c", "Mz_c", "kappa", "alpha", "rho", "Rl", "Re",
     "contact_length", "road_w", "road_slope", "road_curvature", "Re_variation", "road_camber_eff", "x_contact",
-    "x_road", describe={
+    "x_road", "Mx_c", "My_c", "contact_width", "trail", "mux", "muy", "Vsx", "Vsy", "omega_used", describe={
         "Fx": "force on the rim along ISO-W x, at the wheel centre",
         "Fy": "force on the rim along ISO-W y, at the wheel centre",
         "Fz": "force on the rim along ISO-W z (up), at the wheel centre",
@@ -92,10 +103,15 @@ OUTPUTS = pick(
         "kappa": "transient longitudinal slip of the contact patch",
         "alpha": "transient slip angle of the contact patch",
         "rho": "tyre deflection normal to the effective road",
-        "Rl": "lever arm of the contact forces (belt centre to contact point)",
+        "Rl": "loaded radius: wheel centre to the effective road plane, (z - road_w) cos(road_slope)",
+        "Vsx": "longitudinal slip speed of the contact patch, -kappa |Vcx|",
+        "Vsy": "lateral slip speed of the contact patch, tan(alpha) |Vcx|",
+        "omega_used": "rim spin speed (the input, or driven by the torque)",
         "road_w": "effective road height (tandem cams)"})
+#: The outputs taken from the MF at the ring's contact state (the ring does not report them).
+_MF_EXTRAS = {"Mx_c": "mx", "My_c": "my", "contact_width": "b", "trail": "t", "mux": "mux", "muy": "muy"}
 _RING = {"Fx": "fx", "Fy": "fy", "Fz": "fz", "Mx": "mx", "My": "my", "Mz": "mz", "Fx_c": "fx_c", "Fy_c": "fy_c",
-         "Fz_c": "fz_c", "Mz_c": "mz_c", "kappa": "kappa", "alpha": "alpha", "rho": "rho", "Rl": "rl", "Re": "re",
+         "Fz_c": "fz_c", "Mz_c": "mz_c", "kappa": "kappa", "alpha": "alpha", "rho": "rho", "Re": "re",
          "road_slope": "beta", "road_curvature": "curvature", "Re_variation": "dre", "road_camber_eff": "beta_x",
          "x_contact": "x_c"}
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
@@ -114,6 +130,24 @@ def internal_steps(h: float, max_step: float, vx: float) -> int:
     return max(1, n)
 
 
+def contact_extras(model, ring_out, gamma, p, omega_belt, be, mf=None) -> dict:
+    """The outputs the ring does not report, from the MF at its contact state (``ring_out``: the ring's outputs by
+    name): Mx_c, My_c, contact_width, trail, mux, muy at the load Fz_c (at least 1 mN), the slip -Vsx / Vcx given
+    as the wheel's (:func:`mftyre.transient.mf_slip`), the belt spin; Vsx, Vsy of the ring's slips at |Vcx|.
+    ``mf``: the MF (fz, kappa, alpha, gamma, vx, p, omega) -> (mx, my, b, t, mux, muy), default the model's."""
+    from mftyre.transient import mf_slip, slip_speeds
+
+    if mf is None:
+        mf = model.casadi_function(inputs=("fz", "kappa", "alpha", "gamma", "vx", "p", "omega"),
+                                   outputs=tuple(_MF_EXTRAS.values()), name="mf_extras")
+    kappa, alpha, vcx = ring_out["kappa"], ring_out["alpha"], ring_out["vcx"]
+    values = mf(be.fmax(ring_out["fz_c"], 1e-3), mf_slip(kappa, vcx, be), alpha, gamma, vcx, p, omega_belt)
+    extras = dict(zip(_MF_EXTRAS, values))
+    extras["contact_width"] = 2.0 * extras["contact_width"]
+    extras["Vsx"], extras["Vsy"] = slip_speeds(kappa, alpha, be.abs(vcx), be)
+    return extras
+
+
 @dataclass(frozen=True)
 class SwiftFunctions(StateFunctions):
     """The SWIFT wheel's CasADi functions (window arguments ``x0w``, ``grid``, ``hw``: the table window, see module
@@ -128,6 +162,7 @@ class SwiftFunctions(StateFunctions):
     output_dependencies: list
     config_extra: str
     rim: str = "speed"
+    axle: str = "height"
 
     def window_start(self, xb: float) -> int:
         """First table sample of the window around the belt at ``xb``, clamped to the table."""
@@ -135,18 +170,24 @@ class SwiftFunctions(StateFunctions):
         return min(max(i0, 0), self.table_h.size // 2 - WINDOW)
 
 
-def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed") -> SwiftFunctions:
+def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed",
+                    axle: str = "height") -> SwiftFunctions:
     """The functions of the SWIFT wheel of ``model`` on ``road`` (a :class:`swift.road.Road`, an expression or a
-    CSV file, see :func:`swift.road.parse_road`); ``x_start``: default start position. The ring is
+    CSV file, see :func:`swift.road.parse_road`); ``x_start``: default start position; ``rim``, ``axle``: the modes
+    (:data:`RIM_MODES`, :data:`AXLE_MODES`). The ring is
     :class:`swift.simulate.SwiftTyre`'s (its step, outputs and static equilibrium); here only the FMU's inputs are
     mapped onto it: the state holds heights above the road datum, the ring sees them above ``road_z``."""
     import casadi as ca
+
+    from mftyre.backend import casadi_backend
 
     from .simulate import SwiftTyre
 
     if rim not in RIM_MODES:
         raise ModelInputError(f"rim must be one of {', '.join(RIM_MODES)}; got {rim!r}")
-    table_u = input_table(rim)
+    if axle not in AXLE_MODES:
+        raise ModelInputError(f"axle must be one of {', '.join(AXLE_MODES)}; got {axle!r}")
+    table_u = input_table(rim, axle)
     road = parse_road(road)
     prm = model.params
     cams = Cams.from_params(prm, warn=False)  # the tyre below warns
@@ -154,13 +195,14 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
     bps = tuple(road.breakpoints)
     reach = cams.ae + 2 * dx
     lo, hi = (min(bps) - reach, max(bps) + reach) if bps else (0.0, 1.0)
-    tyre = SwiftTyre(model, road, axle="height", rim=rim, x_range=(math.floor(lo / dx) * dx,
-                     math.ceil(hi / dx) * dx), table_dx=dx, window=WINDOW, substeps=SUBSTEPS, compiled=False)
+    tyre = SwiftTyre(model, road, axle=axle, rim=rim, x_range=(math.floor(lo / dx) * dx,
+                     math.ceil(hi / dx) * dx), table_dx=dx, window=WINDOW, substeps=SUBSTEPS, axle_mass=AXLE_MASS,
+                     compiled=False)
     nx = len(STATE_NAMES)
     x, u, q = ca.MX.sym("x", nx), ca.MX.sym("u", len(table_u)), ca.MX.sym("q", len(PARAMETERS))
     x0w, grid, hw, dt = ca.MX.sym("x0w"), ca.MX.sym("grid", WINDOW), ca.MX.sym("hw", 2 * WINDOW), ca.MX.sym("dt")
     U = {n: u[i] for i, n in enumerate(table_u)}
-    ring_u = {"vx": U["vx"], "load": 0, "torque": U.get("torque", 0), "p": U["p"], "y": 0, "vy": U["vy"],
+    ring_u = {"vx": U["vx"], "load": U.get("Fz_in", 0), "torque": U.get("torque", 0), "p": U["p"], "y": 0, "vy": U["vy"],
               "gamma": U["gamma"], "psi": 0, "road_camber": U["road_camber"]}
     uring = ca.vertcat(*(ring_u[n] for n in INPUT_NAMES))
 
@@ -180,13 +222,18 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
                        ["x_next"])
     ring_out = dict(zip(OUTPUT_NAMES, ca.vertsplit(tyre.output_function(lifted(x, -U["road_z"]), uring, x0w,
                                                                          grid, hw))))
-    special = {"contact_length": 2 * ring_out["a"], "x_road": x[_S["xa"]], "road_w": ring_out["w"] + U["road_z"]}
+    special = {"contact_length": 2 * ring_out["a"], "x_road": x[_S["xa"]], "road_w": ring_out["w"] + U["road_z"],
+               "Rl": (x[_S["za"]] - U["road_z"] - ring_out["w"]) * ca.cos(ring_out["beta"]),
+               "omega_used": x[_S["oma"]]}
+    special.update(contact_extras(model, ring_out, U["gamma"], U["p"], x[_S["omb"]], be=casadi_backend()))
     y = [special[n] if n in special else ring_out[_RING[n]] for n in OUTPUTS]
+    y = [ca.MX(v) if not isinstance(v, ca.MX) else v for v in y]
     outw = ca.Function("swift_out", [x, u, x0w, grid, hw], [ca.vertcat(*y)], ["x", "u", "x0w", "grid", "hw"], ["y"])
 
-    # static equilibrium at x_start (SwiftTyre's, axle height imposed), in the road frame
+    # static equilibrium at x_start (SwiftTyre's), in the road frame
     equilibrium = tyre.equilibrium_function(NEWTON_STEPS)
-    x_eq = equilibrium(q[0], U["z"] - U["road_z"], U["vz"], U["omega"], uring, x0w, grid, hw)
+    height = (U["z"] - U["road_z"], U["vz"]) if axle == "height" else (0.0, 0.0)  # load: solved for
+    x_eq = equilibrium(q[0], *height, U["omega"], uring, x0w, grid, hw)
     init = ca.Function("swift_init", [u, q, x0w, grid, hw], [lifted(x_eq, U["road_z"])],
                        ["u", "q", "x0w", "grid", "hw"], ["x0"])
 
@@ -207,21 +254,22 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
              + "static const double ROAD_H[2 * ROAD_N] = {" + ",".join(repr(float(v)) for v in h) + "};\n"
              + "static const double ROAD_GRID[ROAD_WINDOW] = {" + ",".join(repr(float(v)) for v in grid_v) + "};\n")
     omega0, z0 = free_rolling_start(model, INPUTS["vx"].start)
-    computed = {"p": float(prm.INFLPRES), "omega": omega0, "z": z0}
+    computed = {"p": float(prm.INFLPRES), "omega": omega0, "z": z0,
+                "Fz_in": float(prm.FNOMIN)}
     inputs = tuple(v.but(start=computed[n]) if n in computed else v for n, v in table_u.items())
     parameters = (PARAMETERS["x_start"].but(start=float(x_start)), PARAMETERS["max_step"])
     return SwiftFunctions(init=init, step=step, out=outw, state_names=STATE_NAMES, inputs=inputs,
                           parameters=parameters, outputs=tuple(OUTPUTS.values()), table_x0=float(table.x0),
                           table_dx=float(table.dx), table_h=h, grid=grid_v, output_dependencies=deps,
-                          config_extra=extra, rim=rim)
+                          config_extra=extra, rim=rim, axle=axle)
 
 
 class SwiftWheel:
     """The SWIFT wheel in Python (module notes): ``set_inputs``, ``set_parameters``, ``initialise``, ``step``,
     ``outputs``, ``state``. The same functions and the same window placement as the native FMU."""
 
-    def __init__(self, model, road=None, *, x_start: float = 0.0, rim: str = "speed"):
-        self.functions = f = swift_functions(model, road, x_start=x_start, rim=rim)
+    def __init__(self, model, road=None, *, x_start: float = 0.0, rim: str = "speed", axle: str = "height"):
+        self.functions = f = swift_functions(model, road, x_start=x_start, rim=rim, axle=axle)
         self._params = model.params
         self.u = np.array(f.input_starts, dtype=float)
         self.q = np.array(f.parameter_starts, dtype=float)
@@ -259,7 +307,8 @@ class SwiftWheel:
         check_pressure(self._params, float(self.u[self.functions.input_names.index("p")]))
         U = dict(zip(self.functions.input_names, self.u))
         x = self.state.copy()
-        x[_S["za"]], x[_S["vza"]] = U["z"], U["vz"]
+        if self.functions.axle == "height":  # the axle height imposed (as glue_swift.c)
+            x[_S["za"]], x[_S["vza"]] = U["z"], U["vz"]
         if self.functions.rim == "speed":  # the rim spin imposed (as glue_swift.c)
             x[_S["oma"]] = U["omega"]
         n = internal_steps(h, self.q[1], U["vx"])

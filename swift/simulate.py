@@ -589,9 +589,10 @@ class SwiftTyre:
 
     @_with_casadi
     def equilibrium_function(self, iterations: int = 30):
-        """:meth:`initial_state` with the axle height imposed as one CasADi function for code generation (FMU):
+        """:meth:`initial_state` as one CasADi function for code generation (FMU):
         ``(xa, za, vza, omega, u, x0w, grid, hw) -> x`` at the axle position ``xa``, height ``za`` (above the cam
-        table's road), vertical speed ``vza`` and spin ``omega`` (with ``rim="torque"`` its first guess), ring
+        table's road; with ``axle="load"`` unused: the axle height is solved for from the input load, as
+        initial_state), vertical speed ``vza`` and spin ``omega`` (with ``rim="torque"`` its first guess), ring
         inputs ``u`` (INPUT_NAMES) and the window of :attr:`step_function`: the same start (the steady-state load
         at the deflection under the axle), ``iterations`` Newton steps (:func:`_newton_inverse`, as initial_state) on
         :attr:`equilibrium_unknowns`,
@@ -600,18 +601,20 @@ class SwiftTyre:
 
         from mftyre.backend import casadi_backend
 
-        if self.axle != "height":
-            raise ModelInputError("equilibrium_function takes the axle height: build the SwiftTyre with "
-                                  "axle='height'")
         be, prm, n = casadi_backend(), self.model.params, self.window
-        xa, za, vza, omega = (ca.MX.sym(name) for name in ("xa", "za", "vza", "omega"))
+        inputs = xa, za, vza, omega = [ca.MX.sym(name) for name in ("xa", "za", "vza", "omega")]
         u = ca.MX.sym("u", len(INPUT_NAMES))
         x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", n), ca.MX.sym("hw", 2 * n)
         U = {name: u[i] for i, name in enumerate(INPUT_NAMES)}
         h = ca.interpolant("cam", "linear", [n], 2, {"lookup_mode": ["exact"]})(xa - x0w, grid, hw)[0]
-        rl = be.fmin(za - h, prm.UNLOADED_RADIUS)  # as initial_state: model.vertical_force at no spin or slip
         r0, dpi = vertical.free_radius(prm, 0.0, be), vertical.pressure_increment(prm, U["p"])
-        fz = vertical.vertical_force(prm, rl, r0, 0.0, 0.0, 0.0, 0.0, dpi, be)
+        if self.axle == "load":  # as initial_state: the axle at the loaded radius of the load on the tyre, at rest
+            fz = U["load"] - self.constants.mb * prm.GRAVITY
+            za = h + vertical.loaded_radius(prm, be.fmax(fz, 0.0), r0, 0.0, 0.0, 0.0, 0.0, dpi, be)[0]
+            vza = 0.0
+        else:
+            rl = be.fmin(za - h, prm.UNLOADED_RADIUS)  # as initial_state: model.vertical_force at no spin or slip
+            fz = vertical.vertical_force(prm, rl, r0, 0.0, 0.0, 0.0, 0.0, dpi, be)
         guess = dict.fromkeys(STATE_NAMES, 0.0)
         guess.update(xa=xa, xb=xa, za=za, vza=vza, zb=za + be.fmax(fz, 0.0) / self.constants.cbx, vxb=U["vx"],
                      vyb=U["vy"], oma=omega, omb=omega, yb=U["y"], ya=U["y"], gb=U["gamma"], psb=U["psi"])
@@ -628,7 +631,7 @@ class SwiftTyre:
         for _ in range(iterations):
             xi = newton(xi, u, x0w, grid, hw)
         xi = _remember_contact(xi, self._rhs_window(xi, u, x0w, grid, hw, 0.0)[1])
-        return ca.Function("swift_equilibrium", [xa, za, vza, omega, u, x0w, grid, hw], [xi],
+        return ca.Function("swift_equilibrium", [*inputs, u, x0w, grid, hw], [xi],
                            ["xa", "za", "vza", "omega", "u", "x0w", "grid", "hw"], ["x"])
 
     @_with_casadi

@@ -22,3 +22,28 @@ def require_shared(path: Path) -> Path:
 @pytest.fixture(scope="session")
 def mfeval_dir() -> Path:
     return require_shared(MFEVAL_DIR)
+
+
+@pytest.fixture(scope="session")
+def built_fmu(tmp_path_factory):
+    """``built_fmu(tir, *options) -> path``: the FMU of ``mftyre fmu build TIR -o PATH OPTIONS``, built once per
+    test process and shared by the FMU test files (pytest-xdist --dist loadfile: one cache per worker). Callers
+    read the file, never change it."""
+    import argparse
+
+    from mftyre.fmu_command import register
+
+    built = {}
+
+    def build(tir, *options):
+        key = (str(tir), *map(str, options))
+        if key not in built:
+            path = tmp_path_factory.mktemp("built_fmu") / "tyre.fmu"
+            parser = argparse.ArgumentParser(prog="mftyre")
+            register(parser.add_subparsers(dest="command"))
+            ns = parser.parse_args(["fmu", "build", key[0], "-o", str(path), *key[1:]])
+            assert ns.func(ns) == 0, key
+            built[key] = path
+        return built[key]
+
+    return build

@@ -3,8 +3,8 @@
 the same mode, give the same outputs. Modes: steady with the load imposed, steady on a rig (load and slips
 imposed), SWIFT with axle height and spin imposed over a cleat.
 
-What the backends do not share yet is pinned below (ONLY_NATIVE, ONLY_PYTHONFMU), so that closing a gap shows
-here."""
+What the backends do not share is pinned below (ONLY_NATIVE: nothing left; ONLY_PYTHONFMU: the pythonfmu FMU is
+one FMU for every mode, so it has the other modes' variables), so that a new gap shows here."""
 from __future__ import annotations
 
 import math
@@ -18,45 +18,35 @@ fmpy = pytest.importorskip("fmpy")
 
 from mftyre.variables import WHEEL  # noqa: E402
 from test_fmu import TIR61, TIR62, Slave  # noqa: E402
-from test_fmu_native import _build  # noqa: E402  (mftyre fmu build, any backend)
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler (cc) to build native FMUs")
 
 CLEAT = "cleat(x0=0.8, length=0.05, height=0.01)"
 
 #: Variables one backend has in a mode and the other has not (the gaps left; see fmu/README.md).
-ONLY_NATIVE = {
-    "steady": {"road_camber", "mu_scale", "u_x", "u_y"},
-    "rig": {"road_camber", "mu_scale", "u_x", "u_y"},
-    "swift": {"road_camber", "Fx_c", "Fy_c", "road_curvature", "Re_variation", "road_camber_eff", "x_contact"},
-}
-ONLY_NATIVE["swift_torque"] = ONLY_NATIVE["swift"]
-#: Names the SWIFT backends give different meanings (see fmu/README.md): Rl is the lever arm of the contact forces
-#: (belt centre to contact point) in the native FMU, (wheel centre - effective road height) cos(slope) in pythonfmu.
-SWIFT_DIFFERENT = {"Rl"}
+ONLY_NATIVE = {"steady": set(), "rig": set(), "swift": set(), "swift_load_torque": set()}
 #: pythonfmu: one FMU for every mode (String parameters choose), so its extra variables are the other modes' too.
 ONLY_PYTHONFMU = {"vy", "omega", "z", "vz", "road_z", "torque", "kappa_in", "alpha_in", "Fz_in", "axle_mass",
+                  "mu_scale", "u_x", "u_y", "Fx_c", "Fy_c", "road_curvature", "Re_variation", "road_camber_eff",
+                  "x_contact",
                   "x_start", "max_step", "Vsx", "Vsy", "omega_used", "contact_width", "Fz_c", "road_w", "road_slope",
                   "x_road", "Mx_c", "My_c", "trail", "mux", "muy"}
 
 
 @pytest.fixture(scope="module")
-def fmus(tmp_path_factory):
-    out = tmp_path_factory.mktemp("backends")
-    builds = {
+def fmus(built_fmu):
+    builds = {  # the pythonfmu steady and swift FMUs and the native steady one are test_fmu's and test_fmu_swift's
         ("native", "steady"): [TIR61, "--vertical", "load"],
         ("native", "rig"): [TIR61, "--input-mode", "rig"],
         ("native", "swift"): [TIR62, "--model", "swift", "--road", CLEAT],
-        ("native", "swift_torque"): [TIR62, "--model", "swift", "--road", CLEAT, "--rim", "torque"],
+        ("native", "swift_load_torque"): [TIR62, "--model", "swift", "--road", CLEAT, "--vertical", "load", "--rim",
+                                          "torque"],
         ("pythonfmu", "steady"): [TIR61, "--backend", "pythonfmu", "--vertical", "load"],
         ("pythonfmu", "swift"): [TIR62, "--backend", "pythonfmu", "--model", "swift", "--vertical", "position"],
     }
-    paths = {}
-    for (backend, mode), args in builds.items():
-        paths[backend, mode] = out / f"{backend}_{mode}.fmu"
-        assert _build([args[0], "-o", paths[backend, mode], *args[1:]]) == 0, (backend, mode)
+    paths = {key: built_fmu(*args) for key, args in builds.items()}
     paths["pythonfmu", "rig"] = paths["pythonfmu", "steady"]  # one FMU, input_mode chosen at run time
-    paths["pythonfmu", "swift_torque"] = paths["pythonfmu", "swift"]  # rim chosen at run time
+    paths["pythonfmu", "swift_load_torque"] = paths["pythonfmu", "swift"]  # vertical_input, rim chosen at run time
     return paths
 
 
@@ -64,7 +54,7 @@ def _variables(path):
     return {v.name: v for v in fmpy.read_model_description(path).modelVariables if v.type == "Real"}
 
 
-@pytest.mark.parametrize("mode", ["steady", "rig", "swift", "swift_torque"])
+@pytest.mark.parametrize("mode", ["steady", "rig", "swift", "swift_load_torque"])
 def test_both_backends_speak_one_vocabulary(fmus, mode):
     native, python = _variables(fmus["native", mode]), _variables(fmus["pythonfmu", mode])
     for name, v in {**native, **python}.items():  # every Real variable of both is a word of the vocabulary
@@ -120,25 +110,28 @@ def test_both_backends_give_the_same_steady_results(fmus, tmp_path, mode):
             assert a[name] == pytest.approx(b[name], rel=1e-9, abs=1e-7), (mode, i, name, steps[i - 1] if i else {})
 
 
-@pytest.mark.parametrize("rim", ["speed", "torque"])
-def test_both_backends_give_the_same_swift_run_over_a_cleat(fmus, tmp_path, rim):
-    """Axle height imposed, the spin imposed or the rim driven by a torque (100 N m from 0.1 s), the wheel rolling
-    over a 10 mm cleat at 10 m/s in 5 ms communication steps: both backends step the same rigid ring with the same
-    internal step (max_step 1 ms)."""
+@pytest.mark.parametrize("mode", ["swift", "swift_load_torque"])
+def test_both_backends_give_the_same_swift_run_over_a_cleat(fmus, tmp_path, mode):
+    """The wheel rolling over a 10 mm cleat at 10 m/s in 5 ms communication steps, with the axle height and the
+    spin imposed (swift), or the axle pushed down by a load of 4000 N and the rim driven by a torque (100 N m from
+    0.1 s; swift_load_torque): both backends step the same rigid ring with the same internal step (max_step 1 ms)."""
     from mftyre import load_tir
     from mftyre.transient import free_rolling_start
 
     omega, z = free_rolling_start(load_tir(TIR62), 10.0)
-    start = {"vx": 10.0, "omega": omega, "z": z}
-    steps = [{}] * 20 + [{"torque": 100.0}] * 10 if rim == "torque" else [{}] * 30  # 0.15 s: over the cleat at 0.8 m
-    native = _run(fmus["native", "swift" if rim == "speed" else "swift_torque"], tmp_path, start, steps, 5e-3)
-    python = _run(fmus["pythonfmu", "swift"], tmp_path, {**start, "road": CLEAT, "rim": rim}, steps, 5e-3)
+    loaded = mode == "swift_load_torque"
+    start = {"vx": 10.0, "omega": omega, **({"Fz_in": 4000.0} if loaded else {"z": z})}
+    steps = [{}] * 20 + [{"torque": 100.0}] * 10 if loaded else [{}] * 30  # 0.15 s: over the cleat at 0.8 m
+    native = _run(fmus["native", mode], tmp_path, start, steps, 5e-3)
+    python = _run(fmus["pythonfmu", mode], tmp_path, {**start, "road": CLEAT, "rim": "torque" if loaded else "speed",
+                                                      "vertical_input": "load" if loaded else "position"}, steps, 5e-3)
     swing = max(r["Fz"] for r in native) - min(r["Fz"] for r in native)
     assert swing > 300.0  # the cleat is felt
     shared = native[0].keys() & python[0].keys()
-    assert {"Fx", "Fz", "My", "kappa", "rho", "Re", "road_w", "road_slope", "x_road"} <= shared
+    assert {"Fx", "Fz", "My", "kappa", "rho", "Rl", "Re", "road_w", "road_slope", "x_road", "Mx_c", "My_c", "trail",
+            "mux", "contact_width", "Vsx", "omega_used", "Fx_c", "x_contact", "road_curvature"} <= shared
     for i, (a, b) in enumerate(zip(native, python)):
-        for name in shared - SWIFT_DIFFERENT:
+        for name in shared:
             scale = 1e-6 * (swing if name[0] in "FM" else 1.0)
             assert a[name] == pytest.approx(b[name], rel=1e-6, abs=scale), (i, name)
     assert math.isclose(native[-1]["x_road"], 10.0 * 0.15, rel_tol=1e-9)

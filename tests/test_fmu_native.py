@@ -844,7 +844,6 @@ def test_outputs_in_initialisation_mode_are_those_of_the_initial_state(fmus, tmp
     (["--model", "swift", "--input-mode", "rig"], "--input-mode rig is a mode of --model steady"),
     (["--model", "transient", "--rim", "torque"], "--rim torque is a mode of --model swift"),
     (["--backend", "pythonfmu", "--rim", "torque"], "set at run time"),
-    (["--model", "swift", "--vertical", "load"], "takes the wheel-centre height"),
     (["--backend", "pythonfmu", "--road", "cleat(x0=1, length=0.05, height=0.01)"], "set at run time"),
 ])
 def test_options_of_the_other_backend_are_refused(tmp_path, capsys, args, text):

@@ -42,10 +42,8 @@ def model():
 
 
 @pytest.fixture(scope="module")
-def swift_fmu(tmp_path_factory):
-    path = tmp_path_factory.mktemp("fmu_swift") / "tyre_swift.fmu"
-    assert _build([TIR62, "-o", path, "--model", "swift", "--vertical", "position"]) == 0
-    return path
+def swift_fmu(built_fmu):
+    return built_fmu(TIR62, "--backend", "pythonfmu", "--model", "swift", "--vertical", "position")
 
 
 def _scale(model, name):

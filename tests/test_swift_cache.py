@@ -196,7 +196,7 @@ def test_libraries_shipped_in_an_fmu_are_installed_verified_and_loaded_without_a
     for p in shipped.iterdir():
         p.chmod(0o666)  # as unpacked by some tool: the installed copies must still be private
     monkeypatch.setenv("MFTYRE_CACHE", str(tmp_path / "user"))
-    assert core.install_swift_libraries(shipped, entry) == 8
+    assert core.install_libraries(shipped, entry) == 8
 
     def no_compiler(*args, **kwargs):
         raise AssertionError("compiled instead of loading the shipped library")

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import mftyre
-from conftest import TIR_FILES
+from conftest import SHARED, TIR_FILES, require_shared
 from mftyre.backend import NUMPY, casadi_backend
 from mftyre.formula.vertical import free_radius
 from mftyre.transient import (VX_MIN, contact_load, kinematic_slips, mf_slip, slip_speeds, wheel_centre_moments,
@@ -97,27 +97,31 @@ def test_state_functions_describe_their_vectors(kind):
     assert f.init.size1_in(f.init.name_in().index("q")) == len(f.parameter_names) == len(f.parameter_starts)
 
 
-def test_load_at_radius_is_the_fixed_point_of_the_coupled_vertical_force():
-    """A vertical force k (R - Rl) (1 + c Fx) with Fx = mu Fz: Fz = k d / (1 - c mu k d) (d = R - Rl); without
-    coupling the first pass, k d; above the free radius no load."""
-    from mftyre.transient import load_at_radius
+@pytest.mark.parametrize("path", [SHARED / "reference" / "tir" / "TNO_car205_60R15.tir",
+                                  SHARED / "reference" / "mfeval" / "MagicFormula61_Parameters.tir"])
+@pytest.mark.parametrize("kind", ["steady", "transient"])
+def test_position_mode_load_is_the_fixed_point_of_the_coupled_vertical_force(path, kind):
+    """Public .tir files whose vertical force depends on Fx and Fy (Q_FCX, Q_FCY != 0; MF 6.2 and 6.1): with the
+    wheel centre at Rl, the wheel's Fz is MFModel.vertical_force at Rl with the wheel's own Fx and Fy, and differs
+    from the force at Fx = Fy = 0 where the tyre slips (old wheel: the force at Fx = Fy = 0)."""
+    from mftyre.transient import WheelTyre
 
-    k, r_free, c, mu = 2.0e5, 0.31, 2e-5, 1.1
-    calls = []
-
-    def vertical(fx, fy):
-        return k * (r_free - rl) * (1.0 + c * fx), r_free
-
-    def rolling(load):
-        calls.append(load)
-        return mu * load, 0.0, ("at", load)
-
-    rl = 0.29
-    d = r_free - rl
-    load, r_omega, result = load_at_radius(vertical, rolling, rl, True, 1e-9)
-    assert load == pytest.approx(k * d / (1.0 - c * mu * k * d), rel=1e-12) and r_omega == r_free
-    assert result == ("at", load) and len(calls) > 3
-    calls.clear()
-    assert load_at_radius(vertical, rolling, rl, False, 1e-9)[0] == pytest.approx(k * d) and len(calls) == 1
-    rl = 0.32
-    assert load_at_radius(vertical, rolling, rl, True, 1e-9)[0] == 0.0
+    model = mftyre.load_tir(require_shared(path))
+    prm = model.params
+    tyre = WheelTyre(model, kind, "position")
+    rng = np.random.default_rng(7)
+    moved = 0.0
+    for _ in range(8):
+        vx = rng.uniform(3.0, 30.0)
+        inputs = dict(vx=vx, vy=rng.uniform(-3.0, 3.0), omega=vx / prm.UNLOADED_RADIUS * rng.uniform(0.85, 1.15),
+                      gamma=rng.uniform(-0.05, 0.05), p=prm.INFLPRES, z=prm.UNLOADED_RADIUS * rng.uniform(0.95, 0.99),
+                      road_z=0.0)
+        tyre.set_inputs(**inputs)
+        tyre.initialise()
+        out = tyre.outputs()
+        rl = inputs["z"] / math.cos(inputs["gamma"])
+        coupled = model.vertical_force(rl, prm.INFLPRES, inputs["omega"], out["Fx"], out["Fy"], inputs["gamma"])
+        uncoupled = model.vertical_force(rl, prm.INFLPRES, inputs["omega"], 0.0, 0.0, inputs["gamma"])
+        assert out["Fz"] == pytest.approx(float(coupled), rel=1e-9), inputs
+        moved = max(moved, abs(float(uncoupled) - out["Fz"]) / out["Fz"])
+    assert moved > 1e-3

@@ -105,8 +105,13 @@ int glue_init(GlueWork *g, const double *u, const double *q, double *x, char *ms
     }
     for (int i = 0; i < TYRE_NX; i++)
         if (!isfinite(x[i])) {
+#ifdef TYRE_U_Z
             snprintf(msg, n, "no static equilibrium found at the initial inputs (z = %g m, x_start = %g m)",
                      u[TYRE_U_Z], q[TYRE_Q_X_START]);
+#else
+            snprintf(msg, n, "no static equilibrium found at the initial inputs (Fz_in = %g N, x_start = %g m)",
+                     u[TYRE_U_FZ_IN], q[TYRE_Q_X_START]);
+#endif
             return 1;
         }
     return 0;
@@ -125,8 +130,10 @@ int glue_step(GlueWork *g, double *x, const double *u, const double *q, double h
      * than 1e7; a step over budget (max_step far too small, or |vx| far beyond any vehicle) is refused */
     if (!(nd <= ceil(h * STEP_RATE_LIMIT) && nd < 1e7)) return GLUE_OVER_BUDGET;
     n = nd < 1 ? 1 : (long)nd;
+#ifdef TYRE_U_Z /* axle height imposed; with the input load the axle moves (swift.fmu_model) */
     x[S_ZA] = u[TYRE_U_Z];
     x[S_VZA] = u[TYRE_U_VZ];
+#endif
 #ifndef TYRE_U_TORQUE /* rim speed imposed; with the input torque the rim spins freely (swift.fmu_model) */
     x[S_OMA] = u[TYRE_U_OMEGA];
 #endif
