@@ -1,9 +1,9 @@
 """FMI 2.0 co-simulation slave of the mftyre Magic Formula tyre (pythonfmu).
 
 Built by ``mftyre fmu build FILE.tir -o tyre.fmu --backend pythonfmu`` (see build.py and README.md here); not meant to be run
-directly. The FMU's resources hold this script, ``mftyre_fmu_core.py`` (the computation), ``config.json`` (what
-was built), ``tyre.tir`` (the embedded property file), ``functions/`` (the model as serialised CasADi functions
-and, for the build platform, compiled C libraries) and ``vendor/mftyre`` (a copy of the mftyre package used
+directly. The FMU's resources hold this script, ``config.json`` (what
+was built), ``tyre.tir`` (the embedded property file), ``functions/`` (for the build platform, the compiled
+libraries of the wheels) and ``vendor/mftyre`` (a copy of the mftyre package used
 when the host's Python has none installed).
 
 FMI behaviour
@@ -11,7 +11,7 @@ FMI behaviour
 * Parameters are read when initialisation ends; the outputs are computed then from the inputs' current values,
   so they are valid right after fmi2ExitInitializationMode, and after every fmi2DoStep. model=steady has no
   state: the outputs are those of the inputs at the end of the step, whatever the step size. model=swift holds
-  the state of the rigid-ring tyre (``mftyre_fmu_core.SwiftCore`` around ``swift.SwiftTyre``): it starts in
+  the state of the rigid-ring tyre (``swift.fmu_model.SwiftWheel``, the native FMU's functions): it starts in
   static equilibrium at the initial inputs and is advanced over each communication step (any step size; split
   into internal steps of at most ``max_step``).
 * A failed initialisation (bad parameter, unreadable .tir, bad road) is logged with status fmi2Error (category
@@ -24,7 +24,7 @@ FMI behaviour
   leaves the outputs (and the swift state) at their last valid values; the ``status`` output says why (0 ok, 1
   input or step rejected).
 * fmi2GetFMUstate/fmi2SetFMUstate/serialise hold the whole state: the variables, x_road and the SWIFT ring state
-  with its road frames (``_get_fmu_state``).
+  (``_get_fmu_state``).
 * fmi2Reset returns the instance to the state after instantiation (pythonfmu re-creates the object).
 """
 import json
@@ -67,6 +67,34 @@ _PARAMETERS = {  # name -> description; start values come from config.json
     "rim": "swift: speed (the omega input is imposed) or torque (the torque input drives the rim)",
 }
 
+#: Outputs the FMU adds to the wheel's (mftyre.transient.OUTPUTS), in every mode (the SWIFT wheel's).
+EXTRA_OUTPUTS = ("Fz_c", "road_w", "road_slope", "x_road", "Fx_c", "Fy_c", "road_curvature", "Re_variation",
+                 "road_camber_eff", "x_contact")
+#: What the pythonfmu FMU says more about some outputs than the vocabulary (its modes: steady vehicle/rig, swift).
+OUTPUT_NOTES = {
+    "Fz": "vertical force on the tyre, >= 0 (at the wheel centre, ISO-W axes)",
+    "My": "moment about y at the wheel centre, ISO-W axes (-Rl Fx + rolling resistance)",
+    "kappa": "longitudinal slip given to the MF, -Vsx / Vx (kinematic or the rig input: relative to the direction of "
+             "travel, -1 = locked wheel; swift: the transient slip -Vsx / |Vcx|, its MF runs at |Vcx|)",
+    "alpha": "slip angle given to the MF (kinematic, or the rig input)",
+    "Vsx": "longitudinal slip speed of the contact point, -kappa vx (swift: -kappa |Vcx|)",
+    "Vsy": "lateral slip speed of the contact point, tan(alpha) |vx|",
+    "omega_used": "spin speed used (the input; in rig mode estimated from kappa and vx)",
+    "Fz_c": "normal contact force (swift: normal to the effective road plane; steady: = Fz)",
+    "road_w": "effective road height under the wheel (swift: tandem cams + road_z; steady: road_z, or 0 with "
+              "vertical_input=load)",
+    "road_slope": "effective forward road slope beta_y (swift; 0 in steady mode)",
+}
+
+
+def _outputs():
+    """The outputs: name -> Variable (needs mftyre importable: the host's or the FMU's vendored copy)."""
+    from mftyre.transient import OUTPUTS
+    from mftyre.variables import pick
+
+    return pick("output", *OUTPUTS, *EXTRA_OUTPUTS, describe=OUTPUT_NOTES)
+
+
 #: Real parameters: name -> description; units and defaults from mftyre.variables.WHEEL.
 _REAL_PARAMETERS = {
     "x_start": "swift: wheel-centre position on the road profile at the start",
@@ -77,10 +105,8 @@ _REAL_PARAMETERS = {
 
 def _user_error(exc) -> bool:
     """A problem of the parameters or the .tir file that the user can mend (logged without a traceback)."""
-    errors = sys.modules.get("mftyre.errors"), sys.modules.get("mftyre_fmu_core")
-    kinds = tuple(k for k in (getattr(errors[0], "MFTyreError", None), getattr(errors[1], "TyreFMUError", None))
-                  if k is not None)
-    return isinstance(exc, (ValueError, *kinds))
+    kind = getattr(sys.modules.get("mftyre.errors"), "MFTyreError", None)
+    return isinstance(exc, (ValueError, *((kind,) if kind is not None else ())))
 
 
 class MFTyre(Fmi2Slave):
@@ -108,9 +134,7 @@ class MFTyre(Fmi2Slave):
             start = WHEEL[name].start
             setattr(self, name, float(starts.get(name, start if math.isfinite(start) else 0.0)))
         self.version = mftyre.__version__  # the one version string (pyproject reads it too)
-        from mftyre_fmu_core import outputs
-
-        outputs = outputs()
+        outputs = _outputs()
         for name in _REAL_PARAMETERS:
             setattr(self, name, float(params.get(name, WHEEL[name].start)))
         self._units = {v.name: v.unit for v in outputs.values()}
@@ -227,7 +251,7 @@ class MFTyre(Fmi2Slave):
         self._import_mftyre(resources, swift=model_name == "swift")
         import mftyre
         from mftyre.transient import WheelTyre
-        from mftyre_fmu_core import SwiftCore, install_libraries
+        from mftyre.compiled import install_libraries
 
         tir = self.tir_file.strip()
         embedded = not tir
@@ -244,15 +268,12 @@ class MFTyre(Fmi2Slave):
         warn = lambda m: self.log(m, Fmi2Status.warning)  # noqa: E731
         self._x_road = float(self.x_start)
         if model_name == "swift":
-            self._core = SwiftCore(model, self.road, vertical=vertical, rim=rim, x_start=float(self.x_start),
-                                   max_step=float(self.max_step), axle_mass=float(self.axle_mass),
-                                   evaluator=evaluator, functions_dir=functions_dir, index=index, log=warn,
-                                   base_dir=os.getcwd())
+            self._core, step = self._swift_wheel(model, vertical, rim, evaluator, functions_dir, index, warn)
             self._mode = "swift"
             detail = (f"model swift (rim {rim}, road {self.road.strip() or 'flat'}), vertical_input {vertical}, "
-                      f"step {self._core.path}, evaluator {self._core.mf_path}")
+                      f"step {step}")
         else:
-            if functions_dir is not None and index.get("wheel"):  # the compiled wheels shipped for this platform
+            if functions_dir is not None and index and index.get("wheel"):  # the compiled wheels shipped for this platform
                 try:
                     install_libraries(os.path.join(functions_dir, "wheel"), index["wheel"])
                 except Exception as exc:  # read-only cache...: compiled now instead
@@ -263,6 +284,39 @@ class MFTyre(Fmi2Slave):
                       f"evaluator {self._core.evaluator}")
         self.log(f"{cfg.get('tir_name', os.path.basename(path)) if embedded else path}: FITTYP "
                  f"{model.params.fittyp}, mounted {model.side}, {detail}", Fmi2Status.ok)
+
+    def _swift_wheel(self, model, vertical, rim, evaluator, functions_dir, index, warn):
+        """(swift.fmu_model.SwiftWheel of the parameters, "compiled" or "casadi")."""
+        from swift.fmu_model import SwiftWheel
+        from swift.road import parse_road
+        from mftyre.compiled import install_libraries
+
+        for name in ("max_step", "axle_mass"):
+            value = float(getattr(self, name))
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"parameter {name} must be positive, got {value!r}")
+        if not math.isfinite(float(self.x_start)):
+            raise ValueError(f"parameter x_start must be finite, got {self.x_start!r}")
+        road = parse_road(self.road, os.getcwd())
+        if functions_dir is not None and index and index.get("swift"):  # the compiled SWIFT wheels shipped
+            try:
+                install_libraries(os.path.join(functions_dir, "swift"), index["swift"])
+            except Exception as exc:  # read-only cache...: compiled now instead
+                warn(f"shipped SWIFT libraries not installed: {exc}")
+        options = dict(x_start=float(self.x_start), rim=rim, axle="load" if vertical == "load" else "height",
+                       axle_mass=float(self.axle_mass))
+        wheel = None
+        if evaluator in ("auto", "compiled"):
+            try:
+                wheel = SwiftWheel(model, road, compiled=True, **options)
+            except Exception as exc:  # no C compiler...
+                if evaluator == "compiled":
+                    raise ValueError(f"compiled SWIFT wheel unavailable: {exc}") from None
+                warn(f"compiled SWIFT wheel unavailable ({exc}); using CasADi's virtual machine (slow)")
+        if wheel is None:
+            wheel = SwiftWheel(model, road, compiled=False, **options)
+        wheel.set_parameters(x_start=float(self.x_start), max_step=float(self.max_step))
+        return wheel, "compiled" if wheel.library is not None else "casadi"
 
     @staticmethod
     def _import_mftyre(resources, swift=False):
@@ -281,14 +335,13 @@ class MFTyre(Fmi2Slave):
         state = {"variables": super()._get_fmu_state(), "x_road": self._x_road, "problem": self._problem}
         core = self._core
         if core is not None and getattr(core, "state", None) is not None:
-            state["swift"] = {"state": [float(v) for v in core.state], "x_offset": core.x_offset,
-                              "road_z": core.road_z}
+            state["swift"] = {"state": [float(v) for v in core.state]}
         return state
 
     def _set_fmu_state(self, state):
         if not isinstance(state, dict) or "variables" not in state:
             raise ValueError("not a state of this FMU")
-        if "swift" in state and (self._core is None or not hasattr(self._core, "x_offset")):
+        if "swift" in state and (self._core is None or self._mode != "swift"):
             raise ValueError("a SWIFT state cannot be restored into an instance that is not initialised as SWIFT")
         super()._set_fmu_state(state["variables"])
         self._x_road, self._problem = state["x_road"], state["problem"]
@@ -297,7 +350,6 @@ class MFTyre(Fmi2Slave):
 
             sw = state["swift"]
             self._core.state = np.array(sw["state"], dtype=float)
-            self._core.x_offset, self._core.road_z = sw["x_offset"], sw["road_z"]
 
     # ------------------------------------------------------------------------------------------------- stepping
     def do_step(self, current_time, step_size):
@@ -348,10 +400,9 @@ class MFTyre(Fmi2Slave):
         self.status = 0
         return True
 
-    _SWIFT_INPUTS = ("vx", "vy", "omega", "gamma", "z", "vz", "road_z", "road_camber", "Fz_in", "torque", "p")
-
     def _compute_swift(self, step_size):
-        u = {n: getattr(self, n) for n in self._SWIFT_INPUTS}
+        core = self._core
+        u = {n: getattr(self, n) for n in core.functions.input_names}  # this mode's (swift.fmu_model.input_table)
         bad = [f"{n}={v!r}" for n, v in u.items() if not math.isfinite(v)]
         if not bad and not u["p"] > 0:
             bad = [f"p={u['p']!r} (the inflation pressure must be positive)"]
@@ -364,7 +415,14 @@ class MFTyre(Fmi2Slave):
             self.status = 1
             return False
         try:
-            out = self._core.initialise(u) if step_size is None else self._core.advance(u, step_size)
+            core.set_inputs(**u)
+            if step_size is None:
+                core.initialise()
+            else:
+                core.step(step_size)
+            out = core.outputs()
+            if not all(math.isfinite(v) for v in out.values()):
+                raise ArithmeticError("non-finite outputs")
         except Exception as exc:
             if step_size is None:
                 raise

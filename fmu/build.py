@@ -6,11 +6,12 @@
     from fmu.build import build_fmu
     build_fmu("tir_files/car_205_60R15_mf61.tir", "tyre.fmu", side="left")
 
-What goes into the FMU (``resources/``): the slave ``MFTyre.py`` and ``mftyre_fmu_core.py``; ``tyre.tir`` (the
-property file, byte for byte); ``functions/``: the model as serialised CasADi functions (any platform with
-CasADi) and, when a C compiler is available at build time, the same functions compiled to C for the build
-platform (``.so``; with ``--model swift`` also the compiled SWIFT step, ``functions/swift``); ``config.json`` (the
-build options, the start values, the function index); ``vendor/`` (copies of the packages mftyre and swift, used
+What goes into the FMU (``resources/``): the slave ``MFTyre.py``; ``tyre.tir`` (the property file, byte for
+byte); ``functions/``, when a C compiler is available at build time: the wheels compiled to C for the build
+platform (``functions/wheel``: the steady wheel of mftyre.transient; with ``--model swift`` also
+``functions/swift``: the step and outputs of swift.fmu_model's SWIFT wheel), installed into the user's cache when
+the FMU runs on the same platform (elsewhere it compiles them, or runs CasADi's virtual machine); ``config.json``
+(the build options, the start values, the library index); ``vendor/`` (copies of the packages mftyre and swift, used
 only when the host's Python has none). ``documentation/`` holds
 README.md here. A built FMU is a build output: never commit it.
 """
@@ -70,11 +71,6 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
     from mftyre.errors import MFTyreError
     from mftyre.files import make_output_folder, refuse_special_output, write_atomically
 
-    sys.path.insert(0, str(HERE))
-    try:
-        from mftyre_fmu_core import export_functions, export_swift_libraries, export_wheel_libraries
-    finally:
-        sys.path.remove(str(HERE))
     try:
         from pythonfmu.builder import FmuBuilder
     except ImportError as exc:
@@ -111,25 +107,16 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
         stage = Path(tmp) / "stage"
         stage.mkdir()
         shutil.copy2(HERE / "MFTyre.py", stage / "MFTyre.py")
-        shutil.copy2(HERE / "mftyre_fmu_core.py", stage / "mftyre_fmu_core.py")
         tir_bytes = tir.read_bytes()
         (stage / "tyre.tir").write_bytes(tir_bytes)
-        try:
-            index = export_functions(tyre, stage / "functions", compile_c=compile_c)
-        except MFTyreError as exc:  # no C compiler: ship the CasADi functions only
-            warnings.warn(f"shipping CasADi functions only (no compiled C): {exc}", stacklevel=2)
-            shutil.rmtree(stage / "functions", ignore_errors=True)
-            index = export_functions(tyre, stage / "functions", compile_c=False)
-        if index["mf"]["compiled"]:  # the compiled steady wheels for this platform
+        index = {}
+        if compile_c:  # the compiled wheels for this platform (without them the FMU compiles or runs CasADi's VM)
             try:
                 index["wheel"] = export_wheel_libraries(tyre, stage / "functions" / "wheel")
-            except Exception as exc:
-                warnings.warn(f"not shipping compiled steady wheels: {exc}", stacklevel=2)
-        if model == "swift" and index["mf"]["compiled"]:  # the compiled SWIFT step for this platform
-            try:
-                index["swift"] = export_swift_libraries(tyre, stage / "functions" / "swift")
-            except Exception as exc:
-                warnings.warn(f"not shipping a compiled SWIFT step: {exc}", stacklevel=2)
+                if model == "swift":
+                    index["swift"] = export_swift_libraries(tyre, stage / "functions" / "swift")
+            except Exception as exc:  # no C compiler...
+                warnings.warn(f"shipping no compiled libraries: {exc}", stacklevel=2)
         vendor = stage / "vendor" / "mftyre"
         shutil.copytree(Path(mftyre.__file__).parent, vendor,
                         ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.so"))
@@ -167,7 +154,7 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
             + html.escape(readme) + "</pre></body></html>", encoding="utf-8")
         (docs / "README.md").write_text(readme, encoding="utf-8")
 
-        project = [stage / n for n in ("mftyre_fmu_core.py", "tyre.tir", "config.json", "functions", "vendor")]
+        project = [stage / n for n in ("tyre.tir", "config.json", "functions", "vendor")]
         built = Path(tmp) / "out"
         built.mkdir()
         fmu = FmuBuilder.build_FMU(stage / "MFTyre.py", dest=built, project_files=project,
@@ -176,7 +163,7 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
         write_atomically(output, Path(fmu).read_bytes())  # the one atomic no-follow routine
     if not quiet:
         print(f"wrote {output}: {tir.name} (FITTYP {prm.fittyp}), mounted {tyre.side}, model {model}, "
-              f"evaluator {'compiled C + CasADi' if index['mf']['compiled'] else 'CasADi'}")
+              f"{'compiled C for this platform' if index else 'no compiled libraries (CasADi)'}")
     return output
 
 
@@ -214,3 +201,47 @@ def main(argv=None) -> int:
 
 if __name__ == "__main__":
     sys.exit(main())
+
+
+def export_wheel_libraries(model, directory) -> dict:
+    """Compile the steady wheel's outputs (mftyre.transient.WheelTyre, evaluator compiled) for the FMU's modes
+    (vertical load, vertical position, rig) and copy the libraries with their descriptions to ``directory``: shipped
+    in the FMU (installed by :func:`mftyre.compiled.install_libraries`) so that it needs no C compiler on the
+    platform it was built on. Returns {"platform": ..., "files": [names]}."""
+    from mftyre.compiled import platform_tag
+    from mftyre.transient import WheelTyre
+
+    libraries = []
+    for vertical, mode in (("load", "vehicle"), ("position", "vehicle"), ("load", "rig")):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            libraries.append(WheelTyre(model, "steady", vertical, input_mode=mode, evaluator="compiled")
+                             ._compiled.library)
+    return {"platform": platform_tag(), "files": _copy_libraries(libraries, directory)}
+
+
+def export_swift_libraries(model, directory) -> dict:
+    """Compile the SWIFT wheel's step and outputs (swift.fmu_model.SwiftWheel, compiled) for the FMU's
+    configurations (axle height/load x rim speed/torque, default axle mass) and copy them to ``directory``, as
+    :func:`export_wheel_libraries`."""
+    from mftyre.compiled import platform_tag
+    from swift.fmu_model import SwiftWheel
+
+    libraries = []
+    for axle in ("height", "load"):
+        for rim in ("speed", "torque"):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                libraries.append(SwiftWheel(model, None, axle=axle, rim=rim, compiled=True).library)
+    return {"platform": platform_tag(), "files": _copy_libraries(libraries, directory)}
+
+
+def _copy_libraries(libraries, directory) -> list:
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    names = []
+    for library in libraries:
+        for src in (library, library.with_suffix(".json")):  # the library, then its verified description
+            shutil.copy2(src, directory / src.name)
+            names.append(src.name)
+    return names

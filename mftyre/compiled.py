@@ -62,7 +62,7 @@ from .errors import MFTyreError, ModelInputError
 from .inputs import check_finite, check_finite_outputs, check_pressure, input_ranges, warn_outside
 
 __all__ = ["CompiledFunction", "CacheSecurityError", "compile_model", "compile_function", "compile_external",
-           "cached_library", "compile_c", "cache_dir", "generate_c", "CASADI_LOCK"]
+           "cached_library", "compile_c", "cache_dir", "install_libraries", "platform_tag", "generate_c", "CASADI_LOCK"]
 
 _BLOCK = 256  # points per call of the vectorised kernel (inputs broadcast into stack buffers of this length)
 # -O1 with loop vectorisation runs the straight-line kernel as fast as -O3 and compiles in half the time.
@@ -784,3 +784,32 @@ def compile_external(model, inputs=("fz", "kappa", "alpha"), outputs=("fx", "fy"
     with CASADI_LOCK:
         return ca.external(name, str(library), {} if hessian else {"jacobian_options": {"enable_fd": True},
                                                                    "der_options": {"enable_fd": True}})
+
+
+# ------------------------------------------------------------------------------------------ shipped libraries
+def platform_tag() -> str:
+    """The platform a shipped library was built for (system, machine, Python version)."""
+    import sys
+
+    return f"{sys.platform}-{platform.machine()}-py{sys.version_info[0]}.{sys.version_info[1]}"
+
+
+def install_libraries(directory, entry) -> int:
+    """Copy shipped libraries (an FMU's: ``entry`` = {"platform": :func:`platform_tag`, "files": [names]} in
+    ``directory``, each library before its description) into the cache (:func:`cache_dir`), where
+    :func:`cached_library` finds and verifies them, when built for this platform and not there yet; returns how
+    many files were copied. The copies are private to you, whatever the shipped files' modes."""
+    if not entry or entry.get("platform") != platform_tag():
+        return 0
+    cache = cache_dir()
+    cache.mkdir(parents=True, exist_ok=True)
+    n = 0
+    for name in entry.get("files", ()):
+        target = cache / name
+        if not target.exists() and (Path(directory) / name).is_file():
+            tmp = cache / f".{name}.{os.getpid()}.tmp"
+            shutil.copyfile(Path(directory) / name, tmp)
+            os.chmod(tmp, 0o644)
+            os.replace(tmp, target)
+            n += 1
+    return n

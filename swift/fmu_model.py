@@ -171,10 +171,10 @@ class SwiftFunctions(StateFunctions):
 
 
 def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed",
-                    axle: str = "height") -> SwiftFunctions:
+                    axle: str = "height", axle_mass: float = AXLE_MASS) -> SwiftFunctions:
     """The functions of the SWIFT wheel of ``model`` on ``road`` (a :class:`swift.road.Road`, an expression or a
     CSV file, see :func:`swift.road.parse_road`); ``x_start``: default start position; ``rim``, ``axle``: the modes
-    (:data:`RIM_MODES`, :data:`AXLE_MODES`). The ring is
+    (:data:`RIM_MODES`, :data:`AXLE_MODES`); ``axle_mass``: the axle's mass [kg] in the load mode. The ring is
     :class:`swift.simulate.SwiftTyre`'s (its step, outputs and static equilibrium); here only the FMU's inputs are
     mapped onto it: the state holds heights above the road datum, the ring sees them above ``road_z``."""
     import casadi as ca
@@ -196,7 +196,7 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
     reach = cams.ae + 2 * dx
     lo, hi = (min(bps) - reach, max(bps) + reach) if bps else (0.0, 1.0)
     tyre = SwiftTyre(model, road, axle=axle, rim=rim, x_range=(math.floor(lo / dx) * dx,
-                     math.ceil(hi / dx) * dx), table_dx=dx, window=WINDOW, substeps=SUBSTEPS, axle_mass=AXLE_MASS,
+                     math.ceil(hi / dx) * dx), table_dx=dx, window=WINDOW, substeps=SUBSTEPS, axle_mass=axle_mass,
                      compiled=False)
     nx = len(STATE_NAMES)
     x, u, q = ca.MX.sym("x", nx), ca.MX.sym("u", len(table_u)), ca.MX.sym("q", len(PARAMETERS))
@@ -264,16 +264,106 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
                           config_extra=extra, rim=rim, axle=axle)
 
 
+#: Compiler flags of the wheel's library (those of swift.simulate's compiled step).
+_CFLAGS = ("-O3", "-fno-math-errno", "-fno-trapping-math", "-freciprocal-math", "-std=gnu89", "-fPIC", "-shared")
+
+
+def wheel_key(model, rim: str, axle: str, axle_mass: float) -> str:
+    """The key of the compiled step and outputs of :func:`swift_functions` (they do not depend on the road, which
+    they take as the window arguments): the .tir values, the side, the modes, the axle mass, the integration and
+    table constants, the source of the swift and mftyre packages, CasADi and the compiler flags."""
+    import hashlib
+    import json
+    from pathlib import Path
+
+    import casadi as ca
+
+    prm = model.params
+    sources = hashlib.sha256()
+    import mftyre
+
+    for package in (Path(__file__).parent, Path(mftyre.__file__).parent):
+        for file in sorted(package.rglob("*.py")):
+            sources.update(file.read_bytes())
+    payload = {"tir": {k: repr(prm[k]) for k in prm}, "missing": sorted(prm.missing), "side": model.side,
+               "rim": rim, "axle": axle, "axle_mass": float(axle_mass), "window": WINDOW, "substeps": SUBSTEPS,
+               "newton": NEWTON_STEPS, "sources": sources.hexdigest(), "casadi": ca.__version__, "cflags": _CFLAGS}
+    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
+
+
+def compiled_library(functions: SwiftFunctions, key: str):
+    """The wheel's ``step`` and ``out`` as C (CasADi's code generator, as the native FMU), compiled and cached by
+    :func:`mftyre.compiled.cached_library` under ``key`` (:func:`wheel_key`); returns the verified library."""
+    import os
+    from pathlib import Path
+
+    import casadi as ca
+
+    from mftyre.compiled import cached_library
+
+    def generate(folder):
+        gen = ca.CodeGenerator("swift_wheel.c", {"with_header": False})
+        gen.add(functions.step)
+        gen.add(functions.out)
+        source = Path(gen.generate(str(folder) + os.sep))
+        meta = {"inputs": list(functions.input_names), "outputs": list(functions.output_names), "checks": [],
+                "states": list(STATE_NAMES)}
+        return source, _CFLAGS, ("-lm",), meta
+
+    return cached_library("swiftwheel", key, generate)
+
+
+class _Generated:
+    """One generated function of the wheel's library, called through ctypes: ``(x or u, ..., x0w, grid, hw)``
+    with the window arguments ``grid``, ``hw`` passed by address; returns a copy of the first output."""
+
+    def __init__(self, lib, function):
+        import ctypes
+
+        self._fn = getattr(lib, function.name())
+        self._fn.argtypes = [ctypes.c_void_p] * 4 + [ctypes.c_int]
+        self._fn.restype = ctypes.c_int
+        n_in = function.n_in()
+        self._in = [np.zeros(function.nnz_in(i)) for i in range(n_in - 2)]  # the last two by address
+        self._out = np.zeros(function.nnz_out(0))
+        self._arg = (ctypes.c_void_p * max(function.sz_arg(), n_in))(*[a.ctypes.data for a in self._in])
+        self._res = (ctypes.c_void_p * max(function.sz_res(), 1))(self._out.ctypes.data)
+        self._iw = (ctypes.c_longlong * max(function.sz_iw(), 1))()
+        self._w = (ctypes.c_double * max(function.sz_w(), 1))()
+        self._grid = n_in - 2
+
+    def __call__(self, *args):
+        *values, grid, hw = args
+        for buf, value in zip(self._in, values):
+            buf[:] = value
+        self._arg[self._grid], self._arg[self._grid + 1] = grid.ctypes.data, hw.ctypes.data
+        if self._fn(self._arg, self._res, self._iw, self._w, 0):
+            raise ArithmeticError("compiled SWIFT wheel function reported an evaluation error")
+        return self._out.copy()
+
+
 class SwiftWheel:
     """The SWIFT wheel in Python (module notes): ``set_inputs``, ``set_parameters``, ``initialise``, ``step``,
-    ``outputs``, ``state``. The same functions and the same window placement as the native FMU."""
+    ``outputs``, ``state``. The same functions and the same window placement as the native FMU.
 
-    def __init__(self, model, road=None, *, x_start: float = 0.0, rim: str = "speed", axle: str = "height"):
-        self.functions = f = swift_functions(model, road, x_start=x_start, rim=rim, axle=axle)
+    ``compiled``: False, the functions on CasADi's virtual machine; True, ``step`` and ``out`` from the compiled
+    library (:func:`compiled_library`, cached; the static equilibrium ``init`` stays on the virtual machine)."""
+
+    def __init__(self, model, road=None, *, x_start: float = 0.0, rim: str = "speed", axle: str = "height",
+                 axle_mass: float = AXLE_MASS, compiled: bool = False):
+        self.functions = f = swift_functions(model, road, x_start=x_start, rim=rim, axle=axle, axle_mass=axle_mass)
         self._params = model.params
         self.u = np.array(f.input_starts, dtype=float)
         self.q = np.array(f.parameter_starts, dtype=float)
         self.state = np.zeros(len(STATE_NAMES))
+        self._step, self._out = f.step, f.out
+        self.library = None
+        if compiled:
+            import ctypes
+
+            self.library = compiled_library(f, wheel_key(model, rim, axle, axle_mass))
+            lib = ctypes.CDLL(str(self.library))
+            self._step, self._out = _Generated(lib, f.step), _Generated(lib, f.out)
 
     def set_inputs(self, **values):
         for k, v in values.items():
@@ -313,10 +403,13 @@ class SwiftWheel:
             x[_S["oma"]] = U["omega"]
         n = internal_steps(h, self.q[1], U["vx"])
         for _ in range(n):
-            x = np.asarray(self.functions.step(x, self.u, h / n, *self._window(x[_S["xb"]])), dtype=float).ravel()
+            x = np.asarray(self._step(x, self.u, h / n, *self._window(x[_S["xb"]])), dtype=float).ravel()
+        if not np.all(np.isfinite(x)):
+            raise ArithmeticError("the SWIFT state became non-finite (step too long for the tyre's frequencies? "
+                                  "lower max_step)")
         self.state = x
 
     def outputs(self) -> dict:
-        y = np.asarray(self.functions.out(self.state, self.u, *self._window(self.state[_S["xb"]])),
+        y = np.asarray(self._out(self.state, self.u, *self._window(self.state[_S["xb"]])),
                        dtype=float).ravel()
         return dict(zip(self.functions.output_names, y))

@@ -1,7 +1,10 @@
-"""The tyre FMU in swift mode (model=swift: the SWIFT rigid ring, fmu/mftyre_fmu_core.SwiftCore), run with fmpy.
+"""The tyre FMU in swift mode (model=swift: the SWIFT rigid ring, swift.fmu_model.SwiftWheel), run with fmpy.
 
 Evidence used: ``swift.SwiftTyre.step`` driven directly with ``StepInputs`` built here from the FMU's documented
-input mapping (same road, same table grid: agreement ~1e-9), ``MFModel.evaluate`` at the contact-patch state for
+input mapping (same road, same table step; agreement ~1e-8 of FNOMIN: the FMU runs swift_functions' step as
+CasADi-generated C, the reference SwiftTyre's own compiled step with the parameters at run time, on a table of
+another origin: round-off, amplified at the cleat's edges, up to 5e-9 FNOMIN in Fz_c, 7e-11 m in road_w, 4e-10 m in
+contact_length), ``MFModel.evaluate`` at the contact-patch state for
 the outputs the ring does not report, splitting of communication steps (a 2 ms step = two 1 ms steps), RK4
 convergence for step sizes that are not multiples, FMI call sequences (reset, rejected inputs, bad parameters),
 fmpy's validator, and time/memory over a long run.
@@ -56,7 +59,7 @@ def _scale(model, name):
     return {"kappa": 1.0, "alpha": 1.0, "road_slope": 1.0, "omega_used": 100.0}.get(name, L)
 
 
-def _assert_close(model, fmu_out, ref_out, names, rel=1e-9, where="", same=False):
+def _assert_close(model, fmu_out, ref_out, names, rel=2e-8, where="", same=False):
     """FMU outputs against SwiftTyre outputs (MAPPED names), or against FMU outputs (same=True)."""
     for name in names:
         key = name if same else MAPPED[name]
@@ -122,11 +125,11 @@ def test_position_mode_over_cleat_equals_swift_step(model, swift_fmu, tmp_path):
         fz_max = max(fz_max, out["Fz"])
         if k % 50 == 0:
             _check_mf_extras(model, out, r, state, gamma, p)
-        assert out["road_w"] == pytest.approx(float(r["w"]), abs=1e-12)
+        assert out["road_w"] == pytest.approx(float(r["w"]), abs=1e-9)
         assert out["x_road"] == pytest.approx(vx * (k + 1) * h, abs=1e-9)
         assert out["Rl"] == pytest.approx((z0 + vz * (k + 1) * h - r["w"]) * math.cos(r["beta"]), abs=1e-9)
-        assert out["contact_length"] == pytest.approx(2 * float(r["a"]), abs=1e-12)
-        assert out["Vsx"] == pytest.approx(-out["kappa"] * abs(r["vcx"]), abs=1e-12)
+        assert out["contact_length"] == pytest.approx(2 * float(r["a"]), abs=1e-9)
+        assert out["Vsx"] == pytest.approx(-out["kappa"] * abs(r["vcx"]), abs=1e-9)
     assert fz_max > 1.3 * out["Fz"]  # the cleat was felt
     assert fmu.status() == 0
     fmu.close()
@@ -208,7 +211,7 @@ def test_varying_communication_steps(swift_fmu, tmp_path, model):
     n = 0
     for t, o in mixed:
         if round(t, 9) in at:
-            _assert_close(model, o, at[round(t, 9)], OUT, where=f"t={t}", same=True)
+            _assert_close(model, o, at[round(t, 9)], OUT, where=f"t={t}", same=True, rel=1e-9)
             n += 1
     assert n > 50
     # steps of 0.7 ms and 1.3 ms (split into 2 of 0.65 ms) against 1 ms: the same history within the RK4 error
