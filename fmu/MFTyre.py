@@ -273,7 +273,7 @@ class MFTyre(Fmi2Slave):
             detail = (f"model swift (rim {rim}, road {self.road.strip() or 'flat'}), vertical_input {vertical}, "
                       f"step {step}")
         else:
-            if functions_dir is not None and index and index.get("wheel"):  # the compiled wheels shipped for this platform
+            if functions_dir is not None and index and index.get("wheel"):  # the compiled wheels shipped
                 try:
                     install_libraries(os.path.join(functions_dir, "wheel"), index["wheel"])
                 except Exception as exc:  # read-only cache...: compiled now instead
