@@ -215,3 +215,23 @@ def test_libraries_shipped_in_an_fmu_are_installed_verified_and_loaded_without_a
     library.write_bytes(library.read_bytes()[:1000])  # a damaged installed copy is refused and rebuilt
     with pytest.raises(AssertionError, match="compiled instead"):
         _build(other)
+
+
+def test_fmu_swift_wheel_compiled_equals_its_casadi_functions(model):
+    """swift.fmu_model.SwiftWheel(compiled=True) (the pythonfmu SWIFT tyre: swift_functions' step and outputs as
+    CasADi-generated C) = the same functions on CasADi's virtual machine, over a cleat, load mode and rim torque."""
+    from swift.fmu_model import SwiftWheel
+
+    wheels = [SwiftWheel(model, "cleat(x0=0.3, length=0.05, height=0.01)", axle="load", rim="torque", compiled=c)
+              for c in (False, True)]
+    assert wheels[0].library is None and wheels[1].library is not None
+    for w in wheels:
+        w.set_inputs(vx=10.0, omega=10.0 / 0.3, Fz_in=4000.0, torque=50.0)
+        w.initialise()
+    for _ in range(50):  # 5 cm of cleat at 10 m/s and beyond
+        for w in wheels:
+            w.step(1e-3)
+        a, b = (w.outputs() for w in wheels)
+        for name in a:
+            assert b[name] == pytest.approx(a[name], rel=1e-9, abs=1e-9), name
+    assert max(a["Fz"], b["Fz"]) > 0
