@@ -27,7 +27,7 @@ import lmfit
 import numpy as np
 
 from ..data import TyreData, levels
-from ..fit.core import BOUNDS, bounded_parameters, physical_bounds
+from ..fit.core import BOUNDS, bounded_parameters, physical_bounds, sign_in_bounds
 from ..fit.verify import verify_tir
 from ..fit.stages import STAGES, data_corners, need_met, conditions, shape_violations, stage_rows  # need_met: the stages' own rule
 from ..model import MFModel
@@ -68,6 +68,8 @@ def refit(params, ev: Evaluator, names, channels=None, sigma: dict | None = None
              else (float(np.sqrt(np.mean(ev.measured[c] ** 2))) or 1.0) for c in channels}
     if start:
         prm = prm.replace(**{k: v for k, v in start.items() if k in names})
+    bounds = {**BOUNDS, **physical_bounds(prm, ev.data)}   # the fit's physics
+    prm = sign_in_bounds(prm, bounds)
     n = int(sum(ev.measured[c].size for c in channels))
 
     def resid_vec(trial):
@@ -82,7 +84,7 @@ def refit(params, ev: Evaluator, names, channels=None, sigma: dict | None = None
     stage_set = sorted({PARAM_STAGE.get(k) for k in names} & set(STAGES))
     corners = data_corners(ev.data, prm)
     penalty = 10.0 * math.sqrt(max(n, 1)) * max(1.0, float(np.sqrt(np.mean(r0**2))))
-    lp = bounded_parameters(prm, names, {**BOUNDS, **physical_bounds(prm, ev.data)})   # the fit's physics
+    lp = bounded_parameters(prm, names, bounds)
 
     def residual(p):
         trial = prm.replace(**{k: p[k].value for k in names})
