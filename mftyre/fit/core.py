@@ -529,13 +529,22 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
                                 sub.array(stage.channel))
     g, p = sub.array("IA"), sub.array("P")
     flat = np.abs(g) < math.radians(0.25)
-    nominal = flat & (np.abs(p - prm.NOMPRES) <= 0.02 * prm.NOMPRES)
+    calm, what = flat, "zero camber"
+    if stage.name == "vertical":
+        # the load-deflection curve first from rows without slip: the side and longitudinal forces' effect on the
+        # deflection (Q_FCX, Q_FCY; MF 6.2 also Q_FCY2, not fitted) would otherwise bend it (Q_FZ2 to 0)
+        rolling = flat & (np.abs(sub.array("SA")) < math.radians(0.25)) & (np.abs(sub.array("SL")) < 0.005)
+        if rolling.sum() > len(groups["base"] + groups["pressure"]) + 5:
+            calm, what = rolling, "no slip, zero camber"
+    nominal = calm & (np.abs(p - prm.NOMPRES) <= 0.02 * prm.NOMPRES)
     passes = []
     plan = []
     if (groups["pressure"] or groups["camber"]) and nominal.sum() > len(groups["base"]) + 5 and not nominal.all():
-        plan.append(("zero camber, nominal pressure", groups["base"], nominal))
-    if groups["pressure"] and groups["camber"] and flat.sum() > len(groups["base"] + groups["pressure"]) + 5:
-        plan.append(("zero camber, all pressures", groups["base"] + groups["pressure"], flat))
+        plan.append((f"{what}, nominal pressure", groups["base"], nominal))
+    # then the pressure terms, before the rest can bend the curve towards a missing pressure effect
+    if groups["pressure"] and (groups["camber"] or not calm.all()) \
+            and calm.sum() > len(groups["base"] + groups["pressure"]) + 5:
+        plan.append((f"{what}, all pressures", groups["base"] + groups["pressure"], calm))
     plan.append(("all data", names_all, np.ones(len(sub), bool)))
     for label, names, mask in plan:
         part = sub if mask.all() else sub.select(mask)
