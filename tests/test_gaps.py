@@ -564,8 +564,8 @@ def test_refit_of_mx_from_a_published_file_with_negative_qsx11_stays_on_its_curv
     new, res = refit_stages(stale, data, ["mx"], channels=["MX"])
     assert "QSX11" in res["mx"].names
     ev = Evaluator(data, ["MX"])
-    err = {k: mftyre.fit.metrics.normalised_rms(ev.predict(m)["MX"], ev.measured["MX"]) for k, m in (("truth", truth.params),
-                                                                                   ("new", new))}
+    err = {k: mftyre.fit.metrics.normalised_rms(ev.predict(m)["MX"], ev.measured["MX"])
+           for k, m in (("truth", truth.params), ("new", new))}
     assert abs(new.QSX10) < 10 and abs(new.QSX11) > 0.1, (new.QSX10, new.QSX11)
     assert err["new"] < 1.2 * err["truth"], err
 
@@ -642,3 +642,45 @@ def test_fair_start_never_worsens_the_held_out_error():
     for c in rep.error_given:
         assert rep.error_before[c] <= rep.error_given[c] * (1 + 1e-9), (c, rep.error_given, rep.error_before)
     assert rep.effect_names == ["pressure_vertical_stiffness"]
+
+
+def test_friction_decay_with_slip_speed_needs_slip_at_two_speeds():
+    """Benchmark (MFeval 6.1/6.2 rig data): the slip-angle sweeps run at one speed, the speed sweep free rolling.
+    speed_friction (LMUV) was a candidate because the speeds varied over the whole data, and was added beside the
+    hidden effect: at one speed a friction decay with slip speed is a change of the curve's shape. It is now
+    untestable unless the slip is swept at two or more speeds."""
+    from mftyre.data import TyreData
+    from mftyre.gaps.core import _candidates, _prepare
+    from mftyre.rig import rig_programme
+
+    full = _tyre_a().with_params(LMUV=0.0)
+    kw = dict(loads=(0.6, 1.2), pressures=(1.0,), cambers_deg=(0.0,), longitudinal=False, seed=2)
+    one = rig_programme(full, **kw)
+    assert np.ptp(one.array("VX")) > 20.0        # a free-rolling speed sweep is in the data
+    two = TyreData.concat([one, rig_programme(full, speed=0.5 * full.params.LONGVL, **kw)])
+    found = {}
+    for name, data in (("one", one), ("two", two)):
+        run = _prepare(data, full, 0.25, 0, None, None, 1e-3, None, lambda text: None, 0.0)
+        found[name] = _candidates([CATALOGUE["speed_friction"]], run.given, run.train, run.ts)
+    cands, untestable = found["one"]
+    assert list(untestable) == ["speed_friction"] and "slip swept at one speed" in untestable["speed_friction"] \
+        and "slip-angle sweep" not in untestable["speed_friction"], untestable
+    cands, untestable = found["two"]
+    assert "speed_friction" in cands, untestable
+
+
+def test_an_effect_scored_with_its_stages_refitted_is_compared_with_them_refitted_without_it():
+    """Benchmark (MFeval 6.1 sample, 100 Hz rig run, camber_overturning hidden): when no candidate is significant
+    alone, the strongest few are scored with their stages refitted. They were compared with the model before that
+    refit, so the refit's own gain counted as theirs, and after camber_overturning an unrelated Mx effect
+    (camber_squared_overturning, QSX12 = 0 in the truth) was added on the strength of the Mx stage refitted."""
+    from mftyre.rig import rig_programme
+
+    truth = mftyre.load_tir(require_shared(SHARED / "reference/mfeval/MagicFormula61_Parameters.tir"))
+    data = rig_programme(truth, loads=(0.5, 1.0, 1.5), longitudinal=False, seed=5)
+    rep = find_gaps(data, neutralise(truth, "camber_overturning"), effects=[
+        "camber_overturning", "camber_squared_overturning", "lateral_force_overturning_camber"])
+    assert rep.effect_names == ["camber_overturning"], [(c.name, c.held_out_gain, c.note) for r in rep.rounds
+                                                        for c in r]
+    true = rep.held_out_error(truth)["MX"]
+    assert rep.error_after["MX"] - true <= 0.3 * (rep.error_before["MX"] - true)

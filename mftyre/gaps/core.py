@@ -540,29 +540,30 @@ class _Search:
         self.rounds, self.added, self.added_effects, self.rejected = [], [], {}, {}
         self.n_test_rows = {c: run.ev_test.measured[c].size for c in run.ev_test.channels}
 
-    def polish(self, new, e: Effect, names):
-        """Refit from the current model: the stages of the effect's parameters and of its channels, with the
-        new parameters active; kept when it lowers the training chi-square."""
+    def polish(self, new, e: Effect, names, free: bool = True):
+        """Refit from ``new``: the stages of the effect's parameters ``names`` and of its channels, with those
+        parameters active (``free=False``: held, the same stages refitted without them); kept when it lowers the
+        training chi-square."""
         run = self.run
         stages = [st for st in FAIR_STAGES if st in {PARAM_STAGE.get(k) for k in names}
                   or STAGES[st].channel in e.channels]
         polished, _ = refit_stages(new, run.train, stages, turn_slip=run.ts, channels=run.ev_train.channels,
-                                   max_nfev=run.max_nfev, extra=tuple(names), active=self.active,
+                                   max_nfev=run.max_nfev, extra=tuple(names) if free else (), active=self.active,
                                    baseline=run.given)
         chans = run.ev_train.channels
         if _chi2(run.ev_train, polished, self.sigma, chans) <= _chi2(run.ev_train, new, self.sigma, chans):
             return polished
         return new
 
-    def score(self, e: Effect, keep, why, new, rr, m, extra_note=""):
+    def score(self, e: Effect, keep, why, new, rr, m, extra_note="", ref=None):
         """Training F test and held-out score of a candidate model ``new`` against the current ``prm``.
 
         The training F test counts the effective number of independent residuals (n_eff, from the noise) rather
         than rows, and so does the held-out score (chi-square decrease x n_eff / n - k ln n_eff, a BIC-type
         penalty); with enough held-out sweeps the held-out test is also by whole sweeps: the chi-square decrease
         of each held-out sweep, a one-sided signed-rank test (so a gain a few sweeps carry, or 7.120 -> 7.119 %,
-        is not significant)."""
-        run, sigma, prm = self.run, self.sigma, self.prm
+        is not significant). ``ref``: the model it is compared with (default the current one)."""
+        run, sigma, prm = self.run, self.sigma, self.prm if ref is None else ref
         ev_train, ev_test = run.ev_train, run.ev_test
         ch = [c for c in e.channels if c in ev_train.channels]
         k = len(keep)
@@ -585,7 +586,8 @@ class _Search:
     def try_candidates(self, tried) -> list:
         """(candidate, model, refit result) of every effect in ``tried`` refitted alone, best score first; when
         none is significant, the strongest few again with their stages refitted around them (the fair start may
-        have bent other parameters towards the missing effect)."""
+        have bent other parameters towards the missing effect), scored against the same stages refitted without
+        them (what refitting alone gains is not the effect's)."""
         run, results = self.run, []
         ev_train = run.ev_train
         for i, (e, keep, why) in enumerate(tried):
@@ -603,8 +605,11 @@ class _Search:
                 e = self.candidates[cand.name][0]
                 run.say(f"round {len(self.rounds) + 1}: {e.name} with its stages refitted")
                 new = self.polish(new, e, cand.parameters)
+                # compared with the same stages refitted without it: the gain of refitting alone is not the effect's
+                base = self.polish(self.prm, e, cand.parameters, free=False)
                 deep.append(self.score(e, cand.parameters, self.candidates[cand.name][2], new, rr, len(tried),
-                                       "scored with its stages refitted"))
+                                       "scored with its stages refitted, against them refitted without it",
+                                       ref=base))
             results = deep + results[DEEP_RETRIES:]
         results.sort(key=lambda t: -t[0].score)
         return results
