@@ -684,3 +684,19 @@ def test_an_effect_scored_with_its_stages_refitted_is_compared_with_them_refitte
                                                         for c in r]
     true = rep.held_out_error(truth)["MX"]
     assert rep.error_after["MX"] - true <= 0.3 * (rep.error_before["MX"] - true)
+
+
+def test_an_effect_made_redundant_by_a_later_one_is_taken_out_again():
+    """Benchmark (MFeval 6.1 sample, trailer points, camber_overturning hidden): the fair start bends QSX4-QSX9
+    towards the missing camber term, so camber_overturning gains little alone and a small Mx effect
+    (lateral_force_overturning_camber, QSX13 = QSX14 = 0 in the truth) wins the first round; camber_overturning
+    follows. With it in, the first effect no longer passes its test and is taken out (forward selection with a
+    backward check)."""
+    truth = mftyre.load_tir(require_shared(SHARED / "reference/mfeval/MagicFormula61_Parameters.tir"))
+    data = trailer_programme(truth, points=15, noise=NOISE, seed=5)
+    rep = find_gaps(data, neutralise(truth, "camber_overturning"), effects=[
+        "camber_overturning", "camber_squared_overturning", "lateral_force_overturning_camber"])
+    assert rep.effect_names == ["camber_overturning"], [(c.name, c.held_out_gain) for r in rep.rounds for c in r]
+    assert "taken out" in rep.rejected.get("lateral_force_overturning_camber", ""), rep.rejected
+    true = rep.held_out_error(truth)["MX"]
+    assert rep.error_after["MX"] - true <= 0.3 * (rep.error_before["MX"] - true)
