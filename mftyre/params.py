@@ -93,6 +93,7 @@ __all__ = [
     "STAGE_MEMBERS",
     "FIT_BOUNDS",
     "SELECTS_FORM",
+    "SIGN_SYMMETRIC",
 ]
 
 
@@ -520,6 +521,12 @@ _FIT_BOUNDS: dict[str, tuple[float, float]] = {
     "DREFF": (0.0, 5.0), "FREFF": (-2.0, 2.0), "QSY1": (-0.1, 0.1), "QSY7": (0.0, 3.0), "PFZ1": (-5.0, 5.0),
     "QSX11": (0.0, 100.0),
 }
+
+#: Sign symmetries of the equations: negating the parameter together with its partners leaves every output
+#: unchanged (QSX10 atan(QSX11 Fz/Fz0): atan is odd; cos(atan(RVY4 alpha)): even; sin(RVY5 atan(RVY6 kappa)):
+#: odd). The fit bounds keep one sign (the pair's scale and sign are then one parameter each); a file with the
+#: other sign (the MFeval samples: QSX11 = -1.76, RVY4 = -97, RVY6 = -27.5) is the same tyre in the other form.
+SIGN_SYMMETRIC: dict[str, tuple[str, ...]] = {"QSX11": ("QSX10",), "RVY4": (), "RVY6": ("RVY5",)}
 
 #: Parameters whose value selects the form of the equations: the model version and side, the load floor, the MF
 #: 6.2 camber deflection (skipped when both Q_CAM1, Q_CAM2 are 0), the MF 5.2 patch default (Q_A1 = Q_A2 = 0),

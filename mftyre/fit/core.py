@@ -38,7 +38,7 @@ from ..data import UNCHECKED, TyreData, check_plausible, read_data
 from ..formula import Modes, steady_state, vertical
 from ..inputs import warn_data_outside
 from ..model import MFModel
-from ..params import FIT_BOUNDS, SELECTS_FORM, TyreParameters
+from ..params import FIT_BOUNDS, SELECTS_FORM, SIGN_SYMMETRIC, TyreParameters
 from .predict import predict_stage
 from ..programme import recognise
 from ..timeseries import effective_samples, needs_reduction, reduce_sweeps
@@ -287,6 +287,21 @@ def physical_bounds(prm, data: TyreData) -> dict:
             "PHY1": (-0.05, 0.05), "PVY1": (-0.2, 0.2)}
 
 
+def sign_in_bounds(prm, bounds: dict | None = None):
+    """The same tyre with every sign-symmetric parameter (:data:`mftyre.params.SIGN_SYMMETRIC`) whose value lies
+    outside its ``bounds`` (default :data:`BOUNDS`) but whose negative lies inside negated together with its
+    partners: a fit started from it then starts from the file's own values instead of from a clipped, different
+    curve."""
+    bounds = BOUNDS if bounds is None else bounds
+    flip = {}
+    for name, partners in SIGN_SYMMETRIC.items():
+        lo, hi = bounds.get(name, (-np.inf, np.inf))
+        v = float(prm[name])
+        if not lo <= v <= hi and lo <= -v <= hi:
+            flip.update({n: -float(prm[n]) for n in (name, *partners)})
+    return prm.replace(**flip) if flip else prm
+
+
 def bounded_parameters(prm, names, bounds: dict | None = None) -> lmfit.Parameters:
     """lmfit parameters ``names`` started at their values in ``prm``, clipped into ``bounds`` (default
     :data:`BOUNDS`)."""
@@ -505,6 +520,7 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
         if note:
             notes.append(note)
     bounds = dict(BOUNDS, **physical_bounds(prm, data))
+    prm = sign_in_bounds(prm, bounds)
     if generic:
         est = {k: v for k, v in estimate_stage(stage.name, prm, sub).items() if k in names_all}
         prm = prm.replace(**est)
@@ -513,13 +529,22 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
                                 sub.array(stage.channel))
     g, p = sub.array("IA"), sub.array("P")
     flat = np.abs(g) < math.radians(0.25)
-    nominal = flat & (np.abs(p - prm.NOMPRES) <= 0.02 * prm.NOMPRES)
+    calm, what = flat, "zero camber"
+    if stage.name == "vertical":
+        # the load-deflection curve first from rows without slip: the side and longitudinal forces' effect on the
+        # deflection (Q_FCX, Q_FCY; MF 6.2 also Q_FCY2, not fitted) would otherwise bend it (Q_FZ2 to 0)
+        rolling = flat & (np.abs(sub.array("SA")) < math.radians(0.25)) & (np.abs(sub.array("SL")) < 0.005)
+        if rolling.sum() > len(groups["base"] + groups["pressure"]) + 5:
+            calm, what = rolling, "no slip, zero camber"
+    nominal = calm & (np.abs(p - prm.NOMPRES) <= 0.02 * prm.NOMPRES)
     passes = []
     plan = []
     if (groups["pressure"] or groups["camber"]) and nominal.sum() > len(groups["base"]) + 5 and not nominal.all():
-        plan.append(("zero camber, nominal pressure", groups["base"], nominal))
-    if groups["pressure"] and groups["camber"] and flat.sum() > len(groups["base"] + groups["pressure"]) + 5:
-        plan.append(("zero camber, all pressures", groups["base"] + groups["pressure"], flat))
+        plan.append((f"{what}, nominal pressure", groups["base"], nominal))
+    # then the pressure terms, before the rest can bend the curve towards a missing pressure effect
+    if groups["pressure"] and (groups["camber"] or not calm.all()) \
+            and calm.sum() > len(groups["base"] + groups["pressure"]) + 5:
+        plan.append((f"{what}, all pressures", groups["base"] + groups["pressure"], calm))
     plan.append(("all data", names_all, np.ones(len(sub), bool)))
     for label, names, mask in plan:
         part = sub if mask.all() else sub.select(mask)

@@ -134,7 +134,7 @@ CATALOGUE: dict[str, Effect] = {e.name: e for e in (
        "REY2 RHY2 RVY2", _FY, "load combined"),
     # ------------------------------------------------------------------------------------------ speed
     _e("speed_friction", "friction falls with sliding speed (LMUV: the friction decay with slip speed)", "LMUV",
-       "FX FY MZ MX MY", "speed slip_ratio slip_angle", start={"LMUV": 0.05}),
+       "FX FY MZ MX MY", "speed slip_ratio slip_angle", start={"LMUV": 0.05}, needs=("slip_speeds",)),
     _e("speed_rolling_resistance", "rolling resistance grows with speed", "QSY3 QSY4", "MY", "speed"),
     _e("speed_vertical", "the free radius and the vertical stiffness grow with speed", "Q_V1 Q_V2", "FZ", "speed"),
     # ---------------------------------------------------------------------------------- combined slip

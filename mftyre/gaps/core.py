@@ -4,6 +4,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field, replace
+from types import SimpleNamespace
 from pathlib import Path
 
 import numpy as np
@@ -537,32 +538,35 @@ class _Search:
 
     def __init__(self, run: _Run, start, sigma: dict, candidates: dict, active: set):
         self.run, self.prm, self.sigma, self.candidates, self.active = run, start, sigma, candidates, active
+        self.start = start
         self.rounds, self.added, self.added_effects, self.rejected = [], [], {}, {}
         self.n_test_rows = {c: run.ev_test.measured[c].size for c in run.ev_test.channels}
 
-    def polish(self, new, e: Effect, names):
-        """Refit from the current model: the stages of the effect's parameters and of its channels, with the
-        new parameters active; kept when it lowers the training chi-square."""
+    def polish(self, new, e: Effect, names, free: bool = True, active=None):
+        """Refit from ``new``: the stages of the effect's parameters ``names`` and of its channels, with those
+        parameters active (``free=False``: held, the same stages refitted without them; ``active``: the active
+        set, default the current one); kept when it lowers the training chi-square."""
         run = self.run
         stages = [st for st in FAIR_STAGES if st in {PARAM_STAGE.get(k) for k in names}
                   or STAGES[st].channel in e.channels]
         polished, _ = refit_stages(new, run.train, stages, turn_slip=run.ts, channels=run.ev_train.channels,
-                                   max_nfev=run.max_nfev, extra=tuple(names), active=self.active,
+                                   max_nfev=run.max_nfev, extra=tuple(names) if free else (),
+                                   active=self.active if active is None else active,
                                    baseline=run.given)
         chans = run.ev_train.channels
         if _chi2(run.ev_train, polished, self.sigma, chans) <= _chi2(run.ev_train, new, self.sigma, chans):
             return polished
         return new
 
-    def score(self, e: Effect, keep, why, new, rr, m, extra_note=""):
+    def score(self, e: Effect, keep, why, new, rr, m, extra_note="", ref=None):
         """Training F test and held-out score of a candidate model ``new`` against the current ``prm``.
 
         The training F test counts the effective number of independent residuals (n_eff, from the noise) rather
         than rows, and so does the held-out score (chi-square decrease x n_eff / n - k ln n_eff, a BIC-type
         penalty); with enough held-out sweeps the held-out test is also by whole sweeps: the chi-square decrease
         of each held-out sweep, a one-sided signed-rank test (so a gain a few sweeps carry, or 7.120 -> 7.119 %,
-        is not significant)."""
-        run, sigma, prm = self.run, self.sigma, self.prm
+        is not significant). ``ref``: the model it is compared with (default the current one)."""
+        run, sigma, prm = self.run, self.sigma, self.prm if ref is None else ref
         ev_train, ev_test = run.ev_train, run.ev_test
         ch = [c for c in e.channels if c in ev_train.channels]
         k = len(keep)
@@ -585,7 +589,8 @@ class _Search:
     def try_candidates(self, tried) -> list:
         """(candidate, model, refit result) of every effect in ``tried`` refitted alone, best score first; when
         none is significant, the strongest few again with their stages refitted around them (the fair start may
-        have bent other parameters towards the missing effect)."""
+        have bent other parameters towards the missing effect), scored against the same stages refitted without
+        them (what refitting alone gains is not the effect's)."""
         run, results = self.run, []
         ev_train = run.ev_train
         for i, (e, keep, why) in enumerate(tried):
@@ -603,8 +608,11 @@ class _Search:
                 e = self.candidates[cand.name][0]
                 run.say(f"round {len(self.rounds) + 1}: {e.name} with its stages refitted")
                 new = self.polish(new, e, cand.parameters)
+                # compared with the same stages refitted without it: the gain of refitting alone is not the effect's
+                base = self.polish(self.prm, e, cand.parameters, free=False)
                 deep.append(self.score(e, cand.parameters, self.candidates[cand.name][2], new, rr, len(tried),
-                                       "scored with its stages refitted"))
+                                       "scored with its stages refitted, against them refitted without it",
+                                       ref=base))
             results = deep + results[DEEP_RETRIES:]
         results.sort(key=lambda t: -t[0].score)
         return results
@@ -660,6 +668,28 @@ class _Search:
         self.active |= set(cand.parameters)
         del self.candidates[e.name]
 
+    def recheck(self):
+        """Backward check of forward selection: an effect added before others is taken out again when, with the
+        later ones in, it no longer passes the test it passed (its parameters back to their values before it, the
+        stages of its channels refitted without it, compared with the final model). Early in the search a small
+        effect can win while the fair start has bent other parameters towards a missing one."""
+        run = self.run
+        for a in list(self.added[:-1]):
+            e = self.added_effects[a.name]
+            names = list(a.parameters)
+            without = self.prm.replace(**{k: e.neutral.get(k, float(self.start[k])) for k in names})
+            without = self.polish(without, e, names, free=False, active=self.active - set(names))
+            cand = self.score(e, names, {}, self.prm, SimpleNamespace(stderr={}), 1, ref=without)[0]
+            if cand.significant:
+                continue
+            self.prm = without
+            self.added.remove(a)
+            self.active -= set(names)
+            self.rejected[e.name] = (f"added in round {a.round}, then taken out: with "
+                                     f"{', '.join(x.name for x in self.added)} it is no longer significant "
+                                     f"(held-out gain {cand.held_out_gain:.3g}, p {cand.p_value:.2g})")
+            run.say(f"taken out {e.name}: {self.rejected[e.name]}")
+
     def search(self, findings, max_effects: int):
         """Rounds until no finding is left, none is explained, or ``max_effects`` are added."""
         run = self.run
@@ -677,6 +707,7 @@ class _Search:
                 break
             self.add(best[0], best[1])
             findings = locate(run.ev_train, run.ev_train.residuals(self.prm), self.sigma, run.alpha)
+        self.recheck()
         if self.added:
             # final values and standard errors of every added parameter, jointly at the final model
             names = [k for a in self.added for k in a.parameters]

@@ -27,7 +27,7 @@ import lmfit
 import numpy as np
 
 from ..data import TyreData, levels
-from ..fit.core import BOUNDS, bounded_parameters, physical_bounds
+from ..fit.core import BOUNDS, bounded_parameters, physical_bounds, sign_in_bounds
 from ..fit.verify import verify_tir
 from ..fit.stages import STAGES, data_corners, need_met, conditions, shape_violations, stage_rows  # need_met: the stages' own rule
 from ..model import MFModel
@@ -68,6 +68,8 @@ def refit(params, ev: Evaluator, names, channels=None, sigma: dict | None = None
              else (float(np.sqrt(np.mean(ev.measured[c] ** 2))) or 1.0) for c in channels}
     if start:
         prm = prm.replace(**{k: v for k, v in start.items() if k in names})
+    bounds = {**BOUNDS, **physical_bounds(prm, ev.data)}   # the fit's physics
+    prm = sign_in_bounds(prm, bounds)
     n = int(sum(ev.measured[c].size for c in channels))
 
     def resid_vec(trial):
@@ -82,7 +84,7 @@ def refit(params, ev: Evaluator, names, channels=None, sigma: dict | None = None
     stage_set = sorted({PARAM_STAGE.get(k) for k in names} & set(STAGES))
     corners = data_corners(ev.data, prm)
     penalty = 10.0 * math.sqrt(max(n, 1)) * max(1.0, float(np.sqrt(np.mean(r0**2))))
-    lp = bounded_parameters(prm, names, {**BOUNDS, **physical_bounds(prm, ev.data)})   # the fit's physics
+    lp = bounded_parameters(prm, names, bounds)
 
     def residual(p):
         trial = prm.replace(**{k: p[k].value for k in names})
@@ -152,7 +154,7 @@ def needs_met(needs, cond: dict, turn_slip: bool) -> bool:
     return all(turn_slip if n == "turn_slip" else cond[n] if n in _SWEEPS else need_met(n, cond, True) for n in needs)
 
 
-_SWEEPS = ("slip_ratio", "slip_angle", "combined", "deflection")
+_SWEEPS = ("slip_ratio", "slip_angle", "combined", "deflection", "slip_speeds")
 #: Why a parameter whose stage sweeps an input cannot be determined without that sweep.
 SWEEP_REASONS = {
     "slip_ratio": "no longitudinal-slip sweep in the data (SL = 0 throughout): the Fx curve's shape and shifts "
@@ -161,6 +163,8 @@ SWEEP_REASONS = {
                   "act along alpha",
     "combined": "no combined-slip sweep (kappa swept at a slip angle) in the data",
     "deflection": "no load-deflection sweep (loaded radius or deflection at three or more loads) in the data",
+    "slip_speeds": "slip swept at one speed only (the speed sweeps free rolling): a friction decay with slip "
+                   "speed cannot be told from the slip curve's shape",
 }
 
 
@@ -172,7 +176,8 @@ def _swept(x, tol) -> bool:
 
 def data_conditions(data: TyreData) -> dict:
     """:func:`mftyre.fit.stages.conditions` plus the swept inputs (``slip_ratio``, ``slip_angle``,
-    ``combined``, ``deflection``: True where the data sweep them)."""
+    ``combined``, ``deflection``: True where the data sweep them) and ``slip_speeds``: slip at two or more
+    speeds (a speed sweep of the free-rolling wheel does not count)."""
     cond = dict(conditions(data))
     if len(data) == 0:
         return dict(cond, **{k: False for k in _SWEEPS})
@@ -181,11 +186,23 @@ def data_conditions(data: TyreData) -> dict:
     rl = data.array("RL") if data.has("RL") else (data.array("RHO") if data.has("RHO") else None)
     fz = data.array("FZ")
     deflect = rl is not None and _swept(fz[np.isfinite(rl)], 0.02 * float(np.max(np.abs(fz))))
+    slipping = (np.abs(sl) > _KAPPA_TOL) | (np.abs(sa) > _ALPHA_TOL)
     return dict(cond, slip_ratio=_swept(sl, _KAPPA_TOL), slip_angle=_swept(sa, _ALPHA_TOL),
-                combined=_swept(sl[both], _KAPPA_TOL), deflection=bool(deflect))
+                combined=_swept(sl[both], _KAPPA_TOL), deflection=bool(deflect),
+                slip_speeds=_spread(data.array("VX")[slipping]))
 
 
 _KAPPA_TOL, _ALPHA_TOL = 0.005, math.radians(0.25)
+
+
+def _spread(vx) -> bool:
+    """Speeds that differ: the 5-95 % range beyond 1 m/s and 10 % of the median (a rig holds its speed to a few
+    cm/s, which a level count would split into levels)."""
+    vx = np.abs(vx[np.isfinite(vx)])
+    if vx.size < 2:
+        return False
+    lo, hi = np.percentile(vx, [5, 95])
+    return bool(hi - lo > max(1.0, 0.1 * float(np.median(vx))))
 
 
 def stage_data(stage_name: str, data: TyreData) -> TyreData:
