@@ -530,7 +530,9 @@ SIGN_SYMMETRIC: dict[str, tuple[str, ...]] = {"QSX11": ("QSX10",), "RVY4": (), "
 
 #: Parameters whose value selects the form of the equations: the model version and side, the load floor, the MF
 #: 6.2 camber deflection (skipped when both Q_CAM1, Q_CAM2 are 0), the MF 5.2 patch default (Q_A1 = Q_A2 = 0),
-#: the sign branch of PHYP4 and the overturning-moment form (QSX1-QSX14).
+#: the sign branch of PHYP4 and the overturning moment's parameters (QSX1-QSX14: its QSX12-QSX14 term is left out
+#: of the graph when all three are 0; QSX1-QSX11 select nothing since the draft's eq. 49 was found to be the same
+#: expression, kept here so that the fit's batches and the CasADi guard behave as before).
 _SELECTS_FORM = frozenset(["FITTYP", "TYRESIDE", "FZMIN", "Q_CAM1", "Q_CAM2", "Q_A1", "Q_A2", "PHYP4",
                            *(f"QSX{i}" for i in range(1, 15))])
 

@@ -5,8 +5,8 @@ Mx: the MF-Tyre 6.1 form (Pacejka 2012 4.E69 extended with QSX12-QSX14 and the p
                     + QSX4 cos(QSX5 atan((QSX6 Fz/Fz0)^2)) sin(QSX7 gamma + QSX8 atan(QSX9 Fy/Fz0))
                     + QSX10 atan(QSX11 Fz/Fz0) gamma)
          + R0 LMX (Fy (QSX13 + QSX14 |gamma|) - Fz QSX12 gamma |gamma|)
-When both QSX1-QSX11 and QSX12-QSX14 are non-zero, MF-Tyre uses the form of the draft of Besselink et al.
-(eq. 49) in which QSX12 gamma|gamma| enters inside the Fz bracket and QSX13/QSX14 multiply Fy directly.
+The draft of Besselink et al. (eq. 49), which MF-Tyre uses when both QSX1-QSX11 and QSX12-QSX14 are non-zero, puts
+QSX12 gamma|gamma| inside the Fz bracket and QSX13/QSX14 on Fy: the same expression, so one form serves both.
 
 My: paper A48 (the rolling resistance is negative for forward rolling in ISO-W):
     My = -R0 Fz0 LMY (QSY1 + QSY2 Fx/Fz0 + QSY3 |Vx/V0| + QSY4 (Vx/V0)^4 + (QSY5 + QSY6 Fz/Fz0) gamma^2)
@@ -32,14 +32,10 @@ def overturning_moment(prm, s, fy, be):
             + prm.QSX4 * be.cos(prm.QSX5 * be.atan((prm.QSX6 * Fz / Fz0) ** 2))
             * be.sin(prm.QSX7 * g + prm.QSX8 * be.atan(prm.QSX9 * fy / Fz0))
             + prm.QSX10 * be.atan(prm.QSX11 * Fz / Fz0) * g)
-    first_set = any(prm[f"QSX{i}"] != 0 for i in range(1, 12))
-    second_set = any(prm[f"QSX{i}"] != 0 for i in (12, 13, 14))
-    if first_set and second_set:  # draft paper eq. 49
-        return (R0 * Fz * prm.LMX * (core - prm.QSX12 * g * be.of("angle").abs(g))
-                + R0 * fy * prm.LMX * (prm.QSX13 + prm.QSX14 * be.of("angle").abs(g)))
     mx = R0 * Fz * prm.LMX * core
-    if second_set:  # (QSX12-QSX14 are zero in most files: no term)
-        mx = mx + R0 * prm.LMX * (fy * (prm.QSX13 + prm.QSX14 * be.of("angle").abs(g)) - Fz * prm.QSX12 * g * be.of("angle").abs(g))
+    if any(prm[f"QSX{i}"] != 0 for i in (12, 13, 14)):  # (zero in most files: no term in the graph)
+        abs_g = be.of("angle").abs(g)
+        mx = mx + R0 * prm.LMX * (fy * (prm.QSX13 + prm.QSX14 * abs_g) - Fz * prm.QSX12 * g * abs_g)
     return mx
 
 
