@@ -64,7 +64,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .backend import NUMPY
 from .errors import ModelInputError
 from .variables import pick
 

@@ -419,8 +419,6 @@ def test_casadi_matches_numpy(tir, soil_name):
 def test_casadi_derivatives_match_finite_differences():
     """d(drawbar pull, Fy, sinkage)/d(fz, slip, alpha, p) from CasADi against central differences of the NumPy
     model, in the flexible mode (sandy loam) and in the rigid mode (paddy soil)."""
-    import casadi as ca
-
     for name, points in (("sandy_loam", ([20e3, 0.15, 0.05, 1.2e5], [30e3, 0.4, -0.1, 1.6e5])),
                          ("paddy_soil", ([15e3, 0.2, 0.05, 1.6e5],))):
         _check_derivatives(SoftSoilTyre(AGRI, name), points)
