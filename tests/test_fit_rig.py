@@ -149,6 +149,26 @@ def test_batched_jacobian_matches_casadi(truth):
 
 
 # ----------------------------------------------------------------------------------- programme in fit
+def test_one_noisy_speed_is_one_speed_level(truth):
+    """A rig holds its speed at 16.7 +- 0.02 m/s: the fit counted a dozen speed levels in that noise (raw, shuffled or
+    recorded to 0.01 m/s), so speed-dependent terms passed as determined; two speeds 10 m/s apart stay two."""
+    import pandas as pd
+
+    rng = np.random.default_rng(0)
+    n = 3000
+    alpha = np.radians(np.resize(np.linspace(-10, 10, 41), n))
+
+    def speeds_of(vx):
+        frame = pd.DataFrame(dict(FZ=4000.0 + 0 * vx, SA=alpha, SL=0 * vx, VX=vx, P=2.2e5 + 0 * vx))
+        return conditions(TyreData(frame))["speeds"]
+
+    noisy = 16.7 + 0.02 * rng.standard_normal(n)
+    assert speeds_of(noisy) == 1
+    assert speeds_of(rng.permutation(noisy)) == 1
+    assert speeds_of(np.round(noisy, 2)) == 1
+    assert speeds_of(np.r_[10 + 0.02 * rng.standard_normal(n // 2), 20 + 0.02 * rng.standard_normal(n // 2)]) == 2
+
+
 def test_close_load_levels_with_scatter_count_as_levels(truth):
     """Loads 1650 / 2200 / 2750 N with a few percent scatter were chained into one level by the old tolerance
     (5 % of the largest load): the load terms were skipped as 'one load level only'."""

@@ -153,14 +153,17 @@ def _count(data: TyreData, channel: str, width: float) -> int:
 
 
 def _count_levels(x: np.ndarray, width: float) -> int:
-    """Number of distinct values of a condition channel: its levels (:func:`mftyre.programme.cluster_levels`)
-    plus, when at least 10 values (and 1 %) are on no level (the channel is swept somewhere, or held at
-    settings too brief to count as levels), the occupied bins of ``width`` among those."""
+    """Number of distinct values of a condition channel: its levels (:func:`mftyre.programme.cluster_levels`),
+    levels less than ``width`` apart counted as one (a speed held at 16.7 +- 0.02 m/s, which the clustering of a
+    single noisy level can split into a dozen, is one speed), plus, when at least 10 values (and 1 %) are on no
+    level (the channel is swept somewhere, or held at settings too brief to count as levels), the occupied bins
+    of ``width`` among those."""
     labels, centres = cluster_levels(x)
+    distinct = 1 + int(np.count_nonzero(np.diff(np.sort(centres)) >= width)) if centres.size else 0
     off = labels < 0
     if off.sum() >= max(10, 0.01 * x.size):
-        return len(centres) + len(np.unique(np.round(x[off] / width)))
-    return len(centres)
+        return distinct + len(np.unique(np.round(x[off] / width)))
+    return distinct
 
 
 def conditions(data: TyreData) -> dict:
