@@ -28,7 +28,7 @@ from .backend import NUMPY, NUMPY_FOLDING
 from .params import SELECTS_FORM
 from .variables import MF_OUTPUTS, unit_table
 
-__all__ = ["MFModel", "MFOutputs", "load_tir", "OUTPUT_UNITS"]
+__all__ = ["MFModel", "MFOutputs", "load_tir", "OUTPUT_UNITS", "SymbolicParameters"]
 
 #: Unit and meaning of every output (the table :data:`mftyre.variables.MF_OUTPUTS`).
 OUTPUT_UNITS = unit_table(MF_OUTPUTS)
@@ -306,7 +306,7 @@ class MFModel:
         if self.mirrored:
             values = {k: (-v if k in _MIRRORED_INPUTS else v) for k, v in values.items()}
         parameter_symbols = {n: ca.SX.sym(n) for n in parameters}
-        equations_prm = _SymbolicParameters(prm, parameter_symbols) if parameters else prm
+        equations_prm = SymbolicParameters(prm, parameter_symbols) if parameters else prm
         modes = Modes(limits=limits, alpha_star=alpha_star, turn_slip=turn_slip, turn_slip_form=turn_slip_form)
         omega_given = "omega" in inputs or "omega" in (fixed or {})
         out = steady_state(equations_prm, values["fz"], values["kappa"], values["alpha"], values["gamma"],
@@ -368,8 +368,9 @@ class _PlainParameters:
         return self.__dict__[name]
 
 
-class _SymbolicParameters:
-    """A parameter set in which some parameters are CasADi symbols (for :meth:`MFModel.casadi_function`)."""
+class SymbolicParameters:
+    """A parameter set in which some parameters are CasADi symbols (for :meth:`MFModel.casadi_function` and the
+    SWIFT graph with run-time parameters); the forms of the equations must stay numbers."""
 
     def __init__(self, params, symbols: dict):
         form = SELECTS_FORM | (vertical.MF62_SOLVER_FORM_PARAMETERS if params.version == "62" else frozenset())
@@ -380,7 +381,7 @@ class _SymbolicParameters:
         if unknown:
             raise ModelInputError(f"unknown parameter(s) {unknown}")
         self._params, self._symbols = params, symbols
-        self.version, self.fittyp = params.version, params.fittyp
+        self.version, self.fittyp, self.missing = params.version, params.fittyp, params.missing
 
     def __getattr__(self, name):
         symbols = self.__dict__["_symbols"]
@@ -391,6 +392,9 @@ class _SymbolicParameters:
 
     def __contains__(self, name):
         return name in self._params
+
+    def __iter__(self):
+        return iter(self._params)
 
 
 def _own_arrays(values: dict, n: int, inputs: list) -> dict:

@@ -67,6 +67,7 @@ import numpy as np
 from mftyre.compiled import CASADI_LOCK, cached_library  # the verified cache of every compiled library
 from mftyre.backend import NUMPY
 from mftyre.errors import ModelInputError
+from mftyre.model import SymbolicParameters
 from mftyre.params import SELECTS_FORM, swift_invalid_values
 from mftyre.formula import vertical
 
@@ -702,38 +703,16 @@ class SwiftTyre:
         return s
 
 
-
-class _ParametricValues:
-    """A parameter set whose numeric parameters ``names`` are the entries of the symbol vector ``theta``; the rest
-    (the forms of the equations, integers, texts) read from ``params``."""
-
-    def __init__(self, params, names, theta):
-        self._params, self._symbols = params, {n: theta[i] for i, n in enumerate(names)}
-        self.version, self.fittyp, self.missing = params.version, params.fittyp, params.missing
-
-    def __getattr__(self, name):
-        symbols = self.__dict__["_symbols"]
-        return symbols[name] if name in symbols else getattr(self.__dict__["_params"], name)
-
-    def __getitem__(self, name):
-        return self._symbols[name] if name in self._symbols else self._params[name]
-
-    def __contains__(self, name):
-        return name in self._params
-
-    def __iter__(self):
-        return iter(self._params)
-
-
 class _ParametricModel:
     """Stands in for the MFModel while the SWIFT equations are built with run-time parameters: ``params`` the
-    :class:`_ParametricValues`, ``casadi_function`` the model's with those parameters bound to the same symbols;
-    ``constants`` the ring constants as the entries of ``theta`` after the parameters."""
+    model's parameters with those of ``names`` as the entries of ``theta`` (:class:`mftyre.model.SymbolicParameters`),
+    ``casadi_function`` the model's with those parameters bound to the same symbols; ``constants`` the ring
+    constants as the entries of ``theta`` after the parameters."""
 
     def __init__(self, model, names, constants, theta):
         self._model, self._names, self.side = model, list(names), model.side
         self._symbols = [theta[i] for i in range(len(names))]
-        self.params = _ParametricValues(model.params, names, theta)
+        self.params = SymbolicParameters(model.params, dict(zip(self._names, self._symbols)))
         self.constants = replace(constants, **{f: theta[len(names) + i] for i, f in enumerate(_RING_FIELDS)})
 
     def casadi_function(self, **options):
