@@ -41,7 +41,7 @@ from mftyre.variables import pick
 from .enveloping import Cams
 from .ring import INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, check_pressure, pressure_coefficients
 from .road import parse_road
-from .simulate import MAX_RK4_STEP
+from .simulate import MAX_RK4_STEP, GeneratedFunction
 
 __all__ = ["SwiftWheel", "swift_functions", "internal_steps", "input_table", "RIM_MODES", "INPUTS", "OUTPUTS",
            "PARAMETERS", "TABLE_DX", "WINDOW",
@@ -313,35 +313,6 @@ def compiled_library(functions: SwiftFunctions, key: str):
     return cached_library("swiftwheel", key, generate)
 
 
-class _Generated:
-    """One generated function of the wheel's library, called through ctypes: ``(x or u, ..., x0w, grid, hw)``
-    with the window arguments ``grid``, ``hw`` passed by address; returns a copy of the first output."""
-
-    def __init__(self, lib, function):
-        import ctypes
-
-        self._fn = getattr(lib, function.name())
-        self._fn.argtypes = [ctypes.c_void_p] * 4 + [ctypes.c_int]
-        self._fn.restype = ctypes.c_int
-        n_in = function.n_in()
-        self._in = [np.zeros(function.nnz_in(i)) for i in range(n_in - 2)]  # the last two by address
-        self._out = np.zeros(function.nnz_out(0))
-        self._arg = (ctypes.c_void_p * max(function.sz_arg(), n_in))(*[a.ctypes.data for a in self._in])
-        self._res = (ctypes.c_void_p * max(function.sz_res(), 1))(self._out.ctypes.data)
-        self._iw = (ctypes.c_longlong * max(function.sz_iw(), 1))()
-        self._w = (ctypes.c_double * max(function.sz_w(), 1))()
-        self._grid = n_in - 2
-
-    def __call__(self, *args):
-        *values, grid, hw = args
-        for buf, value in zip(self._in, values):
-            buf[:] = value
-        self._arg[self._grid], self._arg[self._grid + 1] = grid.ctypes.data, hw.ctypes.data
-        if self._fn(self._arg, self._res, self._iw, self._w, 0):
-            raise ArithmeticError("compiled SWIFT wheel function reported an evaluation error")
-        return self._out.copy()
-
-
 class SwiftWheel:
     """The SWIFT wheel in Python (module notes): ``set_inputs``, ``set_parameters``, ``initialise``, ``step``,
     ``outputs``, ``state``. The same functions and the same window placement as the native FMU.
@@ -363,7 +334,8 @@ class SwiftWheel:
 
             self.library = compiled_library(f, wheel_key(model, rim, axle, axle_mass))
             lib = ctypes.CDLL(str(self.library))
-            self._step, self._out = _Generated(lib, f.step), _Generated(lib, f.out)
+            step, out = (GeneratedFunction(lib, g, by_address=(-2, -1)) for g in (f.step, f.out))
+            self._step, self._out = (lambda *a: step(*a)[0]), (lambda *a: out(*a)[0])
 
     def set_inputs(self, **values):
         for k, v in values.items():

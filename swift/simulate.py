@@ -991,14 +991,14 @@ class _Compiled:
         self.step1 = self._lib.swift_step1  # one step: inputs, dt, 1, source and target rows in io
         self.pack = struct.Struct(f"{_NI + 4}d").pack_into
         self.free = [_StepBuffers(self)]
-        self._rhs = _Generated(self._lib, tyre._structure.rhs)
+        self._rhs = GeneratedFunction(self._lib, tyre._structure.rhs, by_address=(3, 4))
 
     def rhs(self, state, u, x0w, i0):
         """The right-hand side (:attr:`SwiftTyre.rhs_function`, the exact model: h = 0) on the cam window that
         starts at sample ``i0`` (x = ``x0w``): (dx, out)."""
         with self.lock:
-            return self._rhs((state, u, x0w, None, None, 0.0, self._tyre.theta), self._tyre._grid.ctypes.data,
-                             self._tyre._h.ctypes.data + 16 * i0)
+            return self._rhs(state, u, x0w, self._tyre._grid.ctypes.data, self._tyre._h.ctypes.data + 16 * i0, 0.0,
+                             self._tyre.theta)
 
     def pointers(self, x, rows, scal, xs, ys, work):  # the driver's argument array (addresses of the buffers)
         t = self._tyre
@@ -1073,15 +1073,18 @@ class _StepBuffers:
         self.row, self.last = 0, None
 
 
-class _Generated:
-    """A generated function of the tyre's library with buffers of its own (the caller holds the tyre's lock);
-    arguments 3 and 4 (the cam grid and window) are passed by pointer."""
+class GeneratedFunction:
+    """A function of a CasADi-generated library called through ctypes, with buffers of its own (the caller
+    serialises the calls): ``f(*args)`` with every argument in order, those at ``by_address`` (the cam grid and
+    window) given as arrays or addresses and passed by pointer, the others copied in; returns every output (a
+    matrix in its shape)."""
 
-    def __init__(self, lib, function):
+    def __init__(self, lib, function, by_address):
         self._fn = getattr(lib, function.name())
         self._fn.argtypes = [ctypes.c_void_p] * 4 + [ctypes.c_int]
         self._fn.restype = ctypes.c_int
         n_in, n_out = function.n_in(), function.n_out()
+        self._by_address = tuple(i % n_in for i in by_address)
         self._in = [np.zeros(function.nnz_in(i)) for i in range(n_in)]
         self._out = [np.zeros(function.nnz_out(i)) for i in range(n_out)]
         self._shapes = [function.size_out(i) for i in range(n_out)]
@@ -1090,12 +1093,13 @@ class _Generated:
         self._iw = (ctypes.c_longlong * max(function.sz_iw(), 1))()
         self._w = (ctypes.c_double * max(function.sz_w(), 1))()
 
-    def __call__(self, args, grid, window):
-        for i, (buf, value) in enumerate(zip(self._in, args)):
-            if i not in (3, 4):
-                buf[:] = value
-        self._arg[3], self._arg[4] = grid, window
+    def __call__(self, *args):
+        for i, value in enumerate(args):
+            if i in self._by_address:
+                self._arg[i] = value if isinstance(value, int) else value.ctypes.data
+            else:
+                self._in[i][:] = value
         if self._fn(self._arg, self._res, self._iw, self._w, 0):
-            raise ArithmeticError("compiled SWIFT function reported an evaluation error")
+            raise ArithmeticError(f"compiled SWIFT function {self._fn.__name__} reported an evaluation error")
         return [r.reshape(shape, order="F").copy() if shape[1] > 1 else r.copy()
                 for r, shape in zip(self._out, self._shapes)]
