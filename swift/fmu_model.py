@@ -29,6 +29,7 @@ CasADi, so both give the same numbers.
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -41,7 +42,7 @@ from mftyre.variables import pick
 from .enveloping import Cams
 from .ring import INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, check_pressure, pressure_coefficients
 from .road import parse_road
-from .simulate import MAX_RK4_STEP, GeneratedFunction
+from .simulate import COMPILER_FLAGS, MAX_RK4_STEP, GeneratedFunction
 
 __all__ = ["SwiftWheel", "swift_functions", "internal_steps", "input_table", "RIM_MODES", "INPUTS", "OUTPUTS",
            "PARAMETERS", "TABLE_DX", "WINDOW",
@@ -265,7 +266,22 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
 
 
 #: Compiler flags of the wheel's library (those of swift.simulate's compiled step).
-_CFLAGS = ("-O3", "-fno-math-errno", "-fno-trapping-math", "-freciprocal-math", "-std=gnu89", "-fPIC", "-shared")
+_CFLAGS = (*COMPILER_FLAGS, "-fPIC", "-shared")
+
+
+@functools.cache
+def _sources_digest() -> str:
+    """SHA-256 of the source of the swift and mftyre packages, read once per process."""
+    import hashlib
+    from pathlib import Path
+
+    import mftyre
+
+    sources = hashlib.sha256()
+    for package in (Path(__file__).parent, Path(mftyre.__file__).parent):
+        for file in sorted(package.rglob("*.py")):
+            sources.update(file.read_bytes())
+    return sources.hexdigest()
 
 
 def wheel_key(model, rim: str, axle: str, axle_mass: float) -> str:
@@ -274,20 +290,13 @@ def wheel_key(model, rim: str, axle: str, axle_mass: float) -> str:
     table constants, the source of the swift and mftyre packages, CasADi and the compiler flags."""
     import hashlib
     import json
-    from pathlib import Path
 
     import casadi as ca
 
     prm = model.params
-    sources = hashlib.sha256()
-    import mftyre
-
-    for package in (Path(__file__).parent, Path(mftyre.__file__).parent):
-        for file in sorted(package.rglob("*.py")):
-            sources.update(file.read_bytes())
     payload = {"tir": {k: repr(prm[k]) for k in prm}, "missing": sorted(prm.missing), "side": model.side,
                "rim": rim, "axle": axle, "axle_mass": float(axle_mass), "window": WINDOW, "substeps": SUBSTEPS,
-               "newton": NEWTON_STEPS, "sources": sources.hexdigest(), "casadi": ca.__version__, "cflags": _CFLAGS}
+               "newton": NEWTON_STEPS, "sources": _sources_digest(), "casadi": ca.__version__, "cflags": _CFLAGS}
     return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
 

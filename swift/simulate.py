@@ -344,7 +344,7 @@ class SwiftTyre:
                    "missing": sorted(prm.missing), "version": prm.version, "side": self.model.side,
                    "axle": self.axle, "rim": self.rim, "window": self.window, "substeps": self.substeps,
                    "lever": (self.constants.lever_x, self.constants.lever_y), "kind": kind,
-                   "passes": (CONTACT_PASSES, WARM_PASSES), "cflags": _CFLAGS,
+                   "passes": (CONTACT_PASSES, WARM_PASSES), "cflags": COMPILER_FLAGS,
                    "equations": _SOURCE_HASH, "casadi": ca.__version__}
         return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
@@ -894,7 +894,7 @@ CASADI_SYMBOL_EXPORT int swift_step1(void** p) {
 #: equal for all non-NaN arguments); of the fast-math family only mftyre.compiled's two (-fno-trapping-math,
 #: -freciprocal-math: multiplication by a reciprocal, at most 1 ulp per division; ~4 % faster), no reassociation,
 #: no finite-math assumptions; portable (no -march), as the FMU ships the library.
-_CFLAGS = ("-O3", "-fno-math-errno", "-fno-trapping-math", "-freciprocal-math", "-std=gnu89")
+COMPILER_FLAGS = ("-O3", "-fno-math-errno", "-fno-trapping-math", "-freciprocal-math", "-std=gnu89")
 
 
 def _library(tyre, key: str) -> Path:
@@ -916,7 +916,7 @@ def _library(tyre, key: str) -> Path:
                                    used=", ".join(str(int(u)) for u in _used(tyre)), p=INPUT_NAMES.index("p"),
                                    y=INPUT_NAMES.index("y"), **_S))
         meta = {"inputs": list(INPUT_NAMES), "outputs": list(OUTPUT_NAMES), "checks": [], "states": list(STATE_NAMES)}
-        return source, (*_CFLAGS, "-fPIC", "-shared"), ("-lm",), meta
+        return source, (*COMPILER_FLAGS, "-fPIC", "-shared"), ("-lm",), meta
 
     return cached_library("swift", key, generate)
 
