@@ -27,7 +27,7 @@ import tempfile
 import warnings
 from pathlib import Path
 
-from mftyre.transient import free_rolling_start
+from mftyre.transient import start_inputs
 
 HERE = Path(__file__).resolve().parent
 MODELS = ("steady", "swift")
@@ -128,7 +128,6 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
             shutil.copytree(Path(swift.__file__).parent, stage / "vendor" / "swift",
                             ignore=shutil.ignore_patterns("__pycache__", "*.pyc", "*.so"))
 
-        omega0, rl0 = free_rolling_start(tyre, float(prm.LONGVL))  # no inputs set: free rolling under FNOMIN
         config = {
             "tir": "tyre.tir",
             "tir_name": tir.name,
@@ -140,10 +139,7 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
             "parameters": {"tir_file": "", "model": model, "side": tyre.side, "input_mode": input_mode,
                            "vertical_input": vertical_input, "evaluator": "auto", "road": "", "rim": "speed",
                            "x_start": 0.0, "max_step": 1e-3, "axle_mass": 30.0},
-            "inputs": {"vx": float(prm.LONGVL), "vy": 0.0, "omega": omega0, "gamma": 0.0,
-                       "z": float(rl0), "road_z": 0.0, "Fz_in": float(prm.FNOMIN), "p": float(prm.INFLPRES),
-                       "kappa_in": 0.0, "alpha_in": 0.0, "vz": 0.0, "torque": 0.0, "road_camber": 0.0,
-                       "mu_scale": 1.0},
+            "inputs": start_inputs(tyre),  # the others start at their WHEEL start values, as in the native FMU
         }
         (stage / "config.json").write_text(json.dumps(config, indent=1))
         docs = Path(tmp) / "documentation"

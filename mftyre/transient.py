@@ -65,9 +65,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ModelInputError
-from .variables import pick
+from .variables import WHEEL, pick
 
-__all__ = ["StateFunctions", "WheelFunctions", "wheel_functions", "free_rolling_start", "WheelTyre", "KINDS",
+__all__ = ["StateFunctions", "WheelFunctions", "wheel_functions", "free_rolling_start", "start_inputs", "WheelTyre", "KINDS",
            "VERTICAL_MODES", "INPUT_MODES", "VX_MIN",
            "input_table", "OUTPUTS", "PARAMETERS", "default_tau_vlow", "kinematic_slips", "mf_slip", "slip_speeds",
            "wheel_vertical_force", "contact_load", "vertical_couples_forces",
@@ -122,6 +122,14 @@ def free_rolling_start(model, vx: float) -> tuple[float, float]:
         omega = vx / float(model.evaluate(prm.FNOMIN, 0.0, 0.0, vx=vx, p=prm.INFLPRES, omega=omega).re)
     rl, _ = model.loaded_radius(prm.FNOMIN, p=prm.INFLPRES, omega=omega)
     return omega, float(rl)
+
+
+def start_inputs(model) -> dict:
+    """The start values of the inputs that depend on the file (both FMU backends and every kind): free rolling at
+    the start speed of ``WHEEL["vx"]`` under FNOMIN at INFLPRES (spin ``omega``, axle height ``z``)."""
+    prm = model.params
+    omega, z = free_rolling_start(model, WHEEL["vx"].start)
+    return {"p": float(prm.INFLPRES), "omega": omega, "z": z, "Fz_in": float(prm.FNOMIN)}
 
 
 def default_tau_vlow(model) -> float:
@@ -258,8 +266,7 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
     prm = model.params
     be = casadi_backend()
     table = input_table(vertical, turn_slip, input_mode)
-    omega0, z0 = free_rolling_start(model, table["vx"].start)
-    computed = {"p": float(prm.INFLPRES), "omega": omega0, "z": z0, "Fz_in": float(prm.FNOMIN)}
+    computed = start_inputs(model)
     inputs = tuple(v.but(start=computed[n]) if n in computed else v for n, v in table.items())
     u = ca.SX.sym("u", len(table))
     U = {n: u[i] for i, n in enumerate(table)}

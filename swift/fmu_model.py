@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mftyre.errors import ModelInputError
-from mftyre.transient import StateFunctions, free_rolling_start
+from mftyre.transient import StateFunctions, start_inputs
 from mftyre.variables import pick
 
 from .enveloping import Cams
@@ -254,9 +254,7 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
              + "/* cam height and road-camber slope per sample, interleaved */\n"
              + "static const double ROAD_H[2 * ROAD_N] = {" + ",".join(repr(float(v)) for v in h) + "};\n"
              + "static const double ROAD_GRID[ROAD_WINDOW] = {" + ",".join(repr(float(v)) for v in grid_v) + "};\n")
-    omega0, z0 = free_rolling_start(model, INPUTS["vx"].start)
-    computed = {"p": float(prm.INFLPRES), "omega": omega0, "z": z0,
-                "Fz_in": float(prm.FNOMIN)}
+    computed = start_inputs(model)
     inputs = tuple(v.but(start=computed[n]) if n in computed else v for n, v in table_u.items())
     parameters = (PARAMETERS["x_start"].but(start=float(x_start)), PARAMETERS["max_step"])
     return SwiftFunctions(init=init, step=step, out=outw, state_names=STATE_NAMES, inputs=inputs,

@@ -63,6 +63,8 @@ def test_both_backends_speak_one_vocabulary(fmus, mode):
         assert v.causality == WHEEL[name].causality, name
     for name in native.keys() & python.keys():
         assert native[name].causality == python[name].causality and native[name].unit == python[name].unit, name
+        if native[name].start is not None or python[name].start is not None:  # the same defaults (free rolling)
+            assert float(native[name].start) == pytest.approx(float(python[name].start), rel=1e-12), name
     assert native.keys() - python.keys() == ONLY_NATIVE[mode]
     assert python.keys() - native.keys() <= ONLY_PYTHONFMU
 
