@@ -51,8 +51,15 @@ Vertical
   ``load``: the input ``Fz_in`` (negative = 0).
 Wheel-centre loads: M_W = M_C + (C - W) x F with C -> W = Rl (0, -sin g, cos g):
   Mx_W = Mx + Rl (Fy cos g + Fz sin g),  My_W = My - Rl Fx cos g,  Mz_W = Mz - Rl Fx sin g.
-Turn slip (option ``turn_slip``): input ``yaw_rate``, phit = -yaw_rate / max(Vc, VXLOW) (Pacejka (4.75)), the
-MF with its turn-slip equations; the turn slip acts without lag also in the transient model [chosen].
+Turn slip (option ``turn_slip``): input ``yaw_rate`` (ISO-W z up), phit = +yaw_rate / max(Vc, VXLOW), the MF with
+its turn-slip equations; the turn slip acts without lag also in the transient model [chosen]. The sign: the tread
+in the contact patch spins at yaw_rate + omega sin(gamma) about the road normal (rigid-body kinematics of a wheel
+inclined by gamma about ISO-W x, spinning forwards about its axle), and the MF's spin phi = phit + (1 - eps_gamma)
+omega sin(gamma) / Vc' (4.76 as :mod:`mftyre.formula.turnslip` reads it with the .tir's ISO-W camber) must see the
+yaw rate with the sign of the camber spin. Pacejka's psi_dot = -phit Vc (4.75) is written in the book's own axes;
+taken literally in ISO-W it turns the spin around: a wheel yawing to the left would get the side force and
+moment of a wheel yawing to the right (force into the turn instead of out of it, the bore moment pushing the yaw on
+instead of resisting it).
 Road camber: the MF gets the inclination relative to the road, gamma - road_camber. Friction: ``mu_scale``
 multiplies LMUX and LMUY of the .tir.
 """
@@ -293,8 +300,9 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
         return _rig_functions(model, u, U, q, x, h, gamma, lmux, lmuy, inputs, parameters)
     vy, omega = U["vy"], U["omega"]
 
-    # turn slip (4.75): psi_dot = -phit Vc', Vc' = max(Vc, VXLOW); not relaxed in the transient model [chosen]
-    phit = -U["yaw_rate"] / be.fmax(be.sqrt(vx**2 + vy**2), prm.VXLOW) if turn_slip else 0.0 * vx
+    # turn slip: phit = +psi_dot / Vc', Vc' = max(Vc, VXLOW) (module notes: the sign of the camber spin in ISO-W);
+    # not relaxed in the transient model [chosen]
+    phit = U["yaw_rate"] / be.fmax(be.sqrt(vx**2 + vy**2), prm.VXLOW) if turn_slip else 0.0 * vx
 
     def tyre_at(fz, start=False):
         """The tyre under the load ``fz``: (slips and state expressions, MF outputs); ``start``: with the

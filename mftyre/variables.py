@@ -85,7 +85,7 @@ WHEEL = table(
     Variable("road_z", "m", _I, 0.0, "road height under the wheel, ISO-W z"),
     Variable("Fz_in", "N", _I, _NAN, "vertical load on the tyre (negative = no contact; start: FNOMIN)"),
     Variable("yaw_rate", "rad/s", _I, 0.0, "yaw velocity of the wheel about ISO-W z (vehicle yaw rate + steer rate); "
-             "turn slip phit = -yaw_rate / max(Vc, VXLOW)"),
+             "turn slip phit = +yaw_rate / max(Vc, VXLOW) (mftyre.transient notes)"),
     Variable("kappa_in", "1", _I, 0.0, "rig: longitudinal slip relative to the direction of travel, (omega Re - vx)"
              " / vx (-1 = locked)"),
     Variable("alpha_in", "rad", _I, 0.0, "rig: slip angle"),

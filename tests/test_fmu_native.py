@@ -800,14 +800,14 @@ def test_get_set_and_status_calls_share_one_check(fmus, tmp_path):
 
 
 def test_turn_slip_from_the_yaw_rate(models, tmp_path):
-    """--turn-slip: the yaw_rate input gives the MF's turn slip phit = -yaw_rate / Vc; the native FMU equals
+    """--turn-slip: the yaw_rate input gives the MF's turn slip phit = +yaw_rate / Vc; the native FMU equals
     MFModel.evaluate with that phit (steady) and the Python twin (transient)."""
     path = tmp_path / "ts.fmu"
     assert _build([TIR61, "-o", path, "--model", "steady", "--turn-slip", "--vertical", "load"]) == 0
     vx, yaw_rate, fz = 15.0, 0.8, 4500.0
     s = Slave(path, tmp_path).initialise(vx=vx, omega=vx / RE0, Fz_in=fz, yaw_rate=yaw_rate)
     out = s.get("Fx", "Fy", "Mz_c", "kappa")
-    ref = models["61"].evaluate(fz, out["kappa"], 0.0, 0.0, -yaw_rate / vx, vx, omega=vx / RE0, turn_slip=True)
+    ref = models["61"].evaluate(fz, out["kappa"], 0.0, 0.0, yaw_rate / vx, vx, omega=vx / RE0, turn_slip=True)
     assert out["Fy"] == pytest.approx(float(ref.fy), rel=1e-9) and abs(out["Fy"]) > 50.0
     assert out["Mz_c"] == pytest.approx(float(ref.mz), rel=1e-9, abs=1e-9)
     s.set(yaw_rate=0.0)
@@ -883,3 +883,25 @@ def test_default_inputs_roll_freely(fmus, tmp_path):
         assert abs(out["Fx"]) < 0.01 * out["Fz"], kind
         assert out["Fz"] == pytest.approx(4000.0, rel=0.05), kind  # FNOMIN of the files (rim: less the belt)
         nat.close()
+
+
+def test_a_yawing_wheel_spins_like_an_inclined_one(models):
+    """The tread in the contact patch spins at yaw_rate + omega sin(gamma) about the road normal (ISO-W: z up,
+    gamma about x, omega forwards about the axle): a wheel yawing to the left (yaw_rate > 0) at zero slip angle
+    spins the way a wheel inclined by gamma > 0 does, so the turn-slip side force and moment it gets have the signs
+    of the file's camber thrust and camber moment (Fy < 0 and Mz < 0 on the car file at 2-4 kN: the force points out
+    of the turn, as in the brush model, and the moment resists the yaw). Fails with phit = -yaw_rate / Vc."""
+    vx = 15.0
+    yawing = WheelTyre(models["61"], "steady", vertical="load", turn_slip=True)
+    for fz in (2000.0, 4000.0):
+        yawing.set_inputs(vx=vx, omega=vx / RE0, Fz_in=fz, yaw_rate=0.0, gamma=0.0)
+        yawing.initialise()
+        straight = yawing.outputs()
+        yawing.set_inputs(yaw_rate=0.3)
+        turning = yawing.outputs()
+        yawing.set_inputs(yaw_rate=0.0, gamma=0.02)
+        inclined = yawing.outputs()
+        for name in ("Fy", "Mz_c"):
+            by_yaw, by_camber = turning[name] - straight[name], inclined[name] - straight[name]
+            assert by_yaw * by_camber > 0, (fz, name, by_yaw, by_camber)
+        assert turning["Fy"] - straight["Fy"] < -5.0 and turning["Mz_c"] - straight["Mz_c"] < 0.0
