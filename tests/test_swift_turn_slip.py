@@ -85,12 +85,16 @@ def test_turn_slip_is_the_mf_increment_at_the_patch_spin(model, tyres):
 @pytest.mark.parametrize("vx", [V, -V])
 def test_yaw_rate_drives_the_spin_in_the_direction_of_travel(model, tyres, vx):
     """phi relaxes towards psi_dot / V with V signed by the direction of travel: a left-turning patch (psi_dot > 0
-    about z up) has positive spin forward, negative in reverse."""
-    _, on = tyres
+    about z up) has positive spin forward, negative in reverse; and at 4 kN, where the file's turn-slip moment
+    resists the yaw (dMz/dphit = -48 N m per 1/m), the contact moment opposes the yaw rate in both directions."""
+    off, on = tyres
     u = _inputs(model, vx)
     x = on.initial_state(u)
     x[_S["wpsb"]] = 0.5
     assert np.sign(on.derivative(x, u)[_S["phi"]]) == np.sign(vx)
+    x[_S["phi"]] = 0.5 / vx
+    moment = on.outputs(x, u)[_O["mz_c"]] - off.outputs(x, u)[_O["mz_c"]]
+    assert moment < -0.5  # -48 N m per 1/m x 0.05 1/m
 
 
 @pytest.mark.parametrize("gamma", [0.03, -0.05])
