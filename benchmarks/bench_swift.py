@@ -1,7 +1,7 @@
 """SWIFT real-time factor: a 2 s cleat run (10 x 50 mm cleat, 40 km/h, fixed axle height, 4 kN) with 1 kHz
 output, on one core, side by side:
 
-    python benchmarks/bench_swift.py [--tir FILE.tir] [--repeat 5] [--against GIT_REF] [--cpu]
+    python benchmarks/bench_swift.py [--tir FILE.tir] [--repeat 5] [--against GIT_REF] [--cpu] [--turn-slip]
 
 Rows: ``SwiftTyre.run`` (compiled C: the whole loop of steps in one call), the FMU-style loop of single
 ``SwiftTyre.step`` calls (compiled; one StepInputs per step, as a co-simulation master would pass them), and the
@@ -9,7 +9,8 @@ same equations on the CasADi virtual machine (not compiled, a 0.1 s run scaled t
 simulated time / wall time (the static initialisation is included in the rows). ``--against REF``: the same rows
 for the ``swift`` package of git ref REF (e.g. ``main``), timed alternately with the current code in the same run,
 and the speed-up of the current code. ``--cpu``: thread CPU time instead of wall time (a busy shared machine disturbs
-it far less). Compilation (cached after the first build) is printed separately.
+it far less). ``--turn-slip``: also a row of the current code with the contact patch's turn slip on. Compilation
+(cached after the first build) is printed separately.
 """
 from __future__ import annotations
 
@@ -49,12 +50,12 @@ def _swift_at(ref: str, directory: Path):
     return importlib.import_module(name)
 
 
-def _rows(swift, model, repeat: int, cpu: bool):
+def _rows(swift, model, repeat: int, cpu: bool, **options):
     """Wall times [s]: build, run(), step() loop, CasADi VM run (scaled to T_END), functions to re-time them."""
     rl, _ = model.loaded_radius(4000.0)
     road = swift.Cleat(1.0, 0.05, 0.01)
     t0 = time.perf_counter()
-    tyre = swift.SwiftTyre(model, road, axle="height", rim="speed", x_range=(0.0, 24.0))
+    tyre = swift.SwiftTyre(model, road, axle="height", rim="speed", x_range=(0.0, 24.0), **options)
     t_build = time.perf_counter() - t0
     u = swift.StepInputs(x=0.0, vx=V, z=float(rl), omega=V / 0.3044)
     StepInputs = swift.StepInputs
@@ -64,7 +65,7 @@ def _rows(swift, model, repeat: int, cpu: bool):
         for k in range(int(round(T_END / DT))):
             s, _ = tyre.step(s, StepInputs(x=V * k * DT, vx=V, z=z, omega=omega), DT)
 
-    vm = swift.SwiftTyre(model, road, axle="height", rim="speed", x_range=(0.0, 24.0), compiled=False)
+    vm = swift.SwiftTyre(model, road, axle="height", rim="speed", x_range=(0.0, 24.0), compiled=False, **options)
     vm.run(DT, u, DT)  # its graphs built (on first use since the compiled tyres share one parametric library)
     t_vm = best_time(lambda: vm.run(0.1, u, DT), 1, cpu) * (T_END / 0.1)
     return t_build, t_vm, (lambda: best_time(lambda: tyre.run(T_END, u, DT), repeat, cpu),
@@ -77,6 +78,7 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--against", metavar="GIT_REF", help="also time the swift package of this git ref (e.g. main)")
     ap.add_argument("--cpu", action="store_true", help="thread CPU time instead of wall time")
+    ap.add_argument("--turn-slip", action="store_true", help="also the current code with turn slip (row 'turn slip')")
     args = ap.parse_args(argv)
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})  # one core
@@ -89,7 +91,9 @@ def main(argv=None):
         if args.against:
             variants[args.against] = _swift_at(args.against, Path(tmp))
         setups = {name: _rows(pkg, model, args.repeat, args.cpu) for name, pkg in variants.items()}
-        times = {name: [np.inf, np.inf] for name in variants}
+        if args.turn_slip:
+            setups["turn slip"] = _rows(swift, model, args.repeat, args.cpu, turn_slip=True)
+        times = {name: [np.inf, np.inf] for name in setups}
         for _ in range(2):  # alternate the variants, keep each one's best
             for name, (_, _, timers) in setups.items():
                 times[name] = [min(a, timer()) for a, timer in zip(times[name], timers)]

@@ -194,15 +194,13 @@ def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_sta
         f = wheel_functions(model, kind, vertical, turn_slip=turn_slip, input_mode=input_mode)
         glue, extra, directional = "glue_wheel.c", "", True
     elif kind == "swift":
-        if turn_slip:
-            raise NativeBuildError("--turn-slip is available for --model steady and transient (the SWIFT ring has no "
-                                   "turn slip)")
         if input_mode != "vehicle":
             raise NativeBuildError("--input-mode rig is a mode of --model steady (the SWIFT ring takes the wheel's "
                                    "motion)")
         from swift.fmu_model import swift_functions
 
-        f = swift_functions(model, road, x_start=x_start, rim=rim, axle="load" if vertical == "load" else "height")
+        f = swift_functions(model, road, x_start=x_start, rim=rim, axle="load" if vertical == "load" else "height",
+                            turn_slip=turn_slip)
         glue, extra, directional = "glue_swift.c", f.config_extra, False
     else:
         raise NativeBuildError(f"--model must be one of {', '.join(MODELS)}, got {kind!r}")

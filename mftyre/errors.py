@@ -52,6 +52,11 @@ class PressureFactorWarning(UserWarning):
     the cornering stiffness) has changed sign, although the file may declare the pressure valid."""
 
 
+class TurnSlipWarning(UserWarning):
+    """Turn slip is switched on for a file whose Magic Formula turn-slip moment pushes the contact patch along its
+    yaw rate at some load (SWIFT: the belt yaw and camber modes can grow)."""
+
+
 class InputClippedWarning(UserWarning):
     """Inputs outside the .tir ranges were saturated to them (``limits=True``); the message names each such input,
     its range and how many points."""

@@ -60,7 +60,8 @@ def register(subparsers) -> argparse.ArgumentParser:
                        help="native swift: the input omega spins the rim (speed, default) or the input torque drives "
                             "it (torque); pythonfmu: the FMU parameter rim, set at run time")
     build.add_argument("--turn-slip", action="store_true",
-                       help="native steady/transient: the MF with turn slip, from the input yaw_rate")
+                       help="native steady/transient: the MF with turn slip, from the input yaw_rate; native swift: "
+                            "the contact patch's turn slip from the belt's yaw rate (opt-in, see swift.ring)")
     build.add_argument("--backend", choices=("native", "pythonfmu"), default="native",
                        help="native (compiled C, default) or pythonfmu (Python slave)")
     closing_options(build, overwrite="replace an existing output file")

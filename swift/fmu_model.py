@@ -172,10 +172,12 @@ class SwiftFunctions(StateFunctions):
 
 
 def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed",
-                    axle: str = "height", axle_mass: float = AXLE_MASS) -> SwiftFunctions:
+                    axle: str = "height", axle_mass: float = AXLE_MASS, turn_slip: bool = False) -> SwiftFunctions:
     """The functions of the SWIFT wheel of ``model`` on ``road`` (a :class:`swift.road.Road`, an expression or a
     CSV file, see :func:`swift.road.parse_road`); ``x_start``: default start position; ``rim``, ``axle``: the modes
-    (:data:`RIM_MODES`, :data:`AXLE_MODES`); ``axle_mass``: the axle's mass [kg] in the load mode. The ring is
+    (:data:`RIM_MODES`, :data:`AXLE_MODES`); ``axle_mass``: the axle's mass [kg] in the load mode; ``turn_slip``:
+    the contact patch's turn slip from its yaw rate (:class:`swift.simulate.SwiftTyre`; the wheel frame does not
+    turn: the belt's yaw rate relative to the rim). The ring is
     :class:`swift.simulate.SwiftTyre`'s (its step, outputs and static equilibrium); here only the FMU's inputs are
     mapped onto it: the state holds heights above the road datum, the ring sees them above ``road_z``."""
     import casadi as ca
@@ -198,7 +200,7 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
     lo, hi = (min(bps) - reach, max(bps) + reach) if bps else (0.0, 1.0)
     tyre = SwiftTyre(model, road, axle=axle, rim=rim, x_range=(math.floor(lo / dx) * dx,
                      math.ceil(hi / dx) * dx), table_dx=dx, window=WINDOW, substeps=SUBSTEPS, axle_mass=axle_mass,
-                     compiled=False)
+                     compiled=False, turn_slip=turn_slip)
     nx = len(STATE_NAMES)
     x, u, q = ca.MX.sym("x", nx), ca.MX.sym("u", len(table_u)), ca.MX.sym("q", len(PARAMETERS))
     x0w, grid, hw, dt = ca.MX.sym("x0w"), ca.MX.sym("grid", WINDOW), ca.MX.sym("hw", 2 * WINDOW), ca.MX.sym("dt")
@@ -282,7 +284,7 @@ def _sources_digest() -> str:
     return sources.hexdigest()
 
 
-def wheel_key(model, rim: str, axle: str, axle_mass: float) -> str:
+def wheel_key(model, rim: str, axle: str, axle_mass: float, turn_slip: bool = False) -> str:
     """The key of the compiled step and outputs of :func:`swift_functions` (they do not depend on the road, which
     they take as the window arguments): the .tir values, the side, the modes, the axle mass, the integration and
     table constants, the source of the swift and mftyre packages, CasADi and the compiler flags."""
@@ -293,7 +295,8 @@ def wheel_key(model, rim: str, axle: str, axle_mass: float) -> str:
 
     prm = model.params
     payload = {"tir": {k: repr(prm[k]) for k in prm}, "missing": sorted(prm.missing), "side": model.side,
-               "rim": rim, "axle": axle, "axle_mass": float(axle_mass), "window": WINDOW, "substeps": SUBSTEPS,
+               "rim": rim, "axle": axle, "axle_mass": float(axle_mass), "turn_slip": bool(turn_slip),
+               "window": WINDOW, "substeps": SUBSTEPS,
                "newton": NEWTON_STEPS, "sources": _sources_digest(), "casadi": ca.__version__, "cflags": _CFLAGS}
     return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
@@ -328,8 +331,9 @@ class SwiftWheel:
     library (:func:`compiled_library`, cached; the static equilibrium ``init`` stays on the virtual machine)."""
 
     def __init__(self, model, road=None, *, x_start: float = 0.0, rim: str = "speed", axle: str = "height",
-                 axle_mass: float = AXLE_MASS, compiled: bool = False):
-        self.functions = f = swift_functions(model, road, x_start=x_start, rim=rim, axle=axle, axle_mass=axle_mass)
+                 axle_mass: float = AXLE_MASS, compiled: bool = False, turn_slip: bool = False):
+        self.functions = f = swift_functions(model, road, x_start=x_start, rim=rim, axle=axle, axle_mass=axle_mass,
+                                             turn_slip=turn_slip)
         self._params = model.params
         self.u = np.array(f.input_starts, dtype=float)
         self.q = np.array(f.parameter_starts, dtype=float)
@@ -339,7 +343,7 @@ class SwiftWheel:
         if compiled:
             import ctypes
 
-            self.library = compiled_library(f, wheel_key(model, rim, axle, axle_mass))
+            self.library = compiled_library(f, wheel_key(model, rim, axle, axle_mass, turn_slip))
             lib = ctypes.CDLL(str(self.library))
             step, out = (GeneratedFunction(lib, g, by_address=(-2, -1)) for g in (f.step, f.out))
             self._step, self._out = (lambda *a: step(*a)[0]), (lambda *a: out(*a)[0])

@@ -10,7 +10,8 @@ State (``STATE_NAMES``): belt x_b, z_b, y_b [m], velocities; wind-up theta_w = t
 spin Omega_b, Omega_a; axle z_a, its velocity, axle x_a and rim lateral position y_a (imposed at each step start
 from the inputs x, y and moving with vx, vy within the step: a rim position held over a step while the belt moves
 on stretched the sidewall by c_by vy h/2, steady cornering 9-119 % off at 1-5 ms); belt camber gamma_b and yaw psi_b with rates; residual
-(patch) deflections u_x, u_y, residual yaw psi_r; transient slips kappa', alpha'; the filtered effective slope
+(patch) deflections u_x, u_y, residual yaw psi_r; transient slips kappa', alpha'; the patch's turn slip phi [1/m]
+(constant without the turn-slip option); the filtered effective slope
 betaf (for the rate at which the effective plane turns, below); the tandem base l_s of the last step (memory,
 not integrated: the stepper starts its Newton pass there and stores the new solution after each step; the exact
 right-hand side solves from scratch).
@@ -153,14 +154,36 @@ stiffness: no published formula could be read; a non-zero value gives a warning.
 pages, code and issues corpora (the MF-Tyre/MF-Swift 6.2 help and equation manuals and the Simcenter 2020.2 user
 manual appear only as title pages; public code has the names in .tir parsers and parameter structs only, described
 "load and speed influence on in-plane translation / rotation stiffness"), NOTES sec. 4.2 and 9.7), rotating-damper
-coupling terms, ENV_C1/ENV_C2, turn slip from the belt yaw rate: the MF's turn-slip moment (Pacejka 2012
-(4.93)-(4.98)) has the slope K_zgamma,r0 R0/(1 - eps_gamma) in phi, with the sign of QDZ8 + QDZ9 dfz, negative
-at 2-8 kN on every SWIFT file here (sample, TNO, MFeval 6.1/6.2; sample file, lateral shift PHYP2 off:
-dMz/dphit -58 / -112 / -210 N m per 1/m at 2 / 4 / 8 kN; with it -43 / -48 / +88, and dFy/dphit -2253 N per 1/m
-at 4 kN): with
-phi = -psi_dot/V it pushes the patch along its yaw rate instead of damping it. Tried for issue 19 as the MF's
-increment over phi = 0 with phi relaxed over sigma_c: the linearised ring grew at +2310 1/s (-1 m/s, 8 kN) with the
-force and moment increments, +7e7 1/s (70 m/s, 8 kN) without the side-force increment; not landed.
+coupling terms, ENV_C1/ENV_C2.
+Turn slip of the contact patch (``turn_slip=True``; off by default, below) [chosen, from the MF's turn-slip
+equations, Pacejka 2012 (4.75)-(4.106), mftyre.formula.turnslip]: the patch yaws at psi_dot_c = psidot_b +
+psidot_r (belt and residual yaw, the heading the slip angle uses) and its spin relaxes over sigma_c like the slips,
+    sigma_c dphi/dt + V' phi = s_v psi_dot_c,   V' = max(|V_cx|, VXLOW)   (air: phi relaxes to 0 with AIR_TIME)
+so that phi = psi_dot_c / V with V signed by the direction of travel. The forces get the MF's turn-slip increment
+    F'_x, F'_y, M'_z  +=  MF_ts(phit = phi) - MF_ts(phit = 0)
+(the zeta reduction factors of the peaks and stiffness, the lateral shift S_Hyphi, the moment D_rphi) at the same
+load, slips, rim camber and speed as the slip model, with the camber spin (1 - eps_gamma) s_v Omega_b sin(gamma) of
+rolling forward (reversing as for the other forces: the MF rolls forward, M'_z turns with s_v, so the spin moment
+resists the yaw in both directions): at zero yaw rate the outputs are exactly those without turn slip and the
+steady state stays the MF's. The increment is taken about R0 phi = TURN_SLIP_REFERENCE: (4.104)'s C_r is 0/0 at
+zero turn slip and camber (its value there, 1, is not its limit).
+    Sign: phit = +psi_dot/V in ISO-W (z up). The MF adds phit to the camber spin (1 - eps_gamma) Omega sin(gamma)/V
+(4.76), and an ISO camber gamma > 0 (leaning right: the files' camber thrust Fy < 0) tilts the spin axis to +z; so a
+wheel rolling freely along its cone (leaning right, turning right at psi_dot = -(1 - eps_gamma) Omega sin(gamma))
+has no spin and no camber thrust, and a left-turning patch at zero slip angle is pushed outwards (brush model).
+Pacejka's phit = -psi_dot/V (4.75) has z down. Issue 19's first attempt took -psi_dot/V: the cone's camber thrust
+doubles (tests/test_swift_turn_slip.py); with that sign (and the reference spin) the MFeval 6.2 file, whose moment
+resists the yaw most, grows at +635 1/s (1 m/s, 4 kN), while the sample and TNO files stay damped at 2-8 kN: the
+two cases swap. Its +2310 1/s came with C_r at 0/0 (the Jacobian there has entries of 1e13).
+    Why off by default: the file's own turn-slip moment at zero slip, dMz/dphit = K_zgamma,r0 R0/(1 - eps_gamma)
+(the camber moment QDZ8 + QDZ9 dfz, resisting the yaw) plus the pneumatic trail times the turn-slip side force
+(pushing along it), turns positive at high load on every SWIFT file here (sample and TNO from about 6 kN, +88 N m
+per 1/m at 8 kN; MFeval 6.1/6.2 from 9.8 kN; agricultural files at 2 FNOMIN; PacejkaBook and FSAE from 0.5
+FNOMIN), and with it the ring grows: sample +2.7 1/s (15 m/s, 8 kN, 55 Hz belt yaw), TNO +12.7 1/s (0.5 m/s,
+8 kN, 92 Hz), MFeval 6.2 +525 1/s (-70 m/s, 13.5 kN); at 0.5 and 1 FNOMIN every mode of these files stays damped
+(benchmarks/swift_turn_slip_modes.py, 0.5-70 m/s both ways, INFLPRES). SwiftTyre(turn_slip=True) gives a
+TurnSlipWarning naming the file, the loads and the parameters where the slope is positive
+(:func:`turn_slip_warning`); a positive slope need not make a mode grow (PacejkaBook: damped at 2-8 kN).
 """
 from __future__ import annotations
 
@@ -170,15 +193,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mftyre.errors import ModelInputError
+from mftyre.errors import InputClippedWarning, ModelInputError
 from mftyre.formula import vertical
 
 __all__ = ["RingConstants", "STATE_NAMES", "INPUT_NAMES", "OUTPUT_NAMES", "CONTACT_PASSES", "AIR_TIME",
-           "RESIDUAL_FLOOR", "pressure_coefficients", "pressure_limits", "check_pressure", "residual_vertical",
-           "residual_compliance", "contact_start", "contact_geometry", "ring_equations"]
+           "TURN_SLIP_REFERENCE", "RESIDUAL_FLOOR", "pressure_coefficients", "pressure_limits", "check_pressure",
+           "residual_vertical", "residual_compliance", "contact_start", "contact_geometry", "ring_equations",
+           "turn_slip_moment_slopes", "turn_slip_warning"]
 
 STATE_NAMES = ("xb", "vxb", "zb", "vzb", "thw", "omb", "oma", "za", "vza", "xa", "ya",
-               "ux", "kappa", "yb", "vyb", "gb", "wgb", "psb", "wpsb", "uy", "alpha", "psr", "betaf", "lsm")
+               "ux", "kappa", "yb", "vyb", "gb", "wgb", "psb", "wpsb", "uy", "alpha", "psr", "phi", "betaf", "lsm")
 #: Inputs of one step. x/z/omega of the axle enter through the state (imposed parts are set by the stepper).
 INPUT_NAMES = ("vx", "load", "torque", "p", "y", "vy", "gamma", "psi", "road_camber")
 OUTPUT_NAMES = ("fx", "fy", "fz", "mx", "my", "mz",            # forces and moments of the tyre on the rim
@@ -199,6 +223,11 @@ RESIDUAL_FLOOR = 0.02
 #: Floor of 1 - t, t = kappa_s (R_e - r_c), in the reported rolling radius variation ``dre`` (a concave corner
 #: tighter than 1/(R_e - r_c)) [chosen guard].
 _TURN_FLOOR = 0.2
+#: Reference spin R0 phi about which the turn-slip increment is taken (:func:`ring_equations`) [chosen guard]: the
+#: published C_r = (2/pi) acos(M_zphi90 / |D_rphi|) (Pacejka 2012 (4.104)) is 0/0 at zero turn slip and camber, held
+#: at C_r = 1 exactly there and at its limit (another value) around it: a removable jump of M_z (0.07 N m of 15 N m,
+#: sample file, 4 kN, 0.1 rad) and a derivative of order 1e-16/phi next to it.
+TURN_SLIP_REFERENCE = 1e-6
 
 
 @dataclass(frozen=True)
@@ -281,6 +310,41 @@ def residual_compliance(c_total, c_ring, sigma_c, k_slip, be):
     patch alone is softer (light loads: K ~ Fz, sigma_c ~ sqrt(Fz)) [chosen]."""
     patch = sigma_c / be.fmax(be.abs(k_slip), 1.0)
     return be.fmax(1.0 / c_total - c_ring - patch, RESIDUAL_FLOOR / c_total)
+
+
+def turn_slip_moment_slopes(model, loads=None, h: float = 1e-3):
+    """[(Fz, dMz/dphit, dMzr/dphit)]: the slopes [N m per 1/m] of the MF's aligning moment and of its residual part
+    in the turn slip phit about the reference spin (:data:`TURN_SLIP_REFERENCE`), by central differences of
+    ``h``/R0 with MFModel.evaluate(turn_slip=True) at zero slip and camber, LONGVL, INFLPRES, at ``loads``
+    (default 0.5, 0.55, ... 2 FNOMIN). With phit = psi_dot/V (ISO-W, module notes) a positive slope pushes the patch
+    along its yaw rate: the MF's own (camber) data drive the yaw instead of damping it."""
+    prm = model.params
+    loads = np.linspace(0.5, 2.0, 31) * prm.FNOMIN if loads is None else np.asarray(loads, dtype=float)
+    r0 = prm.UNLOADED_RADIUS
+    ref, dp = TURN_SLIP_REFERENCE / r0, h / r0
+    with warnings.catch_warnings():  # loads above FZMAX: saturated, as in the ring's slip model
+        warnings.simplefilter("ignore", InputClippedWarning)
+        plus = model.evaluate(loads, 0.0, 0.0, 0.0, ref + dp, turn_slip=True)
+        minus = model.evaluate(loads, 0.0, 0.0, 0.0, ref - dp, turn_slip=True)
+    return [(float(f), float(a), float(b)) for f, a, b in zip(loads, (plus.mz - minus.mz) / (2 * dp),
+                                                              (plus.mzr - minus.mzr) / (2 * dp))]
+
+
+def turn_slip_warning(model) -> str | None:
+    """The message of :class:`mftyre.errors.TurnSlipWarning` where the MF turn-slip moment of ``model`` is
+    anti-damping at some load of 0.5-2 FNOMIN (:func:`turn_slip_moment_slopes`), else None."""
+    bad = [row for row in turn_slip_moment_slopes(model) if row[1] > 0]
+    if not bad:
+        return None
+    prm = model.params
+    fz, slope, residual = max(bad, key=lambda row: row[1])
+    names = ", ".join(f"{n} = {prm[n]:g}" for n in ("QDZ8", "QDZ9", "QDZ10", "QDZ11", "PECP1", "PECP2", "PHYP1",
+                                                    "PHYP2", "PHYP3", "PHYP4") if n in prm)
+    return (f"{getattr(prm, 'source', None) or 'this .tir file'}: with turn slip the Magic Formula's aligning moment "
+            f"pushes the contact patch along its yaw rate at {bad[0][0]:.0f}-{bad[-1][0]:.0f} N "
+            f"(dMz/dphit = {slope:+.3g} N m per 1/m at {fz:.0f} N: {residual:+.3g} the residual moment's, from the "
+            f"camber moment K_zgamma,r0, {slope - residual:+.3g} the pneumatic trail times the turn-slip side force; "
+            f"{names}): the SWIFT belt yaw or camber modes can grow (swift.modes.scan shows where)")
 
 
 def pressure_coefficients(prm) -> tuple[float, float | None]:
@@ -400,13 +464,14 @@ def contact_geometry(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls):
 
 
 def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, *, axle: str, rim: str, h=0.0,
-                   road_camber=0.0):
+                   road_camber=0.0, turn_slip: bool = False):
     """State derivative and outputs (CasADi vectors) of the ring at ``state`` (STATE_NAMES) and inputs ``u``
     (INPUT_NAMES), with the front/rear cam heights ``hf``, ``hr`` and their slopes along x at the cam positions
     x_b +- ``ls``/2 (under the belt centre). ``axle``: "height" (imposed, z_a and its rate
     from the state, held by the stepper) or "load"; ``rim``: "speed" (imposed spin) or "torque"; ``h``: the
     integration step (limits the relaxation rate, module notes; 0 = the exact model); ``road_camber``: the
-    multi-track road camber beta_x of a 3D road [rad] (added to the input ``road_camber``)."""
+    multi-track road camber beta_x of a 3D road [rad] (added to the input ``road_camber``); ``turn_slip``: the
+    contact patch's turn slip from its yaw rate (module notes; off: the state ``phi`` stays constant)."""
     import casadi as ca
     from mftyre.backend import casadi_backend
 
@@ -451,6 +516,14 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, *, 
     fxc, fyc, mzc, mxc, myc, re, a, cx, cy, kxk, kya = mf(be.fmax(fzc, _FZ_FLOOR), s["kappa"], alpha_mf,
                                                  v["gamma"] - beta_x, be.fmax(be.abs(vcx), prm.VXLOW),
                                                  v["p"], s["omb"])
+    if turn_slip:  # the MF's turn-slip increment at the patch's relaxed turn slip phi (module notes)
+        mf_ts = model.casadi_function(inputs=("fz", "kappa", "alpha", "gamma", "phit", "vx", "p", "omega"),
+                                      outputs=("fx", "fy", "mz"), turn_slip=True)
+        slip = (be.fmax(fzc, _FZ_FLOOR), s["kappa"], alpha_mf, v["gamma"] - beta_x)
+        rest = (be.fmax(be.abs(vcx), prm.VXLOW), v["p"], s["omb"] * s_v)  # camber spin as rolling forward
+        ref = TURN_SLIP_REFERENCE / prm.UNLOADED_RADIUS
+        on, off = mf_ts(*slip, s["phi"] + ref, *rest), mf_ts(*slip, ref, *rest)
+        fxc, fyc, mzc = fxc + (on[0] - off[0]), fyc + (on[1] - off[1]), mzc + (on[2] - off[2])
     mzc, myc = mzc * s_v, myc * s_o
 
     # residual springs in series with sidewall (+ rotation lever) and the contact patch (the slip model's static
@@ -461,6 +534,10 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, *, 
     uxdot = (fxc - crx * s["ux"]) / (damp * crx)
     uydot = (fyc - cry * s["uy"]) / (damp * cry)
     psrdot = (mzc - crpsi * s["psr"]) / (damp * crpsi)
+    # turn slip: the contact patch's yaw rate (belt + residual yaw) over the speed, relaxed over sigma_c; in the
+    # direction of travel (s_v), the speed held at VXLOW below it as in the MF (module notes)
+    phi_dot = (be.where(contact, (s_v * (s["wpsb"] + psrdot) - be.fmax(be.abs(vcx), prm.VXLOW) * s["phi"]) / sigma_c,
+                        -s["phi"] / AIR_TIME) if turn_slip else 0.0 * s["phi"])
     # effective rolling radius variation (module notes): the belt band runs at (Omega_b + beta_dot) R_e relative to
     # the turning plane, whose contact point moves along the road at V_cx + r_c beta_dot; beta_dot from the slope
     # filtered over the contact half-length a of travel (at least half a step's travel: stable RK4), paced by at least
@@ -501,7 +578,7 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, *, 
         "yb": s["vyb"], "vyb": (-fwy + fy_b) / rc.mb,
         "gb": s["wgb"], "wgb": (-mwx + r_c * fyc + mxc + rc.iby * s["omb"] * s["wpsb"]) / rc.ibx,
         "psb": s["wpsb"], "wpsb": (-mwz + mzc - rc.iby * s["omb"] * s["wgb"]) / rc.ibx,
-        "uy": uydot, "alpha": alpha_dot, "psr": psrdot, "betaf": betaf_dot,
+        "uy": uydot, "alpha": alpha_dot, "psr": psrdot, "phi": phi_dot, "betaf": betaf_dot,
         "lsm": 0.0 * s["lsm"],
     }
     out = dict(fx=fwx - f_bottom * sb, fy=fwy, fz=fwz + f_bottom * cb, mx=mwx, my=mwy, mz=mwz, fx_c=fxc,

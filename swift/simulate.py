@@ -66,14 +66,14 @@ import numpy as np
 
 from mftyre.compiled import CASADI_LOCK, cached_library  # the verified cache of every compiled library
 from mftyre.backend import NUMPY
-from mftyre.errors import ModelInputError
+from mftyre.errors import ModelInputError, TurnSlipWarning
 from mftyre.model import SymbolicParameters
 from mftyre.params import SELECTS_FORM, swift_invalid_values
 from mftyre.formula import vertical
 
 from .enveloping import Cams, CamTable
 from .ring import CONTACT_PASSES, INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, RingConstants, contact_geometry, \
-    check_pressure, contact_start, pressure_coefficients, ring_equations
+    check_pressure, contact_start, pressure_coefficients, ring_equations, turn_slip_warning
 from .road import Road
 
 __all__ = ["StepInputs", "SwiftTyre", "SimResult", "Outputs"]
@@ -161,19 +161,26 @@ class SwiftTyre:
     positions the cam-height table covers; ``table_dx`` its step; ``substeps`` RK4 steps per call of
     :meth:`step`; ``window`` cam-height samples visible to one step (covers the tandem and the travel).
     ``theta``: the parameter values the compiled step takes at run time (:func:`_run_time_parameters`).
+    ``turn_slip``: the contact patch's turn slip from its yaw rate through the MF's turn-slip equations
+    (:mod:`swift.ring`); off by default: on the sample and TNO files the MF's own turn-slip moment makes a belt mode
+    grow at 8 kN (a :class:`mftyre.errors.TurnSlipWarning` names the file and parameters where the moment is
+    anti-damping).
     """
 
     def __init__(self, model, road: Road | CamTable, *, axle: str = "height", rim: str = "speed",
                  x_range=(0.0, 10.0), table_dx: float = 1e-3, substeps: int = 2, window: int = 1024,
-                 axle_mass: float = 30.0, rim_extra_inertia: float = 0.3, compiled: bool = True):
+                 axle_mass: float = 30.0, rim_extra_inertia: float = 0.3, compiled: bool = True,
+                 turn_slip: bool = False):
         if axle not in ("height", "load") or rim not in ("speed", "torque"):
             raise ModelInputError(f"axle must be 'height' or 'load', rim 'speed' or 'torque'; got {axle!r}, {rim!r}")
-        self.model, self.axle, self.rim = model, axle, rim
+        self.model, self.axle, self.rim, self.turn_slip = model, axle, rim, bool(turn_slip)
         self._p_nominal = model.params.INFLPRES  # the default inflation pressure (the parameters are immutable)
         self._p_factors, self._p_range = model.pressure_factors, model.input_range("p")
         for name, message in swift_invalid_values(model.params):  # parameters built by hand skip the reader's check
             raise ModelInputError(f"SWIFT parameter {name} {message}")
         self.constants = RingConstants.from_model(model, axle_mass, rim_extra_inertia)
+        if self.turn_slip and (message := turn_slip_warning(model)):
+            warnings.warn(message, TurnSlipWarning, stacklevel=2)
         self.cams = Cams.from_params(model.params)
         margin = window * table_dx
         if isinstance(road, CamTable):
@@ -223,7 +230,7 @@ class SwiftTyre:
             start_sx = contact_start(m, c, xs, us, hs[0])
             geometry_sx = contact_geometry(m, c, xs, us, *(hs[i] for i in range(5)))
             dx_sx, out_sx = ring_equations(m, c, xs, us, *(hs[i] for i in range(5)), axle=self.axle, rim=self.rim,
-                                           h=hstep, road_camber=ca.atan(hs[5]))
+                                           h=hstep, road_camber=ca.atan(hs[5]), turn_slip=self.turn_slip)
         start = ca.Function("contact_start", [xs, us, hs[0], ts], [start_sx], {"cse": True})
         geometry = ca.Function("contact_geometry", [xs, us, hs[:5], ts], [geometry_sx], {"cse": True})
         physics = ca.Function("ring", [xs, us, hs, hstep, ts], [dx_sx] if stage else [dx_sx, out_sx],
@@ -342,7 +349,8 @@ class SwiftTyre:
         prm = self.model.params
         payload = {"fixed": {k: repr(prm[k]) for k in prm if k not in self._names}, "theta": self._names,
                    "missing": sorted(prm.missing), "version": prm.version, "side": self.model.side,
-                   "axle": self.axle, "rim": self.rim, "window": self.window, "substeps": self.substeps,
+                   "axle": self.axle, "rim": self.rim, "turn_slip": self.turn_slip, "window": self.window,
+                   "substeps": self.substeps,
                    "lever": (self.constants.lever_x, self.constants.lever_y), "kind": kind,
                    "passes": (CONTACT_PASSES, WARM_PASSES), "cflags": COMPILER_FLAGS,
                    "equations": _SOURCE_HASH, "casadi": ca.__version__}
@@ -580,6 +588,9 @@ class SwiftTyre:
                                    "betaf")]
         eqs = [_S[n] for n in ("vxb", "vzb", "omb", "vyb", "wgb", "wpsb", "ux", "uy", "kappa", "alpha", "psr",
                                "betaf")]
+        if self.turn_slip:
+            unknown.append(_S["phi"])
+            eqs.append(_S["phi"])
         if self.axle == "load":
             unknown.append(_S["za"])
             eqs.append(_S["vza"])

@@ -817,11 +817,7 @@ def test_turn_slip_from_the_yaw_rate(models, tmp_path):
     assert "yaw_rate" in py.functions.input_names
 
 
-def test_turn_slip_needs_native_steady_or_transient(tmp_path, capsys):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        assert _build([TIR62, "-o", tmp_path / "a.fmu", "--model", "swift", "--turn-slip"]) == 1
-    assert "--turn-slip is available for --model steady and transient" in capsys.readouterr().err
+def test_turn_slip_needs_the_native_backend(tmp_path):
     assert _build([TIR61, "-o", tmp_path / "b.fmu", "--turn-slip", "--backend", "pythonfmu"]) == 1
 
 
