@@ -339,7 +339,7 @@ static PyObject *mft_python_point(PyObject *context, PyObject *const *args, Py_s
   for (k = 0; k < N_IN; ++k) {{
     PyObject *v = args[k];
     if (PyFloat_Check(v)) xy[k] = PyFloat_AS_DOUBLE(v);
-    else if (PyLong_Check(v)) {{
+    else if (PyLong_CheckExact(v)) {{  /* (subclasses may define __float__: the fallback converts them) */
       xy[k] = PyLong_AsDouble(v);
       if (xy[k] == -1.0 && PyErr_Occurred()) {{ PyErr_Clear(); goto fallback; }}
     }} else goto fallback;

@@ -545,3 +545,143 @@ def test_jacobian_of_adjoint_equals_casadis_and_is_cheaper():
         a = np.array([float(v) for v in ours(*args)])
         b = np.array([float(v) for v in casadis(*args)])
         np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12 * np.abs(b).max())
+
+
+# ------------------------------------------------------------------------------ one point: C entry and ctypes
+def _outcome(call, args):
+    """What one call does: its value or its error (type and message), and its warnings (category, message and
+    the line they are attributed to)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            result = ("value", call(*args))
+        except Exception as exc:  # noqa: BLE001  (compared below)
+            result = ("error", type(exc), str(exc))
+    return repr(result), [(w.category, str(w.message), w.filename, w.lineno) for w in caught]
+
+
+def _one_point(model, seed):
+    return [float(np.atleast_1d(v)[0]) for v in _points(model, 1, seed)]
+
+
+def _awkward_points(model, n, seed):
+    """Random points inside the .tir ranges, a third pushed outside one range, some with a non-finite input or a
+    pressure <= 0, some given as ints, NumPy scalars, 0-d arrays, a string, too few or too many values."""
+    prm = model.params
+    rng = np.random.default_rng(seed)
+    outside = {0: prm.FZMAX * 1.2, 1: prm.KPUMAX + 0.1, 2: prm.ALPMIN - 0.1, 3: prm.CAMMAX + 0.05,
+               6: prm.PRESMIN * 0.9}
+    points = []
+    for i in range(n):
+        x = _one_point(model, seed * 1000 + i)
+        kind = rng.integers(12)
+        if kind < 4:
+            k = int(rng.choice(list(outside)))
+            x[k] = outside[k]
+        elif kind == 4:
+            x[rng.integers(7)] = float(rng.choice([np.nan, np.inf, -np.inf]))
+        elif kind == 5:
+            x[6] = float(rng.choice([0.0, -1e5]))
+        elif kind == 6:
+            x[0], x[4] = int(x[0]), 0
+        elif kind == 7:
+            x[1], x[5] = np.float32(x[1]), np.array(x[5])
+        elif kind == 8:
+            x[2] = np.float64(x[2])
+        elif kind == 9:
+            x = x[: rng.integers(7)] if rng.integers(2) else [*x, 1.0]
+        elif kind == 10:
+            x[3] = "0.01"
+        points.append(x)
+    return points
+
+
+@pytest.fixture(scope="module")
+def tno_compiled(tmp_path_factory):
+    path = require_shared(SHARED / "reference" / "tir" / "TNO_car205_60R15.tir")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = mftyre.load_tir(path)
+    return model, compile_model(model, directory=tmp_path_factory.mktemp("tno"))
+
+
+@pytest.mark.parametrize("tag", [*FILES, "tno"])
+def test_one_point_c_entry_equals_the_ctypes_route(compiled, tno_compiled, tag):
+    """Where CPython's headers are found the library's own C entry evaluates one point (fast_point); on random
+    points (inside and outside the ranges, non-finite, p <= 0, other number types, wrong arity, a string) it
+    returns exactly the ctypes route's outputs, raises the same errors and gives the same warnings at the same
+    line, for the two sample files and the TNO MF 6.2 file."""
+    from mftyre.compiled import _python_extension_flags
+
+    model, f = tno_compiled if tag == "tno" else compiled[tag]
+    assert f.fast_point == bool(_python_extension_flags())
+    points = _awkward_points(model, 240, seed={"mf61": 1, "mf62": 2, "tno": 3}[tag])
+    kinds = {"value": 0, "error": 0, "warned": 0}
+    for x in points:
+        fast, ctypes_route = _outcome(f, x), _outcome(f._call_ctypes, x)
+        assert fast == ctypes_route, x
+        kinds["value" if fast[0].startswith("('value'") else "error"] += 1
+        kinds["warned"] += bool(fast[1])
+    assert min(kinds.values()) >= 20, kinds  # every kind of outcome was compared
+    inside = _one_point(model, 5)
+    with pytest.raises(TypeError, match="unexpected keyword"):
+        f(*inside[:6], p=inside[6])
+
+
+def test_one_point_c_entry_from_four_threads(compiled):
+    """Four threads calling one point at once (the C entry holds the GIL, its buffers on the stack): each gets
+    its serial results, and the errors of non-finite inputs, unmixed."""
+    model, f = compiled["mf62"]
+    data = [[_one_point(model, 100 * k + i) for i in range(300)] for k in range(4)]
+    for k, points in enumerate(data):
+        for i in range(k, 300, 7):
+            points[i][1 + k] = np.nan  # kappa, alpha, gamma or phit
+    serial = [[_outcome(f, x) for x in points] for points in data]
+    failures = []
+
+    def work(k):
+        for _ in range(3):
+            for x, want in zip(data[k], serial[k]):
+                try:
+                    got = repr(("value", f(*x)))
+                except ModelInputError as exc:
+                    got = repr(("error", ModelInputError, str(exc)))
+                if got != want[0]:
+                    failures.append((k, x, got))
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not failures, failures[:3]
+    assert sum("error" in s[0] for points in serial for s in points) >= 4 * 40
+
+
+def test_without_python_headers_one_point_goes_through_ctypes(tmp_path, monkeypatch):
+    """Without CPython's headers the library is built without the C entry, silently (an optimisation, not a
+    requirement), and one point goes through ctypes with the same results; a library built for another
+    interpreter's ABI is not entered from this one."""
+    import casadi as ca
+
+    from mftyre import compiled as module
+
+    x, y = ca.SX.sym("x"), ca.SX.sym("y")
+    function = ca.Function("f", [x, y], [ca.sqrt(x) + y, x / y], ["x", "y"], ["root", "ratio"])
+    checks = [{"range": [-1.0, 4.0]}, {}]
+    headers = bool(module._python_extension_flags())
+    with_entry = CompiledFunction(module.compile_function(function, "entry", tmp_path, checks=checks),
+                                  finite_outputs=True)
+    monkeypatch.setattr(module, "_python_extension_flags", lambda: ())
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        library = module.compile_function(function, "entry", tmp_path, checks=checks)
+        plain = CompiledFunction(library, finite_outputs=True)
+    assert library != with_entry.library and not plain.fast_point
+    assert not hasattr(plain._lib, "mft_python_function")
+    assert with_entry.fast_point == headers
+    for args in [(4.0, 2.0), (2, 3), (-1.0, 1.0), (9.0, 1.0), (1.0, 0.0), (np.nan, 1.0), (1.0,), ("1", 2.0)]:
+        assert _outcome(plain, args) == _outcome(with_entry, args), args
+    monkeypatch.setattr(module, "_PYTHON_ABI", ".cpython-0-other.so")
+    other = CompiledFunction(with_entry.library, finite_outputs=True)
+    assert not other.fast_point and other(4.0, 2.0) == (4.0, 2.0)
