@@ -205,6 +205,91 @@ _LIBMVEC = ("sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sinh", "cosh"
             "atanh", "exp", "log", "pow", "erf", "log1p", "expm1", "hypot")
 
 
+_GATED_MIN = 16  # instructions: smaller branches of an if_else are computed whatever the condition
+
+
+def _point_body(f, ops) -> list:
+    """C lines of the one-point kernel of the SX function ``f`` (after CSE): one variable per instruction, and
+    where an instruction's value is read only by ``if_else_zero(c, .)`` (CasADi's if_else is a sum of two), and so
+    on up its arguments, those instructions (at least :data:`_GATED_MIN`) run inside ``if (c != 0)``, moved after
+    ``c`` where needed: the branch of an if_else not taken is skipped, e.g. the MF 6.2 loaded-radius Newton steps
+    after convergence (``early_stop``). Skipped values are never read (``c ? v : 0`` reads v only if c): the
+    results are those of the straight-line code."""
+    import casadi as ca
+
+    n = f.n_instructions()
+    kinds, operands, text, writer = [], [], [], {}
+    for k in range(n):
+        op, o, i = f.instruction_id(k), f.instruction_output(k), f.instruction_input(k)
+        kinds.append(op)
+        if op == ca.OP_INPUT:
+            operands.append(())
+            text.append(f"v{k} = x{i[0]}[i];")
+        elif op == ca.OP_OUTPUT:
+            operands.append((writer[i[0]],))
+            text.append(f"y{o[0]}[i] = v{writer[i[0]]};")
+        elif op == ca.OP_CONST:
+            operands.append(())
+            text.append(f"v{k} = {_c_number(f.instruction_constant(k))};")
+        else:
+            operands.append(tuple(writer[j] for j in i))  # the instructions that wrote the work variables read
+            text.append(f"v{k} = {ops[op].format(*(f'v{j}' for j in operands[k]))};")
+        if op != ca.OP_OUTPUT:
+            writer[o[0]] = k
+    readers = [[] for _ in range(n)]
+    for k, args in enumerate(operands):
+        for position, j in enumerate(args):
+            readers[j].append((k, position))
+    gate = ca.OP_IF_ELSE_ZERO
+    cones = {}  # condition -> the instructions needed only where it is not zero
+    for c in sorted({operands[k][0] for k in range(n) if kinds[k] == gate}):
+        cone = set()
+        for i in range(n - 1, -1, -1):  # readers come after what they read
+            if i != c and kinds[i] not in (ca.OP_INPUT, ca.OP_OUTPUT) and readers[i] and all(
+                    j in cone or (kinds[j] == gate and position == 1 and operands[j][0] == c)
+                    for j, position in readers[i]):
+                cone.add(i)
+        if len(cone) >= _GATED_MIN:
+            cones[c] = cone
+    conditions = [[] for _ in range(n)]  # of each instruction, outer (larger) cones first
+    for c in sorted(cones, key=lambda c: (-len(cones[c]), c)):
+        for i in cones[c]:
+            conditions[i].append(c)
+    place = {}
+
+    def place_of(i):  # after every condition it runs under
+        if i not in place:
+            place[i] = max([float(i)] + [place_of(c) + 0.5 for c in conditions[i]])
+        return place[i]
+
+    order = sorted(range(n), key=lambda i: (place_of(i), i))
+    rank = {i: r for r, i in enumerate(order)}
+    if any(rank[j] >= rank[k] for k in range(n) for j in operands[k]):  # (cannot happen: then no branches)
+        order, conditions, cones = list(range(n)), [[] for _ in range(n)], {}
+    gated = set().union(*cones.values())
+    plain = [k for k in range(n) if kinds[k] != ca.OP_OUTPUT and k not in gated]
+    lines = [f"double {', '.join(f'v{k}' for k in plain)};"] if plain else []
+    if gated:  # (initialised: a skipped value is never read, but no variable is read uninitialised either)
+        lines.append(f"double {', '.join(f'v{k} = 0.0' for k in sorted(gated))};")
+    stack = []
+    for i in order:
+        want = conditions[i]
+        common = 0
+        while common < min(len(stack), len(want)) and stack[common] == want[common]:
+            common += 1
+        while len(stack) > common:
+            stack.pop()
+            lines.append("  " * len(stack) + "}")
+        for c in want[common:]:
+            lines.append("  " * len(stack) + f"if (v{c} != 0) {{")
+            stack.append(c)
+        lines.append("  " * len(stack) + text[i])
+    while stack:
+        stack.pop()
+        lines.append("  " * len(stack) + "}")
+    return lines
+
+
 def generate_c(function, checks=None) -> str:
     """C source of the scalar-in, scalar-out SX ``function``: ``mft_point`` (one point) and ``mft_batch``
     (n points, inputs with stride 0 or 1 or any, outputs contiguous), both checking the inputs first.
@@ -254,6 +339,7 @@ def generate_c(function, checks=None) -> str:
                          + [f"  double *restrict y{j} = out[{j}];" for j in range(n_out)])
     loop_body = (f"    double {', '.join(f'w{j}' for j in range(max(n_w, 1)))};\n    "
                  + "\n    ".join(body + zero))
+    point_body = "    " + "\n    ".join(_point_body(f, ops) + zero)
     return f"""/* {function.name()}: {n_in} inputs, {n_out} outputs; generated by mftyre.compiled */
 #ifdef MFT_PYTHON
 #define PY_SSIZE_T_CLEAN
@@ -288,14 +374,15 @@ static void kernel(int64_t m, const double *const *in, double *const *out)
   }}
 }}
 
-/* the same for one point, scalar: with the dominator optimisations that the vectorised loop must do without */
+/* the same for one point, scalar, skipping the branches of if_else not taken (see _point_body): with the
+   dominator optimisations that the vectorised loop must do without */
 __attribute__((optimize("tree-dominator-opts")))
 static void kernel_point(const double *const *in, double *const *out)
 {{
 {pointers}
   const int64_t i = 0;
   {{
-{loop_body}
+{point_body}
   }}
 }}
 
@@ -798,10 +885,11 @@ def _model_checks(model, inputs, limits: bool) -> list:
 
 def compile_model(model, inputs=("fz", "kappa", "alpha", "gamma", "phit", "vx", "p"), outputs=None,
                   directory: Path | None = None, **options) -> CompiledFunction:
-    """Compile ``model.casadi_function(inputs, outputs, **options)`` (cached) and load it."""
+    """Compile ``model.casadi_function(inputs, outputs, early_stop=True, **options)`` (cached) and load it."""
     from .formula import OUTPUT_NAMES
 
     outputs = tuple(outputs or OUTPUT_NAMES)
+    options = {"early_stop": True, **options}  # the one-point C skips the loaded-radius steps once converged
     for name, value in (options.get("fixed") or {}).items():
         _check_fixed(name, value)
     key = _key(model, {"inputs": list(inputs), "outputs": list(outputs), **options})

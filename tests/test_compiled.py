@@ -30,6 +30,16 @@ def compiled(tmp_path_factory):
     return result
 
 
+@pytest.fixture(scope="module")
+def tno_compiled(tmp_path_factory):
+    """The public TNO MF 6.2 file (its vertical relation uses the side-force term), compiled once."""
+    path = require_shared(SHARED / "reference" / "tir" / "TNO_car205_60R15.tir")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = mftyre.load_tir(path)
+    return model, compile_model(model, directory=tmp_path_factory.mktemp("tno"))
+
+
 def _points(model, n, seed):
     prm = model.params
     rng = np.random.default_rng(seed)
@@ -451,7 +461,8 @@ def test_shared_range_check_gives_the_compiled_warning(compiled):
 def test_gcc_vectorises_the_kernel_loop(tag, tmp_path):
     """The batch kernel runs SIMD: gcc reports its loop vectorised (with the default flags gcc 12 left the MF 6.2
     kernel scalar, 3.5x slower: the unrolled loaded-radius solver's masks defeated the vectoriser). Also on the
-    shared MF 6.2 file whose vertical relation uses the side-force term (x^Q_FCY2 in every solver step)."""
+    shared MF 6.2 file whose vertical relation uses the side-force term (x^Q_FCY2 in every solver step), with the
+    solver steps that stop early (early_stop, as compile_model builds the kernel)."""
     from mftyre.compiled import _toolchain, generate_c
 
     flags, _, kind = _toolchain()
@@ -462,7 +473,7 @@ def test_gcc_vectorises_the_kernel_loop(tag, tmp_path):
             else TIR_FILES / FILES[tag])
     model = mftyre.load_tir(path)
     source = tmp_path / "kernel.c"
-    source.write_text(generate_c(model.casadi_function(INPUTS)))
+    source.write_text(generate_c(model.casadi_function(INPUTS, early_stop=True)))  # as compile_model builds it
     lines = source.read_text().split("\n")
     loop = range(lines.index("  for (i = 0; i < m; ++i) {") + 1, lines.index("static void kernel_point(const double "
                                                                             "*const *in, double *const *out)"))
@@ -475,14 +486,14 @@ def test_gcc_vectorises_the_kernel_loop(tag, tmp_path):
     assert any(number in loop for number in vectorised), run.stderr[-2000:]
 
 
-def test_mf62_with_side_force_term_matches_numpy_at_low_loads(tmp_path):
+def test_mf62_with_side_force_term_matches_numpy_at_low_loads(tno_compiled):
     """The compiled MF 6.2 loaded-radius solve (fixed Newton steps) on a file whose vertical relation uses the
     side-force term, at low loads where a cambered tyre's root lies above the free radius and up to twice the
     nominal load: every output equals NumPy's (adaptive iteration) at the tolerances above."""
     from mftyre.backend import NUMPY
     from mftyre.formula import vertical
 
-    model = mftyre.load_tir(require_shared(SHARED / "reference" / "tir" / "TNO_car205_60R15.tir"))
+    model, f = tno_compiled
     prm = model.params
     rng = np.random.default_rng(21)
     n = 3000
@@ -491,7 +502,6 @@ def test_mf62_with_side_force_term_matches_numpy_at_low_loads(tmp_path):
     gamma = rng.uniform(prm.CAMMIN, prm.CAMMAX, n)
     vx = rng.uniform(1.0, 50.0, n)
     p = rng.uniform(prm.PRESMIN, prm.PRESMAX, n)
-    f = compile_model(model, directory=tmp_path)
     out = f.batch(fz, kappa, alpha, gamma, 0.0, vx, p)
     ref = model.evaluate(fz, kappa, alpha, gamma, 0.0, vx=vx, p=p)
     r_omega = vertical.free_radius(prm, ref.omega, NUMPY)
@@ -596,15 +606,6 @@ def _awkward_points(model, n, seed):
     return points
 
 
-@pytest.fixture(scope="module")
-def tno_compiled(tmp_path_factory):
-    path = require_shared(SHARED / "reference" / "tir" / "TNO_car205_60R15.tir")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        model = mftyre.load_tir(path)
-    return model, compile_model(model, directory=tmp_path_factory.mktemp("tno"))
-
-
 @pytest.mark.parametrize("tag", [*FILES, "tno"])
 def test_one_point_c_entry_equals_the_ctypes_route(compiled, tno_compiled, tag):
     """Where CPython's headers are found the library's own C entry evaluates one point (fast_point); on random
@@ -685,3 +686,64 @@ def test_without_python_headers_one_point_goes_through_ctypes(tmp_path, monkeypa
     monkeypatch.setattr(module, "_PYTHON_ABI", ".cpython-0-other.so")
     other = CompiledFunction(with_entry.library, finite_outputs=True)
     assert not other.fast_point and other(4.0, 2.0) == (4.0, 2.0)
+
+
+# ------------------------------------------------------------- one point: the loaded-radius steps stop early
+def _extreme_points(model, n, seed):
+    """Loads from none (lifted roots with camber) to 4x nominal (the rim's bottoming region), large slips and
+    side forces, camber at and beyond its range, speeds and pressures across and beyond their ranges."""
+    prm = model.params
+    rng = np.random.default_rng(seed)
+    fz = np.r_[rng.uniform(0.0, 600.0, n // 4), rng.uniform(0.0, 3.0 * prm.FNOMIN, n // 2),
+               rng.uniform(2.0 * prm.FNOMIN, 4.0 * prm.FNOMIN, n - n // 4 - n // 2)]
+    gamma = rng.choice([prm.CAMMIN, prm.CAMMAX, 0.0], n) * rng.uniform(0.5, 1.5, n)
+    return [fz, rng.uniform(-0.5, 0.5, n), rng.uniform(-0.7, 0.7, n), gamma, np.zeros(n), rng.uniform(0.5, 60.0, n),
+            rng.uniform(0.6 * prm.PRESMIN, 1.2 * prm.PRESMAX, n)]
+
+
+@pytest.mark.parametrize("path", [TIR_FILES / FILES["mf62"], SHARED / "reference" / "tir" / "TNO_car205_60R15.tir",
+                                  SHARED / "reference" / "mfeval" / "MagicFormula62_Parameters.tir"],
+                         ids=["mf62", "tno", "mfeval62"])
+def test_early_stop_stays_within_1e12_of_every_newton_step(path):
+    """``early_stop`` (what compile_model builds): the MF 6.2 loaded-radius Newton steps stay put once the NumPy
+    solver's stopping tests hold; on extreme points (no load to 4x nominal, in and beyond the ranges) the results
+    are those of all the unrolled steps to 1e-12 relative (CasADi's own evaluation of both graphs)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = mftyre.load_tir(require_shared(path))
+    x = _extreme_points(model, 4000, seed=31)
+    outputs = ("rl", "rho", "re", "fx", "fy", "mz", "my")
+    results = {}
+    for early_stop in (False, True):
+        f = model.casadi_function(INPUTS, outputs, limits=False, early_stop=early_stop).map(len(x[0]))
+        results[early_stop] = [np.array(v).ravel() for v in f(*x)]
+    prm = model.params
+    rl = results[False][0]
+    assert np.sum(rl < prm.RIM_RADIUS + prm.BOTTOM_OFFST) > 50 or path.name == FILES["mf62"]  # bottoming reached
+    for name, full, early in zip(outputs, results[False], results[True]):
+        assert np.all(np.isfinite(early)), name
+        np.testing.assert_allclose(early, full, rtol=1e-12, atol=1e-300, err_msg=name)
+
+
+def test_one_point_skips_the_steps_after_convergence_with_the_batch_results(tno_compiled):
+    """The one-point C runs the branches of if_else not taken inside ``if`` (the loaded-radius steps once
+    converged): on extreme points inside the ranges (the batch kernel computes every step) each point gives the
+    batch's results; the kernel of the TNO file has such branches, at least one per unrolled Newton step."""
+    import casadi as ca
+
+    from mftyre.compiled import _operations, _point_body
+    from mftyre.formula import vertical
+
+    model, f = tno_compiled
+    graph = model.casadi_function(INPUTS, early_stop=True)
+    lines = _point_body(ca.Function("k", graph.sx_in(), graph.call(graph.sx_in()), {"cse": True}), _operations())
+    assert sum(line.lstrip().startswith("if (v") for line in lines) >= vertical._NEWTON_STEPS
+    prm = model.params
+    x = _extreme_points(model, 1500, seed=32)
+    x[2] = np.clip(x[2], prm.ALPMIN, prm.ALPMAX)
+    x[3] = np.clip(x[3], prm.CAMMIN, prm.CAMMAX)
+    x[6] = np.clip(x[6], prm.PRESMIN, prm.PRESMAX)
+    x[0] = np.clip(x[0], 0.0, prm.FZMAX)
+    batch = np.array(f.batch(*x))
+    points = np.array([f(*(float(v[i]) for v in x)) for i in range(len(x[0]))]).T
+    np.testing.assert_allclose(points, batch, rtol=1e-10, atol=1e-6)
