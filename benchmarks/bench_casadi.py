@@ -6,11 +6,11 @@ Columns: one point (microseconds per call from Python: ``model.evaluate(...)`` o
 and batches of 1e3, 1e4, 1e5 points (nanoseconds per point: ``model.evaluate`` on arrays,
 ``compiled.batch``). Rows: NumPy (the baseline of every ratio), compiled C on one core, compiled C with
 ``threads=0`` (every core). All 29 outputs in every row, inputs drawn at random inside the .tir ranges.
-Targets (issue 10): compiled batch <= 150 ns/point MF 6.1, <= 300 ns/point MF 6.2 on one core; a single
-point <= 2 us; NumPy 1e5 batch <= 500 ns/point MF 6.1, <= 800 MF 6.2 (printed with their ratios,
-measured/target; issue 24 asks for a 10 % margin: ratio <= 0.90, marked "margin met"). Files: the two samples and, when ../shared is beside
-the checkout, its MF 6.2 file whose vertical relation uses the side-force term. Libraries come from the compile
-cache (``--fresh``: a new temporary cache, compile time shown).
+Targets (issue 10): compiled batch <= 150 ns/point MF 6.1, <= 300 ns/point MF 6.2 on one core; a single point <=
+2 us; NumPy 1e5 batch <= 500 ns/point MF 6.1, <= 800 MF 6.2 (printed with their ratios, measured/target; issue 24 asks
+for a 10 % margin: ratio <= 0.90, marked "margin met"). Files: the two samples and, when ../shared is beside the
+checkout, its MF 6.2 file whose vertical relation uses the side-force term. Libraries come from the compile cache
+(``--fresh``: a new temporary cache, compile time shown).
 ``--cpu``: the one-core rows in thread CPU time (see timing.py; on a busy shared machine a 1e5-point run is
 always interrupted and its wall time overstates the cost), the threads row always in wall time.
 """

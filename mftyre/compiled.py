@@ -32,14 +32,15 @@ a small graph, instead of generating C for the whole problem.
 
 Cache. The key is a SHA-256 of everything that defines the function (parameter values, side, options, input and
 output names, the versions of mftyre and CasADi, the source of this module, the backend and the equations, the
-compiler and platform, and the Python ABI where the library has the CPython entry). The folder is ``$MFTYRE_CACHE`` or ``~/.cache/mftyre``; it must belong to the current user
-(or root) and be writable by no one else, as must every library loaded, else :class:`CacheSecurityError`. A
-library is compiled under a unique temporary name in that folder and renamed atomically to
-``<stem>_<sha-256 of the library>.so``, then its description ``<stem>_<sha>.json`` (inputs, outputs, checks, size
-and SHA-256 of the library) is written the same way, so concurrent threads and processes never see half a pair.
-Before a library is loaded its size and SHA-256 are checked against the description: a truncated or altered file
-is rebuilt (from the cache) or refused. Compiler: ``$CC`` or ``cc``. :func:`cached_library` is this cache for
-every compiled library of the project (the SWIFT stepper of :mod:`swift.simulate` too).
+compiler and platform, and the Python ABI where the library has the CPython entry). The folder is ``$MFTYRE_CACHE``
+or ``~/.cache/mftyre``; it must belong to the current user (or root) and be writable by no one else, as must every
+library loaded, else :class:`CacheSecurityError`. A library is compiled under a unique temporary name in that folder
+and renamed atomically to ``<stem>_<sha-256 of the library>.so``, then its description ``<stem>_<sha>.json``
+(inputs, outputs, checks, size and SHA-256 of the library) is written the same way, so concurrent threads and
+processes never see half a pair. Before a library is loaded its size and SHA-256 are checked against the
+description: a truncated or altered file is rebuilt (from the cache) or refused. Compiler: ``$CC`` or ``cc``.
+:func:`cached_library` is this cache for every compiled library of the project (the SWIFT stepper of
+:mod:`swift.simulate` too).
 """
 from __future__ import annotations
 
