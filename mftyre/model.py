@@ -285,7 +285,8 @@ class MFModel:
         Newton step, so its derivatives are those of the implicit function. ``early_stop``: the MF 6.2
         loaded-radius Newton steps stay put once converged (the NumPy solver's stopping tests; results within
         1e-12 relative of the full steps), which the compiled one-point C uses to skip the remaining steps
-        (:func:`mftyre.compiled.compile_model` sets it; ~15 % more operations in the graph, no gain elsewhere).
+        (:func:`mftyre.compiled.compile_model` sets it there; ~15 % more operations in the graph, no gain
+        elsewhere).
         Evaluate many points with ``f.map(n)``; :mod:`mftyre.compiled` compiles the function to C.
         """
         import casadi as ca

@@ -461,8 +461,7 @@ def test_shared_range_check_gives_the_compiled_warning(compiled):
 def test_gcc_vectorises_the_kernel_loop(tag, tmp_path):
     """The batch kernel runs SIMD: gcc reports its loop vectorised (with the default flags gcc 12 left the MF 6.2
     kernel scalar, 3.5x slower: the unrolled loaded-radius solver's masks defeated the vectoriser). Also on the
-    shared MF 6.2 file whose vertical relation uses the side-force term (x^Q_FCY2 in every solver step), with the
-    solver steps that stop early (early_stop, as compile_model builds the kernel)."""
+    shared MF 6.2 file whose vertical relation uses the side-force term (x^Q_FCY2 in every solver step)."""
     from mftyre.compiled import _toolchain, generate_c
 
     flags, _, kind = _toolchain()
@@ -473,7 +472,8 @@ def test_gcc_vectorises_the_kernel_loop(tag, tmp_path):
             else TIR_FILES / FILES[tag])
     model = mftyre.load_tir(path)
     source = tmp_path / "kernel.c"
-    source.write_text(generate_c(model.casadi_function(INPUTS, early_stop=True)))  # as compile_model builds it
+    source.write_text(generate_c(model.casadi_function(INPUTS), point_function=model.casadi_function(
+        INPUTS, early_stop=True)))  # as compile_model builds it
     lines = source.read_text().split("\n")
     loop = range(lines.index("  for (i = 0; i < m; ++i) {") + 1, lines.index("static void kernel_point(const double "
                                                                             "*const *in, double *const *out)"))
