@@ -218,7 +218,7 @@ def _point_body(f, ops) -> list:
     on up its arguments, those instructions (at least :data:`_GATED_MIN`) run inside ``if (c != 0)``, moved after
     ``c`` where needed: the branch of an if_else not taken is skipped, e.g. the MF 6.2 loaded-radius Newton steps
     after convergence (``early_stop``). Skipped values are never read (``c ? v : 0`` reads v only if c): the
-    results are those of the straight-line code."""
+    operations that decide the results are those of the straight-line code."""
     import casadi as ca
 
     n = f.n_instructions()
