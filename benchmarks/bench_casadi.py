@@ -6,10 +6,11 @@ Columns: one point (microseconds per call from Python: ``model.evaluate(...)`` o
 and batches of 1e3, 1e4, 1e5 points (nanoseconds per point: ``model.evaluate`` on arrays,
 ``compiled.batch``). Rows: NumPy (the baseline of every ratio), compiled C on one core, compiled C with
 ``threads=0`` (every core). All 29 outputs in every row, inputs drawn at random inside the .tir ranges.
-Targets (issue 10): compiled batch <= 150 ns/point MF 6.1, <= 300 ns/point MF 6.2 on one core; a single
-point <= 2 us (printed with their ratios, measured/target). Files: the two samples and, when ../shared is beside
-the checkout, its MF 6.2 file whose vertical relation uses the side-force term. Libraries come from the compile
-cache (``--fresh``: a new temporary cache, compile time shown).
+Targets (issue 10): compiled batch <= 150 ns/point MF 6.1, <= 300 ns/point MF 6.2 on one core; a single point <=
+2 us; NumPy 1e5 batch <= 500 ns/point MF 6.1, <= 800 MF 6.2 (printed with their ratios, measured/target; issue 24 asks
+for a 10 % margin: ratio <= 0.90, marked "margin met"). Files: the two samples and, when ../shared is beside the
+checkout, its MF 6.2 file whose vertical relation uses the side-force term. Libraries come from the compile cache
+(``--fresh``: a new temporary cache, compile time shown).
 ``--cpu``: the one-core rows in thread CPU time (see timing.py; on a busy shared machine a 1e5-point run is
 always interrupted and its wall time overstates the cost), the threads row always in wall time.
 """
@@ -36,6 +37,8 @@ NUMPY_TARGET_NS = {"61": 500.0, "62": 800.0}
 
 ROOT = Path(__file__).resolve().parents[1]
 TARGET_NS = {"61": 150.0, "62": 300.0}
+POINT_TARGET_US = 2.0  # one point, compiled, every output
+MARGIN = 0.90  # issue 24: every speed target met with >= 10 % to spare on a loaded machine
 #: an MF 6.2 file whose vertical relation uses the side-force term (the dearer loaded-radius solve), when ../shared
 #: is beside the checkout
 TNO_MF62 = ROOT.parent / "shared" / "reference" / "tir" / "TNO_car205_60R15.tir"
@@ -46,6 +49,13 @@ def inputs(model, n, seed=0):
     rng = np.random.default_rng(seed)
     return [rng.uniform(0.25, 2.0, n) * prm.FNOMIN, rng.uniform(-0.3, 0.3, n), rng.uniform(-0.3, 0.3, n),
             rng.uniform(-0.05, 0.05, n), np.zeros(n), rng.uniform(5.0, 35.0, n), rng.uniform(0.9, 1.1, n) * prm.NOMPRES]
+
+
+def _verdict(measured, target):
+    """``(ratio r, met / NOT met, 10 % margin met / NOT)``: measured/target, and the margin issue 24 asks for."""
+    ratio = measured / target
+    return (f"(ratio {ratio:.2f}, {'met' if ratio <= 1.0 else 'NOT met'}, "
+            f"{'10 % margin met' if ratio <= MARGIN else '10 % margin NOT met'})")
 
 
 def _repeat(call, times):
@@ -93,9 +103,10 @@ def main(argv=None):
             rows[f"compiled C, threads=0 ({cores} cores)"].append(
                 best_time(lambda: compiled.batch(*x, threads=0), 3 * args.repeat) / n * 1e9)
         base = rows["NumPy evaluate (baseline)"]
+        entry = "C entry" if getattr(compiled, "fast_point", False) else "ctypes"
         print(f"\n{Path(path).name} (MF {version[0]}.{version[1:]}), all {len(compiled.outputs)} outputs; "
               f"compile {'(fresh)' if fresh else '(or cache)'}: {t_compile:.1f} s; one-core rows in "
-              f"{'thread CPU' if cpu else 'wall'} time")
+              f"{'thread CPU' if cpu else 'wall'} time; one point through the {entry}")
         print(header)
         for label, values in rows.items():
             first = f"{values[0]:>13.2f}" if values[0] else f"{'':>13}"
@@ -107,13 +118,13 @@ def main(argv=None):
         numpy_target = NUMPY_TARGET_NS.get(version)
         if numpy_target:
             print(f"NumPy target: batch <= {numpy_target:.0f} ns/pt -> {base[-1]:.0f} ns/pt at {sizes[-1]:.0e} "
-                  f"({'met' if base[-1] <= numpy_target else 'NOT met'})")
+                  f"{_verdict(base[-1], numpy_target)}")
         c1 = rows["compiled C, 1 core"]
         target = TARGET_NS.get(version)
         if target:
             print(f"targets: batch <= {target:.0f} ns/pt on one core -> {c1[-1]:.0f} ns/pt at {sizes[-1]:.0e} "
-                  f"(ratio {c1[-1] / target:.2f}, {'met' if c1[-1] <= target else 'NOT met'}); single point <= 2 us "
-                  f"-> {c1[0]:.2f} us (ratio {c1[0] / 2.0:.2f}, {'met' if c1[0] <= 2.0 else 'NOT met'})")
+                  f"{_verdict(c1[-1], target)}; single point <= {POINT_TARGET_US:.0f} us -> {c1[0]:.2f} us "
+                  f"{_verdict(c1[0], POINT_TARGET_US)}")
     if fresh:
         fresh.cleanup()
 

@@ -382,10 +382,11 @@ class CasadiBackend:
 
     name = "casadi"
     pi = np.pi
-    def __init__(self, smooth: float | bool | dict | None = None):
+    def __init__(self, smooth: float | bool | dict | None = None, early_stop: bool = False):
         import casadi as ca
 
         self.ca = ca
+        self.early_stop = early_stop  # the unrolled root searches stay put once converged (see solve_newton)
         self.widths = _smooth_widths(smooth)
         smooth = None if self.widths is None else self.widths["other"]
         self._quantities = {}
@@ -473,9 +474,11 @@ class CasadiBackend:
         return x, aux
 
     def solve_newton(self, fun, x, f, df, lo, hi, xtol, ftol=0.0, max_iter=100, unrolled=12, kink=None):
-        """``unrolled`` steps of :meth:`NumpyBackend.solve_newton` (no stopping test: at the root a Newton step
-        stays put), then the final Newton step (never stopped at the ``kink``), whose derivatives are those of the
-        implicit function."""
+        """``unrolled`` steps of :meth:`NumpyBackend.solve_newton`, then the final Newton step (never stopped at
+        the ``kink``), whose derivatives are those of the implicit function. Without ``early_stop`` no stopping
+        test (at the root a Newton step stays put); with it, the stopping tests of the NumPy solver, and once they
+        hold the point stays put: the steps after it are ``if_else(done, x, step)``, whose ``step`` the compiled
+        one-point C skips (:mod:`mftyre.compiled`)."""
         ca = self.ca
 
         def step(x, f, df, lo, hi, kink=None):
@@ -487,10 +490,27 @@ class CasadiBackend:
             ok = ca.logic_and(df < 0, ca.logic_and(newton >= lo, newton <= hi))
             return newton, ok, lo, hi
 
+        done = previous = df_previous = None  # (early_stop) converged; the last Newton step's size, the slope
+        # before it
         for _ in range(unrolled):
-            newton, ok, lo, hi = step(x, f, df, lo, hi, kink)
-            x = ca.if_else(ok, newton, 0.5 * (lo + hi))
-            f, df = fun(x, None)
+            newton, ok, lo_next, hi_next = step(x, f, df, lo, hi, kink)
+            x_next = ca.if_else(ok, newton, 0.5 * (lo_next + hi_next))
+            if not self.early_stop:
+                x, lo, hi = x_next, lo_next, hi_next
+                f, df = fun(x, None)
+                continue
+            newton_only = ok if kink is None else ca.logic_and(ok, (x - kink) * (newton - kink) >= 0)  # not cut
+            size, tol = ca.fabs(x - newton), xtol + _ULP4 * ca.fabs(x)
+            converged = ca.logic_or(ca.logic_or(ca.fabs(f) <= ftol, hi_next - lo_next <= tol),
+                                    ca.logic_and(newton_only, size <= tol))
+            if previous is not None:  # the error left after this step (see NumpyBackend.solve_newton)
+                left_after = 2.0 * ca.fabs(df - df_previous) * size * size
+                converged = ca.logic_or(converged, ca.logic_and(ca.logic_and(newton_only, previous > 0),
+                                                                left_after <= ca.fabs(df) * previous * tol))
+            done = converged if done is None else ca.logic_or(done, converged)  # and stays so
+            f_next, df_next = fun(x_next, None)
+            previous, df_previous, lo, hi = ca.if_else(ok, size, 0.0), df, lo_next, hi_next  # (idle once done)
+            x, f, df = ca.if_else(done, x, x_next), ca.if_else(done, f, f_next), ca.if_else(done, df, df_next)
         newton, ok, _, _ = step(x, f, df, lo, hi)
         return ca.if_else(ok, newton, x)
 
@@ -530,6 +550,9 @@ def _smooth_widths(smooth) -> dict | None:
     return {k: float(v) for k, v in widths.items()}
 
 
-def casadi_backend(smooth: float | bool | dict | None = None) -> CasadiBackend:
-    """The exact CasADi backend, or a smoothed one (see :class:`CasadiBackend`)."""
-    return __getattr__("CASADI") if smooth is None or smooth is False else CasadiBackend(smooth)
+def casadi_backend(smooth: float | bool | dict | None = None, early_stop: bool = False) -> CasadiBackend:
+    """The exact CasADi backend, or a smoothed one, or one whose root searches stop early (see
+    :class:`CasadiBackend`, :meth:`CasadiBackend.solve_newton`)."""
+    if early_stop or not (smooth is None or smooth is False):
+        return CasadiBackend(smooth, early_stop)
+    return __getattr__("CASADI")

@@ -12,7 +12,10 @@ Evaluation (:func:`compile_model`, :class:`CompiledFunction`). The C is written 
 :meth:`mftyre.MFModel.casadi_function` (after common-subexpression elimination): one straight-line kernel over a
 block of points, vectorised by the compiler (``#pragma omp simd``; on x86-64 Linux with glibc's vector maths
 library libmvec, one clone per instruction set, chosen at load time), plus a batch loop in C over all points and a
-single-point entry. Every call works on its own arrays (the caller's inputs, fresh outputs, stack buffers in C): a
+single-point entry: scalar, it skips the branches of if_else not taken (e.g. the MF 6.2 loaded-radius Newton steps
+once converged, ``early_stop``), and where CPython's headers are found it is called through a small CPython entry
+compiled into the same library (floats in, a tuple out: ~0.1 us of overhead where ctypes takes ~0.6; without the
+headers, ctypes). Every call works on its own arrays (the caller's inputs, fresh outputs, stack buffers in C): a
 compiled object may be called from any number of threads at once, and ``batch`` releases the GIL while the C runs.
 Inputs are checked in C like :meth:`mftyre.MFModel.evaluate` (:mod:`mftyre.inputs`): NaN or +-inf and p <= 0 raise
 :class:`ModelInputError`; values outside the .tir ranges give one :class:`~mftyre.errors.InputClippedWarning` per
@@ -29,14 +32,15 @@ a small graph, instead of generating C for the whole problem.
 
 Cache. The key is a SHA-256 of everything that defines the function (parameter values, side, options, input and
 output names, the versions of mftyre and CasADi, the source of this module, the backend and the equations, the
-compiler and platform). The folder is ``$MFTYRE_CACHE`` or ``~/.cache/mftyre``; it must belong to the current user
-(or root) and be writable by no one else, as must every library loaded, else :class:`CacheSecurityError`. A
-library is compiled under a unique temporary name in that folder and renamed atomically to
-``<stem>_<sha-256 of the library>.so``, then its description ``<stem>_<sha>.json`` (inputs, outputs, checks, size
-and SHA-256 of the library) is written the same way, so concurrent threads and processes never see half a pair.
-Before a library is loaded its size and SHA-256 are checked against the description: a truncated or altered file
-is rebuilt (from the cache) or refused. Compiler: ``$CC`` or ``cc``. :func:`cached_library` is this cache for
-every compiled library of the project (the SWIFT stepper of :mod:`swift.simulate` too).
+compiler and platform, and the Python ABI where the library has the CPython entry). The folder is ``$MFTYRE_CACHE``
+or ``~/.cache/mftyre``; it must belong to the current user (or root) and be writable by no one else, as must every
+library loaded, else :class:`CacheSecurityError`. A library is compiled under a unique temporary name in that folder
+and renamed atomically to ``<stem>_<sha-256 of the library>.so``, then its description ``<stem>_<sha>.json``
+(inputs, outputs, checks, size and SHA-256 of the library) is written the same way, so concurrent threads and
+processes never see half a pair. Before a library is loaded its size and SHA-256 are checked against the
+description: a truncated or altered file is rebuilt (from the cache) or refused. Compiler: ``$CC`` or ``cc``.
+:func:`cached_library` is this cache for every compiled library of the project (the SWIFT stepper of
+:mod:`swift.simulate` too).
 """
 from __future__ import annotations
 
@@ -46,12 +50,14 @@ import hashlib
 import json
 import math
 import numbers
+import operator
 import os
 import platform
 import shutil
 import stat
 import struct
 import subprocess
+import sysconfig
 import tempfile
 import threading
 from pathlib import Path
@@ -77,6 +83,9 @@ _PACKED = 4096  # batches of at most this many points are passed as one packed c
 _FLAG_BITS = 16  # flags of the single-point entry: bit k non-finite input k, 16+k non-positive, 32+k outside
 _INPUT_FLAGS = (1 << (3 * _FLAG_BITS)) - 1  # (and bit 48: an output not finite)
 _OUTPUT_FLAG = 1 << (3 * _FLAG_BITS)
+#: the ABI of this interpreter (its extension modules' suffix): a library's one-point CPython entry is used only
+#: by the interpreter it was built for
+_PYTHON_ABI = sysconfig.get_config_var("EXT_SUFFIX") if platform.python_implementation() == "CPython" else None
 
 
 #: the hash of this module, the backend and the equations: part of every cache key, so that a changed generator or
@@ -200,11 +209,100 @@ _LIBMVEC = ("sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sinh", "cosh"
             "atanh", "exp", "log", "pow", "erf", "log1p", "expm1", "hypot")
 
 
-def generate_c(function, checks=None) -> str:
+_GATED_MIN = 16  # instructions: smaller branches of an if_else are computed whatever the condition
+
+
+def _point_body(f, ops) -> list:
+    """C lines of the one-point kernel of the SX function ``f`` (after CSE): one variable per instruction, and
+    where an instruction's value is read only by ``if_else_zero(c, .)`` (CasADi's if_else is a sum of two), and so
+    on up its arguments, those instructions (at least :data:`_GATED_MIN`) run inside ``if (c != 0)``, moved after
+    ``c`` where needed: the branch of an if_else not taken is skipped, e.g. the MF 6.2 loaded-radius Newton steps
+    after convergence (``early_stop``). Skipped values are never read (``c ? v : 0`` reads v only if c): the
+    operations that decide the results are those of the straight-line code."""
+    import casadi as ca
+
+    n = f.n_instructions()
+    kinds, operands, text, writer = [], [], [], {}
+    for k in range(n):
+        op, o, i = f.instruction_id(k), f.instruction_output(k), f.instruction_input(k)
+        kinds.append(op)
+        if op == ca.OP_INPUT:
+            operands.append(())
+            text.append(f"v{k} = x{i[0]}[i];")
+        elif op == ca.OP_OUTPUT:
+            operands.append((writer[i[0]],))
+            text.append(f"y{o[0]}[i] = v{writer[i[0]]};")
+        elif op == ca.OP_CONST:
+            operands.append(())
+            text.append(f"v{k} = {_c_number(f.instruction_constant(k))};")
+        elif op in ops:
+            operands.append(tuple(writer[j] for j in i))  # the instructions that wrote the work variables read
+            text.append(f"v{k} = {ops[op].format(*(f'v{j}' for j in operands[k]))};")
+        else:
+            raise MFTyreError(f"CasADi operation {op} is not supported by mftyre's C generator")
+        if op != ca.OP_OUTPUT:
+            writer[o[0]] = k
+    readers = [[] for _ in range(n)]
+    for k, args in enumerate(operands):
+        for position, j in enumerate(args):
+            readers[j].append((k, position))
+    gate = ca.OP_IF_ELSE_ZERO
+    cones = {}  # condition -> the instructions needed only where it is not zero
+    for c in sorted({operands[k][0] for k in range(n) if kinds[k] == gate}):
+        cone = set()
+        for i in range(n - 1, -1, -1):  # readers come after what they read
+            if i != c and kinds[i] not in (ca.OP_INPUT, ca.OP_OUTPUT) and readers[i] and all(
+                    j in cone or (kinds[j] == gate and position == 1 and operands[j][0] == c)
+                    for j, position in readers[i]):
+                cone.add(i)
+        if len(cone) >= _GATED_MIN:
+            cones[c] = cone
+    conditions = [[] for _ in range(n)]  # of each instruction, outer (larger) cones first
+    for c in sorted(cones, key=lambda c: (-len(cones[c]), c)):
+        for i in cones[c]:
+            conditions[i].append(c)
+    place = {}
+
+    def place_of(i):  # after every condition it runs under
+        if i not in place:
+            place[i] = max([float(i)] + [place_of(c) + 0.5 for c in conditions[i]])
+        return place[i]
+
+    order = sorted(range(n), key=lambda i: (place_of(i), i))
+    rank = {i: r for r, i in enumerate(order)}
+    if any(rank[j] >= rank[k] for k in range(n) for j in operands[k]):  # (cannot happen: then no branches)
+        order, conditions, cones = list(range(n)), [[] for _ in range(n)], {}
+    gated = set().union(*cones.values())
+    plain = [k for k in range(n) if kinds[k] != ca.OP_OUTPUT and k not in gated]
+    lines = [f"double {', '.join(f'v{k}' for k in plain)};"] if plain else []
+    if gated:  # (initialised: a skipped value is never read, but no variable is read uninitialised either)
+        lines.append(f"double {', '.join(f'v{k} = 0.0' for k in sorted(gated))};")
+    stack = []
+    for i in order:
+        want = conditions[i]
+        common = 0
+        while common < min(len(stack), len(want)) and stack[common] == want[common]:
+            common += 1
+        while len(stack) > common:
+            stack.pop()
+            lines.append("  " * len(stack) + "}")
+        for c in want[common:]:
+            lines.append("  " * len(stack) + f"if (v{c} != 0) {{")
+            stack.append(c)
+        lines.append("  " * len(stack) + text[i])
+    while stack:
+        stack.pop()
+        lines.append("  " * len(stack) + "}")
+    return lines
+
+
+def generate_c(function, checks=None, point_function=None) -> str:
     """C source of the scalar-in, scalar-out SX ``function``: ``mft_point`` (one point) and ``mft_batch``
     (n points, inputs with stride 0 or 1 or any, outputs contiguous), both checking the inputs first.
 
     ``checks``: per input ``{"positive": bool, "range": [lo, hi]}`` (both optional); default: finite only.
+    ``point_function``: the same function, for ``mft_point``, written for one point (e.g. with ``early_stop``:
+    branches the one-point C skips); default ``function``.
     """
     import casadi as ca
 
@@ -215,10 +313,18 @@ def generate_c(function, checks=None) -> str:
             raise MFTyreError(f"compiled functions take and return scalars; {kind}(s) {bad} are not 1x1")
     if n_in > _FLAG_BITS:
         raise MFTyreError(f"compiled functions take at most {_FLAG_BITS} inputs, got {n_in}")
-    if not function.is_a("SXFunction"):
-        function = function.expand()
-    sx = function.sx_in()
-    f = ca.Function("kernel", sx, function.call(sx), {"cse": True})
+    point_function = function if point_function is None else point_function
+    if (point_function.name_in(), point_function.name_out()) != (function.name_in(), function.name_out()):
+        raise MFTyreError(f"the one-point function takes {point_function.name_in()} and returns "
+                          f"{point_function.name_out()}; the function {function.name_in()}, {function.name_out()}")
+
+    def kernel(function):  # CSE'd SX
+        function = function if function.is_a("SXFunction") else function.expand()
+        sx = function.sx_in()
+        return ca.Function("kernel", sx, function.call(sx), {"cse": True})
+
+    f = kernel(function)
+    f_point = f if point_function is function else kernel(point_function)
     ops = _operations()
     body, used = [], set()
     for k in range(f.n_instructions()):
@@ -249,7 +355,13 @@ def generate_c(function, checks=None) -> str:
                          + [f"  double *restrict y{j} = out[{j}];" for j in range(n_out)])
     loop_body = (f"    double {', '.join(f'w{j}' for j in range(max(n_w, 1)))};\n    "
                  + "\n    ".join(body + zero))
+    point_body = "    " + "\n    ".join(_point_body(f_point, ops)
+                                          + [f"y{j}[i] = 0.0;" for j in range(n_out) if f_point.nnz_out(j) == 0])
     return f"""/* {function.name()}: {n_in} inputs, {n_out} outputs; generated by mftyre.compiled */
+#ifdef MFT_PYTHON
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#endif
 #include <math.h>
 #include <stdint.h>
 
@@ -279,14 +391,15 @@ static void kernel(int64_t m, const double *const *in, double *const *out)
   }}
 }}
 
-/* the same for one point, scalar: with the dominator optimisations that the vectorised loop must do without */
+/* the same for one point, scalar, skipping the branches of if_else not taken (see _point_body): with the
+   dominator optimisations that the vectorised loop must do without */
 __attribute__((optimize("tree-dominator-opts")))
 static void kernel_point(const double *const *in, double *const *out)
 {{
 {pointers}
   const int64_t i = 0;
   {{
-{loop_body}
+{point_body}
   }}
 }}
 
@@ -314,6 +427,62 @@ int64_t mft_point(double *xy)
     if (!(y[k] - y[k] == 0.0)) return flags | ((int64_t)1 << {3 * _FLAG_BITS});
   return flags;
 }}
+
+#ifdef MFT_PYTHON
+/* mft_point for CPython (built where Python.h is found): floats or ints in, a tuple of floats out, the GIL held
+   (no shared state: thread-safe). context = (fallback, flagged): nonzero flags go to flagged(flags, inputs,
+   outputs), which raises or warns and returns the outputs; any other call (arity, keywords, other types) to
+   fallback(*args), the ctypes route, so that every error is raised by the same Python code. */
+static PyObject *mft_python_point(PyObject *context, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
+{{
+  double xy[N_IN + N_OUT];
+  PyObject *inputs, *outputs, *flagged, *call[3];
+  int64_t flags;
+  Py_ssize_t k;
+  if (nargs != N_IN || kwnames) goto fallback;
+  for (k = 0; k < N_IN; ++k) {{
+    PyObject *v = args[k];
+    if (PyFloat_Check(v)) xy[k] = PyFloat_AS_DOUBLE(v);
+    else if (PyLong_CheckExact(v)) {{  /* (subclasses may define __float__: the fallback converts them) */
+      xy[k] = PyLong_AsDouble(v);
+      if (xy[k] == -1.0 && PyErr_Occurred()) {{ PyErr_Clear(); goto fallback; }}
+    }} else goto fallback;
+  }}
+  flags = mft_point(xy);
+  if (!(outputs = PyTuple_New(N_OUT))) return NULL;
+  for (k = 0; k < N_OUT; ++k) {{
+    PyObject *y = PyFloat_FromDouble(xy[N_IN + k]);
+    if (!y) {{ Py_DECREF(outputs); return NULL; }}
+    PyTuple_SET_ITEM(outputs, k, y);
+  }}
+  if (!flags) return outputs;
+  if (!(inputs = PyTuple_New(N_IN))) {{ Py_DECREF(outputs); return NULL; }}
+  for (k = 0; k < N_IN; ++k) {{
+    PyObject *x = PyFloat_FromDouble(xy[k]);
+    if (!x) {{ Py_DECREF(inputs); Py_DECREF(outputs); return NULL; }}
+    PyTuple_SET_ITEM(inputs, k, x);
+  }}
+  call[0] = PyLong_FromLongLong(flags); call[1] = inputs; call[2] = outputs;
+  flagged = call[0] ? PyObject_Vectorcall(PyTuple_GET_ITEM(context, 1), call, 3, NULL) : NULL;
+  Py_XDECREF(call[0]); Py_DECREF(inputs); Py_DECREF(outputs);
+  return flagged;
+fallback:
+  return PyObject_Vectorcall(PyTuple_GET_ITEM(context, 0), args, nargs, kwnames);
+}}
+
+static PyMethodDef MFT_PYTHON_POINT = {{"point", (PyCFunction)(void (*)(void))mft_python_point,
+                                        METH_FASTCALL | METH_KEYWORDS, "one point: floats in, a tuple of floats out"}};
+
+/* the one-point function bound to context (a tuple (fallback, flagged)): a new reference */
+PyObject *mft_python_function(PyObject *context)
+{{
+  if (!PyTuple_Check(context) || PyTuple_GET_SIZE(context) != 2) {{
+    PyErr_SetString(PyExc_TypeError, "mft_python_function: context must be a tuple (fallback, flagged)");
+    return NULL;
+  }}
+  return PyCFunction_NewEx(&MFT_PYTHON_POINT, context, NULL);
+}}
+#endif
 
 /* n points: input k at in[k][i * stride[k]]; output j at out[j][i]. counts[3k..3k+2]: points where input k is
    not finite, not positive, outside its range. Returns 1 (nothing evaluated) if any is not finite or not
@@ -422,11 +591,14 @@ def _verify(library: Path) -> dict:
 
 
 class CompiledFunction:
-    """A compiled function of scalars, called through ctypes without CasADi at run time; thread-safe.
+    """A compiled function of scalars, called without CasADi at run time; thread-safe.
 
     ``inputs``, ``outputs``: the names, in call order. ``__call__(*floats)`` evaluates one point and returns a
     tuple of floats; ``batch(*arrays, threads=1)`` evaluates arrays broadcast together (``threads=0``: all
-    cores) and returns one array per output. Bad inputs raise :class:`ModelInputError`.
+    cores) and returns one array per output. Bad inputs raise :class:`ModelInputError`. ``batch`` calls the
+    library through ctypes; one point goes through the library's CPython entry where it has one for this
+    interpreter (``fast_point`` True: about 0.1 us of overhead instead of 0.6), else through ctypes, with the same
+    results, errors and warnings.
     """
 
     def __init__(self, library, *, finite_outputs: bool = False):
@@ -450,9 +622,22 @@ class CompiledFunction:
         self._unpack = struct.Struct(f"{len(self.outputs)}d").unpack_from
         self._ranges = {name: (c["range"][0], c["range"][1], c.get("describe", "")) for name, c in
                         zip(self.inputs, self._checks) if c.get("range")}
+        #: True where one point is evaluated by the library's CPython entry (built with it, for this interpreter)
+        self.fast_point = bool(_PYTHON_ABI) and meta.get("python") == _PYTHON_ABI and hasattr(self._lib,
+                                                                                             "mft_python_function")
+        if self.fast_point:  # C: floats in, tuple out; flags, other argument types and arity back to Python
+            entry = ctypes.PYFUNCTYPE(ctypes.py_object, ctypes.py_object)(("mft_python_function", self._lib))
+            self._call = entry((self._call_ctypes, self._flagged))
+        else:
+            self._call = self._call_ctypes
 
-    def __call__(self, *values):
-        """One point: the inputs as floats, in the order of :attr:`inputs`; returns a tuple of floats."""
+    __call__ = property(operator.attrgetter("_call"), doc="""One point: the inputs as floats, in the order of
+    :attr:`inputs`; returns a tuple of floats. (The instance's one-point function, C or ctypes: calling the
+    object costs no Python frame.)""")
+
+    def _call_ctypes(self, *values):
+        """One point through ctypes (where the library has no CPython entry, and for any call that entry does not
+        take: arguments that are not floats or ints, a wrong number of them)."""
         try:  # this thread's buffer: the inputs, then the outputs
             xy = self._local.xy
         except AttributeError:
@@ -465,12 +650,18 @@ class CompiledFunction:
         except TypeError:  # numbers of other types (e.g. 0-d arrays) are converted; anything else is refused
             xy[:n_in] = [_real(name, v) for name, v in zip(self.inputs, values)]
         flags = self._point(xy)
-        if flags:
-            if flags & _INPUT_FLAGS:
-                self._report(lambda k, kind: (flags >> (kind * _FLAG_BITS + k)) & 1, 1, xy[:n_in])
-            if flags & _OUTPUT_FLAG and self._finite_outputs:  # (checked in C: a tenth of the cost in Python)
-                self._check_outputs(self._unpack(xy, 8 * n_in), xy[:n_in], ())
-        return self._unpack(xy, 8 * n_in)
+        outputs = self._unpack(xy, 8 * n_in)
+        return self._flagged(flags, tuple(xy[:n_in]), outputs, stacklevel=5) if flags else outputs
+
+    def _flagged(self, flags, inputs, outputs, stacklevel=4):
+        """The checks of one point from its flags (``mft_point``: input not finite, not positive, outside its
+        range; an output not finite, checked in C at a tenth of the cost in Python): raise, or warn and return
+        ``outputs``. ``stacklevel``: of the warning, 4 when the C entry calls this."""
+        if flags & _INPUT_FLAGS:
+            self._report(lambda k, kind: (flags >> (kind * _FLAG_BITS + k)) & 1, 1, inputs, stacklevel)
+        if flags & _OUTPUT_FLAG and self._finite_outputs:
+            self._check_outputs(outputs, inputs, ())
+        return outputs
 
     def batch(self, *arrays, threads: int = 1):
         """Many points: one array (or number) per input, broadcast together; one array per output.
@@ -560,8 +751,9 @@ class CompiledFunction:
         return (f"expected {len(self.inputs)} inputs ({', '.join(self.inputs)}), got {got}"
                 + (f"; missing {', '.join(self.inputs[got:])}" if got < len(self.inputs) else ""))
 
-    def _report(self, count, n, values):
-        """Raise for non-finite or non-positive inputs, warn for inputs outside their ranges."""
+    def _report(self, count, n, values, stacklevel=4):
+        """Raise for non-finite or non-positive inputs, warn for inputs outside their ranges (the warning
+        ``stacklevel`` frames up from :func:`~mftyre.inputs.warn_outside`: the caller's line)."""
         for k, name in enumerate(self.inputs):
             if count(k, 0):
                 raise ModelInputError(f"input {name!r} must be finite; {count(k, 0)} of {n} point(s) are NaN or "
@@ -570,7 +762,7 @@ class CompiledFunction:
                 raise ModelInputError(f"input {name!r} must be positive (inflation pressure in Pa); {count(k, 1)} "
                                       f"of {n} point(s) are not (e.g. {_first_bad(values[k], lambda v: ~(v > 0))})")
         outside = {name: int(count(k, 2)) for k, name in enumerate(self.inputs) if name in self._ranges}
-        warn_outside(outside, n, self._ranges, stacklevel=4)
+        warn_outside(outside, n, self._ranges, stacklevel=stacklevel)
 
 
 def _real(name, value) -> float:
@@ -653,22 +845,42 @@ def cached_library(prefix: str, key: str, generate, directory: Path | None = Non
     return library
 
 
-def compile_function(function, key: str, directory: Path | None = None, output_names=None, checks=None) -> Path:
+def compile_function(function, key: str, directory: Path | None = None, output_names=None, checks=None,
+                     point_function=None) -> Path:
     """Generate C for the SX ``function`` (scalar inputs and outputs), compile and cache it under ``key``;
     returns the library. ``output_names`` (default: the function's) become :attr:`CompiledFunction.outputs`;
-    ``checks``: see :func:`generate_c`. ``function`` may also be a callable returning it (called only when the
-    library is not cached)."""
+    ``checks``, ``point_function``: see :func:`generate_c`. ``function`` and ``point_function`` may also be
+    callables returning them (called only when the library is not cached). Where CPython's headers are found (Linux), the same compiler run also builds the
+    one-point entry for this interpreter (``mft_python_function``; the key then names its ABI, ``EXT_SUFFIX``)."""
+    python_flags = _python_extension_flags()
+    python = _PYTHON_ABI if python_flags else None
+
     def generate(folder):
         fn = function if hasattr(function, "n_in") else function()
         flags, libraries, tag = _toolchain()
+        if python:  # the extension's Python symbols are resolved when the interpreter loads the library
+            flags = (*(f for f in flags if f != "-Wl,--no-undefined"), *python_flags)
         fn_checks = checks or [{} for _ in range(fn.n_in())]
+        point = point_function if point_function is None or hasattr(point_function, "n_in") else point_function()
         source = folder / "mftyre.c"
-        source.write_text(generate_c(fn, fn_checks))
+        source.write_text(generate_c(fn, fn_checks, point))
         return source, flags, libraries, {"inputs": list(fn.name_in()),
                                           "outputs": list(output_names or fn.name_out()), "checks": fn_checks,
-                                          "toolchain": tag}
+                                          "toolchain": tag, "python": python}
 
-    return cached_library("mftyre", key, generate, directory)
+    return cached_library("mftyre", f"{key}|python {python}" if python else key, generate, directory)
+
+
+@functools.lru_cache(maxsize=None)
+def _python_extension_flags() -> tuple:
+    """Compiler flags that add the one-point CPython entry to a library (``-DMFT_PYTHON`` and the include folder),
+    or ``()`` where it cannot be built (not CPython on Linux, or no Python.h): it is an optimisation of
+    :meth:`CompiledFunction.__call__` (~0.5 us of ~1.9 per point), not a requirement; without it the call goes
+    through ctypes."""
+    include = sysconfig.get_paths().get("include")
+    if not _PYTHON_ABI or platform.system() != "Linux" or not include or not Path(include, "Python.h").is_file():
+        return ()
+    return "-DMFT_PYTHON", f"-I{include}"
 
 
 def _key(model, options: dict) -> str:
@@ -692,16 +904,20 @@ def _model_checks(model, inputs, limits: bool) -> list:
 
 def compile_model(model, inputs=("fz", "kappa", "alpha", "gamma", "phit", "vx", "p"), outputs=None,
                   directory: Path | None = None, **options) -> CompiledFunction:
-    """Compile ``model.casadi_function(inputs, outputs, **options)`` (cached) and load it."""
+    """Compile ``model.casadi_function(inputs, outputs, **options)`` (cached) and load it; one point is written
+    from the same with ``early_stop=True`` (its C skips the MF 6.2 loaded-radius steps once converged)."""
     from .formula import OUTPUT_NAMES
 
     outputs = tuple(outputs or OUTPUT_NAMES)
     for name, value in (options.get("fixed") or {}).items():
         _check_fixed(name, value)
-    key = _key(model, {"inputs": list(inputs), "outputs": list(outputs), **options})
+    key = _key(model, {"inputs": list(inputs), "outputs": list(outputs), "point": "early_stop", **options})
     checks = _model_checks(model, inputs, options.get("limits", True))
+    # one point: the loaded-radius Newton steps stop once converged (the one-point C skips the rest; the vectorised
+    # batch kernel would compute them anyway, and its graph stays the smaller one)
+    point = {**options, "early_stop": True}
     library = compile_function(lambda: model.casadi_function(inputs, outputs, **options), key, directory, outputs,
-                               checks)
+                               checks, lambda: model.casadi_function(inputs, outputs, **point))
     return CompiledFunction(library, finite_outputs=True)
 
 

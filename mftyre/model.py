@@ -259,7 +259,7 @@ class MFModel:
     def casadi_function(self, inputs=("fz", "kappa", "alpha", "gamma", "phit", "vx", "p"), outputs=OUTPUT_NAMES,
                         *, turn_slip: bool = False, alpha_star: bool = False, limits: bool | str = True,
                         turn_slip_form: str = "published", fixed: dict | None = None, parameters=(),
-                        smooth: float | bool | dict | None = None, name: str = "mftyre"):
+                        smooth: float | bool | dict | None = None, name: str = "mftyre", early_stop: bool = False):
         """A ``casadi.Function`` of the same equations, built from ``casadi.SX`` scalars.
 
         ``inputs``: the symbolic inputs, any of fz kappa alpha gamma phit vx p omega, as the first arguments in
@@ -282,8 +282,12 @@ class MFModel:
         solver ends a hair outside an active bound) need ``limits="smooth"``: the full slope a hair outside, a
         soft saturation fading to 1 % further out (:class:`mftyre.formula.Modes`); False extrapolates.
         The MF 6.2 loaded radius is solved with up to 8 bracket-widening and 16 Dekker steps and a final
-        Newton step, so its derivatives are those of the implicit function. Evaluate many points with
-        ``f.map(n)``; :mod:`mftyre.compiled` compiles the function to C.
+        Newton step, so its derivatives are those of the implicit function. ``early_stop``: the MF 6.2
+        loaded-radius Newton steps stay put once converged (the NumPy solver's stopping tests; results within
+        1e-12 relative of the full steps), which the compiled one-point C uses to skip the remaining steps
+        (:func:`mftyre.compiled.compile_model` sets it there; ~15 % more operations in the graph, no gain
+        elsewhere).
+        Evaluate many points with ``f.map(n)``; :mod:`mftyre.compiled` compiles the function to C.
         """
         import casadi as ca
         from .backend import casadi_backend
@@ -311,7 +315,7 @@ class MFModel:
         omega_given = "omega" in inputs or "omega" in (fixed or {})
         out = steady_state(equations_prm, values["fz"], values["kappa"], values["alpha"], values["gamma"],
                            values["phit"], values["vx"], values["p"], values["omega"], omega_given, modes,
-                           casadi_backend(smooth))
+                           casadi_backend(smooth, early_stop))
         sign = {k: (-1.0 if self.mirrored and k in _MIRRORED_OUTPUTS else 1.0) for k in outputs}
         out_names = [f"{k}_used" if k in allowed else k for k in outputs]
         return ca.Function(name, [symbols[n] for n in inputs] + list(parameter_symbols.values()),

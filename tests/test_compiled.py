@@ -30,6 +30,16 @@ def compiled(tmp_path_factory):
     return result
 
 
+@pytest.fixture(scope="module")
+def tno_compiled(tmp_path_factory):
+    """The public TNO MF 6.2 file (its vertical relation uses the side-force term), compiled once."""
+    path = require_shared(SHARED / "reference" / "tir" / "TNO_car205_60R15.tir")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = mftyre.load_tir(path)
+    return model, compile_model(model, directory=tmp_path_factory.mktemp("tno"))
+
+
 def _points(model, n, seed):
     prm = model.params
     rng = np.random.default_rng(seed)
@@ -462,7 +472,8 @@ def test_gcc_vectorises_the_kernel_loop(tag, tmp_path):
             else TIR_FILES / FILES[tag])
     model = mftyre.load_tir(path)
     source = tmp_path / "kernel.c"
-    source.write_text(generate_c(model.casadi_function(INPUTS)))
+    source.write_text(generate_c(model.casadi_function(INPUTS), point_function=model.casadi_function(
+        INPUTS, early_stop=True)))  # as compile_model builds it
     lines = source.read_text().split("\n")
     loop = range(lines.index("  for (i = 0; i < m; ++i) {") + 1, lines.index("static void kernel_point(const double "
                                                                             "*const *in, double *const *out)"))
@@ -475,14 +486,14 @@ def test_gcc_vectorises_the_kernel_loop(tag, tmp_path):
     assert any(number in loop for number in vectorised), run.stderr[-2000:]
 
 
-def test_mf62_with_side_force_term_matches_numpy_at_low_loads(tmp_path):
+def test_mf62_with_side_force_term_matches_numpy_at_low_loads(tno_compiled):
     """The compiled MF 6.2 loaded-radius solve (fixed Newton steps) on a file whose vertical relation uses the
     side-force term, at low loads where a cambered tyre's root lies above the free radius and up to twice the
     nominal load: every output equals NumPy's (adaptive iteration) at the tolerances above."""
     from mftyre.backend import NUMPY
     from mftyre.formula import vertical
 
-    model = mftyre.load_tir(require_shared(SHARED / "reference" / "tir" / "TNO_car205_60R15.tir"))
+    model, f = tno_compiled
     prm = model.params
     rng = np.random.default_rng(21)
     n = 3000
@@ -491,7 +502,6 @@ def test_mf62_with_side_force_term_matches_numpy_at_low_loads(tmp_path):
     gamma = rng.uniform(prm.CAMMIN, prm.CAMMAX, n)
     vx = rng.uniform(1.0, 50.0, n)
     p = rng.uniform(prm.PRESMIN, prm.PRESMAX, n)
-    f = compile_model(model, directory=tmp_path)
     out = f.batch(fz, kappa, alpha, gamma, 0.0, vx, p)
     ref = model.evaluate(fz, kappa, alpha, gamma, 0.0, vx=vx, p=p)
     r_omega = vertical.free_radius(prm, ref.omega, NUMPY)
@@ -545,3 +555,195 @@ def test_jacobian_of_adjoint_equals_casadis_and_is_cheaper():
         a = np.array([float(v) for v in ours(*args)])
         b = np.array([float(v) for v in casadis(*args)])
         np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12 * np.abs(b).max())
+
+
+# ------------------------------------------------------------------------------ one point: C entry and ctypes
+def _outcome(call, args):
+    """What one call does: its value or its error (type and message), and its warnings (category, message and
+    the line they are attributed to)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            result = ("value", call(*args))
+        except Exception as exc:  # noqa: BLE001  (compared below)
+            result = ("error", type(exc), str(exc))
+    return repr(result), [(w.category, str(w.message), w.filename, w.lineno) for w in caught]
+
+
+def _one_point(model, seed):
+    return [float(np.atleast_1d(v)[0]) for v in _points(model, 1, seed)]
+
+
+def _awkward_points(model, n, seed):
+    """Random points inside the .tir ranges, a third pushed outside one range, some with a non-finite input or a
+    pressure <= 0, some given as ints, NumPy scalars, 0-d arrays, a string, too few or too many values."""
+    prm = model.params
+    rng = np.random.default_rng(seed)
+    outside = {0: prm.FZMAX * 1.2, 1: prm.KPUMAX + 0.1, 2: prm.ALPMIN - 0.1, 3: prm.CAMMAX + 0.05,
+               6: prm.PRESMIN * 0.9}
+    points = []
+    for i in range(n):
+        x = _one_point(model, seed * 1000 + i)
+        kind = rng.integers(12)
+        if kind < 4:
+            k = int(rng.choice(list(outside)))
+            x[k] = outside[k]
+        elif kind == 4:
+            x[rng.integers(7)] = float(rng.choice([np.nan, np.inf, -np.inf]))
+        elif kind == 5:
+            x[6] = float(rng.choice([0.0, -1e5]))
+        elif kind == 6:
+            x[0], x[4] = int(x[0]), 0
+        elif kind == 7:
+            x[1], x[5] = np.float32(x[1]), np.array(x[5])
+        elif kind == 8:
+            x[2] = np.float64(x[2])
+        elif kind == 9:
+            x = x[: rng.integers(7)] if rng.integers(2) else [*x, 1.0]
+        elif kind == 10:
+            x[3] = "0.01"
+        points.append(x)
+    return points
+
+
+@pytest.mark.parametrize("tag", [*FILES, "tno"])
+def test_one_point_c_entry_equals_the_ctypes_route(compiled, tno_compiled, tag):
+    """Where CPython's headers are found the library's own C entry evaluates one point (fast_point); on random
+    points (inside and outside the ranges, non-finite, p <= 0, other number types, wrong arity, a string) it
+    returns exactly the ctypes route's outputs, raises the same errors and gives the same warnings at the same
+    line, for the two sample files and the TNO MF 6.2 file."""
+    from mftyre.compiled import _python_extension_flags
+
+    model, f = tno_compiled if tag == "tno" else compiled[tag]
+    assert f.fast_point == bool(_python_extension_flags())
+    points = _awkward_points(model, 240, seed={"mf61": 1, "mf62": 2, "tno": 3}[tag])
+    kinds = {"value": 0, "error": 0, "warned": 0}
+    for x in points:
+        fast, ctypes_route = _outcome(f, x), _outcome(f._call_ctypes, x)
+        assert fast == ctypes_route, x
+        kinds["value" if fast[0].startswith("('value'") else "error"] += 1
+        kinds["warned"] += bool(fast[1])
+    assert min(kinds.values()) >= 20, kinds  # every kind of outcome was compared
+    inside = _one_point(model, 5)
+    with pytest.raises(TypeError, match="unexpected keyword"):
+        f(*inside[:6], p=inside[6])
+
+
+def test_one_point_c_entry_from_four_threads(compiled):
+    """Four threads calling one point at once (the C entry holds the GIL, its buffers on the stack): each gets
+    its serial results, and the errors of non-finite inputs, unmixed."""
+    model, f = compiled["mf62"]
+    data = [[_one_point(model, 100 * k + i) for i in range(300)] for k in range(4)]
+    for k, points in enumerate(data):
+        for i in range(k, 300, 7):
+            points[i][1 + k] = np.nan  # kappa, alpha, gamma or phit
+    serial = [[_outcome(f, x) for x in points] for points in data]
+    failures = []
+
+    def work(k):
+        for _ in range(3):
+            for x, want in zip(data[k], serial[k]):
+                try:
+                    got = repr(("value", f(*x)))
+                except ModelInputError as exc:
+                    got = repr(("error", ModelInputError, str(exc)))
+                if got != want[0]:
+                    failures.append((k, x, got))
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not failures, failures[:3]
+    assert sum("error" in s[0] for points in serial for s in points) >= 4 * 40
+
+
+def test_without_python_headers_one_point_goes_through_ctypes(tmp_path, monkeypatch):
+    """Without CPython's headers the library is built without the C entry, silently (an optimisation, not a
+    requirement), and one point goes through ctypes with the same results; a library built for another
+    interpreter's ABI is not entered from this one."""
+    import casadi as ca
+
+    from mftyre import compiled as module
+
+    x, y = ca.SX.sym("x"), ca.SX.sym("y")
+    function = ca.Function("f", [x, y], [ca.sqrt(x) + y, x / y], ["x", "y"], ["root", "ratio"])
+    checks = [{"range": [-1.0, 4.0]}, {}]
+    headers = bool(module._python_extension_flags())
+    with_entry = CompiledFunction(module.compile_function(function, "entry", tmp_path, checks=checks),
+                                  finite_outputs=True)
+    monkeypatch.setattr(module, "_python_extension_flags", lambda: ())
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        library = module.compile_function(function, "entry", tmp_path, checks=checks)
+        plain = CompiledFunction(library, finite_outputs=True)
+    assert library != with_entry.library and not plain.fast_point
+    assert not hasattr(plain._lib, "mft_python_function")
+    assert with_entry.fast_point == headers
+    for args in [(4.0, 2.0), (2, 3), (-1.0, 1.0), (9.0, 1.0), (1.0, 0.0), (np.nan, 1.0), (1.0,), ("1", 2.0)]:
+        assert _outcome(plain, args) == _outcome(with_entry, args), args
+    monkeypatch.setattr(module, "_PYTHON_ABI", ".cpython-0-other.so")
+    other = CompiledFunction(with_entry.library, finite_outputs=True)
+    assert not other.fast_point and other(4.0, 2.0) == (4.0, 2.0)
+
+
+# ------------------------------------------------------------- one point: the loaded-radius steps stop early
+def _extreme_points(model, n, seed):
+    """Loads from none (lifted roots with camber) to 4x nominal (the rim's bottoming region), large slips and
+    side forces, camber at and beyond its range, speeds and pressures across and beyond their ranges."""
+    prm = model.params
+    rng = np.random.default_rng(seed)
+    fz = np.r_[rng.uniform(0.0, 600.0, n // 4), rng.uniform(0.0, 3.0 * prm.FNOMIN, n // 2),
+               rng.uniform(2.0 * prm.FNOMIN, 4.0 * prm.FNOMIN, n - n // 4 - n // 2)]
+    gamma = rng.choice([prm.CAMMIN, prm.CAMMAX, 0.0], n) * rng.uniform(0.5, 1.5, n)
+    return [fz, rng.uniform(-0.5, 0.5, n), rng.uniform(-0.7, 0.7, n), gamma, np.zeros(n), rng.uniform(0.5, 60.0, n),
+            rng.uniform(0.6 * prm.PRESMIN, 1.2 * prm.PRESMAX, n)]
+
+
+@pytest.mark.parametrize("path", [TIR_FILES / FILES["mf62"], SHARED / "reference" / "tir" / "TNO_car205_60R15.tir",
+                                  SHARED / "reference" / "mfeval" / "MagicFormula62_Parameters.tir"],
+                         ids=["mf62", "tno", "mfeval62"])
+def test_early_stop_stays_within_1e12_of_every_newton_step(path):
+    """``early_stop`` (what compile_model builds): the MF 6.2 loaded-radius Newton steps stay put once the NumPy
+    solver's stopping tests hold; on extreme points (no load to 4x nominal, in and beyond the ranges) the results
+    are those of all the unrolled steps to 1e-12 relative (CasADi's own evaluation of both graphs)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = mftyre.load_tir(require_shared(path))
+    x = _extreme_points(model, 4000, seed=31)
+    outputs = ("rl", "rho", "re", "fx", "fy", "mz", "my")
+    results = {}
+    for early_stop in (False, True):
+        f = model.casadi_function(INPUTS, outputs, limits=False, early_stop=early_stop).map(len(x[0]))
+        results[early_stop] = [np.array(v).ravel() for v in f(*x)]
+    prm = model.params
+    rl = results[False][0]
+    assert np.sum(rl < prm.RIM_RADIUS + prm.BOTTOM_OFFST) > 50 or path.name == FILES["mf62"]  # bottoming reached
+    for name, full, early in zip(outputs, results[False], results[True]):
+        assert np.all(np.isfinite(early)), name
+        np.testing.assert_allclose(early, full, rtol=1e-12, atol=1e-300, err_msg=name)
+
+
+def test_one_point_skips_the_steps_after_convergence_with_the_batch_results(tno_compiled):
+    """The one-point C runs the branches of if_else not taken inside ``if`` (the loaded-radius steps once
+    converged): on extreme points inside the ranges (the batch kernel computes every step) each point gives the
+    batch's results; the kernel of the TNO file has such branches, at least one per unrolled Newton step."""
+    import casadi as ca
+
+    from mftyre.compiled import _operations, _point_body
+    from mftyre.formula import vertical
+
+    model, f = tno_compiled
+    graph = model.casadi_function(INPUTS, early_stop=True)
+    lines = _point_body(ca.Function("k", graph.sx_in(), graph.call(graph.sx_in()), {"cse": True}), _operations())
+    assert sum(line.lstrip().startswith("if (v") for line in lines) >= vertical._NEWTON_STEPS
+    prm = model.params
+    x = _extreme_points(model, 1500, seed=32)
+    x[2] = np.clip(x[2], prm.ALPMIN, prm.ALPMAX)
+    x[3] = np.clip(x[3], prm.CAMMIN, prm.CAMMAX)
+    x[6] = np.clip(x[6], prm.PRESMIN, prm.PRESMAX)
+    x[0] = np.clip(x[0], 0.0, prm.FZMAX)
+    batch = np.array(f.batch(*x))
+    points = np.array([f(*(float(v[i]) for v in x)) for i in range(len(x[0]))]).T
+    np.testing.assert_allclose(points, batch, rtol=1e-10, atol=1e-6)
