@@ -193,8 +193,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mftyre.errors import InputClippedWarning, ModelInputError
+from mftyre.errors import InputClippedWarning, LoadFactorWarning, ModelInputError
 from mftyre.formula import vertical
+from mftyre.inputs import load_factor_problems
 
 __all__ = ["RingConstants", "STATE_NAMES", "INPUT_NAMES", "OUTPUT_NAMES", "CONTACT_PASSES", "AIR_TIME",
            "TURN_SLIP_REFERENCE", "RESIDUAL_FLOOR", "pressure_coefficients", "pressure_limits", "check_pressure",
@@ -266,6 +267,9 @@ class RingConstants:
                 warnings.warn(f"{name} = {prm[name]} (load and speed influence on the in-plane sidewall stiffness) "
                               f"is not modelled: no published formula; the sidewall stiffness follows FREQ_* only",
                               stacklevel=2)
+        for _, message in load_factor_problems(prm):  # the MF's own data, which no ring can damp
+            warnings.warn(f"{getattr(prm, 'source', None) or 'this .tir file'}: {message}", LoadFactorWarning,
+                          stacklevel=2)
         mb, ibx, iby = prm.BELT_MASS, prm.BELT_IXX, prm.BELT_IYY
         w = {k: 2 * np.pi * prm[f"FREQ_{k}"] for k in ("LONG", "LAT", "YAW", "WINDUP")}
         cbx, cby, cbg, cbth = mb * w["LONG"] ** 2, mb * w["LAT"] ** 2, ibx * w["YAW"] ** 2, iby * w["WINDUP"] ** 2
