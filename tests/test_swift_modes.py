@@ -148,7 +148,12 @@ def test_fsae_grows_only_where_its_longitudinal_slip_stiffness_is_negative():
     the MF's K_xk = Fz (PKX1 + PKX2 dfz) negative above 1625 N (a tyre that pushes along the slip: free rolling is
     unstable). With PKX2 = -40 (edge 2250 N, beyond FZMAX) and nothing else changed, no warning and every mode at
     2000 N is damped; with the file's PKX2 the spin mode grows at 2000 N (1650 N) and decays at 1600 N."""
-    model = mftyre.load_tir(require_shared(MFEVAL_DIR / "FSAE_Defaults.tir"))
+    from mftyre.tir import check_tir
+
+    path = require_shared(MFEVAL_DIR / "FSAE_Defaults.tir")
+    found = [f for f in check_tir(path) if f.severity == "warning" and "K_xk" in f.message]
+    assert len(found) == 1 and "PKX2 = -80" in found[0].message and "1625 N" in found[0].message  # mftyre check
+    model = mftyre.load_tir(path)
     speeds = (0.5, -0.5, 7.0, -7.0, 70.0)
     for pkx2, grows in ((-80.0, True), (-40.0, False)):
         changed = model.with_params(PKX2=pkx2)
