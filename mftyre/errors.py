@@ -52,6 +52,12 @@ class PressureFactorWarning(UserWarning):
     the cornering stiffness) has changed sign, although the file may declare the pressure valid."""
 
 
+class LoadFactorWarning(UserWarning):
+    """A slip stiffness of the file's Magic Formula changes sign inside its load range FZMIN..FZMAX (e.g. K_xk =
+    Fz (PKX1 + PKX2 dfz) exp(PKX3 dfz) with PKX2 < 0): above that load the steady-state tyre pushes along the slip,
+    and a dynamic tyre model rolling freely there grows (SWIFT)."""
+
+
 class TurnSlipWarning(UserWarning):
     """Turn slip is switched on for a file whose Magic Formula turn-slip moment pushes the contact patch along its
     yaw rate at some load (SWIFT: the belt yaw and camber modes can grow)."""

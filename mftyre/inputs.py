@@ -25,7 +25,7 @@ from .errors import InputClippedWarning, ModelInputError, PressureFactorWarning,
 
 __all__ = ["RANGE_PARAMETERS", "input_ranges", "saturate", "check_finite", "check_pressure", "warn_outside",
            "check_finite_outputs", "saturate_inputs", "warn_data_outside", "PRESSURE_FACTORS", "pressure_factor_edges",
-           "PressureFactorCheck"]
+           "PressureFactorCheck", "load_factor_edges", "load_factor_problems"]
 
 #: input -> (.tir parameter of the lower bound or None, of the upper bound, unit): the ranges ``limits=True``
 #: saturates the inputs to (see the module docstring for Fz and FZMIN).
@@ -88,6 +88,50 @@ def pressure_factor_edges(params) -> list[tuple[float, int, str, str]]:
             if candidates.size:
                 edges.append((float(params.NOMPRES * (1.0 + candidates[0])), side, names, what))
     return edges
+
+
+def load_factor_edges(params, dpi: float = 0.0) -> list[tuple[float, str, str]]:
+    """[(Fz_edge [N], parameters, what)]: the positive loads at which a slip stiffness's load factor reaches zero at
+    zero camber and dpi = (p - NOMPRES)/NOMPRES ``dpi``; on the far side of Fz_edge from FNOMIN the stiffness has
+    the opposite sign to the one at FNOMIN (the steady-state tyre pushes along the slip). Closed forms, Fz0' =
+    FNOMIN LFZO:
+        K_xk = Fz (PKX1 + PKX2 dfz) exp(PKX3 dfz) ...  (4.E15): zero at dfz = -PKX1/PKX2
+        K_ya = PKY1 Fz0' ... sin(PKY4 atan(Fz / (PKY2 (1 + PPY2 dpi) Fz0')))  (4.E25): zero at PKY4 atan(.) = pi,
+               i.e. Fz = PKY2 (1 + PPY2 dpi) Fz0' tan(pi/PKY4), only where PKY4 > 2
+    (FSAE_Defaults.tir of MFeval: PKX1 = 50, PKX2 = -80, K_xk < 0 above 1625 N, FZMAX 2000 N)."""
+    fz0 = float(params.FNOMIN) * float(params.LFZO)
+    edges = []
+    pkx1, pkx2 = float(params.PKX1), float(params.PKX2)
+    if pkx2 != 0.0 and fz0 * (1.0 - pkx1 / pkx2) > 0.0:
+        edges.append((fz0 * (1.0 - pkx1 / pkx2), f"PKX1 = {pkx1:g}, PKX2 = {pkx2:g}",
+                      "longitudinal slip stiffness K_xk = Fz (PKX1 + PKX2 dfz) exp(PKX3 dfz) (4.E15)"))
+    pky2 = float(params.PKY2) * (1.0 + float(params.PPY2) * dpi)
+    pky4 = float(params.PKY4)
+    if pky4 > 2.0 and pky2 > 0.0:
+        edges.append((pky2 * fz0 * float(np.tan(np.pi / pky4)), f"PKY2 = {params.PKY2:g}, PKY4 = {pky4:g}"
+                      + (f", PPY2 = {params.PPY2:g}" if dpi and params.PPY2 else ""),
+                      "cornering stiffness K_ya = PKY1 Fz0' sin(PKY4 atan(Fz / (PKY2 Fz0'))) (4.E25)"))
+    return edges
+
+
+def load_factor_problems(params) -> list[tuple[str, str]]:
+    """[(first parameter, message)]: the :func:`load_factor_edges` inside the file's load range (0, FZMAX] at any
+    pressure of PRESMIN..PRESMAX (the edges are linear in the pressure factor: its ends suffice), each message naming
+    the parameters, the property, the load and what is expected (the property keeps its sign up to FZMAX)."""
+    fz0, fzmax = float(params.FNOMIN) * float(params.LFZO), float(params.FZMAX)
+    found: dict = {}
+    for p in (params.PRESMIN, params.PRESMAX):
+        dpi = (float(p) - float(params.NOMPRES)) / float(params.NOMPRES) if params.NOMPRES > 0 else 0.0
+        for edge, names, what in load_factor_edges(params, dpi):
+            if edge <= fzmax and (what not in found or edge < found[what][0]):
+                found[what] = (edge, names, p)
+    return [(names.split(" ")[0],
+             f"{names} make the {what} change sign at Fz = {edge:.6g} N ({edge / fz0:.3g} FNOMIN"
+             f"{f', p = {p:g} Pa' if 'PPY2' in names else ''}), "
+             f"inside the load range up to FZMAX = {fzmax:g} N: {'above' if edge > fz0 else 'below'} it the tyre "
+             f"pushes along the slip (a slip stiffness is expected to keep its sign from 0 to FZMAX); a dynamic "
+             f"tyre rolling freely there (the SWIFT ring) is unstable")
+            for what, (edge, names, p) in found.items()]
 
 
 class PressureFactorCheck:

@@ -31,7 +31,7 @@ from typing import Any
 
 from .errors import ModelInputError, TirError, spelled
 from .files import TIR_MAX_BYTES, read_user_file, same_file, write_atomically
-from .inputs import pressure_factor_edges
+from .inputs import load_factor_problems, pressure_factor_edges
 from .params import (
     CORE_PARAMETERS,
     PARAMETERS,
@@ -645,6 +645,8 @@ def check_tir(path) -> list[Finding]:
                        f"{names} makes the {what} factor change sign at {edge:.6g} Pa, inside PRESMIN..PRESMAX = "
                        f"{v.PRESMIN!r}..{v.PRESMAX!r} Pa: {'above' if side > 0 else 'below'} it that property has "
                        "the wrong sign (the evaluator and SWIFT warn when used there)"))
+    for name, message in load_factor_problems(v):
+        checks.append((True, "warning", name, message))
     for cond, sev, name, msg in checks:
         if cond:
             add(sev, name, msg)

@@ -652,7 +652,10 @@ class SwiftTyre:
         on the accelerations and patch rates, from the steady-state model's deflection. With ``rim="torque"`` the
         spin is an unknown too (``inputs.omega`` its first guess): the rim torque balances the input torque.
         Raises :class:`~mftyre.errors.ModelInputError` where the iteration ends without equilibrium (residual above
-        :data:`EQUILIBRIUM_TOL`)."""
+        :data:`EQUILIBRIUM_TOL`), and where it ends at a root that is no rolling tyre: rolling (|vx| >= VXLOW), a
+        slip outside KPUMIN..KPUMAX (the agricultural sample files at 40-70 m/s, 4-20 times their LONGVL and beyond
+        their speed rating: rolling resistance (QSY4 (V/LONGVL)^4) and radius growth (Q_V1) run away, the root
+        spins backwards at kappa -100..-600 with a free radius of 8-36 m and had growing modes of +200..+640 1/s)."""
         prm = self.model.params
         c = self.constants
         p = prm.INFLPRES if inputs.p is None else inputs.p
@@ -710,6 +713,16 @@ class SwiftTyre:
                 f"d({STATE_NAMES[eqs[worst]]})/dt = {r[worst]:.3g} (tolerance "
                 f"{EQUILIBRIUM_TOL:g}); e.g. a drive/brake torque beyond what the tyre transmits at this load, or "
                 f"the tyre off the road")
+        kappa = float(s[_S["kappa"]])  # rolling (|vx| >= VXLOW) it is the steady slip; at standstill a deflection
+        if abs(inputs.vx) >= prm.VXLOW and not prm.KPUMIN <= kappa <= prm.KPUMAX:  # a root, but no rolling tyre
+            r_free = float(vertical.free_radius(prm, s[_S["omb"]], NUMPY))
+            raise ModelInputError(
+                f"no static equilibrium within the file's slip range at the inputs ({at}): the equations' root has "
+                f"the slip kappa = {kappa:.3g} outside KPUMIN..KPUMAX = {prm.KPUMIN:g}..{prm.KPUMAX:g}, belt spin "
+                f"{float(s[_S['omb']]):.4g} rad/s (free radius {r_free:.3g} m with Q_V1 = {prm.Q_V1:g}, LONGVL = "
+                f"{prm.LONGVL:g} m/s), belt centre {float(s[_S['zb']] - h):.3g} m above the road: no rolling tyre "
+                f"(a torque beyond what the tyre transmits, or speed terms that run away: the rolling resistance "
+                f"QSY3/QSY4 and the radius growth Q_V1 scale with the speed over LONGVL)")
         self._store_contact(s, u)
         return s
 
