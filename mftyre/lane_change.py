@@ -43,6 +43,7 @@ import numpy as np
 
 from .errors import ModelInputError
 from .model import MFModel, load_tir
+from .ocp import assembled_nlp
 from .vehicle import WHEELS, VehicleParams
 
 __all__ = ["LaneChange", "LaneChangeResult", "ROUTES", "simple_tyre_function"]
@@ -91,83 +92,6 @@ def simple_tyre_function(model: MFModel, name: str = "simple_tyre", pressure: bo
     fy = curve(-alpha, ky / (1.3 * dy), 1.3, dy)
     return ca.Function(name, [fz, kappa, alpha, vx, p], [fx, fy, -0.03 * fy],
                        ["fz", "kappa", "alpha", "vx", "p"], ["fx", "fy", "mz"])
-
-
-def assembled_nlp(w, f, g, inputs, outputs, tyres):
-    """The NLP min f(w) s.t. g(w) for tyre functions called over many points, with its exact constraint Jacobian
-    and Hessian of the Lagrangian assembled by the chain rule from the SX vehicle part and the tyres' own
-    derivative functions, each mapped over all points in one call (route ``"assembled"``).
-
-    ``w``: the SX decision variables; ``f``, ``g``: SX expressions of ``w`` and of the tyres' outputs, the SX
-    symbols ``outputs[k]`` (n_out x n, one column per point) of tyre ``tyres[k]`` (a ``casadi.Function`` of
-    n_in scalar inputs and n_out scalar outputs, e.g. :func:`mftyre.compiled.compile_external` with
-    ``hessian=True``) at ``inputs[k]`` (n_in x n SX expressions of ``w``). Returns ``(nlp, options)`` for
-    ``casadi.nlpsol``: the MX problem (the tyre's value mapped) and its ``jac_g`` and ``hess_lag``.
-
-    With u(w) the tyre inputs, J the tyre Jacobians there and H(mu) the Hessians of mu^T y (mu: the multipliers
-    the Lagrangian gives the tyre outputs, dL/dy), the NLP's derivatives are those of the local model
-    y(w) ~ y + J d + (d^T H d)/2 in d = u(w) - u(w0) at w0 = w, which SX differentiates: the constraint Jacobian
-    g_w + g_y J u_w, the Hessian L_ww + L_wy J u_w + (...)^T + u_w^T (J^T L_yy J + H(mu)) u_w + sum (J^T mu)_i
-    u_i,ww. Per iteration the tyres cost one value and Jacobian call (constraint Jacobian) and one value and
-    Jacobian-of-adjoint call (the Hessian, whose blocks also hold J), mapped; the rest is SX."""
-    import casadi as ca
-
-    w0, lam_f, lam_g = ca.SX.sym("w0", w.sparsity()), ca.SX.sym("lam_f"), ca.SX.sym("lam_g", g.numel())
-    n_in = [u.size1() for u in inputs]
-    n_out = [y.size1() for y in outputs]
-    jac = [ca.SX.sym(f"jac{k}", n_out[k] * n_in[k], y.size2()) for k, y in enumerate(outputs)]  # row o * n_in + i
-    hess = [ca.SX.sym(f"hess{k}", n_in[k] * n_in[k], y.size2()) for k, y in enumerate(outputs)]  # row i * n_in + j
-    local, quadratic = [], 0.0
-    for k, (u, y) in enumerate(zip(inputs, outputs)):
-        d = u - ca.substitute(u, w, w0)  # zero at w0 = w, its derivatives those of u
-        local.append(ca.vertcat(*(y[o, :] + sum(jac[k][o * n_in[k] + i, :] * d[i, :] for i in range(n_in[k]))
-                                  for o in range(n_out[k]))))
-        quadratic += 0.5 * sum(ca.sum2(hess[k][i * n_in[k] + j, :] * d[i, :] * d[j, :])
-                               for i in range(n_in[k]) for j in range(n_in[k]))
-    y_all = ca.vertcat(*(ca.vec(y) for y in outputs))
-    local_all = ca.vertcat(*(ca.vec(y) for y in local))
-    f_local, g_local = (ca.substitute(e, y_all, local_all) for e in (f, g))
-    lagrangian = lam_f * f_local + ca.dot(lam_g, g_local) + quadratic
-    hessian = ca.triu(ca.hessian(lagrangian, w)[0])
-    multipliers = ca.jacobian(ca.dot(lam_g, g) + lam_f * f, y_all).T  # dL/dy at the tyres' outputs
-    sx_in = [w, w0, *outputs, *jac]
-    jacobian_part = ca.Function("nlp_jac_g_local", sx_in, [g_local, ca.jacobian(g_local, w)])
-    hessian_part = ca.Function("nlp_hess_l_local", [*sx_in, lam_f, lam_g, *hess], [hessian])
-    tyre_inputs = ca.Function("tyre_inputs", [w], inputs)
-    mu_function = ca.Function("tyre_multipliers", [w, *outputs, lam_g, lam_f], [multipliers])
-    objective = ca.Function("nlp_f_local", [w, *outputs], [f])
-    constraints = ca.Function("nlp_g_local", [w, *outputs], [g])
-
-    x, p = ca.MX.sym("x", w.sparsity()), ca.MX.sym("p", 0, 1)
-    mx_lam_f, mx_lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", g.numel())
-    u = tyre_inputs(x)
-    u = u if isinstance(u, (list, tuple)) else [u]
-    n = [y.size2() for y in outputs]
-    rows = [ca.vertsplit(u[k], list(range(n_in[k] + 1))) for k in range(len(tyres))]
-    values = [ca.vertcat(*tyre.map(n[k])(*rows[k])) for k, tyre in enumerate(tyres)]
-    g_mx = constraints(x, *values)
-    f_mx = objective(x, *values) if ca.depends_on(f, y_all) else objective(x, *[ca.MX(y.sparsity()) for y in outputs])
-
-    jacobians = []
-    for k, tyre in enumerate(tyres):  # blocks d y_o / d u_i, output-major
-        jacobians.append(ca.vertcat(*tyre.jacobian().map(n[k])(*rows[k], *ca.vertsplit(values[k], list(range(n_out[k] + 1))))))
-    jac_g = ca.Function("nlp_jac_g", [x, p], jacobian_part(x, x, *values, *jacobians), ["x", "p"], ["g", "jac_g_x"])
-
-    mu = ca.vertsplit(mu_function(x, *values, mx_lam_g, mx_lam_f), list(np.cumsum([0] + [o * m for o, m in zip(n_out, n)])))
-    hessians, jacobians = [], []
-    for k, tyre in enumerate(tyres):
-        second = tyre.reverse(1).jacobian()  # d (J^T mu)_i / d (inputs_j, outputs, mu_o), input-major
-        seeds = ca.vertsplit(ca.reshape(mu[k], n_out[k], n[k]), list(range(n_out[k] + 1)))
-        blocks = second.map(n[k])(*rows[k], *ca.vertsplit(values[k], list(range(n_out[k] + 1))), *seeds,
-                                  *[ca.MX.zeros(1, n[k])] * n_in[k])
-        stride = n_in[k] + 2 * n_out[k]
-        hessians.append(ca.vertcat(*(blocks[i * stride + j] for i in range(n_in[k]) for j in range(n_in[k]))))
-        jacobians.append(ca.vertcat(*(blocks[i * stride + n_in[k] + n_out[k] + o]
-                                      for o in range(n_out[k]) for i in range(n_in[k]))))
-    hess_lag = ca.Function("nlp_hess_l", [x, p, mx_lam_f, mx_lam_g],
-                           [hessian_part(x, x, *values, *jacobians, mx_lam_f, mx_lam_g, *hessians)],
-                           ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
-    return {"x": x, "f": f_mx, "g": g_mx}, {"jac_g": jac_g, "hess_lag": hess_lag}
 
 
 @dataclass(frozen=True)
@@ -228,13 +152,30 @@ class LaneChange:
         return cls({"FL": left, "FR": right, "RL": left, "RR": right}, params, **kwargs)
 
     # ---------------------------------------------------------------------------------------------- tyres
+    def _inputs(self, wheel: str) -> tuple:
+        """The tyre inputs that vary over the manoeuvre: all but kappa on the undriven axle (free rolling, the MF
+        tyre's functions are specialised to kappa = 0 there: 30 % fewer operations in its Hessian)."""
+        driven = (wheel[0] == "F") == (self.params.drive == "front")
+        return ("fz", "kappa", "alpha", "vx", "p") if driven else ("fz", "alpha", "vx", "p")
+
     def _tyre_function(self, wheel: str, tyre: str, route: str):
-        model = self.tyres[wheel]
+        """The tyre of ``wheel`` as a casadi.Function of :meth:`_inputs` -> (fx, fy, mz); for route "assembled"
+        its kernels (:mod:`mftyre.ocp`)."""
+        import casadi as ca
+
+        from .ocp import compile_tyre_kernels, tyre_kernels
+
+        model, inputs, outputs = self.tyres[wheel], self._inputs(wheel), ("fx", "fy", "mz")
         if tyre in ("simple", "simple-p"):
-            return simple_tyre_function(model, f"simple_{wheel}", pressure=tyre == "simple-p")
-        inputs, outputs = ("fz", "kappa", "alpha", "vx", "p"), ("fx", "fy", "mz")
-        options = dict(limits="smooth", smooth=True)
-        if route in ("external", "external-expand", "external-lbfgs", "assembled"):
+            f = simple_tyre_function(model, f"simple_{wheel}", pressure=tyre == "simple-p")
+            sx = [ca.SX.sym(name) if name in inputs else ca.SX(0.0) for name in f.name_in()]
+            f = ca.Function(f.name(), [v for v in sx if v.is_symbolic()], f.call(sx), list(inputs), list(outputs))
+            return tyre_kernels(f) if route == "assembled" else f
+        fixed = {} if "kappa" in inputs else {"fixed": {"kappa": 0.0}}
+        options = dict(limits="smooth", smooth=True, **fixed)
+        if route == "assembled":
+            return compile_tyre_kernels(model, inputs, outputs, name=f"mf_{wheel}", **options)
+        if route in ("external", "external-expand", "external-lbfgs"):
             from .compiled import compile_external
 
             return compile_external(model, inputs, outputs, hessian=route != "external-lbfgs",
@@ -245,7 +186,7 @@ class LaneChange:
     def _equations(self, X, U, T, pv, tyres):
         """(objective, constraints, lbg, ubg) of the trajectory X (states x nodes), U (controls x nodes), time T and
         pressures pv [bar], MX or SX; ``tyres(rows)`` returns the (fx, fy, mz) rows of each wheel (in
-        :data:`WHEELS` order) for ``rows``, each wheel's (fz, kappa, alpha, vx, p) rows over the nodes."""
+        :data:`WHEELS` order) for ``rows``, each wheel's rows of :meth:`_inputs` over the nodes."""
         import casadi as ca
 
         P, n = self.params, self.intervals + 1
@@ -269,9 +210,9 @@ class LaneChange:
             vxw = vxw_body * cd + vyw_body * sd
             vyw = -vxw_body * sd + vyw_body * cd
             axle = "F" if front else "R"
-            rows.append((static[axle] + (-1.0 if y > 0 else 1.0) * transfer[axle],
-                         0.0 * kappa if front == (P.drive == "rear") else kappa, ca.atan(vyw / vxw), vxw,
-                         ca.repmat(pv[0 if front else 1] * 1e5, 1, n)))
+            row = dict(fz=static[axle] + (-1.0 if y > 0 else 1.0) * transfer[axle], kappa=kappa,
+                       alpha=ca.atan(vyw / vxw), vx=vxw, p=ca.repmat(pv[0 if front else 1] * 1e5, 1, n))
+            rows.append(tuple(row[name] for name in self._inputs(w)))
             geometry.append((x, y, sd, cd))
         sum_fx = sum_fy = yaw = 0.0
         for (x, y, sd, cd), (fx, fy, mz) in zip(geometry, tyres(rows)):
@@ -287,7 +228,7 @@ class LaneChange:
         # objective: the time, and a small penalty on the control changes (no chattering between nodes)
         smoothness = ca.sumsqr(ca.diff(delta, 1, 1)) + ca.sumsqr(ca.diff(kappa, 1, 1))
         objective = T + 1e-2 * smoothness
-        alpha_all = ca.vertcat(*(row[2] for row in rows))
+        alpha_all = ca.vertcat(*(row[-3] for row in rows))
         g = ca.vertcat(ca.vec(defects / ca.repmat(scale, 1, self.intervals)), ca.vec(alpha_all))
         lbg = np.r_[np.zeros(defects.numel()), np.full(alpha_all.numel(), -0.3)]
         ubg = np.r_[np.zeros(defects.numel()), np.full(alpha_all.numel(), 0.3)]
@@ -320,7 +261,7 @@ class LaneChange:
                 return [(y[0, :], y[1, :], y[2, :]) for y in outputs]
 
             objective, g, lbg, ubg = self._equations(X, U, T, pv, tyres)
-            nlp, options = assembled_nlp(w, objective, g, inputs, outputs, functions)
+            nlp, options = assembled_nlp(w, objective, g, inputs, outputs, functions)  # (the tyres' kernels)
         else:
             X, U, T, pv, w = self._symbols(ca.MX)
 
