@@ -1,18 +1,22 @@
-"""The minimum-time lane change (mftyre.lane_change) on four MF tyres against a simple 4-parameter tyre, per IPOPT
+"""The minimum-time lane change (mftyre.lane_change) on four MF tyres against simple 4-parameter tyres, per IPOPT
 iteration, for every route CasADi offers, side by side in one run.
 
-    python benchmarks/bench_ocp.py [--tir FILE.tir] [--intervals 30] [--repeat 3] [--jit]
+    python benchmarks/bench_ocp.py [--tir FILE.tir] [--intervals 30] [--repeat 3] [--jit] [--quick]
 
-Rows: tyre x route (see mftyre.lane_change: "sx" MX graph calling the SX tyre, "expand" one SX graph,
+Rows: tyre x route (see mftyre.lane_change: "assembled" the compiled tyre kernels with the NLP's exact Jacobian
+and Hessian assembled by the chain rule (mftyre.ocp), "sx" MX graph calling the SX tyre, "expand" one SX graph,
 "external" compile_external(hessian=True), "external-expand" the same inside an expanded NLP (SX call nodes),
-"external-fd" compile_external(hessian=False) under IPOPT's exact mode
-(second derivatives by differences of the compiled Jacobian), "external-lbfgs" hessian=False with IPOPT's
-limited-memory quasi-Newton, "jit" (--jit only: the expanded NLP compiled by CasADi's jit, minutes of gcc for the
-MF tyre). Columns: iterations, CPU time of the solve in this thread (best of --repeat; IPOPT and the tyre run in
-it), per iteration, its ratio to the simple tyre's fastest route, and the one-off build time (graph, compile or
-cache). Target (issue 24): the MF tyre <= 1.15x the simple tyre per iteration on the fastest routes. Then where
-the time per iteration goes (nlpsol's statistics per callback, IPOPT's own work) and the compiled MF tyre's own cost
-per point (the tyre, its Jacobian, its second derivatives).
+"external-fd" compile_external(hessian=False) under IPOPT's exact mode (second derivatives by differences of the
+compiled Jacobian), "external-lbfgs" hessian=False with IPOPT's limited-memory quasi-Newton, "jit" (--jit only:
+the expanded NLP compiled by CasADi's jit, gcc at -O1). Two yardsticks (mftyre.lane_change.simple_tyre_function):
+"simple" (no pressure effect: its NLP has empty pressure columns) and "simple-p" (friction and slip stiffness
+following the pressure to first order like the MF tyre's: the MF problem's sparsity). Every solver is built and
+solved once first (one-off set-up untimed), then all are solved in --repeat alternating rounds; columns:
+iterations, the best CPU time of the solve in this thread (IPOPT and the tyre run in it), per iteration, its
+ratio to each yardstick's fastest route, the one-off build time (graph, compile or cache), the optimum (T and the
+pressures). Target (issue 24): the MF tyre <= 1.15x the simple tyre per iteration on the fastest routes; both
+ratios are printed. Then where the time per iteration goes (nlpsol's statistics per callback, IPOPT's own work)
+and the compiled MF kernels' own cost (the floor of route "assembled").
 """
 from __future__ import annotations
 

@@ -3,8 +3,8 @@
     >>> from mftyre.lane_change import LaneChange
     >>> problem = LaneChange.from_tir("tir_files/car_205_60R15_mf61.tir", intervals=30)
     >>> result = problem.solve()                        # route "expand": no compiler needed
-    >>> result = problem.solve(route="external")        # the fastest per iteration (compiled once, cached)
-    >>> result.time, result.p_front, result.stats
+    >>> result = problem.solve(route="assembled")       # the fastest per iteration (kernels compiled once, cached)
+    >>> result.time, result.p_front, result.iterations
 
 Model (planar, ISO body axes at the CoG, as :mod:`mftyre.vehicle`): states X, Y, heading psi, body velocities vx,
 vy and yaw rate r; controls: the steer angle delta of the front wheels and the longitudinal slip kappa of the two
@@ -23,16 +23,27 @@ peaks). Trapezoidal collocation on ``intervals`` equal intervals: the tyres are 
 4 (intervals + 1) calls as one mapped call.
 
 Tyres and routes. ``tyre="mf"``: :meth:`mftyre.MFModel.casadi_function` with ``limits="smooth"`` (the pressures are
-decision variables: full slope at and a hair beyond their bounds) and ``smooth=True`` (per-quantity widths);
-``tyre="simple"``: a 4-parameter Magic Formula (B, C, D, E; D the friction coefficient, Fx and Fy independent,
-Mz = -t Fy with a constant trail) whose peaks match the MF tyre's at the nominal load, the yardstick of the
-cost per iteration. ``route`` (how CasADi evaluates the problem; benchmarks/bench_ocp.py measures them side by
-side): ``"sx"`` the MX graph calling the SX tyre function, ``"expand"`` the whole NLP expanded to one SX graph
-(``expand=True``), ``"external"`` the tyre compiled to C with its Jacobian and Hessian
-(:func:`mftyre.compiled.compile_external`, ``hessian=True``; the fastest measured), ``"external-expand"`` the
-same inside the expanded NLP (CasADi's SX call nodes: 4x slower per iteration), ``"external-lbfgs"`` the same without the Hessian
-and IPOPT's limited-memory quasi-Newton, ``"jit"`` the expanded NLP compiled to C by CasADi's just-in-time
-compiler (seconds of gcc per problem size).
+decision variables: full slope at and a hair beyond their bounds) and ``smooth=True`` (per-quantity widths); on the
+free-rolling axle specialised to kappa = 0 (``fixed=``: the same equations, 30 % fewer operations in the Hessian).
+Yardsticks of the cost per iteration: ``tyre="simple"``, a 4-parameter Magic Formula (B, C, D, E; D the friction
+coefficient, Fx and Fy independent, Mz = -t Fy with a constant trail) whose peaks and slip stiffnesses match the MF
+tyre's at the nominal load and pressure, no pressure effect (its NLP has empty pressure columns); ``"simple-p"``
+the same with the friction and slip stiffnesses following the pressure to first order as the MF tyre's do
+(:func:`simple_tyre_function`), so that its NLP has the MF problem's sparsity. ``route`` (how CasADi evaluates the
+problem; ``python benchmarks/bench_ocp.py`` measures them side by side):
+
+* ``"assembled"``, the fastest per iteration: the vehicle part in SX and the tyre's kernels (value; value and
+  Jacobian; value, Jacobian and Hessian of mu^T y) compiled to C once (:func:`mftyre.ocp.compile_tyre_kernels`,
+  ~3 s of gcc per wheel, cached), each mapped over all nodes in one call; the NLP's exact constraint Jacobian and
+  Hessian of the Lagrangian assembled by the chain rule (:func:`mftyre.ocp.assembled_nlp`) and given to nlpsol;
+  the same NLP and optimum as ``"expand"``;
+* ``"expand"`` the whole NLP expanded to one SX graph (``expand=True``; no compiler);
+* ``"sx"`` the MX graph calling the SX tyre function;
+* ``"external"`` the tyre compiled with its Jacobian and Hessian (:func:`mftyre.compiled.compile_external`,
+  ``hessian=True``) and CasADi differentiating the MX graph around it; ``"external-expand"`` the same inside the
+  expanded NLP (CasADi's SX call nodes); ``"external-lbfgs"`` ``hessian=False`` and IPOPT's limited-memory
+  quasi-Newton;
+* ``"jit"`` the expanded NLP compiled to C by CasADi's just-in-time compiler (gcc at every new problem).
 """
 from __future__ import annotations
 
