@@ -33,7 +33,7 @@ the same with the friction and slip stiffnesses following the pressure to first 
 problem; ``python benchmarks/bench_ocp.py`` measures them side by side):
 
 * ``"assembled"``, the fastest per iteration: the vehicle part in SX and the tyre's kernels (value; value and
-  Jacobian; value, Jacobian and Hessian of mu^T y) compiled to C once (:func:`mftyre.ocp.compile_tyre_kernels`,
+  Jacobian; value, Jacobian and Hessian of mu^T y) compiled to C once (:func:`mftyre.compiled.compile_tyre_kernels`,
   ~3 s of gcc per wheel, cached), each mapped over all nodes in one call; the NLP's exact constraint Jacobian and
   Hessian of the Lagrangian assembled by the chain rule (:func:`mftyre.ocp.assembled_nlp`) and given to nlpsol;
   the same NLP and optimum as ``"expand"``;
@@ -174,7 +174,7 @@ class LaneChange:
         its kernels (:mod:`mftyre.ocp`)."""
         import casadi as ca
 
-        from .ocp import compile_tyre_kernels, tyre_kernels
+        from .compiled import compile_tyre_kernels, tyre_kernels
 
         model, inputs, outputs = self.tyres[wheel], self._inputs(wheel), ("fx", "fy", "mz")
         if tyre in ("simple", "simple-p"):

@@ -9,85 +9,17 @@ the tyres' outputs as symbols, and each tyre contributes, per point, its value, 
 H(mu) of mu^T y (mu: the multipliers the Lagrangian gives the tyre's outputs) from two fused kernels, mapped
 over all points in one call each:
 
-* :func:`tyre_kernels`: from a tyre ``casadi.Function`` of scalars, (value, value + Jacobian, value + Jacobian
-  + upper Hessian of mu^T y) as SX functions, common subexpressions shared;
-* :func:`compile_tyre_kernels`: the same three for an :class:`mftyre.MFModel`, compiled to C once (cached like
-  :mod:`mftyre.compiled`) and loaded with ``casadi.external``;
-* :func:`assembled_nlp`: the NLP for ``casadi.nlpsol`` with its ``jac_g`` and ``hess_lag``.
+* :func:`mftyre.compiled.tyre_kernels`: from a tyre ``casadi.Function`` of scalars, (value, value + Jacobian,
+  value + Jacobian + upper Hessian of mu^T y) as SX functions, common subexpressions shared;
+* :func:`mftyre.compiled.compile_tyre_kernels`: the same three for an :class:`mftyre.MFModel`, compiled to C once
+  (cached) and loaded with ``casadi.external``;
+* :func:`assembled_nlp` (here): the NLP for ``casadi.nlpsol`` with its ``jac_g`` and ``hess_lag``.
 """
 from __future__ import annotations
 
-import hashlib
-import os
-from pathlib import Path
-
 import numpy as np
 
-__all__ = ["tyre_kernels", "compile_tyre_kernels", "assembled_nlp"]
-
-#: this module's source: part of the kernels' cache key (a changed kernel layout never meets an old library)
-_SOURCE = hashlib.sha256(Path(__file__).read_bytes()).hexdigest()
-
-
-def tyre_kernels(f, name: str | None = None):
-    """(value, value_jacobian, value_hessian) of the tyre ``f`` (an SX ``casadi.Function`` of n_in scalar inputs
-    and n_out scalar outputs), each an SX function with shared subexpressions:
-
-    * ``value(u_1..u_n_in) -> (y_1..y_n_out)``;
-    * ``value_jacobian(u) -> (y, dy_o/du_i for o, i)`` (output-major);
-    * ``value_hessian(u, mu_1..mu_n_out) -> (y, dy_o/du_i, d2(mu^T y)/du_i du_j for i <= j)`` (row-major upper
-      triangle)."""
-    import casadi as ca
-
-    name = name or f.name()
-    if any(f.size_in(i) != (1, 1) for i in range(f.n_in())) or any(f.size_out(k) != (1, 1)
-                                                                    for k in range(f.n_out())):
-        raise ValueError(f"tyre function {f.name()} must have scalar inputs and outputs")
-    u = f.sx_in()
-    y = f.call(u)
-    x, y_all = ca.vertcat(*u), ca.vertcat(*y)
-    mu = [ca.SX.sym(f"mu_{n}") for n in f.name_out()]
-    jacobian = ca.jacobian(y_all, x)
-    n_in, n_out = f.n_in(), f.n_out()
-    blocks = [jacobian[o, i] for o in range(n_out) for i in range(n_in)]
-    hessian = ca.hessian(ca.dot(ca.vertcat(*mu), y_all), x)[0]
-    upper = [hessian[i, j] for i in range(n_in) for j in range(i, n_in)]
-    names_in = list(f.name_in())
-    names_jac = [f"d{o}_d{i}" for o in f.name_out() for i in names_in]
-    names_hess = [f"h_{names_in[i]}_{names_in[j]}" for i in range(n_in) for j in range(i, n_in)]
-    cse = {"cse": True}
-    return (ca.Function(name, u, y, names_in, list(f.name_out()), cse),
-            ca.Function(f"{name}_value_jacobian", u, [*y, *blocks], names_in, [*f.name_out(), *names_jac], cse),
-            ca.Function(f"{name}_value_hessian", [*u, *mu], [*y, *blocks, *upper],
-                        [*names_in, *(f"mu_{n}" for n in f.name_out())], [*f.name_out(), *names_jac, *names_hess],
-                        cse))
-
-
-def compile_tyre_kernels(model, inputs=("fz", "kappa", "alpha"), outputs=("fx", "fy"), *, name: str = "tyre",
-                         directory: Path | None = None, **options):
-    """:func:`tyre_kernels` of ``model.casadi_function(inputs, outputs, **options)`` compiled to C in one library
-    (cached in :func:`mftyre.compiled.cache_dir`, built once: ~10-20 s of gcc for the MF tyre) and loaded with
-    ``casadi.external``: the tuple (value, value_jacobian, value_hessian)."""
-    import casadi as ca
-
-    from .compiled import CASADI_LOCK, _key, cached_library
-
-    key = _key(model, {"kernels": name, "inputs": list(inputs), "outputs": list(outputs), "source": _SOURCE,
-                       **options})
-
-    def generate(folder):
-        kernels = tyre_kernels(model.casadi_function(inputs, outputs, name=name, **options))
-        gen = ca.CodeGenerator("mftyre_kernels.c", {"with_header": False})
-        for kernel in (*kernels, kernels[0].jacobian()):  # (CasADi's jac_<name>: the value's own first derivatives,
-            gen.add(kernel)                                 # which nlpsol's gradient of the Lagrangian asks for)
-        meta = {"inputs": list(inputs), "outputs": list(outputs), "checks": [], "toolchain": "casadi",
-                "functions": [k.name() for k in kernels]}
-        flags = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-fno-math-errno")  # as compile_external
-        return Path(gen.generate(str(folder) + os.sep)), flags, ("-lm",), meta
-
-    library = cached_library("mftyre_kernels", key, generate, directory)
-    with CASADI_LOCK:
-        return tuple(ca.external(n, str(library)) for n in (name, f"{name}_value_jacobian", f"{name}_value_hessian"))
+__all__ = ["assembled_nlp"]
 
 
 def _rows(matrix, count):
@@ -102,8 +34,8 @@ def assembled_nlp(w, f, g, inputs, outputs, kernels):
 
     ``w``: the SX decision variables; ``f``, ``g``: SX expressions of ``w`` and of the tyres' outputs, the SX
     symbols ``outputs[k]`` (n_out x n: one column per point) of tyre k at ``inputs[k]`` (n_in x n SX expressions of
-    ``w``); ``kernels[k]``: tyre k's (value, value_jacobian, value_hessian) (:func:`tyre_kernels`,
-    :func:`compile_tyre_kernels`).
+    ``w``); ``kernels[k]``: tyre k's (value, value_jacobian, value_hessian) (:func:`mftyre.compiled.tyre_kernels`,
+    :func:`mftyre.compiled.compile_tyre_kernels`).
 
     With u(w) the tyre inputs, J the tyre Jacobians there and H(mu) the Hessians of mu^T y (mu = dL/dy, the
     multipliers the Lagrangian L gives the tyre outputs), the NLP's derivatives are those of the local model

@@ -12,7 +12,8 @@ import pytest
 ca = pytest.importorskip("casadi")
 
 from mftyre.model import load_tir  # noqa: E402
-from mftyre.ocp import assembled_nlp, tyre_kernels  # noqa: E402
+from mftyre.compiled import tyre_kernels  # noqa: E402
+from mftyre.ocp import assembled_nlp  # noqa: E402
 
 from conftest import TIR_FILES  # noqa: E402
 
