@@ -23,6 +23,7 @@ __all__ = ["assembled_nlp"]
 
 
 def _rows(matrix, count):
+    """The first ``count`` rows of ``matrix``, each a 1 x n row (the arguments of a mapped scalar function)."""
     import casadi as ca
 
     return ca.vertsplit(matrix, list(range(count + 1)))
@@ -76,11 +77,7 @@ def assembled_nlp(w, f, g, inputs, outputs, kernels):
     u = tyre_inputs(x)
     u = u if isinstance(u, (list, tuple)) else [u]
     rows = [_rows(u[k], n_in[k]) for k in range(len(kernels))]
-
-    def values(x_rows):
-        return [ca.vertcat(*kernel[0].map(n[k])(*x_rows[k])) for k, kernel in enumerate(kernels)]
-
-    y = values(rows)
+    y = [ca.vertcat(*kernel[0].map(n[k])(*rows[k])) for k, kernel in enumerate(kernels)]
     g_mx = constraints(x, *y)
     f_mx = objective(x, *(y if ca.depends_on(f, y_all) else [ca.MX(v.sparsity()) for v in outputs]))
 
