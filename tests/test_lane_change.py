@@ -115,6 +115,16 @@ def test_assembled_route_reaches_the_same_optimum(problem, best):
     free-rolling wheels' tyres specialised to kappa = 0) solves the same NLP: the same time and pressures."""
     result = problem.solve("mf", "assembled")
     assert result.success
+    # its derivatives are CasADi's own (the expanded NLP's) at a random point near the initial guess
+    ours, arguments, _ = problem.build("mf", "assembled")
+    theirs = problem.build("mf", "expand")[0]
+    rng = np.random.default_rng(3)
+    x = arguments["x0"] * (1 + 0.05 * rng.standard_normal(arguments["x0"].size))
+    lam_g = rng.standard_normal(arguments["lbg"].size)
+    for name, args in (("nlp_jac_g", (x, [])), ("nlp_hess_l", (x, [], 0.7, lam_g))):
+        a, b = ours.get_function(name)(*args), theirs.get_function(name)(*args)
+        a, b = (np.array(m[-1] if isinstance(m, (list, tuple)) else m) for m in (a, b))
+        assert np.max(np.abs(a - b)) < 1e-9 * np.max(np.abs(b)), name
     assert result.time == pytest.approx(best.time, rel=1e-6)
     assert result.p_front == pytest.approx(best.p_front, rel=1e-6)
     assert result.p_rear == pytest.approx(best.p_rear, rel=1e-6)
