@@ -98,8 +98,9 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=3, help="alternating rounds (each route solved once per round)")
     ap.add_argument("--jit", action="store_true", help="also the jit route of the simple tyres (seconds of gcc)")
     ap.add_argument("--jit-mf", action="store_true",
-                    help="also the jit route of the MF tyre: at 30 intervals gcc -O1 took > 4 GB and ~10 min of CPU "
-                         "before the system killed it on the 2-core test machine")
+                    help="also the jit route of the MF tyre: gcc -O1 ran out of memory on the expanded MF problem "
+                         "(killed at 4.1 GB after ~10 min of CPU at 30 intervals; 'out of memory' after 5.2 GB at "
+                         "10 intervals)")
     ap.add_argument("--quick", action="store_true", help="only the yardsticks and the fastest MF routes")
     args = ap.parse_args(argv)
     with warnings.catch_warnings():
