@@ -69,27 +69,27 @@ def simple_tyre_function(model: MFModel, name: str = "simple_tyre", pressure: bo
     """A 4-parameter Magic Formula tyre (fz, kappa, alpha, vx, p) -> (fx, fy, mz) as a ``casadi.Function``:
     F = D Fz sin(C atan(B s - E (B s - atan(B s)))) for s = kappa (Fx) and s = -alpha (Fy), Mz = -t Fy, with D
     and the slip stiffness B C D of ``model``'s pure-slip curves at the nominal load (C = 1.3 lateral, 1.65
-    longitudinal, E = 0, t = 0.03 m); no speed effect. ``pressure=False``: no pressure effect either (the p input
-    unused). ``pressure=True``: D and the slip stiffness vary with the inflation pressure to first order in
-    dpi = (p - NOMPRES) / NOMPRES as the MF tyre's do at the nominal load and pressure: the friction by the
-    linear terms of the MF's mu factors (1 + PPX3 dpi, 1 + PPY3 dpi; (4.E13), (4.E23)), the slip stiffnesses by
-    their pressure slopes measured on ``model`` (central differences at NOMPRES +- 1 %), so the problem couples
-    the pressure to every node as the MF problem does."""
+    longitudinal, E = 0, t = 0.03 m); no speed effect. ``pressure=False``: the curves at INFLPRES and no pressure
+    effect (the p input unused). ``pressure=True``: the curves at NOMPRES, D and the slip stiffness varying with
+    the inflation pressure to first order in dpi = (p - NOMPRES) / NOMPRES as the MF tyre's do at the nominal load
+    and pressure: the friction by the linear terms of the MF's mu factors (1 + PPX3 dpi, 1 + PPY3 dpi; (4.E13),
+    (4.E23)), the slip stiffnesses by their pressure slopes measured on ``model`` (central differences at
+    NOMPRES +- 1 %, ``limits=False``), so the problem couples the pressure to every node as the MF problem does."""
     import casadi as ca
 
     prm = model.params
     fz0, p0 = float(prm.FNOMIN), float(prm.NOMPRES)
 
-    def stiffnesses(p):
-        out = model.evaluate(fz0, np.array([0.0, 1e-4, 0.0, 0.0]), np.array([0.0, 0.0, 0.0, 1e-4]), p=p)
+    def stiffnesses(p, **options):
+        out = model.evaluate(fz0, np.array([0.0, 1e-4, 0.0, 0.0]), np.array([0.0, 0.0, 0.0, 1e-4]), p=p, **options)
         return (out.fx[1] - out.fx[0]) / 1e-4 / fz0, abs(out.fy[3] - out.fy[2]) / 1e-4 / fz0
 
-    kx, ky = stiffnesses(p0)
+    kx, ky = stiffnesses(p0, limits=False) if pressure else stiffnesses(None)
     dx = float(prm.PDX1 * prm.LMUX)
     dy = float(abs(prm.PDY1) * prm.LMUY)
     fz, kappa, alpha, vx, p = (ca.SX.sym(n) for n in ("fz", "kappa", "alpha", "vx", "p"))
     if pressure:
-        (kx_hi, ky_hi), (kx_lo, ky_lo) = stiffnesses(1.01 * p0), stiffnesses(0.99 * p0)
+        (kx_hi, ky_hi), (kx_lo, ky_lo) = (stiffnesses(f * p0, limits=False) for f in (1.01, 0.99))
         dpi = (p - p0) / p0
         kx = kx * (1 + (kx_hi - kx_lo) / (0.02 * kx) * dpi)
         ky = ky * (1 + (ky_hi - ky_lo) / (0.02 * ky) * dpi)

@@ -132,8 +132,9 @@ def test_assembled_route_reaches_the_same_optimum(problem, best):
 
 
 def test_pressure_yardstick_follows_the_mf_tyres_pressure_slopes(problem):
-    """tyre "simple-p": at NOMPRES the simple tyre; its cornering stiffness and friction change with the pressure
-    by the MF tyre's first-order slopes (the stiffness measured on the MF tyre, the friction by PPY3)."""
+    """tyre "simple-p": at NOMPRES the simple tyre (INFLPRES = NOMPRES in this file); its cornering stiffness and
+    friction change with the pressure by the MF tyre's first-order slopes (the stiffness measured on the MF tyre,
+    the friction by PPY3)."""
     from mftyre.lane_change import simple_tyre_function
 
     model = problem.tyres["FL"]
