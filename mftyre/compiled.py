@@ -28,7 +28,9 @@ reproduces the MFeval tables at the tolerances of the NumPy path (tests/test_com
 Derivatives (:func:`compile_external`): CasADi's own C for the function, its Jacobian (``jac_<name>``) and on
 request the Jacobian of that (``jac_jac_<name>``, second derivatives), compiled once and loaded with
 ``casadi.external``: an NLP (IPOPT) calls the compiled tyre and its derivatives while the rest of the problem stays
-a small graph, instead of generating C for the whole problem.
+a small graph, instead of generating C for the whole problem. :func:`compile_tyre_kernels`: the fused kernels
+(value; value and Jacobian; value, Jacobian and Hessian of mu^T y) from which :func:`mftyre.ocp.assembled_nlp`
+assembles an NLP's exact derivatives (the lane change's fastest route).
 
 Cache. The key is a SHA-256 of everything that defines the function (parameter values, side, options, input and
 output names, the versions of mftyre and CasADi, the source of this module, the backend and the equations, the
@@ -68,7 +70,8 @@ from .errors import MFTyreError, ModelInputError
 from .inputs import check_finite, check_finite_outputs, check_pressure, input_ranges, warn_outside
 
 __all__ = ["CompiledFunction", "CacheSecurityError", "compile_model", "compile_function", "compile_external",
-           "cached_library", "compile_c", "cache_dir", "install_libraries", "platform_tag", "generate_c", "CASADI_LOCK"]
+           "tyre_kernels", "compile_tyre_kernels", "cached_library", "compile_c", "cache_dir", "install_libraries",
+           "platform_tag", "generate_c", "CASADI_LOCK"]
 
 _BLOCK = 256  # points per call of the vectorised kernel (inputs broadcast into stack buffers of this length)
 # -O1 with loop vectorisation runs the straight-line kernel as fast as -O3 and compiles in half the time.
@@ -1000,6 +1003,64 @@ def compile_external(model, inputs=("fz", "kappa", "alpha"), outputs=("fx", "fy"
     with CASADI_LOCK:
         return ca.external(name, str(library), {} if hessian else {"jacobian_options": {"enable_fd": True},
                                                                    "der_options": {"enable_fd": True}})
+
+
+def tyre_kernels(f, name: str | None = None):
+    """(value, value_jacobian, value_hessian) of the tyre ``f`` (an SX ``casadi.Function`` of n_in scalar inputs
+    and n_out scalar outputs), each an SX function with shared subexpressions:
+
+    * ``value(u_1..u_n_in) -> (y_1..y_n_out)``;
+    * ``value_jacobian(u) -> (y, dy_o/du_i for o, i)`` (output-major);
+    * ``value_hessian(u, mu_1..mu_n_out) -> (y, dy_o/du_i, d2(mu^T y)/du_i du_j for i <= j)`` (row-major upper
+      triangle)."""
+    import casadi as ca
+
+    name = name or f.name()
+    if any(f.size_in(i) != (1, 1) for i in range(f.n_in())) or any(f.size_out(k) != (1, 1)
+                                                                    for k in range(f.n_out())):
+        raise ValueError(f"tyre function {f.name()} must have scalar inputs and outputs")
+    u = f.sx_in()
+    y = f.call(u)
+    x, y_all = ca.vertcat(*u), ca.vertcat(*y)
+    mu = [ca.SX.sym(f"mu_{n}") for n in f.name_out()]
+    jacobian = ca.jacobian(y_all, x)
+    n_in, n_out = f.n_in(), f.n_out()
+    blocks = [jacobian[o, i] for o in range(n_out) for i in range(n_in)]
+    hessian = ca.hessian(ca.dot(ca.vertcat(*mu), y_all), x)[0]
+    upper = [hessian[i, j] for i in range(n_in) for j in range(i, n_in)]
+    names_in = list(f.name_in())
+    names_jac = [f"d{o}_d{i}" for o in f.name_out() for i in names_in]
+    names_hess = [f"h_{names_in[i]}_{names_in[j]}" for i in range(n_in) for j in range(i, n_in)]
+    cse = {"cse": True}
+    return (ca.Function(name, u, y, names_in, list(f.name_out()), cse),
+            ca.Function(f"{name}_value_jacobian", u, [*y, *blocks], names_in, [*f.name_out(), *names_jac], cse),
+            ca.Function(f"{name}_value_hessian", [*u, *mu], [*y, *blocks, *upper],
+                        [*names_in, *(f"mu_{n}" for n in f.name_out())], [*f.name_out(), *names_jac, *names_hess],
+                        cse))
+
+
+def compile_tyre_kernels(model, inputs=("fz", "kappa", "alpha"), outputs=("fx", "fy"), *, name: str = "tyre",
+                         directory: Path | None = None, **options):
+    """:func:`tyre_kernels` of ``model.casadi_function(inputs, outputs, **options)`` compiled to C in one library
+    (cached in :func:`cache_dir`, built once: ~10-20 s of gcc for the MF tyre) and loaded with
+    ``casadi.external``: the tuple (value, value_jacobian, value_hessian)."""
+    import casadi as ca
+
+    key = _key(model, {"kernels": name, "inputs": list(inputs), "outputs": list(outputs), **options})
+
+    def generate(folder):
+        kernels = tyre_kernels(model.casadi_function(inputs, outputs, name=name, **options))
+        gen = ca.CodeGenerator("mftyre_kernels.c", {"with_header": False})
+        for kernel in (*kernels, kernels[0].jacobian()):  # (CasADi's jac_<name>: the value's own first derivatives,
+            gen.add(kernel)                                 # which nlpsol's gradient of the Lagrangian asks for)
+        meta = {"inputs": list(inputs), "outputs": list(outputs), "checks": [], "toolchain": "casadi",
+                "functions": [k.name() for k in kernels]}
+        flags = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-fno-math-errno")  # as compile_external
+        return Path(gen.generate(str(folder) + os.sep)), flags, ("-lm",), meta
+
+    library = cached_library("mftyre_kernels", key, generate, directory)
+    with CASADI_LOCK:
+        return tuple(ca.external(n, str(library)) for n in (name, f"{name}_value_jacobian", f"{name}_value_hessian"))
 
 
 # ------------------------------------------------------------------------------------------ shipped libraries

@@ -3,8 +3,8 @@
     >>> from mftyre.lane_change import LaneChange
     >>> problem = LaneChange.from_tir("tir_files/car_205_60R15_mf61.tir", intervals=30)
     >>> result = problem.solve()                        # route "expand": no compiler needed
-    >>> result = problem.solve(route="external")        # the fastest per iteration (compiled once, cached)
-    >>> result.time, result.p_front, result.stats
+    >>> result = problem.solve(route="assembled")       # the fastest per iteration (kernels compiled once, cached)
+    >>> result.time, result.p_front, result.iterations
 
 Model (planar, ISO body axes at the CoG, as :mod:`mftyre.vehicle`): states X, Y, heading psi, body velocities vx,
 vy and yaw rate r; controls: the steer angle delta of the front wheels and the longitudinal slip kappa of the two
@@ -23,16 +23,27 @@ peaks). Trapezoidal collocation on ``intervals`` equal intervals: the tyres are 
 4 (intervals + 1) calls as one mapped call.
 
 Tyres and routes. ``tyre="mf"``: :meth:`mftyre.MFModel.casadi_function` with ``limits="smooth"`` (the pressures are
-decision variables: full slope at and a hair beyond their bounds) and ``smooth=True`` (per-quantity widths);
-``tyre="simple"``: a 4-parameter Magic Formula (B, C, D, E; D the friction coefficient, Fx and Fy independent,
-Mz = -t Fy with a constant trail) whose peaks match the MF tyre's at the nominal load, the yardstick of the
-cost per iteration. ``route`` (how CasADi evaluates the problem; benchmarks/bench_ocp.py measures them side by
-side): ``"sx"`` the MX graph calling the SX tyre function, ``"expand"`` the whole NLP expanded to one SX graph
-(``expand=True``), ``"external"`` the tyre compiled to C with its Jacobian and Hessian
-(:func:`mftyre.compiled.compile_external`, ``hessian=True``; the fastest measured), ``"external-expand"`` the
-same inside the expanded NLP (CasADi's SX call nodes: 4x slower per iteration), ``"external-lbfgs"`` the same without the Hessian
-and IPOPT's limited-memory quasi-Newton, ``"jit"`` the expanded NLP compiled to C by CasADi's just-in-time
-compiler (seconds of gcc per problem size).
+decision variables: full slope at and a hair beyond their bounds) and ``smooth=True`` (per-quantity widths); on the
+free-rolling axle specialised to kappa = 0 (``fixed=``: the same equations, 30 % fewer operations in the Hessian).
+Yardsticks of the cost per iteration: ``tyre="simple"``, a 4-parameter Magic Formula (B, C, D, E; D the friction
+coefficient, Fx and Fy independent, Mz = -t Fy with a constant trail) whose peaks and slip stiffnesses match the MF
+tyre's at the nominal load and pressure, no pressure effect (its NLP has empty pressure columns); ``"simple-p"``
+the same with the friction and slip stiffnesses following the pressure to first order as the MF tyre's do
+(:func:`simple_tyre_function`), so that its NLP has the MF problem's sparsity. ``route`` (how CasADi evaluates the
+problem; ``python benchmarks/bench_ocp.py`` measures them side by side):
+
+* ``"assembled"``, the fastest per iteration: the vehicle part in SX and the tyre's kernels (value; value and
+  Jacobian; value, Jacobian and Hessian of mu^T y) compiled to C once (:func:`mftyre.compiled.compile_tyre_kernels`,
+  ~3 s of gcc per wheel, cached), each mapped over all nodes in one call; the NLP's exact constraint Jacobian and
+  Hessian of the Lagrangian assembled by the chain rule (:func:`mftyre.ocp.assembled_nlp`) and given to nlpsol;
+  the same NLP and optimum as ``"expand"``;
+* ``"expand"`` the whole NLP expanded to one SX graph (``expand=True``; no compiler);
+* ``"sx"`` the MX graph calling the SX tyre function;
+* ``"external"`` the tyre compiled with its Jacobian and Hessian (:func:`mftyre.compiled.compile_external`,
+  ``hessian=True``) and CasADi differentiating the MX graph around it; ``"external-expand"`` the same inside the
+  expanded NLP (CasADi's SX call nodes); ``"external-lbfgs"`` ``hessian=False`` and IPOPT's limited-memory
+  quasi-Newton;
+* ``"jit"`` the expanded NLP compiled to C by CasADi's just-in-time compiler (gcc at every new problem).
 """
 from __future__ import annotations
 
@@ -43,30 +54,47 @@ import numpy as np
 
 from .errors import ModelInputError
 from .model import MFModel, load_tir
+from .ocp import assembled_nlp
 from .vehicle import WHEELS, VehicleParams
 
 __all__ = ["LaneChange", "LaneChangeResult", "ROUTES", "simple_tyre_function"]
 
-ROUTES = ("sx", "expand", "external", "external-expand", "external-lbfgs", "jit")
+ROUTES = ("sx", "expand", "external", "assembled", "external-expand", "external-lbfgs", "jit")
+TYRES = ("mf", "simple", "simple-p")
 _STATES = ("X", "Y", "psi", "vx", "vy", "r")
 _CONTROLS = ("delta", "kappa")
 
 
-def simple_tyre_function(model: MFModel, name: str = "simple_tyre"):
+def simple_tyre_function(model: MFModel, name: str = "simple_tyre", pressure: bool = False):
     """A 4-parameter Magic Formula tyre (fz, kappa, alpha, vx, p) -> (fx, fy, mz) as a ``casadi.Function``:
     F = D Fz sin(C atan(B s - E (B s - atan(B s)))) for s = kappa (Fx) and s = -alpha (Fy), Mz = -t Fy, with D
     and the slip stiffness B C D of ``model``'s pure-slip curves at the nominal load (C = 1.3 lateral, 1.65
-    longitudinal, E = 0, t = 0.03 m); no pressure or speed effect."""
+    longitudinal, E = 0, t = 0.03 m); no speed effect. ``pressure=False``: the curves at INFLPRES and no pressure
+    effect (the p input unused). ``pressure=True``: the curves at NOMPRES, D and the slip stiffness varying with
+    the inflation pressure to first order in dpi = (p - NOMPRES) / NOMPRES as the MF tyre's do at the nominal load
+    and pressure: the friction by the linear terms of the MF's mu factors (1 + PPX3 dpi, 1 + PPY3 dpi; (4.E13),
+    (4.E23)), the slip stiffnesses by their pressure slopes measured on ``model`` (central differences at
+    NOMPRES +- 1 %, ``limits=False``), so the problem couples the pressure to every node as the MF problem does."""
     import casadi as ca
 
     prm = model.params
-    fz0 = float(prm.FNOMIN)
-    out = model.evaluate(fz0, np.array([0.0, 1e-4, 0.0, 0.0]), np.array([0.0, 0.0, 0.0, 1e-4]))
-    kx = (out.fx[1] - out.fx[0]) / 1e-4 / fz0
-    ky = abs(out.fy[3] - out.fy[2]) / 1e-4 / fz0
+    fz0, p0 = float(prm.FNOMIN), float(prm.NOMPRES)
+
+    def stiffnesses(p, **options):
+        out = model.evaluate(fz0, np.array([0.0, 1e-4, 0.0, 0.0]), np.array([0.0, 0.0, 0.0, 1e-4]), p=p, **options)
+        return (out.fx[1] - out.fx[0]) / 1e-4 / fz0, abs(out.fy[3] - out.fy[2]) / 1e-4 / fz0
+
+    kx, ky = stiffnesses(p0, limits=False) if pressure else stiffnesses(None)
     dx = float(prm.PDX1 * prm.LMUX)
     dy = float(abs(prm.PDY1) * prm.LMUY)
     fz, kappa, alpha, vx, p = (ca.SX.sym(n) for n in ("fz", "kappa", "alpha", "vx", "p"))
+    if pressure:
+        (kx_hi, ky_hi), (kx_lo, ky_lo) = (stiffnesses(f * p0, limits=False) for f in (1.01, 0.99))
+        dpi = (p - p0) / p0
+        kx = kx * (1 + (kx_hi - kx_lo) / (0.02 * kx) * dpi)
+        ky = ky * (1 + (ky_hi - ky_lo) / (0.02 * ky) * dpi)
+        dx = dx * (1 + float(prm.PPX3) * dpi)
+        dy = dy * (1 + float(prm.PPY3) * dpi)
 
     def curve(slip, b, c, d):
         return d * fz * ca.sin(c * ca.atan(b * slip))
@@ -135,33 +163,44 @@ class LaneChange:
         return cls({"FL": left, "FR": right, "RL": left, "RR": right}, params, **kwargs)
 
     # ---------------------------------------------------------------------------------------------- tyres
+    def _inputs(self, wheel: str) -> tuple:
+        """The tyre inputs that vary over the manoeuvre: all but kappa on the undriven axle (free rolling, the MF
+        tyre's functions are specialised to kappa = 0 there: 30 % fewer operations in its Hessian)."""
+        driven = (wheel[0] == "F") == (self.params.drive == "front")
+        return ("fz", "kappa", "alpha", "vx", "p") if driven else ("fz", "alpha", "vx", "p")
+
     def _tyre_function(self, wheel: str, tyre: str, route: str):
-        model = self.tyres[wheel]
-        if tyre == "simple":
-            return simple_tyre_function(model, f"simple_{wheel}")
-        inputs, outputs = ("fz", "kappa", "alpha", "vx", "p"), ("fx", "fy", "mz")
-        options = dict(limits="smooth", smooth=True)
+        """The tyre of ``wheel`` as a casadi.Function of :meth:`_inputs` -> (fx, fy, mz); for route "assembled"
+        its kernels (:mod:`mftyre.ocp`)."""
+        import casadi as ca
+
+        from .compiled import compile_tyre_kernels, tyre_kernels
+
+        model, inputs, outputs = self.tyres[wheel], self._inputs(wheel), ("fx", "fy", "mz")
+        if tyre in ("simple", "simple-p"):
+            f = simple_tyre_function(model, f"simple_{wheel}", pressure=tyre == "simple-p")
+            sx = [ca.SX.sym(name) if name in inputs else ca.SX(0.0) for name in f.name_in()]
+            f = ca.Function(f.name(), [v for v in sx if v.is_symbolic()], f.call(sx), list(inputs), list(outputs))
+            return tyre_kernels(f) if route == "assembled" else f
+        fixed = {} if "kappa" in inputs else {"fixed": {"kappa": 0.0}}
+        options = dict(limits="smooth", smooth=True, **fixed)
+        if route == "assembled":
+            return compile_tyre_kernels(model, inputs, outputs, name=f"mf_{wheel}", **options)
         if route in ("external", "external-expand", "external-lbfgs"):
             from .compiled import compile_external
 
-            return compile_external(model, inputs, outputs, hessian=route == "external", name=f"mf_{wheel}",
-                                    **options)
+            return compile_external(model, inputs, outputs, hessian=route != "external-lbfgs",
+                                    name=f"mf_{wheel}", **options)
         return model.casadi_function(inputs, outputs, name=f"mf_{wheel}", **options)
 
     # ---------------------------------------------------------------------------------------------- problem
-    def build(self, tyre: str = "mf", route: str = "expand", ipopt_options: dict | None = None):
-        """(solver, initial guess, bounds, unpack) of the NLP; see :meth:`solve`."""
+    def _equations(self, X, U, T, pv, tyres):
+        """(objective, constraints, lbg, ubg) of the trajectory X (states x nodes), U (controls x nodes), time T and
+        pressures pv [bar], MX or SX; ``tyres(rows)`` returns the (fx, fy, mz) rows of each wheel (in
+        :data:`WHEELS` order) for ``rows``, each wheel's rows of :meth:`_inputs` over the nodes."""
         import casadi as ca
 
-        if tyre not in ("mf", "simple"):
-            raise ModelInputError(f"tyre must be 'mf' or 'simple', got {tyre!r}")
-        if route not in ROUTES:
-            raise ModelInputError(f"route must be one of {ROUTES}, got {route!r}")
         P, n = self.params, self.intervals + 1
-        X = ca.MX.sym("x", len(_STATES), n)
-        U = ca.MX.sym("u", len(_CONTROLS), n)
-        T = ca.MX.sym("T")
-        pv = ca.MX.sym("p", 2)  # bar
         psi, vx, vy, r = X[2, :], X[3, :], X[4, :], X[5, :]
         delta, kappa = U[0, :], U[1, :]
         L = P.wheelbase
@@ -172,9 +211,9 @@ class LaneChange:
                     "R": P.mass * ay / P.track_rear * (P.a / L * P.roll_centre_rear
                                                        + (1 - P.roll_stiffness_front) * (P.h_cog - h_ra))}
         static = {"F": P.mass * P.g * P.b / L / 2, "R": P.mass * P.g * P.a / L / 2}
-        rows = {k: [] for k in ("fz", "kappa", "alpha", "vx", "p")}
-        geometry = []
-        for w, (x, y) in P.positions().items():
+        rows, geometry = [], []
+        for w in WHEELS:
+            x, y = P.positions()[w]
             front = w[0] == "F"
             d = delta if front else 0.0 * delta
             vxw_body, vyw_body = vx - r * y, vy + r * x
@@ -182,24 +221,16 @@ class LaneChange:
             vxw = vxw_body * cd + vyw_body * sd
             vyw = -vxw_body * sd + vyw_body * cd
             axle = "F" if front else "R"
-            rows["fz"].append(static[axle] + (-1.0 if y > 0 else 1.0) * transfer[axle])
-            rows["kappa"].append(0.0 * kappa if front == (P.drive == "rear") else kappa)
-            rows["alpha"].append(ca.atan(vyw / vxw))
-            rows["vx"].append(vxw)
-            rows["p"].append(ca.repmat(pv[0 if front else 1] * 1e5, 1, n))
+            row = dict(fz=static[axle] + (-1.0 if y > 0 else 1.0) * transfer[axle], kappa=kappa,
+                       alpha=ca.atan(vyw / vxw), vx=vxw, p=ca.repmat(pv[0 if front else 1] * 1e5, 1, n))
+            rows.append(tuple(row[name] for name in self._inputs(w)))
             geometry.append((x, y, sd, cd))
-        # one mapped call per wheel model over every node
-        fx, fy, mz = [], [], []
-        for k, w in enumerate(WHEELS):
-            f = self._tyre_function(w, tyre, route)
-            out = f.map(n)(*(rows[name][k] for name in ("fz", "kappa", "alpha", "vx", "p")))
-            fx.append(out[0]), fy.append(out[1]), mz.append(out[2])
         sum_fx = sum_fy = yaw = 0.0
-        for k, (x, y, sd, cd) in enumerate(geometry):
-            fx_b = fx[k] * cd - fy[k] * sd
-            fy_b = fx[k] * sd + fy[k] * cd
+        for (x, y, sd, cd), (fx, fy, mz) in zip(geometry, tyres(rows)):
+            fx_b = fx * cd - fy * sd
+            fy_b = fx * sd + fy * cd
             sum_fx, sum_fy = sum_fx + fx_b, sum_fy + fy_b
-            yaw = yaw + x * fy_b - y * fx_b + mz[k]
+            yaw = yaw + x * fy_b - y * fx_b + mz
         xdot = ca.vertcat(vx * ca.cos(psi) - vy * ca.sin(psi), vx * ca.sin(psi) + vy * ca.cos(psi), r,
                           sum_fx / P.mass + vy * r, sum_fy / P.mass - vx * r, yaw / self.yaw_inertia)
         h = T / self.intervals
@@ -208,12 +239,49 @@ class LaneChange:
         # objective: the time, and a small penalty on the control changes (no chattering between nodes)
         smoothness = ca.sumsqr(ca.diff(delta, 1, 1)) + ca.sumsqr(ca.diff(kappa, 1, 1))
         objective = T + 1e-2 * smoothness
-        alpha_all = ca.vertcat(*rows["alpha"])
+        alpha_all = ca.vertcat(*(row[-3] for row in rows))
         g = ca.vertcat(ca.vec(defects / ca.repmat(scale, 1, self.intervals)), ca.vec(alpha_all))
         lbg = np.r_[np.zeros(defects.numel()), np.full(alpha_all.numel(), -0.3)]
         ubg = np.r_[np.zeros(defects.numel()), np.full(alpha_all.numel(), 0.3)]
-        w = ca.vertcat(ca.vec(X), ca.vec(U), T, pv)
-        options = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes"}
+        return objective, g, lbg, ubg
+
+    def _symbols(self, kind):
+        import casadi as ca
+
+        n = self.intervals + 1
+        X, U, T, pv = kind.sym("x", len(_STATES), n), kind.sym("u", len(_CONTROLS), n), kind.sym("T"), kind.sym("p", 2)
+        return X, U, T, pv, ca.vertcat(ca.vec(X), ca.vec(U), T, pv)
+
+    def build(self, tyre: str = "mf", route: str = "expand", ipopt_options: dict | None = None):
+        """(solver, initial guess, bounds, unpack) of the NLP; see :meth:`solve`."""
+        import casadi as ca
+
+        if tyre not in TYRES:
+            raise ModelInputError(f"tyre must be one of {TYRES}, got {tyre!r}")
+        if route not in ROUTES:
+            raise ModelInputError(f"route must be one of {ROUTES}, got {route!r}")
+        n = self.intervals + 1
+        functions = [self._tyre_function(w, tyre, route) for w in WHEELS]
+        options = {}
+        if route == "assembled":
+            X, U, T, pv, w = self._symbols(ca.SX)
+            inputs, outputs = [], [ca.SX.sym(f"y_{wheel}", 3, n) for wheel in WHEELS]
+
+            def tyres(rows):  # the tyres' outputs as symbols: the vehicle part alone in SX
+                inputs.extend(ca.vertcat(*row) for row in rows)
+                return [(y[0, :], y[1, :], y[2, :]) for y in outputs]
+
+            objective, g, lbg, ubg = self._equations(X, U, T, pv, tyres)
+            nlp, options = assembled_nlp(w, objective, g, inputs, outputs, functions)  # (the tyres' kernels)
+        else:
+            X, U, T, pv, w = self._symbols(ca.MX)
+
+            def tyres(rows):  # one mapped call per wheel over every node
+                return [f.map(n)(*row) for f, row in zip(functions, rows)]
+
+            objective, g, lbg, ubg = self._equations(X, U, T, pv, tyres)
+            nlp = {"x": w, "f": objective, "g": g}
+        options.update({"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes"})
         if route in ("expand", "external-expand", "jit"):
             options["expand"] = True
         if route == "jit":
@@ -221,7 +289,7 @@ class LaneChange:
         if route == "external-lbfgs":
             options["ipopt.hessian_approximation"] = "limited-memory"
         options.update({f"ipopt.{k}": v for k, v in (ipopt_options or {}).items()})
-        solver = ca.nlpsol("lane_change", "ipopt", {"x": w, "f": objective, "g": g}, options)
+        solver = ca.nlpsol("lane_change", "ipopt", nlp, options)
         # bounds and the initial guess (straight line at constant speed, the lateral offset as a smooth step)
         lbx = np.full((len(_STATES), n), -np.inf)
         ubx = np.full((len(_STATES), n), np.inf)

@@ -110,6 +110,55 @@ def test_simple_tyre_and_routes_agree(problem, best):
     assert set(WHEELS) == set(problem.tyres)
 
 
+def test_assembled_route_reaches_the_same_optimum(problem, best):
+    """Route "assembled" (compiled tyre kernels, the NLP's exact derivatives assembled by the chain rule; the
+    free-rolling wheels' tyres specialised to kappa = 0) solves the same NLP: the same time and pressures."""
+    result = problem.solve("mf", "assembled")
+    assert result.success
+    # its derivatives are CasADi's own (the expanded NLP's) at a random point near the initial guess
+    ours, arguments, _ = problem.build("mf", "assembled")
+    theirs = problem.build("mf", "expand")[0]
+    rng = np.random.default_rng(3)
+    x = arguments["x0"] * (1 + 0.05 * rng.standard_normal(arguments["x0"].size))
+    lam_g = rng.standard_normal(arguments["lbg"].size)
+    for name, args in (("nlp_jac_g", (x, [])), ("nlp_hess_l", (x, [], 0.7, lam_g))):
+        a, b = ours.get_function(name)(*args), theirs.get_function(name)(*args)
+        a, b = (np.array(m[-1] if isinstance(m, (list, tuple)) else m) for m in (a, b))
+        assert np.max(np.abs(a - b)) < 1e-9 * np.max(np.abs(b)), name
+    assert result.time == pytest.approx(best.time, rel=1e-6)
+    assert result.p_front == pytest.approx(best.p_front, rel=1e-6)
+    assert result.p_rear == pytest.approx(best.p_rear, rel=1e-6)
+    assert result.iterations <= best.iterations + 2
+
+
+def test_pressure_yardstick_follows_the_mf_tyres_pressure_slopes(problem):
+    """tyre "simple-p": at NOMPRES the simple tyre (INFLPRES = NOMPRES in this file); its cornering stiffness and
+    friction change with the pressure by the MF tyre's first-order slopes (the stiffness measured on the MF tyre,
+    the friction by PPY3)."""
+    from mftyre.lane_change import simple_tyre_function
+
+    model = problem.tyres["FL"]
+    prm = model.params
+    plain, with_p = simple_tyre_function(model), simple_tyre_function(model, pressure=True)
+    fz0, p0 = float(prm.FNOMIN), float(prm.NOMPRES)
+    for alpha in (-0.01, 0.02, 0.2):
+        assert float(with_p(fz0, 0.0, alpha, 20.0, p0)[1]) == pytest.approx(float(plain(fz0, 0.0, alpha, 20.0, p0)[1]))
+
+    def mf_stiffness(p):  # (the MF tyre's force at zero slip, its offset SVy, excluded)
+        fy = model.evaluate(fz0, 0.0, np.array([0.0, -1e-4]), p=p).fy
+        return float(fy[1] - fy[0]) / 1e-4
+
+    def simple_stiffness(p):
+        return float(with_p(fz0, 0.0, -1e-4, 20.0, p)[1]) / 1e-4
+
+    for p in (0.95 * p0, 1.05 * p0):
+        assert simple_stiffness(p) / simple_stiffness(p0) - 1 == pytest.approx(mf_stiffness(p) / mf_stiffness(p0) - 1,
+                                                                                rel=0.1)
+    # far beyond the peak the force is D Fz sin(C pi / 2): the friction's linear pressure term alone
+    ratio = float(with_p(fz0, 0.0, -1.5, 20.0, 1.05 * p0)[1]) / float(with_p(fz0, 0.0, -1.5, 20.0, p0)[1])
+    assert ratio == pytest.approx(1 + 0.05 * float(prm.PPY3), rel=1e-3)
+
+
 def test_lane_change_rejects_bad_inputs(problem):
     from mftyre.errors import ModelInputError
 
