@@ -98,18 +98,30 @@ def reduce_sweeps(data: TyreData, programme: Programme | None = None, *, bins: i
     branch = rows["BRANCH"].to_numpy()
     kind = rows["KIND"].to_numpy()
     seg = rows["SEGMENT"].to_numpy()
-    branch_parts, mean_parts, relaxation = [], [], []
-    for s in np.unique(sweep_id[sweep_id >= 0]):
-        idx = np.flatnonzero(sweep_id == s)
+    sweeps = np.unique(sweep_id[sweep_id >= 0])
+    first = {s: np.flatnonzero(sweep_id == s) for s in sweeps}
+    found = {s: _sweep_relaxation(frame, idx, kind[idx[0]], bins) for s, idx in first.items()}
+    relaxation = pd.DataFrame([dict(sweep=int(s), kind=kind[first[s][0]], length=f[0], spread_ratio=f[1],
+                                    condition=tuple(values[first[s][0], [numeric.index(c) for c in _CONDITION]]))
+                               for s, f in found.items() if f is not None],
+                              columns=["sweep", "kind", "length", "spread_ratio", "condition"])
+    branch_parts, mean_parts = [], []
+    for s in sweeps:
+        idx = first[s]
         k = kind[idx[0]]
         col = numeric.index(_SWEPT[k])
         per = _branch_means(values[idx], col, branch[idx], numeric, bins, min_per_bin)
         branch_parts += [part.assign(BRANCH=direction, SWEEP=s, KIND=k) for direction, part in per.items()]
-        length = _sweep_relaxation(frame, idx, k, bins)
-        if length is not None:
-            relaxation.append(dict(sweep=int(s), kind=k, length=length[0], spread_ratio=length[1]))
+        if found[s] is not None:
+            # both slips relaxed: the swept one with the sweep's length, the held one (the slip angle of a
+            # combined sweep, still relaxing from the ramp before it) with that of its sweeps at the condition
+            sigma, _, step, window = found[s]
             relaxed = values[idx].copy()
-            relaxed[:, col] = relaxed_slip(relaxed[:, col], length[2], length[0])
+            for other in _RELAXED_FORCE:
+                length = sigma if other == k else _condition_length(relaxation, other, values[idx[0]], numeric)
+                if length is not None:
+                    c = numeric.index(_SWEPT[other])
+                    relaxed[:, c] = relaxed_slip(values[window, c], step, length)[window.size - idx.size:]
             per = _branch_means(relaxed, col, branch[idx], numeric, bins, min_per_bin)
         if len(per) == 2:
             # bins measured one way only are left out unless the lag was undone (then nothing is left to cancel)
@@ -117,7 +129,7 @@ def reduce_sweeps(data: TyreData, programme: Programme | None = None, *, bins: i
             common = up.index.intersection(down.index)
             both = (up.loc[common, numeric] + down.loc[common, numeric]) / 2.0
             both["N"] = up.loc[common, "N"] + down.loc[common, "N"]
-            if length is not None:
+            if found[s] is not None:
                 both = pd.concat([both, up.drop(common), down.drop(common)]).sort_index()
             both = both.reset_index()
         elif per:
@@ -137,7 +149,7 @@ def reduce_sweeps(data: TyreData, programme: Programme | None = None, *, bins: i
     dropped = int(np.sum(kind == "transition"))
     note = (f"reduced per sweep: {len(frame)} samples -> {len(mean)} binned means ({bins} bins per sweep, up and "
             f"down branches averaged); {dropped} transition samples left out")
-    relaxation = pd.DataFrame(relaxation, columns=["sweep", "kind", "length", "spread_ratio"])
+    relaxation = relaxation.drop(columns=["condition"])
     if len(relaxation):
         note += "; slip relaxation undone: " + _relaxation_summary(relaxation)
     mean_data = data.with_frame(mean, note)
@@ -169,24 +181,48 @@ def _branch_means(values, col, branch, numeric, bins, min_per_bin) -> dict:
 
 #: the force whose curve over the relaxed slip a sweep's relaxation length straightens, per kind of sweep
 _RELAXED_FORCE = {"slip_angle": "FY", "slip_ratio": "FX"}
+#: the levels that make a sweep's condition (the relaxation length of its held slip is its kind's there)
+_CONDITION = ("FZ_LEVEL", "P_LEVEL", "IA_LEVEL")
+
+
+def _condition_length(relaxation: pd.DataFrame, kind: str, row, numeric) -> float | None:
+    """The median relaxation length of the sweeps of ``kind`` at the condition (load, pressure and camber level)
+    of ``row``; over all of that kind's sweeps when none is at the condition; None when there is none."""
+    own = relaxation[relaxation["kind"] == kind]
+    if not len(own):
+        return None
+    key = tuple(row[[numeric.index(c) for c in _CONDITION]])
+    here = own["length"][[c == key for c in own["condition"]]]
+    return float(np.median(here if len(here) else own["length"]))
 
 
 def _sweep_relaxation(frame, idx, kind, bins):
-    """(relaxation length [m], spread ratio, distance step [m]) of one slip sweep, or None when the sweep is no
-    slip sweep, has no TIME, force or forward speed, or is sampled unevenly."""
+    """(relaxation length [m], spread ratio, distance step [m], rows) of one slip sweep: ``rows`` the sweep's
+    rows ``idx`` preceded by the samples before it, evenly in time, up to as many as the sweep has (the contact
+    is still relaxing from what came before when the sweep starts); None when the sweep is no slip sweep, has no
+    TIME, force or forward speed, or is sampled unevenly."""
     force = _RELAXED_FORCE.get(kind)
     if force is None or "TIME" not in frame or force not in frame:
         return None
-    t, vx = frame["TIME"].to_numpy(float)[idx], frame["VX"].to_numpy(float)[idx]
-    f, x = frame[force].to_numpy(float)[idx], frame[_SWEPT[kind]].to_numpy(float)[idx]
-    dt = np.diff(t)
-    if idx.size < 4 * bins or not (np.all(np.isfinite(dt)) and np.all(dt > 0) and np.all(np.isfinite(f + x + vx))):
+    time, vx = frame["TIME"].to_numpy(float), frame["VX"].to_numpy(float)[idx]
+    f, x = frame[force].to_numpy(float)[idx], frame[_SWEPT[kind]].to_numpy(float)
+    dt = np.diff(time[idx])
+    if idx.size < 4 * bins or not (np.all(np.isfinite(dt)) and np.all(dt > 0) and np.all(np.isfinite(f + x[idx] + vx))):
         return None
-    step = float(np.median(dt)) * float(np.median(vx))
-    if not (step > 0 and np.all(np.abs(dt / np.median(dt) - 1.0) < 0.5)):
+    typical = float(np.median(dt))
+    step = typical * float(np.median(vx))
+    if not (step > 0 and np.all(np.abs(dt / typical - 1.0) < 0.5)):
         return None
-    length, ratio = relaxation_length(x, f, step, bins)
-    return length, ratio, step
+    # the samples before the sweep, back to a time gap or a slip that is not finite
+    first = max(int(idx[0]) - idx.size, 0)
+    before = np.arange(first, int(idx[0]))
+    gaps = np.flatnonzero(~(np.abs(np.diff(time[np.r_[before, idx[0]]]) / typical - 1.0) < 0.5)
+                          | ~np.isfinite(x[before]))
+    if gaps.size:
+        before = before[gaps[-1] + 1:]
+    rows = np.r_[before, idx]
+    length, ratio = relaxation_length(x[rows], f, step, bins)
+    return length, ratio, step, rows
 
 
 def relaxed_slip(slip, distance_step, length):
@@ -214,11 +250,14 @@ def relaxation_length(slip, force, distance_step: float, bins: int = 40) -> tupl
     and down) onto one curve over the relaxed slip (:func:`relaxed_slip`): the least within-bin variance of the
     force in ``bins`` bins of the relaxed slip, over sigma = 0 and a log grid from one distance step to a quarter
     of the distance the sweep travels, refined by a golden-section search between the best point's neighbours.
-    The spread ratio is that variance at sigma over the one at sigma = 0 (1: no lag seen)."""
+    ``slip`` may start with samples before the sweep (the contact relaxes from them): its last ``force.size``
+    samples are the sweep's. The spread ratio is that variance at sigma over the one at sigma = 0 (1: no lag
+    seen)."""
     slip, force = np.asarray(slip, float), np.asarray(force, float)
+    lead = slip.size - force.size
 
     def spread(sigma):
-        x = relaxed_slip(slip, distance_step, sigma)
+        x = relaxed_slip(slip, distance_step, sigma)[lead:]
         edges = np.linspace(np.min(x), np.max(x), bins + 1)
         b = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, bins - 1)
         cnt = np.bincount(b, minlength=bins)
@@ -226,7 +265,7 @@ def relaxation_length(slip, force, distance_step: float, bins: int = 40) -> tupl
         ok = cnt > 1
         return float(np.sum(s2[ok] - s1[ok] ** 2 / cnt[ok]) / max(int(np.sum(cnt[ok])), 1))
 
-    far = 0.25 * distance_step * slip.size
+    far = 0.25 * distance_step * force.size
     if far <= 2.0 * distance_step:
         return 0.0, 1.0
     grid = np.concatenate([[0.0], np.geomspace(distance_step, far, 48)])
