@@ -5,8 +5,8 @@ independent samples.
   samples (with the programme's level of load, pressure and camber: FZ_LEVEL, P_LEVEL, IA_LEVEL) are averaged
   in ``bins`` equal bins of the swept channel (same edges for both branches). The branches stay apart in
   ``Reduction.branches``; ``Reduction.mean`` averages the up and down branch of each bin (so what is left of a
-  first-order lag cancels to first order) and is what a fit uses. Steady segments give one mean row each; transitions are left out (counted
-  in the history).
+  first-order lag cancels to first order) and is what a fit uses. Steady segments give one mean row each;
+  transitions are left out (counted in the history).
 * relaxation: a slip sweep's force follows the slip the contact has relaxed to, not the recorded one (first-order
   lag over the travelled distance, :func:`relaxed_slip`). Where the data carry TIME, the relaxation length of
   each slip-angle (slip-ratio) sweep is the one that collapses the sweep's FY (FX) against the relaxed slip onto
@@ -29,13 +29,14 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
+from scipy.optimize import minimize_scalar
 from scipy.signal import lfilter
 
 from .data import TyreData
 from .programme import Programme, recognise
 
-__all__ = ["reduce_sweeps", "Reduction", "relaxed_slip", "relaxation_length", "hysteresis", "both_ways", "effective_samples", "needs_reduction",
-           "lag_one_correlation"]
+__all__ = ["reduce_sweeps", "Reduction", "relaxed_slip", "relaxation_length", "hysteresis", "both_ways",
+           "effective_samples", "needs_reduction", "lag_one_correlation"]
 
 _SWEPT = {"slip_angle": "SA", "slip_ratio": "SL", "speed": "VX", "load": "FZ"}
 _RESPONSE = ("FX", "FY", "MX", "MY", "MZ", "RL", "RHO", "RE")
@@ -99,15 +100,15 @@ def reduce_sweeps(data: TyreData, programme: Programme | None = None, *, bins: i
     kind = rows["KIND"].to_numpy()
     seg = rows["SEGMENT"].to_numpy()
     sweeps = np.unique(sweep_id[sweep_id >= 0])
-    first = {s: np.flatnonzero(sweep_id == s) for s in sweeps}
-    found = {s: _sweep_relaxation(frame, idx, kind[idx[0]], bins) for s, idx in first.items()}
-    relaxation = pd.DataFrame([dict(sweep=int(s), kind=kind[first[s][0]], length=f[0], spread_ratio=f[1],
-                                    condition=tuple(values[first[s][0], [numeric.index(c) for c in _CONDITION]]))
+    members = {s: np.flatnonzero(sweep_id == s) for s in sweeps}
+    found = {s: _sweep_relaxation(frame, idx, kind[idx[0]], bins) for s, idx in members.items()}
+    relaxation = pd.DataFrame([dict(sweep=int(s), kind=kind[members[s][0]], length=f[0], spread_ratio=f[1],
+                                    condition=tuple(values[members[s][0], [numeric.index(c) for c in _CONDITION]]))
                                for s, f in found.items() if f is not None],
                               columns=["sweep", "kind", "length", "spread_ratio", "condition"])
     branch_parts, mean_parts = [], []
     for s in sweeps:
-        idx = first[s]
+        idx = members[s]
         k = kind[idx[0]]
         col = numeric.index(_SWEPT[k])
         per = _branch_means(values[idx], col, branch[idx], numeric, bins, min_per_bin)
@@ -207,7 +208,8 @@ def _sweep_relaxation(frame, idx, kind, bins):
     time, vx = frame["TIME"].to_numpy(float), frame["VX"].to_numpy(float)[idx]
     f, x = frame[force].to_numpy(float)[idx], frame[_SWEPT[kind]].to_numpy(float)
     dt = np.diff(time[idx])
-    if idx.size < 4 * bins or not (np.all(np.isfinite(dt)) and np.all(dt > 0) and np.all(np.isfinite(f + x[idx] + vx))):
+    finite = np.all(np.isfinite(dt)) and np.all(np.isfinite(f + x[idx] + vx))
+    if idx.size < 4 * bins or not (finite and np.all(dt > 0)):
         return None
     typical = float(np.median(dt))
     step = typical * float(np.median(vx))
@@ -250,9 +252,9 @@ def relaxation_length(slip, force, distance_step: float, bins: int = 40) -> tupl
     and down) onto one curve over the relaxed slip (:func:`relaxed_slip`): the least within-bin variance of the
     force in ``bins`` bins of the relaxed slip, over sigma = 0 and a log grid from one distance step to the
     distance the sweep travels (a sweep to 4 deg at 3 m/s travels 2-3 relaxation lengths of a tractor tyre),
-    refined by a golden-section search between the best point's neighbours. ``slip`` may start with samples before the sweep (the contact relaxes from them): its last ``force.size``
-    samples are the sweep's. The spread ratio is that variance at sigma over the one at sigma = 0 (1: no lag
-    seen)."""
+    refined between the best point's neighbours (bounded Brent search in log sigma). ``slip`` may start with samples
+    before the sweep (the contact relaxes from them): its last ``force.size`` samples are the sweep's. The spread
+    ratio is that variance at sigma over the one at sigma = 0 (1: no lag seen)."""
     slip, force = np.asarray(slip, float), np.asarray(force, float)
     lead = slip.size - force.size
 
@@ -271,25 +273,13 @@ def relaxation_length(slip, force, distance_step: float, bins: int = 40) -> tupl
     grid = np.concatenate([[0.0], np.geomspace(distance_step, far, 48)])
     cost = np.array([spread(g) for g in grid])
     best = int(np.argmin(cost))
-    if 0 < best:  # golden section in log sigma between the neighbours
+    sigma, value = float(grid[best]), float(cost[best])
+    if best > 0:  # refined in log sigma between the neighbours
         lo, hi = math.log(grid[max(best - 1, 1)]), math.log(grid[min(best + 1, grid.size - 1)])
-        ratio = (math.sqrt(5.0) - 1.0) / 2.0
-        c, d = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
-        fc, fd = spread(math.exp(c)), spread(math.exp(d))
-        for _ in range(12):
-            if fc < fd:
-                hi, d, fd = d, c, fc
-                c = hi - ratio * (hi - lo)
-                fc = spread(math.exp(c))
-            else:
-                lo, c, fc = c, d, fd
-                d = lo + ratio * (hi - lo)
-                fd = spread(math.exp(d))
-        sigma, value = (math.exp(c), fc) if fc < fd else (math.exp(d), fd)
-        if value > cost[best]:
-            sigma, value = float(grid[best]), float(cost[best])
-    else:
-        sigma, value = 0.0, float(cost[0])
+        found = minimize_scalar(lambda t: spread(math.exp(t)), bounds=(lo, hi), method="bounded",
+                                options={"xatol": 1e-3})
+        if found.fun < value:
+            sigma, value = math.exp(float(found.x)), float(found.fun)
     return float(sigma), float(value / cost[0]) if cost[0] > 0 else 1.0
 
 
