@@ -318,8 +318,8 @@ def bounded_parameters(prm, names, bounds: dict | None = None) -> lmfit.Paramete
 #: Weight of the weak prior that holds each parameter of a pass near its start value: residual
 #: PRIOR_WEIGHT x |dr/dx_j| (x_j - x_j,start), |dr/dx_j| the norm of the parameter's column of the data's Jacobian
 #: at the start, so the prior is worth PRIOR_WEIGHT^2 (1e-4) of what the data would say of the parameter alone.
-#: A direction the data determine moves by about that fraction less (benchmarks/bench_fit.py's check-grid errors
-#: of the point fit unchanged to 0.01 %); a direction they hardly see (parameters correlated beyond 1 - 1e-4,
+#: A direction the data determine moves by about that fraction less (benchmarks/bench_fit.py: the force and moment
+#: errors of the point fit unchanged to 0.01 %); a direction they hardly see (parameters correlated beyond 1 - 1e-4,
 #: PCY1/PDY1 of a sweep that does not reach the peak) no longer lets the optimiser wander along a flat valley
 #: wherever its path, and the 9th digit of the data, take it (the same run from an ISO-W CSV and a TTC file gave
 #: different resets). Stronger priors (0.03, 0.1) held a load-deflection fit back from a far start (fit error
