@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 
 from .data import CHANNELS, NOISE, TyreData, noise_scales, record_outputs, synthetic_data
+from .timeseries import relaxed_slip
 
 __all__ = ["rig_programme"]
 
@@ -64,18 +65,6 @@ def _ar1(rng, n, phi):
     w = rng.normal(0.0, math.sqrt(1.0 - phi**2), n)
     w[0] = rng.normal()
     return lfilter([1.0], [1.0, -phi], w)
-
-
-def _lag(commanded, distance_step, sigma):
-    """First-order relaxation of a slip in the travelled distance: x_t[k] = a x_t[k-1] + (1 - a) x[k],
-    a = exp(-ds / sigma) (exact for a slip held over the step)."""
-    a = np.exp(-distance_step / np.maximum(sigma, 1e-6))
-    out = np.empty_like(commanded)
-    x_t = commanded[0]
-    for k in range(commanded.size):
-        x_t = a[k] * x_t + (1.0 - a[k]) * commanded[k]
-        out[k] = x_t
-    return out
 
 
 def rig_programme(model, *, loads=(0.45, 0.8, 1.15, 1.5), pressures=(0.86, 1.0, 1.14), cambers_deg=(-3.0, 0.0, 3.0),
@@ -149,8 +138,8 @@ def rig_programme(model, *, loads=(0.45, 0.8, 1.15, 1.5), pressures=(0.86, 1.0, 
     alpha_cmd, kappa_cmd = frame["SA"].to_numpy(), frame["SL"].to_numpy()
     if relaxation:
         relax = model.evaluate(fz_true, 0.0, 0.0, gamma, 0.0, vx, p)
-        alpha_t = _lag(alpha_cmd, vx * dt, np.asarray(relax.sigmay, float))
-        kappa_t = _lag(kappa_cmd, vx * dt, np.asarray(relax.sigmax, float))
+        alpha_t = relaxed_slip(alpha_cmd, vx * dt, np.asarray(relax.sigmay, float))
+        kappa_t = relaxed_slip(kappa_cmd, vx * dt, np.asarray(relax.sigmax, float))
     else:
         alpha_t, kappa_t = alpha_cmd, kappa_cmd
     total = max(time[-1], dt)

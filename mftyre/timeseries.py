@@ -4,12 +4,19 @@ independent samples.
 * :func:`reduce_sweeps`: per recognised sweep (:func:`mftyre.programme.recognise`) and branch (up / down), the
   samples (with the programme's level of load, pressure and camber: FZ_LEVEL, P_LEVEL, IA_LEVEL) are averaged
   in ``bins`` equal bins of the swept channel (same edges for both branches). The branches stay apart in
-  ``Reduction.branches``; ``Reduction.mean`` averages the up and down branch of each bin (so a first-order lag
-  cancels) and is what a fit uses. Steady segments give one mean row each; transitions are left out (counted
-  in the history).
-* :func:`hysteresis`: half the difference up - down of the branch means, per sweep and channel: its RMS over
-  the bins (``amplitude``) and the largest (``peak``), the transient effect of the relaxation length that a
-  steady-state model must not be asked to explain.
+  ``Reduction.branches``; ``Reduction.mean`` averages the up and down branch of each bin (so what is left of a
+  first-order lag cancels to first order) and is what a fit uses. Steady segments give one mean row each;
+  transitions are left out (counted in the history).
+* relaxation: a slip sweep's force follows the slip the contact has relaxed to, not the recorded one (first-order
+  lag over the travelled distance, :func:`relaxed_slip`). Where the data carry TIME, the relaxation length of
+  each slip-angle (slip-ratio) sweep is the one that collapses the sweep's FY (FX) against the relaxed slip onto
+  one curve (:func:`relaxation_length`: least within-bin variance); ``Reduction.mean`` is binned in the relaxed
+  slip. At a car tyre's 0.2 deg of lag this changes little; at a large tyre's 3-4 m relaxation length swept at
+  6 deg/s and 3 m/s (6-8 deg of lag in a 12 deg sweep) the up/down mean alone is far from the steady-state
+  curve (Fy 44 %, Mz 178 % normalised RMS off the tyre's own), the relaxed slip's mean is close to it.
+* :func:`hysteresis`: half the difference up - down of the branch means (in the recorded slip), per sweep and
+  channel: its RMS over the bins (``amplitude``) and the largest (``peak``), the transient effect of the
+  relaxation length that a steady-state model must not be asked to explain.
 * :func:`effective_samples`: n_eff = sum over sweeps of n (1 - r) / (1 + r), r the lag-one autocorrelation of
   the residuals within the sweep (the AR(1) rule); use it for every significance test and uncertainty
   instead of the number of rows.
@@ -17,16 +24,19 @@ independent samples.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
+from scipy.optimize import minimize_scalar
+from scipy.signal import lfilter
 
 from .data import TyreData
 from .programme import Programme, recognise
 
-__all__ = ["reduce_sweeps", "Reduction", "hysteresis", "both_ways", "effective_samples", "needs_reduction",
-           "lag_one_correlation"]
+__all__ = ["reduce_sweeps", "Reduction", "relaxed_slip", "relaxation_length", "hysteresis", "both_ways",
+           "effective_samples", "needs_reduction", "lag_one_correlation"]
 
 _SWEPT = {"slip_angle": "SA", "slip_ratio": "SL", "speed": "VX", "load": "FZ"}
 _RESPONSE = ("FX", "FY", "MX", "MY", "MZ", "RL", "RHO", "RE")
@@ -44,6 +54,7 @@ class Reduction:
     programme: Programme
     rows_in: int
     rows_dropped: int
+    relaxation: pd.DataFrame | None = None
 
     def summary(self) -> str:
         text = (f"{self.rows_in} samples reduced to {len(self.mean)} points (binned means per sweep, up and down "
@@ -54,6 +65,9 @@ class Reduction:
             h = hyst.groupby(["kind", "channel"])["amplitude"].median()
             text += "; hysteresis (half up-down difference, RMS, median over sweeps): " + ", ".join(
                 f"{ch} {v:.3g} ({kind})" for (kind, ch), v in h.items())
+        if self.relaxation is not None and len(self.relaxation):
+            text += "; slip relaxation undone (means binned in the relaxed slip): " + _relaxation_summary(
+                self.relaxation)
         return text
 
 
@@ -72,7 +86,9 @@ def needs_reduction(data: TyreData, programme: Programme | None = None, bins: in
 
 def reduce_sweeps(data: TyreData, programme: Programme | None = None, *, bins: int = 40,
                   min_per_bin: int = 2) -> Reduction:
-    """Binned means per sweep and branch (see the module text); ``min_per_bin`` samples or the bin is dropped."""
+    """Binned means per sweep and branch (see the module text); ``min_per_bin`` samples or the bin is dropped.
+    ``branches`` are binned in the recorded slip (their difference is the hysteresis), ``mean`` in the relaxed
+    slip of slip sweeps with TIME (``relaxation``: the relaxation length per sweep, :func:`relaxation_length`)."""
     prog = programme or recognise(data)
     rows = prog.rows
     frame = data.frame.assign(**{c: rows[c].to_numpy() for c in ("FZ_LEVEL", "P_LEVEL", "IA_LEVEL")})
@@ -83,38 +99,42 @@ def reduce_sweeps(data: TyreData, programme: Programme | None = None, *, bins: i
     branch = rows["BRANCH"].to_numpy()
     kind = rows["KIND"].to_numpy()
     seg = rows["SEGMENT"].to_numpy()
+    sweeps = np.unique(sweep_id[sweep_id >= 0])
+    members = {s: np.flatnonzero(sweep_id == s) for s in sweeps}
+    found = {s: _sweep_relaxation(frame, idx, kind[idx[0]], bins) for s, idx in members.items()}
+    relaxation = pd.DataFrame([dict(sweep=int(s), kind=kind[members[s][0]], length=f[0], spread_ratio=f[1],
+                                    condition=tuple(values[members[s][0], [numeric.index(c) for c in _CONDITION]]))
+                               for s, f in found.items() if f is not None],
+                              columns=["sweep", "kind", "length", "spread_ratio", "condition"])
     branch_parts, mean_parts = [], []
-    for s in np.unique(sweep_id[sweep_id >= 0]):
-        idx = np.flatnonzero(sweep_id == s)
+    for s in sweeps:
+        idx = members[s]
         k = kind[idx[0]]
-        ch = _SWEPT[k]
-        x = frame[ch].to_numpy(float)[idx]
-        edges = np.linspace(np.min(x), np.max(x), bins + 1)
-        b = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, bins - 1)
-        per = {}
-        for direction in (1, -1):
-            sel = branch[idx] == direction
-            if not sel.any():
-                continue
-            keys = b[sel]
-            cnt = np.bincount(keys, minlength=bins)
-            sums = np.zeros((bins, len(numeric)))
-            np.add.at(sums, keys, values[idx[sel]])
-            ok = cnt >= min_per_bin
-            means = sums[ok] / cnt[ok, None]
-            part = pd.DataFrame(means, columns=numeric)
-            part["N"], part["BIN"], part["BRANCH"], part["SWEEP"], part["KIND"] = cnt[ok], np.flatnonzero(ok), \
-                direction, s, k
-            per[direction] = part
-            branch_parts.append(part)
+        col = numeric.index(_SWEPT[k])
+        per = _branch_means(values[idx], col, branch[idx], numeric, bins, min_per_bin)
+        branch_parts += [part.assign(BRANCH=direction, SWEEP=s, KIND=k) for direction, part in per.items()]
+        if found[s] is not None:
+            # both slips relaxed: the swept one with the sweep's length, the held one (the slip angle of a
+            # combined sweep, still relaxing from the ramp before it) with that of its sweeps at the condition
+            sigma, _, step, window = found[s]
+            relaxed = values[idx].copy()
+            for other in _RELAXED_FORCE:
+                length = sigma if other == k else _condition_length(relaxation, other, values[idx[0]], numeric)
+                if length is not None:
+                    c = numeric.index(_SWEPT[other])
+                    relaxed[:, c] = relaxed_slip(values[window, c], step, length)[window.size - idx.size:]
+            per = _branch_means(relaxed, col, branch[idx], numeric, bins, min_per_bin)
         if len(per) == 2:
+            # bins measured one way only are left out unless the lag was undone (then nothing is left to cancel)
             up, down = (per[d].set_index("BIN") for d in (1, -1))
             common = up.index.intersection(down.index)
             both = (up.loc[common, numeric] + down.loc[common, numeric]) / 2.0
             both["N"] = up.loc[common, "N"] + down.loc[common, "N"]
+            if found[s] is not None:
+                both = pd.concat([both, up.drop(common), down.drop(common)]).sort_index()
             both = both.reset_index()
         elif per:
-            both = next(iter(per.values())).drop(columns=["BRANCH"])
+            both = next(iter(per.values()))
         else:
             continue
         both["SWEEP"], both["KIND"] = s, k
@@ -130,9 +150,144 @@ def reduce_sweeps(data: TyreData, programme: Programme | None = None, *, bins: i
     dropped = int(np.sum(kind == "transition"))
     note = (f"reduced per sweep: {len(frame)} samples -> {len(mean)} binned means ({bins} bins per sweep, up and "
             f"down branches averaged); {dropped} transition samples left out")
+    relaxation = relaxation.drop(columns=["condition"])
+    if len(relaxation):
+        note += "; slip relaxation undone: " + _relaxation_summary(relaxation)
     mean_data = data.with_frame(mean, note)
     branch_data = data.with_frame(branches, note.replace("averaged", "kept apart"))
-    return Reduction(mean_data, branch_data, hysteresis(branches), prog, len(frame), dropped)
+    return Reduction(mean_data, branch_data, hysteresis(branches), prog, len(frame), dropped, relaxation)
+
+
+def _branch_means(values, col, branch, numeric, bins, min_per_bin) -> dict:
+    """{direction: DataFrame of the bin means of that branch (columns ``numeric``, N, BIN)} of one sweep's
+    samples ``values`` binned in column ``col`` (the same edges for both branches)."""
+    x = values[:, col]
+    edges = np.linspace(np.min(x), np.max(x), bins + 1)
+    b = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, bins - 1)
+    per = {}
+    for direction in (1, -1):
+        sel = branch == direction
+        if not sel.any():
+            continue
+        keys = b[sel]
+        cnt = np.bincount(keys, minlength=bins)
+        sums = np.zeros((bins, values.shape[1]))
+        np.add.at(sums, keys, values[sel])
+        ok = cnt >= min_per_bin
+        part = pd.DataFrame(sums[ok] / cnt[ok, None], columns=numeric)
+        part["N"], part["BIN"] = cnt[ok], np.flatnonzero(ok)
+        per[direction] = part
+    return per
+
+
+#: the force whose curve over the relaxed slip a sweep's relaxation length straightens, per kind of sweep
+_RELAXED_FORCE = {"slip_angle": "FY", "slip_ratio": "FX"}
+#: the levels that make a sweep's condition (the relaxation length of its held slip is its kind's there)
+_CONDITION = ("FZ_LEVEL", "P_LEVEL", "IA_LEVEL")
+
+
+def _condition_length(relaxation: pd.DataFrame, kind: str, row, numeric) -> float | None:
+    """The median relaxation length of the sweeps of ``kind`` at the condition (load, pressure and camber level)
+    of ``row``; over all of that kind's sweeps when none is at the condition; None when there is none."""
+    own = relaxation[relaxation["kind"] == kind]
+    if not len(own):
+        return None
+    key = tuple(row[[numeric.index(c) for c in _CONDITION]])
+    here = own["length"][[c == key for c in own["condition"]]]
+    return float(np.median(here if len(here) else own["length"]))
+
+
+def _sweep_relaxation(frame, idx, kind, bins):
+    """(relaxation length [m], spread ratio, distance step [m], rows) of one slip sweep: ``rows`` the sweep's
+    rows ``idx`` preceded by the samples before it, evenly in time, up to as many as the sweep has (the contact
+    is still relaxing from what came before when the sweep starts); None when the sweep is no slip sweep, has no
+    TIME, force or forward speed, or is sampled unevenly."""
+    force = _RELAXED_FORCE.get(kind)
+    if force is None or "TIME" not in frame or force not in frame:
+        return None
+    time, vx = frame["TIME"].to_numpy(float), frame["VX"].to_numpy(float)[idx]
+    f, x = frame[force].to_numpy(float)[idx], frame[_SWEPT[kind]].to_numpy(float)
+    dt = np.diff(time[idx])
+    finite = np.all(np.isfinite(dt)) and np.all(np.isfinite(f + x[idx] + vx))
+    if idx.size < 4 * bins or not (finite and np.all(dt > 0)):
+        return None
+    typical = float(np.median(dt))
+    step = typical * float(np.median(vx))
+    if not (step > 0 and np.all(np.abs(dt / typical - 1.0) < 0.5)):
+        return None
+    # the samples before the sweep, back to a time gap or a slip that is not finite
+    first = max(int(idx[0]) - idx.size, 0)
+    before = np.arange(first, int(idx[0]))
+    gaps = np.flatnonzero(~(np.abs(np.diff(time[np.r_[before, idx[0]]]) / typical - 1.0) < 0.5)
+                          | ~np.isfinite(x[before]))
+    if gaps.size:
+        before = before[gaps[-1] + 1:]
+    rows = np.r_[before, idx]
+    length, ratio = relaxation_length(x[rows], f, step, bins)
+    return length, ratio, step, rows
+
+
+def relaxed_slip(slip, distance_step, length):
+    """The slip the contact has relaxed to (first-order lag over the travelled distance, Pacejka 2012, eq. 7.8:
+    d(x_t)/ds = (x - x_t) / sigma): x_t[k] = a_k x_t[k-1] + (1 - a_k) x[k], a_k = exp(-ds_k / sigma_k), from
+    x_t[0] = x[0] (exact for a slip held over each step). ``distance_step`` ds and ``length`` sigma [m]: scalars or
+    arrays of the slip's size; a length of 0 returns the slip."""
+    slip = np.asarray(slip, dtype=float)
+    a = np.exp(-np.asarray(distance_step, float) / np.maximum(length, 1e-12))
+    if np.ndim(a) == 0:
+        if slip.size == 0 or a == 0.0:
+            return slip.copy()
+        return lfilter([1.0 - a], [1.0, -a], slip, zi=[a * slip[0]])[0]
+    a = np.broadcast_to(a, slip.shape)
+    out = np.empty_like(slip)
+    x_t = slip[0] if slip.size else 0.0
+    for k in range(slip.size):
+        x_t = a[k] * x_t + (1.0 - a[k]) * slip[k]
+        out[k] = x_t
+    return out
+
+
+def relaxation_length(slip, force, distance_step: float, bins: int = 40) -> tuple[float, float]:
+    """(sigma [m], spread ratio): the relaxation length that lays a sweep's force samples (in time order, swept up
+    and down) onto one curve over the relaxed slip (:func:`relaxed_slip`): the least within-bin variance of the
+    force in ``bins`` bins of the relaxed slip, over sigma = 0 and a log grid from one distance step to the
+    distance the sweep travels (a sweep to 4 deg at 3 m/s travels 2-3 relaxation lengths of a tractor tyre),
+    refined between the best point's neighbours (bounded Brent search in log sigma). ``slip`` may start with samples
+    before the sweep (the contact relaxes from them): its last ``force.size`` samples are the sweep's. The spread
+    ratio is that variance at sigma over the one at sigma = 0 (1: no lag seen)."""
+    slip, force = np.asarray(slip, float), np.asarray(force, float)
+    lead = slip.size - force.size
+
+    def spread(sigma):
+        x = relaxed_slip(slip, distance_step, sigma)[lead:]
+        edges = np.linspace(np.min(x), np.max(x), bins + 1)
+        b = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, bins - 1)
+        cnt = np.bincount(b, minlength=bins)
+        s1, s2 = np.bincount(b, force, bins), np.bincount(b, force * force, bins)
+        ok = cnt > 1
+        return float(np.sum(s2[ok] - s1[ok] ** 2 / cnt[ok]) / max(int(np.sum(cnt[ok])), 1))
+
+    far = distance_step * force.size
+    if far <= 2.0 * distance_step:
+        return 0.0, 1.0
+    grid = np.concatenate([[0.0], np.geomspace(distance_step, far, 48)])
+    cost = np.array([spread(g) for g in grid])
+    best = int(np.argmin(cost))
+    sigma, value = float(grid[best]), float(cost[best])
+    if best > 0:  # refined in log sigma between the neighbours
+        lo, hi = math.log(grid[max(best - 1, 1)]), math.log(grid[min(best + 1, grid.size - 1)])
+        found = minimize_scalar(lambda t: spread(math.exp(t)), bounds=(lo, hi), method="bounded",
+                                options={"xatol": 1e-3})
+        if found.fun < value:
+            sigma, value = math.exp(float(found.x)), float(found.fun)
+    return float(sigma), float(value / cost[0]) if cost[0] > 0 else 1.0
+
+
+def _relaxation_summary(relaxation: pd.DataFrame) -> str:
+    h = relaxation.groupby("kind")
+    return ", ".join(f"{kind.replace('_', '-')} sweeps: relaxation length {grp['length'].median():.3g} m (median), "
+                     f"force spread about the curve {100 * grp['spread_ratio'].median():.3g} % of that over the "
+                     "recorded slip" for kind, grp in h)
 
 
 def hysteresis(branches) -> pd.DataFrame:

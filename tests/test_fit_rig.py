@@ -368,25 +368,26 @@ def test_one_sided_drive_brake_run_writes_a_tir_with_warnings(truth, tmp_path, c
 _AGRI = TIR_FILES / "agri_460_85R34_mf61.tir"
 
 
-@pytest.mark.parametrize("tir, seed", [
-    (SAMPLE, 2),
-    pytest.param(_AGRI, 3, marks=pytest.mark.xfail(strict=True, reason=(
-        "known defect (issue 26, not fixed): on this agricultural tyre's run the first pure_fy pass is "
-        "ill-conditioned (PCY1/PDY1 correlated -0.9999: the data do not separate shape and peak) and its optimiser "
-        "path differs at 1e-8 (40 against 92 evaluations); the reset thresholds then flip: pure_fy 23 % kept against 8.4 % rejected, mz 187 % "
-        "against 280 %"))),
-], ids=["car", "agri"])
-def test_csv_and_ttc_round_trips_of_one_run_give_one_fit(truth, tmp_path, tir, seed):
+@pytest.mark.parametrize("tir, seed, alpha_max", [(SAMPLE, 2, 12.0), (_AGRI, 3, 12.0), (SAMPLE, 3, 4.0)],
+                         ids=["car", "agri", "car-4deg"])
+def test_csv_and_ttc_round_trips_of_one_run_give_one_fit(truth, tmp_path, tir, seed, alpha_max):
     """The same rig run read from an ISO-W SI CSV (17 digits) and from a TTC .dat (SAE axes, metric units, 8
     significant digits: the inputs differ by ~1e-8 relative) gives the same fit: the same parameters reset as
     undetermined and the same fit errors per stage (issue 26: mz 32.6 % against 52.6 % was reported for such a
-    pair; a fit must not hinge on the 9th digit of the data)."""
+    pair; a fit must not hinge on the 9th digit of the data). The agricultural tyre's run (3 m/s, 3-4 m relaxation
+    length, slip swept at 6 deg/s: 6-8 deg of lag) gave pure_fy 23 % kept against 8.4 % rejected and mz 187 %
+    against 280 % while the up/down mean of the recorded slip was the data: the steady-state fit then chased the
+    lag through an ill-conditioned pass. Both fits are good ones now, judged on the tyre's own noise-free curves
+    at a load between the run's two (held out). Sweeps to 4 deg only (the peak not reached: shape, peak and curvature
+    nearly collinear) made the first Mz pass wander along a flat valley (105 against 420 evaluations) and the
+    resets differ (QEZ1, QEZ2, QEZ4, QHZ2); the weak prior towards the start values (fit.core.PRIOR_WEIGHT) holds
+    such directions."""
     from test_rig_import import TTC_NAMES, TTC_UNITS, _ttc_columns
 
     from mftyre.data import read_data
 
     run = rig_programme(mftyre.load_tir(tir), loads=(0.6, 1.2), pressures=(1.0,), cambers_deg=(0.0,),
-                        longitudinal=False, seed=seed)
+                        longitudinal=False, alpha_max_deg=alpha_max, seed=seed)
     frame = run.frame.drop(columns=["TEST"])
     frame.to_csv(tmp_path / "run.csv", index=False)
     cols = _ttc_columns(frame) | {"ET": frame["TIME"].to_numpy()}
@@ -394,7 +395,7 @@ def test_csv_and_ttc_round_trips_of_one_run_give_one_fit(truth, tmp_path, tir, s
     lines = ["rig run (synthetic)", "\t".join(TTC_NAMES), "\t".join(TTC_UNITS)]
     lines += ["\t".join(f"{v:.8g}" for v in row) for row in table]
     (tmp_path / "run.dat").write_text("\n".join(lines) + "\n")
-    stages = ("pure_fy", "mz", "mx", "vertical", "rolling_radius") if tir == SAMPLE else ("pure_fy", "mz")
+    stages = ("pure_fy", "mz", "mx", "vertical", "rolling_radius") if seed == 2 else ("pure_fy", "mz")
     fits = [fit_tir(read_data(tmp_path / name), stages=stages, compare=False) for name in ("run.csv", "run.dat")]
     a, b = fits
     for name in stages:
@@ -404,5 +405,10 @@ def test_csv_and_ttc_round_trips_of_one_run_give_one_fit(truth, tmp_path, tir, s
         assert sb.fit_error == pytest.approx(sa.fit_error, rel=1e-3), name
         for p in sa.fitted:
             assert b.params[p] == pytest.approx(a.params[p], rel=1e-3, abs=1e-6), (name, p)
-    if tir == SAMPLE:  # and the fit is a good one: the run is the tyre's own
-        assert a.stages["mz"].fit_error < 2.0 and not any(st.rejected for st in a.stages.values())
+    # and the fit is a good one: the run is the tyre's own
+    assert a.stages["mz"].fit_error < 2.0 and not any(st.rejected for st in a.stages.values())
+    truth = mftyre.load_tir(tir)
+    fz = 0.9 * truth.params.FNOMIN
+    alpha = np.radians(np.linspace(-1.0, 1.0, 23) * (alpha_max - 1.0))  # within the sweeps
+    ref, got = truth.evaluate(fz, 0.0, alpha, limits=False), a.model.evaluate(fz, 0.0, alpha, limits=False)
+    assert normalised_rms(got.fy, ref.fy) < 3.0 and normalised_rms(got.mz, ref.mz) < 5.0

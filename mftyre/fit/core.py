@@ -8,7 +8,9 @@ Residuals: residual_i = w_i (model_i - measured_i) / s with s the RMS of the mea
 data, so the cost is the squared normalised RMS error of :func:`mftyre.fit.normalised_rms` for uniform weights;
 w_i = 1 (``weighting="uniform"``) or FNOMIN / Fz_i (``"load"``: every load level counts alike). Shape
 conditions (:func:`mftyre.fit.stages.shape_violations`) enter as penalty residuals, 10 sqrt(n) times the
-violation, at the corners of the data's load, pressure and camber range. Model outputs that are not finite
+violation, at the corners of the data's load, pressure and camber range; a weak prior holds each parameter
+near its start value (:data:`PRIOR_WEIGHT`: worth 1e-4 of what the data say of it alone, so that directions the
+data hardly see stay put instead of following the optimiser's path). Model outputs that are not finite
 give the residual 10 (the step is rejected). The model is evaluated for all parameter vectors of a
 finite-difference Jacobian at once (:class:`_BatchPredictor`: parameters as column vectors against the data as
 a row), the optimiser stops on a relative cost change of 1e-6, BLAS runs on one thread.
@@ -313,9 +315,22 @@ def bounded_parameters(prm, names, bounds: dict | None = None) -> lmfit.Paramete
     return params
 
 
+#: Weight of the weak prior that holds each parameter of a pass near its start value: residual
+#: PRIOR_WEIGHT x |dr/dx_j| (x_j - x_j,start), |dr/dx_j| the norm of the parameter's column of the data's Jacobian
+#: at the start, so the prior is worth PRIOR_WEIGHT^2 (1e-4) of what the data would say of the parameter alone.
+#: A direction the data determine moves by about that fraction less (benchmarks/bench_fit.py: the force and moment
+#: errors of the point fit unchanged to 0.01 %); a direction they hardly see (parameters correlated beyond 1 - 1e-4,
+#: PCY1/PDY1 of a sweep that does not reach the peak) no longer lets the optimiser wander along a flat valley
+#: wherever its path, and the 9th digit of the data, take it (the same run from an ISO-W CSV and a TTC file gave
+#: different resets). Stronger priors (0.03, 0.1) held a load-deflection fit back from a far start (fit error
+#: +10 %).
+PRIOR_WEIGHT = 0.01
+
+
 class _Problem:
     """The least-squares problem of one pass: residuals of many parameter vectors at once (data rows, then the
-    shape-condition penalties) and their forward-difference Jacobian from one batched evaluation."""
+    shape-condition penalties, then the weak prior towards the start values) and their forward-difference
+    Jacobian from one batched evaluation."""
 
     def __init__(self, stage, prm, side, data, names, weighting, bounds):
         self.stage, self.prm, self.names = stage, prm, list(names)
@@ -329,16 +344,23 @@ class _Problem:
         self.hi = np.array([self.params[n].max for n in names])
         self.n_data = len(data)
         self.shaped = shape_violations(stage.name, prm, self.corners).size > 0
+        self.start = np.array([self.params[n].value for n in names], float)
+        self.prior = np.zeros(len(names))  # none while the data's Jacobian at the start is taken
+        effect = np.linalg.norm(self.jacobian(self.start)[:self.n_data], axis=0)
+        self.prior = PRIOR_WEIGHT * np.maximum(effect, 1e-6 * max(float(effect.max(initial=0.0)), 1e-12))
 
     def residuals(self, values):
+        """Rows of residuals for the parameter vectors ``values`` (K, p): the data's, the shape-condition
+        penalties (when the stage has shape conditions), the prior's (:data:`PRIOR_WEIGHT`)."""
         pred = self.predict(values)
         r = self.weights * (pred - self.measured) / self.scale
         r = np.where(np.isfinite(r), r, 10.0)
-        if not self.shaped:
-            return r
-        pen = np.stack([self.penalty * shape_violations(self.stage.name, _BatchParameters(self.prm, dict(
-            zip(self.names, v))), self.corners) for v in values])
-        return np.concatenate([r, pen], axis=1)
+        parts = [r]
+        if self.shaped:
+            parts.append(np.stack([self.penalty * shape_violations(self.stage.name, _BatchParameters(self.prm, dict(
+                zip(self.names, v))), self.corners) for v in values]))
+        parts.append(self.prior * (np.asarray(values, float) - self.start))
+        return np.concatenate(parts, axis=1)
 
     def jacobian(self, x):
         step = 1.5e-8 * np.maximum(np.abs(x), 1e-2)

@@ -173,6 +173,10 @@ def estimate_stage(stage_name: str, prm: TyreParameters, data: TyreData) -> dict
         if len(q) >= 2:
             out["QDZ2"] = q2
         return out
+    if stage_name == "vertical":
+        # the force terms enter squared, (Q_FCY Fy/Fz0)^2: at 0 the data's gradient vanishes and a fit cannot
+        # leave it; a small value (1 % less stiffness at |Fy| = Fz0) lets the data decide size and sign
+        return dict(Q_FCX=0.1, Q_FCY=0.1)
     if stage_name == "combined_fy":
         # kappa-induced side force (4.E66, 4.E67): typical shape values, the amplitude from the data at alpha = 0
         sl, sa, fy = data.array("SL"), data.array("SA"), data.array("FY")
