@@ -694,8 +694,9 @@ class SwiftTyre:
         Raises :class:`~mftyre.errors.ModelInputError` where the iteration ends without equilibrium (residual above
         :data:`EQUILIBRIUM_TOL`), and where it ends at a root that is no rolling tyre (:attr:`rolling_root_function`,
         the rule the FMUs apply too): rolling (|vx| >= VXLOW), a slip outside KPUMIN..KPUMAX (the agricultural
-        sample files at 40-70 m/s, 4-20 times their LONGVL and beyond their speed rating: rolling resistance (QSY4 (V/LONGVL)^4) and radius growth (Q_V1) run away, the root
-        spins backwards at kappa -100..-600 with a free radius of 8-36 m and had growing modes of +200..+640 1/s)."""
+        sample files at 40-70 m/s, 4-20 times their LONGVL and beyond their speed rating: rolling resistance
+        (QSY4 (V/LONGVL)^4) and radius growth (Q_V1) run away, the root spins backwards at kappa -100..-600 with a
+        free radius of 8-36 m and had growing modes of +200..+640 1/s)."""
         prm = self.model.params
         c = self.constants
         p = prm.INFLPRES if inputs.p is None else inputs.p
