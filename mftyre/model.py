@@ -21,7 +21,8 @@ import functools
 import numpy as np
 
 from .errors import ModelInputError
-from .inputs import LoadFactorCheck, PressureFactorCheck, check_finite, check_finite_outputs, check_pressure, input_ranges, saturate, \
+from .inputs import LoadFactorCheck, PressureFactorCheck, check_finite, check_finite_outputs, check_pressure, \
+    input_ranges, saturate, \
     warn_outside
 from .formula import OUTPUT_NAMES, Modes, steady_state, vertical
 from .backend import NUMPY, NUMPY_FOLDING
