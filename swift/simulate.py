@@ -97,6 +97,12 @@ WARM_PASSES = 1
 #: equilibrium; converged solutions reach ~1e-11, inputs without an equilibrium leave 1e1-1e3 (a torque the tyre
 #: cannot hold: the Newton iteration ran off to the axle 26 m above the road or 2260 rad/s).
 EQUILIBRIUM_TOL = 1e-6
+#: The refusal of a start without static equilibrium (:meth:`SwiftTyre.initial_state`, the FMUs' initialisation:
+#: the largest derivative of :attr:`SwiftTyre.equilibrium_unknowns`' equations above EQUILIBRIUM_TOL), printf-style
+#: as NO_ROLLING_ROOT: the inputs, the Newton steps, the state whose derivative is largest, the derivative, the
+#: tolerance.
+NO_EQUILIBRIUM = ("no static equilibrium at the inputs (%s): after %d Newton steps d(%s)/dt = %.3g (tolerance %g); "
+                  "e.g. a drive/brake torque beyond what the tyre transmits at this load, or the tyre off the road")
 #: The refusal of a static root that is no rolling tyre (:attr:`SwiftTyre.rolling_root_function`), printf-style
 #: (the native FMU's glue prints it with the same facts): the inputs (%s), then kappa, belt spin, free radius and
 #: belt height; the file's values in braces (:func:`no_rolling_root_template`).
@@ -664,6 +670,21 @@ class SwiftTyre:
 
     @functools.cached_property
     @_with_casadi
+    def equilibrium_residual_function(self):
+        """The derivatives that vanish in static equilibrium (:attr:`equilibrium_unknowns`' equations, in their
+        order) at a state: ``(x, u, x0w, grid, hw) -> r``, as :meth:`initial_state` tests them against
+        :data:`EQUILIBRIUM_TOL` (:data:`NO_EQUILIBRIUM`); for the FMUs' initialisation."""
+        import casadi as ca
+
+        n = self.window
+        x, u = ca.MX.sym("x", len(STATE_NAMES)), ca.MX.sym("u", len(INPUT_NAMES))
+        x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", n), ca.MX.sym("hw", 2 * n)
+        d = self._rhs_window(x, u, x0w, grid, hw, 0.0)[0]
+        return ca.Function("swift_residual", [x, u, x0w, grid, hw], [d[self.equilibrium_unknowns[1]]],
+                           ["x", "u", "x0w", "grid", "hw"], ["r"])
+
+    @functools.cached_property
+    @_with_casadi
     def rolling_root_function(self):
         """The rule that a static root is a rolling tyre, one definition for :meth:`initial_state`,
         :class:`swift.fmu_model.SwiftWheel` and the native FMU (generated C): ``(x, u, x0w, grid, hw) -> facts``
@@ -749,11 +770,7 @@ class SwiftTyre:
                 f"{float(r[worst])!r} at the inputs {at}): check the [STRUCTURAL] (FREQ_*, DAMP_*, BELT_*), "
                 f"[VERTICAL] and [CONTACT_PATCH] values and SWIFT_* for one no tyre has")
         if not abs(r[worst]) <= EQUILIBRIUM_TOL:
-            raise ModelInputError(
-                f"no static equilibrium at the inputs ({at}): after {iterations} Newton steps "
-                f"d({STATE_NAMES[eqs[worst]]})/dt = {r[worst]:.3g} (tolerance "
-                f"{EQUILIBRIUM_TOL:g}); e.g. a drive/brake torque beyond what the tyre transmits at this load, or "
-                f"the tyre off the road")
+            raise ModelInputError(NO_EQUILIBRIUM % (at, iterations, STATE_NAMES[eqs[worst]], r[worst], EQUILIBRIUM_TOL))
         facts = np.asarray(self.rolling_root_function(s, u, *window), dtype=float).ravel()
         if facts[0]:
             raise ModelInputError(no_rolling_root_template(prm) % (at, *facts[1:]))

@@ -1,9 +1,12 @@
-"""One rule for the SWIFT tyre's static start in every path: a root of the equilibrium equations that is no rolling
-tyre (rolling, |vx| >= VXLOW, with the slip outside KPUMIN..KPUMAX) is refused with the same text by
-swift.SwiftTyre.initial_state, swift.fmu_model.SwiftWheel (CasADi and compiled) and the native FMU (fmpy), through
-:attr:`swift.simulate.SwiftTyre.rolling_root_function`. The agricultural file at 40 m/s (13 LONGVL) and FNOMIN
-with a free rim: the root spins the belt backwards (kappa -128, 11 m free radius, belt 3 m above the road); the
-FMUs accepted it before."""
+"""The same rules for the SWIFT tyre's static start in every path: swift.SwiftTyre.initial_state,
+swift.fmu_model.SwiftWheel (CasADi and compiled) and the native FMU (fmpy) refuse with the same text
+* a root of the equilibrium equations that is no rolling tyre (rolling, |vx| >= VXLOW, with the slip outside
+  KPUMIN..KPUMAX; :attr:`swift.simulate.SwiftTyre.rolling_root_function`): the agricultural file at 40 m/s
+  (13 LONGVL) and FNOMIN with a free rim, where the root spins the belt backwards (kappa -128, 11 m free radius, belt
+  3 m above the road; the FMUs accepted it, with Fz = 58 MN);
+* a start whose equilibrium equations keep a derivative above EQUILIBRIUM_TOL (swift.simulate.NO_EQUILIBRIUM): the
+  same at 30 m/s, d(oma)/dt = -3.5e-4 after 30 Newton steps (the FMUs accepted it, with Fz = -1177 N).
+At 20 m/s every path starts as before."""
 from __future__ import annotations
 
 import re
@@ -19,7 +22,9 @@ from swift.fmu_model import SwiftWheel
 from conftest import TIR_FILES
 
 AGRI = TIR_FILES / "agri_460_85R34_mf61.tir"
-#: The rule's part of the message (after the inputs, which each path names in its own terms).
+#: The rules' part of the messages (after the inputs, which each path names in its own terms).
+NO_EQUILIBRIUM = re.compile(r"no static equilibrium at the inputs \((.*)\): (after 30 Newton steps d\((\w+)\)/dt = "
+                            r"(\S+) \(tolerance 1e-06\); e\.g\. a drive/brake torque .*)")
 RULE = re.compile(r"no static equilibrium within the file's slip range at the inputs \((.*)\): (the equations' root "
                   r"has the slip kappa = .* no rolling tyre .*)")
 
@@ -111,6 +116,21 @@ def test_every_path_refuses_a_root_that_is_no_rolling_tyre_with_the_same_text(ag
     assert "kappa = -128 outside KPUMIN..KPUMAX = -1..1" in rule and "free radius 11.1 m" in rule, rule
     for path, m in matches.items():
         assert "vx = 40" in m.group(1) and "torque = 0" in m.group(1) and "p = 160000 Pa" in m.group(1), (path, m)
+
+
+def test_every_path_refuses_a_start_without_equilibrium_with_the_same_text(agri, agri_fmu, tmp_path):
+    results = {"SwiftTyre": _tyre_result(agri, 30.0, compiled=False),
+               "SwiftWheel": _wheel_result(agri, 30.0, compiled=False),
+               "SwiftWheel compiled": _wheel_result(agri, 30.0, compiled=True),
+               "native FMU": _fmu_result(agri_fmu, agri, 30.0, tmp_path)}
+    matches = {path: NO_EQUILIBRIUM.fullmatch(text) if isinstance(text, str) else None
+               for path, text in results.items()}
+    assert all(matches.values()), results
+    assert {m.group(3) for m in matches.values()} == {"oma"}, results  # the rim's spin is not in balance
+    residuals = [float(m.group(4)) for m in matches.values()]
+    assert max(residuals) == pytest.approx(min(residuals), rel=0.02) and abs(residuals[0]) > 1e-4, residuals
+    for path, m in matches.items():
+        assert "vx = 30" in m.group(1) and "torque = 0" in m.group(1), (path, m)
 
 
 def test_every_path_starts_at_a_normal_speed(agri, agri_fmu, tmp_path):
