@@ -204,7 +204,7 @@ def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_sta
         glue, extra, directional = "glue_swift.c", f.config_extra, False
     else:
         raise NativeBuildError(f"--model must be one of {', '.join(MODELS)}, got {kind!r}")
-    functions = [f.init, f.step, f.out]
+    functions = [f.init, f.step, f.out] + ([f.residual, f.root] if kind == "swift" else [])
     if directional:
         x, u, q = (ca.SX.sym(n, f.out.size1_in(i)) for i, n in enumerate(("x", "u", "q")))
         y = f.out(x, u, q)

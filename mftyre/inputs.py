@@ -21,11 +21,11 @@ import warnings
 
 import numpy as np
 
-from .errors import InputClippedWarning, ModelInputError, PressureFactorWarning, spelled
+from .errors import InputClippedWarning, LoadFactorWarning, ModelInputError, PressureFactorWarning, spelled
 
 __all__ = ["RANGE_PARAMETERS", "input_ranges", "saturate", "check_finite", "check_pressure", "warn_outside",
            "check_finite_outputs", "saturate_inputs", "warn_data_outside", "PRESSURE_FACTORS", "pressure_factor_edges",
-           "PressureFactorCheck", "load_factor_edges", "load_factor_problems"]
+           "PressureFactorCheck", "load_factor_edges", "load_factor_problems", "LoadFactorCheck"]
 
 #: input -> (.tir parameter of the lower bound or None, of the upper bound, unit): the ranges ``limits=True``
 #: saturates the inputs to (see the module docstring for Fz and FZMIN).
@@ -164,6 +164,55 @@ class PressureFactorCheck:
                           f"{'above' if side > 0 else 'below'} it, where that property has the wrong sign (the "
                           f"file's PRESMIN..PRESMAX does not exclude it)", PressureFactorWarning,
                           stacklevel=stacklevel)
+
+
+class LoadFactorCheck:
+    """Warns (:class:`LoadFactorWarning`, once per factor) where a model is used at loads beyond one of
+    :func:`load_factor_edges` at the pressures used (a slip stiffness with the opposite sign to the one at FNOMIN),
+    naming the file, the parameters, the edge and the load; the file is not rejected (its fit may only cover the
+    measured loads). Thread-safe. The common case costs two comparisons: every load inside the band between the
+    edges below and above FNOMIN LFZO, which holds at every pressure where no edge depends on the pressure (K_xk's);
+    where one does (K_ya's with PPY2, MFeval's 6.1/6.2 files), the band holds over the file's PRESMIN..PRESMAX and
+    NOMPRES, and two more comparisons check that the pressures lie there. Loads <= 0 carry no force and cross no
+    edge."""
+
+    def __init__(self, params):
+        self._params = params
+        self._source = getattr(params, "source", None) or "the parameter set"
+        self._fz0 = float(params.FNOMIN) * float(params.LFZO)
+        self._fixed = load_factor_edges(params, 0.0) == load_factor_edges(params, 1.0)  # no edge moves with p
+        pressures = [float(params[n]) for n in ("PRESMIN", "PRESMAX", "NOMPRES")]
+        self.p_low, self.p_high = (-np.inf, np.inf) if self._fixed else (min(pressures), max(pressures))
+        dpis = (0.0,) if self._fixed else (self._dpi(self.p_low), self._dpi(self.p_high))
+        edges = [edge for dpi in dpis for edge, _, _ in load_factor_edges(params, dpi)]
+        self.low = max([e for e in edges if e <= self._fz0], default=0.0)
+        self.high = min([e for e in edges if e >= self._fz0], default=np.inf)
+        self._warned: set = set()
+        self._lock = threading.Lock()
+
+    def _dpi(self, p: float) -> float:
+        nominal = float(self._params.NOMPRES)
+        return (p - nominal) / nominal if nominal > 0 else 0.0
+
+    def __call__(self, fz_min: float, fz_max: float, p_min: float, p_max: float, stacklevel: int = 3) -> None:
+        """Warn for the slip stiffnesses whose sign is the opposite of FNOMIN's somewhere in the loads used,
+        ``fz_min``..``fz_max`` [N], at the pressures used, ``p_min``..``p_max`` [Pa]."""
+        if self.low < fz_min and fz_max < self.high and (self._fixed or self.p_low <= p_min and p_max <= self.p_high):
+            return
+        for p in (p_min, p_max):  # the edges are monotonic in the pressure: its ends bound them
+            for edge, names, what in load_factor_edges(self._params, self._dpi(p)):
+                above = edge > self._fz0
+                crossed = fz_max >= edge if above else 0.0 < fz_min <= edge
+                with self._lock:
+                    if not crossed or what in self._warned:
+                        continue
+                    self._warned.add(what)
+                used = fz_max if above else fz_min
+                warnings.warn(f"{self._source}: {names} make the {what} change sign at Fz = {edge:.6g} N"
+                              f"{f' (p = {p:g} Pa)' if 'PPY2' in names else ''}; the model is used at Fz = "
+                              f"{used:.6g} N, {'above' if above else 'below'} it, where the tyre pushes along the "
+                              f"slip (the slip stiffness has the opposite sign to the one at FNOMIN; the file's FZMAX "
+                              f"does not exclude it)", LoadFactorWarning, stacklevel=stacklevel)
 
 
 def saturate(values, bounds) -> tuple[np.ndarray, int]:

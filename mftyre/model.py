@@ -21,7 +21,8 @@ import functools
 import numpy as np
 
 from .errors import ModelInputError
-from .inputs import PressureFactorCheck, check_finite, check_finite_outputs, check_pressure, input_ranges, saturate, \
+from .inputs import LoadFactorCheck, PressureFactorCheck, check_finite, check_finite_outputs, check_pressure, \
+    input_ranges, saturate, \
     warn_outside
 from .formula import OUTPUT_NAMES, Modes, steady_state, vertical
 from .backend import NUMPY, NUMPY_FOLDING
@@ -164,12 +165,15 @@ class MFModel:
         arrays = as_float_arrays(inputs, copy=False)
         self._check_pressure(arrays["p"])
         p_min, p_max = float(np.min(arrays["p"])), float(np.max(arrays["p"]))
+        fz_min, fz_max = float(np.min(arrays["fz"])), float(np.max(arrays["fz"]))
         if limits:
             ranges = self._input_ranges
             counts = {name: saturate(arrays[name], ranges[name])[1] for name in ranges}
             warn_outside(counts, arrays["fz"].size, ranges)
             p_min, p_max = (min(max(v, ranges["p"][0]), ranges["p"][1]) for v in (p_min, p_max))
+            fz_min, fz_max = (min(max(v, ranges["fz"][0]), ranges["fz"][1]) for v in (fz_min, fz_max))
         self.pressure_factors(p_min, p_max)
+        self.load_factors(fz_min, fz_max, p_min, p_max)
         return MFOutputs(**self._evaluate_arrays(arrays, omega is not None, modes, check_finite=True))
 
     @functools.cached_property
@@ -177,6 +181,13 @@ class MFModel:
         """Warns once per factor where the model is used at a pressure at which a pressure factor of the file has
         changed sign (:class:`mftyre.inputs.PressureFactorCheck`); call with the least and greatest pressure used."""
         return PressureFactorCheck(self._params)
+
+    @functools.cached_property
+    def load_factors(self) -> LoadFactorCheck:
+        """Warns once per factor where the model is used at a load beyond which a slip stiffness of the file has the
+        opposite sign to the one at FNOMIN (:class:`mftyre.inputs.LoadFactorCheck`); call with the least and
+        greatest load and pressure used."""
+        return LoadFactorCheck(self._params)
 
     def input_range(self, name: str) -> tuple[float, float]:
         """(lo, hi) that ``limits=True`` saturates input ``name`` to (:mod:`mftyre.inputs`), in the mounted side's

@@ -30,6 +30,7 @@ CasADi, so both give the same numbers.
 from __future__ import annotations
 
 import functools
+import json
 import math
 from dataclasses import dataclass
 
@@ -42,7 +43,8 @@ from mftyre.variables import pick
 from .enveloping import Cams
 from .ring import INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, check_pressure, pressure_coefficients
 from .road import parse_road
-from .simulate import COMPILER_FLAGS, MAX_RK4_STEP, GeneratedFunction
+from .simulate import COMPILER_FLAGS, EQUILIBRIUM_TOL, MAX_RK4_STEP, NO_EQUILIBRIUM, GeneratedFunction, \
+    no_rolling_root_template
 
 __all__ = ["SwiftWheel", "swift_functions", "internal_steps", "input_table", "RIM_MODES", "INPUTS", "OUTPUTS",
            "PARAMETERS", "TABLE_DX", "WINDOW",
@@ -154,7 +156,12 @@ class SwiftFunctions(StateFunctions):
     """The SWIFT wheel's CasADi functions (window arguments ``x0w``, ``grid``, ``hw``: the table window, see module
     notes; ``hw`` holds (cam height, road-camber slope) pairs, interleaved, as ``table_h``):
     ``init(u, q, x0w, grid, hw) -> x``, ``step(x, u, dt, x0w, grid, hw) -> x_next`` (one RK4 step),
-    ``out(x, u, x0w, grid, hw) -> y``; the road table and the C definitions (``config_extra``) of the native glue."""
+    ``out(x, u, x0w, grid, hw) -> y``, ``residual(x, u, x0w, grid, hw) -> r`` (the equilibrium equations'
+    derivatives ``residual_names``, refused above EQUILIBRIUM_TOL with NO_EQUILIBRIUM, as
+    :meth:`swift.simulate.SwiftTyre.initial_state`), ``root(x, u, x0w, grid, hw) -> facts`` (the rule that a static
+    root is a rolling tyre, :attr:`swift.simulate.SwiftTyre.rolling_root_function`; the refusal
+    ``root_message % (start_text(u, q), *facts[1:])``); the road table and the C definitions (``config_extra``) of
+    the native glue."""
 
     table_x0: float
     table_dx: float
@@ -164,11 +171,31 @@ class SwiftFunctions(StateFunctions):
     config_extra: str
     rim: str = "speed"
     axle: str = "height"
+    root: object = None
+    root_message: str = ""
+    residual: object = None
+    residual_names: tuple = ()
+
+    def start_text(self, u, q) -> str:
+        """The start's values (:func:`start_description`) as the native glue prints them."""
+        names = {"u": self.input_names, "q": self.parameter_names}
+        values = {"u": u, "q": q}
+        form, described = start_description(self.rim, self.axle)
+        return form % tuple(float(values[vec][names[vec].index(name)]) for name, vec in described)
 
     def window_start(self, xb: float) -> int:
         """First table sample of the window around the belt at ``xb``, clamped to the table."""
         i0 = math.floor((xb - self.table_x0) / self.table_dx) - WINDOW // 2
         return min(max(i0, 0), self.table_h.size // 2 - WINDOW)
+
+
+def start_description(rim: str, axle: str) -> tuple:
+    """(printf format, ((name, "u" or "q"), ...)) of the values that describe a start in a refusal: speed, axle,
+    rim, pressure and position; the native glue prints the same (SWIFT_START_TEXT, SWIFT_START_VALUES)."""
+    described = (("vx", "m/s", "u"), ("z", "m", "u") if axle == "height" else ("Fz_in", "N", "u"),
+                 ("omega", "rad/s", "u") if rim == "speed" else ("torque", "N m", "u"), ("p", "Pa", "u"),
+                 ("x_start", "m", "q"))
+    return ", ".join(f"{name} = %g {unit}" for name, unit, _ in described), tuple((n, v) for n, _, v in described)
 
 
 def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed",
@@ -239,6 +266,14 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
     x_eq = equilibrium(q[0], *height, U["omega"], uring, x0w, grid, hw)
     init = ca.Function("swift_init", [u, q, x0w, grid, hw], [lifted(x_eq, U["road_z"])],
                        ["u", "q", "x0w", "grid", "hw"], ["x0"])
+    root = ca.Function("swift_root", [x, u, x0w, grid, hw],
+                       [tyre.rolling_root_function(lifted(x, -U["road_z"]), uring, x0w, grid, hw)],
+                       ["x", "u", "x0w", "grid", "hw"], ["facts"])
+    root_message = no_rolling_root_template(prm)
+    residual = ca.Function("swift_residual", [x, u, x0w, grid, hw],
+                           [tyre.equilibrium_residual_function(lifted(x, -U["road_z"]), uring, x0w, grid, hw)],
+                           ["x", "u", "x0w", "grid", "hw"], ["r"])
+    residual_names = tuple(STATE_NAMES[i] for i in tyre.equilibrium_unknowns[1])
 
     # direct feedthrough of the inputs to the outputs (structural)
     jac = ca.jacobian(outw(x, u, x0w, grid, hw), u).sparsity()
@@ -247,7 +282,16 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
     h = tyre.cam_pairs
     grid_v = np.ascontiguousarray(table.dx * np.arange(WINDOW))
     pstiff, pdamp = pressure_coefficients(prm)  # the factors' signs checked by glue_validate (ring.check_pressure)
-    extra = (f"#define ROAD_N {table.h.size}\n#define ROAD_WINDOW {WINDOW}\n#define ROAD_X0 {table.x0!r}\n"
+    start_form, described = start_description(rim, axle)
+    refusal = (f"#define SWIFT_NO_EQUILIBRIUM {json.dumps(NO_EQUILIBRIUM)}\n#define SWIFT_EQUILIBRIUM_TOL "
+               f"{EQUILIBRIUM_TOL!r}\n#define SWIFT_NEWTON_STEPS {NEWTON_STEPS}\n"
+               f"#define SWIFT_NEQ {len(residual_names)}\n"
+               "static const char *const SWIFT_EQ_NAMES[SWIFT_NEQ] = {"
+               + ", ".join(json.dumps(n) for n in residual_names) + "};\n"
+               f"#define SWIFT_NO_ROLLING_ROOT {json.dumps(root_message)}\n#define SWIFT_START_TEXT "
+               f"{json.dumps(start_form)}\n#define SWIFT_START_VALUES(u, q) "
+               + ", ".join(f"{vec}[TYRE_{vec.upper()}_{name.upper()}]" for name, vec in described) + "\n")
+    extra = (refusal + f"#define ROAD_N {table.h.size}\n#define ROAD_WINDOW {WINDOW}\n#define ROAD_X0 {table.x0!r}\n"
              f"#define ROAD_DX {table.dx!r}\n#define SWIFT_MAX_TRAVEL {MAX_TRAVEL!r}\n"
              f"#define SWIFT_MAX_RK4_STEP {MAX_RK4_STEP!r}\n#define STEP_RATE_LIMIT {STEP_RATE_LIMIT!r}\n"
              f"#define SWIFT_P_NOM {float(prm.NOMPRES)!r}\n#define SWIFT_P_STIFF {pstiff!r}\n"
@@ -262,7 +306,8 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
     return SwiftFunctions(init=init, step=step, out=outw, state_names=STATE_NAMES, inputs=inputs,
                           parameters=parameters, outputs=tuple(OUTPUTS.values()), table_x0=float(table.x0),
                           table_dx=float(table.dx), table_h=h, grid=grid_v, output_dependencies=deps,
-                          config_extra=extra, rim=rim, axle=axle)
+                          config_extra=extra, rim=rim, axle=axle, root=root, root_message=root_message,
+                          residual=residual, residual_names=residual_names)
 
 
 #: Compiler flags of the wheel's library (those of swift.simulate's compiled step).
@@ -372,6 +417,16 @@ class SwiftWheel:
         x = np.asarray(self.functions.init(self.u, self.q, *self._window(self.q[0])), dtype=float).ravel()
         if not np.all(np.isfinite(x)):
             raise ModelInputError("no static equilibrium found at the initial inputs")
+        f, window = self.functions, self._window(self.q[0])
+        r = np.asarray(f.residual(x, self.u, *window), dtype=float).ravel()
+        worst = int(np.argmax(np.abs(r))) if np.all(np.isfinite(r)) else int(np.argmin(np.isfinite(r)))
+        if not abs(r[worst]) <= EQUILIBRIUM_TOL:  # as swift.simulate.SwiftTyre.initial_state
+            raise ModelInputError(NO_EQUILIBRIUM % (f.start_text(self.u, self.q), NEWTON_STEPS,
+                                                    f.residual_names[worst], r[worst], EQUILIBRIUM_TOL))
+        facts = np.asarray(self.functions.root(x, self.u, *window), dtype=float).ravel()
+        if facts[0]:  # a root, but no rolling tyre (swift.simulate.SwiftTyre.rolling_root_function)
+            raise ModelInputError(self.functions.root_message % (self.functions.start_text(self.u, self.q),
+                                                                 *facts[1:]))
         self.state = x
 
     def step(self, h: float):

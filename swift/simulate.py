@@ -97,6 +97,28 @@ WARM_PASSES = 1
 #: equilibrium; converged solutions reach ~1e-11, inputs without an equilibrium leave 1e1-1e3 (a torque the tyre
 #: cannot hold: the Newton iteration ran off to the axle 26 m above the road or 2260 rad/s).
 EQUILIBRIUM_TOL = 1e-6
+#: The refusal of a start without static equilibrium (:meth:`SwiftTyre.initial_state`, the FMUs' initialisation:
+#: the largest derivative of :attr:`SwiftTyre.equilibrium_unknowns`' equations above EQUILIBRIUM_TOL), printf-style
+#: as NO_ROLLING_ROOT: the inputs, the Newton steps, the state whose derivative is largest, the derivative, the
+#: tolerance.
+NO_EQUILIBRIUM = ("no static equilibrium at the inputs (%s): after %d Newton steps d(%s)/dt = %.3g (tolerance %g); "
+                  "e.g. a drive/brake torque beyond what the tyre transmits at this load, or the tyre off the road")
+#: The refusal of a static root that is no rolling tyre (:attr:`SwiftTyre.rolling_root_function`), printf-style
+#: (the native FMU's glue prints it with the same facts): the inputs (%s), then kappa, belt spin, free radius and
+#: belt height; the file's values in braces (:func:`no_rolling_root_template`).
+NO_ROLLING_ROOT = (
+    "no static equilibrium within the file's slip range at the inputs (%s): the equations' root has the slip kappa "
+    "= %.3g outside KPUMIN..KPUMAX = {KPUMIN:g}..{KPUMAX:g}, belt spin %.4g rad/s (free radius %.3g m with Q_V1 = "
+    "{Q_V1:g}, LONGVL = {LONGVL:g} m/s), belt centre %.3g m above the road: no rolling tyre (a torque beyond what "
+    "the tyre transmits, or speed terms that run away: the rolling resistance QSY3/QSY4 and the radius growth Q_V1 "
+    "scale with the speed over LONGVL)")
+
+
+def no_rolling_root_template(prm) -> str:
+    """:data:`NO_ROLLING_ROOT` with the file's KPUMIN, KPUMAX, Q_V1 and LONGVL filled in (Python's ``g`` format is
+    C's ``%g``); the rest is printf-style, for ``%`` in Python and ``snprintf`` in the native FMU."""
+    return NO_ROLLING_ROOT.format(KPUMIN=float(prm.KPUMIN), KPUMAX=float(prm.KPUMAX), Q_V1=float(prm.Q_V1),
+                                  LONGVL=float(prm.LONGVL))
 
 
 def _with_casadi(method):
@@ -646,16 +668,56 @@ class SwiftTyre:
         return ca.Function("swift_equilibrium", [*inputs, u, x0w, grid, hw], [xi],
                            ["xa", "za", "vza", "omega", "u", "x0w", "grid", "hw"], ["x"])
 
+    @functools.cached_property
+    @_with_casadi
+    def equilibrium_residual_function(self):
+        """The derivatives that vanish in static equilibrium (:attr:`equilibrium_unknowns`' equations, in their
+        order) at a state: ``(x, u, x0w, grid, hw) -> r``, as :meth:`initial_state` tests them against
+        :data:`EQUILIBRIUM_TOL` (:data:`NO_EQUILIBRIUM`); for the FMUs' initialisation."""
+        import casadi as ca
+
+        n = self.window
+        x, u = ca.MX.sym("x", len(STATE_NAMES)), ca.MX.sym("u", len(INPUT_NAMES))
+        x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", n), ca.MX.sym("hw", 2 * n)
+        d = self._rhs_window(x, u, x0w, grid, hw, 0.0)[0]
+        return ca.Function("swift_residual", [x, u, x0w, grid, hw], [d[self.equilibrium_unknowns[1]]],
+                           ["x", "u", "x0w", "grid", "hw"], ["r"])
+
+    @functools.cached_property
+    @_with_casadi
+    def rolling_root_function(self):
+        """The rule that a static root is a rolling tyre, one definition for :meth:`initial_state`,
+        :class:`swift.fmu_model.SwiftWheel` and the native FMU (generated C): ``(x, u, x0w, grid, hw) -> facts``
+        (the window of :attr:`step_function`), facts = [refused (1 or 0), kappa, belt spin, free radius, belt centre
+        above the cam road under the axle]. Refused: rolling (|vx| >= VXLOW) with the slip kappa outside
+        KPUMIN..KPUMAX (at standstill kappa is a deflection, not a slip). The message: :func:`no_rolling_root_template`
+        of the facts."""
+        import casadi as ca
+
+        from mftyre.backend import casadi_backend
+
+        prm, n = self.model.params, self.window
+        x, u = ca.MX.sym("x", len(STATE_NAMES)), ca.MX.sym("u", len(INPUT_NAMES))
+        x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", n), ca.MX.sym("hw", 2 * n)
+        h = ca.interpolant("cam", "linear", [n], 2, {"lookup_mode": ["exact"]})(x[_S["xa"]] - x0w, grid, hw)[0]
+        kappa, omega_belt = x[_S["kappa"]], x[_S["omb"]]
+        refused = ca.logic_and(ca.fabs(u[INPUT_NAMES.index("vx")]) >= prm.VXLOW,
+                               ca.logic_or(kappa < prm.KPUMIN, kappa > prm.KPUMAX))
+        facts = ca.vertcat(refused, kappa, omega_belt, vertical.free_radius(prm, omega_belt, casadi_backend()),
+                           x[_S["zb"]] - h)
+        return ca.Function("swift_root", [x, u, x0w, grid, hw], [facts], ["x", "u", "x0w", "grid", "hw"], ["facts"])
+
     @_with_casadi
     def initial_state(self, inputs: StepInputs, iterations: int = 30) -> np.ndarray:
         """Static equilibrium (steady rolling at the input speeds) at the axle position of ``inputs``: Newton
         on the accelerations and patch rates, from the steady-state model's deflection. With ``rim="torque"`` the
         spin is an unknown too (``inputs.omega`` its first guess): the rim torque balances the input torque.
         Raises :class:`~mftyre.errors.ModelInputError` where the iteration ends without equilibrium (residual above
-        :data:`EQUILIBRIUM_TOL`), and where it ends at a root that is no rolling tyre: rolling (|vx| >= VXLOW), a
-        slip outside KPUMIN..KPUMAX (the agricultural sample files at 40-70 m/s, 4-20 times their LONGVL and beyond
-        their speed rating: rolling resistance (QSY4 (V/LONGVL)^4) and radius growth (Q_V1) run away, the root
-        spins backwards at kappa -100..-600 with a free radius of 8-36 m and had growing modes of +200..+640 1/s)."""
+        :data:`EQUILIBRIUM_TOL`), and where it ends at a root that is no rolling tyre (:attr:`rolling_root_function`,
+        the rule the FMUs apply too): rolling (|vx| >= VXLOW), a slip outside KPUMIN..KPUMAX (the agricultural
+        sample files at 40-70 m/s, 4-20 times their LONGVL and beyond their speed rating: rolling resistance
+        (QSY4 (V/LONGVL)^4) and radius growth (Q_V1) run away, the root spins backwards at kappa -100..-600 with a
+        free radius of 8-36 m and had growing modes of +200..+640 1/s)."""
         prm = self.model.params
         c = self.constants
         p = prm.INFLPRES if inputs.p is None else inputs.p
@@ -708,21 +770,10 @@ class SwiftTyre:
                 f"{float(r[worst])!r} at the inputs {at}): check the [STRUCTURAL] (FREQ_*, DAMP_*, BELT_*), "
                 f"[VERTICAL] and [CONTACT_PATCH] values and SWIFT_* for one no tyre has")
         if not abs(r[worst]) <= EQUILIBRIUM_TOL:
-            raise ModelInputError(
-                f"no static equilibrium at the inputs ({at}): after {iterations} Newton steps "
-                f"d({STATE_NAMES[eqs[worst]]})/dt = {r[worst]:.3g} (tolerance "
-                f"{EQUILIBRIUM_TOL:g}); e.g. a drive/brake torque beyond what the tyre transmits at this load, or "
-                f"the tyre off the road")
-        kappa = float(s[_S["kappa"]])  # rolling (|vx| >= VXLOW) it is the steady slip; at standstill a deflection
-        if abs(inputs.vx) >= prm.VXLOW and not prm.KPUMIN <= kappa <= prm.KPUMAX:  # a root, but no rolling tyre
-            r_free = float(vertical.free_radius(prm, s[_S["omb"]], NUMPY))
-            raise ModelInputError(
-                f"no static equilibrium within the file's slip range at the inputs ({at}): the equations' root has "
-                f"the slip kappa = {kappa:.3g} outside KPUMIN..KPUMAX = {prm.KPUMIN:g}..{prm.KPUMAX:g}, belt spin "
-                f"{float(s[_S['omb']]):.4g} rad/s (free radius {r_free:.3g} m with Q_V1 = {prm.Q_V1:g}, LONGVL = "
-                f"{prm.LONGVL:g} m/s), belt centre {float(s[_S['zb']] - h):.3g} m above the road: no rolling tyre "
-                f"(a torque beyond what the tyre transmits, or speed terms that run away: the rolling resistance "
-                f"QSY3/QSY4 and the radius growth Q_V1 scale with the speed over LONGVL)")
+            raise ModelInputError(NO_EQUILIBRIUM % (at, iterations, STATE_NAMES[eqs[worst]], r[worst], EQUILIBRIUM_TOL))
+        facts = np.asarray(self.rolling_root_function(s, u, *window), dtype=float).ravel()
+        if facts[0]:
+            raise ModelInputError(no_rolling_root_template(prm) % (at, *facts[1:]))
         self._store_contact(s, u)
         return s
 

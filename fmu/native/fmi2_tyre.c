@@ -45,7 +45,7 @@ typedef struct {
 } Instance;
 
 static void logf_(Instance *inst, fmi2Status status, const char *category, const char *fmt, ...) {
-    char msg[1024];
+    char msg[2048];
     va_list ap;
     if (!inst || !inst->cb.logger) return;
     if (!inst->logging && status == fmi2OK) return;
@@ -92,7 +92,7 @@ static int check_values(Instance *inst, char *msg, size_t n) {
 /* y = out(x, u) unless y is already current; on failure the old outputs are kept. In initialisation mode x is
  * the initial state the current parameters and inputs give. */
 static fmi2Status update_outputs(Instance *inst, const char *caller) {
-    char msg[512];
+    char msg[1024];
     double y[ARR(TYRE_NY)], x0[ARR(TYRE_NX)];
     const double *x = inst->s.x;
     if (inst->s.outputs_valid || inst->s.phase == PHASE_INSTANTIATED) return fmi2OK;
@@ -214,7 +214,7 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
-    char msg[512];
+    char msg[1024];
     double x[ARR(TYRE_NX)];
     CHECK_INSTANCE(c, "fmi2ExitInitializationMode")
     if (inst->s.phase != PHASE_INIT) {
@@ -470,7 +470,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 
 /* --------------------------------------------------------------------------------------- co-simulation */
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
-    char msg[512];
+    char msg[1024];
     double x[ARR(TYRE_NX)];
     fmi2Status status;
     int rc;

@@ -1,5 +1,6 @@
 /* SWIFT tyre (swift.fmu_model): the rigid ring stepped over the road table built into tyre_config.h, with the
- * functions CasADi generated in tyre_model.c (swift_init, swift_substep, swift_out). Mirrors
+ * functions CasADi generated in tyre_model.c (swift_init, swift_substep, swift_out, swift_residual,
+ * swift_root). Mirrors
  * swift.fmu_model.SwiftWheel line by line: window placement, imposed axle height and spin, step splitting. */
 #include <math.h>
 #include <stdio.h>
@@ -9,7 +10,7 @@
 #include "tyre_glue.h"
 #include "tyre_model.h"
 
-#define NFUN 3
+#define NFUN 5
 typedef int (*WorkFn)(casadi_int *, casadi_int *, casadi_int *, casadi_int *);
 
 struct GlueWork {
@@ -20,7 +21,8 @@ struct GlueWork {
 };
 
 GlueWork *glue_alloc(void) {
-    WorkFn work[NFUN] = {swift_init_work, swift_substep_work, swift_out_work};
+    WorkFn work[NFUN] = {swift_init_work, swift_substep_work, swift_out_work, swift_residual_work,
+                          swift_root_work};
     casadi_int narg = 8, nres = 4, niw = 1, nw = 1;
     GlueWork *g = (GlueWork *)calloc(1, sizeof(GlueWork));
     if (!g) return NULL;
@@ -114,6 +116,40 @@ int glue_init(GlueWork *g, const double *u, const double *q, double *x, char *ms
 #endif
             return 1;
         }
+    /* the rules of swift.simulate.SwiftTyre.initial_state, with its messages, the window of the start as
+     * swift_init's: the equilibrium equations' derivatives within SWIFT_EQUILIBRIUM_TOL (SWIFT_NO_EQUILIBRIUM), and
+     * a root that is a rolling tyre (SwiftTyre.rolling_root_function, SWIFT_NO_ROLLING_ROOT) */
+    double r[SWIFT_NEQ], facts[5], x0r;
+    char start[256];
+    int worst = 0;
+    g->arg[0] = x;
+    g->arg[1] = u;
+    set_window(g, 2, q[TYRE_Q_X_START], &x0r);
+    g->res[0] = r;
+    if (swift_residual(g->arg, g->res, g->iw, g->w, 0)) {
+        snprintf(msg, n, "the static equilibrium could not be checked");
+        return 1;
+    }
+    for (int i = 0; i < SWIFT_NEQ; i++) /* the largest derivative, or the first that is not finite */
+        if (!isfinite(r[i]) || fabs(r[i]) > fabs(r[worst])) {
+            worst = i;
+            if (!isfinite(r[i])) break;
+        }
+    snprintf(start, sizeof start, SWIFT_START_TEXT, SWIFT_START_VALUES(u, q));
+    if (!(fabs(r[worst]) <= SWIFT_EQUILIBRIUM_TOL)) {
+        snprintf(msg, n, SWIFT_NO_EQUILIBRIUM, start, SWIFT_NEWTON_STEPS, SWIFT_EQ_NAMES[worst], r[worst],
+                 SWIFT_EQUILIBRIUM_TOL);
+        return 1;
+    }
+    g->res[0] = facts;
+    if (swift_root(g->arg, g->res, g->iw, g->w, 0)) {
+        snprintf(msg, n, "the static equilibrium could not be checked");
+        return 1;
+    }
+    if (facts[0] != 0.0) {
+        snprintf(msg, n, SWIFT_NO_ROLLING_ROOT, start, facts[1], facts[2], facts[3], facts[4]);
+        return 1;
+    }
     return 0;
 }
 
