@@ -165,9 +165,8 @@ so that phi = psi_dot_c / V with V signed by the direction of travel. The forces
 load, slips, rim camber and speed as the slip model, with the camber spin (1 - eps_gamma) s_v Omega_b sin(gamma) of
 rolling forward (reversing as for the other forces: the MF rolls forward, M'_z turns with s_v, so the spin moment
 resists the yaw in both directions): at zero yaw rate the outputs are exactly those without turn slip and the
-steady state stays the MF's. (The increment was taken about a reference spin R0 phi = 1e-6 while the MF's C_r
-(4.104) was 0/0 at zero turn slip and camber with another limit beside it; the evaluator now takes that limit,
-mftyre.formula.aligning, and the increment is about phit = 0.)
+steady state stays the MF's. The increment is taken about R0 phi = TURN_SLIP_REFERENCE: (4.104)'s C_r is 0/0 at
+zero turn slip and camber (its value there, 1, is not its limit).
     Sign: phit = +psi_dot/V in ISO-W (z up). The MF adds phit to the camber spin (1 - eps_gamma) Omega sin(gamma)/V
 (4.76), and an ISO camber gamma > 0 (leaning right: the files' camber thrust Fy < 0) tilts the spin axis to +z; so a
 wheel rolling freely along its cone (leaning right, turning right at psi_dot = -(1 - eps_gamma) Omega sin(gamma))
@@ -199,7 +198,7 @@ from mftyre.formula import vertical
 from mftyre.inputs import load_factor_problems
 
 __all__ = ["RingConstants", "STATE_NAMES", "INPUT_NAMES", "OUTPUT_NAMES", "CONTACT_PASSES", "AIR_TIME",
-           "RESIDUAL_FLOOR", "pressure_coefficients", "pressure_limits", "check_pressure",
+           "TURN_SLIP_REFERENCE", "RESIDUAL_FLOOR", "pressure_coefficients", "pressure_limits", "check_pressure",
            "residual_vertical", "residual_compliance", "contact_start", "contact_geometry", "ring_equations",
            "turn_slip_moment_slopes", "turn_slip_warning"]
 
@@ -225,6 +224,11 @@ RESIDUAL_FLOOR = 0.02
 #: Floor of 1 - t, t = kappa_s (R_e - r_c), in the reported rolling radius variation ``dre`` (a concave corner
 #: tighter than 1/(R_e - r_c)) [chosen guard].
 _TURN_FLOOR = 0.2
+#: Reference spin R0 phi about which the turn-slip increment is taken (:func:`ring_equations`) [chosen guard]: the
+#: published C_r = (2/pi) acos(M_zphi90 / |D_rphi|) (Pacejka 2012 (4.104)) is 0/0 at zero turn slip and camber, held
+#: at C_r = 1 exactly there and at its limit (another value) around it: a removable jump of M_z (0.07 N m of 15 N m,
+#: sample file, 4 kN, 0.1 rad) and a derivative of order 1e-16/phi next to it.
+TURN_SLIP_REFERENCE = 1e-6
 
 
 @dataclass(frozen=True)
@@ -314,18 +318,18 @@ def residual_compliance(c_total, c_ring, sigma_c, k_slip, be):
 
 def turn_slip_moment_slopes(model, loads=None, h: float = 1e-3):
     """[(Fz, dMz/dphit, dMzr/dphit)]: the slopes [N m per 1/m] of the MF's aligning moment and of its residual part
-    in the turn slip phit about 0, by central differences of
+    in the turn slip phit about the reference spin (:data:`TURN_SLIP_REFERENCE`), by central differences of
     ``h``/R0 with MFModel.evaluate(turn_slip=True) at zero slip and camber, LONGVL, INFLPRES, at ``loads``
     (default 0.5, 0.55, ... 2 FNOMIN). With phit = psi_dot/V (ISO-W, module notes) a positive slope pushes the patch
     along its yaw rate: the MF's own (camber) data drive the yaw instead of damping it."""
     prm = model.params
     loads = np.linspace(0.5, 2.0, 31) * prm.FNOMIN if loads is None else np.asarray(loads, dtype=float)
     r0 = prm.UNLOADED_RADIUS
-    dp = h / r0
+    ref, dp = TURN_SLIP_REFERENCE / r0, h / r0
     with warnings.catch_warnings():  # loads above FZMAX: saturated, as in the ring's slip model
         warnings.simplefilter("ignore", InputClippedWarning)
-        plus = model.evaluate(loads, 0.0, 0.0, 0.0, dp, turn_slip=True)
-        minus = model.evaluate(loads, 0.0, 0.0, 0.0, -dp, turn_slip=True)
+        plus = model.evaluate(loads, 0.0, 0.0, 0.0, ref + dp, turn_slip=True)
+        minus = model.evaluate(loads, 0.0, 0.0, 0.0, ref - dp, turn_slip=True)
     return [(float(f), float(a), float(b)) for f, a, b in zip(loads, (plus.mz - minus.mz) / (2 * dp),
                                                               (plus.mzr - minus.mzr) / (2 * dp))]
 
@@ -521,7 +525,8 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, *, 
                                       outputs=("fx", "fy", "mz"), turn_slip=True)
         slip = (be.fmax(fzc, _FZ_FLOOR), s["kappa"], alpha_mf, v["gamma"] - beta_x)
         rest = (be.fmax(be.abs(vcx), prm.VXLOW), v["p"], s["omb"] * s_v)  # camber spin as rolling forward
-        on, off = mf_ts(*slip, s["phi"], *rest), mf_ts(*slip, 0.0, *rest)
+        ref = TURN_SLIP_REFERENCE / prm.UNLOADED_RADIUS
+        on, off = mf_ts(*slip, s["phi"] + ref, *rest), mf_ts(*slip, ref, *rest)
         fxc, fyc, mzc = fxc + (on[0] - off[0]), fyc + (on[1] - off[1]), mzc + (on[2] - off[2])
     mzc, myc = mzc * s_v, myc * s_o
 

@@ -15,7 +15,7 @@ import mftyre
 from mftyre.errors import TurnSlipWarning
 from swift import OUTPUT_NAMES, Flat, StepInputs, SwiftTyre
 from swift.modes import scan
-from swift.ring import STATE_NAMES
+from swift.ring import STATE_NAMES, TURN_SLIP_REFERENCE
 
 from conftest import MFEVAL_DIR, SHARED, TIR_FILES, require_shared
 
@@ -64,7 +64,7 @@ def test_zero_yaw_rate_leaves_the_ring_unchanged(model, tyres, vx, alpha, gamma)
 
 def test_turn_slip_is_the_mf_increment_at_the_patch_spin(model, tyres):
     """A state with turn slip phi: the contact forces are those without it plus the MF's turn-slip increment
-    MF(phit = phi) - MF(phit = 0) (MFModel.evaluate(turn_slip=True)) at the ring's own
+    MF(phit = phi) - MF(phit = 0) (MFModel.evaluate(turn_slip=True), about the reference spin) at the ring's own
     contact load, slips, camber and speed."""
     off, on = tyres
     u = _inputs(model, V, 0.04, 0.02)
@@ -72,9 +72,10 @@ def test_turn_slip_is_the_mf_increment_at_the_patch_spin(model, tyres):
     phi = 0.3 / V  # a yaw rate of 0.3 rad/s at 10 m/s
     x[_S["phi"]] = phi
     y_off, y_on = off.outputs(x, u), on.outputs(x, u)
+    ref = TURN_SLIP_REFERENCE / model.params.UNLOADED_RADIUS
     args = dict(fz=y_off[_O["fz_c"]], kappa=y_off[_O["kappa"]], alpha=y_off[_O["alpha"]], gamma=u.gamma,
                 vx=max(abs(y_off[_O["vcx"]]), model.params.VXLOW), omega=x[_S["omb"]], turn_slip=True)
-    with_spin, without = model.evaluate(phit=phi, **args), model.evaluate(phit=0.0, **args)
+    with_spin, without = model.evaluate(phit=phi + ref, **args), model.evaluate(phit=ref, **args)
     for name, out in (("fx_c", "fx"), ("fy_c", "fy"), ("mz_c", "mz")):
         increment = float(getattr(with_spin, out) - getattr(without, out))
         assert y_on[_O[name]] - y_off[_O[name]] == pytest.approx(increment, rel=1e-9, abs=1e-9)

@@ -75,33 +75,17 @@ def aligning_coefficients(prm, s, lat, gyk, modes, be) -> SimpleNamespace:
         b_drp = k_zgr0 / (c_drp * d_drp * (1.0 - s.eps_gamma))  # (4.98)
         spin = s.phi if published else s.phit
         d_rp = d_drp * be.sin(c_drp * be.atan(b_drp * R0 * spin))  # (4.93)
-        # Mz90 = mz_inf (2/pi) atan(QCRP2 R0 |phit|) Gyk (4.103); (4.104): Cr = zeta7 = (2/pi) acos(Mz90 / |D_rphi|),
-        # real for ratios in [-1, 1]. Both are 0 at zero turn slip and spin, so the ratio is written as the ratio of
-        # their slopes at 0 times two factors that are 1 there, f1 = atan(x)/x, f2 = sin(C atan(y))/(C y) (series
-        # below |x|, |y| = 1e-4, error < 1e-16), and |phit|/|spin|: its limit at phit -> 0 is the slope ratio, not 0
-        # (Cr = 1) as it was, which jumped Mz next to zero turn slip (0.065 of 15.4 N m, sample file, 4 kN, 0.1 rad;
-        # 0.77 of 183 N m, agri) with derivatives of order 1e-16/phit beside it. |phit|/|spin| = 1 where the spin has
-        # no camber part (mfeval: spin = phit); with camber spin and zero turn slip the ratio is 0 and Cr = 1, as in
-        # the model without turn slip (where both go to 0 together the limit depends on the direction: along phit).
-        x, y = prm.QCRP2 * R0 * be.abs(s.phit), b_drp * R0 * spin
-        small_x, small_y = be.abs(x) < 1e-4, be.abs(y) < 1e-4
-        f1 = be.where(small_x, 1.0 - x**2 / 3.0, be.atan(x) / be.where(small_x, 1.0, x))
-        f2 = be.where(small_y, 1.0 - y**2 * (2.0 + c_drp**2) / 6.0,
-                      be.sin(c_drp * be.atan(y)) / be.where(small_y, 1.0, c_drp * y))
-        num = mz_inf * (2.0 / be.pi) * prm.QCRP2 * gyk * f1
-        den = be.abs(d_drp * c_drp * b_drp * f2)
-        if published:
-            plain = s.phi_camber == 0
-            num = num * be.where(plain, 1.0, be.abs(s.phit))
-            den = den * be.where(plain, 1.0, be.abs(spin))
-        # Beyond [-1, 1] (|D_rphi| small: a file with QDZ8 QDZ9 dfz + QDZ10 ~ 0 in the mfeval K_zgamma,r0, or small
-        # spin beside the turn slip):
+        mz90 = mz_inf * (2.0 / be.pi) * be.atan(prm.QCRP2 * R0 * be.abs(s.phit)) * gyk  # (4.103)
+        # (4.104): Cr = zeta7 = (2/pi) acos(Mz90 / |D_rphi|), real for ratios in [-1, 1]; without turn slip
+        # (Mz90 = 0) the ratio is 0 and Cr = 1 as in the model without turn slip. Beyond [-1, 1] (|D_rphi| small:
+        # a file with QDZ8 QDZ9 dfz + QDZ10 ~ 0 in the mfeval K_zgamma,r0, or small turn slip):
         # published: Cr = (2/pi) acos of the ratio held in [-1, 1] (0 or 2), a real shape factor as (4.46) needs;
         # mfeval: MATLAB's complex acos, Cr = a + i b with b = (2/pi) acosh|ratio|, of which MFeval reports the
         # real part of Mzr: Dr cos(a x) cosh(b x), x = atan(Br alpha_r) (unbounded in alpha_r)
-        finite = den * 1e12 > be.abs(num)  # else the ratio is held at +-1e12 (D_rphi = 0 at zero load)
-        ratio = be.where(num == 0, 0.0, be.where(finite, num / be.where(finite, den, 1.0),
-                                                 be.where(num > 0, 1e12, -1e12)))
+        held = be.abs(d_rp)
+        finite = held * 1e12 > be.abs(mz90)  # else the ratio is held at +-1e12 (D_rphi = 0 at zero load)
+        ratio = be.where(mz90 == 0, 0.0, be.where(finite, mz90 / be.where(finite, held, 1.0),
+                                                  be.where(mz90 > 0, 1e12, -1e12)))
         # (acos and acosh only inside their open domains: their infinite slopes at +-1 times the held ratio's zero
         # slope would make NaN derivatives)
         inside = be.abs(ratio) < 1.0

@@ -35,10 +35,8 @@ def spin_slip(prm, s, omega, modes, be):
     camber_spin = (1.0 - eps_gamma) * omega * be.sin(s.gamma)
     if modes.turn_slip_form == "published":
         vc_prime = be.fmax(vc, prm.VXLOW)  # singularity protection, continuous
-        # (4.76) with psi_dot = -phit Vc' (4.75): phi = -(psi_dot - camber_spin)/Vc' = phit + camber_spin/Vc', the
-        # camber part kept apart (exactly 0 without camber: Cr (4.104) takes its limit there, aligning.py)
-        s.phi_camber = camber_spin / vc_prime
-        phi = s.phit + s.phi_camber
+        psi_dot = -s.phit * vc_prime  # (4.75)
+        phi = -(psi_dot - camber_spin) / vc_prime  # (4.76)
     else:
         vc_prime = be.where(be.abs(s.vx) < prm.VXLOW, prm.VXLOW * be.sign_nz(s.vx), vc)
         psi_dot = -s.phit * vc_prime
