@@ -101,6 +101,8 @@ def load_factor_edges(params, dpi: float = 0.0) -> list[tuple[float, str, str]]:
     (FSAE_Defaults.tir of MFeval: PKX1 = 50, PKX2 = -80, K_xk < 0 above 1625 N, FZMAX 2000 N)."""
     fz0 = float(params.FNOMIN) * float(params.LFZO)
     edges = []
+    if not fz0 > 0.0:  # no nominal load (a file the value checks refuse): no load scale to place an edge on
+        return edges
     pkx1, pkx2 = float(params.PKX1), float(params.PKX2)
     if pkx2 != 0.0 and fz0 * (1.0 - pkx1 / pkx2) > 0.0:
         edges.append((fz0 * (1.0 - pkx1 / pkx2), f"PKX1 = {pkx1:g}, PKX2 = {pkx2:g}",
