@@ -44,7 +44,7 @@ class Effect:
     variables: tuple           # condition variables whose residual structure it explains
     start: dict = field(default_factory=dict)   # start values when switching on (default: the neutral value)
     needs: tuple = ()          # extra data conditions (beyond the stage groups'): e.g. ("turn_slip",)
-    with_stages: bool = False  # always scored with its stages refitted around it (a nuisance of the whole data)
+    with_stages: bool = False  # scored with its stages refitted around it when it passes alone (a nuisance)
 
     def parameter_descriptions(self) -> dict:
         """Parameter -> its one-line meaning from the schema."""

@@ -624,10 +624,11 @@ class _Search:
             startv = {k: e.start.get(k, e.neutral.get(k, float(base[k]))) for k in keep}
             new, rr = refit(base, ev_train, keep, [c for c in e.channels if c in ev_train.channels],
                             self.sigma, start=startv, max_nfev=run.max_nfev)
-            if e.with_stages:
-                results.append(self._score_with_stages(e, keep, why, new, rr, len(tried)))
-            else:
-                results.append(self.score(e, keep, why, new, rr, len(tried)))
+            result = self.score(e, keep, why, new, rr, len(tried))
+            if e.with_stages and result[0].p_value < run.alpha / len(tried) and result[0].score > 0:
+                # worth the stages refitted around it: it explains the training data alone and gains held out
+                result = self._score_with_stages(e, keep, why, new, rr, len(tried))
+            results.append(result)
         if results and not any(r[0].significant for r in results):
             results.sort(key=lambda t: -t[0].score)
             deep = []

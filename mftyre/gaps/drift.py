@@ -11,10 +11,11 @@ the last: TIME, or without it the row order),
 
 zero mean over the run, so the mean friction stays with the tyre's own parameters. Its coefficients are fitted as
 nuisance parameters, offered and judged like every catalogue effect (held-out sweeps, F test, pruning of
-undetermined coefficients), reported apart from the tyre's effects and never written to the .tir. It is always
-scored with the stages of its channels refitted around it, against the same stages refitted without it (as the
-deep retries of :mod:`mftyre.gaps.core`): the fair start has bent the friction and load parameters towards the
-drift in the order the blocks were run, and the drift alone, on that bent tyre, would be judged on a strawman.
+undetermined coefficients), reported apart from the tyre's effects and never written to the .tir. When it
+passes alone (training F test, a held-out gain), it is scored again with the stages of its channels refitted
+around it, against the same stages refitted without it (as the deep retries of :mod:`mftyre.gaps.core`): the
+fair start has bent the friction and load parameters towards the drift in the order the blocks were run, and
+the drift alone, on that bent tyre, would be judged on a strawman.
 
 :class:`Drifting` is a parameter set with drift coefficients: the tyre's :class:`mftyre.params.TyreParameters`
 (an :class:`mftyre.MFModel` built from it, verification and the .tir writer see the tyre alone) plus the
