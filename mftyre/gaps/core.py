@@ -185,8 +185,6 @@ def _chi2(ev: Evaluator, prm, sigma, channels) -> float:
 DEEP_RETRIES = 3
 #: Bins per sweep when a time series is reduced (per branch; fewer points, faster refits, the same curves).
 REDUCED_BINS = 15
-#: Rounds of stage refits and refits of a nuisance's own coefficients (which belong to no stage) when polishing it.
-POLISH_ROUNDS = 2
 #: Held-out sweeps (that the candidate changes by more than the noise, sum of (change/sigma)^2 >= 1) needed for
 #: the test by whole sweeps.
 MIN_HELD_OUT_SWEEPS = 8
@@ -566,16 +564,14 @@ class _Search:
         run = self.run
         stages = [st for st in FAIR_STAGES if st in {PARAM_STAGE.get(k) for k in names}
                   or STAGES[st].channel in e.channels]
+        polished, _ = refit_stages(new, run.train, stages, turn_slip=run.ts, channels=run.ev_train.channels,
+                                   max_nfev=run.max_nfev, extra=tuple(names) if free else (),
+                                   active=self.active if active is None else active,
+                                   baseline=run.given)
         own = [k for k in names if k not in PARAM_STAGE] if free else []
-        polished = new
-        for _ in range(POLISH_ROUNDS if own else 1):
-            polished, _ = refit_stages(polished, run.train, stages, turn_slip=run.ts, channels=run.ev_train.channels,
-                                       max_nfev=run.max_nfev, extra=tuple(names) if free else (),
-                                       active=self.active if active is None else active,
-                                       baseline=run.given)
-            if own:   # a nuisance's coefficients belong to no stage: refitted around the refitted stages
-                polished, _ = refit(polished, run.ev_train, own, [c for c in e.channels if c in run.ev_train.channels],
-                                    self.sigma, max_nfev=run.max_nfev)
+        if own:   # a nuisance's coefficients belong to no stage: refitted around the refitted stages
+            polished, _ = refit(polished, run.ev_train, own, [c for c in e.channels if c in run.ev_train.channels],
+                                self.sigma, max_nfev=run.max_nfev)
         chans = run.ev_train.channels
         if _chi2(run.ev_train, polished, self.sigma, chans) <= _chi2(run.ev_train, new, self.sigma, chans):
             return polished
