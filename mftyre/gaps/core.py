@@ -560,7 +560,8 @@ class _Search:
     def polish(self, new, e: Effect, names, free: bool = True, active=None):
         """Refit from ``new``: the stages of the effect's parameters ``names`` and of its channels, with those
         parameters active (``free=False``: held, the same stages refitted without them; ``active``: the active
-        set, default the current one); kept when it lowers the training chi-square."""
+        set, default the current one); a nuisance's own coefficients (no stage's) are refitted after the stages;
+        kept when it lowers the training chi-square."""
         run = self.run
         stages = [st for st in FAIR_STAGES if st in {PARAM_STAGE.get(k) for k in names}
                   or STAGES[st].channel in e.channels]
