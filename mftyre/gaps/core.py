@@ -578,20 +578,22 @@ class _Search:
             return polished
         return new
 
-    def score(self, e: Effect, keep, why, new, rr, m, extra_note="", ref=None):
+    def score(self, e: Effect, keep, why, new, rr, m, extra_note="", ref=None, ref_test=None):
         """Training F test and held-out score of a candidate model ``new`` against the current ``prm``.
 
         The training F test counts the effective number of independent residuals (n_eff, from the noise) rather
         than rows, and so does the held-out score (chi-square decrease x n_eff / n - k ln n_eff, a BIC-type
         penalty); with enough held-out sweeps the held-out test is also by whole sweeps: the chi-square decrease
         of each held-out sweep, a one-sided signed-rank test (so a gain a few sweeps carry, or 7.120 -> 7.119 %,
-        is not significant). ``ref``: the model it is compared with (default the current one)."""
+        is not significant). ``ref``: the model it is compared with (default the current one); ``ref_test``: on the
+        held-out data (default ``ref``)."""
         run, sigma, prm = self.run, self.sigma, self.prm if ref is None else ref
+        prm_test = prm if ref_test is None else ref_test
         ev_train, ev_test = run.ev_train, run.ev_test
         ch = [c for c in e.channels if c in ev_train.channels]
         k = len(keep)
         c_tr0, c_tr1 = _chi2(ev_train, prm, sigma, ch), _chi2(ev_train, new, sigma, ch)
-        c_te0, c_te1 = _chi2(ev_test, prm, sigma, ch), _chi2(ev_test, new, sigma, ch)
+        c_te0, c_te1 = _chi2(ev_test, prm_test, sigma, ch), _chi2(ev_test, new, sigma, ch)
         n_tr = int(sum(ev_train.measured[c].size for c in ch))
         n_te = int(sum(self.n_test_rows[c] for c in ch))
         n_eff = _n_eff(ev_train, new, ch, run.series)
@@ -599,7 +601,7 @@ class _Search:
         n_eff_te = _n_eff(ev_test, new, ch, run.series)
         sc = (c_te0 - c_te1) * n_eff_te / max(n_te, 1) - k * math.log(max(n_eff_te, 2.0))
         gain = (c_te0 - c_te1) / c_te0 if c_te0 > 0 else 0.0
-        p_sweeps, n_sweeps = _sweep_test(ev_test, prm, new, sigma, ch)
+        p_sweeps, n_sweeps = _sweep_test(ev_test, prm_test, new, sigma, ch)
         sig = p < run.alpha / m and sc > 0 and (n_sweeps < MIN_HELD_OUT_SWEEPS or p_sweeps < HELD_OUT_ALPHA)
         note = "; ".join([f"{k2} not freed ({v})" for k2, v in why.items()] + ([extra_note] if extra_note else []))
         return (Candidate(e.name, list(keep), c_tr0, c_tr1, c_te0, c_te1, n_tr, n_te, fstat, p, sc, gain, sig,
@@ -643,11 +645,16 @@ class _Search:
 
     def _score_with_stages(self, e: Effect, keep, why, new, rr, m):
         """:meth:`score` of ``new`` with the stages of the effect refitted around it, against the same stages
-        refitted without it: the gain of refitting alone is not the effect's."""
+        refitted without it (the gain of refitting alone is not the effect's); on the held-out data against the
+        better of those and the current model (stages refitted freely can lose there what they gain in training:
+        that loss is no gain of the effect either)."""
         new = self.polish(new, e, keep)
         base = self.polish(self.prm, e, keep, free=False)
+        ch = [c for c in e.channels if c in self.run.ev_test.channels]
+        ev_test = self.run.ev_test
+        better = base if _chi2(ev_test, base, self.sigma, ch) <= _chi2(ev_test, self.prm, self.sigma, ch) else self.prm
         return self.score(e, keep, why, new, rr, m, "scored with its stages refitted, against them refitted "
-                          "without it", ref=base)
+                          "without it", ref=base, ref_test=better)
 
     def accept(self, results, m: int):
         """The best significant candidate whose determined parameters (:func:`_prune`) still explain the data and
