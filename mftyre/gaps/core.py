@@ -789,7 +789,8 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
     parameters or a ``.tir`` path. ``holdout``: fraction of the sweeps held out (whole sweeps); ``seed``: which;
     ``alpha``: family-wise significance level of the residual tests and of the candidate tests; ``max_effects``:
     at most this many effects are added; ``channels``: restrict to these channels (default all measured);
-    ``effects``: restrict the candidates to these catalogue names; ``turn_slip``: evaluate with turn slip
+    ``effects``: restrict the candidates to these catalogue names (and ``"friction_drift"``, the nuisance of
+    :mod:`mftyre.gaps.drift`, offered by default); ``turn_slip``: evaluate with turn slip
     (default: when the data have turn slip); ``max_nfev``: evaluations per refit; ``progress``: callable(text).
 
     Phases: prepare (split), fair start, noise, locate, name and add (:class:`_Search`), report.
@@ -797,7 +798,7 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
     say = progress or (lambda text: None)
     run = _prepare(data, model, holdout, seed, channels, turn_slip, alpha, max_nfev, say, time.perf_counter())
     start, fair, active = _fair_start(run)
-    pool = [CATALOGUE[n] for n in (effects or CATALOGUE)]
+    pool = [CATALOGUE[n] for n in (effects or CATALOGUE) if n != FRICTION_DRIFT.name]
     candidates, untestable = _candidates(pool, run.given, run.train, run.ts)
     if effects is None or FRICTION_DRIFT.name in effects:
         _offer_drift(candidates, untestable, run.train)
