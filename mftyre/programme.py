@@ -7,7 +7,8 @@ and which are transitions between conditions, and so which effects the data can 
 Levels (:func:`cluster_levels`) are the modes of the distribution of a condition channel: a histogram of
 bin width set by the channel's own short-term scatter (samples against the median of their four neighbours,
 over the samples that scatter at all: exact plateaus, ramps and staircases say nothing about it; for point
-data that step every row between settings, the distance to the third-nearest value), smoothed, whose
+data that step every row between settings, the scatter within the groups the sorted values form, separated by
+empty room), smoothed, whose
 peaks are merged only when the valley between them is shallow (above half the lower peak). A level is
 therefore separated from its neighbour by the empty room between them, however close they are relative to
 the largest value (1650 / 2200 / 2750 N with a few percent scatter are three levels), and a slow ramp between
@@ -15,7 +16,9 @@ levels is no level. Samples far from every level (more than 4 robust standard de
 level, and more than the bin width; when an exact plateau sits beside visits that scatter, those visits'
 spread) are off-level (label -1): ramps, load sweeps, transients. With a handful
 of points (< 50) distinct values whose separations are far below the others (a jump of 8x in the sorted
-separations) are merged: repeated settings that scatter.
+separations) are merged: repeated settings that scatter. Values in no order (50 or more) that form no groups and
+lie flat over their range (a table of random points) hold no level: :attr:`Programme.spread` gives their range,
+which determines load, pressure or camber terms as levels do.
 
 In a time series (:func:`recognise`; TIME at 20 Hz or more) the levels are found from the held samples only
 (the local range over +-w samples, w = 0.25 s, within 5 short-term standard deviations and 2 % of the range),
@@ -70,9 +73,10 @@ def _short_term_scatter(x: np.ndarray, *, every_row: bool = True) -> float:
     run of five (a ramp, a staircase of settings) tell nothing about the scatter and are left out too. Noise
     leaves 98 % of the samples (of white noise) in no monotone run, exact settings only the few at their
     reversals and resets: when fewer than a quarter remain, the scatter is 0 (exact settings). ``every_row``: when the spread exceeds 5 % of the
-    range, neighbouring rows are not repeated settings (the channel steps every row, as the conditions of a
-    table of random points): the median distance to the third-nearest value instead. A time series has no such
-    channel (``every_row=False``): a single noisy level (a speed held at 16.7 +- 0.02 m/s) is noise."""
+    range, neighbouring rows may be settings repeated in no order (the channel steps every row between them): the
+    scatter within the groups they form (:func:`_settings_scatter`), if they form any; values that form none (one
+    noisy level in no order, a table of random points) keep the spread about their neighbours. A time series has
+    no such channel (``every_row=False``): a single noisy level (a speed held at 16.7 +- 0.02 m/s) is noise."""
     scatter = _neighbour_scatter(x)
     if not every_row or scatter <= 0.05 * float(np.ptp(x)):
         return scatter
