@@ -17,7 +17,8 @@ and data generated from the truth. Programmes, as labs run them:
 
 A case passes when the hidden effect is named, nothing unrelated is added, and the held-out error's excess over
 the truth's shrinks by at least 70 % on the effect's primary channel; a control (nothing hidden) passes when
-nothing is added. Prints one row per case and the pass count. Nothing here is tuned to a case: the cases are
+nothing is added. A nuisance of the measurement the finder names (the rig's friction drift over the test day,
+:mod:`mftyre.gaps.drift`) is shown in brackets: it is no effect of the tyre. Prints one row per case and the pass count. Nothing here is tuned to a case: the cases are
 every testable effect of the catalogue.
 """
 from __future__ import annotations
@@ -108,7 +109,7 @@ def main() -> int:
                 t1 = time.process_time()
                 try:
                     ok, rep, shrink = run_case(truth, data, hidden)
-                    added = ",".join(rep.effect_names) or "-"
+                    added = (",".join(rep.effect_names) or "-") + "".join(f" [{a.name}]" for a in rep.nuisances)
                 except Exception as exc:   # a crash is a failed case, reported
                     ok, added, shrink = False, f"error: {type(exc).__name__}: {exc}"[:60], float("nan")
                 rows.append((tname, pname, hidden[0] if hidden else "(control)", added, shrink, ok,

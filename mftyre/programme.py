@@ -7,7 +7,8 @@ and which are transitions between conditions, and so which effects the data can 
 Levels (:func:`cluster_levels`) are the modes of the distribution of a condition channel: a histogram of
 bin width set by the channel's own short-term scatter (samples against the median of their four neighbours,
 over the samples that scatter at all: exact plateaus, ramps and staircases say nothing about it; for point
-data that step every row between settings, the distance to the third-nearest value), smoothed, whose
+data that step every row between settings, the scatter within the groups the sorted values form, separated by
+empty room), smoothed, whose
 peaks are merged only when the valley between them is shallow (above half the lower peak). A level is
 therefore separated from its neighbour by the empty room between them, however close they are relative to
 the largest value (1650 / 2200 / 2750 N with a few percent scatter are three levels), and a slow ramp between
@@ -15,7 +16,9 @@ levels is no level. Samples far from every level (more than 4 robust standard de
 level, and more than the bin width; when an exact plateau sits beside visits that scatter, those visits'
 spread) are off-level (label -1): ramps, load sweeps, transients. With a handful
 of points (< 50) distinct values whose separations are far below the others (a jump of 8x in the sorted
-separations) are merged: repeated settings that scatter.
+separations) are merged: repeated settings that scatter. Values in no order (50 or more) that form no groups and
+lie flat over their range (a table of random points) hold no level: :attr:`Programme.spread` gives their range,
+which determines load, pressure or camber terms as levels do.
 
 In a time series (:func:`recognise`; TIME at 20 Hz or more) the levels are found from the held samples only
 (the local range over +-w samples, w = 0.25 s, within 5 short-term standard deviations and 2 % of the range),
@@ -70,9 +73,20 @@ def _short_term_scatter(x: np.ndarray, *, every_row: bool = True) -> float:
     run of five (a ramp, a staircase of settings) tell nothing about the scatter and are left out too. Noise
     leaves 98 % of the samples (of white noise) in no monotone run, exact settings only the few at their
     reversals and resets: when fewer than a quarter remain, the scatter is 0 (exact settings). ``every_row``: when the spread exceeds 5 % of the
-    range, neighbouring rows are not repeated settings (the channel steps every row, as the conditions of a
-    table of random points): the median distance to the third-nearest value instead. A time series has no such
-    channel (``every_row=False``): a single noisy level (a speed held at 16.7 +- 0.02 m/s) is noise."""
+    range, neighbouring rows may be settings repeated in no order (the channel steps every row between them): the
+    scatter within the groups they form (:func:`_settings_scatter`), if they form any; values that form none (one
+    noisy level in no order, a table of random points) keep the spread about their neighbours. A time series has
+    no such channel (``every_row=False``): a single noisy level (a speed held at 16.7 +- 0.02 m/s) is noise."""
+    scatter = _neighbour_scatter(x)
+    if not every_row or scatter <= 0.05 * float(np.ptp(x)):
+        return scatter
+    settings = _settings_scatter(x)
+    return scatter if settings is None else settings
+
+
+def _neighbour_scatter(x: np.ndarray) -> float:
+    """The robust spread of each sample about the median of its four neighbours (see :func:`_short_term_scatter`),
+    0 when fewer than 20 values or exact settings."""
     if x.size < 20:
         return 0.0
     padded = np.pad(x, 2, mode="reflect")
@@ -83,11 +97,33 @@ def _short_term_scatter(x: np.ndarray, *, every_row: bool = True) -> float:
     scatters = (dev > 1e-9 * max(float(np.max(np.abs(x))), 1e-300)) & ~monotone
     if scatters.sum() < max(10, 0.25 * x.size):
         return 0.0
-    scatter = _MAD_TO_SD / _NEIGHBOUR_MEDIAN_GAIN * float(np.median(dev[scatters]))
-    if not every_row or scatter <= 0.05 * float(np.ptp(x)):
-        return scatter
+    return _MAD_TO_SD / _NEIGHBOUR_MEDIAN_GAIN * float(np.median(dev[scatters]))
+
+
+def _settings_scatter(x: np.ndarray) -> float | None:
+    """The scatter of settings repeated in no order (point data stepping every row between them): the median robust
+    standard deviation of the groups of three or more values, when the sorted values fall into two or more such groups
+    separated by empty room (a gap more than :data:`_SETTINGS_ROOM` times the median of the 40 gaps around it and
+    of all gaps: the few values at either end of a range leave no window of their own);
+    None when they do not: one noisy level (a speed held at 16.7 +- 0.02 m/s, shuffled) or values spread over a
+    range (a table of random points), whose gaps grow smoothly (into the tails of a normal scatter too). (The
+    distance to the third-nearest value, used before, is the spacing of the values, not the scatter of a setting:
+    with 200 values per setting it is ~25 times smaller, and one noisy setting split into several.)"""
     v = np.sort(x)
-    return float(np.median(v[3:] - v[:-3]))
+    gaps = np.diff(v)
+    from scipy.ndimage import median_filter
+
+    around = np.maximum(median_filter(gaps, size=41, mode="nearest"), np.median(gaps))
+    cut = np.flatnonzero(gaps > _SETTINGS_ROOM * around)
+    groups = [g for g in np.split(v, cut + 1) if g.size >= 3]
+    if len(groups) < 2:
+        return None
+    return float(np.median([_MAD_TO_SD * np.median(np.abs(g - np.median(g))) for g in groups]))
+
+
+#: Empty room between repeated settings, in local gaps (a gap of independent values exceeds 20 times the median
+#: of its neighbours with probability ~e^-14)
+_SETTINGS_ROOM = 20.0
 
 
 _MAD_TO_SD = 1.4826  # standard deviation / median absolute deviation of a normal distribution
@@ -111,6 +147,21 @@ def _spread(values: np.ndarray, centre: float) -> float:
     return spread
 
 
+def _spread_over_a_range(x: np.ndarray) -> bool:
+    """Unordered values (neighbours as different as any two: the spread about the neighbours' median above 5 %
+    of the range) that form no groups of repeated settings (:func:`_settings_scatter`) and lie flat over their
+    range rather than peaked about one value as the noise of a held level does: the 2.5-97.5 % range over the
+    interquartile range below :data:`_FLAT_TAILS` (a normal scatter 2.9, uniform values 1.9). A table of random
+    points: no level at all."""
+    if _neighbour_scatter(x) <= 0.05 * float(np.ptp(x)) or _settings_scatter(x) is not None:
+        return False
+    q = np.percentile(x, [2.5, 25.0, 75.0, 97.5])
+    return bool(q[3] - q[0] < _FLAT_TAILS * (q[2] - q[1]))
+
+
+_FLAT_TAILS = 2.4
+
+
 def cluster_levels(values, *, scatter: float | None = None):
     """Cluster the values of a condition channel into levels: (labels, centres).
 
@@ -131,6 +182,8 @@ def cluster_levels(values, *, scatter: float | None = None):
         labels[ok] = 0
         return labels, np.array([float(np.mean(xs))])
     s = _short_term_scatter(xs) if scatter is None else float(scatter)
+    if scatter is None and xs.size >= 50 and _spread_over_a_range(xs):
+        return labels, np.zeros(0)
     h = max(s, 1e-3 * span, 1e-12 * scale)
     nbins = int(min(max(span / (h / 2.0), 8), 20000))
     edges = np.linspace(xs.min(), xs.max(), nbins + 1)
@@ -280,7 +333,8 @@ class Programme:
     ``rows``: per-row DataFrame with SEGMENT, SWEEP (segment number of swept segments, -1 otherwise), KIND,
     BRANCH (+1 up, -1 down, 0 held), STEADY (bool), FZ_LEVEL, P_LEVEL, IA_LEVEL (index into ``levels``, -1
     off-level); ``sample_rate`` [Hz] when a TIME channel is present;
-    ``fittable``: stage group -> bool; ``notes``: what cannot be determined and why.
+    ``fittable``: stage group -> bool; ``notes``: what cannot be determined and why; ``spread``: condition channel
+    -> (least, greatest) value where the values lie spread over a range with no level (a table of random points).
     """
 
     levels: dict
@@ -292,6 +346,7 @@ class Programme:
     fittable: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)
     sl_max: float = 0.0  # largest |SL| in the data: "no longitudinal slip" is said only when it is noise
+    spread: dict = field(default_factory=dict)  # FZ, P, IA spread over a range by random points: (lo, hi), no level
 
     def count(self, kind: str) -> int:
         """Number of sweeps of a kind (slip_angle, slip_ratio, speed, load, steady)."""
@@ -310,7 +365,10 @@ class Programme:
         for ch, name, fac, unit, digits in (("FZ", "load", 1.0, "N", 0), ("P", "pressure", 1e-5, "bar", 2),
                                             ("IA", "camber", 180 / math.pi, "deg", 1), ("VX", "speed", 1.0, "m/s", 1)):
             c = np.round(self.levels.get(ch, np.zeros(0)) * fac, digits) + 0.0  # + 0.0: no "-0.0"
-            if c.size == 0:
+            if c.size == 0 and ch in self.spread:
+                lo, hi = (round(v * fac, digits) + 0.0 for v in self.spread[ch])
+                parts.append(f"{name}s spread over {lo:.{digits}f} to {hi:.{digits}f} {unit} (no level)")
+            elif c.size == 0:
                 parts.append(f"no {name} level")
             elif c.size == 1:
                 parts.append(f"1 {name} {c[0]:.{digits}f} {unit}")
@@ -362,6 +420,15 @@ def _direction(x: np.ndarray) -> np.ndarray:
     change = padded[2 * w:] - padded[:-2 * w]
     band = max(5.0 * _short_term_scatter(x), 0.02 * float(np.ptp(x)))
     return np.where(np.abs(change) > band, np.sign(change), 0).astype(int)
+
+
+def _in_steps(x: np.ndarray) -> bool:
+    """Whether ``x`` moves in steps: three rows or more up and down, the median change from row to row within a
+    quarter of its range and none beyond half of it (random values jump by a third of theirs, some across it)."""
+    d = _direction(x)
+    step = np.abs(np.diff(x))
+    return int(np.sum(d > 0)) >= 3 and int(np.sum(d < 0)) >= 3 \
+        and float(np.median(step)) <= 0.25 * float(np.ptp(x)) and float(np.max(step)) <= 0.5 * float(np.ptp(x))
 
 
 def _reversals(d: np.ndarray) -> int:
@@ -450,13 +517,15 @@ def recognise(data: TyreData) -> Programme:
     short_run = max(50, int(0.002 * n)) if time_series else max(2, int(0.002 * n))
     steady_run = 4 * short_run if time_series else short_run  # 2 s at 100 Hz
     w = max(1, short_run // 2)  # half-window of the local change (0.25 s at 100 Hz)
-    labels, levels = {}, {}
+    labels, levels, spread = {}, {}, {}
     for ch in cond_ch:
         x = data.array(ch)
         held = _held(x, w, every_row=not time_series)
         ok = held & np.isfinite(x)
         scatter = _short_term_scatter(x[ok], every_row=False) if time_series else None
         lab, centres = cluster_levels(np.where(ok, x, np.nan), scatter=scatter)  # levels from the held samples
+        if scatter is None and not centres.size and np.count_nonzero(ok) >= 50 and _spread_over_a_range(x[ok]):
+            spread[ch] = (float(np.min(x[ok])), float(np.max(x[ok])))
         if time_series and centres.size:
             lab = _stays(x, lab, centres, penalty=4.0 * short_run, block=max(1, short_run // 5))
         else:
@@ -524,9 +593,10 @@ def recognise(data: TyreData) -> Programme:
                  and ranges[ch] >= 0.5 * widest[ch]}
         # slip and speed sweeps run at held conditions; a load sweep goes up and down off the load levels over
         # at least their span (a one-way load change is the ramp between two conditions, unloading to change
-        # the pressure a dip)
+        # the pressure a dip), in steps (the loads of a table of random points jump up and down every row)
         score = {ch: v for ch, v in score.items() if (ch == "FZ") == off_level}
-        if "FZ" in score and not (_up_and_down(fz[sub]) and ranges["FZ"] >= np.ptp(levels["FZ"])):
+        if "FZ" in score and not (_up_and_down(fz[sub]) and _in_steps(fz[sub])
+                                  and ranges["FZ"] >= (np.ptp(levels["FZ"]) if levels["FZ"].size else 0.0)):
             score.pop("FZ")
         swept = max(score, key=score.get) if score else None
         moving = any(ranges[ch] > SWEEP_THRESHOLD[ch] for ch in ("SA", "SL", "VX"))
@@ -572,12 +642,12 @@ def recognise(data: TyreData) -> Programme:
     has = dict(
         lateral_slip=beyond(sa, SWEEP_THRESHOLD["SA"]),
         longitudinal_slip=beyond(sl, SWEEP_THRESHOLD["SL"]),
-        camber=bool(np.any(np.abs(levels["IA"]) > math.radians(0.25))),
+        camber=bool(np.any(np.abs(np.r_[levels["IA"], spread.get("IA", ())]) > math.radians(0.25))),
         speed_sweep=bool(np.any(kind == "speed")),
         loaded_radius=data.has("RL"), effective_radius=data.has("RE"),
         fx=data.has("FX"), fy=data.has("FY"), mz=data.has("MZ"), mx=data.has("MX"), my=data.has("MY"))
     prog = Programme(levels=levels, sweeps=sweeps, rows=per_row, n_rows=n, sample_rate=sample_rate, has=has,
-                     sl_max=float(np.nanmax(np.abs(sl))) if n else 0.0)
+                     sl_max=float(np.nanmax(np.abs(sl))) if n else 0.0, spread=spread)
     prog.fittable, prog.notes = _fittable(prog)
     return prog
 
@@ -599,8 +669,8 @@ def _fittable(prog: Programme):
     combined = bool(len(prog.sweeps)) and bool(((prog.sweeps["kind"] == "slip_ratio")
                                                 & (prog.sweeps["SA"].abs() > SWEEP_THRESHOLD["SA"])).any())
     rule("combined slip", combined, "no slip-ratio sweep at a non-zero slip angle")
-    rule("load terms", n_loads >= 2, f"{n_loads} load level(s)")
-    rule("pressure terms", lv["P"].size >= 2, f"{lv['P'].size} pressure level(s)")
+    rule("load terms", n_loads >= 2 or "FZ" in prog.spread, f"{n_loads} load level(s)")
+    rule("pressure terms", lv["P"].size >= 2 or "P" in prog.spread, f"{lv['P'].size} pressure level(s)")
     rule("camber terms", h["camber"], "no camber level other than zero")
     rule("Mx", h["mx"], "no MX channel")
     rule("My", h["my"], "no MY channel")

@@ -125,3 +125,63 @@ def test_settings_stepping_every_row_are_still_levels():
     labels, centres = cluster_levels(x)
     np.testing.assert_allclose(centres, [2000.0, 4000.0, 6000.0], rtol=0.01)
     assert np.all(labels >= 0)
+
+
+def _mfeval_tables(mfeval_dir):
+    """(name, table, random) of every MFeval reference table; random: no condition (load, pressure, camber) is
+    ever repeated (9 rows in 10 distinct), as in MFeval's tables of random points."""
+    out = []
+    for path in sorted(mfeval_dir.glob("*.csv")):
+        if path.stem.endswith("_parameters"):
+            continue
+        d = pd.read_csv(path)
+        out.append((path.stem, d, all(d[c].nunique() > 0.9 * len(d) for c in ("in_Fz", "in_P", "in_gamma"))))
+    return out
+
+
+def _recognised(d):
+    return recognise(TyreData(pd.DataFrame({"FZ": d.in_Fz, "SA": d.in_alpha, "IA": d.in_gamma, "SL": d.in_kappa,
+                                            "VX": d.in_Vx, "P": d.in_P})))
+
+
+def test_random_point_tables_we_did_not_write_have_no_levels_but_a_spread(mfeval_dir):
+    """MFeval's tables of random points (loads, pressures, cambers drawn anew every row) read as 27-55 "levels"
+    per channel (the every-row rule took the spacing of the values for the scatter of a setting) and some as
+    "1 load 7732 N": they hold no level; their conditions are spread over a range, which still determines the
+    load, pressure and camber terms; no load sweep is read into their jumps."""
+    tables = [(name, d) for name, d, random in _mfeval_tables(mfeval_dir) if random]
+    assert len(tables) >= 10
+    for name, d in tables:
+        prog = _recognised(d)
+        assert all(prog.levels[ch].size == 0 for ch in ("FZ", "P", "IA")), (name, prog.summary())
+        assert prog.spread["FZ"] == (d.in_Fz.min(), d.in_Fz.max()), name
+        assert set(prog.spread) == {"FZ", "P", "IA"}, name
+        assert prog.fittable["load terms"] and prog.fittable["pressure terms"] and prog.fittable["camber terms"]
+        assert prog.count("load") == 0, (name, prog.summary())
+        assert "loads spread over" in prog.summary()
+
+
+def test_sweep_tables_we_did_not_write_keep_one_level_per_setting(mfeval_dir):
+    """Every other MFeval table (sweeps, staircases, ramps of exact settings): one level per distinct setting of
+    load, pressure and camber (a guard for the rule above)."""
+    tables = [(name, d) for name, d, random in _mfeval_tables(mfeval_dir) if not random]
+    assert len(tables) >= 15
+    for name, d in tables:
+        prog = _recognised(d)
+        for ch, col in (("FZ", "in_Fz"), ("P", "in_P"), ("IA", "in_gamma")):
+            assert prog.levels[ch].size == d[col].nunique(), (name, ch, prog.summary())
+
+
+def test_unordered_values_are_settings_only_when_they_leave_empty_room():
+    """Without an order to read the scatter from: one noisy level shuffled is one level (was 7: the distance to
+    the third-nearest value is the spacing of the values, not their scatter), three noisy settings shuffled are
+    three (their scatter is their own), values drawn uniformly over a range are no level (was 28)."""
+    rng = np.random.default_rng(4)
+    x = rng.permutation(np.repeat([2000.0, 4000.0, 6000.0], 200) * (1 + 0.02 * rng.standard_normal(600)))
+    labels, centres = cluster_levels(x)
+    np.testing.assert_allclose(centres, [2000.0, 4000.0, 6000.0], rtol=0.01)
+    assert np.all(labels >= 0)
+    labels, centres = cluster_levels(rng.permutation(16.7 + 0.02 * rng.standard_normal(3000)))
+    assert centres.size == 1 and np.mean(labels == 0) > 0.99
+    labels, centres = cluster_levels(rng.uniform(2000.0, 8000.0, 1500))
+    assert centres.size == 0 and np.all(labels == -1)

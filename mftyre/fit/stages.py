@@ -154,8 +154,9 @@ def _count(data: TyreData, channel: str, width: float) -> int:
 
 def _count_levels(x: np.ndarray, width: float) -> int:
     """Number of distinct values of a condition channel: its levels (:func:`mftyre.programme.cluster_levels`),
-    levels less than ``width`` apart counted as one (a speed held at 16.7 +- 0.02 m/s, which the clustering of a
-    single noisy level can split into a dozen, is one speed), plus, when at least 10 values (and 1 %) are on no
+    levels less than ``width`` apart counted as one (a speed held at 16.7 +- 0.02 m/s and recorded to 0.01 m/s
+    holds each recorded value many times over, which the clustering reads as a dozen exact settings: one speed),
+    plus, when at least 10 values (and 1 %) are on no
     level (the channel is swept somewhere, or held at settings too brief to count as levels), the occupied bins
     of ``width`` among those."""
     labels, centres = cluster_levels(x)

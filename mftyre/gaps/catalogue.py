@@ -44,10 +44,17 @@ class Effect:
     variables: tuple           # condition variables whose residual structure it explains
     start: dict = field(default_factory=dict)   # start values when switching on (default: the neutral value)
     needs: tuple = ()          # extra data conditions (beyond the stage groups'): e.g. ("turn_slip",)
+    with_stages: bool = False  # scored with its stages refitted around it when it passes alone (a nuisance)
 
     def parameter_descriptions(self) -> dict:
         """Parameter -> its one-line meaning from the schema."""
         return {n: PARAMETERS[n].description for n in self.parameters}
+
+    @staticmethod
+    def admit(prm):
+        """The parameter set able to carry the effect's parameters: the tyre's own for a catalogue effect (a
+        nuisance such as :data:`mftyre.gaps.drift.FRICTION_DRIFT` adds its coefficients)."""
+        return prm
 
     @property
     def versions(self) -> frozenset:

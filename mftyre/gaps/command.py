@@ -94,6 +94,9 @@ def run(args) -> int:
         vals = ", ".join(f"{k} = {v['value']:.4g}" + (f" +- {v['stderr']:.2g}" if v['stderr'] else "")
                          for k, v in a.parameters.items())
         print(f"  added {a.name}: {a.description}; {vals}")
+    for a in rep.nuisances:
+        vals = ", ".join(f"{k} = {v['value']:.4g}" for k, v in a.parameters.items())
+        print(f"  named in the measurement (not written to the .tir): {a.name}: {a.description}; {vals}")
     for name, why in rep.rejected.items():
         print(f"  rejected {name}: {why}")
     if rep.untestable:

@@ -23,6 +23,7 @@ from ..programme import recognise
 from ..timeseries import effective_samples, needs_reduction, reduce_sweeps
 from ..tir import write_tir
 from .catalogue import CATALOGUE, PARAM_STAGE, Effect, effect_state, parameter_needs
+from .drift import FRICTION_DRIFT, tyre_of, with_progress
 from .locate import locate
 from .refit import FAIR_STAGES, SWEEP_REASONS, at_neutral, active_parameters, covariance, standard_errors, stage_data, data_conditions, needs_met, refit, refit_stages
 from .residuals import Evaluator, sweep_labels, holdout_mask, noise_levels, noise_of_means
@@ -84,7 +85,8 @@ class GapReport:
     """The outcome of :func:`find_gaps`.
 
     ``model_given``, ``model_start`` (after the fair start), ``model`` (improved); ``effects_added``
-    (:class:`AddedEffect` list); ``findings_before`` / ``findings_after`` (:class:`mftyre.gaps.Finding` lists, on the
+    (:class:`AddedEffect` list, the tyre's); ``nuisances``: effects of the measurement named and fitted, not the
+    tyre's and not in the .tir (:data:`mftyre.gaps.drift.FRICTION_DRIFT`); ``findings_before`` / ``findings_after`` (:class:`mftyre.gaps.Finding` lists, on the
     training data); ``error_given`` / ``error_before`` / ``error_after``: channel -> normalised RMS [%] on the held-out
     data (given model, fair start, improved); ``noise``: channel -> (sigma, method); ``rounds``: per round the
     candidates tried; ``untestable``: effect -> reason; ``message``: the verdict in one sentence.
@@ -113,6 +115,7 @@ class GapReport:
         return dict(
             message=self.message,
             effects_added=[e.to_dict() for e in self.effects_added],
+            nuisances=[e.to_dict() for e in self.nuisances],
             error_given=self.error_given, error_before=self.error_before, error_after=self.error_after,
             error_train_before=self.error_train_before, error_train_after=self.error_train_after,
             findings=[f.to_dict() for f in self.findings_before],
@@ -250,7 +253,7 @@ def _prune(new, current, e: Effect, names, ev: Evaluator, sigma, alpha: float, s
     while names:
         n_eff = _n_eff(ev, new, ch, series)
         se, corr = covariance(new, ev, names, ch, sigma, n_eff)
-        ref = {k: e.neutral.get(k, float(current[k])) for k in names}
+        ref = {k: e.neutral[k] if k in e.neutral else float(current[k]) for k in names}
         # a switch's size is its distance from the neutral value, a shape factor's its value
         size = {k: abs(float(new[k]) - e.neutral[k]) if k in e.neutral else abs(float(new[k])) for k in names}
         ratio = {k: (math.inf if se[k] is None else se[k] / max(size[k], 1e-300)) for k in names}
@@ -362,6 +365,17 @@ def _candidates(pool, given, train: TyreData, ts: bool):
     return candidates, untestable
 
 
+def _offer_drift(candidates, untestable, train: TyreData):
+    """Offer :data:`mftyre.gaps.drift.FRICTION_DRIFT` where the friction shows: a slip sweep and Fx or Fy measured."""
+    cond = data_conditions(train)
+    if not (cond["slip_angle"] or cond["slip_ratio"]):
+        untestable[FRICTION_DRIFT.name] = "no slip sweep in the data: the friction does not show"
+    elif not any(train.has(c) for c in ("FX", "FY")):
+        untestable[FRICTION_DRIFT.name] = "neither FX nor FY measured"
+    else:
+        candidates[FRICTION_DRIFT.name] = (FRICTION_DRIFT, list(FRICTION_DRIFT.parameters), {})
+
+
 def _find_small(data, given, start, fair, candidates, untestable, ev, ts, max_effects, t0, say) -> GapReport:
     """The small-data search (:mod:`mftyre.gaps.small`): forward selection by AICc and leave-one-out over all
     points; the report's "held-out" errors are the leave-one-out errors."""
@@ -444,7 +458,7 @@ def _find_small(data, given, start, fair, candidates, untestable, ev, ts, max_ef
         findings_before=[], findings_after=[], error_given=_errors(ev, given), error_before=loo_start,
         error_after=loo, error_train_before=_errors(ev, start), error_train_after=err_all, noise=sigma,
         rounds=rounds, untestable=untestable, rejected=rejected, message=message, data=data,
-        test_mask=np.ones(len(data), bool), transient=[], programme=None, reduction=None,
+        test_mask=np.ones(len(data), bool), transient=[], nuisances=[], programme=None, reduction=None,
         evaluator=ev, data_summary=_summary(data), seconds=time.perf_counter() - t0, turn_slip=ts,
         small_data=True, parameter_stderr=se)
 
@@ -478,6 +492,7 @@ def _prepare(data, model, holdout, seed, channels, turn_slip, alpha, max_nfev, s
     data = load_data(data)
     programme = recognise(data)
     say("test programme: " + programme.summary())
+    data = with_progress(data)   # the run's progress (TIME or row order), for the friction drift
     raw, reduction = data, None
     if needs_reduction(data, programme):
         reduction = reduce_sweeps(data, programme, bins=REDUCED_BINS)
@@ -545,7 +560,8 @@ class _Search:
     def polish(self, new, e: Effect, names, free: bool = True, active=None):
         """Refit from ``new``: the stages of the effect's parameters ``names`` and of its channels, with those
         parameters active (``free=False``: held, the same stages refitted without them; ``active``: the active
-        set, default the current one); kept when it lowers the training chi-square."""
+        set, default the current one); a nuisance's own coefficients (no stage's) are refitted after the stages;
+        kept when it lowers the training chi-square."""
         run = self.run
         stages = [st for st in FAIR_STAGES if st in {PARAM_STAGE.get(k) for k in names}
                   or STAGES[st].channel in e.channels]
@@ -553,25 +569,31 @@ class _Search:
                                    max_nfev=run.max_nfev, extra=tuple(names) if free else (),
                                    active=self.active if active is None else active,
                                    baseline=run.given)
+        own = [k for k in names if k not in PARAM_STAGE] if free else []
+        if own:   # a nuisance's coefficients belong to no stage: refitted around the refitted stages
+            polished, _ = refit(polished, run.ev_train, own, [c for c in e.channels if c in run.ev_train.channels],
+                                self.sigma, max_nfev=run.max_nfev)
         chans = run.ev_train.channels
         if _chi2(run.ev_train, polished, self.sigma, chans) <= _chi2(run.ev_train, new, self.sigma, chans):
             return polished
         return new
 
-    def score(self, e: Effect, keep, why, new, rr, m, extra_note="", ref=None):
+    def score(self, e: Effect, keep, why, new, rr, m, extra_note="", ref=None, ref_test=None):
         """Training F test and held-out score of a candidate model ``new`` against the current ``prm``.
 
         The training F test counts the effective number of independent residuals (n_eff, from the noise) rather
         than rows, and so does the held-out score (chi-square decrease x n_eff / n - k ln n_eff, a BIC-type
         penalty); with enough held-out sweeps the held-out test is also by whole sweeps: the chi-square decrease
         of each held-out sweep, a one-sided signed-rank test (so a gain a few sweeps carry, or 7.120 -> 7.119 %,
-        is not significant). ``ref``: the model it is compared with (default the current one)."""
+        is not significant). ``ref``: the model it is compared with (default the current one); ``ref_test``: on the
+        held-out data (default ``ref``)."""
         run, sigma, prm = self.run, self.sigma, self.prm if ref is None else ref
+        prm_test = prm if ref_test is None else ref_test
         ev_train, ev_test = run.ev_train, run.ev_test
         ch = [c for c in e.channels if c in ev_train.channels]
         k = len(keep)
         c_tr0, c_tr1 = _chi2(ev_train, prm, sigma, ch), _chi2(ev_train, new, sigma, ch)
-        c_te0, c_te1 = _chi2(ev_test, prm, sigma, ch), _chi2(ev_test, new, sigma, ch)
+        c_te0, c_te1 = _chi2(ev_test, prm_test, sigma, ch), _chi2(ev_test, new, sigma, ch)
         n_tr = int(sum(ev_train.measured[c].size for c in ch))
         n_te = int(sum(self.n_test_rows[c] for c in ch))
         n_eff = _n_eff(ev_train, new, ch, run.series)
@@ -579,7 +601,7 @@ class _Search:
         n_eff_te = _n_eff(ev_test, new, ch, run.series)
         sc = (c_te0 - c_te1) * n_eff_te / max(n_te, 1) - k * math.log(max(n_eff_te, 2.0))
         gain = (c_te0 - c_te1) / c_te0 if c_te0 > 0 else 0.0
-        p_sweeps, n_sweeps = _sweep_test(ev_test, prm, new, sigma, ch)
+        p_sweeps, n_sweeps = _sweep_test(ev_test, prm_test, new, sigma, ch)
         sig = p < run.alpha / m and sc > 0 and (n_sweeps < MIN_HELD_OUT_SWEEPS or p_sweeps < HELD_OUT_ALPHA)
         note = "; ".join([f"{k2} not freed ({v})" for k2, v in why.items()] + ([extra_note] if extra_note else []))
         return (Candidate(e.name, list(keep), c_tr0, c_tr1, c_te0, c_te1, n_tr, n_te, fstat, p, sc, gain, sig,
@@ -597,25 +619,42 @@ class _Search:
             if not any(c in ev_train.channels for c in e.channels):
                 continue
             run.say(f"round {len(self.rounds) + 1}: candidate {i + 1}/{len(tried)} {e.name} ({' '.join(keep)})")
-            startv = {k: e.start.get(k, e.neutral.get(k, float(self.prm[k]))) for k in keep}
-            new, rr = refit(self.prm, ev_train, keep, [c for c in e.channels if c in ev_train.channels],
+            base = e.admit(self.prm)
+            startv = {k: e.start.get(k, e.neutral.get(k, float(base[k]))) for k in keep}
+            new, rr = refit(base, ev_train, keep, [c for c in e.channels if c in ev_train.channels],
                             self.sigma, start=startv, max_nfev=run.max_nfev)
-            results.append(self.score(e, keep, why, new, rr, len(tried)))
+            result = self.score(e, keep, why, new, rr, len(tried))
+            if e.with_stages and result[0].p_value < run.alpha / len(tried) and result[0].score > 0:
+                # worth the stages refitted around it: it explains the training data alone and gains held out
+                result = self._score_with_stages(e, keep, why, new, rr, len(tried))
+            results.append(result)
         if results and not any(r[0].significant for r in results):
             results.sort(key=lambda t: -t[0].score)
             deep = []
             for cand, new, rr in results[:DEEP_RETRIES]:
                 e = self.candidates[cand.name][0]
+                if e.with_stages:
+                    deep.append((cand, new, rr))
+                    continue
                 run.say(f"round {len(self.rounds) + 1}: {e.name} with its stages refitted")
-                new = self.polish(new, e, cand.parameters)
-                # compared with the same stages refitted without it: the gain of refitting alone is not the effect's
-                base = self.polish(self.prm, e, cand.parameters, free=False)
-                deep.append(self.score(e, cand.parameters, self.candidates[cand.name][2], new, rr, len(tried),
-                                       "scored with its stages refitted, against them refitted without it",
-                                       ref=base))
+                deep.append(self._score_with_stages(e, cand.parameters, self.candidates[cand.name][2], new, rr,
+                                                    len(tried)))
             results = deep + results[DEEP_RETRIES:]
         results.sort(key=lambda t: -t[0].score)
         return results
+
+    def _score_with_stages(self, e: Effect, keep, why, new, rr, m):
+        """:meth:`score` of ``new`` with the stages of the effect refitted around it, against the same stages
+        refitted without it (the gain of refitting alone is not the effect's); on the held-out data against the
+        better of those and the current model (stages refitted freely can lose there what they gain in training:
+        that loss is no gain of the effect either)."""
+        new = self.polish(new, e, keep)
+        base = self.polish(self.prm, e, keep, free=False)
+        ch = [c for c in e.channels if c in self.run.ev_test.channels]
+        ev_test = self.run.ev_test
+        better = base if _chi2(ev_test, base, self.sigma, ch) <= _chi2(ev_test, self.prm, self.sigma, ch) else self.prm
+        return self.score(e, keep, why, new, rr, m, "scored with its stages refitted, against them refitted "
+                          "without it", ref=base, ref_test=better)
 
     def accept(self, results, m: int):
         """The best significant candidate whose determined parameters (:func:`_prune`) still explain the data and
@@ -677,7 +716,7 @@ class _Search:
         for a in list(self.added[:-1]):
             e = self.added_effects[a.name]
             names = list(a.parameters)
-            without = self.prm.replace(**{k: e.neutral.get(k, float(self.start[k])) for k in names})
+            without = self.prm.replace(**{k: e.neutral[k] if k in e.neutral else float(self.start[k]) for k in names})
             without = self.polish(without, e, names, free=False, active=self.active - set(names))
             cand = self.score(e, names, {}, self.prm, SimpleNamespace(stderr={}), 1, ref=without)[0]
             if cand.significant:
@@ -719,18 +758,21 @@ class _Search:
                     a.parameters[k].update(value=float(self.prm[k]), stderr=se.get(k))
 
 
-def _verdict(findings_before, added, findings_after, transient) -> str:
+def _verdict(findings_before, added, findings_after, transient, nuisances=()) -> str:
     """The outcome in one sentence."""
     if not findings_before:
         message = ("the model already explains the data: no residual structure beyond measurement noise; "
                    "nothing added")
     elif not added:
         message = "residual structure found, but no catalogue effect explains it significantly on held-out data; " \
-                  "nothing added"
+                  "nothing added" + ("" if not nuisances else " to the tyre")
     else:
         message = f"added {len(added)} effect(s): {', '.join(a.name for a in added)}" + (
             "; remaining structure: " + findings_after[0].text if findings_after else
             "; no significant residual structure remains")
+    if nuisances:
+        message += "; named in the measurement, not the tyre: " + ", ".join(a.description.split(":")[0]
+                                                                           for a in nuisances)
     if transient:
         message += "; transient (named, not fitted): " + ", ".join(
             f"{t['channel']} up/down hysteresis +-{t['rms']:.3g} (relaxation length, {t['parameters']})"
@@ -747,7 +789,8 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
     parameters or a ``.tir`` path. ``holdout``: fraction of the sweeps held out (whole sweeps); ``seed``: which;
     ``alpha``: family-wise significance level of the residual tests and of the candidate tests; ``max_effects``:
     at most this many effects are added; ``channels``: restrict to these channels (default all measured);
-    ``effects``: restrict the candidates to these catalogue names; ``turn_slip``: evaluate with turn slip
+    ``effects``: restrict the candidates to these catalogue names (and ``"friction_drift"``, the nuisance of
+    :mod:`mftyre.gaps.drift`, offered by default); ``turn_slip``: evaluate with turn slip
     (default: when the data have turn slip); ``max_nfev``: evaluations per refit; ``progress``: callable(text).
 
     Phases: prepare (split), fair start, noise, locate, name and add (:class:`_Search`), report.
@@ -755,8 +798,10 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
     say = progress or (lambda text: None)
     run = _prepare(data, model, holdout, seed, channels, turn_slip, alpha, max_nfev, say, time.perf_counter())
     start, fair, active = _fair_start(run)
-    pool = [CATALOGUE[n] for n in (effects or CATALOGUE)]
+    pool = [CATALOGUE[n] for n in (effects or CATALOGUE) if n != FRICTION_DRIFT.name]
     candidates, untestable = _candidates(pool, run.given, run.train, run.ts)
+    if effects is None or FRICTION_DRIFT.name in effects:
+        _offer_drift(candidates, untestable, run.train)
     if run.small:
         say(f"small data ({len(run.data)} rows): effects judged by AICc and leave-one-out over all points")
         return _find_small(run.data, run.given, start, fair, candidates, untestable, run.ev_all, run.ts,
@@ -775,11 +820,13 @@ def find_gaps(data, model, *, holdout: float = 0.25, seed: int = 0, alpha: float
 def _report(run: _Run, start, search: _Search, findings_before, transient, untestable) -> GapReport:
     prm, ev_train, ev_test = search.prm, run.ev_train, run.ev_test
     findings_after = locate(ev_train, ev_train.residuals(prm), search.sigma, run.alpha)
-    message = _verdict(findings_before, search.added, findings_after, transient)
+    added = [a for a in search.added if a.name != FRICTION_DRIFT.name]
+    nuisances = [a for a in search.added if a.name == FRICTION_DRIFT.name]
+    message = _verdict(findings_before, added, findings_after, transient, nuisances)
     run.say(message)
     return GapReport(
-        model_given=MFModel(run.given), model_start=MFModel(start), model=MFModel(prm),
-        effects_added=search.added, findings_before=findings_before, findings_after=findings_after,
+        model_given=MFModel(run.given), model_start=MFModel(start), model=MFModel(tyre_of(prm)),
+        effects_added=added, nuisances=nuisances, findings_before=findings_before, findings_after=findings_after,
         error_given=_errors(ev_test, run.given), error_before=_errors(ev_test, start),
         error_after=_errors(ev_test, prm), error_train_before=_errors(ev_train, start),
         error_train_after=_errors(ev_train, prm), noise=search.sigma, rounds=search.rounds, untestable=untestable,

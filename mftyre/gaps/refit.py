@@ -33,6 +33,7 @@ from ..fit.stages import STAGES, data_corners, need_met, conditions, shape_viola
 from ..model import MFModel
 from ..params import PARAMETERS
 from .catalogue import BASE, CATALOGUE, PARAM_STAGE, TURN_SLIP_BASE, effect_state, parameter_needs
+from .drift import BOUNDS as DRIFT_BOUNDS
 from .residuals import Evaluator
 
 __all__ = ["refit", "RefitResult", "refit_stages", "stage_names", "needs_met", "data_conditions", "SWEEP_REASONS", "active_parameters", "standard_errors", "covariance", "FAIR_STAGES"]
@@ -68,7 +69,7 @@ def refit(params, ev: Evaluator, names, channels=None, sigma: dict | None = None
              else (float(np.sqrt(np.mean(ev.measured[c] ** 2))) or 1.0) for c in channels}
     if start:
         prm = prm.replace(**{k: v for k, v in start.items() if k in names})
-    bounds = {**BOUNDS, **physical_bounds(prm, ev.data)}   # the fit's physics
+    bounds = {**BOUNDS, **physical_bounds(prm, ev.data), **DRIFT_BOUNDS}   # the fit's physics
     prm = sign_in_bounds(prm, bounds)
     n = int(sum(ev.measured[c].size for c in channels))
 

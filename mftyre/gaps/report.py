@@ -65,6 +65,14 @@ def markdown_report(rep, plot_names: dict | None = None) -> str:
         for k, v in a.parameters.items():
             lines.append(f"| {k} | {v['value']:.6g} | {_f(v['stderr'], '{:.3g}')} | {v['meaning']} |")
         lines.append("")
+    if getattr(rep, "nuisances", None):
+        lines += ["## Named in the measurement, not the tyre", "",
+                  "Fitted as nuisances beside the tyre's parameters (held-out test as for the effects); not written "
+                  "to the .tir.", ""]
+        for a in rep.nuisances:
+            vals = ", ".join(f"{k} = {v['value']:.4g}" for k, v in a.parameters.items())
+            lines += [f"- {a.name}: {a.description}; {vals} (held-out chi-square decrease "
+                      f"{100 * a.held_out_gain:.0f} %).", ""]
     for title, findings in (("Findings before (after the fair start)", rep.findings_before),
                             ("Findings after", rep.findings_after)):
         lines += [f"## {title}", ""]

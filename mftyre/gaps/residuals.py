@@ -27,6 +27,7 @@ import numpy as np
 from ..data import TyreData, split_sweeps
 from ..fit.predict import predict
 from ..model import MFModel
+from .drift import Drifting, predict_drifting
 
 __all__ = ["CHANNELS", "UNITS", "Evaluator", "noise_levels", "noise_of_means", "holdout_mask", "test_kind"]
 
@@ -70,10 +71,17 @@ class Evaluator:
         return np.isfinite(d.array("RHO"))
 
     def predict(self, params, channels=None) -> dict:
-        """Channel -> model values at the channel's rows (the fit's rule, :func:`mftyre.fit.predict.predict`)."""
-        model = params if isinstance(params, MFModel) else MFModel(params)
+        """Channel -> model values at the channel's rows (the fit's rule, :func:`mftyre.fit.predict.predict`; with
+        the friction drift of :class:`mftyre.gaps.drift.Drifting` parameters)."""
         channels = self.channels if channels is None else [c for c in channels if c in self.channels]
-        pred = predict(model, self.data, channels, self.inputs, turn_slip=self.turn_slip)
+        prm = params.params if isinstance(params, MFModel) else params
+
+        def plain(p, chans):
+            return predict(p if isinstance(p, MFModel) else MFModel(p), self.data, chans, self.inputs,
+                           turn_slip=self.turn_slip)
+
+        pred = predict_drifting(plain, prm, self.data, channels) if isinstance(prm, Drifting) else \
+            plain(params, channels)
         return {c: pred[c][self.rows[c]] for c in channels}
 
     def residuals(self, params, channels=None) -> dict:
