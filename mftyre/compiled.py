@@ -69,8 +69,8 @@ import numpy as np
 from .errors import MFTyreError, ModelInputError
 from .inputs import check_finite, check_finite_outputs, check_pressure, input_ranges, warn_outside
 
-__all__ = ["CompiledFunction", "CacheSecurityError", "compile_model", "compile_function", "compile_external",
-           "tyre_kernels", "compile_tyre_kernels", "cached_library", "compile_c", "cache_dir", "install_libraries",
+__all__ = ["CompiledFunction", "CacheSecurityError", "CompileError", "compile_model", "compile_function",
+           "compile_external", "tyre_kernels", "compile_tyre_kernels", "cached_library", "compile_c", "cache_dir", "install_libraries",
            "platform_tag", "generate_c", "CASADI_LOCK"]
 
 _BLOCK = 256  # points per call of the vectorised kernel (inputs broadcast into stack buffers of this length)
@@ -103,6 +103,10 @@ _GENERATOR = hashlib.sha256(b"".join(path.read_bytes() for path in (
 #: matrices at once can corrupt them (seen as crashes when two SWIFT tyres were built at once). Every CasADi call
 #: of the compile cache and of :mod:`swift.simulate` holds this lock (the compiled C never needs it).
 CASADI_LOCK = threading.RLock()
+
+
+class CompileError(MFTyreError):
+    """The C compiler refused a generated source (its message and the command are in the text)."""
 
 
 class CacheSecurityError(MFTyreError):
@@ -166,7 +170,7 @@ def compile_c(source: Path, library: Path, flags=("-O2", "-fPIC", "-shared"), li
         cmd = [compiler, *flags, str(source), "-o", tmp, *libraries]
         run = subprocess.run(cmd, capture_output=True, text=True)
         if run.returncode != 0:
-            raise MFTyreError(f"compiling {source} failed ({' '.join(cmd)}):\n{run.stderr[-2000:]}")
+            raise CompileError(f"compiling {source} failed ({' '.join(cmd)}):\n{run.stderr[-2000:]}")
         os.chmod(tmp, 0o644)
         os.replace(tmp, library)
     finally:
@@ -871,11 +875,28 @@ def compile_function(function, key: str, directory: Path | None = None, output_n
                                           "outputs": list(output_names or fn.name_out()), "checks": fn_checks,
                                           "toolchain": tag, "python": python}
 
-    return cached_library("mftyre", f"{key}|python {python}" if python else key, generate, directory)
+    try:
+        return cached_library("mftyre", f"{key}|python {python}" if python else key, generate, directory)
+    except CompileError:
+        if not python:
+            raise
+        # headers that do not compile (another interpreter's, a broken install): this process builds without the
+        # entry from now on; a failure that is not the entry's fails again below and is raised
+        _PYTHON_ENTRY_BUILDS.clear()
+        return compile_function(function, key, directory, output_names, checks, point_function)
+
+
+#: Non-empty while the one-point CPython entry builds in this process (emptied by the first build that fails).
+_PYTHON_ENTRY_BUILDS = {True}
+
+
+def _python_extension_flags() -> tuple:
+    """:func:`_python_headers` unless building with them failed in this process."""
+    return _python_headers() if _PYTHON_ENTRY_BUILDS else ()
 
 
 @functools.lru_cache(maxsize=None)
-def _python_extension_flags() -> tuple:
+def _python_headers() -> tuple:
     """Compiler flags that add the one-point CPython entry to a library (``-DMFT_PYTHON`` and the include folder),
     or ``()`` where it cannot be built (not CPython on Linux, or no Python.h): it is an optimisation of
     :meth:`CompiledFunction.__call__` (~0.5 us of ~1.9 per point), not a requirement; without it the call goes

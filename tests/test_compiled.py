@@ -688,6 +688,32 @@ def test_without_python_headers_one_point_goes_through_ctypes(tmp_path, monkeypa
     assert not other.fast_point and other(4.0, 2.0) == (4.0, 2.0)
 
 
+def test_headers_that_do_not_compile_fall_back_to_ctypes(tmp_path, monkeypatch):
+    """Python.h present but unusable (another interpreter's, a broken install): the library is built without the C
+    entry instead of failing, and later builds of the process skip the entry; a failure that is not the entry's
+    (no compiler) is still raised."""
+    import casadi as ca
+
+    from mftyre import compiled as module
+
+    broken = tmp_path / "include"
+    broken.mkdir()
+    (broken / "Python.h").write_text("#error not these headers\n")
+    monkeypatch.setattr(module, "_PYTHON_ABI", module._PYTHON_ABI or ".cpython-0-test.so")
+    monkeypatch.setattr(module, "_python_headers", lambda: ("-DMFT_PYTHON", f"-I{broken}"))
+    monkeypatch.setattr(module, "_PYTHON_ENTRY_BUILDS", {True})
+    x, y = ca.SX.sym("x"), ca.SX.sym("y")
+    function = ca.Function("g", [x, y], [x * y], ["x", "y"], ["product"])
+    plain = CompiledFunction(module.compile_function(function, "broken-headers", tmp_path / "cache"))
+    assert not plain.fast_point and plain(3.0, 2.0) == (6.0,)
+    assert not module._PYTHON_ENTRY_BUILDS and module._python_extension_flags() == ()
+    flags, libraries, tag = module._toolchain()
+    monkeypatch.setattr(module, "_toolchain", lambda: ((*flags, "--no-such-compiler-option"), libraries, tag))
+    monkeypatch.setattr(module, "_PYTHON_ENTRY_BUILDS", {True})
+    with pytest.raises(MFTyreError, match="no-such-compiler-option"):
+        module.compile_function(function, "other-key", tmp_path / "cache")
+
+
 # ------------------------------------------------------------- one point: the loaded-radius steps stop early
 def _extreme_points(model, n, seed):
     """Loads from none (lifted roots with camber) to 4x nominal (the rim's bottoming region), large slips and
