@@ -70,8 +70,8 @@ from .errors import MFTyreError, ModelInputError
 from .inputs import check_finite, check_finite_outputs, check_pressure, input_ranges, warn_outside
 
 __all__ = ["CompiledFunction", "CacheSecurityError", "CompileError", "compile_model", "compile_function",
-           "compile_external", "tyre_kernels", "compile_tyre_kernels", "cached_library", "compile_c", "cache_dir", "install_libraries",
-           "platform_tag", "generate_c", "CASADI_LOCK"]
+           "compile_external", "tyre_kernels", "compile_tyre_kernels", "cached_library", "compile_c", "cache_dir",
+           "install_libraries", "platform_tag", "generate_c", "CASADI_LOCK"]
 
 _BLOCK = 256  # points per call of the vectorised kernel (inputs broadcast into stack buffers of this length)
 # -O1 with loop vectorisation runs the straight-line kernel as fast as -O3 and compiles in half the time.
