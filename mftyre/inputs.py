@@ -22,6 +22,7 @@ import warnings
 import numpy as np
 
 from .errors import InputClippedWarning, LoadFactorWarning, ModelInputError, PressureFactorWarning, spelled
+from .formula.vertical import pressure_increment
 
 __all__ = ["RANGE_PARAMETERS", "input_ranges", "saturate", "check_finite", "check_pressure", "warn_outside",
            "check_finite_outputs", "saturate_inputs", "warn_data_outside", "PRESSURE_FACTORS", "pressure_factor_edges",
@@ -123,7 +124,7 @@ def load_factor_problems(params) -> list[tuple[str, str]]:
     fz0, fzmax = float(params.FNOMIN) * float(params.LFZO), float(params.FZMAX)
     found: dict = {}
     for p in (params.PRESMIN, params.PRESMAX):
-        dpi = (float(p) - float(params.NOMPRES)) / float(params.NOMPRES) if params.NOMPRES > 0 else 0.0
+        dpi = _pressure_increment(params, p)
         for edge, names, what in load_factor_edges(params, dpi):
             if edge <= fzmax and (what not in found or edge < found[what][0]):
                 found[what] = (edge, names, p)
@@ -136,19 +137,40 @@ def load_factor_problems(params) -> list[tuple[str, str]]:
             for what, (edge, names, p) in found.items()]
 
 
-class PressureFactorCheck:
+def _pressure_increment(params, p) -> float:
+    """dpi of :func:`mftyre.formula.vertical.pressure_increment` at ``p``; 0 where NOMPRES is not positive (a file
+    the value checks refuse, still read by ``mftyre check``)."""
+    return float(pressure_increment(params, float(p))) if params.NOMPRES > 0 else 0.0
+
+
+class _WarnOnce:
+    """The state of a check that warns once per key, from any thread: the source named in the message."""
+
+    def __init__(self, params):
+        self._source = getattr(params, "source", None) or "the parameter set"
+        self._warned: set = set()
+        self._lock = threading.Lock()
+
+    def _first(self, key) -> bool:
+        """True the first time ``key`` is seen (then the caller warns)."""
+        with self._lock:
+            if key in self._warned:
+                return False
+            self._warned.add(key)
+            return True
+
+
+class PressureFactorCheck(_WarnOnce):
     """Warns (:class:`PressureFactorWarning`, once per factor) where a model is used at a pressure beyond one of
     :func:`pressure_factor_edges`, naming the file, the parameters and the pressure; the file is not rejected (its
     fit may only cover the measured pressures). Thread-safe; the common case (every pressure inside) costs two
     comparisons."""
 
     def __init__(self, params):
+        super().__init__(params)
         self._edges = pressure_factor_edges(params)
-        self._source = getattr(params, "source", None) or "the parameter set"
         self.low = max([p for p, side, _, _ in self._edges if side < 0], default=-np.inf)
         self.high = min([p for p, side, _, _ in self._edges if side > 0], default=np.inf)
-        self._warned: set = set()
-        self._lock = threading.Lock()
 
     def __call__(self, p_min: float, p_max: float, stacklevel: int = 3) -> None:
         """Warn for the factors that are <= 0 somewhere in the pressures used, ``p_min``..``p_max`` [Pa]."""
@@ -156,10 +178,8 @@ class PressureFactorCheck:
             return
         for edge, side, names, what in self._edges:
             crossed = p_max >= edge if side > 0 else p_min <= edge
-            with self._lock:
-                if not crossed or names in self._warned:
-                    continue
-                self._warned.add(names)
+            if not crossed or not self._first(names):
+                continue
             used = p_max if side > 0 else p_min
             warnings.warn(f"{self._source}: {names} makes the {what} factor change sign at p = {edge:.6g} Pa "
                           f"({edge / 1e5:.3g} bar); the model is used at p = {used:.6g} Pa, "
@@ -168,7 +188,7 @@ class PressureFactorCheck:
                           stacklevel=stacklevel)
 
 
-class LoadFactorCheck:
+class LoadFactorCheck(_WarnOnce):
     """Warns (:class:`LoadFactorWarning`, once per factor) where a model is used at loads beyond one of
     :func:`load_factor_edges` at the pressures used (a slip stiffness with the opposite sign to the one at FNOMIN),
     naming the file, the parameters, the edge and the load; the file is not rejected (its fit may only cover the
@@ -179,22 +199,16 @@ class LoadFactorCheck:
     edge."""
 
     def __init__(self, params):
+        super().__init__(params)
         self._params = params
-        self._source = getattr(params, "source", None) or "the parameter set"
         self._fz0 = float(params.FNOMIN) * float(params.LFZO)
         self._fixed = load_factor_edges(params, 0.0) == load_factor_edges(params, 1.0)  # no edge moves with p
         pressures = [float(params[n]) for n in ("PRESMIN", "PRESMAX", "NOMPRES")]
         self.p_low, self.p_high = (-np.inf, np.inf) if self._fixed else (min(pressures), max(pressures))
-        dpis = (0.0,) if self._fixed else (self._dpi(self.p_low), self._dpi(self.p_high))
+        dpis = (0.0,) if self._fixed else tuple(_pressure_increment(params, p) for p in (self.p_low, self.p_high))
         edges = [edge for dpi in dpis for edge, _, _ in load_factor_edges(params, dpi)]
         self.low = max([e for e in edges if e <= self._fz0], default=0.0)
         self.high = min([e for e in edges if e >= self._fz0], default=np.inf)
-        self._warned: set = set()
-        self._lock = threading.Lock()
-
-    def _dpi(self, p: float) -> float:
-        nominal = float(self._params.NOMPRES)
-        return (p - nominal) / nominal if nominal > 0 else 0.0
 
     def __call__(self, fz_min: float, fz_max: float, p_min: float, p_max: float, stacklevel: int = 3) -> None:
         """Warn for the slip stiffnesses whose sign is the opposite of FNOMIN's somewhere in the loads used,
@@ -202,13 +216,11 @@ class LoadFactorCheck:
         if self.low < fz_min and fz_max < self.high and (self._fixed or self.p_low <= p_min and p_max <= self.p_high):
             return
         for p in (p_min, p_max):  # the edges are monotonic in the pressure: its ends bound them
-            for edge, names, what in load_factor_edges(self._params, self._dpi(p)):
+            for edge, names, what in load_factor_edges(self._params, _pressure_increment(self._params, p)):
                 above = edge > self._fz0
                 crossed = fz_max >= edge if above else 0.0 < fz_min <= edge
-                with self._lock:
-                    if not crossed or what in self._warned:
-                        continue
-                    self._warned.add(what)
+                if not crossed or not self._first(what):
+                    continue
                 used = fz_max if above else fz_min
                 warnings.warn(f"{self._source}: {names} make the {what} change sign at Fz = {edge:.6g} N"
                               f"{f' (p = {p:g} Pa)' if 'PPY2' in names else ''}; the model is used at Fz = "
