@@ -857,8 +857,9 @@ def compile_function(function, key: str, directory: Path | None = None, output_n
     """Generate C for the SX ``function`` (scalar inputs and outputs), compile and cache it under ``key``;
     returns the library. ``output_names`` (default: the function's) become :attr:`CompiledFunction.outputs`;
     ``checks``, ``point_function``: see :func:`generate_c`. ``function`` and ``point_function`` may also be
-    callables returning them (called only when the library is not cached). Where CPython's headers are found (Linux), the same compiler run also builds the
-    one-point entry for this interpreter (``mft_python_function``; the key then names its ABI, ``EXT_SUFFIX``)."""
+    callables returning them (called only when the library is not cached). Where CPython's headers are found
+    (Linux), the same compiler run also builds the one-point entry for this interpreter (``mft_python_function``;
+    the key then names its ABI, ``EXT_SUFFIX``)."""
     python_flags = _python_extension_flags()
     python = _PYTHON_ABI if python_flags else None
 
@@ -1001,29 +1002,42 @@ def compile_external(model, inputs=("fz", "kappa", "alpha"), outputs=("fx", "fy"
     key = _key(model, {"external": name, "inputs": list(inputs), "outputs": list(outputs), "hessian": hessian,
                        **options})
 
-    def generate(folder):
+    def functions():
         f = model.casadi_function(inputs, outputs, name=name, **options)
         sx = f.sx_in()
         f = ca.Function(name, sx, f.call(sx), f.name_in(), f.name_out(), {"cse": True})
-        gen = ca.CodeGenerator("mftyre_ext.c", {"with_header": False})
         # second derivatives as the Jacobian of the adjoint (reverse) function, i.e. of lambda^T J: the Hessian of
         # the Lagrangian weighted by the outputs' multipliers, n_in^2 + n_in n_out entries where the Jacobian of
         # the Jacobian has n_out n_in^2 (and costs 4x as much per point)
         derivatives = (f.jacobian(), f.reverse(1), _jacobian_of_adjoint(f)) if hessian else (f.jacobian(),)
-        for g in (f, *derivatives):
-            gen.add(g)
         meta = {"inputs": list(f.name_in()), "outputs": list(f.name_out()), "checks": [], "toolchain": "casadi",
                 "function": name, "hessian": hessian}
-        flags = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-fno-math-errno")  # (errno unread: sqrt inlined)
-        return Path(gen.generate(str(folder) + os.sep)), flags, ("-lm",), meta
+        return (f, *derivatives), meta
 
-    library = cached_library("mftyre_ext", key, generate, directory)
+    library = _casadi_library("mftyre_ext", key, functions, directory)
     # without the Hessian: second derivatives (where asked for) by differences of the compiled Jacobian; the
     # first derivatives stay the compiled ones ("enable_fd" on the function itself would difference those too:
     # 4x the time of a constraint Jacobian and, inexact, 2x the iterations of IPOPT's limited-memory mode)
     with CASADI_LOCK:
         return ca.external(name, str(library), {} if hessian else {"jacobian_options": {"enable_fd": True},
                                                                    "der_options": {"enable_fd": True}})
+
+
+def _casadi_library(prefix: str, key: str, functions, directory: Path | None) -> Path:
+    """The library (cached under ``prefix`` and ``key``) of the CasADi functions that ``functions()`` returns with
+    the library's description, written by CasADi's code generator (:func:`compile_external`,
+    :func:`compile_tyre_kernels`)."""
+    import casadi as ca
+
+    def generate(folder):
+        members, meta = functions()
+        gen = ca.CodeGenerator(f"{prefix}.c", {"with_header": False})
+        for f in members:
+            gen.add(f)
+        flags = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-fno-math-errno")  # (errno unread: sqrt inlined)
+        return Path(gen.generate(str(folder) + os.sep)), flags, ("-lm",), meta
+
+    return cached_library(prefix, key, generate, directory)
 
 
 def tyre_kernels(f, name: str | None = None):
@@ -1069,17 +1083,14 @@ def compile_tyre_kernels(model, inputs=("fz", "kappa", "alpha"), outputs=("fx", 
 
     key = _key(model, {"kernels": name, "inputs": list(inputs), "outputs": list(outputs), **options})
 
-    def generate(folder):
+    def functions():
         kernels = tyre_kernels(model.casadi_function(inputs, outputs, name=name, **options))
-        gen = ca.CodeGenerator("mftyre_kernels.c", {"with_header": False})
-        for kernel in (*kernels, kernels[0].jacobian()):  # (CasADi's jac_<name>: the value's own first derivatives,
-            gen.add(kernel)                                 # which nlpsol's gradient of the Lagrangian asks for)
         meta = {"inputs": list(inputs), "outputs": list(outputs), "checks": [], "toolchain": "casadi",
                 "functions": [k.name() for k in kernels]}
-        flags = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-fno-math-errno")  # as compile_external
-        return Path(gen.generate(str(folder) + os.sep)), flags, ("-lm",), meta
+        # (CasADi's jac_<name>: the value's own first derivatives, which nlpsol's gradient of the Lagrangian asks for)
+        return (*kernels, kernels[0].jacobian()), meta
 
-    library = cached_library("mftyre_kernels", key, generate, directory)
+    library = _casadi_library("mftyre_kernels", key, functions, directory)
     with CASADI_LOCK:
         return tuple(ca.external(n, str(library)) for n in (name, f"{name}_value_jacobian", f"{name}_value_hessian"))
 
