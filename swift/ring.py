@@ -175,15 +175,17 @@ Pacejka's phit = -psi_dot/V (4.75) has z down. Issue 19's first attempt took -ps
 doubles (tests/test_swift_turn_slip.py); with that sign (and the reference spin) the MFeval 6.2 file, whose moment
 resists the yaw most, grows at +635 1/s (1 m/s, 4 kN), while the sample and TNO files stay damped at 2-8 kN: the
 two cases swap. Its +2310 1/s came with C_r at 0/0 (the Jacobian there has entries of 1e13).
-    Why off by default: the file's own turn-slip moment at zero slip, dMz/dphit = K_zgamma,r0 R0/(1 - eps_gamma)
-(the camber moment QDZ8 + QDZ9 dfz, resisting the yaw) plus the pneumatic trail times the turn-slip side force
-(pushing along it), turns positive at high load on every SWIFT file here (sample and TNO from about 6 kN, +88 N m
-per 1/m at 8 kN; MFeval 6.1/6.2 from 9.8 kN; agricultural files at 2 FNOMIN; PacejkaBook and FSAE from 0.5
-FNOMIN), and with it the ring grows: sample +2.7 1/s (15 m/s, 8 kN, 55 Hz belt yaw), TNO +12.7 1/s (0.5 m/s,
-8 kN, 92 Hz), MFeval 6.2 +525 1/s (-70 m/s, 13.5 kN); at 0.5 and 1 FNOMIN every mode of these files stays damped
-(benchmarks/swift_turn_slip_modes.py, 0.5-70 m/s both ways, INFLPRES). SwiftTyre(turn_slip=True) gives a
-TurnSlipWarning naming the file, the loads and the parameters where the slope is positive
-(:func:`turn_slip_warning`); a positive slope need not make a mode grow (PacejkaBook: damped at 2-8 kN).
+    Why off by default: on a file whose camber moment changes sign with the load (K_zgamma,r0 = Fz R0 (QDZ8 +
+QDZ9 dfz) LKZC, (4.99): MFeval's MF 6.1/6.2 files above 1.66 FNOMIN) the MF's turn-slip moment at zero slip,
+dMz/dphit = K_zgamma,r0 R0/(1 - eps_gamma), pushes the yaw, and the ring grows (MFeval 6.2 +176 1/s at -70 m/s,
+13.5 kN); :class:`mftyre.errors.TurnSlipWarning` names the file, the loads and the parameters there
+(:func:`turn_slip_warning`). And the turn-slip side force feeds the TNO file's 93 Hz belt camber/lateral mode
+(DAMP_LAT 0.005) at low speed and high load: +1.1 1/s at 0.5 m/s, 8 kN; +10 at 10 kN (damped up to 6 kN).
+With turn slip the sample file's modes are all damped from 2 kN to FZMAX at PRESMIN..PRESMAX, 0.5-70 m/s both
+ways, including the belt-yaw mode at 10 kN, 2.55 bar that grows without it (+0.18 1/s, 7 m/s)
+(benchmarks/swift_turn_slip_modes.py). (Until the MF's pneumatic trail multiplied F'y at gamma = phi = 0 (4.E32,
+4.E74), it took the camber spin's side force S_Hyphi through the trail, and dMz/dphit turned positive above ~6 kN
+on the sample and TNO files: +2.7 1/s at 8 kN, 15 m/s.)
 """
 from __future__ import annotations
 
@@ -336,18 +338,18 @@ def turn_slip_moment_slopes(model, loads=None, h: float = 1e-3):
 
 def turn_slip_warning(model) -> str | None:
     """The message of :class:`mftyre.errors.TurnSlipWarning` where the MF turn-slip moment of ``model`` is
-    anti-damping at some load of 0.5-2 FNOMIN (:func:`turn_slip_moment_slopes`), else None."""
+    anti-damping at some load of 0.5-2 FNOMIN (:func:`turn_slip_moment_slopes`), else None. At zero slip the slope
+    is the residual moment's, K_zgamma,r0 R0 / (1 - eps_gamma) (4.97)-(4.99): the file's camber moment (QDZ8 +
+    QDZ9 dfz, QDZ10, QDZ11) changing sign with the load."""
     bad = [row for row in turn_slip_moment_slopes(model) if row[1] > 0]
     if not bad:
         return None
     prm = model.params
-    fz, slope, residual = max(bad, key=lambda row: row[1])
-    names = ", ".join(f"{n} = {prm[n]:g}" for n in ("QDZ8", "QDZ9", "QDZ10", "QDZ11", "PECP1", "PECP2", "PHYP1",
-                                                    "PHYP2", "PHYP3", "PHYP4") if n in prm)
+    fz, slope, _ = max(bad, key=lambda row: row[1])
+    names = ", ".join(f"{n} = {prm[n]:g}" for n in ("QDZ8", "QDZ9", "QDZ10", "QDZ11", "PECP1", "PECP2") if n in prm)
     return (f"{getattr(prm, 'source', None) or 'this .tir file'}: with turn slip the Magic Formula's aligning moment "
             f"pushes the contact patch along its yaw rate at {bad[0][0]:.0f}-{bad[-1][0]:.0f} N "
-            f"(dMz/dphit = {slope:+.3g} N m per 1/m at {fz:.0f} N: {residual:+.3g} the residual moment's, from the "
-            f"camber moment K_zgamma,r0, {slope - residual:+.3g} the pneumatic trail times the turn-slip side force; "
+            f"(dMz/dphit = {slope:+.3g} N m per 1/m at {fz:.0f} N, from the camber moment K_zgamma,r0 of the file; "
             f"{names}): the SWIFT belt yaw or camber modes can grow (swift.modes.scan shows where)")
 
 

@@ -15,7 +15,7 @@ import mftyre
 from mftyre.errors import TurnSlipWarning
 from swift import OUTPUT_NAMES, Flat, StepInputs, SwiftTyre
 from swift.modes import scan
-from swift.ring import STATE_NAMES, TURN_SLIP_REFERENCE
+from swift.ring import STATE_NAMES, TURN_SLIP_REFERENCE, turn_slip_warning
 
 from conftest import MFEVAL_DIR, SHARED, TIR_FILES, require_shared
 
@@ -145,19 +145,23 @@ def test_every_mode_damped_where_the_moment_resists_the_yaw(name, path, loads):
 
 
 def test_warning_names_the_file_and_parameters_where_the_moment_drives_the_yaw(model):
-    """Sample file: the MF's dMz/dphit turns positive above ~6 kN (+88 N m per 1/m at 8 kN, where the ring with turn
-    slip grows at +2.7 1/s, 15 m/s): SwiftTyre(turn_slip=True) warns, naming the file, the loads and QDZ8/PHYP*;
-    without turn slip it does not."""
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        SwiftTyre(model, Flat(), x_range=(0.0, 1.0), compiled=False, turn_slip=True)
-    [message] = [str(w.message) for w in caught if w.category is TurnSlipWarning]
-    for part in ("car_205_60R15_mf62_swift.tir", "QDZ8 = -0.1428", "PHYP2", "8000 N", "swift.modes.scan"):
+    """MFeval's MF 6.2 file: its camber moment QDZ8 + QDZ9 dfz changes sign at 1.66 FNOMIN (11.2 kN), and with it the
+    MF's turn-slip moment at zero slip: SwiftTyre(turn_slip=True) warns, naming the file, the loads and the QDZ
+    parameters. The sample file's moment resists the yaw at every load up to 2 FNOMIN (until the trail multiplied
+    F'y with the camber spin's side force in it, it pushed above ~6 kN): no warning, with or without turn slip."""
+    path = require_shared(MFEVAL_DIR / "MagicFormula62_Parameters.tir")
+    for tyre_model, expected in ((mftyre.load_tir(path), True), (model, False)):
+        for turn_slip in (True, False):
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                SwiftTyre(tyre_model, Flat(), x_range=(0.0, 1.0), compiled=False, turn_slip=turn_slip)
+            messages = [str(w.message) for w in caught if w.category is TurnSlipWarning]
+            assert len(messages) == (expected and turn_slip), (tyre_model.params.source, turn_slip, messages)
+    message = turn_slip_warning(mftyre.load_tir(path))
+    for part in ("MagicFormula62_Parameters.tir", "QDZ8 = -0.34545", "QDZ9 = 0.52144", "13504 N",
+                 "swift.modes.scan"):
         assert part in message
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        SwiftTyre(model, Flat(), x_range=(0.0, 1.0), compiled=False)
-    assert not [w for w in caught if w.category is TurnSlipWarning]
+    assert turn_slip_warning(model) is None
 
 
 def test_the_fmu_wheel_takes_the_option(model):

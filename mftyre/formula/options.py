@@ -15,9 +15,11 @@ SMOOTH_LIMITS_MARGIN = 0.01
 
 #: Forms of the turn-slip equations (see :mod:`mftyre.formula.turnslip`):
 #: "published": Pacejka (2012) as printed: the spin (4.76) with its leading minus sign, K_zgamma,r0 (4.99),
-#:              the residual spin torque D_rphi driven by the spin phi; singularity protection Vc' >= VXLOW.
+#:              the residual spin torque D_rphi driven by the spin phi; the trail's F'y at gamma = phi = 0;
+#:              singularity protection Vc' >= VXLOW.
 #: "mfeval":    the reference evaluator MFeval 4.3.1: (4.76) without the minus sign, K_zgamma,r0 =
 #:              Fz R0 (QDZ8 QDZ9 dfz + QDZ10 + QDZ11 dfz |gamma|) LKZC, D_rphi driven by the turn slip phit,
+#:              the trail's F'y with S_Hyphi,
 #:              Vc' = VXLOW sign(Vx) below VXLOW, and Cr = (2/pi) acos(Mz90/|D_rphi|) (4.104) complex where the
 #:              ratio leaves [-1, 1] (MATLAB's acos), Mzr its real part (see mftyre.formula.aligning).
 TURN_SLIP_FORMS = ("published", "mfeval")

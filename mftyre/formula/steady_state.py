@@ -1,6 +1,8 @@
 """Steady-state evaluation: conditioned inputs -> every output of the model, for any backend."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 from . import aligning, derived, lateral, longitudinal, moments, normalisation, turnslip, vertical
 
 __all__ = ["steady_state", "OUTPUT_NAMES"]
@@ -33,7 +35,11 @@ def steady_state(prm, fz, kappa, alpha, gamma, phit, vx, p, omega, omega_given, 
     fy, gyk, svyk = lateral.combined_lateral(prm, s, lat.Fy0, lat.muy, modes, be)
 
     coeffs = aligning.aligning_coefficients(prm, s, lat, gyk, modes, be)
-    fy0_gamma0 = None if prm.version == "52" else lateral.pure_lateral(prm, s, be.exact(0.0), modes, be).Fy0
+    # F'y of the pneumatic-trail moment at gamma = phi = 0 (4.E32, 4.E74): with turn slip, the published form
+    # leaves the spin's side force out of it (the camber moment is then D_rphi's, as without turn slip it is D_r's);
+    # the reference evaluator keeps S_Hyphi there (mfeval form)
+    trail_modes = replace(modes, turn_slip=False) if modes.turn_slip_form == "published" else modes
+    fy0_gamma0 = None if prm.version == "52" else lateral.pure_lateral(prm, s, be.exact(0.0), trail_modes, be).Fy0
     mz, t, mzr = aligning.aligning_torque(prm, s, coeffs, lon.Kxk, fx, fy, svyk, fy0_gamma0, gyk, modes, be)
     mx = moments.overturning_moment(prm, s, fy, be)
     my = moments.rolling_resistance_moment(prm, s, fx, be)

@@ -8,11 +8,13 @@ Two forms (``Modes.turn_slip_form``):
   with psi_dot = -phit Vc' (4.75), i.e. phi = phit + (1 - eps_gamma) omega sin(gamma) / Vc'. This is the form in
   which the model is consistent with itself: at zero turn slip the camber spin reproduces, to first order, the
   camber thrust and camber moment of the model without turn slip (S_Hyphi -> Kyg0 gamma / Kya, D_rphi -> the
-  camber part of D_r, Cr -> 1); ``tests/test_turn_slip.py`` checks it. Below VXLOW the speed is held at
+  camber part of D_r, Cr -> 1), provided the pneumatic trail multiplies F'y at gamma = phi = 0 (4.E32, 4.E74);
+  ``tests/test_turn_slip.py`` checks both. Below VXLOW the speed is held at
   Vc' = max(Vc, VXLOW) (continuous, positive in both directions of travel).
 * "mfeval": the reference evaluator's choices, reproduced for comparison: (4.76) without the minus sign (its
   authors' reading of the axis systems), Vc' = VXLOW sign(Vx) below VXLOW, D_rphi from phit instead of phi,
-  and K_zgamma,r0 = Fz R0 (QDZ8 QDZ9 dfz + QDZ10 + QDZ11 dfz |gamma|) LKZC instead of (4.99), and Cr (4.104) taken
+  K_zgamma,r0 = Fz R0 (QDZ8 QDZ9 dfz + QDZ10 + QDZ11 dfz |gamma|) LKZC instead of (4.99), F'y of the trail
+  moment with the spin's S_Hyphi in it (the camber thrust counted again through the trail), and Cr (4.104) taken
   through MATLAB's complex acos where Mz90/|D_rphi| > 1 (Mzr = Dr cos(a x) cosh(b x), the real part MFeval
   reports). The last matters on files with QDZ10 = QDZ11 = 0 and a small QDZ9 (TNO's 205/60 R15 MF 6.2 example):
   there K_zgamma,r0 ~ 0, D_rphi ~ 0, the ratio is far above 1 and Mzr grows with the slip angle (182 N m at
