@@ -160,7 +160,10 @@ equations, Pacejka 2012 (4.75)-(4.106), mftyre.formula.turnslip]: the patch yaws
 psidot_r (belt and residual yaw, the heading the slip angle uses) and its spin relaxes over sigma_c like the slips,
     sigma_c dphi/dt + V' phi = s_v psi_dot_c,   V' = max(|V_cx|, VXLOW)   (air: phi relaxes to 0 with AIR_TIME)
 so that phi = psi_dot_c / V with V signed by the direction of travel. The forces get the MF's turn-slip increment
-    F'_x, F'_y, M'_z  +=  MF_ts(phit = phi) - MF_ts(phit = 0)
+    F'_x, F'_y, M'_z  +=  MF_ts(phit = phi min(1, |V_cx|/VXLOW)) - MF_ts(phit = 0)
+(below VXLOW the turn slip fades as in the MF's low-speed model, phit |Vx|/VXLOW: phi itself, relaxed at V' >=
+VXLOW, does not vanish at standstill as the transient slips do; without the fade the TNO file's 93 Hz belt
+camber/lateral mode (DAMP_LAT 0.005) grew at 0.5 m/s, 8 kN, +1.1 1/s, fed by the turn-slip side force)
 (the zeta reduction factors of the peaks and stiffness, the lateral shift S_Hyphi, the moment D_rphi) at the same
 load, slips, rim camber and speed as the slip model, with the camber spin (1 - eps_gamma) s_v Omega_b sin(gamma) of
 rolling forward (reversing as for the other forces: the MF rolls forward, M'_z turns with s_v, so the spin moment
@@ -179,11 +182,12 @@ two cases swap. Its +2310 1/s came with C_r at 0/0 (the Jacobian there has entri
 QDZ9 dfz) LKZC, (4.99): MFeval's MF 6.1/6.2 files above 1.66 FNOMIN) the MF's turn-slip moment at zero slip,
 dMz/dphit = K_zgamma,r0 R0/(1 - eps_gamma), pushes the yaw, and the ring grows (MFeval 6.2 +176 1/s at -70 m/s,
 13.5 kN); :class:`mftyre.errors.TurnSlipWarning` names the file, the loads and the parameters there
-(:func:`turn_slip_warning`). And the turn-slip side force feeds the TNO file's 93 Hz belt camber/lateral mode
-(DAMP_LAT 0.005) at low speed and high load: +1.1 1/s at 0.5 m/s, 8 kN; +10 at 10 kN (damped up to 6 kN).
-With turn slip the sample file's modes are all damped from 2 kN to FZMAX at PRESMIN..PRESMAX, 0.5-70 m/s both
-ways, including the belt-yaw mode at 10 kN, 2.55 bar that grows without it (+0.18 1/s, 7 m/s)
-(benchmarks/swift_turn_slip_modes.py). (Until the MF's pneumatic trail multiplied F'y at gamma = phi = 0 (4.E32,
+(:func:`turn_slip_warning`). And at FZMAX (2.5 FNOMIN) the turn-slip side force still feeds the TNO file's 89 Hz
+belt camber/lateral mode at 1-2 m/s (+5.9 1/s at 1 m/s, 10 kN). Elsewhere, 0.5-70 m/s both ways, PRESMIN..PRESMAX
+(TNO: up to 2.2 bar; above 5.7 bar its own cornering stiffness reverses), every mode of every bundled and shared
+SWIFT file stays damped with turn slip from 0.5 FNOMIN (or 2 kN) to FZMAX, or to 1.66 FNOMIN on the MFeval files,
+including the sample file's belt-yaw mode at 10 kN, 2.55 bar that grows without it (+0.18 1/s, 7 m/s)
+(benchmarks/swift_turn_slip_modes.py; FSAE_Defaults's LoadFactorWarning case aside). (Until the MF's pneumatic trail multiplied F'y at gamma = phi = 0 (4.E32,
 4.E74), it took the camber spin's side force S_Hyphi through the trail, and dMz/dphit turned positive above ~6 kN
 on the sample and TNO files: +2.7 1/s at 8 kN, 15 m/s.)
 """
@@ -528,7 +532,8 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, *, 
         slip = (be.fmax(fzc, _FZ_FLOOR), s["kappa"], alpha_mf, v["gamma"] - beta_x)
         rest = (be.fmax(be.abs(vcx), prm.VXLOW), v["p"], s["omb"] * s_v)  # camber spin as rolling forward
         ref = TURN_SLIP_REFERENCE / prm.UNLOADED_RADIUS
-        on, off = mf_ts(*slip, s["phi"] + ref, *rest), mf_ts(*slip, ref, *rest)
+        fade = be.fmin(be.abs(vcx) / prm.VXLOW, 1.0)  # the MF's low-speed turn slip, phit |Vx| / VXLOW
+        on, off = mf_ts(*slip, s["phi"] * fade + ref, *rest), mf_ts(*slip, ref, *rest)
         fxc, fyc, mzc = fxc + (on[0] - off[0]), fyc + (on[1] - off[1]), mzc + (on[2] - off[2])
     mzc, myc = mzc * s_v, myc * s_o
 

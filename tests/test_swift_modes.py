@@ -133,7 +133,8 @@ def test_every_mode_damped(name, path):
 
 @pytest.mark.xfail(strict=True, reason="the sample files' belt-yaw mode grows at FZMAX and PRESMAX (+0.18 1/s, 7 m/s, "
                                        "10 kN, 2.55 bar): the pneumatic trail's moment lags the belt yaw (relaxation "
-                                       "and DAMP_RESIDUAL) and outweighs DAMP_YAW = 0.007; not resolved")
+                                       "and DAMP_RESIDUAL) and outweighs DAMP_YAW = 0.007; damped with turn slip "
+                                       "(tests/test_swift_turn_slip.py), not without")
 def test_sample_belt_yaw_at_fzmax_and_presmax():
     """The 56 Hz belt yaw of the sample file at 10 kN, 2.55 bar, 5-9 m/s both ways. Measured (swift.modes, max Re
     [1/s] at 5/7/9 m/s): file -0.10/+0.18/+0.06; LTR = 0 (no pneumatic trail) -3.2/-4.1/-5.3; DAMP_YAW 0.02 -4.4/-4.0/
