@@ -55,6 +55,12 @@ _INPUTS = {
     "alpha_in": "rig mode: slip angle (ISO-W)",
     "torque": "swift, rim=torque: drive (+) or brake (-) torque on the rim about its axle",
 }
+#: The input of an FMU built with turn slip (config.json ``turn_slip``, as the native FMU's ``--turn-slip``).
+_TURN_SLIP_INPUTS = {
+    "yaw_rate": "turn slip, model=steady: yaw velocity of the wheel about ISO-W z (vehicle yaw rate + steer rate), "
+                "phit = +yaw_rate / max(Vc, VXLOW); swift: must stay 0 (the wheel frame does not yaw: the ring's turn "
+                "slip is the contact patch's yaw relative to the rim)",
+}
 
 _PARAMETERS = {  # name -> description; start values come from config.json
     "tir_file": "property file: empty = the .tir embedded in the FMU (resources/tyre.tir), else a path",
@@ -123,6 +129,8 @@ class MFTyre(Fmi2Slave):
         self._config = self._read_config()
         cfg = self._config
         params = cfg.get("parameters", {})
+        self._turn_slip = bool(cfg.get("turn_slip", False))  # fixed at build time: it adds the input yaw_rate
+        inputs = {**_INPUTS, **(_TURN_SLIP_INPUTS if self._turn_slip else {})}
         for name in _PARAMETERS:
             setattr(self, name, str(params.get(name, "")))
         self._import_mftyre(self.resources or ".")
@@ -130,7 +138,7 @@ class MFTyre(Fmi2Slave):
         from mftyre.variables import WHEEL
 
         starts = cfg.get("inputs", {})
-        for name in _INPUTS:
+        for name in inputs:
             start = WHEEL[name].start
             setattr(self, name, float(starts.get(name, start if math.isfinite(start) else 0.0)))
         self.version = mftyre.__version__  # the one version string (pyproject reads it too)
@@ -138,7 +146,7 @@ class MFTyre(Fmi2Slave):
         for name in _REAL_PARAMETERS:
             setattr(self, name, float(params.get(name, WHEEL[name].start)))
         self._units = {v.name: v.unit for v in outputs.values()}
-        self._units.update({n: WHEEL[n].unit for n in (*_INPUTS, *_REAL_PARAMETERS)})
+        self._units.update({n: WHEEL[n].unit for n in (*inputs, *_REAL_PARAMETERS)})
         for name in outputs:
             setattr(self, name, 0.0)
         self.status = 0
@@ -153,7 +161,7 @@ class MFTyre(Fmi2Slave):
         for name, description in _REAL_PARAMETERS.items():
             self.register_variable(Real(name, causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed,
                                         description=description))
-        for name, description in _INPUTS.items():
+        for name, description in inputs.items():
             self.register_variable(Real(name, causality=Fmi2Causality.input, variability=Fmi2Variability.continuous,
                                         description=description))
         for v in outputs.values():
@@ -247,6 +255,9 @@ class MFTyre(Fmi2Slave):
                                  "wheel-centre motion (input_mode='vehicle')")
             if rim not in ("speed", "torque"):
                 raise ValueError(f"parameter rim must be 'speed' or 'torque', got {self.rim!r}")
+        elif mode == "rig" and self._turn_slip:
+            raise ValueError("parameter input_mode='rig' has no turn slip (the slips and the load are imposed) and "
+                             "this FMU was built with turn slip: use input_mode='vehicle'")
         resources = self.resources or "."
         self._import_mftyre(resources, swift=model_name == "swift")
         import mftyre
@@ -278,12 +289,14 @@ class MFTyre(Fmi2Slave):
                     install_libraries(os.path.join(functions_dir, "wheel"), index["wheel"])
                 except Exception as exc:  # read-only cache...: compiled now instead
                     warn(f"shipped wheel libraries not installed: {exc}")
-            self._core = WheelTyre(model, "steady", vertical, input_mode=mode, evaluator=evaluator)
+            self._core = WheelTyre(model, "steady", vertical, turn_slip=self._turn_slip, input_mode=mode,
+                                   evaluator=evaluator)
             self._mode = "rig" if mode == "rig" else vertical
             detail = (f"input_mode {mode}{'' if mode == 'rig' else ', vertical_input ' + vertical}, "
                       f"evaluator {self._core.evaluator}")
         self.log(f"{cfg.get('tir_name', os.path.basename(path)) if embedded else path}: FITTYP "
-                 f"{model.params.fittyp}, mounted {model.side}, {detail}", Fmi2Status.ok)
+                 f"{model.params.fittyp}, mounted {model.side}, {detail}{', turn slip' if self._turn_slip else ''}",
+                 Fmi2Status.ok)
 
     def _swift_wheel(self, model, vertical, rim, evaluator, functions_dir, index, warn):
         """(swift.fmu_model.SwiftWheel of the parameters, "compiled" or "casadi")."""
@@ -304,7 +317,7 @@ class MFTyre(Fmi2Slave):
             except Exception as exc:  # read-only cache...: compiled now instead
                 warn(f"shipped SWIFT libraries not installed: {exc}")
         options = dict(x_start=float(self.x_start), rim=rim, axle="load" if vertical == "load" else "height",
-                       axle_mass=float(self.axle_mass))
+                       axle_mass=float(self.axle_mass), turn_slip=self._turn_slip)
         wheel = None
         if evaluator in ("auto", "compiled"):
             try:
@@ -408,6 +421,9 @@ class MFTyre(Fmi2Slave):
             bad = [f"p={u['p']!r} (the inflation pressure must be positive)"]
         if not bad and self.mu_scale != 1.0:
             bad = [f"mu_scale={self.mu_scale!r} (the SWIFT model has no friction scale: leave it at 1)"]
+        if not bad and self._turn_slip and self.yaw_rate != 0.0:
+            bad = [f"yaw_rate={self.yaw_rate!r} (the SWIFT wheel frame does not yaw; its turn slip is the contact "
+                   "patch's yaw relative to the rim: leave it at 0)"]
         if not bad and step_size is not None and not step_size >= 0:
             bad = [f"communication step size {step_size!r}"]
         if bad:

@@ -1,6 +1,6 @@
 """Build the tyre FMU (FMI 2.0 co-simulation, pythonfmu) from a .tir file.
 
-    python -m fmu.build FILE.tir -o tyre.fmu [--model steady|swift] [--side left|right]
+    python -m fmu.build FILE.tir -o tyre.fmu [--model steady|swift] [--side left|right] [--turn-slip]
     mftyre fmu build FILE.tir -o tyre.fmu ...                   (the same, through the mftyre command line)
 
     from fmu.build import build_fmu
@@ -11,7 +11,8 @@ byte); ``functions/``, when a C compiler is available at build time: the wheels 
 platform (``functions/wheel``: the steady wheel of mftyre.transient; with ``--model swift`` also
 ``functions/swift``: the step and outputs of swift.fmu_model's SWIFT wheel), installed into the user's cache when
 the FMU runs on the same platform (elsewhere it compiles them, or runs CasADi's virtual machine); ``config.json``
-(the build options, the start values, the library index); ``vendor/`` (copies of the packages mftyre and swift, used
+(the build options, the start values, the library index; ``turn_slip``, fixed at build time as in the native FMU
+since it adds the input ``yaw_rate``); ``vendor/`` (copies of the packages mftyre and swift, used
 only when the host's Python has none). ``documentation/`` holds
 README.md here. A built FMU is a build output: never commit it.
 """
@@ -58,14 +59,18 @@ def swift_available(model=None) -> str | None:
 
 
 def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, input_mode: str = "vehicle",
-              vertical_input: str = "load", compile_c: bool = True, quiet: bool = True) -> Path:
+              vertical_input: str = "load", turn_slip: bool = False, compile_c: bool = True,
+              quiet: bool = True) -> Path:
     """Build the FMU for the property file ``tir`` at ``output`` (a .fmu path); returns the path.
 
     ``model``: the default of the FMU's ``model`` parameter ('steady' or 'swift'; 'swift' needs the SWIFT
     parameters of the .tir, checked here). ``side``: mounting
     side (default: the file's TYRESIDE). ``input_mode`` / ``vertical_input``: defaults of the parameters of the
-    same names. ``compile_c``: also ship C libraries compiled for this platform (needs a C compiler here, not on
-    the machine that runs the FMU); without them, or on another platform, the FMU runs the CasADi functions.
+    same names. ``turn_slip``: both models with turn slip, as the native FMU's ``--turn-slip`` (steady: the MF's
+    turn slip from the input ``yaw_rate``, :mod:`mftyre.transient`; swift: the contact patch's turn slip,
+    :class:`swift.fmu_model.SwiftWheel`); fixed for the FMU. ``compile_c``: also ship C libraries compiled for this
+    platform (needs a C compiler here, not on the machine that runs the FMU); without them, or on another platform,
+    the FMU runs the CasADi functions.
     """
     import mftyre
     from mftyre.errors import MFTyreError
@@ -83,6 +88,9 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
         raise FMUBuildError(f"input mode must be one of {', '.join(INPUT_MODES)}, got {input_mode!r}")
     if vertical_input not in VERTICAL_INPUTS:
         raise FMUBuildError(f"vertical input must be one of {', '.join(VERTICAL_INPUTS)}, got {vertical_input!r}")
+    if turn_slip and input_mode == "rig":
+        raise FMUBuildError("--input-mode rig (slips and load imposed) has no turn slip: the turn slip comes from the "
+                            "wheel's motion (input mode vehicle)")
     if output.suffix.lower() != ".fmu":
         raise FMUBuildError(f"the output file must end in .fmu, got {str(output)!r}")
     if not tir.is_file():
@@ -112,9 +120,9 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
         index = {}
         if compile_c:  # the compiled wheels for this platform (without them the FMU compiles or runs CasADi's VM)
             try:
-                index["wheel"] = export_wheel_libraries(tyre, stage / "functions" / "wheel")
+                index["wheel"] = export_wheel_libraries(tyre, stage / "functions" / "wheel", turn_slip)
                 if model == "swift":
-                    index["swift"] = export_swift_libraries(tyre, stage / "functions" / "swift")
+                    index["swift"] = export_swift_libraries(tyre, stage / "functions" / "swift", turn_slip)
             except Exception as exc:  # no C compiler...
                 warnings.warn(f"shipping no compiled libraries: {exc}", stacklevel=2)
         vendor = stage / "vendor" / "mftyre"
@@ -134,6 +142,7 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
             "tir_sha256": hashlib.sha256(tir_bytes).hexdigest(),
             "fittyp": prm.fittyp,
             "side": tyre.side,
+            "turn_slip": bool(turn_slip),
             "mftyre_version": mftyre.__version__,
             "functions": index,
             "parameters": {"tir_file": "", "model": model, "side": tyre.side, "input_mode": input_mode,
@@ -159,6 +168,7 @@ def build_fmu(tir, output, *, model: str = "steady", side: str | None = None, in
         write_atomically(output, Path(fmu).read_bytes())  # the one atomic no-follow routine
     if not quiet:
         print(f"wrote {output}: {tir.name} (FITTYP {prm.fittyp}), mounted {tyre.side}, model {model}, "
+              f"{'turn slip, ' if turn_slip else ''}"
               f"{'compiled C for this platform' if index else 'no compiled libraries (CasADi)'}")
     return output
 
@@ -175,6 +185,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="default of the input_mode parameter (default vehicle)")
     parser.add_argument("--vertical-input", choices=VERTICAL_INPUTS, default="load",
                         help="default of the vertical_input parameter (default load)")
+    parser.add_argument("--turn-slip", action="store_true",
+                        help="both models with turn slip (steady: from the input yaw_rate; swift: the contact "
+                             "patch's), as the native FMU's --turn-slip; fixed at build time")
     parser.add_argument("--no-compile", action="store_true",
                         help="ship only the CasADi functions (no C libraries for this platform)")
 
@@ -182,7 +195,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args) -> int:
     try:
         build_fmu(args.tir, args.output, model=args.model, side=args.side, input_mode=args.input_mode,
-                  vertical_input=args.vertical_input, compile_c=not args.no_compile, quiet=False)
+                  vertical_input=args.vertical_input, turn_slip=args.turn_slip, compile_c=not args.no_compile,
+                  quiet=False)
     except FMUBuildError as exc:
         print(f"mftyre fmu build: error: {exc}", file=sys.stderr)
         return 1
@@ -199,24 +213,25 @@ if __name__ == "__main__":
     sys.exit(main())
 
 
-def export_wheel_libraries(model, directory) -> dict:
+def export_wheel_libraries(model, directory, turn_slip: bool = False) -> dict:
     """Compile the steady wheel's outputs (mftyre.transient.WheelTyre, evaluator compiled) for the FMU's modes
-    (vertical load, vertical position, rig) and copy the libraries with their descriptions to ``directory``: shipped
-    in the FMU (installed by :func:`mftyre.compiled.install_libraries`) so that it needs no C compiler on the
-    platform it was built on. Returns {"platform": ..., "files": [names]}."""
+    (vertical load, vertical position, and rig unless ``turn_slip``) and copy the libraries with their descriptions
+    to ``directory``: shipped in the FMU (installed by :func:`mftyre.compiled.install_libraries`) so that it needs
+    no C compiler on the platform it was built on. Returns {"platform": ..., "files": [names]}."""
     from mftyre.compiled import platform_tag
     from mftyre.transient import WheelTyre
 
     libraries = []
-    for vertical, mode in (("load", "vehicle"), ("position", "vehicle"), ("load", "rig")):
+    modes = (("load", "vehicle"), ("position", "vehicle")) + (() if turn_slip else (("load", "rig"),))
+    for vertical, mode in modes:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            libraries.append(WheelTyre(model, "steady", vertical, input_mode=mode, evaluator="compiled")
-                             ._compiled.library)
+            libraries.append(WheelTyre(model, "steady", vertical, turn_slip=turn_slip, input_mode=mode,
+                                       evaluator="compiled")._compiled.library)
     return {"platform": platform_tag(), "files": _copy_libraries(libraries, directory)}
 
 
-def export_swift_libraries(model, directory) -> dict:
+def export_swift_libraries(model, directory, turn_slip: bool = False) -> dict:
     """Compile the SWIFT wheel's step and outputs (swift.fmu_model.SwiftWheel, compiled) for the FMU's
     configurations (axle height/load x rim speed/torque, default axle mass) and copy them to ``directory``, as
     :func:`export_wheel_libraries`."""
@@ -228,7 +243,8 @@ def export_swift_libraries(model, directory) -> dict:
         for rim in ("speed", "torque"):
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                libraries.append(SwiftWheel(model, None, axle=axle, rim=rim, compiled=True).library)
+                libraries.append(SwiftWheel(model, None, axle=axle, rim=rim, compiled=True,
+                                            turn_slip=turn_slip).library)
     return {"platform": platform_tag(), "files": _copy_libraries(libraries, directory)}
 
 

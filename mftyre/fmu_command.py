@@ -60,8 +60,9 @@ def register(subparsers) -> argparse.ArgumentParser:
                        help="native swift: the input omega spins the rim (speed, default) or the input torque drives "
                             "it (torque); pythonfmu: the FMU parameter rim, set at run time")
     build.add_argument("--turn-slip", action="store_true",
-                       help="native steady/transient: the MF with turn slip, from the input yaw_rate; native swift: "
-                            "the contact patch's turn slip from the belt's yaw rate (opt-in, see swift.ring)")
+                       help="steady/transient: the MF with turn slip, from the input yaw_rate; swift: the contact "
+                            "patch's turn slip from the belt's yaw rate (opt-in, see swift.ring); both backends "
+                            "(pythonfmu: for both of its models)")
     build.add_argument("--backend", choices=("native", "pythonfmu"), default="native",
                        help="native (compiled C, default) or pythonfmu (Python slave)")
     closing_options(build, overwrite="replace an existing output file")
@@ -88,8 +89,8 @@ def run(args) -> int:
                              turn_slip=args.turn_slip, input_mode=args.input_mode or "vehicle", rim=args.rim or "speed",
                              overwrite=args.overwrite, quiet=False, progress=progress)
             return 0
-        if args.model == "transient" or args.turn_slip:
-            raise ValueError("--model transient and --turn-slip are only available with --backend native")
+        if args.model == "transient":
+            raise ValueError("--model transient is only available with --backend native")
         if args.road is not None or args.x_start != 0.0 or args.rim is not None:
             raise ValueError("with --backend pythonfmu the road, x_start and rim are FMU parameters set at run time "
                              "(road, x_start, rim), not build options")
@@ -97,6 +98,6 @@ def run(args) -> int:
 
         return build.run(argparse.Namespace(tir=args.tir, output=args.output, model=args.model, side=args.side,
                                              input_mode=args.input_mode or "vehicle", vertical_input=args.vertical,
-                                             no_compile=False))
+                                             turn_slip=args.turn_slip, no_compile=False))
     except (MFTyreError, OSError, ValueError, ImportError) as exc:  # the builders' errors: a message, no traceback
         return command_error("fmu build", f"error: {exc}", 1)

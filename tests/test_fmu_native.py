@@ -817,8 +817,12 @@ def test_turn_slip_from_the_yaw_rate(models, tmp_path):
     assert "yaw_rate" in py.functions.input_names
 
 
-def test_turn_slip_needs_the_native_backend(tmp_path):
-    assert _build([TIR61, "-o", tmp_path / "b.fmu", "--turn-slip", "--backend", "pythonfmu"]) == 1
+def test_transient_needs_the_native_backend(tmp_path, capsys):
+    """The pythonfmu slave has no transient wheel (its turn slip: tests/test_fmu_backends.py)."""
+    out = tmp_path / "b.fmu"
+    assert _build([TIR61, "-o", out, "--model", "transient", "--turn-slip", "--backend", "pythonfmu"]) == 1
+    assert "--model transient is only available with --backend native" in capsys.readouterr().err
+    assert not out.exists()
 
 
 @pytest.mark.parametrize("kind", ["transient", "swift"])
