@@ -36,26 +36,39 @@ ONLY_PYTHONFMU = {"vy", "omega", "z", "vz", "road_z", "torque", "kappa_in", "alp
                   "x_road", "Mx_c", "My_c", "trail", "mux", "muy", "yaw_rate"}
 
 
+_PYTHONFMU_STEADY = [TIR61, "--backend", "pythonfmu", "--vertical", "load"]
+_PYTHONFMU_SWIFT = [TIR62, "--backend", "pythonfmu", "--model", "swift", "--vertical", "position"]
+#: (backend, mode) -> the options of ``mftyre fmu build``. The pythonfmu steady and swift FMUs and the native steady
+#: one are test_fmu's and test_fmu_swift's; the pythonfmu FMU is one FMU for several modes (input_mode,
+#: vertical_input, rim chosen at run time).
+BUILDS = {
+    ("native", "steady"): [TIR61, "--vertical", "load"],
+    ("native", "rig"): [TIR61, "--input-mode", "rig"],
+    ("native", "swift"): [TIR62, "--model", "swift", "--road", CLEAT],
+    ("native", "swift_load_torque"): [TIR62, "--model", "swift", "--road", CLEAT, "--vertical", "load", "--rim",
+                                      "torque"],
+    ("pythonfmu", "steady"): _PYTHONFMU_STEADY,
+    ("pythonfmu", "rig"): _PYTHONFMU_STEADY,
+    ("pythonfmu", "swift"): _PYTHONFMU_SWIFT,
+    ("pythonfmu", "swift_load_torque"): _PYTHONFMU_SWIFT,
+    ("native", "steady_ts"): [TIR61, "--vertical", "load", "--turn-slip"],
+    ("native", "swift_ts"): [TIR62, "--model", "swift", "--road", CLEAT, "--turn-slip"],
+    ("pythonfmu", "steady_ts"): [*_PYTHONFMU_STEADY, "--turn-slip"],
+    ("pythonfmu", "swift_ts"): [*_PYTHONFMU_SWIFT, "--turn-slip"],
+}
+
+
 @pytest.fixture(scope="module")
 def fmus(built_fmu):
-    builds = {  # the pythonfmu steady and swift FMUs and the native steady one are test_fmu's and test_fmu_swift's
-        ("native", "steady"): [TIR61, "--vertical", "load"],
-        ("native", "rig"): [TIR61, "--input-mode", "rig"],
-        ("native", "swift"): [TIR62, "--model", "swift", "--road", CLEAT],
-        ("native", "swift_load_torque"): [TIR62, "--model", "swift", "--road", CLEAT, "--vertical", "load", "--rim",
-                                          "torque"],
-        ("pythonfmu", "steady"): [TIR61, "--backend", "pythonfmu", "--vertical", "load"],
-        ("pythonfmu", "swift"): [TIR62, "--backend", "pythonfmu", "--model", "swift", "--vertical", "position"],
-        ("native", "steady_ts"): [TIR61, "--vertical", "load", "--turn-slip"],
-        ("native", "swift_ts"): [TIR62, "--model", "swift", "--road", CLEAT, "--turn-slip"],
-        ("pythonfmu", "steady_ts"): [TIR61, "--backend", "pythonfmu", "--vertical", "load", "--turn-slip"],
-        ("pythonfmu", "swift_ts"): [TIR62, "--backend", "pythonfmu", "--model", "swift", "--vertical", "position",
-                                    "--turn-slip"],
-    }
-    paths = {key: built_fmu(*args) for key, args in builds.items()}
-    paths["pythonfmu", "rig"] = paths["pythonfmu", "steady"]  # one FMU, input_mode chosen at run time
-    paths["pythonfmu", "swift_load_torque"] = paths["pythonfmu", "swift"]  # vertical_input, rim chosen at run time
-    return paths
+    """(backend, mode) -> the FMU's path, built when a test first asks for it (built_fmu builds equal options
+    once), so that a selection of tests builds only the FMUs it runs."""
+
+    class Built(dict):
+        def __missing__(self, key):
+            self[key] = built_fmu(*BUILDS[key])
+            return self[key]
+
+    return Built()
 
 
 def _variables(path):
