@@ -225,14 +225,17 @@ class SwiftTyre:
 
     # ------------------------------------------------------------------ equations
     @_with_casadi
-    def _rhs(self, n_window, warm=False, stage=False, parametric=False):
+    def _rhs(self, n_window, warm=False, stage=False, parametric=False, hoisted=False):
         """rhs(x, u, x0w, grid, hw, h) -> (dx, out): MX graph, so that the cam-height lookups stay compiled
         constant-time table accesses (an index computed from x into the window, no search). ``h``: the integration
         step that bounds the relaxation rate (0: the exact model). The contact solution: ``CONTACT_PASSES`` Newton
         passes from an estimate, or (``warm``, the stepper) ``WARM_PASSES`` from the solution stored in the state.
         ``stage`` (an RK stage of the stepper): (dx, the tandem base l_s) instead, without the expressions only the
         outputs need. ``parametric``: the numeric parameters are a further input ``theta`` (:attr:`theta`: run-time
-        values, one graph per model structure) instead of numbers in the graph."""
+        values, one graph per model structure) instead of numbers in the graph. ``hoisted`` (the stepper): (rhs,
+        rhs_stage, hoisted) instead, whose last input ``q`` holds the parts of the equations that depend on theta, the
+        inputs ``u`` and ``h`` only (pressure factors, products of parameters...): constant over a step, the stepper
+        computes them once, ``q = hoisted(u, h, theta)``, not at each RK stage (~5 % of the operations)."""
         import casadi as ca
 
         x = ca.MX.sym("x", len(STATE_NAMES))
@@ -253,10 +256,14 @@ class SwiftTyre:
             geometry_sx = contact_geometry(m, c, xs, us, *(hs[i] for i in range(5)))
             dx_sx, out_sx = ring_equations(m, c, xs, us, *(hs[i] for i in range(5)), axle=self.axle, rim=self.rim,
                                            h=hstep, road_camber=ca.atan(hs[5]), turn_slip=self.turn_slip)
+        if hoisted:  # the parts constant over a step: the input q (both functions take the same q)
+            (geometry_sx, dx_sx, out_sx), q_sx, q_values = ca.extract_parametric(
+                ca.cse([geometry_sx, dx_sx, out_sx]), ca.vertcat(ts, us, hstep))
+            qs, q = ca.vertcat(*q_sx), ca.MX.sym("q", len(q_sx))
+        else:
+            qs, q = ca.SX(0, 1), ca.MX(0, 1)
         start = ca.Function("contact_start", [xs, us, hs[0], ts], [start_sx], {"cse": True})
-        geometry = ca.Function("contact_geometry", [xs, us, hs[:5], ts], [geometry_sx], {"cse": True})
-        physics = ca.Function("ring", [xs, us, hs, hstep, ts], [dx_sx] if stage else [dx_sx, out_sx],
-                              {"cse": True})
+        geometry = ca.Function("contact_geometry", [xs, us, hs[:5], ts, qs], [geometry_sx], {"cse": True})
 
         spacing = grid[1] - grid[0]
 
@@ -274,33 +281,42 @@ class SwiftTyre:
             ls, passes = start(x, u, cam(xc)[0], theta), CONTACT_PASSES
         for _ in range(passes):  # the tandem base at the current load
             (hf, dhf, _), (hr, dhr, _) = cam(xc + ls / 2), cam(xc - ls / 2)
-            ls = geometry(x, u, ca.vertcat(hf, dhf, hr, dhr, ls), theta)
+            ls = geometry(x, u, ca.vertcat(hf, dhf, hr, dhr, ls), theta, q)
         (hf, dhf, cf), (hr, dhr, cr) = cam(xc + ls / 2), cam(xc - ls / 2)
-        results = physics.call([x, u, ca.vertcat(hf, dhf, hr, dhr, ls, (cf + cr) / 2), h, theta])
-        extra = [theta] if parametric else []
-        if stage:
-            return ca.Function("rhs_stage", [x, u, x0w, grid, hw, h, *extra], [results[0], ls])
-        return ca.Function("rhs", [x, u, x0w, grid, hw, h, *extra], results)
+        extra = ([theta] if parametric else []) + ([q] if hoisted else [])
+
+        def rhs(stage):
+            physics = ca.Function("ring", [xs, us, hs, hstep, ts, qs], [dx_sx] if stage else [dx_sx, out_sx],
+                                  {"cse": True})
+            results = physics.call([x, u, ca.vertcat(hf, dhf, hr, dhr, ls, (cf + cr) / 2), h, theta, q])
+            if stage:
+                return ca.Function("rhs_stage", [x, u, x0w, grid, hw, h, *extra], [results[0], ls])
+            return ca.Function("rhs", [x, u, x0w, grid, hw, h, *extra], results)
+
+        if hoisted:
+            return rhs(False), rhs(True), ca.Function("hoisted", [us, hstep, ts], [ca.vertcat(*q_values)],
+                                                      {"cse": True})
+        return rhs(stage)
 
     @_with_casadi
     def _build_step(self, parametric=False):
         """``swift_step(x, u, dt, x0w, grid, hw[, theta]) -> (x_next, out)`` (:attr:`step_function`)."""
         import casadi as ca
 
-        rhs = self._rhs(self.window, warm=True, parametric=parametric)
-        rhs_stage = self._rhs(self.window, warm=True, stage=True, parametric=parametric)
+        rhs, rhs_stage, hoisted = self._rhs(self.window, warm=True, parametric=parametric, hoisted=True)
         x = ca.MX.sym("x", len(STATE_NAMES))
         u = ca.MX.sym("u", len(INPUT_NAMES))
         dt, x0w = ca.MX.sym("dt"), ca.MX.sym("x0w")
         grid, hw = ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
         extra = [ca.MX.sym("theta", len(self.theta))] if parametric else []
         h = dt / self.substeps
+        stages = [*extra, hoisted(u, h, *(extra or [ca.MX(0, 1)]))]  # (theta,) q: computed once a step
 
         def with_memory(s, memory):  # s with its tandem base to start from
             return ca.vertcat(s[:_S["lsm"]], memory, s[_S["lsm"] + 1:])
 
         def f(s, memory):  # (dx, the tandem base) at s, its tandem base started from ``memory``
-            return rhs_stage(with_memory(s, memory), u, x0w, grid, hw, h, *extra)
+            return rhs_stage(with_memory(s, memory), u, x0w, grid, hw, h, *stages)
 
         xs, memory = x, x[_S["lsm"]]
         for _ in range(self.substeps):  # classical RK4; each stage starts from the previous stage's contact
@@ -309,7 +325,7 @@ class SwiftTyre:
             k3, memory = f(xs + h / 2 * k2, memory)
             k4, memory = f(xs + h * k3, memory)
             xs = xs + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        out = rhs(with_memory(xs, memory), u, x0w, grid, hw, h, *extra)[1]
+        out = rhs(with_memory(xs, memory), u, x0w, grid, hw, h, *stages)[1]
         xs = _remember_contact(xs, out)  # the contact solution for the next step
         return ca.Function("swift_step", [x, u, dt, x0w, grid, hw, *extra], [xs, out],
                            ["x", "u", "dt", "x0w", "grid", "hw", *(["theta"] if parametric else [])],
