@@ -356,6 +356,13 @@ class SwiftTyre:
                                                  [d, _newton_inverse(ca.jacobian(d, xs)[:, unknown])])
             return self._numeric[key]
 
+    @functools.cached_property
+    def _grid_dm(self):
+        """The window's grid (:attr:`_grid`) as a CasADi matrix, for the virtual-machine calls (under the lock)."""
+        import casadi as ca
+
+        return ca.DM(self._grid)
+
     @property
     def _rhs_window(self):
         return self._numeric_function("rhs")
@@ -734,6 +741,8 @@ class SwiftTyre:
         sample files at 40-70 m/s, 4-20 times their LONGVL and beyond their speed rating: rolling resistance
         (QSY4 (V/LONGVL)^4) and radius growth (Q_V1) run away, the root spins backwards at kappa -100..-600 with a
         free radius of 8-36 m and had growing modes of +200..+640 1/s)."""
+        import casadi as ca
+
         prm = self.model.params
         c = self.constants
         p = prm.INFLPRES if inputs.p is None else inputs.p
@@ -758,7 +767,9 @@ class SwiftTyre:
         # the Jacobian from the graph with this model's values, as the FMU's equilibrium_function: at standstill it
         # is singular and the regularised step amplifies the round-off in which two graphs differ (~1e-7 m)
         equilibrium = self._equilibrium_function(unknown, eqs)
-        u, window, i0 = self._u(inputs), self._rhs_args(s)[:3], self._window_start(s[_S["xb"]])
+        x0w, _, hw = self._rhs_args(s)[:3]
+        # the window as CasADi matrices once for every virtual-machine call below (numpy's 3k values took ~70 us a call)
+        u, window, i0 = self._u(inputs), (x0w, self._grid_dm, ca.DM(hw)), self._window_start(s[_S["xb"]])
         inverse, last = None, np.inf
         for _ in range(iterations):  # Newton; compiled, the Jacobian is kept while the steps shrink tenfold
             if inverse is None or self._compiled is None:
