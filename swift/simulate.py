@@ -218,6 +218,8 @@ class SwiftTyre:
         self._grid = np.ascontiguousarray(self.table.dx * np.arange(self.window))
         camber = np.zeros(self.table.h.size) if self.table.camber is None else self.table.camber
         self._h = np.ascontiguousarray(np.column_stack([self.table.h, camber]).ravel(), dtype=float)  # interleaved
+        # a road with road camber (3D): else the compiled step leaves the cams' road-camber slope out (0: keyed)
+        self._road_camber = bool(np.any(camber))
         self._numeric = {}  # the equations with this model's values in the graph (CasADi VM, FMU), built on first use
         self._names, self.theta = _run_time_parameters(model.params, self.constants)
         self._structure = _structure(self) if compiled else None  # not compiled: the numeric graphs only
@@ -252,12 +254,15 @@ class SwiftTyre:
         c = m.constants if parametric else self.constants
         xs, us, hs = ca.SX.sym("x", len(STATE_NAMES)), ca.SX.sym("u", len(INPUT_NAMES)), ca.SX.sym("h", 6)
         hstep = ca.SX.sym("hstep")
+        # the cams' road camber: 0 in the compiled library of a road without (keyed; its beta_x then depends on the
+        # inputs only); the numeric graphs (virtual machine, FMU, whose keys do not name the road) always look it up
+        road_camber = ca.atan(hs[5]) if self._road_camber or not parametric else 0.0
         with warnings.catch_warnings():  # numpy's sqrt of a parameter (a symbol here): CasADi's notice, not ours
             warnings.simplefilter("ignore", FutureWarning)
             start_sx = contact_start(m, c, xs, us, hs[0])
             geometry_sx = contact_geometry(m, c, xs, us, *(hs[i] for i in range(5)))
             dx_sx, out_sx = ring_equations(m, c, xs, us, *(hs[i] for i in range(5)), axle=self.axle, rim=self.rim,
-                                           h=hstep, road_camber=ca.atan(hs[5]), turn_slip=self.turn_slip)
+                                           h=hstep, road_camber=road_camber, turn_slip=self.turn_slip)
         if hoisted:  # the parts constant over a step: the input q (both functions take the same q)
             (geometry_sx, dx_sx, out_sx), q_sx, q_values = ca.extract_parametric(
                 ca.cse([geometry_sx, dx_sx, out_sx]), ca.vertcat(ts, us, hstep))
@@ -396,6 +401,7 @@ class SwiftTyre:
         payload = {"fixed": {k: repr(prm[k]) for k in prm if k not in self._names}, "theta": self._names,
                    "missing": sorted(prm.missing), "version": prm.version, "side": self.model.side,
                    "axle": self.axle, "rim": self.rim, "turn_slip": self.turn_slip, "window": self.window,
+                   "road_camber": self._road_camber,
                    "substeps": self.substeps,
                    "lever": (self.constants.lever_x, self.constants.lever_y), "kind": kind,
                    "passes": (CONTACT_PASSES, WARM_PASSES), "cflags": COMPILER_FLAGS,
