@@ -9,8 +9,8 @@ same equations on the CasADi virtual machine (not compiled, a 0.1 s run scaled t
 simulated time / wall time (the static initialisation is included in the rows). ``--against REF``: the same rows
 for the ``swift`` package of git ref REF (e.g. ``main``), timed alternately with the current code in the same run,
 and the speed-up of the current code. ``--cpu``: thread CPU time instead of wall time (a busy shared machine disturbs
-it far less). ``--turn-slip``: also a row of the current code with the contact patch's turn slip on. Compilation
-(cached after the first build) is printed separately.
+it far less). ``--turn-slip``: also a row of the current code with the contact patch's turn slip on (with
+``--against``, of REF too, and its speed-up). Compilation (cached after the first build) is printed separately.
 """
 from __future__ import annotations
 
@@ -93,6 +93,9 @@ def main(argv=None):
         setups = {name: _rows(pkg, model, args.repeat, args.cpu) for name, pkg in variants.items()}
         if args.turn_slip:
             setups["turn slip"] = _rows(swift, model, args.repeat, args.cpu, turn_slip=True)
+            if args.against:
+                setups[f"{args.against} ts"] = _rows(variants[args.against], model, args.repeat, args.cpu,
+                                                     turn_slip=True)
         times = {name: [np.inf, np.inf] for name in setups}
         for _ in range(2):  # alternate the variants, keep each one's best
             for name, (_, _, timers) in setups.items():
@@ -111,12 +114,17 @@ def main(argv=None):
         print(f"{name}: per step (initialisation included) run() {t_run / n_steps * 1e6:.2f} us, step() loop "
               f"{t_step / n_steps * 1e6:.2f} us")
     if args.against:
-        (new_run, new_step), (old_run, old_step) = times["current"], times[args.against]
-        print(f"speed-up of the current code over {args.against}: run() {old_run / new_run:.2f}x, "
-              f"step() loop {old_step / new_step:.2f}x")
-    t_run, t_step = times["current"]
-    for name, t in (("run()", t_run), ("step() loop", t_step)):
-        print(f"target: real-time factor >= 100 for {name}: {'met' if T_END / t >= 100 else 'NOT met'}")
+        pairs = [("current", args.against, "")] + ([("turn slip", f"{args.against} ts", ", turn slip")]
+                                                   if args.turn_slip else [])
+        for new, old, what in pairs:
+            (new_run, new_step), (old_run, old_step) = times[new], times[old]
+            print(f"speed-up of the current code over {args.against}{what}: run() {old_run / new_run:.2f}x, "
+                  f"step() loop {old_step / new_step:.2f}x")
+    for row in ("current", "turn slip") if args.turn_slip else ("current",):
+        t_run, t_step = times[row]
+        for name, t in (("run()", t_run), ("step() loop", t_step)):
+            print(f"target: real-time factor >= 100 for {name}{', turn slip' if row != 'current' else ''}: "
+                  f"{'met' if T_END / t >= 100 else 'NOT met'}")
     return times
 
 

@@ -270,7 +270,8 @@ class MFModel:
     def casadi_function(self, inputs=("fz", "kappa", "alpha", "gamma", "phit", "vx", "p"), outputs=OUTPUT_NAMES,
                         *, turn_slip: bool = False, alpha_star: bool = False, limits: bool | str = True,
                         turn_slip_form: str = "published", fixed: dict | None = None, parameters=(),
-                        smooth: float | bool | dict | None = None, name: str = "mftyre", early_stop: bool = False):
+                        smooth: float | bool | dict | None = None, name: str = "mftyre", early_stop: bool = False,
+                        low_speed: bool = True):
         """A ``casadi.Function`` of the same equations, built from ``casadi.SX`` scalars.
 
         ``inputs``: the symbolic inputs, any of fz kappa alpha gamma phit vx p omega, as the first arguments in
@@ -297,7 +298,8 @@ class MFModel:
         loaded-radius Newton steps stay put once converged (the NumPy solver's stopping tests; results within
         1e-12 relative of the full steps), which the compiled one-point C uses to skip the remaining steps
         (:func:`mftyre.compiled.compile_model` sets it there; ~15 % more operations in the graph, no gain
-        elsewhere).
+        elsewhere). ``low_speed=False`` (with limits): the caller keeps |vx| >= VXLOW, where the low-speed factors
+        are 1, and the graph leaves the low-speed model out (SWIFT's slip model; below VXLOW it would be missing).
         Evaluate many points with ``f.map(n)``; :mod:`mftyre.compiled` compiles the function to C.
         """
         import casadi as ca
@@ -322,7 +324,8 @@ class MFModel:
             values = {k: (-v if k in _MIRRORED_INPUTS else v) for k, v in values.items()}
         parameter_symbols = {n: ca.SX.sym(n) for n in parameters}
         equations_prm = SymbolicParameters(prm, parameter_symbols) if parameters else prm
-        modes = Modes(limits=limits, alpha_star=alpha_star, turn_slip=turn_slip, turn_slip_form=turn_slip_form)
+        modes = Modes(limits=limits, alpha_star=alpha_star, turn_slip=turn_slip, turn_slip_form=turn_slip_form,
+                      low_speed=low_speed)
         omega_given = "omega" in inputs or "omega" in (fixed or {})
         out = steady_state(equations_prm, values["fz"], values["kappa"], values["alpha"], values["gamma"],
                            values["phit"], values["vx"], values["p"], values["omega"], omega_given, modes,

@@ -522,13 +522,14 @@ def ring_equations(model, rc: RingConstants, state, u, hf, dhf, hr, dhr, ls, *, 
     alpha_mf = s["alpha"]
     beta_x = road_camber + v["road_camber"]
     mf = model.casadi_function(inputs=("fz", "kappa", "alpha", "gamma", "vx", "p", "omega"),
-                               outputs=("fx", "fy", "mz", "mx", "my", "re", "a", "cx", "cy", "kxk", "kya"))
+                               outputs=("fx", "fy", "mz", "mx", "my", "re", "a", "cx", "cy", "kxk", "kya"),
+                               low_speed=False)  # (its speed is at least VXLOW: the low-speed factors are 1)
     fxc, fyc, mzc, mxc, myc, re, a, cx, cy, kxk, kya = mf(be.fmax(fzc, _FZ_FLOOR), s["kappa"], alpha_mf,
                                                  v["gamma"] - beta_x, be.fmax(be.abs(vcx), prm.VXLOW),
                                                  v["p"], s["omb"])
     if turn_slip:  # the MF's turn-slip increment at the patch's relaxed turn slip phi (module notes)
         mf_ts = model.casadi_function(inputs=("fz", "kappa", "alpha", "gamma", "phit", "vx", "p", "omega"),
-                                      outputs=("fx", "fy", "mz"), turn_slip=True)
+                                      outputs=("fx", "fy", "mz"), turn_slip=True, low_speed=False)
         slip = (be.fmax(fzc, _FZ_FLOOR), s["kappa"], alpha_mf, v["gamma"] - beta_x)
         rest = (be.fmax(be.abs(vcx), prm.VXLOW), v["p"], s["omb"] * s_v)  # camber spin as rolling forward
         ref = TURN_SLIP_REFERENCE / prm.UNLOADED_RADIUS

@@ -218,6 +218,8 @@ class SwiftTyre:
         self._grid = np.ascontiguousarray(self.table.dx * np.arange(self.window))
         camber = np.zeros(self.table.h.size) if self.table.camber is None else self.table.camber
         self._h = np.ascontiguousarray(np.column_stack([self.table.h, camber]).ravel(), dtype=float)  # interleaved
+        # a road with road camber (3D): else the compiled step leaves the cams' road-camber slope out (0: keyed)
+        self._road_camber = bool(np.any(camber))
         self._numeric = {}  # the equations with this model's values in the graph (CasADi VM, FMU), built on first use
         self._names, self.theta = _run_time_parameters(model.params, self.constants)
         self._structure = _structure(self) if compiled else None  # not compiled: the numeric graphs only
@@ -225,14 +227,19 @@ class SwiftTyre:
 
     # ------------------------------------------------------------------ equations
     @_with_casadi
-    def _rhs(self, n_window, warm=False, stage=False, parametric=False):
+    def _rhs(self, n_window, warm=False, stage=False, parametric=False, hoisted=False):
         """rhs(x, u, x0w, grid, hw, h) -> (dx, out): MX graph, so that the cam-height lookups stay compiled
         constant-time table accesses (an index computed from x into the window, no search). ``h``: the integration
         step that bounds the relaxation rate (0: the exact model). The contact solution: ``CONTACT_PASSES`` Newton
         passes from an estimate, or (``warm``, the stepper) ``WARM_PASSES`` from the solution stored in the state.
         ``stage`` (an RK stage of the stepper): (dx, the tandem base l_s) instead, without the expressions only the
         outputs need. ``parametric``: the numeric parameters are a further input ``theta`` (:attr:`theta`: run-time
-        values, one graph per model structure) instead of numbers in the graph."""
+        values, one graph per model structure) instead of numbers in the graph. ``hoisted`` (the stepper):
+        (rhs_outputs, rhs_stage, hoisted) instead: the outputs alone (without the expressions only dx needs, e.g. the
+        MF's Mx and My: ~17 % fewer operations) and the stage, whose last input ``q`` holds the parts of the equations
+        that depend on theta, the inputs ``u`` and ``h`` only (pressure factors, products of parameters...): constant
+        over a step, the stepper computes them once, ``q = hoisted(u, h, theta)``, not at each RK stage (~5 % of the
+        operations)."""
         import casadi as ca
 
         x = ca.MX.sym("x", len(STATE_NAMES))
@@ -247,16 +254,23 @@ class SwiftTyre:
         c = m.constants if parametric else self.constants
         xs, us, hs = ca.SX.sym("x", len(STATE_NAMES)), ca.SX.sym("u", len(INPUT_NAMES)), ca.SX.sym("h", 6)
         hstep = ca.SX.sym("hstep")
+        # the cams' road camber: 0 in the compiled library of a road without (keyed; its beta_x then depends on the
+        # inputs only); the numeric graphs (virtual machine, FMU, whose keys do not name the road) always look it up
+        road_camber = ca.atan(hs[5]) if self._road_camber or not parametric else 0.0
         with warnings.catch_warnings():  # numpy's sqrt of a parameter (a symbol here): CasADi's notice, not ours
             warnings.simplefilter("ignore", FutureWarning)
             start_sx = contact_start(m, c, xs, us, hs[0])
             geometry_sx = contact_geometry(m, c, xs, us, *(hs[i] for i in range(5)))
             dx_sx, out_sx = ring_equations(m, c, xs, us, *(hs[i] for i in range(5)), axle=self.axle, rim=self.rim,
-                                           h=hstep, road_camber=ca.atan(hs[5]), turn_slip=self.turn_slip)
+                                           h=hstep, road_camber=road_camber, turn_slip=self.turn_slip)
+        if hoisted:  # the parts constant over a step: the input q (both functions take the same q)
+            (geometry_sx, dx_sx, out_sx), q_sx, q_values = ca.extract_parametric(
+                ca.cse([geometry_sx, dx_sx, out_sx]), ca.vertcat(ts, us, hstep))
+            qs, q = ca.vertcat(*q_sx), ca.MX.sym("q", len(q_sx))
+        else:
+            qs, q = ca.SX(0, 1), ca.MX(0, 1)
         start = ca.Function("contact_start", [xs, us, hs[0], ts], [start_sx], {"cse": True})
-        geometry = ca.Function("contact_geometry", [xs, us, hs[:5], ts], [geometry_sx], {"cse": True})
-        physics = ca.Function("ring", [xs, us, hs, hstep, ts], [dx_sx] if stage else [dx_sx, out_sx],
-                              {"cse": True})
+        geometry = ca.Function("contact_geometry", [xs, us, hs[:5], ts, qs], [geometry_sx], {"cse": True})
 
         spacing = grid[1] - grid[0]
 
@@ -274,33 +288,41 @@ class SwiftTyre:
             ls, passes = start(x, u, cam(xc)[0], theta), CONTACT_PASSES
         for _ in range(passes):  # the tandem base at the current load
             (hf, dhf, _), (hr, dhr, _) = cam(xc + ls / 2), cam(xc - ls / 2)
-            ls = geometry(x, u, ca.vertcat(hf, dhf, hr, dhr, ls), theta)
+            ls = geometry(x, u, ca.vertcat(hf, dhf, hr, dhr, ls), theta, q)
         (hf, dhf, cf), (hr, dhr, cr) = cam(xc + ls / 2), cam(xc - ls / 2)
-        results = physics.call([x, u, ca.vertcat(hf, dhf, hr, dhr, ls, (cf + cr) / 2), h, theta])
-        extra = [theta] if parametric else []
-        if stage:
-            return ca.Function("rhs_stage", [x, u, x0w, grid, hw, h, *extra], [results[0], ls])
-        return ca.Function("rhs", [x, u, x0w, grid, hw, h, *extra], results)
+        extra = ([theta] if parametric else []) + ([q] if hoisted else [])
+
+        def rhs(name, outputs):  # outputs: dx, out
+            physics = ca.Function("ring", [xs, us, hs, hstep, ts, qs], [(dx_sx, out_sx)[i] for i in outputs],
+                                  {"cse": True})
+            results = physics.call([x, u, ca.vertcat(hf, dhf, hr, dhr, ls, (cf + cr) / 2), h, theta, q])
+            return ca.Function(name, [x, u, x0w, grid, hw, h, *extra], [results[0], ls] if name == "rhs_stage"
+                               else results)
+
+        if hoisted:
+            return (rhs("rhs_outputs", (1,)), rhs("rhs_stage", (0,)),
+                    ca.Function("hoisted", [us, hstep, ts], [ca.vertcat(*q_values)], {"cse": True}))
+        return rhs("rhs_stage", (0,)) if stage else rhs("rhs", (0, 1))
 
     @_with_casadi
     def _build_step(self, parametric=False):
         """``swift_step(x, u, dt, x0w, grid, hw[, theta]) -> (x_next, out)`` (:attr:`step_function`)."""
         import casadi as ca
 
-        rhs = self._rhs(self.window, warm=True, parametric=parametric)
-        rhs_stage = self._rhs(self.window, warm=True, stage=True, parametric=parametric)
+        rhs_outputs, rhs_stage, hoisted = self._rhs(self.window, warm=True, parametric=parametric, hoisted=True)
         x = ca.MX.sym("x", len(STATE_NAMES))
         u = ca.MX.sym("u", len(INPUT_NAMES))
         dt, x0w = ca.MX.sym("dt"), ca.MX.sym("x0w")
         grid, hw = ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
         extra = [ca.MX.sym("theta", len(self.theta))] if parametric else []
         h = dt / self.substeps
+        stages = [*extra, hoisted(u, h, *(extra or [ca.MX(0, 1)]))]  # (theta,) q: computed once a step
 
         def with_memory(s, memory):  # s with its tandem base to start from
             return ca.vertcat(s[:_S["lsm"]], memory, s[_S["lsm"] + 1:])
 
         def f(s, memory):  # (dx, the tandem base) at s, its tandem base started from ``memory``
-            return rhs_stage(with_memory(s, memory), u, x0w, grid, hw, h, *extra)
+            return rhs_stage(with_memory(s, memory), u, x0w, grid, hw, h, *stages)
 
         xs, memory = x, x[_S["lsm"]]
         for _ in range(self.substeps):  # classical RK4; each stage starts from the previous stage's contact
@@ -309,7 +331,7 @@ class SwiftTyre:
             k3, memory = f(xs + h / 2 * k2, memory)
             k4, memory = f(xs + h * k3, memory)
             xs = xs + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        out = rhs(with_memory(xs, memory), u, x0w, grid, hw, h, *extra)[1]
+        out = rhs_outputs(with_memory(xs, memory), u, x0w, grid, hw, h, *stages)
         xs = _remember_contact(xs, out)  # the contact solution for the next step
         return ca.Function("swift_step", [x, u, dt, x0w, grid, hw, *extra], [xs, out],
                            ["x", "u", "dt", "x0w", "grid", "hw", *(["theta"] if parametric else [])],
@@ -339,6 +361,13 @@ class SwiftTyre:
                 self._numeric[key] = ca.Function("equilibrium", [xs, us, x0w, grid, hw],
                                                  [d, _newton_inverse(ca.jacobian(d, xs)[:, unknown])])
             return self._numeric[key]
+
+    @functools.cached_property
+    def _grid_dm(self):
+        """The window's grid (:attr:`_grid`) as a CasADi matrix, for the virtual-machine calls (under the lock)."""
+        import casadi as ca
+
+        return ca.DM(self._grid)
 
     @property
     def _rhs_window(self):
@@ -372,6 +401,7 @@ class SwiftTyre:
         payload = {"fixed": {k: repr(prm[k]) for k in prm if k not in self._names}, "theta": self._names,
                    "missing": sorted(prm.missing), "version": prm.version, "side": self.model.side,
                    "axle": self.axle, "rim": self.rim, "turn_slip": self.turn_slip, "window": self.window,
+                   "road_camber": self._road_camber,
                    "substeps": self.substeps,
                    "lever": (self.constants.lever_x, self.constants.lever_y), "kind": kind,
                    "passes": (CONTACT_PASSES, WARM_PASSES), "cflags": COMPILER_FLAGS,
@@ -718,6 +748,8 @@ class SwiftTyre:
         sample files at 40-70 m/s, 4-20 times their LONGVL and beyond their speed rating: rolling resistance
         (QSY4 (V/LONGVL)^4) and radius growth (Q_V1) run away, the root spins backwards at kappa -100..-600 with a
         free radius of 8-36 m and had growing modes of +200..+640 1/s)."""
+        import casadi as ca
+
         prm = self.model.params
         c = self.constants
         p = prm.INFLPRES if inputs.p is None else inputs.p
@@ -742,7 +774,9 @@ class SwiftTyre:
         # the Jacobian from the graph with this model's values, as the FMU's equilibrium_function: at standstill it
         # is singular and the regularised step amplifies the round-off in which two graphs differ (~1e-7 m)
         equilibrium = self._equilibrium_function(unknown, eqs)
-        u, window, i0 = self._u(inputs), self._rhs_args(s)[:3], self._window_start(s[_S["xb"]])
+        x0w, _, hw = self._rhs_args(s)[:3]
+        # the window as CasADi matrices once for every virtual-machine call below (numpy's 3k values took ~70 us a call)
+        u, window, i0 = self._u(inputs), (x0w, self._grid_dm, ca.DM(hw)), self._window_start(s[_S["xb"]])
         inverse, last = None, np.inf
         for _ in range(iterations):  # Newton; compiled, the Jacobian is kept while the steps shrink tenfold
             if inverse is None or self._compiled is None:
@@ -965,11 +999,16 @@ CASADI_SYMBOL_EXPORT int swift_step1(void** p) {
 
 
 #: Compiler flags of the SWIFT library: ~15 % fewer instructions per step than -O2 (-fno-math-errno: sqrt and
-#: friends inline, errno is never read; gnu89: CasADi's fmax/fmin become inlined comparisons instead of libm calls,
+#: friends inline, errno is never read; gnu89: CasADi's fmax/fmin become comparisons instead of libm calls,
 #: equal for all non-NaN arguments); of the fast-math family only mftyre.compiled's two (-fno-trapping-math,
 #: -freciprocal-math: multiplication by a reciprocal, at most 1 ulp per division; ~4 % faster), no reassociation,
-#: no finite-math assumptions; portable (no -march), as the FMU ships the library.
-COMPILER_FLAGS = ("-O3", "-fno-math-errno", "-fno-trapping-math", "-freciprocal-math", "-std=gnu89")
+#: no finite-math assumptions; portable (no -march), as the FMU ships the library. -fno-semantic-interposition:
+#: CasADi's helpers (casadi_sq, _fmax, _fmin, _fabs, _sign, _copy) are global functions of the library, which
+#: -fPIC otherwise calls through the PLT at ~230 places per right-hand side, each call spilling every live
+#: floating-point register (all are caller-saved); inlined, the turn-slip cleat run is ~5 % faster (round-off:
+#: the reciprocals then apply across them, outputs within 2e-13 of their range).
+COMPILER_FLAGS = ("-O3", "-fno-math-errno", "-fno-trapping-math", "-freciprocal-math", "-std=gnu89",
+                  "-fno-semantic-interposition")
 
 
 def _library(tyre, key: str) -> Path:

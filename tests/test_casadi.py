@@ -53,6 +53,24 @@ def test_casadi_subset_of_inputs_and_outputs_with_fixed_values():
     assert float(dfy(0.05)) == pytest.approx(fd, rel=1e-6)
 
 
+@pytest.mark.parametrize("turn_slip", [False, True])
+def test_low_speed_false_leaves_out_a_model_that_is_1_from_vxlow_up(turn_slip):
+    """low_speed=False (SWIFT's slip model, whose speed is at least VXLOW): the same outputs, bit for bit, at
+    |vx| >= VXLOW with fewer operations; below VXLOW the low-speed model is missing indeed (the caller's contract)."""
+    model = mftyre.load_tir(TIR_FILES / "car_205_60R15_mf62_swift.tir")
+    prm = model.params
+    x = _random_inputs(prm, 200, seed=3, turn_slip=turn_slip)
+    x["vx"] = np.sign(x["vx"]) * np.maximum(np.abs(x["vx"]), prm.VXLOW)
+    x["vx"][:3] = [prm.VXLOW, -prm.VXLOW, 1.5 * prm.VXLOW]  # the edge itself (the factors 1 exactly)
+    full, lean = (model.casadi_function(turn_slip=turn_slip, low_speed=flag) for flag in (True, False))
+    assert lean.n_instructions() < full.n_instructions()
+    args = [v[None, :] for v in x.values()]
+    for name, a, b in zip(OUTPUT_NAMES, full.map(200)(*args), lean.map(200)(*args)):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b), err_msg=name)
+    slow = [v[None, :1] for v in {**x, "vx": np.array([0.3 * prm.VXLOW])}.values()]
+    assert float(full(*slow)[0]) != pytest.approx(float(lean(*slow)[0]), rel=1e-3)  # fx: kappa scaled by |vx|/VXLOW
+
+
 def test_casadi_function_rejects_unknown_names():
     model = mftyre.load_tir(TIR_FILES / "car_205_60R15_mf61.tir")
     with pytest.raises(ModelInputError, match="unknown input"):

@@ -133,6 +133,24 @@ def test_new_parameter_values_reuse_the_library_and_step_as_the_virtual_machine(
             assert out[name] == pytest.approx(ref_out[name], rel=1e-9, abs=1e-9)
 
 
+def test_a_banked_road_gets_its_own_library_and_steps_as_the_virtual_machine(model, cache):
+    """The library of a road without road camber leaves the cams' road-camber slope out (a 2-D road: 0); a banked
+    road of the same model and modes gets a library of its own, built after the flat one in this process, whose
+    beta_x and forces are the virtual machine's (which always looks the camber up)."""
+    from swift import Flat, TwoTrack
+
+    bank = 0.05  # 5 cm over a 1 m track spacing: beta_x = atan(0.05)
+    flat, banked = (SwiftTyre(model, road, x_range=(0.0, 3.0), compiled=compiled)
+                    for road, compiled in ((Flat(0.0), True), (TwoTrack(Flat(bank / 2), Flat(-bank / 2), 1.0), True)))
+    assert flat._compiled._lib._name != banked._compiled._lib._name
+    state, out = _steps(banked, n=20)
+    ref_state, ref_out = _steps(SwiftTyre(model, banked.table, x_range=(0.0, 3.0), compiled=False), n=20)
+    assert out["beta_x"] == pytest.approx(np.arctan(bank), rel=1e-3) and _steps(flat, n=2)[1]["beta_x"] == 0.0
+    np.testing.assert_allclose(state, ref_state, rtol=1e-9, atol=1e-12)
+    for name in ("fy", "fz", "mx"):
+        assert out[name] == pytest.approx(ref_out[name], rel=1e-9, abs=1e-9)
+
+
 def test_two_threads_building_one_swift_model_both_succeed(model, cache):
     """Compiled into one library at once; and the CasADi graphs built at once, three times over (old: CasADi's
     shared nodes were corrupted now and then, a crash)."""

@@ -34,7 +34,7 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
         s.low_speed = be.abs(vx) <= VXLOW
         if be.any(phit != 0):  # (NumPy skips this without turn slip)
             phit = phit * be.cos(alpha)
-        if be.any(s.low_speed):  # (NumPy skips this when no point is that slow; the factors would all be 1)
+        if modes.low_speed and be.any(s.low_speed):  # (NumPy skips this when no point is that slow: factors 1)
             speed_kink = be.of("speed")  # (the switch at VXLOW rounded with the speed width when smooth)
             reduction_linear = speed_kink.fmin(speed_kink.abs(vx), VXLOW) / VXLOW
             s.reduction_smooth = be.where(s.low_speed, 1.0 - 0.5 * (1.0 + be.cos(be.pi * vx / VXLOW)), 1.0)

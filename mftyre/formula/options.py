@@ -45,12 +45,15 @@ class Modes:
     alpha_star: alpha* = tan(alpha) sign(Vx), gamma* = sin(gamma) (4.E3, 4.E4); otherwise alpha* = alpha.
     turn_slip:  turn slip and camber spin through the zeta factors (4.76-4.106).
     turn_slip_form: "published" or "mfeval", see :data:`TURN_SLIP_FORMS`.
+    low_speed:  with limits, the low-speed model below VXLOW; False: the caller keeps |Vx| >= VXLOW (SWIFT's slip
+                model at max(|V|, VXLOW)), where its factors are 1, and a symbolic graph leaves it out.
     """
 
     limits: bool = True
     alpha_star: bool = False
     turn_slip: bool = False
     turn_slip_form: str = "published"
+    low_speed: bool = True
 
     def __post_init__(self):
         if self.limits not in (True, False, "smooth"):
