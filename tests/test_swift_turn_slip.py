@@ -163,7 +163,7 @@ def test_warning_names_the_file_and_parameters_where_the_moment_drives_the_yaw(m
                 warnings.simplefilter("always")
                 SwiftTyre(tyre_model, Flat(), x_range=(0.0, 1.0), compiled=False, turn_slip=turn_slip)
             messages = [str(w.message) for w in caught if w.category is TurnSlipWarning]
-            assert len(messages) == (expected and turn_slip), (tyre_model.params.source, turn_slip, messages)
+            assert len(messages) == int(expected and turn_slip), (tyre_model.params.source, turn_slip, messages)
     message = turn_slip_warning(mftyre.load_tir(path))
     for part in ("MagicFormula62_Parameters.tir", "QDZ8 = -0.34545", "QDZ9 = 0.52144", "13504 N",
                  "swift.modes.scan"):

@@ -38,7 +38,8 @@ def steady_state(prm, fz, kappa, alpha, gamma, phit, vx, p, omega, omega_given, 
     # F'y of the pneumatic-trail moment at gamma = phi = 0 (4.E32, 4.E74): with turn slip, the published form
     # leaves the spin's side force out of it (the camber moment is then D_rphi's, as without turn slip it is D_r's);
     # the reference evaluator keeps S_Hyphi there (mfeval form)
-    trail_modes = replace(modes, turn_slip=False) if modes.turn_slip_form == "published" else modes
+    published = modes.turn_slip and modes.turn_slip_form == "published"
+    trail_modes = replace(modes, turn_slip=False) if published else modes
     fy0_gamma0 = None if prm.version == "52" else lateral.pure_lateral(prm, s, be.exact(0.0), trail_modes, be).Fy0
     mz, t, mzr = aligning.aligning_torque(prm, s, coeffs, lon.Kxk, fx, fy, svyk, fy0_gamma0, gyk, modes, be)
     mx = moments.overturning_moment(prm, s, fy, be)
