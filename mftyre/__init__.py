@@ -8,13 +8,13 @@
 ISO-W (TYDEX W) axes, SI units.
 """
 from .errors import DataError, InputClippedWarning, LoadFactorWarning, MFTyreError, ModelInputError, \
-    PressureFactorWarning, TirError, TurnSlipWarning
+    PressureFactorWarning, ReferenceValueWarning, TirError, TurnSlipWarning
 from .model import MFModel, MFOutputs, load_tir
 
 __version__ = "0.1.0"
 __all__ = ["load_tir", "MFModel", "MFOutputs", "MFTyreError", "TirError", "DataError", "ModelInputError",
-           "InputClippedWarning", "LoadFactorWarning", "PressureFactorWarning", "TurnSlipWarning", "read_tir",
-           "write_tir", "sample_tir", "read_data"]
+           "InputClippedWarning", "LoadFactorWarning", "PressureFactorWarning", "ReferenceValueWarning",
+           "TurnSlipWarning", "read_tir", "write_tir", "sample_tir", "read_data"]
 
 #: Imported when first used, so ``import mftyre`` stays light: name -> (module, attribute or None for the module).
 _LAZY = {"read_tir": ("tir", "read_tir"), "write_tir": ("tir", "write_tir"), "sample_tir": ("files", "sample_tir"),

@@ -5,16 +5,25 @@ means INFLPRES, a missing or zero omega means "estimate it" (decided per row; MF
 ``use_mode`` has three digits: hundreds 1/2 = limit checks on/off, tens 1/2 = alpha* off/on, units 1/2 =
 turn slip off/on.
 
+Above FZMAX (limit checks on) the model and MFeval split the load alike: Fx, Fy, Mz, Mx and the relaxation outputs at
+FZMAX, Re, the spin, the MF 6.2 loaded radius, the contact patch and My at the load given. MFeval's MF 6.1/5.2
+deflection (and so Rl and Cz) stays at FZMAX's, and its MF 6.2 Cz divides the saturated load by the deflection at the
+load given: :func:`mfeval` returns these values as MFeval does and warns (:class:`mftyre.ReferenceValueWarning`),
+as it does where the inputs are beyond the limits at which the model refuses them (:func:`mftyre.inputs.check_limits`).
+
 Output columns, in MFeval's order (half lengths doubled to 2a, 2b as MFeval reports them):
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from .backend import NUMPY
-from .errors import ModelInputError
-from .formula import Modes
+from .errors import ModelInputError, ReferenceValueWarning
+from .formula import Modes, vertical
 from .formula.normalisation import condition_inputs
+from .inputs import check_tyre_outputs, limit_problems
 from .model import MFModel, as_float_arrays, load_tir
 
 __all__ = ["mfeval", "MFEVAL_COLUMNS"]
@@ -50,6 +59,7 @@ def mfeval(tir, inputs, use_mode: int, *, turn_slip_form: str = "published") -> 
     if np.any(arrays["p"] < 0):
         raise ModelInputError("pressure column P must be positive (or 0 for INFLPRES)")
     out = model._evaluate_arrays(arrays, omega != 0, modes)
+    _reference_values(model, arrays, omega != 0, modes, out)
 
     result = np.empty((n, len(MFEVAL_COLUMNS)))
     for j, name in enumerate(MFEVAL_COLUMNS):
@@ -75,3 +85,34 @@ def mfeval(tir, inputs, use_mode: int, *, turn_slip_form: str = "published") -> 
         else:
             result[:, MFEVAL_COLUMNS.index("iKya")] = 0.0
     return result
+
+
+def _reference_values(model, arrays: dict, omega_given, modes, out: dict) -> None:
+    """MFeval's vertical outputs above FZMAX in ``out`` (in place), and a :class:`ReferenceValueWarning` for them
+    and for inputs beyond the model's limits."""
+    prm = model.params
+    notes = [message for _, message in limit_problems(prm, arrays, modes.limits, omega_given)]
+    above = arrays["fz"] > prm.FZMAX if modes.limits else np.zeros(arrays["fz"].shape, dtype=bool)
+    if above.any():
+        fz_used = max(prm.FZMAX, prm.FZMIN)  # MFeval's Fz_lowLimit above FZMAX
+        if prm.version == "62":  # Cz = Fz (saturated) / rho (at the load given)
+            out["cz"] = np.where(above, prm.FZMAX / out["rho"], out["cz"])
+            what = "Cz as FZMAX divided by the deflection at the load"
+        else:  # the MF 6.1 deflection at FZMAX, Rl = R_omega - rho, Cz = FZMAX / rho
+            dpi = vertical.pressure_increment(prm, out["p"])
+            r_omega = vertical.free_radius(prm, out["omega"], NUMPY)
+            with np.errstate(all="ignore"):
+                rl, rho = vertical.loaded_radius(prm, fz_used, r_omega, out["omega"], out["fx"], out["fy"], 0.0, dpi,
+                                                 NUMPY)
+            out["rl"], out["rho"] = np.where(above, rl, out["rl"]), np.where(above, rho, out["rho"])
+            out["cz"] = np.where(above, fz_used / rho, out["cz"])
+            what = "the deflection, Rl and Cz of the load FZMAX"
+        notes.append(f"Fz above FZMAX = {prm.FZMAX:g} N at {int(above.sum())} row(s) (up to {arrays['fz'].max():.6g} "
+                     f"N): MFeval returns {what}, which no tyre carrying more load has; the model's own "
+                     "(MFModel.evaluate) are those of the load")
+    try:
+        check_tyre_outputs(out, arrays)
+    except ModelInputError as exc:
+        notes.append(str(exc))
+    for note in notes:
+        warnings.warn(f"compat.mfeval returns MFeval's values: {note}", ReferenceValueWarning, stacklevel=3)

@@ -67,7 +67,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import MFTyreError, ModelInputError
-from .inputs import check_finite, check_finite_outputs, check_pressure, input_ranges, warn_outside
+from .inputs import check_finite, check_finite_outputs, check_pressure, hard_limits, input_ranges, warn_outside
 
 __all__ = ["CompiledFunction", "CacheSecurityError", "CompileError", "compile_model", "compile_function",
            "compile_external", "tyre_kernels", "compile_tyre_kernels", "cached_library", "compile_c", "cache_dir",
@@ -628,7 +628,10 @@ class CompiledFunction:
         self._n_in = len(self.inputs)
         self._unpack = struct.Struct(f"{len(self.outputs)}d").unpack_from
         self._ranges = {name: (c["range"][0], c["range"][1], c.get("describe", "")) for name, c in
-                        zip(self.inputs, self._checks) if c.get("range")}
+                        zip(self.inputs, self._checks) if c.get("range") and not c.get("hard")}
+        #: input -> (index, lower, upper limit beyond which it is refused, their description)
+        self._limits = {name: (k, *((-math.inf, c["limit"]) if "limit" in c else c["range"]), c["limit_describe"])
+                        for k, (name, c) in enumerate(zip(self.inputs, self._checks)) if "limit_describe" in c}
         #: True where one point is evaluated by the library's CPython entry (built with it, for this interpreter)
         self.fast_point = bool(_PYTHON_ABI) and meta.get("python") == _PYTHON_ABI and hasattr(self._lib,
                                                                                              "mft_python_function")
@@ -768,6 +771,25 @@ class CompiledFunction:
             if count(k, 1):
                 raise ModelInputError(f"input {name!r} must be positive (inflation pressure in Pa); {count(k, 1)} "
                                       f"of {n} point(s) are not (e.g. {_first_bad(values[k], lambda v: ~(v > 0))})")
+        for name, (k, lo, hi, describe) in self._limits.items():  # refused beyond what a tyre can be
+            if count(k, 2):
+                v = np.atleast_1d(np.asarray(values[k], dtype=float))
+                beyond = (v < lo) | (v > hi)
+                if beyond.any():
+                    raise ModelInputError(f"input {name} = {v[beyond][0]:.6g} at {int(np.sum(beyond))} of {n} "
+                                          f"point(s) is beyond the limit of {describe}")
+        if "kappa" in self._ranges and "rim" in self._checks[self.inputs.index("kappa")]:
+            k, check = self.inputs.index("kappa"), self._checks[self.inputs.index("kappa")]
+            if count(k, 2):  # the rim speed of the estimated spin, omega Re = (1 + kappa) vx (2.5)
+                kappa = np.atleast_1d(np.asarray(values[k], dtype=float))
+                with np.errstate(all="ignore"):
+                    rim = np.abs((1.0 + kappa) * np.asarray(values[self.inputs.index("vx")], dtype=float))
+                beyond = np.broadcast_to(rim > check["rim"], np.broadcast_shapes(rim.shape, kappa.shape))
+                if beyond.any():
+                    raise ModelInputError(f"input kappa = {np.broadcast_to(kappa, beyond.shape)[beyond][0]:.6g} (rim "
+                                          f"speed {np.broadcast_to(rim, beyond.shape)[beyond][0]:.6g} m/s) at "
+                                          f"{int(np.sum(beyond))} of {n} point(s) is beyond the limit of "
+                                          f"{check['rim_describe']}")
         outside = {name: int(count(k, 2)) for k, name in enumerate(self.inputs) if name in self._ranges}
         warn_outside(outside, n, self._ranges, stacklevel=stacklevel)
 
@@ -920,11 +942,32 @@ def _key(model, options: dict) -> str:
 
 
 def _model_checks(model, inputs, limits: bool) -> list:
-    """Per input: finite always; p positive; the .tir range where ``limits`` saturates it."""
+    """Per input: finite always; p positive; the .tir range where ``limits`` saturates it (warned); the limits of
+    :func:`mftyre.inputs.hard_limits` (refused): vx and omega as hard ranges (``"hard": True``), fz's margin above
+    FZMAX checked where the C flags fz outside its range (``"limit"``). (The rim speed (1 + kappa) vx of an estimated
+    spin is checked where kappa is outside KPUMIN..KPUMAX (``"rim"``); inside, by evaluate only.)"""
     ranges = input_ranges(model.params, model.mirrored) if limits else {}
-    return [{"positive": name == "p",
-             **({"range": list(ranges[name][:2]), "describe": ranges[name][2]} if name in ranges else {})}
-            for name in inputs]
+    lim = hard_limits(model.params)
+    source = getattr(model.params, "source", None) or "the parameter set"
+    hard = {"vx": (min(lim["vx"][0], lim["rim"][0]), lim["vx"] if lim["vx"][0] <= lim["rim"][0] else lim["rim"])}
+    if np.isfinite(lim["rim"][0]):
+        r0 = float(model.params.UNLOADED_RADIUS)
+        hard["omega"] = (lim["rim"][0] / r0, (lim["rim"][0], f"{lim['rim'][0] / r0:.6g} rad/s (rim speed |omega R0| "
+                                                            f"{lim['rim'][1]})"))
+    checks = []
+    for name in inputs:
+        check = {"positive": name == "p"}
+        if name in ranges:
+            check.update(range=list(ranges[name][:2]), describe=ranges[name][2])
+            if name == "fz":
+                check.update(limit=lim["fz"][0], limit_describe=f"{source}: fz <= {lim['fz'][1]}")
+            if name == "kappa" and "vx" in inputs and np.isfinite(lim["rim"][0]):
+                check.update(rim=lim["rim"][0], rim_describe=f"{source}: |(1 + kappa) vx| <= {lim['rim'][1]}")
+        elif name in hard and np.isfinite(hard[name][0]):
+            check.update(range=[-hard[name][0], hard[name][0]], hard=True,
+                         limit_describe=f"{source}: |{name}| <= {hard[name][1][1]}")
+        checks.append(check)
+    return checks
 
 
 def compile_model(model, inputs=("fz", "kappa", "alpha", "gamma", "phit", "vx", "p"), outputs=None,
@@ -936,8 +979,9 @@ def compile_model(model, inputs=("fz", "kappa", "alpha", "gamma", "phit", "vx", 
     outputs = tuple(outputs or OUTPUT_NAMES)
     for name, value in (options.get("fixed") or {}).items():
         _check_fixed(name, value)
-    key = _key(model, {"inputs": list(inputs), "outputs": list(outputs), "point": "early_stop", **options})
     checks = _model_checks(model, inputs, options.get("limits", True))
+    key = _key(model, {"inputs": list(inputs), "outputs": list(outputs), "point": "early_stop", "checks": checks,
+                       **options})
     # one point: the loaded-radius Newton steps stop once converged (the one-point C skips the rest; the vectorised
     # batch kernel would compute them anyway, and its graph stays the smaller one)
     point = {**options, "early_stop": True}

@@ -63,6 +63,11 @@ class TurnSlipWarning(UserWarning):
     yaw rate at some load (SWIFT: the belt yaw and camber modes can grow)."""
 
 
+class ReferenceValueWarning(UserWarning):
+    """:func:`mftyre.compat.mfeval` returns the reference evaluator's value where no tyre has it, or where the model
+    itself refuses the input (beyond the limits of :mod:`mftyre.inputs`): the message names the input and what."""
+
+
 class InputClippedWarning(UserWarning):
     """Inputs outside the .tir ranges were saturated to them (``limits=True``); the message names each such input,
     its range and how many points."""

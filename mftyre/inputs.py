@@ -8,11 +8,28 @@
   :class:`InputClippedWarning` per call names each such input, its range (parameter names and values) and how
   many points lay outside it. ``limits=False`` evaluates the values as given.
 
-Fz has an upper bound only. FZMAX saturates the load everywhere. FZMIN is not a bound of the input: loads in
+Fz has an upper bound only. Above FZMAX (the split of the reference evaluator MFeval) the fitted force and moment
+equations (Fx, Fy, Mz, Mx) and the relaxation outputs use the load saturated at FZMAX, while the vertical relations
+(Re and the spin, the loaded radius, deflection and vertical stiffness, the contact patch) and the rolling
+resistance My use the load as given. FZMIN is not a bound of the input: loads in
 (0, FZMIN) are evaluated as given, except that the aligning-torque coefficients and the MF 6.1 deflection use
 max(Fz, FZMIN) and Mx, My scale down below FZMIN (the TNO practice the reference evaluator encodes), so they give
 no warning; Fz <= 0 is no contact, not a range violation either. The compiled C counts one interval per input,
 the same as :func:`saturate` here.
+
+Beyond what a tyre can be the model refuses (:class:`ModelInputError` naming the input, its value and the limit;
+:func:`check_limits`, the policy of docs/model-input-policy.md), in every entry:
+
+* with limits, loads above :data:`LOAD_MARGIN` FZMAX (the split above is the reference evaluator's answer up to
+  there, with the warning);
+* wheel-centre speeds at which the rolling-resistance terms of My, QSY3 |vx|/LONGVL + QSY4 (vx/LONGVL)^4, reach
+  :data:`ROLLING_RESISTANCE_LIMIT` (My = Fz0 R0: a moment no contact force makes);
+* rim speeds |omega R0| (|(1 + kappa) vx| where omega is estimated) at which the free radius grows by more than
+  :data:`FREE_RADIUS_GROWTH_LIMIT` of UNLOADED_RADIUS (Q_V1 (omega R0/LONGVL)^2, paper (1)).
+
+:func:`check_tyre_outputs` backs them up on the outputs of :meth:`mftyre.MFModel.evaluate` (a negative deflection
+or a radius <= 0 under load). The reference evaluator's own answers stay available in :func:`mftyre.compat.mfeval`,
+which warns where they are outside these limits.
 """
 from __future__ import annotations
 
@@ -24,7 +41,8 @@ import numpy as np
 from .errors import InputClippedWarning, LoadFactorWarning, ModelInputError, PressureFactorWarning, spelled
 from .formula.vertical import pressure_increment
 
-__all__ = ["RANGE_PARAMETERS", "input_ranges", "saturate", "check_finite", "check_pressure", "warn_outside",
+__all__ = ["LOAD_MARGIN", "ROLLING_RESISTANCE_LIMIT", "FREE_RADIUS_GROWTH_LIMIT", "hard_limits", "check_limits",
+           "limit_problems", "beyond_limits", "check_tyre_outputs", "RANGE_PARAMETERS", "input_ranges", "saturate", "check_finite", "check_pressure", "warn_outside",
            "check_finite_outputs", "saturate_inputs", "warn_data_outside", "PRESSURE_FACTORS", "pressure_factor_edges",
            "PressureFactorCheck", "load_factor_edges", "load_factor_problems", "LoadFactorCheck"]
 
@@ -38,6 +56,123 @@ RANGE_PARAMETERS = {
     "p": ("PRESMIN", "PRESMAX", "Pa"),
 }
 _MIRRORED = ("alpha", "gamma")  # ranges of the measured side, negated for a tyre mounted on the other side
+
+
+#: With limits, loads up to LOAD_MARGIN FZMAX are evaluated with the split above FZMAX and warned; above: refused.
+LOAD_MARGIN = 1.5
+#: The rolling-resistance coefficient |My| / (Fz0 R0) of the speed terms at which a speed is refused (published
+#: tyres: about 0.01 at LONGVL; 1 puts the vertical force a radius away from the wheel centre, outside any patch).
+ROLLING_RESISTANCE_LIMIT = 1.0
+#: The growth of the free radius with the rim speed, as a share of UNLOADED_RADIUS, at which a speed is refused
+#: (the value checks of mftyre.params ask for less than this at 3 LONGVL; published tyres: ~1.5 % at 300 km/h).
+FREE_RADIUS_GROWTH_LIMIT = 0.1
+
+
+def hard_limits(params) -> dict:
+    """{quantity: (limit, description)} of :func:`check_limits` for ``params``: 'fz' [N] (with limits), 'vx' the
+    wheel-centre speed [m/s], 'rim' the rim speed |omega R0| [m/s] (inf where the file's terms never reach the
+    limit)."""
+    v0 = float(params.LONGVL)
+    qsy3, qsy4 = abs(float(params.QSY3)), abs(float(params.QSY4))
+    if qsy3 or qsy4:  # smallest x >= 0 with qsy3 x + qsy4 x^4 = limit (monotone: the real positive root)
+        roots = np.roots([qsy4, 0.0, 0.0, qsy3, -ROLLING_RESISTANCE_LIMIT]) if qsy4 else \
+            np.array([ROLLING_RESISTANCE_LIMIT / qsy3])
+        x = float(min(r.real for r in np.atleast_1d(roots) if abs(r.imag) <= 1e-9 * abs(r) and r.real > 0))
+        vx = (x * v0, f"{x * v0:.6g} m/s, where the rolling-resistance terms QSY3 |vx|/LONGVL + QSY4 (vx/LONGVL)^4 "
+                      f"(QSY3 = {params.QSY3:g}, QSY4 = {params.QSY4:g}, LONGVL = {v0:g} m/s) reach "
+                      f"{ROLLING_RESISTANCE_LIMIT:g}: My = Fz0 R0, a moment no contact force makes")
+    else:
+        vx = (np.inf, "none (QSY3 = QSY4 = 0)")
+    q_v1 = abs(float(params.Q_V1))
+    if q_v1:
+        v = v0 * float(np.sqrt(FREE_RADIUS_GROWTH_LIMIT / q_v1))
+        rim = (v, f"{v:.6g} m/s, where the free radius R0 (Q_RE0 + Q_V1 (omega R0/LONGVL)^2) changes by "
+                  f"{100 * FREE_RADIUS_GROWTH_LIMIT:g} % of UNLOADED_RADIUS (Q_V1 = {params.Q_V1:g})")
+    else:
+        rim = (np.inf, "none (Q_V1 = 0)")
+    fzmax = float(params.FZMAX)
+    return {"fz": (LOAD_MARGIN * fzmax, f"{LOAD_MARGIN:g} FZMAX = {LOAD_MARGIN * fzmax:.6g} N (FZMAX = {fzmax:g} N; "
+                                        "up to there the forces and moments are those at FZMAX, the radii, patch and "
+                                        "My those at the load)"),
+            "vx": vx, "rim": rim}
+
+
+def _limit_masks(params, arrays: dict, limits, omega_given, lim) -> list:
+    """[(input, values, beyond mask, limit, what, rim speeds or None)] of :func:`hard_limits`, broadcast."""
+    masks = []
+    if limits and "fz" in arrays:
+        fz = np.asarray(arrays["fz"])
+        masks.append(("fz", fz, fz > lim["fz"][0], lim["fz"], "fz", None))
+    if "vx" not in arrays:
+        return masks
+    vx = np.asarray(arrays["vx"])
+    masks.append(("vx", vx, np.abs(vx) > lim["vx"][0], lim["vx"], "|vx|", None))
+    if np.isfinite(lim["rim"][0]):  # rim speed: omega R0 where omega is given, else (1 + kappa) vx (2.5)
+        kappa, omega = np.asarray(arrays.get("kappa", 0.0)), np.asarray(arrays.get("omega", 0.0))
+        given = np.asarray(omega_given, dtype=bool)
+        with np.errstate(all="ignore"):
+            rim = np.where(given, np.abs(omega) * float(params.UNLOADED_RADIUS), np.abs((1.0 + kappa) * vx))
+        shape = np.broadcast_shapes(rim.shape, vx.shape)
+        bad = np.broadcast_to(rim > lim["rim"][0], shape)
+        if bad.any():  # named by the input that makes the rim speed at the first such point
+            i = np.unravel_index(np.argmax(bad), shape) if shape else ()
+            name = ("omega" if np.broadcast_to(given, shape)[i]
+                    else "kappa" if abs(float(np.broadcast_to(kappa, shape)[i])) > 1.0 else "vx")
+            values = np.broadcast_to({"omega": omega, "vx": vx, "kappa": kappa}[name], shape)
+            masks.append((name, values, bad, lim["rim"], "|omega R0|" if name == "omega" else "|(1 + kappa) vx|",
+                          np.broadcast_to(rim, shape)))
+    return masks
+
+
+def beyond_limits(params, arrays: dict, limits, omega_given=False, lim=None) -> np.ndarray:
+    """Boolean array: the points :func:`check_limits` refuses (``arrays`` as for :func:`limit_problems`)."""
+    lim = hard_limits(params) if lim is None else lim
+    masks = [bad for _, _, bad, _, _, _ in _limit_masks(params, arrays, limits, omega_given, lim)]
+    shape = np.broadcast_shapes(*(np.shape(v) for v in arrays.values()))
+    return np.logical_or.reduce([np.broadcast_to(m, shape) for m in masks] + [np.zeros(shape, dtype=bool)])
+
+
+def limit_problems(params, arrays: dict, limits, omega_given=False, lim=None) -> list[tuple[str, str]]:
+    """[(input, message)] for the inputs beyond :func:`hard_limits` (``arrays``: float arrays of the inputs,
+    fz kappa vx and omega where present; ``omega_given``: bool or boolean array, where omega is an input; ``lim``:
+    the :func:`hard_limits` of ``params`` if known)."""
+    source = getattr(params, "source", None) or "the parameter set"
+    lim = hard_limits(params) if lim is None else lim
+    found = []
+    for name, values, bad, limit, what, rim in _limit_masks(params, arrays, limits, omega_given, lim):
+        if bad.any():
+            i = np.unravel_index(np.argmax(bad), bad.shape) if bad.ndim else ()
+            value = float(np.broadcast_to(values, bad.shape)[i])
+            shown = "" if rim is None else f" (rim speed {float(rim[i]):.6g} m/s)"
+            count = f" at {int(bad.sum())} of {bad.size} points" if bad.size > 1 else ""
+            found.append((name, f"input {name} = {value:.6g}{shown}{count} is beyond the limit of {source}: "
+                                f"{what} <= {limit[1]}"))
+    return found
+
+
+def check_limits(params, arrays: dict, limits, omega_given=False, lim=None) -> None:
+    """Raise :class:`ModelInputError` for the first of :func:`limit_problems` (the refusals of the policy in the
+    module docstring)."""
+    problems = limit_problems(params, arrays, limits, omega_given, lim)
+    if problems:
+        raise ModelInputError(problems[0][1])
+
+
+def check_tyre_outputs(out: dict, arrays: dict) -> None:
+    """Outputs no tyre has, under load (fz > 0): a negative deflection rho, an effective rolling radius or loaded
+    radius <= 0: ModelInputError naming the load and the output (the backstop of :func:`check_limits`)."""
+    loaded = np.asarray(out["fz"]) > 0
+    for name, bad, what in (("rho", lambda v: v < 0, "negative deflection"),
+                            ("re", lambda v: ~(v > 0), "effective rolling radius <= 0"),
+                            ("rl", lambda v: ~(v > 0), "loaded radius <= 0")):
+        if name in out:
+            wrong = loaded & bad(np.asarray(out[name]))
+            if wrong.any():
+                i = np.unravel_index(np.argmax(wrong), wrong.shape) if wrong.ndim else ()
+                at = ", ".join(f"{k} = {float(np.broadcast_to(v, wrong.shape)[i]):.6g}" for k, v in arrays.items())
+                raise ModelInputError(f"the equations give a {what} ({name} = {float(np.asarray(out[name])[i]):.6g} "
+                                      f"m) under load at {int(wrong.sum())} point(s), first at {at}: no tyre has "
+                                      "it there (check the load and the vertical parameters)")
 
 
 def input_ranges(params, mirrored: bool = False) -> dict:

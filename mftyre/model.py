@@ -21,9 +21,8 @@ import functools
 import numpy as np
 
 from .errors import ModelInputError
-from .inputs import LoadFactorCheck, PressureFactorCheck, check_finite, check_finite_outputs, check_pressure, \
-    input_ranges, saturate, \
-    warn_outside
+from .inputs import LoadFactorCheck, PressureFactorCheck, check_finite, check_finite_outputs, check_limits, \
+    check_pressure, check_tyre_outputs, hard_limits, input_ranges, saturate, warn_outside
 from .formula import OUTPUT_NAMES, Modes, steady_state, vertical
 from .backend import NUMPY, NUMPY_FOLDING
 from .params import SELECTS_FORM
@@ -164,6 +163,7 @@ class MFModel:
                       omega=0.0 if omega is None else omega)
         arrays = as_float_arrays(inputs, copy=False)
         self._check_pressure(arrays["p"])
+        check_limits(prm, arrays, limits, omega is not None, self._hard_limits)
         p_min, p_max = float(np.min(arrays["p"])), float(np.max(arrays["p"]))
         fz_min, fz_max = float(np.min(arrays["fz"])), float(np.max(arrays["fz"]))
         if limits:
@@ -174,7 +174,9 @@ class MFModel:
             fz_min, fz_max = (min(max(v, ranges["fz"][0]), ranges["fz"][1]) for v in (fz_min, fz_max))
         self.pressure_factors(p_min, p_max)
         self.load_factors(fz_min, fz_max, p_min, p_max)
-        return MFOutputs(**self._evaluate_arrays(arrays, omega is not None, modes, check_finite=True))
+        out = self._evaluate_arrays(arrays, omega is not None, modes, check_finite=True)
+        check_tyre_outputs(out, arrays)
+        return MFOutputs(**out)
 
     @functools.cached_property
     def pressure_factors(self) -> PressureFactorCheck:
@@ -193,6 +195,10 @@ class MFModel:
         """(lo, hi) that ``limits=True`` saturates input ``name`` to (:mod:`mftyre.inputs`), in the mounted side's
         axes (a mirrored model's alpha and gamma ranges are mirrored too); Fz: (-inf, FZMAX)."""
         return self._input_ranges[name][:2]
+
+    @functools.cached_property
+    def _hard_limits(self) -> dict:
+        return hard_limits(self._params)
 
     @functools.cached_property
     def _input_ranges(self) -> dict:
@@ -431,11 +437,15 @@ def _own_arrays(values: dict, n: int, inputs: list) -> dict:
 
 def as_float_arrays(inputs: dict, copy: bool = True) -> dict:
     """Broadcast the inputs to one shape as float arrays (writable copies, or with ``copy=False`` read-only
-    broadcast views); NaN, +-inf or non-numeric -> ModelInputError."""
+    broadcast views); NaN, +-inf, numbers beyond binary64 (an int such as 10**400) or non-numeric ->
+    ModelInputError naming the input."""
     arrays = {}
     for name, value in inputs.items():
         try:
             arr = np.asarray(value, dtype=float)
+        except OverflowError as exc:
+            raise ModelInputError(f"input {name!r} must be finite; got a number beyond the largest float "
+                                  f"(~1.8e308): {_short(value)}") from exc
         except (TypeError, ValueError) as exc:
             raise ModelInputError(f"input {name!r} must be numeric, got {value!r}") from exc
         check_finite(name, arr)
@@ -446,3 +456,9 @@ def as_float_arrays(inputs: dict, copy: bool = True) -> dict:
         shapes = {k: v.shape for k, v in arrays.items()}
         raise ModelInputError(f"inputs cannot be broadcast to one shape: {shapes}") from exc
     return {k: np.array(v) if copy else v for k, v in zip(arrays, broadcast)}
+
+
+def _short(value) -> str:
+    """``value`` as text for an error message, at most 60 characters (a 400-digit int is shortened)."""
+    text = repr(value)
+    return text if len(text) <= 60 else f"{text[:28]}...{text[-28:]} ({len(text)} characters)"

@@ -12,6 +12,7 @@ import mftyre
 from mftyre import cli
 from mftyre.backend import NUMPY
 from mftyre.formula import OUTPUT_NAMES, vertical
+from mftyre.inputs import beyond_limits
 
 from conftest import MFEVAL_DIR, SHARED, TIR_FILES
 
@@ -45,25 +46,38 @@ def test_infinite_input_raises(which, value):
 @pytest.mark.parametrize("tir", [TIR61, TIR62], ids=["mf61", "mf62"])
 def test_spin_solved_at_any_speed_and_slip(tir):
     """omega Re = (1 + kappa) Vx (2.5) with Re = R_omega(omega) - (R_omega - Re) (paper (1), (7)), also where the
-    old fixed-point iteration diverged (Vx > ~840 m/s, kappa > ~52)."""
+    old fixed-point iteration diverged (Vx > ~840 m/s, kappa > ~52): evaluate refuses such speeds (the free radius
+    would grow by more than 10 %), compat.mfeval answers them (with a warning), through the same solver."""
+    from mftyre.compat import MFEVAL_COLUMNS, mfeval
+
     model = _load(tir)
     prm = model.params
     vx = np.array([0.0, 1.0, 30.0, 900.0, 5000.0, 1.0e5, 30.0, 30.0, -30.0, 200.0])
     kappa = np.array([0.0, 0.1, 0.0, 0.0, 0.0, 0.0, 100.0, -3.0, 60.0, 500.0])
-    out = model.evaluate(4000.0, kappa, 0.0, vx=vx)
-    for name in OUTPUT_NAMES:
-        assert np.all(np.isfinite(out[name])), name
-    dpi = (out.p - prm.NOMPRES) / prm.NOMPRES
-    reduction = vertical.rolling_radius_reduction(prm, out.fz, dpi, NUMPY)
-    re = vertical.free_radius(prm, out.omega, NUMPY) - reduction
-    np.testing.assert_allclose(re, out.re, rtol=1e-13)
-    np.testing.assert_allclose(out.omega * out.re, (1.0 + kappa) * vx, rtol=1e-12, atol=1e-12)
+    rows = np.column_stack([np.full(10, 4000.0), kappa, np.zeros((10, 3)), vx])
+    with pytest.warns(mftyre.ReferenceValueWarning, match="beyond the limit"):
+        table = mfeval(model, rows, 211)
+    out = {name: table[:, MFEVAL_COLUMNS.index(name)] for name in ("Re", "omega", "Fz", "P")}
+    assert np.all(np.isfinite(table[:, [j for j, c in enumerate(MFEVAL_COLUMNS) if c != "iKya"]]))
+    dpi = (out["P"] - prm.NOMPRES) / prm.NOMPRES
+    reduction = vertical.rolling_radius_reduction(prm, out["Fz"], dpi, NUMPY)
+    re = vertical.free_radius(prm, out["omega"], NUMPY) - reduction
+    np.testing.assert_allclose(re, out["Re"], rtol=1e-13)
+    np.testing.assert_allclose(out["omega"] * out["Re"], (1.0 + kappa) * vx, rtol=1e-12, atol=1e-12)
+    with pytest.raises(mftyre.ModelInputError, match="kappa = 100 .*rim speed"):
+        model.evaluate(4000.0, kappa[6], 0.0, vx=vx[6])
 
 
 def test_cli_eval_extreme_slip_has_no_traceback(capsys):
-    assert cli.main(["eval", str(TIR61), "--kappa", "100"]) == 0
-    assert cli.main(["eval", str(TIR61), "--vx", "1000"]) == 0
+    """Within the limits: exit 0, no NaN; beyond them (a rim speed 100 x 16.7 m/s, 1000 m/s): exit 2 with the
+    input, its value and the limit on stderr, no traceback."""
+    assert cli.main(["eval", str(TIR61), "--kappa", "2"]) == 0
+    assert cli.main(["eval", str(TIR61), "--vx", "100"]) == 0
     assert "nan" not in capsys.readouterr().out.lower()
+    for option, value in (("--kappa", "100"), ("--vx", "1000")):
+        assert cli.main(["eval", str(TIR61), option, value]) != 0
+        err = capsys.readouterr().err
+        assert f"= {value}" in err and "beyond the limit" in err and "Traceback" not in err
 
 
 @pytest.mark.parametrize("path", [TIR61, TIR62, *EXTRA], ids=lambda p: p.stem)
@@ -83,9 +97,14 @@ def test_finite_outputs_at_extreme_inputs(path):
         fz[:50] = 0.0
         vx = log_uniform(-3, 4)
         vx[50:100] = 0.0
-        out = model.evaluate(fz, log_uniform(-4, 3.5), log_uniform(-4, 0.5), log_uniform(-4, 0.3),
-                             log_uniform(-4, 1), vx=vx, p=10.0 ** rng.uniform(4, 7, n), limits=limits,
-                             turn_slip=turn_slip, turn_slip_form=form)
+        inputs = dict(fz=fz, kappa=log_uniform(-4, 3.5), alpha=log_uniform(-4, 0.5), gamma=log_uniform(-4, 0.3),
+                      phit=log_uniform(-4, 1), vx=vx, p=10.0 ** rng.uniform(4, 7, n))
+        refused = beyond_limits(model.params, inputs, limits)  # beyond what a tyre can be: ModelInputError
+        assert 0 < refused.sum() < n
+        with pytest.raises(mftyre.ModelInputError, match="beyond the limit"):
+            model.evaluate(**inputs, limits=limits, turn_slip=turn_slip, turn_slip_form=form)
+        out = model.evaluate(**{k: v[~refused] for k, v in inputs.items()}, limits=limits, turn_slip=turn_slip,
+                             turn_slip_form=form)
         bad = [k for k in OUTPUT_NAMES if not np.all(np.isfinite(out[k]))]
         assert not bad, (limits, turn_slip, form, bad)
 

@@ -42,7 +42,7 @@ def test_fz_warns_above_fzmax_only():
     the deflection (no bound of the input, no warning), Fz <= 0 is no contact."""
     model = mftyre.load_tir(TIR61)
     prm = model.params
-    fz = np.array([-100.0, 0.0, 0.5 * prm.FZMIN, 4000.0, prm.FZMAX + 1.0, 2.0 * prm.FZMAX])
+    fz = np.array([-100.0, 0.0, 0.5 * prm.FZMIN, 4000.0, prm.FZMAX + 1.0, 1.5 * prm.FZMAX])
     _, caught = _caught(lambda: model.evaluate(fz, 0.0, 0.05))
     assert len(caught) == 1
     assert str(caught[0].message).endswith(f"fz outside FZMAX = [-inf, {prm.FZMAX:g}] N at 2 of 6 point(s)")
@@ -110,7 +110,7 @@ def test_cli_used_columns_of_swept_inputs_are_the_values_used(tmp_path):
     for option, values, name, unit in (("--gamma", [0.0, 0.15, 0.3, -0.3], "gamma", "rad"),
                                        ("--kappa", [0.5, 1.75, 3.0, -3.0], "kappa", "-"),
                                        ("--alpha", [0.1, 1.2, -1.5], "alpha", "rad"),
-                                       ("--fz", [1000.0, 2.0 * prm.FZMAX], "fz", "N")):
+                                       ("--fz", [1000.0, 1.4 * prm.FZMAX], "fz", "N")):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", InputClippedWarning)
             assert cli.main(["eval", str(TIR61), option, ",".join(map(str, values)), "--outputs", f"fx,fy,{name}",

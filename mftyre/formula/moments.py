@@ -40,9 +40,9 @@ def overturning_moment(prm, s, fy, be):
 
 
 def rolling_resistance_moment(prm, s, fx, be):
-    """My from the load (saturated at FZMAX with limits, as every output), the speed, Fx, inclination and
-    pressure."""
-    Fz = s.Fz
+    """My from the load as given (not saturated at FZMAX: the rolling resistance keeps growing with the load, as in
+    the reference evaluator), the speed, Fx, inclination and pressure."""
+    Fz = s.uFz
     if prm.FZMIN > 0:
         Fz = be.where(Fz < prm.FZMIN, Fz * (Fz / prm.FZMIN), Fz)
     R0, Fz0, V0, vx = prm.UNLOADED_RADIUS, prm.FNOMIN, prm.LONGVL, s.vx

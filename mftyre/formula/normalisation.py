@@ -3,8 +3,11 @@
 Limits and the low-speed model (``modes.limits``), following the TNO/MF-Tyre practice that the reference
 evaluator encodes:
 
-* Fz < 0 is set to 0 (the tyre has left the road). Fz is saturated at FZMAX; FZMIN raises the load used in
-  the aligning-torque coefficients and the MF 6.1 deflection only.
+* Fz < 0 is set to 0 (the tyre has left the road). Fz is saturated at FZMAX in the fitted force and moment
+  equations (Fx, Fy, Mz, Mx) and the relaxation outputs; the vertical relations (Re and the spin, the loaded radius
+  and deflection, the vertical stiffness, the contact patch) and My use the load as given (``uFz``), as the
+  reference evaluator does. FZMIN raises the load used in the aligning-torque coefficients and the MF 6.1
+  deflection only.
 * alpha, gamma, kappa and p are saturated to [ALPMIN, ALPMAX], [CAMMIN, CAMMAX], [KPUMIN, KPUMAX] and
   [PRESMIN, PRESMAX].
 * Below VXLOW: kappa and phit scale linearly with |Vx|/VXLOW, alpha with (|Vx| + |Vsy|)/VXLOW when that sum
@@ -57,13 +60,14 @@ def condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be) -> Si
         gamma = saturate(gamma, prm.CAMMIN, prm.CAMMAX)
         Fz = saturate(uFz, None, prm.FZMAX)
         s.Fz_low = be.of("force").fmax(Fz, prm.FZMIN)
+        s.uFz_low = be.of("force").fmax(uFz, prm.FZMIN)
         p = saturate(p, prm.PRESMIN, prm.PRESMAX)
     else:
         s.low_speed = None
         s.reduction_smooth = None
         s.kappa_out = kappa
         Fz = uFz
-        s.Fz_low = Fz
+        s.Fz_low = s.uFz_low = Fz
 
     s.Fz, s.kappa, s.alpha, s.gamma, s.phit, s.p = Fz, kappa, alpha, gamma, phit, p
     s.tan_alpha = be.tan(alpha)

@@ -20,8 +20,10 @@ def steady_state(prm, fz, kappa, alpha, gamma, phit, vx, p, omega, omega_given, 
     """All outputs at the given inputs (ISO-W, SI).
 
     ``omega_given`` is True (use ``omega``), False (estimate it from kappa and Vx) or a boolean array
-    choosing per element. With limits every output uses the load saturated at FZMAX (forces, moments, Re and the
-    spin estimated from it, the loaded radius and deflection, the contact patch); the output fz is the load as given.
+    choosing per element. With limits the fitted force and moment equations (Fx, Fy, Mz, Mx) and the relaxation
+    outputs use the load saturated at FZMAX; Re and the spin estimated from it, the loaded radius, deflection and
+    vertical stiffness, the contact patch and My use the load as given (the reference evaluator's split); the
+    output fz is the load as given.
     """
     s = normalisation.condition_inputs(prm, fz, kappa, alpha, gamma, phit, vx, p, modes, be)
     omega, r_omega, re = vertical.spin_and_radius(prm, s, omega, omega_given, be)
@@ -45,10 +47,10 @@ def steady_state(prm, fz, kappa, alpha, gamma, phit, vx, p, omega, omega_given, 
     mx = moments.overturning_moment(prm, s, fy, be)
     my = moments.rolling_resistance_moment(prm, s, fx, be)
 
-    fz_cz = s.Fz if prm.version == "62" else s.Fz_low  # FZMIN raises the load of the MF 6.1 deflection only
+    fz_cz = s.uFz if prm.version == "62" else s.uFz_low  # FZMIN raises the load of the MF 6.1 deflection only
     rl, rho = vertical.loaded_radius(prm, fz_cz, r_omega, omega, fx, fy, s.gamma, s.dpi, be)
     cz = fz_cz / be.where(fz_cz == 0, 1e-6, rho)
-    a, b = vertical.contact_patch(prm, s.Fz, s.dpi, be)
+    a, b = vertical.contact_patch(prm, s.uFz, s.dpi, be)
     cx, cy, sigmax, sigmay = derived.carcass_stiffness_and_relaxation(prm, s, lon.Kxk, lat.Kya, be)
 
     muy = be.abs(lat.muy) if modes.limits else lat.muy

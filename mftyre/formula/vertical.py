@@ -116,7 +116,7 @@ def spin_and_radius(prm, s, omega_in, omega_given, be):
     there) and quadratically, at any speed and slip (a plain fixed-point iteration diverges once
     2 Q_V1 (omega R0/V0)^2 > 1, above about 840 m/s or kappa = 52).
     """
-    reduction = rolling_radius_reduction(prm, s.Fz, s.dpi, be)  # at the load used: saturated at FZMAX (limits)
+    reduction = rolling_radius_reduction(prm, s.uFz, s.dpi, be)  # at the load as given (not saturated at FZMAX)
     wheel_speed = (1.0 + s.ukappa) * s.vx  # omega Re (2.5)
 
     if omega_given is True:
