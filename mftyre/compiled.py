@@ -657,7 +657,7 @@ class CompiledFunction:
             xy[:n_in] = values
         except ValueError:
             raise ModelInputError(self._arity_message(len(values))) from None
-        except TypeError:  # numbers of other types (e.g. 0-d arrays) are converted; anything else is refused
+        except (TypeError, OverflowError):  # other types (e.g. 0-d arrays) are converted; anything else is refused
             xy[:n_in] = [_real(name, v) for name, v in zip(self.inputs, values)]
         flags = self._point(xy)
         outputs = self._unpack(xy, 8 * n_in)
@@ -751,6 +751,9 @@ class CompiledFunction:
         if arr.dtype.kind not in "iuf":
             try:
                 arr = np.asarray(value, dtype=np.float64) if arr.dtype.kind == "O" else None
+            except OverflowError:
+                raise ModelInputError(f"input {name!r} must be finite; got a number beyond the largest float "
+                                      "(~1.8e308)") from None
             except (TypeError, ValueError):
                 arr = None
             if arr is None:
@@ -799,6 +802,9 @@ def _real(name, value) -> float:
         if isinstance(value, (str, bytes, complex)):
             raise TypeError
         return float(value)
+    except OverflowError:
+        raise ModelInputError(f"input {name!r} must be finite; got a number beyond the largest float (~1.8e308)") \
+            from None
     except (TypeError, ValueError):
         raise ModelInputError(f"input {name!r} must be a real number, got {value!r}") from None
 

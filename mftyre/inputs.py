@@ -158,20 +158,28 @@ def check_limits(params, arrays: dict, limits, omega_given=False, lim=None) -> N
         raise ModelInputError(problems[0][1])
 
 
-def check_tyre_outputs(out: dict, arrays: dict) -> None:
+def check_tyre_outputs(out: dict, arrays: dict, params=None, lim=None) -> None:
     """Outputs no tyre has, under load (fz > 0): a negative deflection rho, an effective rolling radius or loaded
-    radius <= 0: ModelInputError naming the load and the output (the backstop of :func:`check_limits`)."""
+    radius <= 0, and (with ``params``) a spin whose rim speed |omega R0| is beyond :func:`hard_limits` (an estimated
+    spin runs away where Re shrinks towards 0): ModelInputError naming the output and the inputs of the first such
+    point (the backstop of :func:`check_limits`)."""
     loaded = np.asarray(out["fz"]) > 0
-    for name, bad, what in (("rho", lambda v: v < 0, "negative deflection"),
-                            ("re", lambda v: ~(v > 0), "effective rolling radius <= 0"),
-                            ("rl", lambda v: ~(v > 0), "loaded radius <= 0")):
+    tests = [("rho", lambda v: v < 0, "negative deflection", "m"),
+             ("re", lambda v: ~(v > 0), "effective rolling radius <= 0", "m"),
+             ("rl", lambda v: ~(v > 0), "loaded radius <= 0", "m")]
+    if params is not None:
+        rim = (hard_limits(params) if lim is None else lim)["rim"]
+        r0 = float(params.UNLOADED_RADIUS)
+        tests.append(("omega", lambda v: np.abs(v) * r0 > rim[0], f"spin beyond the limit |omega R0| <= {rim[1]}",
+                      "rad/s"))
+    for name, bad, what, unit in tests:
         if name in out:
             wrong = loaded & bad(np.asarray(out[name]))
             if wrong.any():
                 i = np.unravel_index(np.argmax(wrong), wrong.shape) if wrong.ndim else ()
                 at = ", ".join(f"{k} = {float(np.broadcast_to(v, wrong.shape)[i]):.6g}" for k, v in arrays.items())
                 raise ModelInputError(f"the equations give a {what} ({name} = {float(np.asarray(out[name])[i]):.6g} "
-                                      f"m) under load at {int(wrong.sum())} point(s), first at {at}: no tyre has "
+                                      f"{unit}) under load at {int(wrong.sum())} point(s), first at {at}: no tyre has "
                                       "it there (check the load and the vertical parameters)")
 
 
@@ -374,8 +382,15 @@ def saturate(values, bounds) -> tuple[np.ndarray, int]:
 
 
 def check_finite(name: str, values) -> None:
-    """Raise :class:`ModelInputError` if ``values`` holds NaN or +-inf, naming the input and the first places."""
-    values = np.asarray(values)
+    """Raise :class:`ModelInputError` if ``values`` holds NaN or +-inf or a number beyond binary64 (an int such as
+    10**400), naming the input and the first places."""
+    try:
+        values = np.asarray(values, dtype=float) if np.asarray(values).dtype.kind in "Oiu" else np.asarray(values)
+    except OverflowError:
+        raise ModelInputError(f"input {name!r} must be finite; got a number beyond the largest float (~1.8e308)") \
+            from None
+    except (TypeError, ValueError):
+        values = np.asarray(values)
     bad = ~np.isfinite(values)
     if bad.any():
         where = np.argwhere(bad)[:5].tolist() if values.ndim else "scalar"

@@ -175,7 +175,7 @@ class MFModel:
         self.pressure_factors(p_min, p_max)
         self.load_factors(fz_min, fz_max, p_min, p_max)
         out = self._evaluate_arrays(arrays, omega is not None, modes, check_finite=True)
-        check_tyre_outputs(out, arrays)
+        check_tyre_outputs(out, arrays, prm, self._hard_limits)
         return MFOutputs(**out)
 
     @functools.cached_property
@@ -320,6 +320,9 @@ class MFModel:
             raise ModelInputError(f"unknown output(s) {bad}; outputs are {', '.join(OUTPUT_NAMES)}")
         prm = self._params
         values = dict(gamma=0.0, phit=0.0, vx=prm.LONGVL, p=prm.INFLPRES, omega=0.0)
+        for name, value in (fixed or {}).items():
+            if not isinstance(value, ca.SX | ca.MX):
+                check_finite(name, value)
         values.update(fixed or {})
         symbols = {n: ca.SX.sym(n) for n in inputs}
         values.update(symbols)

@@ -29,8 +29,9 @@ def test_mf52_zero_load_reports_the_computed_deflection():
     rho = mfeval(model, rows, 111)[:, RHO]
     np.testing.assert_allclose(rho, prm.FZMIN / prm.VERTICAL_STIFFNESS, rtol=1e-3)
     assert abs(rho[0] - 2.16e-4) < 1e-6
-    # limits off: no load, no deflection
-    np.testing.assert_array_equal(mfeval(model, rows, 211)[:, RHO], 0.0)
+    # limits off: no load, MFeval's placeholder 1e-6 m (its MF 5.2 branch is its MF 6.1 one; MFeval 4.3.1 under
+    # Octave gives 1e-6 there, tests/data/mfeval_extra/MagicFormula52_Parameters.csv.gz)
+    np.testing.assert_array_equal(mfeval(model, rows, 211)[:, RHO], 1e-6)
 
 
 def test_mf61_zero_load_keeps_the_placeholder():

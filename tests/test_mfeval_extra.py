@@ -1,8 +1,9 @@
 """compat.mfeval and turn_slip_form="mfeval" against MFeval 4.3.1 where the shared tables are silent: loads from 0 to
 1.5 FZMAX, speeds around VXLOW and far above LONGVL, pressures beyond PRESMIN..PRESMAX, every use mode, every
 sample file (tables made by tests/data/mfeval_extra/make_tables.py with MFeval run by GNU Octave; these tests read
-the tables only). A cell MFeval answers with NaN is no reference; nor are MFeval's MF 6.1 rho, Rl, Cz where Q_FZ2 = 0
-(it divides by 2 Q_FZ2) nor its MF 6.2 Rl, rho, Cz where its secant solver stopped short of its tolerance."""
+the tables only). A cell MFeval answers with NaN or inf is no reference (e.g. Cz where its MF 6.1 deflection divides
+by 2 Q_FZ2 = 0); every other cell is, MFeval's artefacts included (its MF 6.2 secant iterate where it stopped short of
+its tolerance, its MF 6.1 root without bottoming): compat returns them, with a warning."""
 from __future__ import annotations
 
 import gzip
@@ -26,10 +27,8 @@ FILES = sorted(MANIFEST["files"])
 
 FORCES = ("Fx", "Fy", "Fz")
 MOMENTS = ("Mx", "My", "Mz", "Mzr")
-SECANT = ("Rl", "rho", "Cz")  # MF 6.2: MFeval's secant iterate (tolerance 1e-6 FNOMIN in the load)
-#: relative tolerances (with an absolute floor of the same size times the column's scale)
-TOLERANCE = {**{c: 1e-9 for c in MFEVAL_COLUMNS}, "omega": 1e-9}
-SECANT_TOLERANCE = {"Rl": 1e-7, "rho": 1e-7, "Cz": 1e-7}  # rho, Cz: relative to Rl's scale R0, Cz's Cz0
+#: relative tolerance of every column (with an absolute floor 1e-3 times the column's scale)
+TOLERANCE = 1e-9
 
 
 def tir_path(name: str) -> Path:
@@ -82,14 +81,8 @@ def errors(model, table, result) -> dict:
             continue
         ref, got = table[col], result[:, j]
         valid = np.isfinite(ref)
-        if col in SECANT and prm.version != "62" and prm.Q_FZ2 == 0:
-            valid[:] = False
-        if col in SECANT and prm.version == "62":
-            valid &= np.abs(table["rl_residual"]) <= 1e-6 * prm.FNOMIN
-        if col in SECANT and prm.version == "62":  # an error of the secant iterate, on the column's scale
-            err = np.abs(got - ref) / scale[col]
-        else:
-            err = np.abs(got - ref) / np.maximum(np.abs(ref), scale.get(col, 1.0) * 1e-3 if col in scale else 1e-3)
+        with np.errstate(invalid="ignore"):
+            err = np.abs(got - ref) / np.maximum(np.abs(ref), 1e-3 * scale.get(col, 1.0))
         err = np.where(valid, err, 0.0)
         err = np.where(valid & ~np.isfinite(got), np.inf, err)
         i = int(np.argmax(err))
@@ -113,13 +106,14 @@ def evaluated():
 
 @pytest.mark.parametrize("name", FILES)
 def test_compat_equals_mfeval_everywhere_it_answers(name, evaluated):
-    """Every output of every row: 1e-9 relative (floors 1e-12 FNOMIN, FNOMIN R0 for forces and moments near zero,
-    1e-12 of the unit elsewhere); MF 6.2 Rl, rho, Cz (MFeval's secant iterate) 1e-7 of R0, R0, Cz0."""
+    """Every output of every row to 1e-9 relative (floors 1e-12 FNOMIN, FNOMIN R0 for forces and moments near zero,
+    1e-12 R0, 1e-12 Cz0 for the radii and Cz, 1e-12 of the unit elsewhere). Before: Re, 2a, 2b, My, Rl above
+    FZMAX (held at FZMAX), omega and the turn-slip forces ~1e-8 (the converged spin, not MFeval's iterate), the MF 6.1
+    deflection beyond bottoming, the MF 6.2 Rl where MFeval's secant stops short."""
     model, table, result = evaluated(name)
     bad = {}
     for col, (err, i) in errors(model, table, result).items():
-        tol = SECANT_TOLERANCE[col] if col in SECANT and model.params.version == "62" else TOLERANCE[col]
-        if not err <= tol:
+        if not err <= TOLERANCE:
             bad[col] = (err, {k: table[k][i] for k in ("in_Fz", "in_Vx", "in_P", "useMode", "ncols")},
                         result[i, MFEVAL_COLUMNS.index(col)], table[col][i])
     assert not bad, bad
@@ -173,7 +167,10 @@ def test_compat_warns_where_mfeval_gives_a_value_no_tyre_has():
         warnings.simplefilter("ignore", InputClippedWarning)
         at_max = mfeval(model, [[prm.FZMAX, 0, 0, 0, 0, prm.LONGVL, prm.NOMPRES]], 111)[0]
     rho = MFEVAL_COLUMNS.index("rho")
-    assert row[rho] == pytest.approx(at_max[rho], rel=1e-12)
+    assert row[rho] == pytest.approx(at_max[rho], rel=1e-3)  # (the spin, at the load, changes Q_V2's term)
+    with pytest.warns(InputClippedWarning):
+        own = model.evaluate(1.2 * prm.FZMAX, 0.0, 0.0, vx=prm.LONGVL, p=prm.NOMPRES)
+    assert own.rho > 1.1 * row[rho]
     with pytest.warns(ReferenceValueWarning, match="vx = 10000"):
         mfeval(model, [[4000, 0, 0, 0, 0, 1e4, prm.NOMPRES]], 111)
     with pytest.raises(mftyre.ModelInputError, match="vx"):

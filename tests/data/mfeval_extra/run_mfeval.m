@@ -13,7 +13,7 @@ function run_mfeval(tir, infile, outfile)
     ncols = rows(i, 10);
     r = solver.fullSteadyState(params, rows(i, 1:ncols), rows(i, 9));
     residual = 0;
-    if params.FITTYP == 62 && r(3) > 0
+    if params.FITTYP == 62
       gamma = r(9);
       if rows(i, 9) < 200
         gamma = min(max(gamma, params.CAMMIN), params.CAMMAX);
