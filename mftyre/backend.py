@@ -19,7 +19,7 @@ import numpy as np
 from .errors import ModelInputError
 
 __all__ = ["ExactCoefficient", "NumpyBackend", "CasadiBackend", "NUMPY", "NUMPY_FOLDING", "CASADI", "casadi_backend",
-           "SMOOTH_WIDTHS"]
+           "SMOOTH_WIDTHS", "LIMITS_SLACK"]
 
 #: The quantities whose kinks ``smooth`` rounds, each with its own width (in its unit), and the widths
 #: ``smooth=True`` uses: a width is small against the scale that matters for its quantity, yet the kink it
@@ -42,6 +42,10 @@ def _whole(chosen, cond, other) -> bool:
     return (type(cond) is np.ndarray and type(chosen) is np.ndarray and chosen.dtype == np.float64
             and chosen.shape == cond.shape and getattr(other, "shape", ()) in ((), chosen.shape))
 
+
+#: CasADi's saturation at the .tir ranges keeps the full slope this share of max(1, |bound|) beyond a bound (100
+#: times IPOPT's bound relaxation, 1e-8) before it returns to the bound: see CasadiBackend.saturate.
+LIMITS_SLACK = 1e-6
 
 class ExactCoefficient(float):
     """A .tir coefficient that is exactly 0 or 1 (a scaling factor lambda = 1, an unused term's coefficient 0), for
@@ -455,11 +459,20 @@ class CasadiBackend:
         return self.fmin(self.fmax(x, lo), hi)
 
     def saturate(self, x, lo, hi):
-        """x held in [lo, hi] (``lo`` None: below ``hi``), exact also with ``smooth``, with the slope 1 up to and at
-        the bounds (one-sided, from inside: fmin/fmax would give 1/2 there) and 0 strictly beyond them."""
+        """x held in [lo, hi] (``lo`` None: below ``hi``), exact also with ``smooth`` except in a band just beyond
+        each bound b: up to d = LIMITS_SLACK max(1, |b|) beyond it the input keeps its full slope (the identity), over
+        the next d it returns to the bound (slope -1), and further out it is held there (slope 0), as NumPy's clip.
+        An interior-point solver relaxes a bound by 1e-8 max(1, |b|) (IPOPT's bound_relax_factor) and ends a hair
+        outside an active one: there it sees the true slope, so the bound's multiplier is the true sensitivity (with
+        a plain clip it is 0). The outputs differ from NumPy's only inside the band, by at most the slope times d."""
         ca = self.ca
-        held = ca.if_else(x > hi, hi, x)
-        return held if lo is None else ca.if_else(x < lo, lo, held)
+
+        def beyond(over, bound):  # the input used at ``over`` > 0 beyond ``bound``, moving away from it
+            d = LIMITS_SLACK * ca.fmax(1.0, ca.fabs(bound))
+            return ca.fmax(0.0, d - ca.fabs(over - d))
+
+        held = ca.if_else(x > hi, hi + beyond(x - hi, hi), x)
+        return held if lo is None else ca.if_else(x < lo, lo - beyond(lo - x, lo), held)
 
     @staticmethod
     def broadcast(*values):

@@ -108,8 +108,9 @@ def simple_tyre_function(model: MFModel, name: str = "simple_tyre", pressure: bo
 @dataclass(frozen=True)
 class LaneChangeResult:
     """The optimum: manoeuvre time [s], pressures [Pa], the trajectory (arrays over the nodes) and IPOPT's
-    figures (``iterations``, ``solve_time`` the CPU time of the solve in the calling thread [s],
-    ``time_per_iteration``)."""
+    figures (``success``, ``status`` its return status, ``iterations``, ``solve_time`` the CPU time of the solve in
+    the calling thread [s], ``time_per_iteration``). Every value is the one IPOPT returned: at an active bound an
+    interior-point solver may end a hair outside it (bound_relax_factor, 1e-8 relative by default)."""
 
     success: bool
     status: str
@@ -329,7 +330,6 @@ class LaneChange:
         sol = solver(**arguments)
         wall = time.thread_time() - t0
         stats = solver.stats()
-        states, controls, T, pf, pr = unpack(sol["x"])
-        pf, pr = (min(max(p, self.pressure_bounds[0]), self.pressure_bounds[1]) for p in (pf, pr))
+        states, controls, T, pf, pr = unpack(sol["x"])  # as IPOPT returned them (no clipping into the bounds)
         return LaneChangeResult(bool(stats.get("success", False)), str(stats.get("return_status", "")), T, pf, pr,
                                 states, controls, int(stats.get("iter_count", 0)), wall)
