@@ -320,9 +320,9 @@ class MFModel:
             raise ModelInputError(f"unknown output(s) {bad}; outputs are {', '.join(OUTPUT_NAMES)}")
         prm = self._params
         values = dict(gamma=0.0, phit=0.0, vx=prm.LONGVL, p=prm.INFLPRES, omega=0.0)
-        for name, value in (fixed or {}).items():
+        for fixed_name, value in (fixed or {}).items():
             if not isinstance(value, ca.SX | ca.MX):
-                check_finite(name, value)
+                check_finite(fixed_name, value)
         values.update(fixed or {})
         symbols = {n: ca.SX.sym(n) for n in inputs}
         values.update(symbols)
