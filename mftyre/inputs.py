@@ -144,7 +144,8 @@ def limit_problems(params, arrays: dict, limits, omega_given=False, lim=None) ->
             i = np.unravel_index(np.argmax(bad), bad.shape) if bad.ndim else ()
             value = float(np.broadcast_to(values, bad.shape)[i])
             shown = "" if rim is None else f" (rim speed {float(rim[i]):.6g} m/s)"
-            count = f" at {int(bad.sum())} of {bad.size} points" if bad.size > 1 else ""
+            where = ", ".join(str(int(j)) for j in i)
+            count = f" at {int(bad.sum())} of {bad.size} points, first at point {where}," if bad.size > 1 else ""
             found.append((name, f"input {name} = {value:.6g}{shown}{count} is beyond the limit of {source}: "
                                 f"{what} <= {limit[1]}"))
     return found

@@ -15,6 +15,8 @@ import mftyre
 import mftyre.model as model_module
 from mftyre import ModelInputError
 from mftyre.errors import InputClippedWarning
+from mftyre.formula import Modes
+from mftyre.model import as_float_arrays
 
 from conftest import TIR_FILES
 
@@ -105,9 +107,14 @@ def test_non_finite_output_error_names_the_original_index_and_counts_every_chunk
     vx = np.zeros(n)
     vx[[2 * CHUNK + 3, 2 * CHUNK + 9, 3 * CHUNK + 2]] = 40.0
     monkeypatch.setattr(model_module, "_CHUNK", CHUNK)
+    # evaluate refuses the speeds first (the free radius would change by more than 10 % at 0.14 m/s) ...
+    with pytest.raises(ModelInputError, match=rf"vx = 40 .* at 3 of {n} points, first at point {2 * CHUNK + 3},"):
+        bad.evaluate(4000.0, 0.0, 0.0, vx=vx)
+    # ... and the chunked check of the outputs behind it names the same point
+    arrays = as_float_arrays(dict(fz=4000.0, kappa=0.0, alpha=0.0, gamma=0.0, phit=0.0, vx=vx, p=2.2e5, omega=0.0))
     with pytest.raises(ModelInputError, match=rf"non-finite .* at 3 of {n} point\(s\), first at point "
                                               rf"{2 * CHUNK + 3}: .*vx=40"):
-        bad.evaluate(4000.0, 0.0, 0.0, vx=vx)
+        bad._evaluate_arrays(arrays, False, Modes(), check_finite=True)
 
 
 def test_threads_sharing_one_model_get_the_serial_results(monkeypatch):

@@ -15,6 +15,7 @@ casadi = pytest.importorskip("casadi")
 
 import mftyre  # noqa: E402
 from mftyre.errors import ModelInputError  # noqa: E402
+from mftyre.backend import LIMITS_SLACK  # noqa: E402
 from mftyre.vehicle import (WHEELS, Vehicle, VehicleParams, brute_force_braking_slip,  # noqa: E402
                             optimal_braking_slip)
 
@@ -86,9 +87,10 @@ def test_optimised_pressure_optimum_is_a_steady_state_maximum(car, max_optimised
 @pytest.mark.parametrize("limits", [True, "smooth"])
 def test_pressure_has_its_full_slope_up_to_and_at_its_bounds(limits):
     """Inside PRESMIN..PRESMAX, the bounds included, an input is the identity with its full (one-sided) slope:
-    dFy/dp equals that of limits=False (fmin/fmax gave half of it at the bound). Beyond: True saturates (slope 0);
-    "smooth" keeps the full slope a hair outside (an interior-point solver's bound relaxation: 1e-8) and a slope
-    that fades to 1 % further out, continuous in value and slope at the bound."""
+    dFy/dp equals that of limits=False (fmin/fmax gave half of it at the bound). Both keep the full slope a hair
+    outside (an interior-point solver's bound relaxation: 1e-8); beyond 2 LIMITS_SLACK |bound| True saturates (slope
+    0, the value at the bound: NumPy's clip); "smooth" has a slope that fades to 1 % further out, continuous in value
+    and slope at the bound."""
     model = mftyre.load_tir(TIR)
     prm = model.params
 
@@ -104,11 +106,13 @@ def test_pressure_has_its_full_slope_up_to_and_at_its_bounds(limits):
         hair = bound * (1.0 + outward * 1e-8)
         far = bound + outward * 0.2 * (prm.PRESMAX - prm.PRESMIN)
         value, slope = (float(v) for v in limited(hair))
+        assert slope == pytest.approx(float(free(bound)[1]), rel=1e-6)
+        assert value == pytest.approx(float(free(hair)[0]), rel=1e-9)
         if limits is True:
+            beyond = bound * (1.0 + outward * 3 * LIMITS_SLACK)
+            value, slope = (float(v) for v in limited(beyond))
             assert slope == 0.0 and value == float(free(bound)[0])
         else:
-            assert slope == pytest.approx(float(free(bound)[1]), rel=1e-6)
-            assert value == pytest.approx(float(free(hair)[0]), rel=1e-9)
             far_slope = float(limited(far)[1])
             assert 0.0 < far_slope / float(free(bound)[1]) < 0.05
 
