@@ -154,6 +154,16 @@ def limit_problems(params, arrays: dict, limits, omega_given=False, lim=None) ->
 def check_limits(params, arrays: dict, limits, omega_given=False, lim=None) -> None:
     """Raise :class:`ModelInputError` for the first of :func:`limit_problems` (the refusals of the policy in the
     module docstring)."""
+    lim = hard_limits(params) if lim is None else lim
+
+    def peak(name):  # the largest |value| of an input (0 if absent); a 0-d array as a float (faster)
+        v = arrays.get(name, 0.0)
+        return abs(float(v)) if np.ndim(v) == 0 else float(np.max(np.abs(v)))
+
+    speed = peak("vx")
+    rim = max(speed * (1.0 + peak("kappa")), peak("omega") * float(params.UNLOADED_RADIUS))
+    if (not limits or peak("fz") <= lim["fz"][0]) and speed <= lim["vx"][0] and rim <= lim["rim"][0]:
+        return  # (every point inside: a few reductions)
     problems = limit_problems(params, arrays, limits, omega_given, lim)
     if problems:
         raise ModelInputError(problems[0][1])
