@@ -251,7 +251,11 @@ def _check_plain(value, where: str) -> None:
     if isinstance(value, _PLAIN):
         return
     if isinstance(value, np.ndarray):
-        if value.dtype.kind not in "biufcUSM":
+        if value.dtype.kind == "O":  # e.g. a DataFrame's text column: every item plain
+            for item in value.ravel():
+                if not isinstance(item, _PLAIN):
+                    _check_plain(item, f"{where}, an item")
+        elif value.dtype.kind not in "biufcUSM":
             raise RunnerError(f"{where}: an array of {value.dtype}: expected numbers or strings")
         return
     if isinstance(value, pd.DataFrame):
