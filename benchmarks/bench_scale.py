@@ -37,7 +37,7 @@ import numpy as np  # noqa: E402
 import mftyre  # noqa: E402
 from mftyre.campaign import run_campaign  # noqa: E402
 from mftyre.data import trailer_programme, write_tydex  # noqa: E402
-from mftyre.files import sample_tir  # noqa: E402
+from mftyre.files import make_output_folder, sample_tir  # noqa: E402
 from mftyre.runner import Runner  # noqa: E402
 from mftyre.sweep import parse_distribution, sweep, sweep_runs  # noqa: E402
 
@@ -79,7 +79,7 @@ def main() -> None:
     print(f"# bench_scale ({'full' if args.full else 'reduced'} size): {load()}")
     tmp = Path(tempfile.mkdtemp(prefix="bench_scale_"))
     try:
-        source = campaign(tmp / "campaign", size["tyres"])
+        source = campaign(make_output_folder(tmp / "campaign"), size["tyres"])
         swift_file = sample_tir("car_205_60R15_mf62_swift.tir")
         swift_model = mftyre.load_tir(swift_file)
         variables = [parse_distribution("LMUX=normal(1, 0.05)"), parse_distribution("fz=uniform(3000, 5000)")]

@@ -53,6 +53,10 @@ __all__ = ["Runner", "Outcome", "Failure", "RunnerError", "add_runner_options", 
 
 #: The environment variable naming a scheduler's address (``tcp://host:8786``) when none is given.
 SCHEDULER_VARIABLE = "MFTYRE_SCHEDULER"
+#: dask settings of the local cluster: no sampling profiler (every 10 ms in each worker) nor GIL monitor (every
+#: 1 ms), which serve the dashboard this runner does not start and cost CPU that a shared machine's users feel.
+#: A cluster's own workers keep their configuration (DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED=False sets it).
+QUIET = {"distributed.worker.profile.enabled": False, "distributed.admin.system-monitor.gil.enabled": False}
 _KEY = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,119}")
 
 
@@ -135,8 +139,11 @@ class Runner:
                 raise RunnerError(f"scheduler {self.scheduler}: cannot connect ({exc}); expected the address of a "
                                   "running dask scheduler, e.g. tcp://host:8786") from None
         else:  # processes with one thread each: the GIL and CasADi's lock are per process
-            self._cluster = LocalCluster(n_workers=self.workers, threads_per_worker=1, processes=True,
-                                         dashboard_address=None, silence_logs=logging.ERROR)
+            import dask
+
+            with dask.config.set(QUIET):  # (the workers take the configuration in force when they start)
+                self._cluster = LocalCluster(n_workers=self.workers, threads_per_worker=1, processes=True,
+                                             dashboard_address=None, silence_logs=logging.ERROR)
             self._client = Client(self._cluster)
         return self._client
 
@@ -358,7 +365,7 @@ def add_runner_options(parser) -> None:
     group = parser.add_argument_group("parallel work (dask.distributed)")
     group.add_argument("--workers", type=number_type(0, integer=True), default=None, metavar="N",
                        help=f"worker processes of a local cluster (default: the cores, {default_workers()}; 0: "
-                            "serially in this process)")
+                            "serially in this process; ignored with a scheduler)")
     group.add_argument("--scheduler", metavar="ADDRESS", default=None,
                        help=f"use the running dask scheduler at ADDRESS (tcp://host:8786) and its workers instead "
                             f"(default: ${SCHEDULER_VARIABLE} when set)")

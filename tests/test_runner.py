@@ -17,7 +17,7 @@ import pytest
 
 import mftyre
 from mftyre.campaign import campaign_tyres, run_campaign
-from mftyre.data import read_data, trailer_programme, write_tydex
+from mftyre.data import TyreData, read_data, trailer_programme, write_tydex
 from mftyre.fit import fit_tir
 from mftyre.runner import Runner, RunnerError
 from mftyre.sweep import parse_distribution, run_batch, sweep, sweep_runs
@@ -111,6 +111,8 @@ def _campaign(folder):
 
 
 def test_campaign_is_bitwise_the_fit_of_each_tyre_alone(cluster, tmp_path):
+    """The folder campaign on the cluster against each tyre fitted alone in this process, as ``mftyre fit RUN``
+    fits it (read_data, fit_tir; tyreB's two runs joined)."""
     source = _campaign(tmp_path / "campaign")
     defaults = {"start": None, "stages": ["pure_fx"], "weighting": "uniform", "bins": 40, "max_nfev": None,
                 "no_pressure": False}
@@ -118,33 +120,42 @@ def test_campaign_is_bitwise_the_fit_of_each_tyre_alone(cluster, tmp_path):
     out = tmp_path / "out"
     summary, failures = run_campaign(source, out, cluster, defaults=defaults, say=lambda text: None)
     assert not failures and list(summary["status"]) == ["fitted", "fitted"]
+    assert pd.read_csv(out / "summary.csv")["tyre"].tolist() == ["tyreA", "tyreB"]
+    for tyre in ("tyreA", "tyreB"):
+        assert (out / f"{tyre}.md").is_file() and (out / f"{tyre}_pure_fx.png").is_file()
+
     for tyre, runs in (("tyreA", ["tyreA.tdx"]), ("tyreB", ["tyreB/run1.tdx", "tyreB/run2.tdx"])):
-        parts = [read_data(source / r) for r in runs]
-        alone = fit_tir(parts[0] if len(parts) == 1 else type(parts[0]).concat(parts), stages=["pure_fx"])
+        parts = [read_data(source / run) for run in runs]
+        alone = fit_tir(parts[0] if len(parts) == 1 else TyreData.concat(parts), stages=["pure_fx"])
         written = read_tir(out / f"{tyre}.tir")  # the campaign's file, read back
         assert all(repr(written[k]) == repr(alone.params[k]) for k in alone.params), tyre
-        row = summary[summary["tyre"] == tyre].iloc[0]
-        assert row["pure_fx FX [%]"] == alone.fit_errors["pure_fx"]
-        assert (out / f"{tyre}.md").is_file() and (out / f"{tyre}_pure_fx.png").is_file()
+        assert summary.loc[summary["tyre"] == tyre, "pure_fx FX [%]"].iloc[0] == alone.fit_errors["pure_fx"]
     assert written["PDX1"] != read_tir(out / "tyreA.tir")["PDX1"]  # two tyres, two results
-    assert pd.read_csv(out / "summary.csv")["tyre"].tolist() == ["tyreA", "tyreB"]
 
 
-def test_campaign_manifest_reports_a_tyre_that_cannot_be_read_and_fits_the_others(tmp_path):
+def test_campaign_manifest_rows_and_a_tyre_that_cannot_be_read(tmp_path):
     source = _campaign(tmp_path / "campaign")
-    (source / "manifest.csv").write_text("tyre,runs,stages\nA,tyreA.tdx,pure_fx\nlost,missing.tdx;tyreA.tdx,\n")
-    defaults = {"start": None, "stages": ["vertical"], "weighting": "uniform", "bins": 40, "max_nfev": None,
+    (source / "manifest.csv").write_text("tyre,runs,stages,bins\nA,tyreA.tdx,pure_fx;mz,12\n"
+                                         "lost,missing.tdx;tyreA.tdx,,\n")
+    defaults = {"start": None, "stages": ["vertical"], "weighting": "load", "bins": 40, "max_nfev": None,
                 "no_pressure": False}
+    tyres = campaign_tyres(source / "manifest.csv", defaults)
+    assert tyres["A"]["stages"] == ["pure_fx", "mz"] and tyres["A"]["bins"] == 12 and tyres["A"]["weighting"] == "load"
+    assert tyres["lost"]["stages"] == ["vertical"] and tyres["lost"]["runs"][1] == source / "tyreA.tdx"
+    (source / "manifest.csv").write_text("tyre,runs\nlost,missing.tdx;tyreA.tdx\n")
     summary, failures = run_campaign(source / "manifest.csv", tmp_path / "out", Runner(workers=0),
                                      defaults=defaults, say=lambda text: None)
-    assert summary["status"].iloc[0] == "fitted" and "pure_fx FX [%]" in summary.columns
-    assert summary["status"].iloc[1].startswith("failed") and "missing.tdx" in failures[0]
-    assert not (tmp_path / "out" / "lost.tir").exists()
+    assert summary["status"].iloc[0].startswith("failed") and "missing.tdx: file not found" in failures[0]
+    assert not (tmp_path / "out" / "lost.tir").exists() and (tmp_path / "out" / "summary.csv").is_file()
+    (source / "bad.csv").write_text("tyre,runs,stages\nA,tyreA.tdx,pure_fz\n")
+    with pytest.raises(mftyre.errors.DataError, match=r"bad.csv, row 2: unknown stage\(s\) pure_fz"):
+        campaign_tyres(source / "bad.csv", defaults)
 
 
 def test_scheduler_in_a_separate_process(tmp_path):
     file = tmp_path / "scheduler.json"
-    env = {**os.environ, "PYTHONWARNINGS": "ignore"}
+    env = {**os.environ, "PYTHONWARNINGS": "ignore", "DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED": "False",
+           "DASK_DISTRIBUTED__ADMIN__SYSTEM_MONITOR__GIL__ENABLED": "False"}
     scheduler = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
                                   "--port", "0", "--no-dashboard", "--scheduler-file", str(file)],
                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
@@ -156,7 +167,7 @@ def test_scheduler_in_a_separate_process(tmp_path):
             time.sleep(0.05)
         address = json.loads(file.read_text())["address"]
         worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nworkers", "1",
-                                   "--nthreads", "1", "--no-dashboard"], stdout=subprocess.DEVNULL,
+                                   "--nthreads", "1", "--no-dashboard", "--no-nanny"], stdout=subprocess.DEVNULL,
                                   stderr=subprocess.DEVNULL, env=env)
         runs = _steady_runs(n=2)
         os.environ["MFTYRE_SCHEDULER"] = address  # the variable names the cluster when no address is given
