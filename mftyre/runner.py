@@ -370,7 +370,8 @@ def add_runner_options(parser) -> None:
                        help=f"use the running dask scheduler at ADDRESS (tcp://host:8786) and its workers instead "
                             f"(default: ${SCHEDULER_VARIABLE} when set)")
     group.add_argument("--resume", action="store_true",
-                       help="keep the tasks already done in the output folder's tasks/ (same inputs) and run the rest")
+                       help="keep the tasks already done (same inputs) in the tasks folder of the outputs, run the "
+                            "rest and write the outputs again")
 
 
 def runner_from_args(args) -> Runner:

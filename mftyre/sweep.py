@@ -306,8 +306,8 @@ def run(args) -> int:
         return command_error("sweep", "--road: the steady model has no road; use --model swift or transient")
     tasks = out.with_name(out.name + ".tasks")
     if refused := refused_outputs("sweep", {"-o": out, "--plot": args.plot}, {"FILE.tir": args.file},
-                                  folders={"tasks folder": None if args.resume else tasks},
-                                  overwrite=args.overwrite):
+                                  folders={"tasks folder": tasks},
+                                  overwrite=args.overwrite or args.resume):  # a rerun replaces its own outputs
         return refused
     say = progress_printer(args.quiet)
     try:

@@ -230,3 +230,21 @@ def test_evaluate_chunked_is_one_compiled_batch_and_the_model(cluster):
     assert np.allclose(grid.compute(), model.evaluate(loads, 0.0, angles).fy, rtol=1e-9, atol=1e-9)
     with pytest.raises(mftyre.errors.ModelInputError, match="fz"):
         model.evaluate_chunked(np.array([4000.0, np.nan]), 0.0, 0.0, outputs=("fy",))["fy"].compute()
+
+
+def test_sweep_command_writes_the_table_and_plot_and_resumes(tmp_path, capsys):
+    from mftyre.cli import main
+
+    out, plot = tmp_path / "runs.csv", tmp_path / "runs.png"
+    argv = ["sweep", str(SAMPLE), "--model", "steady", "--vary", "LMUY=normal(1, 0.05)", "--vary", "alpha=0.05",
+            "--speed", "36km/h", "-n", "4", "--seed", "9", "--batch", "2", "-o", str(out), "--plot", str(plot),
+            "--workers", "0", "--quiet"]
+    assert main(argv) == 0
+    table = pd.read_csv(out, keep_default_na=False)
+    assert len(table) == 4 and (table["seed"] == 9).all() and (table["speed"] == 10.0).all()
+    assert np.array_equal(table["LMUY"], np.random.default_rng(9).normal(1.0, 0.05, 4))
+    assert plot.read_bytes()[:4] == b"\x89PNG"
+    assert main(argv) == 2 and "pass --overwrite" in capsys.readouterr().err  # no --resume, no --overwrite
+    first = out.read_bytes()
+    assert main([*argv, "--resume"]) == 0 and out.read_bytes() == first
+    assert main([*argv[:-7], "-o", str(tmp_path / "x.txt"), "--workers", "0"]) == 2
