@@ -69,6 +69,21 @@ def timed(fn):
     return time.perf_counter() - t0, value
 
 
+def cpu_seconds(client=None) -> float:
+    """CPU time [s] used so far by this process, or by the workers of ``client`` together."""
+    if client is None:
+        return time.process_time()
+    return sum(client.run(time.process_time).values())
+
+
+def cpu_timed(fn, client=None):
+    """(wall s, CPU s of this process or of the workers, value): the CPU time is what a loaded machine disturbs
+    least (time waiting for a core is not counted)."""
+    c0 = cpu_seconds(client)
+    wall, value = timed(fn)
+    return wall, cpu_seconds(client) - c0, value
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--full", action="store_true", help="the issue's sizes (8 tyres, 1000 runs, 1e8 points)")
@@ -98,29 +113,34 @@ def main() -> None:
             print(f"cluster: {cluster.describe()}, {workers} workers; start {t_start + t_client:.1f} s, warm-up "
                   f"(imports, compiled libraries) {t_warm:.1f} s")
             rows = []
-            t_serial, _ = timed(lambda: run_campaign(source, tmp / "serial", serial, defaults=defaults,
-                                                     say=lambda text: None))
-            t_parallel, (summary, failures) = timed(lambda: run_campaign(source, tmp / "parallel", cluster,
-                                                                          defaults=defaults, say=lambda text: None))
+            t_serial, c_serial, _ = cpu_timed(lambda: run_campaign(source, tmp / "serial", serial, defaults=defaults,
+                                                                    say=lambda text: None))
+            t_parallel, c_parallel, (summary, failures) = cpu_timed(
+                lambda: run_campaign(source, tmp / "parallel", cluster, defaults=defaults, say=lambda text: None),
+                client)
             def fitted(folder, i):  # the .tir without its "Fitted by ... in N s" line
                 lines = (folder / f"tyre{i:02d}.tir").read_text().splitlines()
                 return [line for line in lines if not line.startswith("! Fitted by")]
 
             same = all(fitted(tmp / "serial", i) == fitted(tmp / "parallel", i) for i in range(size["tyres"]))
-            rows.append((f"campaign, {size['tyres']} tyres", f"{t_serial:.1f} s", f"{t_parallel:.1f} s",
-                         f"speed-up {t_serial / t_parallel:.2f} (target >= 1.7 with 2 workers)",
+            rows.append((f"campaign, {size['tyres']} tyres", f"{t_serial:.1f} s (CPU {c_serial:.1f} s)",
+                         f"{t_parallel:.1f} s (workers' CPU {c_parallel:.1f} s)",
+                         f"speed-up {t_serial / t_parallel:.2f} (target >= 1.7 with 2 workers); CPU serial / "
+                         f"workers {c_serial / c_parallel:.2f}",
                          f"{'identical' if same else 'DIFFERENT'} .tir files; {len(failures)} failed"))
-            n_serial = max(size["runs"] // 10, 4)
-            t_one, (table_one, _) = timed(lambda: sweep(swift_file, "swift", runs.iloc[:n_serial], serial,
-                                                         options=SWIFT_OPTIONS, batch=10))
-            t_many, (table, failed) = timed(lambda: sweep(swift_file, "swift", runs, cluster, options=SWIFT_OPTIONS,
-                                                          batch=10))
+            n_serial = max(size["runs"] // 4, 10)
+            t_one, c_one, (table_one, _) = cpu_timed(lambda: sweep(swift_file, "swift", runs.iloc[:n_serial],
+                                                                    serial, options=SWIFT_OPTIONS, batch=10))
+            t_many, c_many, (table, failed) = cpu_timed(lambda: sweep(swift_file, "swift", runs, cluster,
+                                                                      options=SWIFT_OPTIONS, batch=10), client)
             rate_one, rate_many = n_serial / t_one, len(runs) / t_many / workers
             same = table.iloc[:n_serial][table_one.columns].equals(table_one)
-            rows.append((f"SWIFT Monte-Carlo, {len(runs)} runs", f"{rate_one:.2f} runs/s ({n_serial} runs)",
-                         f"{rate_many:.2f} runs/s per worker", f"{100 * rate_many / rate_one:.0f} % of serial per "
-                         "worker (target >= 90 %)", f"{'identical' if same else 'DIFFERENT'} peaks; "
-                                                    f"{len(failed)} failed"))
+            rows.append((f"SWIFT Monte-Carlo, {len(runs)} runs", f"{rate_one:.2f} runs/s ({n_serial} runs; "
+                                                                 f"{n_serial / c_one:.2f} runs per CPU s)",
+                         f"{rate_many:.2f} runs/s per worker ({len(runs) / c_many:.2f} runs per worker CPU s)",
+                         f"{100 * rate_many / rate_one:.0f} % of serial per worker (target >= 90 %); per CPU s "
+                         f"{100 * (len(runs) / c_many) / (n_serial / c_one):.0f} %",
+                         f"{'identical' if same else 'DIFFERENT'} peaks; {len(failed)} failed"))
             model = mftyre.load_tir(sample_tir("car_205_60R15_mf61.tir"))
             n = size["points"]
             rng = np.random.default_rng(1)

@@ -248,3 +248,18 @@ def test_sweep_command_writes_the_table_and_plot_and_resumes(tmp_path, capsys):
     first = out.read_bytes()
     assert main([*argv, "--resume"]) == 0 and out.read_bytes() == first
     assert main([*argv[:-7], "-o", str(tmp_path / "x.txt"), "--workers", "0"]) == 2
+
+
+def test_fit_command_dispatches_a_folder_to_the_campaign(tmp_path, capsys):
+    from mftyre.cli import main
+
+    (tmp_path / "campaign" / "tyreX").mkdir(parents=True)
+    (tmp_path / "campaign" / "tyreX" / "run.csv").write_text("FZ,SA\n1,x\n")
+    out = tmp_path / "out"
+    assert main(["fit", str(tmp_path / "campaign"), "-o", str(out), "--report", "r.md", "--quiet"]) == 2
+    assert "--report: a campaign writes one report per tyre" in capsys.readouterr().err
+    assert main(["fit", str(tmp_path / "campaign"), "-o", str(out), "--workers", "0", "--quiet"]) == 1
+    captured = capsys.readouterr()
+    assert "tyre tyreX (runs " in captured.err and "run.csv" in captured.err
+    assert pd.read_csv(out / "summary.csv")["status"].iloc[0].startswith("failed")
+    assert main(["fit", str(tmp_path / "campaign"), "-o", str(out), "--workers", "0", "--quiet"]) == 2  # not empty
