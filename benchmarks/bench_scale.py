@@ -13,7 +13,8 @@ Cases:
 * ``SWIFT Monte-Carlo``: :mod:`mftyre.sweep` runs of the sample SWIFT file over a 10 mm cleat at 10 m/s, 1 m, LMUX
   ~ normal(1, 0.05), fz ~ uniform(3000, 5000) (seed 1), batches of 10: runs per second serially in this process
   and per worker (target: >= 90 % of the serial rate per worker).
-* ``evaluation``: :meth:`mftyre.MFModel.evaluate_chunked` (fx, fy, mz; chunks of 2**20 points) on the workers, ns
+* ``evaluation``: :meth:`mftyre.MFModel.evaluate_chunked` (fx, fy, mz; chunks of 2**20 points, fewer when
+  that leaves a worker fewer than 8) on the workers, ns
   per point, against :meth:`mftyre.MFModel.evaluate` (NumPy) on 1e6 of the points in this process.
 
 The cluster is started (and every worker has imported mftyre and loaded the compiled libraries: a warm-up task)
@@ -151,7 +152,7 @@ def main() -> None:
             import dask.array as da
 
             def big():
-                chunk = 2**20
+                chunk = min(2**20, -(-n // (8 * workers)))  # at least 8 chunks per worker
                 out = model.evaluate_chunked(da.random.uniform(2000, 6000, n, chunks=chunk),
                                              da.random.uniform(-0.2, 0.2, n, chunks=chunk),
                                              da.random.uniform(-0.2, 0.2, n, chunks=chunk), chunks=chunk)
