@@ -326,6 +326,7 @@ def build_parser() -> argparse.ArgumentParser:
     from .plot_command import register as register_plot
     from .swift_command import register as register_swift
     from .soil.command import register as register_soil
+    from .sweep import register as register_sweep
 
     register_demo(sub)
     register_fit(sub)
@@ -334,6 +335,7 @@ def build_parser() -> argparse.ArgumentParser:
     register_swift(sub)
     register_fmu(sub)
     register_soil(sub)
+    register_sweep(sub)
     return parser
 
 

@@ -71,9 +71,12 @@ from .inputs import check_finite, check_finite_outputs, check_pressure, hard_lim
 
 __all__ = ["CompiledFunction", "CacheSecurityError", "CompileError", "compile_model", "compile_function",
            "compile_external", "tyre_kernels", "compile_tyre_kernels", "cached_library", "compile_c", "cache_dir",
-           "install_libraries", "platform_tag", "generate_c", "CASADI_LOCK"]
+           "install_libraries", "platform_tag", "generate_c", "CASADI_LOCK", "BLOCK_POINTS"]
 
 _BLOCK = 256  # points per call of the vectorised kernel (inputs broadcast into stack buffers of this length)
+#: The kernel's block of points: a batch's result at a point may differ in the last ulp with the point's place in
+#: its block (the vector maths' remainder), so batches split at multiples of this give the same bits as one batch.
+BLOCK_POINTS = _BLOCK
 # -O1 with loop vectorisation runs the straight-line kernel as fast as -O3 and compiles in half the time.
 # -fno-tree-dominator-opts: gcc 12's dominator pass folded the 0/1 masks of the unrolled MF 6.2 loaded-radius
 # solver (Dekker's method, before the Newton solver) into boolean chains of mixed precision that its vectoriser

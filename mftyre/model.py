@@ -178,6 +178,38 @@ class MFModel:
         check_tyre_outputs(out, arrays, prm, self._hard_limits)
         return MFOutputs(**out)
 
+    def evaluate_chunked(self, fz, kappa, alpha, gamma=0.0, phit=0.0, vx=None, p=None, *,
+                         outputs=("fx", "fy", "mz"), chunks=2**20, **options) -> dict:
+        """Very large inputs (10^8 points: a driving simulator's look-up table) as ``dask.array`` chunks: output
+        name -> a lazy dask array of the broadcast shape, each chunk evaluated by the compiled kernel
+        (:func:`mftyre.compiled.compile_model` of these ``outputs`` and ``options``: turn_slip, alpha_star, limits,
+        turn_slip_form), which checks its inputs as :meth:`evaluate` does (non-finite inputs or p <= 0 raise
+        ModelInputError, values outside the .tir ranges warn) when computed. Inputs: numbers, NumPy or dask
+        arrays (``chunks``: points per chunk of those that are not dask arrays yet, rounded up to a multiple of
+        :data:`mftyre.compiled.BLOCK_POINTS`, so that the bits do not depend on it); omega is estimated from
+        kappa and vx. Compute with ``dask.compute(*out.values())``: on the threads of this process (the kernel
+        releases the GIL), or on the workers of a :class:`mftyre.runner.Runner` while its client is active; a
+        chunk carries only the parameters and its inputs, each worker builds (or loads from the compile cache)
+        the kernel once. The results agree with :meth:`evaluate` to about 3e-11 relative (the C's vector maths)
+        and do not depend on the chunks (of a multiple of BLOCK_POINTS points)."""
+        import dask.array as da
+
+        from .compiled import BLOCK_POINTS
+
+        chunks = -(-int(chunks) // BLOCK_POINTS) * BLOCK_POINTS
+        prm = self._params
+        values = [fz, kappa, alpha, gamma, phit, prm.LONGVL if vx is None else vx, prm.INFLPRES if p is None else p]
+        shape = np.broadcast_shapes(*(np.shape(v) for v in values))
+        arrays = da.broadcast_arrays(*(v if isinstance(v, da.Array) else
+                                       da.from_array(np.asarray(v, dtype=float), chunks=chunks) for v in values))
+        arrays = [a.reshape(-1) for a in arrays]
+        arrays = da.unify_chunks(*(x for a in arrays for x in (a, "i")))[1]
+        outputs = tuple(outputs)
+        block = da.map_blocks(_compiled_block, *arrays, params=prm, side=self.side, outputs=outputs,
+                              options=dict(options), dtype=float, new_axis=0,
+                              chunks=((len(outputs),), arrays[0].chunks[0]), meta=np.empty((0, 0)))
+        return {name: block[i].reshape(shape) for i, name in enumerate(outputs)}
+
     @functools.cached_property
     def pressure_factors(self) -> PressureFactorCheck:
         """Warns once per factor where the model is used at a pressure at which a pressure factor of the file has
@@ -380,6 +412,25 @@ class MFModel:
     def __repr__(self):
         src = getattr(self._params, "source", None)
         return f"MFModel(FITTYP={self._params.fittyp}, side={self.side!r}, source={src!r})"
+
+
+#: Compiled kernels of this process for :meth:`MFModel.evaluate_chunked` (a digest of the parameters, side, outputs
+#: and options -> CompiledFunction): each worker builds or loads a kernel once, whatever the number of chunks.
+_KERNELS: dict = {}
+
+
+def _compiled_block(*inputs, params, side, outputs, options):
+    """One chunk of :meth:`MFModel.evaluate_chunked`: (outputs, points)."""
+    import hashlib
+    import pickle
+
+    from .compiled import compile_model
+
+    key = hashlib.sha256(pickle.dumps((params, side, outputs, sorted(options.items())))).hexdigest()
+    kernel = _KERNELS.get(key)
+    if kernel is None:
+        kernel = _KERNELS[key] = compile_model(MFModel(params, side=side), outputs=outputs, **options)
+    return np.array(kernel.batch(*inputs)).reshape(len(outputs), -1)
 
 
 class _PlainParameters:

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["register", "run"]
+__all__ = ["register", "run", "roll"]
 
 #: Outputs drawn by --plot, against the wheel position.
 _PLOTTED = (("fz", "N", "vertical force"), ("fx", "N", "longitudinal force"), ("my", "N m", "rolling moment"),
@@ -129,32 +129,45 @@ def _road_file(args):
 def simulate(args, say):
     """(SimResult, road, one-line description): the tyre built (compiled once, cached), then run."""
     import mftyre
-    from swift import StepInputs, SwiftTyre
     from swift.road import parse_road
 
     model = mftyre.load_tir(args.file)
-    prm = model.params
-    fz = float(prm.FNOMIN if args.fz is None else args.fz)
-    p = float(prm.INFLPRES if args.p is None else args.p)
     road = parse_road(args.road)
     v = args.speed
-    static = model.evaluate(fz=fz, kappa=0.0, alpha=0.0, vx=v, p=p)
-    rl, re = float(static.rl), float(static.re)
-    p = float(static.p)  # as used (saturated to PRESMIN..PRESMAX, a note says so): for the ring as for the height
     say(f"building the SWIFT stepper for {Path(args.file).name} (C compiled on first use and cached in "
         "~/.cache/mftyre; a minute at most)")
-    tyre = SwiftTyre(model, road, axle=args.axle, rim="speed", x_range=(args.start - 1.0, args.start + args.distance + 1.0))
-    t_end = args.distance / v
-    say(f"running {t_end:.3g} s ({args.distance:g} m at {v:g} m/s, {int(round(t_end / args.dt))} steps of "
-        f"{args.dt:g} s)")
-    u = StepInputs(x=args.start, vx=v, z=rl, load=fz, omega=v / re, p=p)
-    res = tyre.run(t_end, u, dt=args.dt)
+    res, (fz, p, rl, re) = roll(model, road, v, fz=args.fz, p=args.p, axle=args.axle, start=args.start,
+                                distance=args.distance, dt=args.dt,
+                                say=lambda steps: say(f"running {args.distance / v:.3g} s ({args.distance:g} m at "
+                                                      f"{v:g} m/s, {steps} steps of {args.dt:g} s)"))
     say("done")
     hold = (f"axle height {rl * 1e3:.1f} mm (the loaded radius at {fz:g} N)" if args.axle == "height"
             else f"axle load {fz:g} N")
     info = (f"{Path(args.file).name}: {v:g} m/s ({v * 3.6:.1f} km/h), {hold}, p {p / 1e5:.3g} bar, spin "
             f"{v / re:.4g} rad/s (Re {re * 1e3:.1f} mm); road {args.road or 'flat'}")
     return res, road, info
+
+
+def roll(model, road, v: float, *, fz=None, p=None, axle: str = "height", start: float = 0.0,
+         distance: float = 3.0, dt: float = 1e-3, say=None):
+    """The run of ``mftyre swift``: the SWIFT tyre of ``model`` rolling freely (spin v / Re) at ``v`` over ``road``
+    from ``start`` for ``distance`` from the static equilibrium, axle height held at the loaded radius of ``fz``
+    (default FNOMIN) or the axle load ``fz`` held; ``p`` default INFLPRES. Returns (SimResult, (fz, p used, Rl,
+    Re)); ``say(steps)`` is called before the run."""
+    from swift import StepInputs, SwiftTyre
+
+    prm = model.params
+    fz = float(prm.FNOMIN if fz is None else fz)
+    p = float(prm.INFLPRES if p is None else p)
+    static = model.evaluate(fz=fz, kappa=0.0, alpha=0.0, vx=v, p=p)
+    rl, re = float(static.rl), float(static.re)
+    p = float(static.p)  # as used (saturated to PRESMIN..PRESMAX, a note says so): for the ring as for the height
+    tyre = SwiftTyre(model, road, axle=axle, rim="speed", x_range=(start - 1.0, start + distance + 1.0))
+    t_end = distance / v
+    if say is not None:
+        say(int(round(t_end / dt)))
+    u = StepInputs(x=start, vx=v, z=rl, load=fz, omega=v / re, p=p)
+    return tyre.run(t_end, u, dt=dt), (fz, p, rl, re)
 
 
 def _frame(res):

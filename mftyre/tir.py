@@ -43,7 +43,7 @@ from .params import (
     invalid_values,
 )
 
-__all__ = ["read_tir", "parse_tir", "write_tir", "check_tir", "validate_params", "Finding", "UNIT_FACTORS",
+__all__ = ["read_tir", "read_tir_text", "parse_tir", "write_tir", "check_tir", "validate_params", "Finding", "UNIT_FACTORS",
            "unit_factor"]
 
 
@@ -444,11 +444,14 @@ def _validate(prm: TyreParameters, source: str) -> None:
 def read_tir(path, *, strict: bool = False) -> TyreParameters:
     """Read a .tir file (see :func:`parse_tir`)."""
     p = Path(path)
-    text = _read_text(p)
+    text = read_tir_text(p)
     return _parse(text, str(p), strict=strict, stacklevel=3)[0]
 
 
-def _read_text(p: Path) -> str:
+def read_tir_text(p) -> str:
+    """The text of the .tir file ``p`` (UTF-8, else Latin-1), read by the rule of :mod:`mftyre.files`; TirError
+    naming the file when it cannot be read or is binary."""
+    p = Path(p)
     data = read_user_file(p, max_bytes=TIR_MAX_BYTES, what=".tir property file", error=TirError)
     try:
         text = data.decode("utf-8")
@@ -600,7 +603,7 @@ def check_tir(path) -> list[Finding]:
         p = Path(path)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", MissingParameterWarning)
-            prm, sections_read = _parse(_read_text(p), str(p), strict=False, stacklevel=2, validate=False)
+            prm, sections_read = _parse(read_tir_text(p), str(p), strict=False, stacklevel=2, validate=False)
     except TirError as exc:
         return [Finding("error", getattr(exc, "parameter", None), getattr(exc, "line", None), str(exc))]
 

@@ -41,8 +41,9 @@ def register(subparsers) -> None:
                     "the physical checks are rejected with their reason. Writes the .tir file and optionally a "
                     "Markdown report with plots. Time series (100 Hz and more) are reduced per sweep to binned means, "
                     "up and down branches averaged.")
-    p.add_argument("data", help="measurement file: TYDEX, TTC (.dat/.mat) or CSV (see DATA below)")
-    p.add_argument("-o", "--output", required=True, help="the .tir file to write")
+    p.add_argument("data", help="measurement file: TYDEX, TTC (.dat/.mat) or CSV (see DATA below); or a campaign: a "
+                                "folder of runs or a CSV manifest (tyre, runs, ...; see mftyre.campaign)")
+    p.add_argument("-o", "--output", required=True, help="the .tir file to write (a campaign: the output folder)")
     p.add_argument("--start", help="start parameters from this .tir file (default: neutral values and estimates "
                                    "from the data)")
     p.add_argument("--report", help="write a Markdown report (and PNG plots beside it) to this path")
@@ -56,6 +57,9 @@ def register(subparsers) -> None:
     p.add_argument("--max-nfev", type=_integer(1), default=None,
                    help="residual evaluations per pass at most (integer >= 1; default 30 x (parameters + 1))")
     closing_options(p, overwrite="replace existing output files", quiet="no progress output", data=True)
+    from ..runner import add_runner_options
+
+    add_runner_options(p)  # a campaign's tyres in parallel (mftyre.campaign)
 
 
 def run(args) -> int:
@@ -64,12 +68,17 @@ def run(args) -> int:
     from ..errors import MFTyreError
     from .core import fit_tir
     from .stages import STAGE_NAMES
+    from ..campaign import is_campaign
 
     out = Path(args.output)
     stages = [s.strip() for s in args.stages.split(",") if s.strip()]
     unknown = [s for s in stages if s not in STAGE_NAMES]
     if unknown:
         return command_error("fit", f"unknown stage(s) {', '.join(unknown)}; stages: {', '.join(STAGE_NAMES)}")
+    if is_campaign(args.data):  # a folder or manifest: many tyres (mftyre.campaign)
+        from ..campaign import run_command
+
+        return run_command(args)
     outputs = {"-o": out, "--report": args.report}
     if args.report:  # the report's plots beside it (mftyre.fit.report.save_report)
         report = Path(args.report)
