@@ -32,6 +32,11 @@ from mftyre.variables import UNIT_BASES
 #: The hand-written C files (package data of fmu, so installed wheels can build FMUs).
 C_DIR = importlib.resources.files("fmu") / "native"
 MODELS = ("steady", "transient", "swift")
+#: FMI interfaces: co-simulation (the FMU integrates), model exchange (the host's integrator takes the states).
+INTERFACES = ("cs", "me")
+FMI_VERSIONS = (2, 3)
+#: Nominal value [m] of the states (the contact deflections: millimetres), for the host's error control in ME.
+STATE_NOMINAL = 1e-3
 
 
 
@@ -39,17 +44,41 @@ class NativeBuildError(MFTyreError):
     """The native FMU cannot be built (the message says why)."""
 
 
-def fmi2_headers() -> Path:
-    """fmpy's copy of the standard FMI 2.0 headers (2-clause BSD, Modelica Association)."""
+def fmi_headers(version: int = 2) -> tuple[Path, tuple]:
+    """fmpy's copy of the standard FMI 2.0 or 3.0 headers (2-clause BSD, Modelica Association): (folder, names)."""
+    names = {2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"),
+             3: ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")}[version]
     try:
         import fmpy
     except ImportError:
-        raise NativeBuildError("the native FMU needs the FMI 2.0 headers shipped with fmpy (pip install fmpy)") \
-            from None
+        raise NativeBuildError(f"the native FMU needs the FMI {version}.0 headers shipped with fmpy (pip install fmpy)"
+                               ) from None
     folder = Path(fmpy.__file__).parent / "c-code"
-    if not (folder / "fmi2Functions.h").is_file():
-        raise NativeBuildError(f"fmpy at {folder.parent} has no FMI 2.0 headers (c-code/fmi2Functions.h)")
-    return folder
+    if not all((folder / n).is_file() for n in names):
+        raise NativeBuildError(f"fmpy at {folder.parent} has no FMI {version}.0 headers (c-code/{names[0]})")
+    return folder, names
+
+
+#: The binary platforms: FMI 2 folder name -> (FMI 3 platform tuple, library suffix). FMI 2.0 names only the
+#: x86 platforms (linux64, win64, darwin64); ARM 64 has FMI 3 tuples only (aarch64-linux, aarch64-darwin).
+PLATFORMS = {"linux64": ("x86_64-linux", ".so"), "win64": ("x86_64-windows", ".dll"),
+             "darwin64": ("x86_64-darwin", ".dylib"), "aarch64-linux": ("aarch64-linux", ".so"),
+             "aarch64-darwin": ("aarch64-darwin", ".dylib")}
+#: The MinGW-w64 cross compiler that builds win64 on Linux (Debian: apt-get install gcc-mingw-w64-x86-64).
+MINGW = "x86_64-w64-mingw32-gcc"
+INSTALL_HINT = {"win64": f"no MinGW-w64 cross compiler ({MINGW}; Debian/Ubuntu: apt-get install gcc-mingw-w64-x86-64)"}
+
+
+def host_platform() -> str:
+    """The FMI 2 platform name of this machine (:data:`PLATFORMS`)."""
+    import platform
+
+    arm = platform.machine().lower() in ("aarch64", "arm64")
+    if sys.platform.startswith("linux"):
+        return "aarch64-linux" if arm else "linux64"
+    if sys.platform == "darwin":
+        return "aarch64-darwin" if arm else "darwin64"
+    return "win64"
 
 
 def c_compiler() -> str:
@@ -59,19 +88,86 @@ def c_compiler() -> str:
     return cc
 
 
+def toolchains() -> dict:
+    """platform -> (compiler, None) for each platform this machine can build, or (None, why not): the host with
+    ``$CC`` or cc, win64 from Linux with MinGW-w64; other platforms build from the FMU's sources on the platform."""
+    host = host_platform()
+    found = {}
+    for name in PLATFORMS:
+        if name == host:
+            try:
+                found[name] = (c_compiler(), None)
+            except NativeBuildError as exc:
+                found[name] = (None, str(exc))
+        elif name == "win64" and host == "linux64":
+            cc = shutil.which(MINGW)
+            found[name] = (cc, None if cc else INSTALL_HINT["win64"])
+        else:
+            found[name] = (None, f"not cross-compiled here (build it on {name} from the FMU's sources/)")
+    return found
+
+
 def compile_sources(sources_dir: Path, library: Path) -> None:
-    """cc -O2 -fPIC -shared every .c in ``sources_dir`` into ``library``."""
+    """Compile every .c in ``sources_dir`` into ``library``, for the platform its folder names
+    (``binaries/<platform>/``, :data:`PLATFORMS`, FMI 2 or 3 names) with that platform's compiler
+    (:func:`toolchains`): each source to an object (-O2; cached in the compile cache by its text, the headers it
+    includes, compiler and flags: the generated tyre equations compile once for every variant), then linked
+    -shared (win64: the C runtime of gcc linked in)."""
+    fmi2_name = {v[0]: k for k, v in PLATFORMS.items()}.get(library.parent.name, library.parent.name)
+    compiler, why = toolchains().get(fmi2_name, (None, f"unknown platform {fmi2_name}"))
+    if compiler is None:
+        raise NativeBuildError(f"cannot build {fmi2_name}: {why}")
     library.parent.mkdir(parents=True, exist_ok=True)
-    files = sorted(str(p) for p in Path(sources_dir).glob("*.c"))
-    cmd = [c_compiler(), "-O2", "-fPIC", "-shared", "-fvisibility=hidden", "-I", str(sources_dir), *files,
-           "-o", str(library), "-lm"]
+    windows = fmi2_name == "win64"
+    cflags = ["-O2", "-fvisibility=hidden", "-I", "."] + ([] if windows else ["-fPIC"])
+    objects = [_object(compiler, cflags, Path(src)) for src in sorted(Path(sources_dir).glob("*.c"))]
+    cmd = [compiler, "-shared", *objects, "-o", str(library)] + (["-static-libgcc"] if windows else ["-lm"])
     res = subprocess.run(cmd, capture_output=True, text=True)
     if res.returncode != 0:
-        raise NativeBuildError(f"compiling the FMU failed ({' '.join(cmd)}):\n{res.stderr[-4000:]}")
+        raise NativeBuildError(f"linking the FMU failed ({' '.join(cmd)}):\n{res.stderr[-4000:]}")
+
+
+def _included(source: Path, seen: set) -> bytes:
+    """The text of ``source`` and of the local headers it includes (recursively): what its object depends on."""
+    import re
+
+    text = source.read_bytes()
+    out = text
+    for name in re.findall(rb'^\s*#\s*include\s*"([^"]+)"', text, re.M):
+        header = source.parent / name.decode()
+        if header.is_file() and header not in seen:
+            seen.add(header)
+            out += b"\0" + name + b"\0" + _included(header, seen)
+    return out
+
+
+def _object(compiler: str, cflags: list, source: Path) -> str:
+    """The object file of ``source`` from the compile cache (:func:`mftyre.compiled.cache_dir`), compiled into it
+    when absent (written under a unique name and renamed: concurrent builds do not collide)."""
+    from mftyre.compiled import cache_dir
+
+    version = subprocess.run([compiler, "-dumpmachine"], capture_output=True, text=True).stdout.strip()
+    key = hashlib.sha256(b"\0".join([compiler.encode(), version.encode(), " ".join(cflags).encode(),
+                                      _included(source, set())])).hexdigest()[:32]
+    folder = cache_dir() / "fmu_objects"
+    folder.mkdir(mode=0o700, exist_ok=True)
+    obj = folder / f"{source.stem}_{key}.o"
+    if not obj.is_file():
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{obj.name}.", suffix=".tmp")
+        os.close(fd)
+        try:
+            cmd = [compiler, *cflags, "-c", source.name, "-o", tmp]
+            res = subprocess.run(cmd, capture_output=True, text=True, cwd=source.parent)
+            if res.returncode != 0:
+                raise NativeBuildError(f"compiling the FMU failed ({' '.join(cmd)}):\n{res.stderr[-4000:]}")
+            os.replace(tmp, obj)
+        finally:
+            Path(tmp).unlink(missing_ok=True)
+    return str(obj)
 
 
 def _c_array(name, values, ctype="double"):
-    vals = list(values) or [0]
+    vals = list(values) or ([0] if ctype == "double" else ["-1"])
     body = ", ".join(repr(float(v)) if ctype == "double" else v for v in vals)
     return f"static const {ctype} {name}[{len(vals)}] = {{{body}}};\n"
 
@@ -87,7 +183,8 @@ def write_config(path: Path, spec, guid: str, extra: str = "") -> None:
             "#ifndef TYRE_CONFIG_H\n#define TYRE_CONFIG_H\n"
             f"#define TYRE_GUID \"{guid}\"\n#define TYRE_NX {len(spec.state_names)}\n#define TYRE_NU {len(u)}\n"
             f"#define TYRE_NQ {len(spec.parameter_names)}\n#define TYRE_NY {len(spec.output_names)}\n"
-            f"#define TYRE_HAS_DD {1 if spec.directional else 0}\n")
+            f"#define TYRE_HAS_DD {1 if spec.directional else 0}\n#define TYRE_HAS_ME {1 if spec.me else 0}\n"
+            f"#define TYRE_NZ {len(spec.event_names)}\n")
     for i, n in enumerate(u):
         text += f"#define TYRE_U_{n.upper()} {i}\n"
     for i, n in enumerate(spec.parameter_names):
@@ -95,24 +192,55 @@ def write_config(path: Path, spec, guid: str, extra: str = "") -> None:
     text += _c_array("TYRE_Q_START", [v.start for v in spec.parameters])
     text += _c_array("TYRE_U_START", [v.start for v in spec.inputs])
     text += _c_strings("TYRE_Q_NAMES", spec.parameter_names) + _c_strings("TYRE_U_NAMES", u)
+    # the outputs that are the states (ME: the state variables), and the states' nominal values
+    text += _c_array("TYRE_X_OUTPUT", [str(spec.output_names.index(n)) for n in spec.state_names if spec.me], "int")
+    text += f"#define TYRE_X_NOMINAL {STATE_NOMINAL!r}\n"
     text += extra + "#endif\n"
     path.write_text(text)
 
 
-def model_description(spec, model_id: str, guid: str, description: str, sources: list[str]) -> str:
-    """modelDescription.xml: parameters, inputs (start values), outputs with their true input dependencies."""
-    units = sorted({v.unit for v in (*spec.parameters, *spec.inputs, *spec.outputs)} - {"1"})
+def _attr(text: str) -> str:
+    return escape(text, {chr(34): "&quot;"})
+
+
+def _variables(spec) -> list:
+    """Every variable of the FMU in value-reference order: (name, causality, unit, description, start, derivative
+    of), the parameters q, inputs u and outputs y (:mod:`mftyre.variables`), then for model exchange the state
+    derivatives der(<state>) and the event indicators (the glue's value references, fmi2_tyre.c)."""
+    out = [(v.name, v.causality, v.unit, v.description, None if v.start is None else float(v.start), None)
+           for v in (*spec.parameters, *spec.inputs, *spec.outputs)]
+    if spec.me:
+        first_y = len(spec.parameters) + len(spec.inputs)
+        for name in spec.state_names:
+            unit = spec.outputs[spec.output_names.index(name)].unit
+            out.append((f"der({name})", "local", f"{unit}/s", f"time derivative of the state {name}", None,
+                        first_y + spec.output_names.index(name)))
+        for name in spec.event_names:
+            out.append((f"event_{name}", "local", "1", f"event indicator: its sign changes where a branch of the "
+                        f"equations switches ({name})", None, None))
+    return out
+
+
+def model_description(spec, model_id: str, guid: str, description: str, sources: list[str],
+                      interface: str = "cs") -> str:
+    """FMI 2.0 modelDescription.xml of co-simulation (``cs``) or model exchange (``me``): parameters, inputs
+    (start values), outputs with their true dependencies (CS: on the inputs; ME: on the inputs and the states),
+    ME also the state derivatives."""
+    me = interface == "me"
+    units = sorted({v.unit for v in (*spec.parameters, *spec.inputs, *spec.outputs)} - {"1"} |
+                   ({f"{spec.outputs[spec.output_names.index(n)].unit}/s" for n in spec.state_names} if me else set()))
+    flags = ('needsExecutionTool="false" canBeInstantiatedOnlyOncePerProcess="false" '
+             'canNotUseMemoryManagementFunctions="true" canGetAndSetFMUstate="true" canSerializeFMUstate="true" '
+             f'providesDirectionalDerivative="{"true" if spec.directional else "false"}"')
+    element = (f'  <ModelExchange modelIdentifier="{model_id}" completedIntegratorStepNotNeeded="true" {flags}>' if me
+               else f'  <CoSimulation modelIdentifier="{model_id}" canHandleVariableCommunicationStepSize="true" '
+               'canInterpolateInputs="false" maxOutputDerivativeOrder="0" canRunAsynchronuously="false" ' + flags + '>')
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
              f'<fmiModelDescription fmiVersion="2.0" modelName="{escape(model_id)}" guid="{guid}" '
-             f'description="{escape(description, {chr(34): "&quot;"})}" generationTool="mftyre (native, CasADi '
-             f'C code)" variableNamingConvention="flat" numberOfEventIndicators="0">',
-             f'  <CoSimulation modelIdentifier="{model_id}" needsExecutionTool="false" '
-             'canHandleVariableCommunicationStepSize="true" canInterpolateInputs="false" '
-             'maxOutputDerivativeOrder="0" canRunAsynchronuously="false" canBeInstantiatedOnlyOncePerProcess="false" '
-             'canNotUseMemoryManagementFunctions="true" canGetAndSetFMUstate="true" canSerializeFMUstate="true" '
-             f'providesDirectionalDerivative="{"true" if spec.directional else "false"}">',
-             '    <SourceFiles>'] + [f'      <File name="{s}"/>' for s in sources] + [
-             '    </SourceFiles>', '  </CoSimulation>', '  <UnitDefinitions>']
+             f'description="{_attr(description)}" generationTool="mftyre (native, CasADi '
+             f'C code)" variableNamingConvention="flat" numberOfEventIndicators="{len(spec.event_names) if me else 0}">',
+             element, '    <SourceFiles>'] + [f'      <File name="{s}"/>' for s in sources] + [
+             '    </SourceFiles>', '  </ModelExchange>' if me else '  </CoSimulation>', '  <UnitDefinitions>']
     for un in units:
         base = " ".join(f'{k}="{v}"' for k, v in UNIT_BASES[un].items())
         lines.append(f'    <Unit name="{un}"><BaseUnit {base}/></Unit>')
@@ -122,34 +250,101 @@ def model_description(spec, model_id: str, guid: str, description: str, sources:
               '    <Category name="logStatusDiscard" description="rejected steps and inputs (outputs held)"/>',
               '  </LogCategories>',
               '  <DefaultExperiment startTime="0" stopTime="1" stepSize="0.001"/>', '  <ModelVariables>']
-    vr = 0
-
-    def var(name, causality, variability, unit, desc, start=None, initial=None):
-        nonlocal vr
-        attrs = f'name="{name}" valueReference="{vr}" causality="{causality}" variability="{variability}"'
-        if initial:
-            attrs += f' initial="{initial}"'
+    variability = {"parameter": "fixed", "input": "continuous", "output": "continuous", "local": "continuous"}
+    initial = {"parameter": "exact", "input": None, "output": "calculated", "local": "calculated"}
+    variables = [v for v in _variables(spec) if not v[0].startswith("event_")]  # FMI 2: indicators by number only
+    for vr, (name, causality, unit, desc, start, derivative) in enumerate(variables):
+        attrs = f'name="{name}" valueReference="{vr}" causality="{causality}" variability="{variability[causality]}"'
+        if initial[causality]:
+            attrs += f' initial="{initial[causality]}"'
         real = "<Real" + (f' unit="{unit}"' if unit != "1" else "") + (
-            f' start="{start!r}"' if start is not None else "") + "/>"
-        lines.append(f'    <ScalarVariable {attrs} description="{escape(desc, {chr(34): "&quot;"})}">{real}'
-                     '</ScalarVariable>')
-        vr += 1
-
-    variability = {"parameter": "fixed", "input": "continuous", "output": "continuous"}
-    initial = {"parameter": "exact", "input": None, "output": "calculated"}
-    for v in (*spec.parameters, *spec.inputs, *spec.outputs):  # mftyre.variables.Variable, in vector order
-        var(v.name, v.causality, variability[v.causality], v.unit, v.description,
-            None if v.start is None else float(v.start), initial[v.causality])
+            f' start="{start!r}"' if start is not None else "") + (
+            f' derivative="{derivative + 1}"' if derivative is not None else "") + (
+            f' nominal="{STATE_NOMINAL!r}"' if me and name in spec.state_names else "") + "/>"
+        lines.append(f'    <ScalarVariable {attrs} description="{_attr(desc)}">{real}</ScalarVariable>')
     lines += ['  </ModelVariables>', '  <ModelStructure>', '    <Outputs>']
-    nq, nu, ny = len(spec.parameter_names), len(spec.input_names), len(spec.output_names)
-    deps = spec.output_dependencies  # per output: indices of the inputs it depends on directly
-    for j in range(ny):
-        d = " ".join(str(nq + i + 1) for i in deps[j])
-        lines.append(f'      <Unknown index="{nq + nu + j + 1}" dependencies="{d}"/>')
-    lines += ['    </Outputs>', '    <InitialUnknowns>']
-    for j in range(ny):
-        lines.append(f'      <Unknown index="{nq + nu + j + 1}"/>')
+    for j, d in enumerate(_dependencies(spec, me)[0]):
+        lines.append(f'      <Unknown index="{_first_output(spec) + j + 1}" dependencies="{" ".join(str(i + 1) for i in d)}"/>')
+    lines.append('    </Outputs>')
+    if me and spec.state_names:
+        lines.append('    <Derivatives>')
+        for k, d in enumerate(_dependencies(spec, me)[1]):
+            lines.append(f'      <Unknown index="{_first_output(spec) + len(spec.outputs) + k + 1}" '
+                         f'dependencies="{" ".join(str(i + 1) for i in d)}"/>')
+        lines.append('    </Derivatives>')
+    lines.append('    <InitialUnknowns>')
+    for j in range(len(spec.outputs) + (len(spec.state_names) if me else 0)):
+        lines.append(f'      <Unknown index="{_first_output(spec) + j + 1}"/>')
     lines += ['    </InitialUnknowns>', '  </ModelStructure>', '</fmiModelDescription>', '']
+    return "\n".join(lines)
+
+
+def _first_output(spec) -> int:
+    return len(spec.parameters) + len(spec.inputs)
+
+
+def _dependencies(spec, me: bool) -> tuple:
+    """(per output, per state derivative): the value references each depends on directly: inputs, and with
+    ``me`` the state variables (the outputs that are the states; an output's own state is itself, not listed)."""
+    nq, y0 = len(spec.parameters), _first_output(spec)
+    state_vr = [y0 + spec.output_names.index(n) for n in spec.state_names]
+    outputs = []
+    for j, d in enumerate(spec.output_dependencies):
+        refs = [nq + i for i in d]
+        if me:
+            refs = sorted(refs + [state_vr[k] for k in spec.output_state_dependencies[j] if state_vr[k] != y0 + j])
+        outputs.append(refs)
+    derivatives = [sorted([state_vr[k] for k in dx] + [nq + i for i in du]) for dx, du in spec.derivative_dependencies]
+    return outputs, derivatives
+
+
+def model_description3(spec, model_id: str, guid: str, description: str, interface: str = "cs") -> str:
+    """FMI 3.0 modelDescription.xml (co-simulation or model exchange): the variables of :func:`_variables` as
+    Float64, their dependencies by value reference; model exchange with the state derivatives and the event
+    indicators."""
+    me = interface == "me"
+    variables = _variables(spec) if me else _variables(spec)[:_first_output(spec) + len(spec.outputs)]
+    units = sorted({v[2] for v in variables} - {"1"})
+    flags = ('canGetAndSetFMUState="true" canSerializeFMUState="true" '
+             f'providesDirectionalDerivatives="{"true" if spec.directional else "false"}"')
+    element = (f'  <ModelExchange modelIdentifier="{model_id}" needsCompletedIntegratorStep="false" {flags}/>' if me
+               else f'  <CoSimulation modelIdentifier="{model_id}" canHandleVariableCommunicationStepSize="true" '
+               f'hasEventMode="false" {flags}/>')
+    lines = ['<?xml version="1.0" encoding="UTF-8"?>',
+             f'<fmiModelDescription fmiVersion="3.0" modelName="{escape(model_id)}" instantiationToken="{guid}" '
+             f'description="{_attr(description)}" generationTool="mftyre (native, CasADi C code)" '
+             'variableNamingConvention="flat">', element, '  <UnitDefinitions>']
+    for un in units:
+        base = " ".join(f'{k}="{v}"' for k, v in UNIT_BASES[un].items())
+        lines.append(f'    <Unit name="{un}"><BaseUnit {base}/></Unit>')
+    lines += ['  </UnitDefinitions>', '  <LogCategories>',
+              '    <Category name="logStatusError" description="errors: failed initialisation, bad calls"/>',
+              '    <Category name="logStatusDiscard" description="rejected steps and inputs (outputs held)"/>',
+              '  </LogCategories>',
+              '  <DefaultExperiment startTime="0" stopTime="1" stepSize="0.001"/>', '  <ModelVariables>']
+    variability = {"parameter": "fixed", "input": "continuous", "output": "continuous", "local": "continuous"}
+    for vr, (name, causality, unit, desc, start, derivative) in enumerate(variables):
+        attrs = (f'name="{name}" valueReference="{vr}" causality="{causality}" variability="{variability[causality]}"'
+                 + (f' unit="{unit}"' if unit != "1" else "") + (f' start="{start!r}"' if start is not None else "")
+                 + (f' derivative="{derivative}"' if derivative is not None else "")
+                 + (f' nominal="{STATE_NOMINAL!r}"' if me and name in spec.state_names else ""))
+        lines.append(f'    <Float64 {attrs} description="{_attr(desc)}"/>')
+    lines += ['  </ModelVariables>', '  <ModelStructure>']
+    outputs, derivatives = _dependencies(spec, me)
+    y0 = _first_output(spec)
+    for j, d in enumerate(outputs):
+        lines.append(f'    <Output valueReference="{y0 + j}" dependencies="{" ".join(map(str, d))}"/>')
+    der0 = y0 + len(spec.outputs)
+    if me:
+        for k, d in enumerate(derivatives):
+            lines.append(f'    <ContinuousStateDerivative valueReference="{der0 + k}" dependencies="'
+                         f'{" ".join(map(str, d))}"/>')
+    for j in range(len(spec.outputs) + (len(spec.state_names) if me else 0)):
+        lines.append(f'    <InitialUnknown valueReference="{y0 + j}"/>')
+    if me:
+        for k in range(len(spec.event_names)):
+            lines.append(f'    <EventIndicator valueReference="{der0 + len(spec.state_names) + k}"/>')
+    lines += ['  </ModelStructure>', '</fmiModelDescription>', '']
     return "\n".join(lines)
 
 
@@ -161,8 +356,9 @@ def build_description(model_id: str, sources: list[str]) -> str:
             '</fmiBuildDescription>\n')
 
 
-def generate_sources(spec, sources: Path, guid: str) -> list[str]:
-    """Write the C sources of ``spec`` (see :func:`model_spec`) into ``sources``; returns the .c names."""
+def generate_sources(spec, sources: Path, guid: str, fmi_version: int = 2) -> list[str]:
+    """Write the C sources of ``spec`` (see :func:`model_spec`) into ``sources``; returns the .c names. FMI 3: the
+    FMI 3 layer ``fmi3_tyre.c`` over the FMI 2 wrapper (one implementation of the FMU's behaviour)."""
     import casadi as ca
 
     sources.mkdir(parents=True, exist_ok=True)
@@ -171,12 +367,14 @@ def generate_sources(spec, sources: Path, guid: str) -> list[str]:
         gen.add(f)
     gen.generate(str(sources) + os.sep)
     write_config(sources / "tyre_config.h", spec, guid, spec.config_extra)
-    for name in ("fmi2_tyre.c", "tyre_glue.h", spec.glue):
+    layers = ["fmi2_tyre.c"] + (["fmi3_tyre.c"] if fmi_version == 3 else [])
+    for name in (*layers, "tyre_glue.h", spec.glue):
         (sources / name).write_bytes((C_DIR / name).read_bytes())
-    headers = fmi2_headers()
-    for name in ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"):
-        shutil.copy2(headers / name, sources / name)
-    return ["fmi2_tyre.c", spec.glue, "tyre_model.c"]
+    for version in (2, 3) if fmi_version == 3 else (2,):
+        folder, names = fmi_headers(version)
+        for name in names:
+            shutil.copy2(folder / name, sources / name)
+    return [*layers[::-1], spec.glue, "tyre_model.c"]
 
 
 def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_start: float = 0.0,
@@ -205,30 +403,71 @@ def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_sta
     else:
         raise NativeBuildError(f"--model must be one of {', '.join(MODELS)}, got {kind!r}")
     functions = [f.init, f.step, f.out] + ([f.residual, f.root] if kind == "swift" else [])
-    if directional:
+    me = directional  # the wheels have their state equations as derivatives (WheelFunctions.deriv); SWIFT not
+    state_deps = derivative_deps = []
+    if directional:  # d(y, dx/dt) / d(x, u) (dy/du for co-simulation, the whole Jacobian for model exchange)
         x, u, q = (ca.SX.sym(n, f.out.size1_in(i)) for i, n in enumerate(("x", "u", "q")))
-        y = f.out(x, u, q)
-        jac = ca.jacobian(y, u).sparsity()
-        deps = [[i for i in range(jac.size2()) if jac.has_nz(j, i)] for j in range(jac.size1())]
-        du = ca.SX.sym("du", u.numel())
-        functions.append(ca.Function("tyre_dout", [x, u, q, du], [ca.jtimes(y, u, du)], ["x", "u", "q", "du"],
-                                     ["dy"]))
+        y, xdot = f.out(x, u, q), f.deriv(x, u, q)
+
+        def pattern(expr, wrt):
+            jac = ca.jacobian(expr, wrt).sparsity()
+            return [[i for i in range(jac.size2()) if jac.has_nz(j, i)] for j in range(jac.size1())]
+
+        deps = pattern(y, u)
+        state_deps = pattern(y, x)  # per output: the states it depends on
+        derivative_deps = [(a, b) for a, b in zip(pattern(xdot, x), pattern(xdot, u))]
+        dx, du = ca.SX.sym("dx", x.numel()), ca.SX.sym("du", u.numel())
+        xu, dxu = ca.vertcat(x, u), ca.vertcat(dx, du)
+        functions += [ca.Function("tyre_dout", [x, u, q, dx, du], [ca.jtimes(y, xu, dxu), ca.jtimes(xdot, xu, dxu)],
+                                  ["x", "u", "q", "dx", "du"], ["dy", "dxdot"]), f.deriv, f.events]
     else:
         deps = f.output_dependencies
     return SimpleNamespace(
         functions=functions, state_names=f.state_names, glue=glue, config_extra=extra, directional=directional,
+        me=me, event_names=f.event_names if me else (), kind=kind,
         parameters=f.parameters, inputs=f.inputs, outputs=f.outputs, input_names=f.input_names,
         parameter_names=f.parameter_names, output_names=f.output_names, output_dependencies=deps,
+        output_state_dependencies=state_deps, derivative_dependencies=derivative_deps,
         fingerprint=hashlib.sha256("".join(fn.serialize() for fn in functions).encode()).hexdigest() + extra)
+
+
+def choose_platforms(requested=None, fmi_version: int = 2) -> tuple[list, dict]:
+    """(platforms to build, {platform: why it is not built}): ``requested`` (names of :data:`PLATFORMS`, FMI 2
+    names or FMI 3 tuples) or by default every platform this machine can build (:func:`toolchains`)."""
+    chains = toolchains()
+    if fmi_version == 2:  # FMI 2.0 names linux64, win64, darwin64 only
+        chains.update({p: (None, "FMI 2.0 has no platform name for it (build with --fmi-version 3)")
+                       for p in PLATFORMS if p.startswith("aarch64")})
+    if requested is None:
+        chosen = [p for p, (cc, _) in chains.items() if cc]
+        if not chosen:
+            raise NativeBuildError(f"no platform can be built here: {chains[host_platform()][1]}")
+        return chosen, {p: why for p, (cc, why) in chains.items() if not cc}
+    tuples = {v[0]: k for k, v in PLATFORMS.items()}
+    chosen = []
+    for name in requested:
+        p = tuples.get(name, name)
+        if p not in PLATFORMS:
+            raise NativeBuildError(f"--platforms: unknown platform {name!r} (one of {', '.join(PLATFORMS)})")
+        if not chains[p][0]:
+            raise NativeBuildError(f"--platforms {name}: cannot build it here: {chains[p][1]}")
+        if p not in chosen:
+            chosen.append(p)
+    if not chosen:
+        raise NativeBuildError("--platforms: name at least one platform")
+    return chosen, {}
 
 
 def build_native_fmu(tir, output, *, model: str = "steady", side: str | None = None, vertical: str = "position",
                      road=None, x_start: float = 0.0, turn_slip: bool = False, input_mode: str = "vehicle",
-                     rim: str = "speed", overwrite: bool = False, quiet: bool = True, progress=None) -> Path:
+                     rim: str = "speed", platforms=None, interface: str = "cs", fmi_version: int = 2,
+                     overwrite: bool = False, quiet: bool = True, progress=None) -> Path:
     """Build the native FMU of ``tir`` at ``output``; returns the path. ``road``: swift only, a
     :class:`swift.road.Road`, a road expression or a CSV file with columns x, z. ``input_mode``: "vehicle" or
     "rig" (steady: load and slips as inputs, :func:`mftyre.transient.wheel_functions`). ``rim``: swift, "speed"
-    (input omega imposed) or "torque" (input torque drives the rim). ``progress``: callable(text)
+    (input omega imposed) or "torque" (input torque drives the rim). ``platforms``: the binaries to put in
+    (:func:`choose_platforms`; default every one this machine can build). ``interface``: "cs" (co-simulation) or
+    "me" (model exchange; steady and transient). ``fmi_version``: 2 or 3. ``progress``: callable(text)
     told each stage (equations, C generation, compilation, packing)."""
     import mftyre
     from mftyre.errors import MFTyreError
@@ -236,6 +475,16 @@ def build_native_fmu(tir, output, *, model: str = "steady", side: str | None = N
     tir, output = Path(tir), Path(output)
     if model not in MODELS:
         raise NativeBuildError(f"--model must be one of {', '.join(MODELS)}, got {model!r}")
+    if interface not in INTERFACES:
+        raise NativeBuildError(f"--interface must be one of {', '.join(INTERFACES)}, got {interface!r}")
+    if fmi_version not in FMI_VERSIONS:
+        raise NativeBuildError(f"--fmi-version must be 2 or 3, got {fmi_version!r}")
+    if interface == "me" and model == "swift":
+        raise NativeBuildError(
+            "--interface me is not offered for --model swift: its step carries the contact solution (the contact "
+            "length l_s solved from the last step's) and moves the road window, which are not states a host's "
+            "integrator can take, and the ring needs RK4 steps of at most 1 ms; use co-simulation (--interface cs)")
+    chosen, missing = choose_platforms(platforms, fmi_version)
     if output.suffix.lower() != ".fmu":
         raise NativeBuildError(f"the output file must end in .fmu, got {str(output)!r}")
     try:  # the one output rule: never an input, an existing file only with --overwrite, never a link or FIFO
@@ -256,22 +505,28 @@ def build_native_fmu(tir, output, *, model: str = "steady", side: str | None = N
         raise NativeBuildError(f"cannot build the {model} FMU from {tir}: {exc}") from None
     model_id = f"mftyre_{model}"
     tir_bytes = tir.read_bytes()
-    mode = (model, tyre.side, vertical, turn_slip, spec.fingerprint, mftyre.__version__)
+    mode = (model, tyre.side, vertical, turn_slip, spec.fingerprint, mftyre.__version__) + (
+        () if (interface, fmi_version) == ("cs", 2) else (interface, fmi_version))
     digest = hashlib.sha256(tir_bytes + repr(mode if input_mode == "vehicle" else (*mode, input_mode)).encode()
                             ).hexdigest()
     guid = "{" + str(uuid.UUID(digest[:32])) + "}"
     with tempfile.TemporaryDirectory(prefix="mftyre_native_") as tmp:
         root = Path(tmp) / "fmu"
         say("generating C sources")
-        c_files = generate_sources(spec, root / "sources", guid)
+        c_files = generate_sources(spec, root / "sources", guid, fmi_version)
         (root / "sources" / "buildDescription.xml").write_text(build_description(model_id, c_files))
         desc = (f"mftyre {model} tyre from {tir.name} (FITTYP {tyre.params.fittyp}), mounted {tyre.side}; "
                 "ISO-W axes (x wheel heading on the road, y left, z up), SI units")
-        (root / "modelDescription.xml").write_text(model_description(spec, model_id, guid, desc, c_files))
+        (root / "modelDescription.xml").write_text(
+            model_description(spec, model_id, guid, desc, c_files, interface) if fmi_version == 2 else
+            model_description3(spec, model_id, guid, desc, interface))
         (root / "resources").mkdir()
         (root / "resources" / "tyre.tir").write_bytes(tir_bytes)
-        say(f"compiling {len(c_files)} C sources (the longest step: the generated C of the wheel's equations)")
-        compile_sources(root / "sources", root / "binaries" / _platform_dir() / f"{model_id}.so")
+        for name in chosen:
+            folder, suffix = (name if fmi_version == 2 else PLATFORMS[name][0]), PLATFORMS[name][1]
+            say(f"compiling {len(c_files)} C sources for {name} (the longest step: the generated C of the wheel's "
+                "equations)")
+            compile_sources(root / "sources", root / "binaries" / folder / f"{model_id}{suffix}")
         say("packing the FMU")
         archive = io.BytesIO()  # zipped in memory, then written by the one atomic no-follow routine
         with zipfile.ZipFile(archive, "w", zipfile.ZIP_DEFLATED) as zf:
@@ -281,15 +536,8 @@ def build_native_fmu(tir, output, *, model: str = "steady", side: str | None = N
         make_output_folder(output.parent)
         write_atomically(output, archive.getvalue())
     if not quiet:
-        print(f"wrote {output}: native FMI 2.0 CS, model {model}, {tir.name} mounted {tyre.side}")
+        print(f"wrote {output}: native FMI {fmi_version}.0 {interface.upper()}, model {model}, {tir.name} mounted "
+              f"{tyre.side}; binaries for {', '.join(chosen)}")
+        for name, why in missing.items():
+            print(f"  no {name} binary: {why}")
     return output
-
-
-def _platform_dir() -> str:
-    import platform
-
-    if sys.platform.startswith("linux"):
-        return "linux64" if platform.machine() in ("x86_64", "aarch64") else "linux32"
-    if sys.platform == "darwin":
-        return "darwin64"
-    return "win64"
