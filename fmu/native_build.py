@@ -287,7 +287,7 @@ def _dependencies(spec, me: bool) -> tuple:
     """(per output, per state derivative): the value references each depends on directly: inputs, and with
     ``me`` the state variables (the outputs that are the states; an output's own state is itself, not listed)."""
     nq, y0 = len(spec.parameters), _first_output(spec)
-    state_vr = [y0 + spec.output_names.index(n) for n in spec.state_names]
+    state_vr = [y0 + spec.output_names.index(n) for n in spec.state_names] if spec.me else []
     outputs = []
     for j, d in enumerate(spec.output_dependencies):
         refs = [nq + i for i in d]
@@ -304,7 +304,7 @@ def model_description3(spec, model_id: str, guid: str, description: str, interfa
     indicators."""
     me = interface == "me"
     variables = _variables(spec) if me else _variables(spec)[:_first_output(spec) + len(spec.outputs)]
-    units = sorted({v[2] for v in variables} - {"1"})
+    units = sorted({v[2] for v in variables} - {"1"} | {"s"})
     flags = ('canGetAndSetFMUState="true" canSerializeFMUState="true" '
              f'providesDirectionalDerivatives="{"true" if spec.directional else "false"}"')
     element = (f'  <ModelExchange modelIdentifier="{model_id}" needsCompletedIntegratorStep="false" {flags}/>' if me
@@ -323,6 +323,8 @@ def model_description3(spec, model_id: str, guid: str, description: str, interfa
               '  </LogCategories>',
               '  <DefaultExperiment startTime="0" stopTime="1" stepSize="0.001"/>', '  <ModelVariables>']
     variability = {"parameter": "fixed", "input": "continuous", "output": "continuous", "local": "continuous"}
+    lines.append(f'    <Float64 name="time" valueReference="{len(_variables(spec))}" causality="independent" '
+                 'variability="continuous" unit="s" description="simulation time"/>')
     for vr, (name, causality, unit, desc, start, derivative) in enumerate(variables):
         attrs = (f'name="{name}" valueReference="{vr}" causality="{causality}" variability="{variability[causality]}"'
                  + (f' unit="{unit}"' if unit != "1" else "") + (f' start="{start!r}"' if start is not None else "")

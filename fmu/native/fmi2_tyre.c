@@ -4,7 +4,8 @@
  * It only translates FMI calls: the tyre is the model glue (tyre_glue.h: glue_init, glue_step, glue_out,
  * glue_dout, glue_validate), which calls the C code CasADi generated from mftyre's equations. Variables:
  * value references 0..NQ-1 are the parameters q, NQ..NQ+NU-1 the inputs u, then the NY outputs y (the states x
- * are outputs too: TYRE_X_OUTPUT), then for model exchange the NX state derivatives and the NZ event indicators. The whole
+ * are outputs too: TYRE_X_OUTPUT), then for model exchange the NX state derivatives and the NZ event indicators, then
+ * time (FMI 3's independent variable). The whole
  * internal state (phase, time, q, u, x, y) is one plain struct, so FMU states are copies of it and serialise
  * byte for byte. Every failure is logged with its cause and reported through the status; nothing aborts.
  */
@@ -263,7 +264,7 @@ fmi2Status fmi2Reset(fmi2Component c) {
 }
 
 /* ------------------------------------------------------------------------------------------ get / set */
-typedef enum { VAR_PARAMETER, VAR_INPUT, VAR_OUTPUT, VAR_DERIVATIVE, VAR_EVENT, VAR_UNKNOWN } VarKind;
+typedef enum { VAR_PARAMETER, VAR_INPUT, VAR_OUTPUT, VAR_DERIVATIVE, VAR_EVENT, VAR_TIME, VAR_UNKNOWN } VarKind;
 
 /* What value reference r names, and through *index its place in q, u or y. */
 static VarKind var_kind(fmi2ValueReference r, size_t *index) {
@@ -287,7 +288,8 @@ static VarKind var_kind(fmi2ValueReference r, size_t *index) {
         *index = r - N_VARS - TYRE_NX;
         return VAR_EVENT;
     }
-    return VAR_UNKNOWN;
+    *index = 0;
+    return r == N_ALL ? VAR_TIME : VAR_UNKNOWN; /* the independent variable of FMI 3 */
 }
 
 /* The arrays of a get/set call: vr and value must be given when nvr > 0 (else an error naming fn). */
@@ -325,6 +327,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
         case VAR_OUTPUT: value[i] = inst->s.y[k]; break;
         case VAR_DERIVATIVE: value[i] = xdot[k]; break;
         case VAR_EVENT: value[i] = z[k]; break;
+        case VAR_TIME: value[i] = inst->s.time; break;
         default:
             LOG_ERROR(inst, "fmi2GetReal: unknown value reference %u", (unsigned)vr[i]);
             return fmi2Error;
