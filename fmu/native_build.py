@@ -252,7 +252,8 @@ def model_description(spec, model_id: str, guid: str, description: str, sources:
               '  <DefaultExperiment startTime="0" stopTime="1" stepSize="0.001"/>', '  <ModelVariables>']
     variability = {"parameter": "fixed", "input": "continuous", "output": "continuous", "local": "continuous"}
     initial = {"parameter": "exact", "input": None, "output": "calculated", "local": "calculated"}
-    variables = [v for v in _variables(spec) if not v[0].startswith("event_")]  # FMI 2: indicators by number only
+    variables = _variables(spec)[:_first_output(spec) + len(spec.outputs) + (len(spec.state_names) if me else 0)]
+    # (ME: with the state derivatives; FMI 2 numbers the event indicators, without variables)
     for vr, (name, causality, unit, desc, start, derivative) in enumerate(variables):
         attrs = f'name="{name}" valueReference="{vr}" causality="{causality}" variability="{variability[causality]}"'
         if initial[causality]:

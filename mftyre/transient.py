@@ -43,6 +43,9 @@ sigma_kappa, sigma_alpha); relaxation lengths the MF's ``sigmax``/``sigmay`` (PT
   Integration: held inputs over a step make the deflection equations linear with constant coefficients; they
   are integrated exactly (exponential), so any step size is stable and a steady state is step-size independent.
   Initial state: the steady-state deflections u = -Vsx sigma / max(|vx|, VXLOW), v = Vsy sigma / max(|vx|, VXLOW).
+  Model exchange (a host's integrator takes the states): ``deriv`` gives du/dt, dv/dt above; ``events`` one
+  indicator per switch of the equations (vx: direction of travel; |vx| - VXLOW: low-speed fade; contact:
+  R_omega - Rl in position mode, Fz_in with the load input), continuous across each.
 Vertical
   ``position``: Fz = max(0, MF vertical force at the loaded radius Rl = (z - road_z) / cos(gamma - road_camber))
   while Rl < R_omega (else lifted off, Fz = 0). Where the .tir couples the vertical force to Fx and Fy (the

@@ -21,7 +21,8 @@
 #include "tyre_glue.h"
 
 #define N_VARS (TYRE_NQ + TYRE_NU + TYRE_NY)
-#define N_ALL (N_VARS + TYRE_NX + TYRE_NZ)
+#define N_DER (TYRE_HAS_ME ? TYRE_NX : 0) /* the state derivatives have variables in model exchange */
+#define N_ALL (N_VARS + N_DER + TYRE_NZ)
 #define ARR(n) ((n) > 0 ? (n) : 1)
 #define STATE_MAGIC 0x6d667479u /* "mfty" */
 
@@ -280,12 +281,12 @@ static VarKind var_kind(fmi2ValueReference r, size_t *index) {
         *index = r - TYRE_NQ - TYRE_NU;
         return VAR_OUTPUT;
     }
-    if (r < N_VARS + TYRE_NX) {
+    if (r < N_VARS + N_DER) {
         *index = r - N_VARS;
         return VAR_DERIVATIVE;
     }
     if (r < N_ALL) {
-        *index = r - N_VARS - TYRE_NX;
+        *index = r - N_VARS - N_DER;
         return VAR_EVENT;
     }
     *index = 0;
