@@ -196,15 +196,26 @@ def _assert_like_cs(got, ref, interface, model, where, ramping=None):
                                    err_msg=f"{where} {out} (inputs held)")
 
 
+@pytest.fixture(scope="module")
+def reference(fmus):
+    """(model, scenario) -> (inputs, fmpy's run of the FMI 2 CS FMU), each run once."""
+    runs = {}
+
+    def get(model, name):
+        if (model, name) not in runs:
+            signals = _scenario(name, fmpy.read_model_description(str(fmus(2, "cs", model))))
+            runs[model, name] = signals, _fmpy_run(fmus(2, "cs", model), signals, "cs")
+        return runs[model, name]
+    return get
+
+
 @pytest.mark.parametrize("variant", [v for v in VARIANTS if v[:2] != (2, "cs")], ids=_id)
-def test_fmpy_runs_every_variant_like_the_fmi2_cs_fmu(fmus, variant):
+def test_fmpy_runs_every_variant_like_the_fmi2_cs_fmu(fmus, reference, variant):
     """Cornering, braking (and SWIFT over the cleat) in fmpy: every variant gives the FMI 2 CS FMU's numbers (ME:
     integrated by fmpy's CVode, _assert_like_cs)."""
     version, interface, model = variant
-    md = fmpy.read_model_description(str(fmus(2, "cs", model)))
     for name in SCENARIOS[model]:
-        signals = _scenario(name, md)
-        ref = _fmpy_run(fmus(2, "cs", model), signals, "cs")
+        signals, ref = reference(model, name)
         got = _fmpy_run(fmus(*variant), signals, interface)
         np.testing.assert_array_equal(got["time"], ref["time"])
         _assert_like_cs(got, ref, interface, model, f"fmpy {name}")
@@ -394,7 +405,7 @@ def _fmusim():
 
 
 @pytest.mark.parametrize("variant", [v for v in VARIANTS if v[0] == 3], ids=_id)
-def test_fmusim_runs_the_fmi3_variants_like_the_fmi2_cs_fmu(fmus, tmp_path, variant):
+def test_fmusim_runs_the_fmi3_variants_like_the_fmi2_cs_fmu(fmus, reference, tmp_path, variant):
     """The FMI Reference FMUs' fmusim (an importer we did not write; set FMUSIM or put fmusim on PATH) runs each
     FMI 3 variant over the cornering, braking (and cleat) runs: CS gives fmpy's FMI 2 CS numbers, ME (fmusim's
     CVode) the same once the inputs are held."""
@@ -403,9 +414,8 @@ def test_fmusim_runs_the_fmi3_variants_like_the_fmi2_cs_fmu(fmus, tmp_path, vari
         pytest.skip("fmusim not found (build it from modelica/Reference-FMUs with CMake, see docs/fmu-variants.md, "
                     "and set FMUSIM=/path/to/fmusim)")
     _, interface, model = variant
-    md = fmpy.read_model_description(str(fmus(2, "cs", model)))
     for name in SCENARIOS[model]:
-        signals = _scenario(name, md)
+        signals, ref = reference(model, name)
         csv = tmp_path / f"{name}.csv"
         np.savetxt(csv, np.column_stack([signals[n] for n in signals.dtype.names]), delimiter=",",
                    header=",".join(f'"{n}"' for n in signals.dtype.names), comments="", fmt="%.17g")
@@ -418,6 +428,5 @@ def test_fmusim_runs_the_fmi3_variants_like_the_fmi2_cs_fmu(fmus, tmp_path, vari
         got = np.genfromtxt(out, delimiter=",", names=True)
         last = np.append(got["time"][1:] != got["time"][:-1], True)  # at an event time: the row after the event
         got = got[last]
-        ref = _fmpy_run(fmus(2, "cs", model), signals, "cs")
         np.testing.assert_allclose(got["time"], ref["time"], atol=1e-9)
         _assert_like_cs(got, ref, interface, model, f"fmusim {name}", FMUSIM_ME_RAMPING)
