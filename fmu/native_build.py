@@ -435,9 +435,16 @@ def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_sta
         fingerprint=hashlib.sha256("".join(fn.serialize() for fn in functions).encode()).hexdigest() + extra)
 
 
+#: The environment variable whose value (comma-separated platforms) replaces the default of ``--platforms``.
+PLATFORMS_ENV = "MFTYRE_FMU_PLATFORMS"
+
+
 def choose_platforms(requested=None, fmi_version: int = 2) -> tuple[list, dict]:
     """(platforms to build, {platform: why it is not built}): ``requested`` (names of :data:`PLATFORMS`, FMI 2
-    names or FMI 3 tuples) or by default every platform this machine can build (:func:`toolchains`)."""
+    names or FMI 3 tuples), else ``$MFTYRE_FMU_PLATFORMS``, else every platform this machine can build
+    (:func:`toolchains`)."""
+    if requested is None and os.environ.get(PLATFORMS_ENV):
+        requested = os.environ[PLATFORMS_ENV].split(",")
     chains = toolchains()
     if fmi_version == 2:  # FMI 2.0 names linux64, win64, darwin64 only
         chains.update({p: (None, "FMI 2.0 has no platform name for it (build with --fmi-version 3)")

@@ -68,9 +68,9 @@ def register(subparsers) -> argparse.ArgumentParser:
                        help="native (compiled C, default) or pythonfmu (Python slave)")
     build.add_argument("--platforms", metavar="P1,P2",
                        help="native: the binaries to put in the FMU, from linux64, win64, darwin64, aarch64-linux, "
-                            "aarch64-darwin; default every one this machine can build (linux64 with cc, win64 "
-                            "with the MinGW-w64 cross compiler x86_64-w64-mingw32-gcc); the others build from the "
-                            "FMU's sources (docs/fmu-variants.md)")
+                            "aarch64-darwin; default $MFTYRE_FMU_PLATFORMS, else every one this machine can build "
+                            "(linux64 with cc, win64 with the MinGW-w64 cross compiler x86_64-w64-mingw32-gcc); the "
+                            "others build from the FMU's sources (docs/fmu-variants.md)")
     build.add_argument("--interface", choices=("cs", "me"), default="cs",
                        help="native: co-simulation (cs, default: the FMU integrates its states) or model exchange "
                             "(me: the host's integrator does; steady and transient)")

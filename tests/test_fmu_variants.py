@@ -47,6 +47,7 @@ def fmus(built_fmu):
     def get(version, interface, model):
         options = [] if (version, interface) == (2, "cs") else ["--interface", interface, "--fmi-version",
                                                                  str(version)]
+        options += ["--platforms", "linux64,win64" if MINGW else "linux64"]  # conftest: linux64 alone by default
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             return built_fmu(*MODELS[model], *options)
@@ -88,7 +89,12 @@ def fake_compile(monkeypatch):
 
 
 def test_build_says_which_platforms_it_built_and_why_others_are_missing(tmp_path, capsys, fake_compile, monkeypatch):
+    monkeypatch.setenv(native_build.PLATFORMS_ENV, "linux64")  # the default of --platforms from the environment
     assert _build_cli(tmp_path) == 0
+    assert "binaries for linux64\n" in capsys.readouterr().out and fake_compile == ["binaries/linux64/mftyre_steady.so"]
+    monkeypatch.delenv(native_build.PLATFORMS_ENV)  # the default: every platform this machine can build
+    fake_compile.clear()
+    assert _build_cli(tmp_path, "--overwrite") == 0
     out = capsys.readouterr().out
     assert "binaries for linux64" + (", win64" if MINGW else "") in out
     assert "no darwin64 binary: not cross-compiled here" in out
