@@ -10,6 +10,11 @@ One step = set vx, vy, omega (varying), fmi2DoStep(1 ms), get Fx, Fz. Rows:
   swift <= 30 us; four SWIFT tyres as a real-time factor (1 ms / time of the four steps, target >= 20);
 * through fmpy (Python host): native and pythonfmu FMUs of steady and swift, with the ratio pythonfmu / native;
 * memory: resident set size of the C host before and after --memory-steps steps of each native model.
+* ``--variants`` (instead of the rows above): every variant (FMI 2 / 3, co-simulation / model exchange, steady,
+  transient, SWIFT) in the C host of the tests (tests/fmu_host.c: 4 instances side by side, one 1 ms step =
+  set vx, vy, omega, step (CS: doStep; ME: the host's explicit Euler step with derivatives, event indicators,
+  states, completed integrator step), get Fx; best of --repeat runs of --steps steps) on linux64 and on the win64
+  binary under Wine (the host cross-compiled with MinGW-w64), with the ratio win64 / linux64.
 
 The FMUs are built into a temporary folder first. Timing rule: benchmarks/timing.py (best of --repeat).
 """
@@ -188,15 +193,75 @@ def fmpy_per_step(path: Path, tmp: Path, steps: int, repeat: int) -> float:
     return per
 
 
+VARIANT_HOST = ROOT / "tests" / "fmu_host.c"
+
+
+def variants(tmp: Path, steps: int, repeat: int) -> None:
+    """The per-step cost of every variant on every platform (module notes, ``--variants``)."""
+    import shutil
+
+    import fmpy
+    from fmpy import extract, read_model_description
+
+    from fmu.native_build import MINGW, build_native_fmu
+
+    headers = Path(fmpy.__file__).parent / "c-code"
+    hosts = {"linux64": (tmp / "vhost", ["cc", "-O2"], ["-ldl", "-lm"])}
+    mingw, wine = shutil.which(MINGW), shutil.which("wine64") or shutil.which("wine")
+    if mingw and wine:
+        hosts["win64"] = (tmp / "vhost.exe", [mingw, "-O2"], ["-static"])
+    else:
+        print(f"no win64 column: needs {MINGW} and wine64 (Debian: apt-get install gcc-mingw-w64-x86-64 wine64)")
+    for exe, cc, libs in hosts.values():
+        subprocess.run([*cc, "-I", str(headers), str(VARIANT_HOST), "-o", str(exe), *libs], check=True)
+    env = dict(os.environ, WINEDEBUG="-all")
+    print(f"\nC host (tests/fmu_host.c), 4 instances, 1 ms steps; time per step per tyre, best of {repeat} runs of "
+          f"{steps} steps")
+    print(f"{'FMI':4s} {'interface':10s} {'model':10s} {'linux64':>10s} {'win64 (Wine)':>13s} {'win64/linux64':>14s}")
+    for version in (2, 3):
+        for interface in ("cs", "me"):
+            for kind, tir, kwargs in (("steady", TIR61, {}), ("transient", TIR61, {}), ("swift", TIR62, {"road": ROAD})):
+                if interface == "me" and kind == "swift":
+                    continue
+                path = tmp / f"v{version}_{interface}_{kind}.fmu"
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    build_native_fmu(tir, path, model=kind, interface=interface, fmi_version=version, **kwargs)
+                md = read_model_description(path)
+                vr = {v.name: v.valueReference for v in md.modelVariables}
+                ident = (md.coSimulation or md.modelExchange).modelIdentifier
+                folder = Path(extract(path, unzipdir=str(tmp / path.stem)))
+                nz = md.numberOfEventIndicators if interface == "me" else 0
+                args = [str(version), interface, md.guid, "4", str(steps), str(repeat),
+                        str(md.numberOfContinuousStates), str(nz), *(str(vr[n]) for n in ("vx", "vy", "omega")), "1",
+                        str(vr["Fx"])]
+                cost = {}
+                for platform, (exe, _, _) in hosts.items():
+                    sub = {(2, "linux64"): "linux64", (2, "win64"): "win64", (3, "linux64"): "x86_64-linux",
+                           (3, "win64"): "x86_64-windows"}[version, platform]
+                    lib = folder / "binaries" / sub / (ident + (".dll" if platform == "win64" else ".so"))
+                    cmd = ([wine] if platform == "win64" else []) + [str(exe), str(lib), *args]
+                    out = subprocess.run(cmd, capture_output=True, text=True, check=True, env=env).stdout
+                    cost[platform] = float(out.split("us_per_step")[1])
+                win = cost.get("win64")
+                print(f"{version:<4d} {interface:10s} {kind:10s} {cost['linux64']:8.2f}us "
+                      + (f"{win:11.2f}us {win / cost['linux64']:13.2f}x" if win else f"{'-':>13s}"))
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=20000, help="steps per timed run in the C host")
     parser.add_argument("--fmpy-steps", type=int, default=2000, help="steps per timed run through fmpy")
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--memory-steps", type=int, default=1_000_000)
+    parser.add_argument("--variants", action="store_true",
+                        help="only the table of every variant and platform in the C host (module notes)")
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory(prefix="bench_fmu_") as t:
         tmp = Path(t)
+        if args.variants:
+            variants(tmp, args.steps, args.repeat)
+            return 0
         paths = build_all(tmp)
         print("\nC host (dlopen, no Python), 1 ms steps; time per step per tyre")
         print(f"{'model':10s} {'1 tyre':>9s} {'4 tyres':>9s} {'target':>7s}         RSS [kB] after 10/40/70/100 % "

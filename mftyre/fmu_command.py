@@ -27,9 +27,10 @@ def fmu_sources():
 def register(subparsers) -> argparse.ArgumentParser:
     """Add the ``fmu`` command (subcommand ``build``) to an argparse subparsers object."""
     fmu = subparsers.add_parser(
-        "fmu", help="package the tyre as an FMI 2.0 co-simulation FMU",
-        description="Package the tyre as an FMI 2.0 co-simulation FMU. See fmu/README.md for the FMU's "
-                    "variables.")
+        "fmu", help="package the tyre as an FMU (FMI 2.0 or 3.0, co-simulation or model exchange)",
+        description="Package the tyre as an FMU (FMI 2.0 or 3.0, co-simulation or model exchange; Linux and "
+                    "Windows binaries in one file). See fmu/README.md for the FMU's variables and "
+                    "docs/fmu-variants.md for the variants and platforms.")
     sub = fmu.add_subparsers(dest="fmu_command", metavar="SUBCOMMAND")
     sub.required = True
     build = command_parser(
@@ -65,6 +66,16 @@ def register(subparsers) -> argparse.ArgumentParser:
                             "(pythonfmu: for both of its models)")
     build.add_argument("--backend", choices=("native", "pythonfmu"), default="native",
                        help="native (compiled C, default) or pythonfmu (Python slave)")
+    build.add_argument("--platforms", metavar="P1,P2",
+                       help="native: the binaries to put in the FMU, from linux64, win64, darwin64, aarch64-linux, "
+                            "aarch64-darwin; default $MFTYRE_FMU_PLATFORMS, else every one this machine can build "
+                            "(linux64 with cc, win64 with the MinGW-w64 cross compiler x86_64-w64-mingw32-gcc); the "
+                            "others build from the FMU's sources (docs/fmu-variants.md)")
+    build.add_argument("--interface", choices=("cs", "me"), default="cs",
+                       help="native: co-simulation (cs, default: the FMU integrates its states) or model exchange "
+                            "(me: the host's integrator does; steady and transient)")
+    build.add_argument("--fmi-version", type=int, choices=(2, 3), default=2,
+                       help="native: FMI 2.0 (default) or FMI 3.0")
     closing_options(build, overwrite="replace an existing output file")
     return fmu
 
@@ -87,8 +98,13 @@ def run(args) -> int:
             build_native_fmu(args.tir, args.output, model=args.model, side=args.side,
                              vertical=args.vertical, road=args.road, x_start=args.x_start,
                              turn_slip=args.turn_slip, input_mode=args.input_mode or "vehicle", rim=args.rim or "speed",
+                             platforms=args.platforms.split(",") if args.platforms is not None else None,
+                             interface=args.interface, fmi_version=args.fmi_version,
                              overwrite=args.overwrite, quiet=False, progress=progress)
             return 0
+        if args.platforms is not None or args.interface != "cs" or args.fmi_version != 2:
+            raise ValueError("--platforms, --interface and --fmi-version are options of --backend native (the "
+                             "pythonfmu FMU is FMI 2.0 co-simulation with pythonfmu's binaries)")
         if args.model == "transient":
             raise ValueError("--model transient is only available with --backend native")
         if args.road is not None or args.x_start != 0.0 or args.rim is not None:

@@ -43,6 +43,9 @@ sigma_kappa, sigma_alpha); relaxation lengths the MF's ``sigmax``/``sigmay`` (PT
   Integration: held inputs over a step make the deflection equations linear with constant coefficients; they
   are integrated exactly (exponential), so any step size is stable and a steady state is step-size independent.
   Initial state: the steady-state deflections u = -Vsx sigma / max(|vx|, VXLOW), v = Vsy sigma / max(|vx|, VXLOW).
+  Model exchange (a host's integrator takes the states): ``deriv`` gives du/dt, dv/dt above; ``events`` one
+  indicator per switch of the equations (vx: direction of travel; |vx| - VXLOW: low-speed fade; contact:
+  R_omega - Rl in position mode, Fz_in with the load input), continuous across each.
 Vertical
   ``position``: Fz = max(0, MF vertical force at the loaded radius Rl = (z - road_z) / cos(gamma - road_camber))
   while Rl < R_omega (else lifted off, Fz = 0). Where the .tir couples the vertical force to Fx and Fy (the
@@ -246,6 +249,12 @@ class WheelFunctions(StateFunctions):
     kind: str
     vertical: str
     input_mode: str = "vehicle"
+    #: ``deriv(x, u, q) -> dx/dt`` (the state equations a host's integrator can take: Model Exchange) and
+    #: ``events(x, u, q) -> z``: one value per switch of the equations (sign of vx, |vx| = VXLOW, contact), zero where
+    #: a branch changes (event indicators)
+    deriv: object = None
+    events: object = None
+    event_names: tuple = ()
 
 
 def wheel_functions(model, kind: str = "steady", vertical: str = "position",
@@ -313,7 +322,7 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
             kappa, alpha = kinematic_slips(vx, vy, omega, re, be)
             vx_mf = vx
             ux = uy = 0.0 * vx
-            x0 = x_next = ca.SX(0, 1)
+            x0 = x_next = xdot = ca.SX(0, 1)
         else:
             sigx, sigy = be.fmax(sigx, SIGMA_MIN), be.fmax(sigy, SIGMA_MIN)
             speed = be.abs(vx)
@@ -334,8 +343,10 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
                 gain = be.where(lh > 1e-8, (1.0 - be.exp(-lh)) / be.fmax(lam, 1e-300), h * (1.0 - lh / 2))
                 return dev * be.exp(-lh) + forcing * gain
             x_next = ca.vertcat(relax(ux, speed / sigx, -vsx), relax(uy, speed / sigy, vsy))
+            xdot = ca.vertcat(dux, duy)
         kappa = mf_slip(kappa, vx_mf, be)  # the MF's slip is relative to the direction of travel (module notes)
-        return (re, kappa, alpha, ux, uy, x0, x_next), mf(fz, kappa, alpha, gamma, phit, vx_mf, p, omega, lmux, lmuy)
+        return (re, kappa, alpha, ux, uy, x0, x_next, xdot), mf(fz, kappa, alpha, gamma, phit, vx_mf, p, omega, lmux,
+                                                                 lmuy)
 
     # vertical load
     if vertical == "position":
@@ -354,9 +365,11 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
 
         fz, ro = coupled_load(False)
         fz_start = coupled_load(True)[0] if kind == "transient" and vertical_couples_forces(prm) else fz
+        contact = ro - rl_geo  # > 0 in contact (contact_load)
     else:
         fz = fz_start = be.fmax(U["Fz_in"], 0.0)
-    (re, kappa, alpha, ux, uy, _, x_next), mf_values = tyre_at(fz)
+        contact = U["Fz_in"]
+    (re, kappa, alpha, ux, uy, _, x_next, xdot), mf_values = tyre_at(fz)
     x0 = tyre_at(fz_start, start=True)[0][5]
     fx, fy, mx, my, mz, _, rho, rl_mf, a, b, t, mux, muy = mf_values
     rl = rl_geo if vertical == "position" else rl_mf
@@ -367,19 +380,25 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
          "contact_length": 2.0 * a, "trail": t, "mux": mux, "muy": muy, "u_x": ux, "u_y": uy,
          "omega_used": omega, "contact_width": 2.0 * b}
     y["Vsx"], y["Vsy"] = slip_speeds(kappa, alpha, vx, be)
-    return _wheel(x, u, q, h, x0, x_next, y, inputs, parameters, kind=kind, vertical=vertical)
+    # the switches: direction of travel (mf_slip, vx_mf), the low-speed fade at VXLOW (the transient's damping; the
+    # steady MF's own fade-out), the contact (lift-off)
+    events = {"vx": vx, "low_speed": be.abs(vx) - prm.VXLOW, "contact": contact}
+    return _wheel(x, u, q, h, x0, x_next, y, inputs, parameters, xdot, events, kind=kind, vertical=vertical)
 
 
-def _wheel(x, u, q, h, x0, x_next, y: dict, inputs, parameters, **mode) -> WheelFunctions:
-    """The three functions of a wheel from its expressions: initial state ``x0``, state after a step ``x_next``,
-    outputs ``y`` (by name, :data:`OUTPUTS`)."""
+def _wheel(x, u, q, h, x0, x_next, y: dict, inputs, parameters, xdot, events: dict, **mode) -> WheelFunctions:
+    """The functions of a wheel from its expressions: initial state ``x0``, state after a step ``x_next``,
+    outputs ``y`` (by name, :data:`OUTPUTS`), state derivatives ``xdot``, event indicators ``events`` (by name)."""
     import casadi as ca
 
     init = ca.Function("tyre_init", [u, q], [x0], ["u", "q"], ["x0"])
     step = ca.Function("tyre_step", [x, u, q, h], [x_next], ["x", "u", "q", "h"], ["x_next"])
     out = ca.Function("tyre_out", [x, u, q], [ca.vertcat(*(y[n] for n in OUTPUTS))], ["x", "u", "q"], ["y"])
+    deriv = ca.Function("tyre_deriv", [x, u, q], [xdot], ["x", "u", "q"], ["xdot"])
+    ev = ca.Function("tyre_events", [x, u, q], [ca.vertcat(*events.values())], ["x", "u", "q"], ["z"])
     return WheelFunctions(init=init, step=step, out=out, state_names=("u_x", "u_y")[:x.numel()], inputs=inputs,
-                          parameters=parameters, outputs=tuple(OUTPUTS.values()), **mode)
+                          parameters=parameters, outputs=tuple(OUTPUTS.values()), deriv=deriv, events=ev,
+                          event_names=tuple(events), **mode)
 
 
 def _rig_functions(model, u, U, q, x, h, gamma, lmux, lmuy, inputs, parameters) -> WheelFunctions:
@@ -402,8 +421,8 @@ def _rig_functions(model, u, U, q, x, h, gamma, lmux, lmuy, inputs, parameters) 
          "kappa": kappa, "alpha": alpha, "Rl": rl, "Re": re, "rho": rho, "contact_length": 2.0 * a, "trail": t,
          "mux": mux, "muy": muy, "u_x": none, "u_y": none, "omega_used": omega, "contact_width": 2.0 * b}
     y["Vsx"], y["Vsy"] = slip_speeds(kappa, alpha, U["vx"], be)
-    return _wheel(x, u, q, h, ca.SX(0, 1), ca.SX(0, 1), y, inputs, parameters, kind="steady", vertical="load",
-                  input_mode="rig")
+    return _wheel(x, u, q, h, ca.SX(0, 1), ca.SX(0, 1), y, inputs, parameters, ca.SX(0, 1), {"contact": U["Fz_in"]},
+                  kind="steady", vertical="load", input_mode="rig")
 
 
 class StepError(ModelInputError):

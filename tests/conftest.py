@@ -1,9 +1,17 @@
 """Shared fixtures: where the shared reference material lives, and the sample .tir files."""
 from __future__ import annotations
 
+import os
+import platform
 from pathlib import Path
 
 import pytest
+
+# Native FMUs built by the tests carry the host's binary only (the default would add win64 where MinGW-w64 is
+# installed: a second compilation of every FMU, ~30 s of CPU for each SWIFT one); tests/test_fmu_variants.py
+# builds the other platforms and checks the default.
+if platform.system() == "Linux" and platform.machine() == "x86_64":
+    os.environ.setdefault("MFTYRE_FMU_PLATFORMS", "linux64")
 
 PROJECT = Path(__file__).resolve().parents[1]
 SHARED = PROJECT.parent / "shared"

@@ -1,8 +1,11 @@
-/* FMI 2.0 co-simulation wrapper of the mftyre tyre models (written for mftyre; see fmu/README.md).
+/* FMI 2.0 co-simulation and model exchange wrapper of the mftyre tyre models (written for mftyre; see
+ * fmu/README.md; fmi3_tyre.c is the FMI 3.0 layer over it).
  *
  * It only translates FMI calls: the tyre is the model glue (tyre_glue.h: glue_init, glue_step, glue_out,
  * glue_dout, glue_validate), which calls the C code CasADi generated from mftyre's equations. Variables:
- * value references 0..NQ-1 are the parameters q, NQ..NQ+NU-1 the inputs u, then the NY outputs y. The whole
+ * value references 0..NQ-1 are the parameters q, NQ..NQ+NU-1 the inputs u, then the NY outputs y (the states x
+ * are outputs too: TYRE_X_OUTPUT), then for model exchange the NX state derivatives and the NZ event indicators, then
+ * time (FMI 3's independent variable). The whole
  * internal state (phase, time, q, u, x, y) is one plain struct, so FMU states are copies of it and serialise
  * byte for byte. Every failure is logged with its cause and reported through the status; nothing aborts.
  */
@@ -18,6 +21,8 @@
 #include "tyre_glue.h"
 
 #define N_VARS (TYRE_NQ + TYRE_NU + TYRE_NY)
+#define N_DER (TYRE_HAS_ME ? TYRE_NX : 0) /* the state derivatives have variables in model exchange */
+#define N_ALL (N_VARS + N_DER + TYRE_NZ)
 #define ARR(n) ((n) > 0 ? (n) : 1)
 #define STATE_MAGIC 0x6d667479u /* "mfty" */
 
@@ -40,6 +45,7 @@ typedef struct {
     fmi2CallbackFunctions cb;
     char *name;
     int logging;
+    int me; /* instantiated for model exchange */
     TyreState s;
     GlueWork *work;
 } Instance;
@@ -155,7 +161,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         return NULL;                                                                                               \
     } while (0)
     if (!instanceName || !instanceName[0]) FAIL("fmi2Instantiate: the instance name is empty");
-    if (fmuType != fmi2CoSimulation) FAIL("fmi2Instantiate: this FMU supports co-simulation only");
+    if (fmuType != fmi2CoSimulation && !(TYRE_HAS_ME && fmuType == fmi2ModelExchange))
+        FAIL("fmi2Instantiate: this FMU supports co-simulation only");
     if (!fmuGUID || strcmp(fmuGUID, TYRE_GUID) != 0)
         FAIL("fmi2Instantiate: GUID %s does not match the FMU's %s", fmuGUID ? fmuGUID : "(null)", TYRE_GUID);
     inst = (Instance *)calloc(1, sizeof(Instance));
@@ -172,6 +179,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     strcpy(inst->name, instanceName);
     inst->cb = *functions;
     inst->logging = loggingOn ? 1 : 0;
+    inst->me = fmuType == fmi2ModelExchange;
     reset_values(inst);
     return inst;
 }
@@ -257,7 +265,7 @@ fmi2Status fmi2Reset(fmi2Component c) {
 }
 
 /* ------------------------------------------------------------------------------------------ get / set */
-typedef enum { VAR_PARAMETER, VAR_INPUT, VAR_OUTPUT, VAR_UNKNOWN } VarKind;
+typedef enum { VAR_PARAMETER, VAR_INPUT, VAR_OUTPUT, VAR_DERIVATIVE, VAR_EVENT, VAR_TIME, VAR_UNKNOWN } VarKind;
 
 /* What value reference r names, and through *index its place in q, u or y. */
 static VarKind var_kind(fmi2ValueReference r, size_t *index) {
@@ -273,7 +281,16 @@ static VarKind var_kind(fmi2ValueReference r, size_t *index) {
         *index = r - TYRE_NQ - TYRE_NU;
         return VAR_OUTPUT;
     }
-    return VAR_UNKNOWN;
+    if (r < N_VARS + N_DER) {
+        *index = r - N_VARS;
+        return VAR_DERIVATIVE;
+    }
+    if (r < N_ALL) {
+        *index = r - N_VARS - N_DER;
+        return VAR_EVENT;
+    }
+    *index = 0;
+    return r == N_ALL ? VAR_TIME : VAR_UNKNOWN; /* the independent variable of FMI 3 */
 }
 
 /* The arrays of a get/set call: vr and value must be given when nvr > 0 (else an error naming fn). */
@@ -285,9 +302,13 @@ static int arrays_given(Instance *inst, const char *fn, size_t nvr, const void *
     return 1;
 }
 
+static fmi2Status me_values(Instance *inst, const char *caller, double *xdot, double *z);
+
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
     fmi2Status status = fmi2OK;
     size_t k;
+    double xdot[ARR(TYRE_NX)] = {0}, z[ARR(TYRE_NZ)] = {0};
+    int me_done = 0;
     CHECK_INSTANCE(c, "fmi2GetReal")
     if (!arrays_given(inst, "fmi2GetReal", nvr, vr, value)) return fmi2Error;
     for (size_t i = 0; i < nvr; i++)
@@ -296,10 +317,18 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
             break;
         }
     for (size_t i = 0; i < nvr; i++) {
-        switch (var_kind(vr[i], &k)) {
+        VarKind kind = var_kind(vr[i], &k);
+        if ((kind == VAR_DERIVATIVE || kind == VAR_EVENT) && !me_done) {
+            if (me_values(inst, "fmi2GetReal", xdot, z) != fmi2OK) return fmi2Error;
+            me_done = 1;
+        }
+        switch (kind) {
         case VAR_PARAMETER: value[i] = inst->s.q[k]; break;
         case VAR_INPUT: value[i] = inst->s.u[k]; break;
         case VAR_OUTPUT: value[i] = inst->s.y[k]; break;
+        case VAR_DERIVATIVE: value[i] = xdot[k]; break;
+        case VAR_EVENT: value[i] = z[k]; break;
+        case VAR_TIME: value[i] = inst->s.time; break;
         default:
             LOG_ERROR(inst, "fmi2GetReal: unknown value reference %u", (unsigned)vr[i]);
             return fmi2Error;
@@ -427,11 +456,19 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
 }
 
 /* ------------------------------------------------------------------------------- directional derivative */
+/* The state whose variable is output k, or -1. */
+static int state_of_output(size_t k) {
+    for (int i = 0; i < TYRE_NX; i++)
+        if ((size_t)TYRE_X_OUTPUT[i] == k) return i;
+    return -1;
+}
+
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
                                         const fmi2ValueReference vKnown_ref[], size_t nKnown,
                                         const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
-    double du[ARR(TYRE_NU)] = {0}, dy[ARR(TYRE_NY)];
+    double du[ARR(TYRE_NU)] = {0}, dy[ARR(TYRE_NY)], dx[ARR(TYRE_NX)] = {0}, dxdot[ARR(TYRE_NX)];
     size_t k;
+    int xk;
     CHECK_INSTANCE(c, "fmi2GetDirectionalDerivative")
     if ((nKnown > 0 && (!vKnown_ref || !dvKnown)) || (nUnknown > 0 && (!vUnknown_ref || !dvUnknown))) {
         LOG_ERROR(inst, "fmi2GetDirectionalDerivative: null argument");
@@ -446,25 +483,32 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
         return fmi2Error;
     }
     for (size_t i = 0; i < nKnown; i++) {
-        if (var_kind(vKnown_ref[i], &k) != VAR_INPUT) {
-            LOG_ERROR(inst, "fmi2GetDirectionalDerivative: known %u is not an input", (unsigned)vKnown_ref[i]);
+        VarKind kind = var_kind(vKnown_ref[i], &k);
+        if (kind == VAR_OUTPUT && inst->me && (xk = state_of_output(k)) >= 0) {
+            dx[xk] += dvKnown[i];
+            continue;
+        }
+        if (kind != VAR_INPUT) {
+            LOG_ERROR(inst, "fmi2GetDirectionalDerivative: known %u is not an input%s", (unsigned)vKnown_ref[i],
+                      inst->me ? " or a state" : "");
             return fmi2Error;
         }
         du[k] += dvKnown[i];
     }
-    for (size_t i = 0; i < nUnknown; i++)
-        if (var_kind(vUnknown_ref[i], &k) != VAR_OUTPUT) {
-            LOG_ERROR(inst, "fmi2GetDirectionalDerivative: unknown %u is not an output", (unsigned)vUnknown_ref[i]);
+    for (size_t i = 0; i < nUnknown; i++) {
+        VarKind kind = var_kind(vUnknown_ref[i], &k);
+        if (kind != VAR_OUTPUT && !(kind == VAR_DERIVATIVE && inst->me)) {
+            LOG_ERROR(inst, "fmi2GetDirectionalDerivative: unknown %u is not an output%s", (unsigned)vUnknown_ref[i],
+                      inst->me ? " or a state derivative" : "");
             return fmi2Error;
         }
-    if (glue_dout(inst->work, inst->s.x, inst->s.u, inst->s.q, du, dy) != 0) {
+    }
+    if (glue_dout(inst->work, inst->s.x, inst->s.u, inst->s.q, dx, du, dy, dxdot) != 0) {
         LOG_ERROR(inst, "fmi2GetDirectionalDerivative: evaluation failed");
         return fmi2Error;
     }
-    for (size_t i = 0; i < nUnknown; i++) {
-        var_kind(vUnknown_ref[i], &k);
-        dvUnknown[i] = dy[k];
-    }
+    for (size_t i = 0; i < nUnknown; i++)
+        dvUnknown[i] = var_kind(vUnknown_ref[i], &k) == VAR_DERIVATIVE ? dxdot[k] : dy[k];
     return fmi2OK;
 }
 
@@ -476,6 +520,10 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSet
     int rc;
     CHECK_INSTANCE(c, "fmi2DoStep")
     (void)noSetFMUStatePriorToCurrentPoint;
+    if (inst->me) {
+        LOG_ERROR(inst, "fmi2DoStep: the instance is a model exchange instance (the host integrates)");
+        return fmi2Error;
+    }
     if (inst->s.phase != PHASE_STEP) {
         LOG_ERROR(inst, "fmi2DoStep: not in step mode (initialise first)");
         return fmi2Error;
@@ -555,3 +603,159 @@ STATUS(fmi2GetRealStatus, fmi2Real, fmi2LastSuccessfulTime, inst->s.time)
 STATUS(fmi2GetIntegerStatus, fmi2Integer, NO_KIND, 0)
 STATUS(fmi2GetBooleanStatus, fmi2Boolean, fmi2Terminated, fmi2False)
 STATUS(fmi2GetStringStatus, fmi2String, NO_KIND, NULL)
+
+/* ------------------------------------------------------------------------------------- model exchange */
+/* The host's integrator holds the states: it sets x (fmi2SetContinuousStates) and the time, and takes the
+ * derivatives of the tyre's state equations (glue_deriv) and the event indicators (glue_events: a sign change marks
+ * a switch of the equations: direction of travel, low speed, contact). The equations have no discrete states, so
+ * events need no update. */
+static int me_ready(Instance *inst, const char *fn) {
+    if (!inst->me) {
+        LOG_ERROR(inst, "%s: the instance is a co-simulation instance", fn);
+        return 0;
+    }
+    if (inst->s.phase != PHASE_STEP && inst->s.phase != PHASE_INIT) {
+        LOG_ERROR(inst, "%s: only in initialisation, event or continuous-time mode", fn);
+        return 0;
+    }
+    return 1;
+}
+
+/* xdot and z at the current (x, u); in initialisation mode at the initial state of the current inputs. */
+static fmi2Status me_values(Instance *inst, const char *caller, double *xdot, double *z) {
+    char msg[1024];
+    double x0[ARR(TYRE_NX)];
+    const double *x = inst->s.x;
+    if (!me_ready(inst, caller)) return fmi2Error;
+    if (!check_values(inst, msg, sizeof msg)) {
+        LOG_ERROR(inst, "%s: %s", caller, msg);
+        return fmi2Error;
+    }
+    if (inst->s.phase == PHASE_INIT) {
+        msg[0] = 0;
+        if (glue_init(inst->work, inst->s.u, inst->s.q, x0, msg, sizeof msg) != 0) {
+            LOG_ERROR(inst, "%s: %s", caller, msg[0] ? msg : "no initial state at these inputs");
+            return fmi2Error;
+        }
+        x = x0;
+    }
+    if ((xdot && TYRE_NX > 0 && (glue_deriv(inst->work, x, inst->s.u, inst->s.q, xdot) != 0 ||
+                                 !all_finite(xdot, TYRE_NX))) ||
+        (z && TYRE_NZ > 0 && (glue_events(inst->work, x, inst->s.u, inst->s.q, z) != 0 || !all_finite(z, TYRE_NZ)))) {
+        LOG_ERROR(inst, "%s: the state derivatives or event indicators are not finite at this state and these inputs",
+                  caller);
+        return fmi2Error;
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterEventMode(fmi2Component c) {
+    CHECK_INSTANCE(c, "fmi2EnterEventMode")
+    return me_ready(inst, "fmi2EnterEventMode") ? fmi2OK : fmi2Error;
+}
+
+fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
+    CHECK_INSTANCE(c, "fmi2NewDiscreteStates")
+    if (!me_ready(inst, "fmi2NewDiscreteStates") || !info) return fmi2Error;
+    info->newDiscreteStatesNeeded = fmi2False;
+    info->terminateSimulation = fmi2False;
+    info->nominalsOfContinuousStatesChanged = fmi2False;
+    info->valuesOfContinuousStatesChanged = fmi2False;
+    info->nextEventTimeDefined = fmi2False;
+    info->nextEventTime = 0.0;
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
+    CHECK_INSTANCE(c, "fmi2EnterContinuousTimeMode")
+    return me_ready(inst, "fmi2EnterContinuousTimeMode") ? fmi2OK : fmi2Error;
+}
+
+fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
+                                       fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation) {
+    CHECK_INSTANCE(c, "fmi2CompletedIntegratorStep")
+    (void)noSetFMUStatePriorToCurrentPoint;
+    if (!me_ready(inst, "fmi2CompletedIntegratorStep") || !enterEventMode || !terminateSimulation) return fmi2Error;
+    *enterEventMode = fmi2False;
+    *terminateSimulation = fmi2False;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
+    CHECK_INSTANCE(c, "fmi2SetTime")
+    if (!me_ready(inst, "fmi2SetTime")) return fmi2Error;
+    if (!isfinite(time)) {
+        LOG_ERROR(inst, "fmi2SetTime: time %g is not finite", time);
+        return fmi2Error;
+    }
+    inst->s.time = time;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
+    CHECK_INSTANCE(c, "fmi2SetContinuousStates")
+    if (!me_ready(inst, "fmi2SetContinuousStates")) return fmi2Error;
+    if (nx != TYRE_NX || (nx > 0 && !x)) {
+        LOG_ERROR(inst, "fmi2SetContinuousStates: %lu states given, the FMU has %d", (unsigned long)nx, TYRE_NX);
+        return fmi2Error;
+    }
+    if (!all_finite(x, (int)nx)) {
+        LOG_ERROR(inst, "fmi2SetContinuousStates: a state is not finite");
+        return fmi2Error;
+    }
+    for (size_t i = 0; i < nx; i++) inst->s.x[i] = x[i];
+    inst->s.outputs_valid = 0;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
+    char msg[1024];
+    CHECK_INSTANCE(c, "fmi2GetContinuousStates")
+    if (!me_ready(inst, "fmi2GetContinuousStates")) return fmi2Error;
+    if (nx != TYRE_NX || (nx > 0 && !x)) {
+        LOG_ERROR(inst, "fmi2GetContinuousStates: %lu states asked for, the FMU has %d", (unsigned long)nx, TYRE_NX);
+        return fmi2Error;
+    }
+    if (inst->s.phase == PHASE_INIT) { /* the initial state of the current inputs */
+        msg[0] = 0;
+        if (!check_values(inst, msg, sizeof msg) ||
+            glue_init(inst->work, inst->s.u, inst->s.q, x, msg, sizeof msg) != 0) {
+            LOG_ERROR(inst, "fmi2GetContinuousStates: %s", msg[0] ? msg : "no initial state at these inputs");
+            return fmi2Error;
+        }
+        return fmi2OK;
+    }
+    for (size_t i = 0; i < nx; i++) x[i] = inst->s.x[i];
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx) {
+    CHECK_INSTANCE(c, "fmi2GetNominalsOfContinuousStates")
+    if (nx != TYRE_NX || (nx > 0 && !x_nominal)) {
+        LOG_ERROR(inst, "fmi2GetNominalsOfContinuousStates: %lu states asked for, the FMU has %d", (unsigned long)nx,
+                  TYRE_NX);
+        return fmi2Error;
+    }
+    for (size_t i = 0; i < nx; i++) x_nominal[i] = TYRE_X_NOMINAL;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx) {
+    CHECK_INSTANCE(c, "fmi2GetDerivatives")
+    if (nx != TYRE_NX || (nx > 0 && !derivatives)) {
+        LOG_ERROR(inst, "fmi2GetDerivatives: %lu derivatives asked for, the FMU has %d states", (unsigned long)nx,
+                  TYRE_NX);
+        return fmi2Error;
+    }
+    return me_values(inst, "fmi2GetDerivatives", derivatives, NULL);
+}
+
+fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni) {
+    CHECK_INSTANCE(c, "fmi2GetEventIndicators")
+    if (ni != TYRE_NZ || (ni > 0 && !eventIndicators)) {
+        LOG_ERROR(inst, "fmi2GetEventIndicators: %lu indicators asked for, the FMU has %d", (unsigned long)ni,
+                  TYRE_NZ);
+        return fmi2Error;
+    }
+    return me_values(inst, "fmi2GetEventIndicators", NULL, eventIndicators);
+}

@@ -196,7 +196,19 @@ int glue_out(GlueWork *g, const double *x, const double *u, const double *q, dou
     return swift_out(g->arg, g->res, g->iw, g->w, 0);
 }
 
-int glue_dout(GlueWork *g, const double *x, const double *u, const double *q, const double *du, double *dy) {
-    (void)g, (void)x, (void)u, (void)q, (void)du, (void)dy;
+int glue_dout(GlueWork *g, const double *x, const double *u, const double *q, const double *dx, const double *du,
+              double *dy, double *dxdot) {
+    (void)g, (void)x, (void)u, (void)q, (void)dx, (void)du, (void)dy, (void)dxdot;
     return 1; /* not provided (providesDirectionalDerivative = false) */
+}
+
+/* no model exchange (TYRE_HAS_ME 0): the step carries the contact solution and the road window (fmu/README.md) */
+int glue_deriv(GlueWork *g, const double *x, const double *u, const double *q, double *xdot) {
+    (void)g, (void)x, (void)u, (void)q, (void)xdot;
+    return 1;
+}
+
+int glue_events(GlueWork *g, const double *x, const double *u, const double *q, double *z) {
+    (void)g, (void)x, (void)u, (void)q, (void)z;
+    return 1;
 }

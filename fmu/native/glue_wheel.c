@@ -1,4 +1,4 @@
-/* Steady and transient tyre (mftyre.transient): the four functions CasADi generated in tyre_model.c. */
+/* Steady and transient tyre (mftyre.transient): the six functions CasADi generated in tyre_model.c. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -7,7 +7,7 @@
 #include "tyre_glue.h"
 #include "tyre_model.h"
 
-#define NFUN 4
+#define NFUN 6
 typedef int (*WorkFn)(casadi_int *, casadi_int *, casadi_int *, casadi_int *);
 
 struct GlueWork {
@@ -18,7 +18,8 @@ struct GlueWork {
 };
 
 GlueWork *glue_alloc(void) {
-    WorkFn work[NFUN] = {tyre_init_work, tyre_step_work, tyre_out_work, tyre_dout_work};
+    WorkFn work[NFUN] = {tyre_init_work, tyre_step_work, tyre_out_work, tyre_dout_work, tyre_deriv_work,
+                         tyre_events_work};
     casadi_int niw = 1, nw = 1;
     GlueWork *g = (GlueWork *)calloc(1, sizeof(GlueWork));
     if (!g) return NULL;
@@ -86,11 +87,30 @@ int glue_out(GlueWork *g, const double *x, const double *u, const double *q, dou
     return tyre_out(g->arg, g->res, g->iw, g->w, 0);
 }
 
-int glue_dout(GlueWork *g, const double *x, const double *u, const double *q, const double *du, double *dy) {
+int glue_dout(GlueWork *g, const double *x, const double *u, const double *q, const double *dx, const double *du,
+              double *dy, double *dxdot) {
     g->arg[0] = x;
     g->arg[1] = u;
     g->arg[2] = q;
-    g->arg[3] = du;
+    g->arg[3] = dx;
+    g->arg[4] = du;
     g->res[0] = dy;
+    g->res[1] = dxdot;
     return tyre_dout(g->arg, g->res, g->iw, g->w, 0);
+}
+
+int glue_deriv(GlueWork *g, const double *x, const double *u, const double *q, double *xdot) {
+    g->arg[0] = x;
+    g->arg[1] = u;
+    g->arg[2] = q;
+    g->res[0] = xdot;
+    return tyre_deriv(g->arg, g->res, g->iw, g->w, 0);
+}
+
+int glue_events(GlueWork *g, const double *x, const double *u, const double *q, double *z) {
+    g->arg[0] = x;
+    g->arg[1] = u;
+    g->arg[2] = q;
+    g->res[0] = z;
+    return tyre_events(g->arg, g->res, g->iw, g->w, 0);
 }

@@ -18,6 +18,10 @@ int glue_init(GlueWork *w, const double *u, const double *q, double *x, char *ms
 int glue_step(GlueWork *w, double *x, const double *u, const double *q, double h);
 /* outputs y at (x, u) */
 int glue_out(GlueWork *w, const double *x, const double *u, const double *q, double *y);
-/* dy = d out / d u * du at (x, u) */
-int glue_dout(GlueWork *w, const double *x, const double *u, const double *q, const double *du, double *dy);
+/* dy = d out / d(x, u) * (dx, du), dxdot = d deriv / d(x, u) * (dx, du) at (x, u) */
+int glue_dout(GlueWork *w, const double *x, const double *u, const double *q, const double *dx, const double *du,
+              double *dy, double *dxdot);
+/* model exchange (TYRE_HAS_ME): the state derivatives xdot and the TYRE_NZ event indicators z at (x, u) */
+int glue_deriv(GlueWork *w, const double *x, const double *u, const double *q, double *xdot);
+int glue_events(GlueWork *w, const double *x, const double *u, const double *q, double *z);
 #endif
