@@ -87,3 +87,17 @@ def test_relative_links_resolve(page):
         if re.match(r"[a-z]+:", target) or Path(target).name in later:
             continue
         assert (page.parent / target).exists(), f"{page.relative_to(ROOT)}: link to missing {target}"
+
+
+def test_no_paths_of_the_development_machine():
+    """Pages name paths a user has (the repository's own, ``../shared/reference/`` beside it), not ours."""
+    for page in [*PAGES, ROOT / "tir_files" / "README.md"]:
+        assert "/work/" not in page.read_text(encoding="utf-8"), f"{page.relative_to(ROOT)} names /work/"
+
+
+def test_notebooks_extra_opens_the_notebooks():
+    import tomllib
+
+    extras = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]["optional-dependencies"]
+    assert any(req.startswith(("jupyterlab", "notebook")) for req in extras["notebooks"])
+    assert 'pip install -e ".[notebooks]"' in (ROOT / "README.md").read_text(encoding="utf-8")

@@ -61,3 +61,11 @@ def test_format_table_columns_and_digits():
     import pandas as pd
 
     assert format_table(pd.DataFrame(values)) == format_table(values)
+
+
+def test_fit_help_names_every_format_it_reads(capsys):
+    from mftyre import cli
+
+    assert cli.main(["fit", "--help"]) == 0
+    description = " ".join(capsys.readouterr().out.split())
+    assert "to TYDEX (.tdx), TTC (.dat text or .mat) or CSV data" in description
