@@ -1,6 +1,6 @@
-"""Start-up cost of the command line: CPU seconds (user + system) of a whole `mftyre` process for `--help`,
-`fit --help`, `check FILE.tir` and `eval FILE.tir` of one point, the best of --repeat runs, and which of the slow
-third-party packages each command imports.
+"""Start-up cost of the command line: CPU seconds (user + system) of a whole process for `import mftyre` and the
+`mftyre` commands `--help`, `fit --help`, `check FILE.tir` and `eval FILE.tir` of one point, the best of --repeat
+runs, and which of the slow third-party packages each imports.
 
     python benchmarks/bench_startup.py                    # this tree
     python benchmarks/bench_startup.py --against 6669f8c  # and a git revision beside it, in the same run
@@ -24,7 +24,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLE = "tir_files/car_205_60R15_mf61.tir"
-COMMANDS = {"--help": ["--help"], "fit --help": ["fit", "--help"], "check FILE.tir": ["check", SAMPLE],
+COMMANDS = {"import mftyre": None, "--help": ["--help"], "fit --help": ["fit", "--help"], "check FILE.tir": ["check", SAMPLE],
             "eval FILE.tir (1 point)": ["eval", SAMPLE]}
 #: the packages a command should import only when it needs them
 HEAVY = ("numpy", "pandas", "scipy", "lmfit", "matplotlib", "casadi", "fmpy", "pythonfmu", "swift", "fmu")
@@ -44,10 +44,14 @@ def _script(argv: list[str], report: bool) -> str:
             f"\n    status = main({argv!r})\n{tail}\nsys.exit(status)")
 
 
-def run_once(tree: Path, argv: list[str], *, report: bool = False) -> tuple[float, str]:
-    """CPU seconds of one process running `mftyre ARGV` from ``tree``; with ``report`` also its heavy imports."""
+def run_once(tree: Path, argv: list[str] | None, *, report: bool = False) -> tuple[float, str]:
+    """CPU seconds of one process running `mftyre ARGV` from ``tree`` (None: `import mftyre` alone); with ``report``
+    also its heavy imports."""
     before = os.times()
-    done = subprocess.run([sys.executable, "-c", _script(argv, report)], cwd=tree, env=_environment(tree),
+    code = _script(argv, report) if argv is not None else (
+        "import sys, mftyre\n" + ("print('MODULES', ' '.join(sorted({m.split('.')[0] for m in sys.modules} & "
+                                  f"{set(HEAVY)!r})), file=sys.stderr)" if report else ""))
+    done = subprocess.run([sys.executable, "-c", code], cwd=tree, env=_environment(tree),
                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     after = os.times()
     if done.returncode != 0:
@@ -57,7 +61,7 @@ def run_once(tree: Path, argv: list[str], *, report: bool = False) -> tuple[floa
             modules.group(1) if modules else "")
 
 
-def best(tree: Path, argv: list[str], repeat: int) -> float:
+def best(tree: Path, argv: list[str] | None, repeat: int) -> float:
     return min(run_once(tree, argv)[0] for _ in range(repeat))
 
 
@@ -107,7 +111,7 @@ def main() -> None:
         for label, argv in COMMANDS.items():  # side by side: each command measured on every tree in turn
             times = [best(tree, argv, args.repeat) for tree in trees.values()]
             modules = [run_once(tree, argv, report=True)[1] or "none" for tree in trees.values()]
-            print(f"| `mftyre {label}` | {' | '.join(f'{t:.2f}' for t in times)} | {' | '.join(modules)} |")
+            print(f"| `{label if argv is None else 'mftyre ' + label}` | {' | '.join(f'{t:.2f}' for t in times)} | {' | '.join(modules)} |")
         print(f"\nslow imports (CPU s added to a bare interpreter, best of {args.repeat}):")
         for name, seconds in import_costs(ROOT, args.repeat).items():
             print(f"  {name:20s} {seconds:.2f}")
