@@ -9,18 +9,18 @@ ISO-W (TYDEX W) axes, SI units.
 """
 from .errors import DataError, InputClippedWarning, LoadFactorWarning, MFTyreError, ModelInputError, \
     PressureFactorWarning, ReferenceValueWarning, TirError, TurnSlipWarning
-from .model import MFModel, MFOutputs, load_tir
 
 __version__ = "0.1.0"
 __all__ = ["load_tir", "MFModel", "MFOutputs", "MFTyreError", "TirError", "DataError", "ModelInputError",
            "InputClippedWarning", "LoadFactorWarning", "PressureFactorWarning", "ReferenceValueWarning",
            "TurnSlipWarning", "read_tir", "write_tir", "sample_tir", "read_data"]
 
-#: Imported when first used, so ``import mftyre`` stays light: name -> (module, attribute or None for the module).
-_LAZY = {"read_tir": ("tir", "read_tir"), "write_tir": ("tir", "write_tir"), "sample_tir": ("files", "sample_tir"),
+#: Imported when first used, so ``import mftyre`` stays light (no NumPy): name -> (module, attribute).
+_LAZY = {"load_tir": ("model", "load_tir"), "MFModel": ("model", "MFModel"), "MFOutputs": ("model", "MFOutputs"),
+         "read_tir": ("tir", "read_tir"), "write_tir": ("tir", "write_tir"), "sample_tir": ("files", "sample_tir"),
          "read_data": ("data", "read_data")}
 _SUBMODULES = ("files", "data", "tir", "params", "fit", "gaps", "programme", "rig", "compiled", "transient", "soil",
-               "compat", "cli")
+               "compat", "cli", "model", "backend", "formula", "inputs", "variables", "vehicle")
 
 
 def __getattr__(name):  # PEP 562: mftyre.files.sample_tir(...) and mftyre.write_tir(...) after `import mftyre`

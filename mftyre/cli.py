@@ -31,7 +31,7 @@ import numpy as np
 from .arguments import (MAX_POINTS, SWEEP_UNITS, SweepAction, closing_options, command_error, command_parser,
                         join_negative_values, sweep_option, sweep_type)
 from .errors import speaking_cli
-from .grid_results import check_request, format_table, grid_frame, plot_grid, sweep_grid, write_results
+from .grid_results import check_request, format_table, grid_columns, plot_grid, sweep_grid, write_results
 
 __all__ = ["main", "build_parser"]
 
@@ -201,12 +201,12 @@ def _cmd_eval(args) -> int:
                 print(format_table(_eval_frame(args, out, swept, shape, table_cols, model)))
 
         def table():
-            frames = [_eval_frame(args, out, swept, shape, args.outputs or tuple(out.keys()), model)
+            import pandas as pd
+
+            frames = [pd.DataFrame(_eval_frame(args, out, swept, shape, args.outputs or tuple(out.keys()), model))
                       for _, model, out in results]
             if len(results) == 1:
                 return frames[0]
-            import pandas as pd
-
             return pd.concat([f.assign(tir=Path(file).name)[["tir", *f.columns]]
                               for (file, _, _), f in zip(results, frames)], ignore_index=True)
 
@@ -247,14 +247,14 @@ def _used(args, model, name, values):
 
 
 def _eval_frame(args, out, swept: list[str], shape, outputs, model):
-    """Swept inputs as given (and as used, where the .tir ranges saturated them), then the outputs; column names
-    'name [SI unit]'."""
+    """The table's columns (name -> array): swept inputs as given (and as used, where the .tir ranges saturated
+    them), then the outputs; column names 'name [SI unit]'."""
     from .model import OUTPUT_UNITS
 
     # a swept input that is also an output is shown as NAME_used: the model echoes kappa, alpha, gamma and fz as
     # asked (before the .tir ranges), so saturate the echo as the equations did
     out = {k: (_used(args, model, k, out[k]) if k in swept else out[k]) for k in out.keys()}
-    return grid_frame(args, out, swept, shape, outputs, input_units={n: unit for n, (unit, _) in SWEEP_UNITS.items()},
+    return grid_columns(args, out, swept, shape, outputs, input_units={n: unit for n, (unit, _) in SWEEP_UNITS.items()},
                       output_units=OUTPUT_UNITS, used=lambda name, values: _used(args, model, name, values))
 
 

@@ -69,7 +69,7 @@ import numpy as np
 from .errors import MFTyreError, ModelInputError
 from .inputs import check_finite, check_finite_outputs, check_pressure, hard_limits, input_ranges, warn_outside
 
-__all__ = ["CompiledFunction", "CacheSecurityError", "CompileError", "compile_model", "compile_function",
+__all__ = ["CompiledFunction", "BatchOutputs", "CacheSecurityError", "CompileError", "compile_model", "compile_function",
            "compile_external", "tyre_kernels", "compile_tyre_kernels", "cached_library", "compile_c", "cache_dir",
            "install_libraries", "platform_tag", "generate_c", "CASADI_LOCK", "BLOCK_POINTS"]
 
@@ -600,12 +600,35 @@ def _verify(library: Path) -> dict:
 
 
 
+class BatchOutputs(tuple):
+    """The arrays of :meth:`CompiledFunction.batch`: a tuple, one array per output in the order of ``names`` (the
+    function's ``outputs``), also by name: ``out.fy``, ``out.to_dict()["fy"]``."""
+
+    def __new__(cls, names, arrays):
+        self = super().__new__(cls, arrays)
+        self.names = tuple(names)
+        return self
+
+    def __getnewargs__(self):  # pickled with its names (results of a batch may travel between processes)
+        return self.names, tuple(self)
+
+    def __getattr__(self, name):
+        names = self.__dict__.get("names", ())
+        if name not in names:
+            raise AttributeError(f"no output {name!r}; outputs: {', '.join(names)}")
+        return self[names.index(name)]
+
+    def to_dict(self) -> dict:
+        return dict(zip(self.names, self))
+
+
 class CompiledFunction:
     """A compiled function of scalars, called without CasADi at run time; thread-safe.
 
     ``inputs``, ``outputs``: the names, in call order. ``__call__(*floats)`` evaluates one point and returns a
-    tuple of floats; ``batch(*arrays, threads=1)`` evaluates arrays broadcast together (``threads=0``: all
-    cores) and returns one array per output. Bad inputs raise :class:`ModelInputError`. ``batch`` calls the
+    tuple of floats in the order of ``outputs``; ``batch(*arrays, threads=1)`` evaluates arrays broadcast together
+    (``threads=0``: all cores) and returns one array per output (:class:`BatchOutputs`: by position or by name,
+    ``out.fy``). Bad inputs raise :class:`ModelInputError`. ``batch`` calls the
     library through ctypes; one point goes through the library's CPython entry where it has one for this
     interpreter (``fast_point`` True: about 0.1 us of overhead instead of 0.6), else through ctypes, with the same
     results, errors and warnings.
@@ -677,7 +700,8 @@ class CompiledFunction:
         return outputs
 
     def batch(self, *arrays, threads: int = 1):
-        """Many points: one array (or number) per input, broadcast together; one array per output.
+        """Many points: one array (or number) per input, broadcast together; one array per output
+        (:class:`BatchOutputs`: ``fx, fy, *rest = ...`` or ``out.fy``).
         ``threads``: how many threads share the points (0: one per available core)."""
         if isinstance(threads, bool) or not isinstance(threads, numbers.Integral) or threads < 0:
             raise ModelInputError(f"threads must be 0 (one per available core) or a positive integer, got {threads!r}")
@@ -702,7 +726,7 @@ class CompiledFunction:
                 self._report(lambda k, kind: counts[k, kind], n, packed)
             if self._finite_outputs:
                 self._check_outputs(result, packed, shape)
-            return tuple(result.reshape((n_out, *shape)))
+            return BatchOutputs(self.outputs, result.reshape((n_out, *shape)))
         flat, strides = [], []
         for v in values:
             if v.size == 1:  # one value for every point: stride 0, no copy
@@ -738,7 +762,7 @@ class CompiledFunction:
             self._report(lambda k, kind: total[k, kind], n, flat)
         if self._finite_outputs:
             self._check_outputs(result, [np.broadcast_to(v, shape) for v in values], shape)
-        return tuple(result.reshape((n_out, *shape)))
+        return BatchOutputs(self.outputs, result.reshape((n_out, *shape)))
 
     def _check_outputs(self, result, inputs, shape) -> None:
         """ModelInputError naming the outputs and the first point where finite inputs gave non-finite outputs

@@ -90,11 +90,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from .errors import DataError, speaking, speaking_cli, spelled
 from .files import DATA_MAX_BYTES, check_outputs, open_user_file, read_user_file, write_atomically
 from .tir import UNIT_FACTORS
+from .lazy import LazyModule
+
+pd = LazyModule("pandas")  # imported when first used: the command line starts without it
 
 __all__ = [
     "CHANNELS", "REQUIRED", "INPUTS", "OUTPUTS", "UNITS", "TyreData", "read_csv", "read_tydex", "write_tydex",

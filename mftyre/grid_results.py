@@ -15,7 +15,7 @@ import numpy as np
 
 from .files import OutputError, check_outputs, make_output_folder, write_figure, write_frame_csv
 
-__all__ = ["check_request", "sweep_grid", "grid_frame", "format_table", "plot_grid", "write_results"]
+__all__ = ["check_request", "sweep_grid", "grid_columns", "grid_frame", "format_table", "plot_grid", "write_results"]
 
 
 def check_request(parser, args, swept: list[str], *, plot_example: str) -> None:
@@ -41,16 +41,21 @@ def sweep_grid(args, swept: list[str]) -> tuple[dict[str, np.ndarray], tuple[int
     return dict(zip(swept, grids)), tuple(getattr(args, n).values.size for n in swept)
 
 
-def grid_frame(args, out, swept: list[str], shape, outputs, *, input_units: dict, output_units: dict,
-               used=None, repeated: str = "_used"):
+def grid_frame(args, out, swept: list[str], shape, outputs, **options):
+    """:func:`grid_columns` as a pandas DataFrame (the ``--csv`` table)."""
+    import pandas as pd
+
+    return pd.DataFrame(grid_columns(args, out, swept, shape, outputs, **options))
+
+
+def grid_columns(args, out, swept: list[str], shape, outputs, *, input_units: dict, output_units: dict,
+                 used=None, repeated: str = "_used") -> dict[str, np.ndarray]:
     """One row a grid point: the swept inputs as given, then ``outputs``; columns 'name [SI unit]'
-    (``input_units``: input -> unit, ``output_units``: output -> (unit, meaning)).
+    (``input_units``: input -> unit, ``output_units``: output -> (unit, meaning)), as a dict of column -> array.
 
     ``used(name, values)``: the values the model evaluated; where they differ from those given, a column
     'name_used' follows the input (unless it is also an output). An output named like a swept input is
     labelled name + ``repeated``."""
-    import pandas as pd
-
     size = max(1, math.prod(shape))
     cols = {}
     for name, grid in sweep_grid(args, swept)[0].items():
@@ -62,12 +67,18 @@ def grid_frame(args, out, swept: list[str], shape, outputs, *, input_units: dict
     for name in outputs:
         label = f"{name}{repeated}" if name in swept else name
         cols[f"{label} [{output_units[name][0]}]"] = np.broadcast_to(out[name], shape).reshape(size)
-    return pd.DataFrame(cols)
+    return cols
 
 
-def format_table(frame) -> str:
-    """The table as printed on the terminal (6 significant digits)."""
-    return frame.to_string(index=False, float_format=lambda v: f"{v:.6g}")
+def format_table(table) -> str:
+    """The table (a dict column -> values, or a DataFrame) as printed on the terminal: right-aligned columns, numbers
+    to 6 significant digits. Plain Python, so that `mftyre eval` of one point does not import pandas."""
+    if hasattr(table, "columns"):
+        table = {name: table[name].to_numpy() for name in table.columns}
+    cells = [[str(name), *(v if isinstance(v, str) else f"{v:.6g}" for v in values)] for name, values in table.items()]
+    widths = [max(map(len, column)) for column in cells]
+    return "\n".join("  ".join(column[row].rjust(width) for column, width in zip(cells, widths))
+                     for row in range(len(cells[0]) if cells else 0))
 
 
 _STYLES = (("-", "solid"), ("--", "dashed"), (":", "dotted"), ("-.", "dash-dot"))

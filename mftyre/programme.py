@@ -52,9 +52,11 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import pandas as pd
 
 from .data import TyreData
+from .lazy import LazyModule
+
+pd = LazyModule("pandas")  # imported when first used: the command line starts without it
 
 __all__ = ["cluster_levels", "recognise", "Programme", "SWEEP_THRESHOLD"]
 

@@ -80,6 +80,24 @@ def test_eight_threads_give_the_serial_results(compiled, tag):
         np.testing.assert_array_equal(got, want)
 
 
+
+def test_batch_outputs_are_named(compiled):
+    """batch returns one array per output, by position (as before) and by name, and pickles with its names."""
+    import pickle
+
+    model, f = compiled["mf61"]
+    out = f.batch(np.array([3000.0, 5000.0]), 0.02, 0.05, 0.0, 0.0, 20.0, 2.1e5)
+    ref = model.evaluate(np.array([3000.0, 5000.0]), 0.02, 0.05, vx=20.0, p=2.1e5)
+    assert len(out) == len(f.outputs) and isinstance(out, tuple)
+    np.testing.assert_allclose(out.fy, ref.fy, rtol=1e-10)
+    np.testing.assert_allclose(out.mz, out[f.outputs.index("mz")])
+    assert list(out.to_dict()) == list(f.outputs)
+    back = pickle.loads(pickle.dumps(out))
+    assert back.names == out.names and np.array_equal(back.fx, out.fx)
+    with pytest.raises(AttributeError, match="no output 'fyy'"):
+        out.fyy
+
+
 def test_results_match_numpy_and_broadcast(compiled):
     model, f = compiled["mf61"]
     fz = np.array([[3000.0], [5000.0], [7000.0]])  # (3, 1) against (4,): a (3, 4) grid

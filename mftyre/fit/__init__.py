@@ -14,11 +14,13 @@ reduced per sweep (:mod:`mftyre.timeseries`); every stage result must pass :func
 finder's check before it writes an improved .tir).
 Command line: ``mftyre fit DATA -o out.tir [--start FILE.tir] [--report report.md]``.
 """
-from .core import BOUNDS, COMPARED_STAGES, FitResult, StageResult, fit_tir, load_data
-from .metrics import normalised_rms
-from .stages import STAGE_NAMES, STAGES
-from .start import start_parameters
-from .verify import verify_tir
+
+from ..lazy import export_lazily
 
 __all__ = ["fit_tir", "FitResult", "StageResult", "normalised_rms", "start_parameters", "STAGES", "STAGE_NAMES",
            "BOUNDS", "COMPARED_STAGES", "load_data", "verify_tir"]
+#: the names above, each imported from its submodule when first used: `mftyre fit --help` imports no lmfit
+export_lazily(__name__, {
+    "BOUNDS": "core", "COMPARED_STAGES": "core", "FitResult": "core", "StageResult": "core", "fit_tir": "core",
+    "load_data": "core", "normalised_rms": "metrics", "STAGE_NAMES": "stages", "STAGES": "stages",
+    "start_parameters": "start", "verify_tir": "verify"})

@@ -36,8 +36,8 @@ def register(subparsers) -> None:
     p = command_parser(
         subparsers, "fit", run, data=True, help="fit Magic Formula parameters to tyre measurements and write a .tir file",
         description="Fit Magic Formula parameters (MF 6.1, or MF 6.2 with an MF 6.2 --start), stage by stage (pure Fx, pure Fy, Mz, combined, Mx, My, vertical, "
-                    "rolling radius), to TYDEX (.tdx) or CSV data; pressure terms when the data have several "
-                    "pressures. The test programme is recognised first and printed; stages whose result fails "
+                    "rolling radius), to TYDEX (.tdx), TTC (.dat text or .mat) or CSV data; pressure terms when "
+                    "the data have several pressures. The test programme is recognised first and printed; stages whose result fails "
                     "the physical checks are rejected with their reason. Writes the .tir file and optionally a "
                     "Markdown report with plots. Time series (100 Hz and more) are reduced per sweep to binned means, "
                     "up and down branches averaged.")

@@ -40,12 +40,17 @@ The workflow (:func:`find_gaps`):
    the effects with values and standard errors, transient effects, rejected and untestable effects, the improved
    .tir; Markdown + PNG and JSON.
 """
-from .catalogue import BASE, CATALOGUE, Effect, coverage, effect_state, neutralise
-from .core import AddedEffect, Candidate, GapReport, find_gaps
-from .locate import Finding, locate
-from .refit import refit, refit_stages
-from .residuals import CHANNELS, Evaluator, holdout_mask, noise_levels
+
+from ..lazy import export_lazily
 
 __all__ = ["find_gaps", "GapReport", "AddedEffect", "Candidate", "CATALOGUE", "Effect", "BASE", "coverage",
            "effect_state", "neutralise", "Finding", "locate", "refit", "refit_stages", "CHANNELS", "Evaluator",
            "holdout_mask", "noise_levels"]
+#: the names above, each imported from its submodule when first used: `mftyre --help` imports no scipy or lmfit
+export_lazily(__name__, {
+    "BASE": "catalogue", "CATALOGUE": "catalogue", "Effect": "catalogue", "coverage": "catalogue",
+    "effect_state": "catalogue", "neutralise": "catalogue",
+    "AddedEffect": "core", "Candidate": "core", "GapReport": "core", "find_gaps": "core",
+    "Finding": "locate", "locate": "locate",
+    "refit": "refit", "refit_stages": "refit",
+    "CHANNELS": "residuals", "Evaluator": "residuals", "holdout_mask": "residuals", "noise_levels": "residuals"})

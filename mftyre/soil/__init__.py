@@ -10,11 +10,12 @@
   interface (``evaluate``, ``towed``, the same outputs);
 * :class:`Ground`: one interface for a vehicle model: hard ground (Magic Formula), soft soil, or a blend.
 """
-from .soils import Soil, builtin_soils, read_soils, soil
-from .model import SinkageError, SoftSoilTyre, SoilOutputs
-from .equations import OUTPUTS
-from .cone_index import ConeIndexTyre
-from .ground import Ground, GroundForces
+from ..lazy import export_lazily
 
 __all__ = ["Soil", "builtin_soils", "read_soils", "soil", "SoftSoilTyre", "SoilOutputs", "SinkageError", "OUTPUTS",
            "Ground", "GroundForces", "ConeIndexTyre"]
+#: the names above, each imported from its submodule when first used (`mftyre --help` registers `mftyre soil`)
+export_lazily(__name__, {
+    "Soil": "soils", "builtin_soils": "soils", "read_soils": "soils", "soil": "soils",
+    "SinkageError": "model", "SoftSoilTyre": "model", "SoilOutputs": "model", "OUTPUTS": "equations",
+    "ConeIndexTyre": "cone_index", "Ground": "ground", "GroundForces": "ground"})
