@@ -228,7 +228,9 @@ def remedy(option: str, channel: str, value: str) -> str:
 
 
 def _assignments(text: str, what: str) -> list[tuple[str, str]]:
-    pairs = []
+    """The ``CHANNEL=VALUE`` items of an option, each channel once (ValueError naming a channel given twice: which
+    one is meant cannot be guessed)."""
+    pairs, seen = [], {}
     for item in str(text).split(","):
         if not item.strip():
             continue
@@ -237,6 +239,10 @@ def _assignments(text: str, what: str) -> list[tuple[str, str]]:
         key, value = (part.strip() for part in item.split("=", 1))
         if not key or not value:
             raise ValueError(f"{what}: {item.strip()!r} has an empty side (e.g. {_EXAMPLE_OPTION[what]})")
+        if key.upper() in seen:
+            raise ValueError(f"{what}: {key} is given twice ({seen[key.upper()]!r} and {item.strip()!r}): give each "
+                             "channel once")
+        seen[key.upper()] = item.strip()
         pairs.append((key, value))
     if not pairs:
         raise ValueError(f"{what}: empty; expected CHANNEL=VALUE,... (e.g. {_EXAMPLE_OPTION[what]})")
@@ -256,7 +262,13 @@ def _channel(name: str, what: str) -> str:
 def parse_columns(text: str) -> dict:
     """``"FZ=Fz_N,SA=alpha"`` (channel = file column) -> ``{"Fz_N": "FZ", "alpha": "SA"}`` (the ``columns=``
     of the readers); ValueError naming what was expected."""
-    return {col: _channel(ch, "columns") for ch, col in _assignments(text, "columns")}
+    out = {}
+    for ch, col in _assignments(text, "columns"):
+        if col in out:
+            raise ValueError(f"columns: file column {col!r} is given for {out[col]} and for {ch.strip().upper()}: "
+                             "a column holds one channel")
+        out[col] = _channel(ch, "columns")
+    return out
 
 
 def parse_units(text: str) -> dict:
@@ -331,7 +343,7 @@ _MAX_LEVER = 1.0
 
 
 def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of: dict | None = None,
-                    stated: str = "") -> None:
+                    stated: str = "", constants: dict | None = None) -> None:
     """The one plausibility judge: DataError at values no tyre measurement in SI units and ISO-W axes has, judged
     on the whole file's physics, each message naming the channel (and the file's column), what was seen, the
     likely unit or axis system and the option that converts it. In order:
@@ -348,13 +360,18 @@ def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of:
        |(FX, FY)| / FZ beyond :data:`_MAX_FRICTION`; FY rising with SA (slip angle or lateral force reversed?).
 
     ``stated``: where a file that states its own units (TYDEX, TTC) states them; the remedy for a unit is then
-    to correct that statement (``--units`` is for CSV files)."""
+    to correct that statement (``--units`` is for CSV files). ``constants``: the constant channels given to the
+    reader (``defaults=``, ``--set``: channel -> value as given); the remedy for one of them is its unit
+    (``--set P=2.2bar``), not the file's."""
     frame = data.frame if isinstance(data, TyreData) else data
+    given = {str(k).strip().upper(): v for k, v in (constants or {}).items()}
     where = where or (data.source if isinstance(data, TyreData) else "") or "<data>"
     column_of = column_of or {}
     present = set(frame.columns)
 
     def name(ch):
+        if ch in given:
+            return f"channel {ch} (the constant {ch}={given[ch]})"
         col = column_of.get(ch, ch)
         return f"channel {ch}" + (f" (file column {col!r})" if col != ch else "")
 
@@ -367,6 +384,13 @@ def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of:
 
     def refuse(problems, fixes, sae=""):
         axes = f". Also {sae}" if sae else ""
+        constant = {ch: u for ch, u in fixes.items() if ch in given}
+        if constant:  # a number without a unit is SI: the remedy is the unit on the constant
+            fix = ", ".join(remedy("constants", ch, f"{_QUANTITY.fullmatch(str(given[ch])).group(1)}{u}")
+                            if _QUANTITY.fullmatch(str(given[ch])) else remedy("constants", ch, f"VALUE{u}")
+                            for ch, u in constant.items())
+            raise DataError(f"{where}: {'; '.join(problems)}. A constant without a unit is in SI units: give its unit, "
+                            f"e.g. {fix}{axes}")
         if stated:
             likely = ", ".join(f"{column_of.get(ch, ch)} looks like {u}" for ch, u in fixes.items())
             raise DataError(f"{where}: {'; '.join(problems)}. The file states its units ({stated}): correct the "
@@ -714,7 +738,7 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
     _apply_defaults(frame, defaults, path, column_of)
     _check_required(frame, path, lambda row: f"{path}: line {row + 2}", column_of)
     if check:
-        check_plausible(frame, str(path), column_of)
+        check_plausible(frame, str(path), column_of, constants=defaults)
     unit_record = {ch: units.get(ch, _SI_NAME[CHANNELS[ch][0]]) for ch in CHANNELS if ch in frame.columns}
     return TyreData(frame, tyre=tyre or path.stem, source=str(path), units=unit_record,
                     history=_import_notes(axes, units, defaults, check))
@@ -1017,7 +1041,8 @@ def _read_tydex(fh, path: Path, defaults, axes="ISO-W", check=True) -> TyreData:
                         f"({', '.join(_TYDEX_NAMES[c][0] for c in missing)}) nor a constant")
     _check_values(frame, lambda row: f"{path}:{lines()[row]}", name_of)
     if check:
-        check_plausible(frame, str(path), name_of, stated="the unit column of its **MEASURCHANNELS lines")
+        check_plausible(frame, str(path), name_of, stated="the unit column of its **MEASURCHANNELS lines",
+                        constants=defaults)
     tyre = str(state.header.get("MEASID", ("", "", ""))[0] or path.stem)
     consts = {k: v[0] for k, v in {**state.header, **state.constants}.items()}
     return TyreData(frame, tyre=tyre, source=str(path), units=units, constants=consts,
@@ -1325,7 +1350,7 @@ def read_ttc(path, *, columns: dict | None = None, axes: str = "SAE", defaults: 
                         f"{remedy('columns', 'SL', 'SR')} or give a constant")
     _check_required(frame, path, locate, column_of)
     if check:
-        check_plausible(frame, str(path), column_of, stated="the channel struct of the .mat file, else the metric TTC "
+        check_plausible(frame, str(path), column_of, constants=defaults, stated="the channel struct of the .mat file, else the metric TTC "
                         "units" if raw.startswith(b"MATLAB") else "the units row below the channel names")
     return TyreData(frame, tyre=path.stem, source=str(path), units=unit_record,
                     history=[f"TTC run read from {path.name}"] + _import_notes(axes, None, defaults, check))

@@ -430,6 +430,7 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
                                         const fmi2ValueReference vKnown_ref[], size_t nKnown,
                                         const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
+    char msg[1024];
     double du[ARR(TYRE_NU)] = {0}, dy[ARR(TYRE_NY)];
     size_t k;
     CHECK_INSTANCE(c, "fmi2GetDirectionalDerivative")
@@ -457,9 +458,22 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
             LOG_ERROR(inst, "fmi2GetDirectionalDerivative: unknown %u is not an output", (unsigned)vUnknown_ref[i]);
             return fmi2Error;
         }
+    /* as fmi2DoStep: no derivative at inputs or parameters it refuses; none that is not finite */
+    if (!all_finite(du, TYRE_NU)) {
+        LOG_ERROR(inst, "fmi2GetDirectionalDerivative: a seed dvKnown is not finite");
+        return fmi2Error;
+    }
+    if (!check_values(inst, msg, sizeof msg)) {
+        LOG_DISCARD(inst, "fmi2GetDirectionalDerivative: %s; no derivative", msg);
+        return fmi2Discard;
+    }
     if (glue_dout(inst->work, inst->s.x, inst->s.u, inst->s.q, du, dy) != 0) {
         LOG_ERROR(inst, "fmi2GetDirectionalDerivative: evaluation failed");
         return fmi2Error;
+    }
+    if (!all_finite(dy, TYRE_NY)) {
+        LOG_DISCARD(inst, "fmi2GetDirectionalDerivative: the derivative is not finite at these inputs");
+        return fmi2Discard;
     }
     for (size_t i = 0; i < nUnknown; i++) {
         var_kind(vUnknown_ref[i], &k);
