@@ -484,15 +484,21 @@ def test_soil_file_refuses_a_fifo_and_a_device_without_blocking(tmp_path, capsys
     assert "not a regular file" in capsys.readouterr().err
 
 
-def test_one_swift_fmu_step_has_a_time_budget_proportional_to_the_step(tmp_path):
+@pytest.fixture(scope="module")
+def swift_fmu(tmp_path_factory):
+    path = tmp_path_factory.mktemp("swift_fmu") / "swift.fmu"
+    assert cli.main(["fmu", "build", str(T62), "-o", str(path), "--model", "swift", "--vertical", "position"]) == 0
+    return path
+
+
+def test_one_swift_fmu_step_has_a_time_budget_proportional_to_the_step(tmp_path, swift_fmu):
     """max_step = 2e-7 and a 1 s step: 5e6 internal steps (about 30 s in one fmi2DoStep; up to 1e7 were allowed) ran;
     now a step may take at most 1e6 internal steps per simulated second, one over budget is refused with fmi2Error
     and a message."""
     from fmpy.fmi1 import FMICallException
     from test_fmu import Slave
 
-    path = tmp_path / "swift.fmu"
-    assert cli.main(["fmu", "build", str(T62), "-o", str(path), "--model", "swift", "--vertical", "position"]) == 0
+    path = swift_fmu
     start = {"vx": 10.0, "omega": 10.0 / 0.305, "z": 0.29, "max_step": 2e-7}
     fmu = Slave(path, tmp_path, start=start)
     cpu = time.process_time()
@@ -503,6 +509,33 @@ def test_one_swift_fmu_step_has_a_time_budget_proportional_to_the_step(tmp_path)
     within = Slave(path, tmp_path, start=dict(start, max_step=2e-6))  # 5e5 internal steps per second: allowed
     within.fmu.doStep(0.0, 0.01)
     assert 0.0 < within.get("Fz")["Fz"] < 1e5
+
+
+def test_one_swift_fmu_call_has_a_step_budget_whatever_the_step_length(tmp_path, swift_fmu):
+    """Issue 34: one fmi2DoStep of 9,999 s at the default max_step (1 ms) ran ~1e7 internal steps (109 s); a 300 s
+    step 3e5 (~3 s). Now one call takes at most MAX_STEPS_PER_CALL = 200,000 internal steps (~2 s): beyond it
+    fmi2Error with a message, at once, the state held (the next steps go on from it), and the same rule in Python."""
+    from fmpy.fmi1 import FMICallException
+    from test_fmu import Slave
+
+    from mftyre.errors import ModelInputError
+    from swift.fmu_model import MAX_STEPS_PER_CALL, internal_steps
+
+    fmu = Slave(swift_fmu, tmp_path, start={"vx": 10.0, "omega": 10.0 / 0.305, "z": 0.29})
+    fmu.fmu.doStep(0.0, 0.01)
+    held = fmu.get("Fz")["Fz"]
+    for h in (9999.0, 300.0):
+        cpu = time.process_time()
+        with pytest.raises(FMICallException, match="error"):
+            fmu.fmu.doStep(0.01, h)
+        assert time.process_time() - cpu < 1.0, h
+        assert fmu.get("Fz")["Fz"] == held
+    assert sum("step too long" in message for _, message in fmu.messages) == 2
+    fmu.fmu.doStep(0.01, 0.01)  # the state was held: the run goes on
+    assert fmu.get("Fz")["Fz"] == pytest.approx(held, rel=0.05)
+    assert internal_steps(MAX_STEPS_PER_CALL * 1e-3, 1e-3, 10.0) == MAX_STEPS_PER_CALL  # 200 s: within
+    with pytest.raises(ModelInputError, match="200,000 per call"):
+        internal_steps(9999.0, 1e-3, 10.0)
 
 
 # ------------------------------------------------------------------------------------ seeded fuzz: the counts

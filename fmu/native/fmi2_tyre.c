@@ -507,8 +507,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSet
     rc = glue_step(inst->work, x, inst->s.u, inst->s.q, h);
     if (rc == GLUE_OVER_BUDGET) {
         LOG_ERROR(inst, "fmi2DoStep at t = %g: the step of %g s needs more internal steps than its time budget "
-                        "(the parameter max_step is too small or the speed too high for this model); state and "
-                        "outputs held", t, h);
+                        "(the parameter max_step is too small, the speed too high or the step too long for this "
+                        "model: split it); state and outputs held", t, h);
         return fmi2Error;
     }
     if (rc != 0 || !all_finite(x, TYRE_NX)) {
