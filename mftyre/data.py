@@ -530,7 +530,7 @@ def _speed_and_spin(frame, fixes, problems, name) -> None:
 
 def _slope_per_load(x, force, fz, keep) -> float | None:
     """|slope| of force / FZ over x, fitted on the rows ``keep`` with |x| within 30 % of the 99th percentile of |x|
-    (the linear range of a sweep); None without 10 such rows or when the slope is not 8 standard errors from 0."""
+    (the linear range of a sweep); None without 10 such rows or when the slope is not 5 standard errors from 0."""
     keep = keep & np.isfinite(x) & np.isfinite(force) & np.isfinite(fz) & (np.abs(fz) > 0)
     if keep.sum() < 10:
         return None
@@ -542,7 +542,7 @@ def _slope_per_load(x, force, fz, keep) -> float | None:
     (slope, offset), residual = np.polyfit(x, per_load, 1, full=True)[:2]
     spread = float(np.sum((x - x.mean()) ** 2))
     error = math.sqrt(float(residual[0]) / (x.size - 2) / spread) if residual.size else 0.0
-    return abs(float(slope)) if abs(slope) > 8.0 * error else None
+    return abs(float(slope)) if abs(slope) > 5.0 * error else None
 
 
 def _slip_stiffness_units(frame, fixes, problems, name) -> None:

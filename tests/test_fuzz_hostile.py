@@ -800,3 +800,280 @@ def test_field_counts_are_checked_across_the_blocks_of_a_large_file(tmp_path):
     rows[-1] = rows[0]
     path.write_text("FZ,SA,SL,VX,P\n" + "\n".join(rows) + "\n\n")
     assert len(read_csv(path).frame) == 150_000
+
+
+# ------------------------------------------------------------------------------------ issue 34: readers, judge, limits
+DEG = np.pi / 180
+TTC_NAMES = ["ET", "V", "N", "SA", "IA", "RL", "RE", "P", "FX", "FY", "FZ", "MX", "MZ", "SL"]
+TTC_UNITS = ["s", "kph", "rpm", "deg", "deg", "cm", "cm", "kPa", "N", "N", "N", "N-m", "N-m", "none"]
+
+
+@pytest.fixture(scope="module")
+def programme():
+    """A trailer programme of the sample car tyre with realistic noise (ISO-W, SI)."""
+    from mftyre.data import trailer_programme
+
+    model = _quiet(mftyre.load_tir, T61)
+    return trailer_programme(model, loads=(0.6, 1.0), pressures=(1.0,), cambers_deg=(0.0, 3.0), points=21, noise=1.0,
+                             seed=34).frame
+
+
+def _ttc(frame) -> dict:
+    """The programme as a metric TTC run holds it (SAE axes), converted by hand."""
+    return {"ET": np.arange(len(frame)) * 0.01, "V": frame.VX * 3.6, "N": frame.OMEGA * 60 / (2 * np.pi),
+            "SA": -frame.SA / DEG, "IA": frame.IA / DEG, "RL": frame.RL * 100, "RE": frame.RE * 100, "P": frame.P / 1e3,
+            "FX": frame.FX, "FY": -frame.FY, "FZ": -frame.FZ, "MX": frame.MX, "MZ": -frame.MZ, "SL": frame.SL}
+
+
+def test_a_compressed_mat_that_expands_beyond_the_budget_is_refused_before_it_is_read(tmp_path, programme):
+    """Issue 34 item 1: the size limit saw only the compressed bytes (a 2.6 MB .mat of 12 x 2.5e7 zeros was read
+    whole: 52 s, 6.2 GB). The variables' decompressed size counts against the same budget (max_bytes), counted in
+    pieces before scipy reads anything: here a 40 MB run compressed to well under 4 MiB."""
+    import scipy.io
+
+    from mftyre.data import read_ttc
+
+    cols = {k: np.tile(np.asarray(v, float), 1500) for k, v in _ttc(programme).items()}
+    path = tmp_path / "bomb.mat"
+    scipy.io.savemat(path, cols, do_compression=True)
+    expanded = sum(v.nbytes for v in cols.values())
+    assert path.stat().st_size < 4 * 2**20 < expanded
+    cpu = time.process_time()
+    with pytest.raises(DataError, match=r"bomb\.mat: its variables expand to more than 4,194,304 bytes"):
+        read_ttc(path, max_bytes=4 * 2**20)
+    assert time.process_time() - cpu < 1.0
+    assert len(read_ttc(path, max_bytes=2 * expanded)) == len(cols["FZ"])  # within the budget: read
+    scipy.io.savemat(path, cols, do_compression=False)  # uncompressed: the file's own size is the measure
+    with pytest.raises(DataError, match="more than the limit"):
+        read_ttc(path, max_bytes=4 * 2**20)
+
+
+def test_a_ttc_channel_named_twice_is_refused(tmp_path, programme):
+    """Issue 34 item 2: two FZ columns in a TTC .dat silently kept the last."""
+    from mftyre.data import read_ttc
+
+    cols = _ttc(programme)
+    names, units = TTC_NAMES + ["FZ"], TTC_UNITS + ["N"]
+    table = np.column_stack([np.asarray(cols[n], float) for n in TTC_NAMES] + [np.zeros(len(programme))])
+    lines = ["run", "\t".join(names), "\t".join(units)] + ["\t".join(f"{v:.10g}" for v in row) for row in table]
+    path = tmp_path / "twice.dat"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(DataError, match=r"twice\.dat:2: channel FZ is named twice \(columns 11 and 15\)"):
+        read_ttc(path)
+    path.write_text("\n".join(line.rsplit("\t", 1)[0] for line in lines) + "\n")
+    assert np.allclose(read_ttc(path).array("FZ"), programme.FZ)  # once: read, in ISO-W
+
+
+def _small_sweeps(alpha_deg, kappa):
+    from mftyre.data import trailer_programme
+
+    return trailer_programme(_quiet(mftyre.load_tir, T61), loads=(0.6, 1.0), pressures=(1.0,), cambers_deg=(0.0,),
+                             alpha_max_deg=alpha_deg, kappa_max=kappa, combined_alpha_deg=(alpha_deg / 2,), points=41,
+                             noise=1.0, seed=5).frame
+
+
+def _rows(frame, ch, row, value):
+    x = frame[ch].to_numpy(float).copy()
+    x[row] = value
+    return frame.assign(**{ch: x})
+
+
+RPM = 60 / (2 * np.pi)
+#: The unit mistakes of issue 34 item 3 that the channel-by-channel check let through: (frame -> mistaken frame,
+#: what the message must say).
+MISTAKES = {
+    "VX km/h + OMEGA rpm below 100 km/h": (lambda f: f[f.VX < 25].assign(VX=lambda d: d.VX * 3.6,
+                                                                          OMEGA=lambda d: d.OMEGA * RPM),
+                                           r"VX looks like km/h.*OMEGA looks like rpm"),
+    "VX mph + OMEGA rpm": (lambda f: f.assign(VX=f.VX / 0.44704, OMEGA=f.OMEGA * RPM),
+                           r"VX looks like mph.*OMEGA looks like rpm"),
+    "OMEGA deg/s": (lambda f: f.assign(OMEGA=f.OMEGA / DEG), r"OMEGA looks like deg/s"),
+    "MZ N mm": (lambda f: f.assign(MZ=f.MZ * 1e3), r"channel MZ.*lever.*N\*mm"),
+    "MX N mm": (lambda f: f.assign(MX=f.MX * 1e3), r"channel MX.*lever.*N\*mm"),
+    "SA deg, sweeps within 1 deg": (lambda f: _small_sweeps(1.0, 0.25).pipe(lambda d: d.assign(SA=d.SA / DEG)),
+                                    r"channel SA: the cornering stiffness per unit load.*look like deg"),
+    "SA deg, sweeps within 0.5 deg": (lambda f: _small_sweeps(0.5, 0.25).pipe(lambda d: d.assign(SA=d.SA / DEG)),
+                                      r"channel SA: the cornering stiffness.*look like deg"),
+    "SL percent, sweeps within 2 %": (lambda f: _small_sweeps(1.0, 0.02).pipe(lambda d: d.assign(SL=d.SL * 100)),
+                                      r"channel SL: the longitudinal slip stiffness.*look like %"),
+    "SL percent, sweeps within 1 %": (lambda f: _small_sweeps(1.0, 0.01).pipe(lambda d: d.assign(SL=d.SL * 100)),
+                                      r"channel SL: the longitudinal slip stiffness.*look like %"),
+    "IA written as 0/1 deg": (lambda f: f.assign(IA=np.where(f.IA.abs() > 0, 1.0, 0.0)),
+                              r"channel IA: every value is a whole number.*look like deg"),
+    "IA written as -1/0/1 deg": (lambda f: f.assign(IA=np.sign(f.IA) * (np.arange(len(f)) % 2)),
+                                 r"channel IA: every value is a whole number"),
+    "one row VX = -1e300": (lambda f: _rows(f, "VX", 7, -1e300), r"row 8: channel VX is -1e\+300 m/s"),
+    "one row SA = 40 rad": (lambda f: _rows(f, "SA", 3, 40.0), r"row 4: channel SA is 40 rad"),
+    "one row FY = 1e9 N": (lambda f: _rows(f, "FY", 0, 1e9), r"row 1: channel FY is 1e\+09 N"),
+    "FZ zero in every row": (lambda f: f.assign(FZ=0.0), r"channel FZ is 0 in every row"),
+    "FZ negative in exactly half the rows": (lambda f: f.iloc[:len(f) // 2 * 2].assign(
+        FZ=lambda d: np.where(np.arange(len(d)) % 2 == 0, -d.FZ, d.FZ)), r"channel FZ is zero or negative in 50 %"),
+    "a friction of 10": (lambda f: f.assign(FZ=f.FZ / 10), r"friction \|\(FX, FY\)\| / FZ is 1\d.*beyond the 5"),
+}
+
+
+@pytest.mark.parametrize("mistake", list(MISTAKES))
+def test_the_plausibility_judge_finds_whole_file_unit_mistakes(programme, mistake):
+    """Issue 34 item 3: 17 unit and row mistakes that the channel-by-channel ranges let through, each refused by the
+    one judge (check_plausible) on whole-file physics: VX against OMEGA x radius with both units unknown, the slip
+    stiffnesses per unit load, whole-number cambers, moment levers, single rows, the load's sign, the friction."""
+    from mftyre.data import check_plausible
+
+    make, message = MISTAKES[mistake]
+    with pytest.raises(DataError, match=message):
+        check_plausible(make(programme.copy()), "rig.csv")
+
+
+def test_the_judge_raises_no_false_alarm_on_real_looking_data():
+    """The trailer and rig generators of every sample tyre (noise, offsets, small sweeps, time series with a TIME
+    channel), read as they are, pass (the MFeval reference tables are judged in test_rig_import)."""
+    from mftyre.data import check_plausible, trailer_programme
+    from mftyre.rig import rig_programme
+
+    judged = 0
+    for path in sorted(T61.parent.glob("*.tir")):
+        model = _quiet(mftyre.load_tir, path)
+        for frame in (trailer_programme(model, noise=1.0, seed=1).frame,
+                      trailer_programme(model, alpha_max_deg=1.0, kappa_max=0.02, noise=2.0, seed=2,
+                                        offsets={"SA": 0.002, "FY": 30.0}).frame,
+                      _quiet(rig_programme, model, seed=3).frame):
+            check_plausible(frame, path.name)
+            judged += 1
+    assert judged >= 9
+
+
+@pytest.mark.parametrize("change", [{"phi": np.radians(89.9999)}, {"K": 1e300}, {"phi": np.radians(61.0)},
+                                    {"K": 2.0}])
+def test_soil_values_that_would_overflow_are_typed_errors(tmp_path, capsys, change):
+    """Issue 34 item 4: phi = 89.9999 deg or K = 1e300 passed the soil's checks and gave a raw OverflowError in
+    evaluate, towed and `mftyre soil`. A soil has phi <= 60 deg (N_gamma's tan(1.4 phi) diverges at 64.3) and
+    K <= 1 m: a ModelInputError naming the soil (a DataError naming the line from a soil file)."""
+    import dataclasses
+
+    from mftyre.errors import ModelInputError
+    from mftyre.soil import SoftSoilTyre
+    from mftyre.soil.soils import soil
+
+    agri = T61.parent / "agri_460_85R34_mf61.tir"
+    for call in (lambda t: t.evaluate(fz=25e3, slip=0.2, p=1.2e5), lambda t: t.towed(fz=25e3, p=1.2e5)):
+        with pytest.raises(ModelInputError, match="soil 'sandy_loam'"):
+            call(SoftSoilTyre(agri, dataclasses.replace(soil("sandy_loam"), **change)))
+    (name, value), = change.items()
+    row = dict(name="odd", n=0.7, k_c=5.27, k_phi=1515.04, c=1.72, phi=30.0, K=0.025)
+    row[name] = float(np.degrees(value)) if name == "phi" else value
+    soils = tmp_path / "soils.csv"
+    soils.write_text(",".join(row) + "\n" + ",".join(str(v) for v in row.values()) + "\n")
+    assert cli.main(["soil", str(agri), "--soil", "odd", "--soil-file", str(soils), "--fz", "25kN", "-q"]) != 0
+    err = capsys.readouterr().err
+    assert "soils.csv:2" in err and f"{name} must be" in err and "Traceback" not in err
+
+
+def test_our_swift_and_fmu_are_imported_even_beside_a_users_swift_py_and_fmu_folder(tmp_path):
+    """Issue 34 item 6: a `swift.py` or a folder `fmu/` in the working folder was imported instead of ours (the
+    user's file ran) under `python -m mftyre`, scripts and notebooks, where the working folder comes first."""
+    import subprocess
+    import sys
+
+    (tmp_path / "swift.py").write_text("open('RAN', 'w').write('swift')\nraise SystemExit('the user swift ran')\n")
+    (tmp_path / "fmu").mkdir()
+    (tmp_path / "fmu" / "__init__.py").write_text("open('RAN', 'w').write('fmu')\n")
+    here = Path(mftyre.__file__).resolve().parents[1]
+    show = "import mftyre, swift, fmu, swift.road, fmu.build; print(swift.__file__); print(fmu.__file__)"
+    (tmp_path / "script.py").write_text(show + "\n")
+    for argv in ([sys.executable, "-c", show], [sys.executable, "script.py"],
+                 [sys.executable, "-m", "mftyre", "fmu", "--help"]):
+        done = subprocess.run(argv, cwd=tmp_path, capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, (argv, done.stderr[-500:])
+        if "-m" not in argv:
+            assert done.stdout.split() == [str(here / "swift" / "__init__.py"), str(here / "fmu" / "__init__.py")]
+        assert not (tmp_path / "RAN").exists(), argv
+
+
+def test_write_tir_keeps_a_source_name_with_line_breaks_on_its_comment_line(tmp_path):
+    """Issue 34 item 7: a source name with line breaks injected lines (a new [SHAPE] section, or an unreadable
+    file) into the written header."""
+    from mftyre.tir import parse_tir, read_tir, write_tir
+
+    evil = "run.tir\n[SHAPE]\n{radial width}\n1.0 0.0\r\nFNOMIN = 1\u2028x"
+    prm = _quiet(parse_tir, T61.read_text(), evil)
+    path = write_tir(prm, tmp_path / "out.tir")
+    back = _quiet(read_tir, path)
+    assert back.extra_sections == prm.extra_sections and "SHAPE" not in back.extra_sections
+    assert back.FNOMIN == prm.FNOMIN
+    source = [line for line in path.read_text().splitlines() if line.startswith("! Source:")]
+    assert source == ["! Source: run.tir\\n[SHAPE]\\n{radial width}\\n1.0 0.0\\r\\nFNOMIN = 1\\u2028x"]
+
+
+@pytest.mark.parametrize("option, text, message", [
+    ("units", "SA=deg,SA=rad", "units: SA is given twice"),
+    ("constants", "P=1.6bar,P=2bar", "constants: P is given twice"),
+    ("constants", "ia=0,IA=1deg", "constants: IA is given twice"),
+    ("columns", "FZ=a,SA=a", "columns: file column 'a' is given for FZ and for SA"),
+    ("columns", "FZ=a,FZ=b", "columns: FZ is given twice")])
+def test_an_option_giving_a_channel_twice_is_refused(option, text, message):
+    """Issue 34 item 8: options given twice were resolved silently (the last won)."""
+    from mftyre.data import parse_columns, parse_constants, parse_units
+
+    parse = {"units": parse_units, "constants": parse_constants, "columns": parse_columns}[option]
+    with pytest.raises(ValueError, match=message):
+        parse(text)
+
+
+def test_a_constant_without_its_unit_is_refused_with_advice_that_works(tmp_path, programme):
+    """Issue 34 item 8: `--set P=2.2` (2.2 Pa) was refused with the advice `--units P=bar`, which is refused in turn
+    (the file has no P column). The advice is now the constant with its unit, and it reads."""
+    import re
+
+    from mftyre.data import parse_constants, read_data, speaking_cli
+
+    path = tmp_path / "nop.csv"
+    programme.drop(columns=["P"]).to_csv(path, index=False)
+    with speaking_cli():
+        with pytest.raises(DataError, match=r"the constant P=2.2.*give its unit, e.g. --set P=2.2bar") as exc:
+            read_data(path, defaults=parse_constants("P=2.2"))
+        advice = re.search(r"--set (\S+)", str(exc.value)).group(1)
+        data = read_data(path, defaults=parse_constants(advice))
+    assert data.frame.P.iloc[0] == pytest.approx(2.2e5)
+    with pytest.raises(DataError, match=r"defaults=\{'P': '2.2bar'\}"):
+        read_data(path, defaults={"P": 2.2})
+
+
+def test_tir_limits_refuse_early(tmp_path):
+    """Issue 34 item 9: a 16 MiB .tir of distinct one-line sections took 26 s (35 s in `mftyre check`); 10,001
+    unknown parameters in an unknown section were refused only after the whole file was parsed. Now more than
+    MAX_SECTIONS different sections and the 10,001st unknown parameter are refused where they are met."""
+    from mftyre.tir import MAX_SECTIONS, MAX_UNKNOWN_PARAMETERS, parse_tir
+
+    sections = T61.read_text() + "".join(f"[S{i}]\nx\n" for i in range(1_500_000))  # 16 MiB
+    cpu = time.process_time()
+    with pytest.raises(TirError, match=rf"more than {MAX_SECTIONS:,} different sections"):
+        _quiet(parse_tir, sections, "big.tir")
+    unknown = T61.read_text() + "[EXTRA]\n" + "".join(f"P{i}=1\n" for i in range(1_500_000))
+    with pytest.raises(TirError, match=rf"big\.tir:\d+: P{MAX_UNKNOWN_PARAMETERS}: more than 10,000 parameters"):
+        _quiet(parse_tir, unknown, "big.tir")
+    assert time.process_time() - cpu < 4.0  # was 26 s + 9 s (both texts are built above the timer's start: ~1 s)
+    few = T61.read_text() + "".join(f"[S{i}]\nQ{i} = 1\n" for i in range(MAX_SECTIONS - 40))
+    assert len(_quiet(parse_tir, few, "few.tir").unknown) == MAX_SECTIONS - 40
+
+
+def test_data_limits_refuse_early(tmp_path):
+    """Issue 34 item 9: a CSV of 200,000 columns (1.9 MB) took 60 s, and a CSV at the 2 GiB limit would need ~7 GB.
+    Now a measurement file has at most DATA_MAX_COLUMNS columns and DATA_MAX_BYTES bytes (256 MiB: reading takes up
+    to ~5x the file's size, see docs/resource-limits.md), each refused before the samples are read."""
+    from mftyre.data import read_data
+    from mftyre.files import DATA_MAX_BYTES, DATA_MAX_COLUMNS
+
+    assert DATA_MAX_BYTES * 6 < 2e9
+    wide = tmp_path / "wide.csv"
+    wide.write_text("FZ,SA,SL,VX,P," + ",".join(f"c{i}" for i in range(200_000)) + "\n" +
+                    "4000,0,0,10,2e5" + ",1" * 200_000 + "\n")
+    cpu = time.process_time()
+    with pytest.raises(DataError, match=rf"wide\.csv: line 1: 200,005 columns, more than the {DATA_MAX_COLUMNS:,}"):
+        read_data(wide)
+    huge = tmp_path / "huge.csv"
+    with open(huge, "wb") as fh:  # sparse: no disk used
+        fh.write(b"FZ,SA,SL,VX,P\n")
+        fh.truncate(DATA_MAX_BYTES + 1)
+    with pytest.raises(DataError, match="more than the limit of 268435456 bytes"):
+        read_data(huge)
+    assert time.process_time() - cpu < 2.0
