@@ -328,7 +328,7 @@ _TYPICAL = {"SA": (0.02, 0.6), "IA": (0.005, 0.3), "SL": (0.01, 1.0), "VX": (0.5
 #: Largest magnitude of a single value (SI) of any tyre measurement, a few times the ranges above: a row beyond it
 #: is damaged (e.g. VX = -1e300), whatever the rest of the file says.
 _ROW_LIMIT = {"SA": 3.2, "IA": 3.2, "SL": 50.0, "VX": 300.0, "P": 6e7, "RL": 6.0, "RE": 6.0, "RHO": 1.5, "FZ": 3e6,
-              "FX": 3e6, "FY": 3e6, "MX": 3e6, "MY": 3e6, "MZ": 3e6, "OMEGA": 3e3, "PHIT": 1e3}
+              "FX": 3e6, "FY": 3e6, "MX": 3e5, "MY": 3e5, "MZ": 3e5, "OMEGA": 3e3, "PHIT": 1e3}
 #: Slope of the force over the slip at small slip, per unit load, that every tyre exceeds: cornering stiffness /
 #: FZ and longitudinal slip stiffness / FZ are 5 ... 50 per radian (per unit slip); 1.5 leaves room for the
 #: saturation within the fitted range and for high loads.

@@ -933,13 +933,14 @@ def test_the_judge_raises_no_false_alarm_on_real_looking_data():
     judged = 0
     for path in sorted(T61.parent.glob("*.tir")):
         model = _quiet(mftyre.load_tir, path)
-        for frame in (trailer_programme(model, noise=1.0, seed=1).frame,
-                      trailer_programme(model, alpha_max_deg=1.0, kappa_max=0.02, noise=2.0, seed=2,
-                                        offsets={"SA": 0.002, "FY": 30.0}).frame,
-                      _quiet(rig_programme, model, seed=3).frame):
-            check_plausible(frame, path.name)
-            judged += 1
-    assert judged >= 9
+        check_plausible(trailer_programme(model, noise=1.0, seed=1, points=21).frame, path.name)
+        judged += 1
+    small = trailer_programme(_quiet(mftyre.load_tir, T61), alpha_max_deg=1.0, kappa_max=0.02, noise=2.0, seed=2,
+                              offsets={"SA": 0.002, "FY": 30.0})
+    check_plausible(small.frame, "small sweeps")
+    rig = _quiet(rig_programme, _quiet(mftyre.load_tir, T61), loads=(0.45, 1.5), pressures=(0.86, 1.14), seed=3)
+    check_plausible(rig.frame, "rig")
+    assert judged >= 4
 
 
 @pytest.mark.parametrize("change", [{"phi": np.radians(89.9999)}, {"K": 1e300}, {"phi": np.radians(61.0)},
@@ -1044,11 +1045,11 @@ def test_tir_limits_refuse_early(tmp_path):
     MAX_SECTIONS different sections and the 10,001st unknown parameter are refused where they are met."""
     from mftyre.tir import MAX_SECTIONS, MAX_UNKNOWN_PARAMETERS, parse_tir
 
-    sections = T61.read_text() + "".join(f"[S{i}]\nx\n" for i in range(1_500_000))  # 16 MiB
+    sections = T61.read_text() + "".join(f"[S{i}]\nx\n" for i in range(400_000))  # 4 MiB (16 MiB took 26 s)
     cpu = time.process_time()
     with pytest.raises(TirError, match=rf"more than {MAX_SECTIONS:,} different sections"):
         _quiet(parse_tir, sections, "big.tir")
-    unknown = T61.read_text() + "[EXTRA]\n" + "".join(f"P{i}=1\n" for i in range(1_500_000))
+    unknown = T61.read_text() + "[EXTRA]\n" + "".join(f"P{i}=1\n" for i in range(400_000))
     with pytest.raises(TirError, match=rf"big\.tir:\d+: P{MAX_UNKNOWN_PARAMETERS}: more than 10,000 parameters"):
         _quiet(parse_tir, unknown, "big.tir")
     assert time.process_time() - cpu < 4.0  # was 26 s + 9 s (both texts are built above the timer's start: ~1 s)
@@ -1058,12 +1059,12 @@ def test_tir_limits_refuse_early(tmp_path):
 
 def test_data_limits_refuse_early(tmp_path):
     """Issue 34 item 9: a CSV of 200,000 columns (1.9 MB) took 60 s, and a CSV at the 2 GiB limit would need ~7 GB.
-    Now a measurement file has at most DATA_MAX_COLUMNS columns and DATA_MAX_BYTES bytes (256 MiB: reading takes up
-    to ~5x the file's size, see docs/resource-limits.md), each refused before the samples are read."""
+    Now a measurement file has at most DATA_MAX_COLUMNS columns and DATA_MAX_BYTES bytes (128 MiB: reading takes up
+    to ~8x the file's size, see docs/resource-limits.md), each refused before the samples are read."""
     from mftyre.data import read_data
     from mftyre.files import DATA_MAX_BYTES, DATA_MAX_COLUMNS
 
-    assert DATA_MAX_BYTES * 6 < 2e9
+    assert DATA_MAX_BYTES * 8 < 1.2e9
     wide = tmp_path / "wide.csv"
     wide.write_text("FZ,SA,SL,VX,P," + ",".join(f"c{i}" for i in range(200_000)) + "\n" +
                     "4000,0,0,10,2e5" + ",1" * 200_000 + "\n")
@@ -1074,6 +1075,143 @@ def test_data_limits_refuse_early(tmp_path):
     with open(huge, "wb") as fh:  # sparse: no disk used
         fh.write(b"FZ,SA,SL,VX,P\n")
         fh.truncate(DATA_MAX_BYTES + 1)
-    with pytest.raises(DataError, match="more than the limit of 268435456 bytes"):
+    with pytest.raises(DataError, match="more than the limit of 134217728 bytes"):
         read_data(huge)
     assert time.process_time() - cpu < 2.0
+
+
+def _fuzz_ttc_units(rng, tmp_path, frame, cases: int, counts: dict) -> None:
+    """TTC .dat and .mat runs (compressed or not) of a real-looking programme with a seeded unit, axis or row
+    mistake, a channel named twice, or none: each mistake a DataError (else counted silent), each clean run read
+    back exactly as written (in ISO-W, SI), never a raw exception; the slowest accepted read is recorded."""
+    import scipy.io
+
+    from mftyre.data import read_data
+
+    rpm = 60 / (2 * np.pi)
+    mistakes = [None, None, ("VX", 3.6), ("VX", 1 / 0.44704), ("OMEGA", 1 / DEG), ("MZ", 1e3), ("MX", 1e3),
+                ("FY", -1.0), ("FZ", 0.0), ("FZ", 0.1), "km/h+rpm", "mph+rpm", "row", "twice"]
+    for case in range(cases):
+        counts["ttc cases"] += 1
+        kind = mistakes[int(rng.integers(len(mistakes)))]
+        f = frame.copy()
+        if isinstance(kind, tuple):
+            f[kind[0]] = f[kind[0]] * kind[1]
+        elif kind in ("km/h+rpm", "mph+rpm"):
+            f = f[f.VX < 25].copy() if kind == "km/h+rpm" else f
+            f["VX"] = f.VX * (3.6 if kind == "km/h+rpm" else 1 / 0.44704)
+            f["OMEGA"] = f.OMEGA * rpm
+        elif kind == "row":
+            ch = ["VX", "SA", "FY", "FX", "MZ", "SL"][int(rng.integers(6))]
+            f.loc[f.index[int(rng.integers(len(f)))], ch] = float(rng.choice([-1e300, 1e200, 1e7]))  # beyond _ROW_LIMIT
+        cols = _ttc(f)
+        names = list(TTC_NAMES) + (["FZ"] if kind == "twice" else [])
+        table = np.column_stack([np.asarray(cols[n], float) for n in TTC_NAMES]
+                                + ([np.asarray(cols["FZ"], float)] if kind == "twice" else []))
+        mat = kind != "twice" and rng.random() < 0.5
+        path = tmp_path / f"run{case}.{'mat' if mat else 'dat'}"
+        if mat:
+            scipy.io.savemat(path, {n: table[:, j] for j, n in enumerate(TTC_NAMES)},
+                             do_compression=bool(rng.random() < 0.5))
+        else:
+            units = TTC_UNITS + (["N"] if kind == "twice" else [])
+            path.write_text("\n".join(["run", "\t".join(names), "\t".join(units)]
+                                      + ["\t".join(repr(float(v)) for v in row) for row in table]) + "\n")
+        start = time.process_time()
+        try:
+            data = read_data(path)
+        except DataError:
+            if kind is None:
+                counts["clean runs refused"] += 1
+            continue
+        except Exception as exc:  # noqa: BLE001
+            counts["raw exceptions"] += 1
+            counts.setdefault("raw", []).append((kind, repr(exc)[:80]))
+            continue
+        counts["slowest accepted read [s]"] = max(counts["slowest accepted read [s]"], time.process_time() - start)
+        if kind is not None:
+            counts["silent acceptances"] += 1
+            counts.setdefault("silent", []).append(kind)
+        elif not np.allclose(data.array("FZ"), f.FZ) or not np.allclose(data.array("SA"), f.SA):
+            counts["silent acceptances"] += 1
+
+
+def _fuzz_options(rng, cases: int, counts: dict) -> None:
+    """Option strings (--units, --columns, --set) of random channels, units, values, separators, repeated
+    channels: a ValueError or a mapping that gives each channel once, never a raw exception."""
+    from mftyre.data import parse_columns, parse_constants, parse_units
+
+    channels = ["SA", "sa", "IA", "P", "p", "VX", "FZ", "OMEGA", "XX", ""]
+    values = {"units": ["deg", "rad", "km/h", "psi", "bar", "%", "", "furlong", "N*mm", "rpm"],
+              "columns": ["a", "b", "Fz_N", "", "a b", "SA"],
+              "set": ["1.6bar", "2.2", "0", "-2deg", "60km/h", "1e400", "nan", "x", "", "1e-300kPa"]}
+    parsers = {"units": parse_units, "columns": parse_columns, "set": parse_constants}
+    for _ in range(cases):
+        counts["option cases"] += 1
+        option = list(parsers)[int(rng.integers(3))]
+        items = [f"{channels[int(rng.integers(len(channels)))]}{'=' if rng.random() < 0.9 else ''}"
+                 f"{values[option][int(rng.integers(len(values[option])))]}" for _ in range(int(rng.integers(1, 4)))]
+        text = ("," if rng.random() < 0.9 else ";").join(items)
+        try:
+            parsed = parsers[option](text)
+        except ValueError:
+            continue
+        except Exception as exc:  # noqa: BLE001
+            counts["raw exceptions"] += 1
+            counts.setdefault("raw", []).append((option, text, repr(exc)[:80]))
+            continue
+        given = [i.split("=", 1)[0].strip().upper() for i in text.split(",") if i.strip()]
+        targets = list(parsed.values()) if option == "columns" else list(parsed)
+        if len(set(given)) != len(given) or len(set(targets)) != len(targets):
+            counts["silent acceptances"] += 1
+            counts.setdefault("silent", []).append(text)
+
+
+def _fuzz_soils(rng, cases: int, counts: dict) -> None:
+    """Soils with values drawn over and beyond their ranges (and the edges, phi 60 deg, K 1 m, n, moduli up to
+    1e300): a typed error or finite outputs, in evaluate and towed, never a raw exception."""
+    from mftyre.soil import SoftSoilTyre
+    from mftyre.soil.soils import Soil
+
+    model = _quiet(mftyre.load_tir, T61.parent / "agri_460_85R34_mf61.tir")
+    edge = {"n": [1e-300, 0.05, 0.7, 1.5, 3.0, 1e300], "k_c": [0.0, 1e3, 1e6, 1e300], "k_phi": [0.0, 1e5, 1e8, 1e300],
+            "c": [0.0, 1e3, 1e300], "phi": [0.0, 0.5, np.radians(60.0), np.radians(60.001), 1.5707], "K": [1e-300,
+                                                                                                        0.01, 1.0, 1e300]}
+    for _ in range(cases):
+        counts["soil cases"] += 1
+        values = {k: v[int(rng.integers(len(v)))] for k, v in edge.items()}
+        for call in ("evaluate", "towed"):
+            try:
+                tyre = SoftSoilTyre(model, Soil("fuzz", **values))
+                out = (tyre.evaluate(fz=25e3, slip=np.array([-0.5, 0.0, 0.2, 0.9]), p=1.2e5) if call == "evaluate"
+                       else tyre.towed(fz=25e3, p=1.2e5))
+            except MFTyreError:
+                continue
+            except Exception as exc:  # noqa: BLE001
+                counts["raw exceptions"] += 1
+                counts.setdefault("raw", []).append((call, values, repr(exc)[:80]))
+                continue
+            # (the tractive efficiency is NaN by definition where the wheel takes no power: braking, slip -0.5)
+            if not all(np.isfinite(np.asarray(out[k], float)).all() for k in out.keys() if k != "efficiency"):
+                counts["silent acceptances"] += 1
+                counts.setdefault("silent", []).append((call, values))
+
+
+def test_seeded_fuzz_of_the_issue_34_readers_options_and_soils(tmp_path, programme, capsys):
+    """Issue 34: TTC .dat/.mat with unit/axis/row mistakes, option strings and soil values, seeded and fast: raw
+    exceptions 0, silent acceptances 0, every clean run read back, every accepted read far under 30 s."""
+    from collections import Counter
+
+    rng = np.random.default_rng(34)
+    counts = Counter()
+    counts["slowest accepted read [s]"] = 0.0
+    _fuzz_ttc_units(rng, tmp_path, programme, 60, counts)
+    _fuzz_options(rng, 400, counts)
+    _fuzz_soils(rng, 40, counts)
+    with capsys.disabled():
+        print("\nissue 34 fuzz:", {k: (round(v, 3) if isinstance(v, float) else v) for k, v in counts.items()
+                                   if not isinstance(v, list)})
+    assert counts["ttc cases"] == 60 and counts["option cases"] == 400 and counts["soil cases"] == 40
+    for measure in ("raw exceptions", "silent acceptances", "clean runs refused"):
+        assert counts[measure] == 0, (measure, counts.get("raw"), counts.get("silent"))
+    assert counts["slowest accepted read [s]"] < 30.0

@@ -71,6 +71,12 @@ class Soil:
             raise ModelInputError(f"soil {self.name!r}: phi must be in [0, {MAX_PHI_DEG:g}] deg (soils have up to about "
                                   f"50 deg; the bearing-capacity factors diverge before 65), got "
                                   f"{math.degrees(self.phi)!r} deg")
+        if self.n < 0.1:  # soils.csv: n >= 0.11; below 0.1 the sinkage z = (p / k)^(1/n) overflows
+            raise ModelInputError(f"soil {self.name!r}: n must be at least 0.1 (soils have 0.1 ... 1.5), got {self.n!r}")
+        for field, high in (("n", 3.0), ("k_c", 1e9), ("k_phi", 1e10), ("c", 1e7)):
+            if getattr(self, field) > high:  # soils.csv: n <= 1.1, k_c <= 1e5, k_phi <= 5.3e6, c <= 7e4 (SI)
+                raise ModelInputError(f"soil {self.name!r}: {field} must be at most {high:g} (SI; no soil has more, and "
+                                      f"the equations overflow far beyond), got {getattr(self, field)!r}")
         if self.K > MAX_K:
             raise ModelInputError(f"soil {self.name!r}: K must be at most {MAX_K:g} m (soils have 1 mm ... 10 cm), got "
                                   f"{self.K!r} m")
