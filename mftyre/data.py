@@ -1371,12 +1371,16 @@ def _ttc_mapping(names, columns, path) -> dict:
 
 
 def _ttc_dat(raw: bytes, path):
-    """(channel -> values, channel -> unit, file line of the first sample) of a TTC .dat file."""
+    """(channel -> values, channel -> unit, file line of the first sample) of a TTC .dat file. The lines before
+    the samples are decoded from the file's first MiB; the samples go to pandas' C parser from the bytes as read
+    (no decoded copy, no list of lines: the memory of a large run is the bytes plus its table)."""
+    head = raw[:1 << 20]
     try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        text = raw.decode("latin-1")
-    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+        text = head.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        text = head[:exc.start].decode("utf-8-sig") if exc.start > len(head) - 4 else head.decode("latin-1")
+    breaks = [m.end() for _, m in zip(range(8), re.finditer(rb"\r\n|\r|\n", head))]  # bytes after each line end
+    lines = re.split(r"\r\n|\r|\n", text)[:6]
     at = _ttc_names_line(lines)
     if at is None:
         raise DataError(f"{path}: not a TTC run file: expected a header line, a row of channel names (ET V N SA IA "
@@ -1392,10 +1396,13 @@ def _ttc_dat(raw: bytes, path):
     if len(units) != len(names):
         raise DataError(f"{path}:{at + 2}: {len(units)} units for {len(names)} channels: expected one unit per "
                         f"channel named on line {at + 1}")
-    body = "\n".join(lines[at + 2:])
+    body = io.BytesIO(raw)  # shares the bytes
+    body.seek(breaks[at + 1] if len(breaks) > at + 1 else len(raw))
+    single_cr = b"\n" not in head and b"\r" in head  # lines ended by CR alone
     try:
-        table = pd.read_csv(io.StringIO(body), sep=r"\s+", header=None, names=range(len(names) + 1),
-                            keep_default_na=False, na_values=_NAN_TEXT, skip_blank_lines=True)
+        table = pd.read_csv(body, sep=r"\s+", header=None, names=range(len(names) + 1), encoding="latin-1",
+                            keep_default_na=False, na_values=_NAN_TEXT, skip_blank_lines=True,
+                            **({"lineterminator": "\r"} if single_cr else {}))
     except pd.errors.EmptyDataError:
         table = pd.DataFrame(columns=range(len(names) + 1))
     except (pd.errors.ParserError, ValueError) as exc:
