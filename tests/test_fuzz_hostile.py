@@ -944,11 +944,12 @@ def test_the_judge_raises_no_false_alarm_on_real_looking_data():
 
 
 @pytest.mark.parametrize("change", [{"phi": np.radians(89.9999)}, {"K": 1e300}, {"phi": np.radians(61.0)},
-                                    {"K": 2.0}])
+                                    {"K": 2.0}, {"K": 1e-300}, {"n": 0.05}, {"c": 1e300}])
 def test_soil_values_that_would_overflow_are_typed_errors(tmp_path, capsys, change):
     """Issue 34 item 4: phi = 89.9999 deg or K = 1e300 passed the soil's checks and gave a raw OverflowError in
     evaluate, towed and `mftyre soil`. A soil has phi <= 60 deg (N_gamma's tan(1.4 phi) diverges at 64.3) and
-    K <= 1 m: a ModelInputError naming the soil (a DataError naming the line from a soil file)."""
+    1e-12 <= K <= 1 m (K = 1e-300, n = 0.05 or c = 1e300 gave NaN forces, found by the fuzz below): a
+    ModelInputError naming the soil (a DataError naming the line from a soil file)."""
     import dataclasses
 
     from mftyre.errors import ModelInputError
@@ -1168,15 +1169,15 @@ def _fuzz_options(rng, cases: int, counts: dict) -> None:
 
 
 def _fuzz_soils(rng, cases: int, counts: dict) -> None:
-    """Soils with values drawn over and beyond their ranges (and the edges, phi 60 deg, K 1 m, n, moduli up to
-    1e300): a typed error or finite outputs, in evaluate and towed, never a raw exception."""
+    """Soils with values drawn over and beyond their ranges (and the edges, phi 60 deg, K 1e-12 ... 1 m, n, moduli up
+    to 1e300): a typed error or finite outputs, in evaluate and towed, never a raw exception."""
     from mftyre.soil import SoftSoilTyre
     from mftyre.soil.soils import Soil
 
     model = _quiet(mftyre.load_tir, T61.parent / "agri_460_85R34_mf61.tir")
     edge = {"n": [1e-300, 0.05, 0.7, 1.5, 3.0, 1e300], "k_c": [0.0, 1e3, 1e6, 1e300], "k_phi": [0.0, 1e5, 1e8, 1e300],
             "c": [0.0, 1e3, 1e300], "phi": [0.0, 0.5, np.radians(60.0), np.radians(60.001), 1.5707], "K": [1e-300,
-                                                                                                        0.01, 1.0, 1e300]}
+                                                                                                        1e-12, 1.0, 1e300]}
     for _ in range(cases):
         counts["soil cases"] += 1
         values = {k: v[int(rng.integers(len(v)))] for k, v in edge.items()}
