@@ -33,7 +33,8 @@ axis system (``axes=``, :data:`AXES`: ISO-W, SAE, adapted-SAE, adapted-ISO) is t
 (``defaults=``) fill channels the file lacks, and :func:`check_plausible` refuses values no tyre measurement has in
 SI units and ISO-W axes, naming the channel, the file's column, the likely unit or axis system and the option that
 converts it (``check=False`` skips it). The command line passes ``--columns``, ``--units``, ``--axes``, ``--set``
-and ``--no-check`` (:func:`mftyre.cli.add_data_options`); messages then name those options (:func:`speaking_cli`).
+and ``--no-check`` (:func:`mftyre.cli.add_data_options`), each channel once; messages then name those options
+(:func:`speaking_cli`).
 
 TTC (:func:`read_ttc`): the Calspan tyre test consortium runs: a ``.dat`` text file (a free header line, a row of
 channel names, a row of units, whitespace-separated samples) or a MATLAB ``.mat`` file with the same channels as
@@ -75,7 +76,8 @@ Every malformed input raises :class:`mftyre.errors.DataError` naming the file, t
 channel) and the reason: missing channel, unknown unit, non-numeric value, wrong number of values, NaN in a
 required channel, an infinite value (``inf``, ``1e400``) in any channel, two columns for one channel, no data
 rows. Only regular files are read (a FIFO or a device is refused), up to :data:`mftyre.files.DATA_MAX_BYTES`
-(``max_bytes=`` of the readers). Both readers parse the samples with pandas' C parser (about the time of a plain
+(``max_bytes=`` of the readers; for a .mat file also the size its variables expand to) and
+:data:`mftyre.files.DATA_MAX_COLUMNS` columns (docs/resource-limits.md). Both readers parse the samples with pandas' C parser (about the time of a plain
 ``pandas.read_csv`` of the file; ``benchmarks/bench_data.py``).
 """
 from __future__ import annotations
