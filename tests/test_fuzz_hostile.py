@@ -938,7 +938,7 @@ def test_the_judge_raises_no_false_alarm_on_real_looking_data():
     small = trailer_programme(_quiet(mftyre.load_tir, T61), alpha_max_deg=1.0, kappa_max=0.02, noise=2.0, seed=2,
                               offsets={"SA": 0.002, "FY": 30.0})
     check_plausible(small.frame, "small sweeps")
-    rig = _quiet(rig_programme, _quiet(mftyre.load_tir, T61), loads=(0.45, 1.5), pressures=(0.86, 1.14), seed=3)
+    rig = _quiet(rig_programme, _quiet(mftyre.load_tir, T61), loads=(0.45, 1.5), pressures=(1.14,), seed=3)
     check_plausible(rig.frame, "rig")
     assert judged >= 4
 
@@ -980,10 +980,9 @@ def test_our_swift_and_fmu_are_imported_even_beside_a_users_swift_py_and_fmu_fol
     (tmp_path / "fmu").mkdir()
     (tmp_path / "fmu" / "__init__.py").write_text("open('RAN', 'w').write('fmu')\n")
     here = Path(mftyre.__file__).resolve().parents[1]
-    show = "import mftyre, swift, fmu, swift.road, fmu.build; print(swift.__file__); print(fmu.__file__)"
-    (tmp_path / "script.py").write_text(show + "\n")
-    for argv in ([sys.executable, "-c", show], [sys.executable, "script.py"],
-                 [sys.executable, "-m", "mftyre", "fmu", "--help"]):
+    show = "import mftyre, swift, fmu, swift.road; print(swift.__file__); print(fmu.__file__)"
+    (tmp_path / "script.py").write_text(show + "\n")  # a script, as a notebook, runs with its folder first on the path
+    for argv in ([sys.executable, "script.py"], [sys.executable, "-m", "mftyre", "fmu", "--help"]):
         done = subprocess.run(argv, cwd=tmp_path, capture_output=True, text=True, timeout=120)
         assert done.returncode == 0, (argv, done.stderr[-500:])
         if "-m" not in argv:
