@@ -7,6 +7,38 @@
 
 ISO-W (TYDEX W) axes, SI units.
 """
+def _own_packages(names=("swift", "fmu")) -> None:
+    """Our top-level packages ``swift`` and ``fmu`` (installed beside ``mftyre``) are imported from where they are
+    installed, never from the user's working folder: under ``python -m mftyre``, a script or a notebook, the folder
+    comes first on sys.path, and a ``swift.py`` or ``fmu/`` there was imported (and run) instead of ours. A finder
+    ahead of the others gives our location for these two names; one of them already imported from elsewhere is
+    dropped so the next import finds ours."""
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    own = {name: root / name / "__init__.py" for name in names if (root / name / "__init__.py").is_file()}
+
+    class OwnPackages:
+        @staticmethod
+        def find_spec(name, path=None, target=None):
+            init = own.get(name)
+            if init is None:
+                return None
+            return importlib.util.spec_from_file_location(name, init, submodule_search_locations=[str(init.parent)])
+
+    for name, init in own.items():
+        module = sys.modules.get(name)
+        if module is not None and Path(getattr(module, "__file__", "") or "").resolve() != init:
+            for loaded in [m for m in sys.modules if m == name or m.startswith(name + ".")]:
+                del sys.modules[loaded]
+    if not any(type(f).__name__ == "OwnPackages" for f in sys.meta_path):
+        sys.meta_path.insert(0, OwnPackages())
+
+
+_own_packages()
+
 from .errors import DataError, InputClippedWarning, LoadFactorWarning, MFTyreError, ModelInputError, \
     PressureFactorWarning, ReferenceValueWarning, TirError, TurnSlipWarning
 

@@ -33,7 +33,8 @@ axis system (``axes=``, :data:`AXES`: ISO-W, SAE, adapted-SAE, adapted-ISO) is t
 (``defaults=``) fill channels the file lacks, and :func:`check_plausible` refuses values no tyre measurement has in
 SI units and ISO-W axes, naming the channel, the file's column, the likely unit or axis system and the option that
 converts it (``check=False`` skips it). The command line passes ``--columns``, ``--units``, ``--axes``, ``--set``
-and ``--no-check`` (:func:`mftyre.cli.add_data_options`); messages then name those options (:func:`speaking_cli`).
+and ``--no-check`` (:func:`mftyre.cli.add_data_options`), each channel once; messages then name those options
+(:func:`speaking_cli`).
 
 TTC (:func:`read_ttc`): the Calspan tyre test consortium runs: a ``.dat`` text file (a free header line, a row of
 channel names, a row of units, whitespace-separated samples) or a MATLAB ``.mat`` file with the same channels as
@@ -75,7 +76,8 @@ Every malformed input raises :class:`mftyre.errors.DataError` naming the file, t
 channel) and the reason: missing channel, unknown unit, non-numeric value, wrong number of values, NaN in a
 required channel, an infinite value (``inf``, ``1e400``) in any channel, two columns for one channel, no data
 rows. Only regular files are read (a FIFO or a device is refused), up to :data:`mftyre.files.DATA_MAX_BYTES`
-(``max_bytes=`` of the readers). Both readers parse the samples with pandas' C parser (about the time of a plain
+(``max_bytes=`` of the readers; for a .mat file also the size its variables expand to) and
+:data:`mftyre.files.DATA_MAX_COLUMNS` columns (docs/resource-limits.md). Both readers parse the samples with pandas' C parser (about the time of a plain
 ``pandas.read_csv`` of the file; ``benchmarks/bench_data.py``).
 """
 from __future__ import annotations
@@ -92,7 +94,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import DataError, speaking, speaking_cli, spelled
-from .files import DATA_MAX_BYTES, check_outputs, open_user_file, read_user_file, write_atomically
+from .files import DATA_MAX_BYTES, DATA_MAX_COLUMNS, check_outputs, open_user_file, read_user_file, write_atomically
 from .tir import UNIT_FACTORS
 from .lazy import LazyModule
 
@@ -230,7 +232,9 @@ def remedy(option: str, channel: str, value: str) -> str:
 
 
 def _assignments(text: str, what: str) -> list[tuple[str, str]]:
-    pairs = []
+    """The ``CHANNEL=VALUE`` items of an option, each channel once (ValueError naming a channel given twice: which
+    one is meant cannot be guessed)."""
+    pairs, seen = [], {}
     for item in str(text).split(","):
         if not item.strip():
             continue
@@ -239,6 +243,10 @@ def _assignments(text: str, what: str) -> list[tuple[str, str]]:
         key, value = (part.strip() for part in item.split("=", 1))
         if not key or not value:
             raise ValueError(f"{what}: {item.strip()!r} has an empty side (e.g. {_EXAMPLE_OPTION[what]})")
+        if key.upper() in seen:
+            raise ValueError(f"{what}: {key} is given twice ({seen[key.upper()]!r} and {item.strip()!r}): give each "
+                             "channel once")
+        seen[key.upper()] = item.strip()
         pairs.append((key, value))
     if not pairs:
         raise ValueError(f"{what}: empty; expected CHANNEL=VALUE,... (e.g. {_EXAMPLE_OPTION[what]})")
@@ -258,7 +266,13 @@ def _channel(name: str, what: str) -> str:
 def parse_columns(text: str) -> dict:
     """``"FZ=Fz_N,SA=alpha"`` (channel = file column) -> ``{"Fz_N": "FZ", "alpha": "SA"}`` (the ``columns=``
     of the readers); ValueError naming what was expected."""
-    return {col: _channel(ch, "columns") for ch, col in _assignments(text, "columns")}
+    out = {}
+    for ch, col in _assignments(text, "columns"):
+        if col in out:
+            raise ValueError(f"columns: file column {col!r} is given for {out[col]} and for {ch.strip().upper()}: "
+                             "a column holds one channel")
+        out[col] = _channel(ch, "columns")
+    return out
 
 
 def parse_units(text: str) -> dict:
@@ -315,30 +329,87 @@ _TYPICAL = {"SA": (0.02, 0.6), "IA": (0.005, 0.3), "SL": (0.01, 1.0), "VX": (0.5
             "RL": (0.1, 1.5), "RE": (0.1, 1.5), "RHO": (0.002, 0.2), "FZ": (30.0, 2e5)}
 
 
+#: Largest magnitude of a single value (SI) of any tyre measurement, a few times the ranges above: a row beyond it
+#: is damaged (e.g. VX = -1e300), whatever the rest of the file says.
+_ROW_LIMIT = {"SA": 3.2, "IA": 3.2, "SL": 50.0, "VX": 300.0, "P": 6e7, "RL": 6.0, "RE": 6.0, "RHO": 1.5, "FZ": 3e6,
+              "FX": 3e6, "FY": 3e6, "MX": 3e5, "MY": 3e5, "MZ": 3e5, "OMEGA": 3e3, "PHIT": 1e3}
+#: Slope of the force over the slip at small slip, per unit load, that every tyre exceeds: cornering stiffness /
+#: FZ and longitudinal slip stiffness / FZ are 5 ... 50 per radian (per unit slip); 1.5 leaves room for the
+#: saturation within the fitted range and for high loads.
+_MIN_STIFFNESS_PER_LOAD = 1.5
+#: Speed and spin units that may be mistaken for SI, and the SI factor of each (VX / (OMEGA x radius) is about 1).
+_SPEED_UNITS = {"m/s": 1.0, "km/h": 1 / 3.6, "mph": 0.44704}
+_SPIN_UNITS = {"rad/s": 1.0, "rpm": 2 * math.pi / 60, "deg/s": math.pi / 180}
+#: Most friction |(FX, FY)| / FZ a tyre gives (racing tyres about 2, at light loads up to 3-4).
+_MAX_FRICTION = 5.0
+#: Longest lever |M| / FZ [m] of any tyre moment (aligning ~ 0.05 m, overturning ~ 0.1 m, rolling ~ 0.01 m).
+_MAX_LEVER = 1.0
+
+
 def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of: dict | None = None,
-                    stated: str = "") -> None:
-    """DataError at the first channel whose values no tyre measurement in SI units and ISO-W axes has: |SA|,
-    |IA| beyond 1 rad (degrees?), |SL| beyond 2 (percent?), VX above 100 m/s (km/h?), P below 20 kPa (kPa,
-    bar, psi?), RL or RE above 2 m, RHO above 0.5 m (mm, cm?), FZ all below 30 N (kN?), FZ mostly negative
-    (SAE axes?), FY rising with SA (slip angle or lateral force reversed?). The message names the channel (and
-    the file's column), what was seen, the likely unit or axis system and the option that converts it.
+                    stated: str = "", constants: dict | None = None) -> None:
+    """The one plausibility judge: DataError at values no tyre measurement in SI units and ISO-W axes has, judged
+    on the whole file's physics, each message naming the channel (and the file's column), what was seen, the
+    likely unit or axis system and the option that converts it. In order:
+
+    1. ranges: |SA|, |IA| beyond 1 rad (degrees?), |SL| beyond 2 (percent?), VX above 100 m/s (km/h?), P below
+       20 kPa (kPa, bar, psi?), RL or RE above 2 m, RHO above 0.5 m (mm, cm?), FZ all below 30 N (kN?); and
+       VX / (OMEGA x radius), about 1 for a rolling wheel, matched against every pair of speed and spin units
+       (km/h, mph; rpm, deg/s), so two wrong channels are found together;
+    2. single rows beyond any tyre (:data:`_ROW_LIMIT`, e.g. VX = -1e300), named by their row;
+    3. the slip stiffnesses per unit load (slope of FY / FZ over SA and of FX / FZ over SL at small slip) below
+       :data:`_MIN_STIFFNESS_PER_LOAD` but plausible in degrees (SA) or percent (SL); a camber written in whole
+       numbers with some at +-1 (degrees); a moment longer than :data:`_MAX_LEVER` x FZ (N mm?);
+    4. the load: zero or negative in more than 10 % of the rows (mostly negative: SAE axes?); a friction
+       |(FX, FY)| / FZ beyond :data:`_MAX_FRICTION`; FY rising with SA (slip angle or lateral force reversed?).
+
     ``stated``: where a file that states its own units (TYDEX, TTC) states them; the remedy for a unit is then
-    to correct that statement (``--units`` is for CSV files)."""
+    to correct that statement (``--units`` is for CSV files). ``constants``: the constant channels given to the
+    reader (``defaults=``, ``--set``: channel -> value as given); the remedy for one of them is its unit
+    (``--set P=2.2bar``), not the file's."""
     frame = data.frame if isinstance(data, TyreData) else data
+    given = {str(k).strip().upper(): v for k, v in (constants or {}).items()}
     where = where or (data.source if isinstance(data, TyreData) else "") or "<data>"
     column_of = column_of or {}
+    present = set(frame.columns)
 
     def name(ch):
+        if ch in given:
+            return f"channel {ch} (the constant {ch}={given[ch]})"
         col = column_of.get(ch, ch)
         return f"channel {ch}" + (f" (file column {col!r})" if col != ch else "")
 
+    def column(ch):
+        return frame[ch].to_numpy(dtype=float)
+
     def values(ch):
-        x = frame[ch].to_numpy(dtype=float)
+        x = column(ch)
         return x[np.isfinite(x)]
 
+    def refuse(problems, fixes, sae=""):
+        axes = f". Also {sae}" if sae else ""
+        constant = {ch: u for ch, u in fixes.items() if ch in given}
+        if constant:  # a number without a unit is SI: the remedy is the unit on the constant
+            fix = ", ".join(remedy("constants", ch, f"{_QUANTITY.fullmatch(str(given[ch])).group(1)}{u}")
+                            if _QUANTITY.fullmatch(str(given[ch])) else remedy("constants", ch, f"VALUE{u}")
+                            for ch, u in constant.items())
+            raise DataError(f"{where}: {'; '.join(problems)}. A constant without a unit is in SI units: give its unit, "
+                            f"e.g. {fix}{axes}")
+        if stated:
+            likely = ", ".join(f"{column_of.get(ch, ch)} looks like {u}" for ch, u in fixes.items())
+            raise DataError(f"{where}: {'; '.join(problems)}. The file states its units ({stated}): correct the "
+                            f"wrong ones in a copy of the file ({likely}), or read it unchecked with "
+                            f"{spelled('check=False', '--no-check')}{axes}")
+        if speaking() == "cli":
+            fix = "--units " + ",".join(f"{ch}={u}" for ch, u in fixes.items())
+        else:
+            fix = "units={" + ", ".join(f"{ch!r}: {u!r}" for ch, u in fixes.items()) + "}"
+        raise DataError(f"{where}: {'; '.join(problems)}. Give the file's units, e.g. {fix}{axes}")
+
+    # 1. ranges, and speed against spin
     problems, fixes = [], {}
     for ch, (low, high, candidates) in _PLAUSIBLE.items():
-        if ch not in frame.columns:
+        if ch not in present:
             continue
         x = np.abs(values(ch))
         if x.size == 0 or not x.any():
@@ -359,43 +430,71 @@ def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of:
         fixes[ch] = (likely or candidates)[0]
         problems.append(f"{name(ch)}: {shown} is {typical:.4g} {si}, {side} the {expected} {si} of any tyre "
                         f"measurement in SI units: {guess}")
-    lever = "RE" if "RE" in frame.columns else "RL"
-    if {"VX", "OMEGA", lever} <= set(frame.columns) and not {"VX", lever} & set(fixes):  # (VX, radius in SI)
-        radius = frame[lever].to_numpy(float)
-        vx, omega = frame["VX"].to_numpy(float), frame["OMEGA"].to_numpy(float)
-        ok = np.isfinite(vx) & np.isfinite(omega) & np.isfinite(radius) & (np.abs(omega * radius) > 0.5)
-        if ok.sum() >= 5:
-            ratio = float(np.median(np.abs(vx[ok]) / np.abs(omega[ok] * radius[ok])))
-            for ch, unit, factor in (("VX", "km/h", unit_to_si("VX", "km/h")), ("VX", "mph", unit_to_si("VX", "mph")),
-                                     ("OMEGA", "rpm", 1.0 / unit_to_si("OMEGA", "rpm"))):
-                if abs(ratio * factor - 1.0) < 0.15 and ch not in fixes:
-                    fixes[ch] = unit
-                    problems.append(f"{name(ch)}: VX / (OMEGA x radius) is {ratio:.3g} (about 1 for a rolling wheel "
-                                    f"in SI units): {ch} looks like {unit}")
-                    break
+    _speed_and_spin(frame, fixes, problems, name)
     sae = ""  # the load's sign is independent of the units: named in the same error
-    if "FZ" in frame.columns:
+    if "FZ" in present:
         fz = values("FZ")
         if fz.size and np.mean(fz < 0) > 0.5:
             sae = (f"{name('FZ')}: {100 * np.mean(fz < 0):.0f} % of the values are negative (median "
                    f"{np.median(fz):.4g} N): the load is positive in ISO-W; the file is probably in SAE axes (z down): "
                    f"{remedy('axes', 'FZ', 'SAE')}")
     if problems:
-        axes = f". Also {sae}" if sae else ""
-        if stated:
-            likely = ", ".join(f"{column_of.get(ch, ch)} looks like {u}" for ch, u in fixes.items())
-            raise DataError(f"{where}: {'; '.join(problems)}. The file states its units ({stated}): correct the "
-                            f"wrong ones in a copy of the file ({likely}), or read it unchecked with "
-                            f"{spelled('check=False', '--no-check')}{axes}")
-        if speaking() == "cli":
-            fix = "--units " + ",".join(f"{ch}={u}" for ch, u in fixes.items())
-        else:
-            fix = "units={" + ", ".join(f"{ch!r}: {u!r}" for ch, u in fixes.items()) + "}"
-        raise DataError(f"{where}: {'; '.join(problems)}. Give the file's units, e.g. {fix}{axes}")
+        refuse(problems, fixes, sae)
+    # 2. single rows no tyre has
+    for ch, limit in _ROW_LIMIT.items():
+        if ch in present:
+            x = column(ch)
+            beyond = np.flatnonzero(np.abs(x) > limit)
+            if beyond.size:
+                row = int(beyond[0])
+                raise DataError(f"{where}: row {row + 1}: {name(ch)} is {x[row]:.4g} {_SI_NAME[CHANNELS[ch][0]]}, "
+                                f"beyond the {limit:g} of any tyre measurement ({beyond.size} row"
+                                f"{'s' if beyond.size > 1 else ''}): a damaged row, or a unit mistaken for SI; "
+                                f"remove the row or read the file unchecked ({spelled('check=False', '--no-check')})")
+    # 3. stiffnesses, camber and moments against the load
     if sae:
         raise DataError(f"{where}: {sae}")
-    if {"SA", "FY"} <= set(frame.columns):
-        sa, fy = frame["SA"].to_numpy(float), frame["FY"].to_numpy(float)
+    _slip_stiffness_units(frame, fixes, problems, name)
+    if "IA" in present:
+        ia = values("IA")
+        if ia.size and np.any(np.abs(ia) == 1.0) and np.all(ia == np.round(ia)):
+            fixes["IA"] = "deg"
+            problems.append(f"{name('IA')}: every value is a whole number ({', '.join(f'{v:g}' for v in np.unique(ia)[:6])}"
+                            f" rad): a camber of 1 rad (57 deg) is no test condition; the values look like deg")
+    if "FZ" in present:
+        load = float(np.max(np.abs(values("FZ")), initial=0.0))
+        for ch in ("MX", "MY", "MZ"):
+            x = np.abs(values(ch)) if ch in present else np.zeros(0)
+            if x.size and load > 0 and float(np.quantile(x, 0.99)) > _MAX_LEVER * load:
+                lever = float(np.quantile(x, 0.99)) / load
+                fixes[ch] = "N*mm"
+                problems.append(f"{name(ch)}: 99th percentile of |{ch}| is {lever:.3g} m x the largest load, beyond the "
+                                f"{_MAX_LEVER:g} m lever of any tyre moment: the values look like N*mm")
+    if problems:
+        refuse(problems, fixes)
+    # 4. the load, the friction, the sign of the lateral force
+    if "FZ" in present:
+        fz = column("FZ")
+        off = np.mean(~(fz > 0))
+        if not np.any(fz):
+            raise DataError(f"{where}: {name('FZ')} is 0 in every row: expected the load on the tyre (FZ > 0 in ISO-W)")
+        if off > 0.1:
+            raise DataError(f"{where}: {name('FZ')} is zero or negative in {100 * off:.0f} % of the rows (median "
+                            f"{np.median(fz):.4g} N): a rolling tyre carries a load, FZ > 0 in ISO-W; the load cell "
+                            f"or the axis system is wrong (SAE axes: {remedy('axes', 'FZ', 'SAE')})")
+        forces = [column(ch) for ch in ("FX", "FY") if ch in present]
+        loaded = fz > 0.1 * float(np.median(fz[fz > 0]))
+        if forces and loaded.sum() >= 5:
+            grip = np.hypot(*forces) if len(forces) == 2 else np.abs(forces[0])
+            mu = grip[loaded] / fz[loaded]
+            mu = mu[np.isfinite(mu)]
+            if mu.size >= 5 and float(np.quantile(mu, 0.99)) > _MAX_FRICTION:
+                raise DataError(f"{where}: the friction |(FX, FY)| / FZ is {float(np.quantile(mu, 0.99)):.3g} (99th "
+                                f"percentile, rows loaded above 10 % of the median load), beyond the {_MAX_FRICTION:g} "
+                                "of any tyre: the forces and the load are in different units (e.g. FZ in daN or kgf, "
+                                f"the forces in N); give the units ({spelled('units=', '--units')})")
+    if {"SA", "FY"} <= present:
+        sa, fy = column("SA"), column("FY")
         near = np.isfinite(sa) & np.isfinite(fy) & (np.abs(sa) < math.radians(4.0))
         if near.sum() >= 10 and np.ptp(sa[near]) > math.radians(1.0):
             slope = np.polyfit(sa[near], fy[near], 1)[0]
@@ -406,6 +505,80 @@ def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of:
                                 f"angle or the lateral force is reversed: {remedy('axes', 'SA', 'adapted-ISO')} (SA "
                                 f"reversed) or {remedy('axes', 'SA', 'adapted-SAE')} (FY, MZ reversed); see the "
                                 f"axis systems in the README")
+
+
+def _speed_and_spin(frame, fixes, problems, name) -> None:
+    """VX / (OMEGA x radius), about 1 for a rolling wheel in SI units (RE, else RL, in metres), matched against
+    every pair of speed and spin units: the pair whose ratio is within 15 % names the wrong channels (both at once,
+    e.g. km/h and rpm: 0.377). Skipped when the radius or VX is already found in a wrong unit."""
+    lever = "RE" if "RE" in frame.columns else "RL"
+    if not {"VX", "OMEGA", lever} <= set(frame.columns) or {"VX", lever} & set(fixes):
+        return
+    radius = frame[lever].to_numpy(float)
+    vx, omega = frame["VX"].to_numpy(float), frame["OMEGA"].to_numpy(float)
+    ok = np.isfinite(vx) & np.isfinite(omega) & np.isfinite(radius) & (np.abs(omega * radius) > 0.5) & (vx != 0)
+    if ok.sum() < 5:
+        return
+    ratio = float(np.median(np.abs(vx[ok]) / np.abs(omega[ok] * radius[ok])))
+    pairs = [(sv / so, speed, spin) for speed, sv in _SPEED_UNITS.items() for spin, so in _SPIN_UNITS.items()]
+    factor, speed, spin = min(pairs, key=lambda p: abs(math.log(ratio * p[0])))
+    if abs(ratio * factor - 1.0) >= 0.15 or (speed, spin) == ("m/s", "rad/s"):
+        return
+    wrong = [(ch, unit) for ch, unit in (("VX", speed), ("OMEGA", spin)) if unit not in ("m/s", "rad/s")]
+    for ch, unit in wrong:
+        if ch not in fixes:
+            fixes[ch] = unit
+            problems.append(f"{name(ch)}: VX / (OMEGA x radius) is {ratio:.3g} (about 1 for a rolling wheel in SI "
+                            f"units; {1 / factor:.3g} with VX in {speed} and OMEGA in {spin}): {ch} looks like {unit}")
+
+
+def _slope_per_load(x, force, fz, keep) -> float | None:
+    """|slope| of force / FZ over x, fitted on the rows ``keep`` with |x| within 30 % of the 99th percentile of |x|
+    (the linear range of a sweep); None without 10 such rows or when the slope is not 5 standard errors from 0."""
+    keep = keep & np.isfinite(x) & np.isfinite(force) & np.isfinite(fz) & (np.abs(fz) > 0)
+    if keep.sum() < 10:
+        return None
+    reach = float(np.quantile(np.abs(x[keep]), 0.99))
+    keep &= np.abs(x) <= 0.3 * reach
+    if keep.sum() < 10 or not np.ptp(x[keep]) > 0:
+        return None
+    x, per_load = x[keep], force[keep] / np.abs(fz[keep])
+    (slope, offset), residual = np.polyfit(x, per_load, 1, full=True)[:2]
+    spread = float(np.sum((x - x.mean()) ** 2))
+    error = math.sqrt(float(residual[0]) / (x.size - 2) / spread) if residual.size else 0.0
+    return abs(float(slope)) if abs(slope) > 5.0 * error else None
+
+
+def _slip_stiffness_units(frame, fixes, problems, name) -> None:
+    """The slip stiffnesses per unit load (FY over SA, FX over SL; :data:`_MIN_STIFFNESS_PER_LOAD`): a slope every
+    tyre exceeds in SI, met only with the slip in degrees (SA) or percent (SL), e.g. sweeps within +-1 deg or +-2 %,
+    which the ranges cannot tell from radians or ratios."""
+    columns = set(frame.columns)
+    if "FZ" not in columns:
+        return
+    fz = frame["FZ"].to_numpy(float)
+    n = len(frame)
+    sa = frame["SA"].to_numpy(float) if "SA" in columns else np.zeros(n)
+    sl = frame["SL"].to_numpy(float) if "SL" in columns else np.zeros(n)
+    ia = frame["IA"].to_numpy(float) if "IA" in columns else np.zeros(n)
+    upright = np.abs(ia) <= math.radians(0.5)
+    if upright.sum() < 10:
+        upright = np.ones(n, bool)
+    cases = (("SA", "FY", sa, np.abs(sl) <= max(0.02, 0.1 * float(np.max(np.abs(sl), initial=0.0))), "deg",
+              "cornering stiffness"),
+             ("SL", "FX", sl, np.abs(sa) <= math.radians(0.5), "%", "longitudinal slip stiffness"))
+    for ch, force, x, free, unit, what in cases:
+        if ch not in columns or force not in columns or ch in fixes:
+            continue
+        slope = _slope_per_load(x, frame[force].to_numpy(float), fz, free & upright)
+        if slope is None or slope >= _MIN_STIFFNESS_PER_LOAD:
+            continue
+        factor = unit_to_si(ch, unit)
+        if 3.0 <= slope / factor <= 100.0:
+            fixes[ch] = unit
+            problems.append(f"{name(ch)}: the {what} per unit load (slope of {force} / FZ over {ch} at small slip) "
+                            f"is {slope:.3g}, below the {_MIN_STIFFNESS_PER_LOAD:g} of any tyre in SI units "
+                            f"({slope / factor:.3g} with {ch} in {unit}): the values look like {unit}")
 
 
 # --------------------------------------------------------------------------------------------- TyreData
@@ -512,6 +685,7 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
     with open_user_file(path, max_bytes=max_bytes, what="CSV data file", error=DataError) as fh:
         data = fh.read()
     header = _csv_header(data, path)
+    _refuse_wide(len(header), path, "line 1: ")
     if len(header) == 1 and header[0].upper() not in CHANNELS:
         for sep, name in ((";", "semicolons"), ("\t", "tabs"), (" ", "blanks")):
             if len(header[0].split(sep)) > 2:
@@ -568,10 +742,18 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
     _apply_defaults(frame, defaults, path, column_of)
     _check_required(frame, path, lambda row: f"{path}: line {row + 2}", column_of)
     if check:
-        check_plausible(frame, str(path), column_of)
+        check_plausible(frame, str(path), column_of, constants=defaults)
     unit_record = {ch: units.get(ch, _SI_NAME[CHANNELS[ch][0]]) for ch in CHANNELS if ch in frame.columns}
     return TyreData(frame, tyre=tyre or path.stem, source=str(path), units=unit_record,
                     history=_import_notes(axes, units, defaults, check))
+
+
+def _refuse_wide(count: int, path, where: str = "") -> None:
+    """DataError when a file has more columns than :data:`mftyre.files.DATA_MAX_COLUMNS` (before its samples are
+    read: each column costs Python work, 200,000 of them a minute)."""
+    if count > DATA_MAX_COLUMNS:
+        raise DataError(f"{path}: {where}{count:,} columns, more than the {DATA_MAX_COLUMNS:,} a measurement file may "
+                        "have (a tyre test records a few dozen channels): split the file or drop columns")
 
 
 def _refuse_units_row(raw, header, path):
@@ -824,6 +1006,7 @@ def _read_tydex(fh, path: Path, defaults, axes="ISO-W", check=True) -> TyreData:
     channels = state.channels
     if not channels:
         raise DataError(f"{path}: **MEASURCHANNELS lists no channel")
+    _refuse_wide(len(channels), path, "**MEASURCHANNELS: ")
     rows = _SampleRows(fh)
     columns, lines = _tydex_samples(rows, data_line, channels, path)
     tail = rows.rest + fh.read()
@@ -862,7 +1045,8 @@ def _read_tydex(fh, path: Path, defaults, axes="ISO-W", check=True) -> TyreData:
                         f"({', '.join(_TYDEX_NAMES[c][0] for c in missing)}) nor a constant")
     _check_values(frame, lambda row: f"{path}:{lines()[row]}", name_of)
     if check:
-        check_plausible(frame, str(path), name_of, stated="the unit column of its **MEASURCHANNELS lines")
+        check_plausible(frame, str(path), name_of, stated="the unit column of its **MEASURCHANNELS lines",
+                        constants=defaults)
     tyre = str(state.header.get("MEASID", ("", "", ""))[0] or path.stem)
     consts = {k: v[0] for k, v in {**state.header, **state.constants}.items()}
     return TyreData(frame, tyre=tyre, source=str(path), units=units, constants=consts,
@@ -1131,7 +1315,7 @@ def read_ttc(path, *, columns: dict | None = None, axes: str = "SAE", defaults: 
     path = Path(path)
     raw = read_user_file(path, max_bytes=max_bytes, what="TTC data file", error=DataError)
     if raw.startswith(b"MATLAB"):
-        channels, units = _ttc_mat(raw, path)
+        channels, units = _ttc_mat(raw, path, max_bytes)
         locate = lambda row: f"{path}: sample {row + 1}"  # noqa: E731
     else:
         channels, units, first = _ttc_dat(raw, path)
@@ -1170,7 +1354,7 @@ def read_ttc(path, *, columns: dict | None = None, axes: str = "SAE", defaults: 
                         f"{remedy('columns', 'SL', 'SR')} or give a constant")
     _check_required(frame, path, locate, column_of)
     if check:
-        check_plausible(frame, str(path), column_of, stated="the channel struct of the .mat file, else the metric TTC "
+        check_plausible(frame, str(path), column_of, constants=defaults, stated="the channel struct of the .mat file, else the metric TTC "
                         "units" if raw.startswith(b"MATLAB") else "the units row below the channel names")
     return TyreData(frame, tyre=path.stem, source=str(path), units=unit_record,
                     history=[f"TTC run read from {path.name}"] + _import_notes(axes, None, defaults, check))
@@ -1191,24 +1375,38 @@ def _ttc_mapping(names, columns, path) -> dict:
 
 
 def _ttc_dat(raw: bytes, path):
-    """(channel -> values, channel -> unit, file line of the first sample) of a TTC .dat file."""
+    """(channel -> values, channel -> unit, file line of the first sample) of a TTC .dat file. The lines before
+    the samples are decoded from the file's first MiB; the samples go to pandas' C parser from the bytes as read
+    (no decoded copy, no list of lines: the memory of a large run is the bytes plus its table)."""
+    head = raw[:1 << 20]
     try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        text = raw.decode("latin-1")
-    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+        text = head.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        text = head[:exc.start].decode("utf-8-sig") if exc.start > len(head) - 4 else head.decode("latin-1")
+    breaks = [m.end() for _, m in zip(range(8), re.finditer(rb"\r\n|\r|\n", head))]  # bytes after each line end
+    lines = re.split(r"\r\n|\r|\n", text)[:6]
     at = _ttc_names_line(lines)
     if at is None:
         raise DataError(f"{path}: not a TTC run file: expected a header line, a row of channel names (ET V N SA IA "
                         "... FZ) and a row of units before the samples")
     names, units = _ttc_fields(lines[at]), _ttc_fields(lines[at + 1])
+    _refuse_wide(len(names), path, f"line {at + 1}: ")
+    seen: dict[str, int] = {}
+    for j, name in enumerate(names, start=1):
+        if name.upper() in seen:
+            raise DataError(f"{path}:{at + 1}: channel {name} is named twice (columns {seen[name.upper()]} and {j}): "
+                            "expected one column per channel")
+        seen[name.upper()] = j
     if len(units) != len(names):
         raise DataError(f"{path}:{at + 2}: {len(units)} units for {len(names)} channels: expected one unit per "
                         f"channel named on line {at + 1}")
-    body = "\n".join(lines[at + 2:])
+    body = io.BytesIO(raw)  # shares the bytes
+    body.seek(breaks[at + 1] if len(breaks) > at + 1 else len(raw))
+    single_cr = b"\n" not in head and b"\r" in head  # lines ended by CR alone
     try:
-        table = pd.read_csv(io.StringIO(body), sep=r"\s+", header=None, names=range(len(names) + 1),
-                            keep_default_na=False, na_values=_NAN_TEXT, skip_blank_lines=True)
+        table = pd.read_csv(body, sep=r"\s+", header=None, names=range(len(names) + 1), encoding="latin-1",
+                            keep_default_na=False, na_values=_NAN_TEXT, skip_blank_lines=True,
+                            **({"lineterminator": "\r"} if single_cr else {}))
     except pd.errors.EmptyDataError:
         table = pd.DataFrame(columns=range(len(names) + 1))
     except (pd.errors.ParserError, ValueError) as exc:
@@ -1256,10 +1454,49 @@ def _is_number(text: str) -> bool:
     return True
 
 
-def _ttc_mat(raw: bytes, path):
+def _mat_expands_within(raw: bytes, path, max_bytes: int) -> None:
+    """DataError when the variables of the MATLAB 5 file ``raw`` take more than ``max_bytes`` once decompressed (a
+    file of a few MB can expand to many GB), found before any is read whole: each compressed element is inflated
+    in 1 MiB pieces that are counted and dropped. Elements: an 8-byte tag (type, byte count; a small element holds
+    its data in the tag), data padded to 8 bytes unless compressed (type 15); a damaged file is left to scipy."""
+    import zlib
+
+    order = "<" if raw[126:128] == b"IM" else ">"
+    at, total = 128, 0
+    while at + 8 <= len(raw):
+        kind, size = np.frombuffer(raw, f"{order}u4", 2, at)
+        kind, size = int(kind), int(size)
+        if kind >> 16:  # small data element: the data sit in the tag
+            at += 8
+            continue
+        body = memoryview(raw)[at + 8:at + 8 + size]
+        if kind == 15:
+            inflate = zlib.decompressobj()
+            try:
+                for start in range(0, len(body), 1 << 16):
+                    piece = body[start:start + (1 << 16)]
+                    while piece and total <= max_bytes:
+                        total += len(inflate.decompress(piece, 1 << 20))
+                        piece = inflate.unconsumed_tail
+                    if total > max_bytes or inflate.eof:
+                        break
+            except zlib.error:
+                return  # damaged: scipy names it
+            at += 8 + size
+        else:
+            total += size
+            at += 8 + size + (-size % 8)
+        if total > max_bytes:
+            raise DataError(f"{path}: its variables expand to more than {max_bytes:,} bytes once decompressed (the "
+                            f"limit of a measurement file, compressed or not): not read; split the run into smaller "
+                            "files")
+
+
+def _ttc_mat(raw: bytes, path, max_bytes: int = DATA_MAX_BYTES):
     """(channel -> values, channel -> unit) of a TTC .mat file (vectors named after the channels)."""
     import scipy.io
 
+    _mat_expands_within(raw, path, max_bytes)
     try:
         mat = scipy.io.loadmat(io.BytesIO(raw), squeeze_me=True, struct_as_record=False)
     except Exception as exc:  # scipy raises several kinds for a damaged file
@@ -1280,6 +1517,7 @@ def _ttc_mat(raw: bytes, path):
                             "of equal length")
         length = value.size
         columns[name] = value.astype(float)
+        _refuse_wide(len(columns), path, "variables: ")
     if "FZ" not in {n.upper() for n in columns}:
         raise DataError(f"{path}: no channel FZ among the .mat variables ({', '.join(columns) or 'none'}): "
                         "expected a TTC run (vectors ET, V, N, SA, IA, ..., FZ)")

@@ -28,12 +28,17 @@ from pathlib import Path
 from .errors import MFTyreError
 
 __all__ = ["OutputError", "open_user_file", "read_user_file", "same_file", "check_outputs", "write_atomically",
-           "write_figure", "write_frame_csv", "make_output_folder", "refuse_special_output", "sample_tir", "TIR_MAX_BYTES", "DATA_MAX_BYTES"]
+           "write_figure", "write_frame_csv", "make_output_folder", "refuse_special_output", "sample_tir", "TIR_MAX_BYTES", "DATA_MAX_BYTES",
+           "DATA_MAX_COLUMNS"]
 
 #: Largest .tir file read (16 MiB; real files are tens of kB).
 TIR_MAX_BYTES = 16 * 2**20
-#: Largest CSV/TYDEX file read (2 GiB; 1e6 rows of 17 channels are about 300 MB).
-DATA_MAX_BYTES = 2 * 2**30
+#: Largest measurement file read (CSV, TYDEX, TTC .dat/.mat, road profiles), and the most bytes the variables of a
+#: compressed .mat file may expand to: 128 MiB (reading takes up to about 8x the file's size in memory, so at most
+#: ~1.1 GB, and ~7 s of CPU; 6e5 rows of 17 channels written with 10 digits). docs/resource-limits.md.
+DATA_MAX_BYTES = 128 * 2**20
+#: Most columns (channels) a measurement file may have (TTC runs have about 25; each column costs Python work).
+DATA_MAX_COLUMNS = 1_000
 
 
 class OutputError(MFTyreError, FileExistsError):

@@ -49,6 +49,8 @@ __all__ = ["read_tir", "read_tir_text", "parse_tir", "write_tir", "check_tir", "
 
 #: Most parameters not in the schema a file may hold (each is kept to be written back; real files have a few).
 MAX_UNKNOWN_PARAMETERS = 10_000
+#: Most distinct section names a file may hold (real files have about 25; each is kept to be written back).
+MAX_SECTIONS = 1_000
 
 
 class _TirFileExists(TirError, FileExistsError):
@@ -330,8 +332,7 @@ def _parse(text: str, source: str, *, strict: bool, stacklevel: int, validate: b
         elif len(unknown) < MAX_UNKNOWN_PARAMETERS:
             unknown[name] = (section, _raw_value(value, quoted))
         else:
-            raise _err(source, lineno, name, f"more than {MAX_UNKNOWN_PARAMETERS:,} parameters that are not in the "
-                                             "schema: not a tyre property file (real files have none or a few)")
+            raise too_many_unknown(lineno, raw)
 
     def end_unknown_section(section: str, first_line: int, body: list[str]) -> None:
         """An unknown section: parameters when every content line is ``NAME = value``, else kept verbatim."""
@@ -346,7 +347,14 @@ def _parse(text: str, source: str, *, strict: bool, stacklevel: int, validate: b
             body.pop()
         extra_parts.setdefault(section, []).append("\n".join(body))
 
+    def too_many_unknown(lineno: int, raw: str) -> TirError:
+        return _err(source, lineno, _split_assignment(raw, source, lineno)[0],
+                    f"more than {MAX_UNKNOWN_PARAMETERS:,} parameters that are not in the schema: not a tyre property "
+                    "file (real files have none or a few)")
+
     section, first_line, body = None, 1, []  # body: the lines of the unknown section being read
+    sections_seen: set[str] = set()
+    assignments = 0  # lines NAME = value in the unknown section being read (refused early beyond the limit)
     for lineno, raw in enumerate(lines_of_text, start=1):
         stripped = raw.strip()
         header = _section_header(stripped)
@@ -355,7 +363,12 @@ def _parse(text: str, source: str, *, strict: bool, stacklevel: int, validate: b
         if header is not None:
             if section is not None and section not in known_sections:
                 end_unknown_section(section, first_line, body)
-            section, first_line, body = header, lineno + 1, []
+            section, first_line, body, assignments = header, lineno + 1, [], 0
+            sections_seen.add(header)
+            if len(sections_seen) > MAX_SECTIONS:
+                raise _err(source, lineno, None, f"more than {MAX_SECTIONS:,} different sections ({_shown(stripped)} "
+                                                 "is one too many): not a tyre property file (real files have about "
+                                                 "25)")
         elif section is None:
             if not _is_comment_or_blank(stripped):
                 name = raw.split("=", 1)[0].strip() if "=" in raw else None
@@ -366,6 +379,10 @@ def _parse(text: str, source: str, *, strict: bool, stacklevel: int, validate: b
                 assign(section, lineno, raw)
         else:
             body.append(raw)
+            if "=" in raw and _is_assignment(raw):
+                assignments += 1
+                if len(unknown) + assignments > MAX_UNKNOWN_PARAMETERS:
+                    raise too_many_unknown(lineno, raw)
     if section is not None and section not in known_sections:
         end_unknown_section(section, first_line, body)
     del lines_of_text, body
@@ -504,6 +521,12 @@ def _line(name: str, value: str, comment: str = "") -> str:
     return text
 
 
+def _one_line(text) -> str:
+    """``text`` as one printable line: line breaks and other control characters spelled as escapes (``\\n``), so
+    a name written into a comment can never start a line (a section, a parameter) of the written file."""
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in str(text))
+
+
 def tir_text(params: TyreParameters, comments=()) -> str:
     """The text :func:`write_tir` writes for ``params``; ``comments``: lines added to the header as ``!``
     comments (e.g. the provenance of fitted values)."""
@@ -539,7 +562,7 @@ def tir_text(params: TyreParameters, comments=()) -> str:
         if section == "MDI_HEADER":
             out.append("!")
             out.append("! Written by mftyre (Magic Formula tyre model, Python); values in SI units.")
-            out.append(f"! Source: {params.source if params.source else '(created in memory)'}")
+            out.append(f"! Source: {_one_line(params.source) if params.source else '(created in memory)'}")
             out.append(f"! Model: FITTYP {params.fittyp} (MF {version[0]}.{version[1]})")
             out.extend("! " + " ".join(str(c).split()) for c in comments)
             out.append("!")

@@ -48,7 +48,7 @@ from .simulate import COMPILER_FLAGS, EQUILIBRIUM_TOL, MAX_RK4_STEP, NO_EQUILIBR
 
 __all__ = ["SwiftWheel", "swift_functions", "internal_steps", "input_table", "RIM_MODES", "INPUTS", "OUTPUTS",
            "PARAMETERS", "TABLE_DX", "WINDOW",
-           "MAX_TRAVEL", "SUBSTEPS", "STEP_RATE_LIMIT"]
+           "MAX_TRAVEL", "SUBSTEPS", "STEP_RATE_LIMIT", "MAX_STEPS_PER_CALL"]
 
 TABLE_DX = 1e-3
 WINDOW = 1024
@@ -61,6 +61,10 @@ NEWTON_STEPS = 30
 SUBSTEPS = 1
 #: Internal steps per simulated second one communication step may take (the time budget of a step).
 STEP_RATE_LIMIT = 1e6
+#: Most internal steps one communication step may take, whatever its length (the work of one call, at about 10 us
+#: of CPU per internal step: ~2 s, what a host waits for; a 9,999 s step took 1e7 steps and 109 s). At the default
+#: max_step of 1 ms a step may be up to 200 s long. docs/resource-limits.md.
+MAX_STEPS_PER_CALL = 200_000
 
 #: The wheel's variables: name -> Variable (mftyre.variables), in the order of the vectors.
 INPUTS = pick("input", "vx", "vy", "omega", "gamma", "z", "vz", "p", "road_z", "road_camber", describe={
@@ -124,12 +128,12 @@ def internal_steps(h: float, max_step: float, vx: float) -> int:
     """How many equal RK4 steps a communication step of ``h`` [s] is split into (module notes; the C wrapper
     glue_swift.c spells the same rule): steps of at most ``max_step`` and MAX_RK4_STEP, and short enough that the
     wheel travels at most MAX_TRAVEL in one. A step that would need more than STEP_RATE_LIMIT internal steps per
-    simulated second (or 1e7) is refused (ModelInputError)."""
+    simulated second, or more than MAX_STEPS_PER_CALL in all, is refused (ModelInputError)."""
     n = max(math.ceil(h / min(max_step, MAX_RK4_STEP) - 1e-9), math.ceil(abs(vx) * h / MAX_TRAVEL))
-    if not (n <= math.ceil(h * STEP_RATE_LIMIT) and n < 1e7):
+    if not (n <= math.ceil(h * STEP_RATE_LIMIT) and n <= MAX_STEPS_PER_CALL):
         raise ModelInputError(f"the step of {h!r} s needs {n:.3g} internal steps, more than its time budget "
-                              f"({STEP_RATE_LIMIT:g} per simulated second): max_step too small or the speed too high "
-                              "for this model")
+                              f"({STEP_RATE_LIMIT:g} per simulated second, {MAX_STEPS_PER_CALL:,} per call): max_step "
+                              "too small, the speed too high or the step too long for this model (split it)")
     return max(1, n)
 
 
@@ -294,6 +298,7 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
     extra = (refusal + f"#define ROAD_N {table.h.size}\n#define ROAD_WINDOW {WINDOW}\n#define ROAD_X0 {table.x0!r}\n"
              f"#define ROAD_DX {table.dx!r}\n#define SWIFT_MAX_TRAVEL {MAX_TRAVEL!r}\n"
              f"#define SWIFT_MAX_RK4_STEP {MAX_RK4_STEP!r}\n#define STEP_RATE_LIMIT {STEP_RATE_LIMIT!r}\n"
+             f"#define SWIFT_MAX_STEPS_PER_CALL {MAX_STEPS_PER_CALL!r}\n"
              f"#define SWIFT_P_NOM {float(prm.NOMPRES)!r}\n#define SWIFT_P_STIFF {pstiff!r}\n"
              f"#define SWIFT_P_DAMP {0.0 if pdamp is None else pdamp!r}\n"
              + "".join(f"#define S_{n.upper()} {i}\n" for i, n in enumerate(STATE_NAMES))

@@ -547,6 +547,29 @@ def test_directional_derivatives_equal_finite_differences(fmus, tmp_path):
         s.close()
 
 
+
+def test_a_directional_derivative_at_a_nan_input_is_discarded_like_the_step(fmus, tmp_path):
+    """After a NaN input fmi2DoStep returns Discard, but fmi2GetDirectionalDerivative returned fmi2OK with NaN
+    derivatives (issue 34): now it is Discard too, naming the input, a non-finite seed is an error, and valid
+    inputs give finite derivatives again."""
+    from fmpy.fmi1 import FMICallException
+
+    for kind in ("steady", "transient"):
+        s = Slave(fmus[kind], tmp_path).initialise(vx=15.0, omega=15.0 / RE0, z=0.288)
+        s.step()
+        outs = [s.vr[o] for o in ("Fx", "Fy", "Fz", "Mz")]
+        s.set(vx=float("nan"))
+        with pytest.raises(FMICallException) as exc:
+            s.fmu.getDirectionalDerivative(outs, [s.vr["vx"]], [1.0])
+        assert exc.value.status == 2, kind  # fmi2Discard
+        assert any("fmi2GetDirectionalDerivative: input vx is not finite" in m for _, m in s.messages), kind
+        s.set(vx=15.0)
+        with pytest.raises(FMICallException) as exc:
+            s.fmu.getDirectionalDerivative(outs, [s.vr["vx"]], [float("nan")])
+        assert exc.value.status == 3, kind  # fmi2Error: the seed is the caller's mistake
+        assert all(math.isfinite(v) for v in s.fmu.getDirectionalDerivative(outs, [s.vr["vx"]], [1.0])), kind
+        s.close()
+
 # ------------------------------------------------------------------------------------------ C host, sources
 C_HOST = r"""
 #include <dlfcn.h>

@@ -499,15 +499,21 @@ def test_soil_file_refuses_a_fifo_and_a_device_without_blocking(tmp_path, capsys
     assert "not a regular file" in capsys.readouterr().err
 
 
-def test_one_swift_fmu_step_has_a_time_budget_proportional_to_the_step(tmp_path):
+@pytest.fixture(scope="module")
+def swift_fmu(tmp_path_factory):
+    path = tmp_path_factory.mktemp("swift_fmu") / "swift.fmu"
+    assert cli.main(["fmu", "build", str(T62), "-o", str(path), "--model", "swift", "--vertical", "position"]) == 0
+    return path
+
+
+def test_one_swift_fmu_step_has_a_time_budget_proportional_to_the_step(tmp_path, swift_fmu):
     """max_step = 2e-7 and a 1 s step: 5e6 internal steps (about 30 s in one fmi2DoStep; up to 1e7 were allowed) ran;
     now a step may take at most 1e6 internal steps per simulated second, one over budget is refused with fmi2Error
     and a message."""
     from fmpy.fmi1 import FMICallException
     from test_fmu import Slave
 
-    path = tmp_path / "swift.fmu"
-    assert cli.main(["fmu", "build", str(T62), "-o", str(path), "--model", "swift", "--vertical", "position"]) == 0
+    path = swift_fmu
     start = {"vx": 10.0, "omega": 10.0 / 0.305, "z": 0.29, "max_step": 2e-7}
     fmu = Slave(path, tmp_path, start=start)
     cpu = time.process_time()
@@ -518,6 +524,33 @@ def test_one_swift_fmu_step_has_a_time_budget_proportional_to_the_step(tmp_path)
     within = Slave(path, tmp_path, start=dict(start, max_step=2e-6))  # 5e5 internal steps per second: allowed
     within.fmu.doStep(0.0, 0.01)
     assert 0.0 < within.get("Fz")["Fz"] < 1e5
+
+
+def test_one_swift_fmu_call_has_a_step_budget_whatever_the_step_length(tmp_path, swift_fmu):
+    """Issue 34: one fmi2DoStep of 9,999 s at the default max_step (1 ms) ran ~1e7 internal steps (109 s); a 300 s
+    step 3e5 (~3 s). Now one call takes at most MAX_STEPS_PER_CALL = 200,000 internal steps (~2 s): beyond it
+    fmi2Error with a message, at once, the state held (the next steps go on from it), and the same rule in Python."""
+    from fmpy.fmi1 import FMICallException
+    from test_fmu import Slave
+
+    from mftyre.errors import ModelInputError
+    from swift.fmu_model import MAX_STEPS_PER_CALL, internal_steps
+
+    fmu = Slave(swift_fmu, tmp_path, start={"vx": 10.0, "omega": 10.0 / 0.305, "z": 0.29})
+    fmu.fmu.doStep(0.0, 0.01)
+    held = fmu.get("Fz")["Fz"]
+    for h in (9999.0, 300.0):
+        cpu = time.process_time()
+        with pytest.raises(FMICallException, match="error"):
+            fmu.fmu.doStep(0.01, h)
+        assert time.process_time() - cpu < 1.0, h
+        assert fmu.get("Fz")["Fz"] == held
+    assert sum("step too long" in message for _, message in fmu.messages) == 2
+    fmu.fmu.doStep(0.01, 0.01)  # the state was held: the run goes on
+    assert fmu.get("Fz")["Fz"] == pytest.approx(held, rel=0.05)
+    assert internal_steps(MAX_STEPS_PER_CALL * 1e-3, 1e-3, 10.0) == MAX_STEPS_PER_CALL  # 200 s: within
+    with pytest.raises(ModelInputError, match="200,000 per call"):
+        internal_steps(9999.0, 1e-3, 10.0)
 
 
 # ------------------------------------------------------------------------------------ seeded fuzz: the counts
@@ -782,3 +815,418 @@ def test_field_counts_are_checked_across_the_blocks_of_a_large_file(tmp_path):
     rows[-1] = rows[0]
     path.write_text("FZ,SA,SL,VX,P\n" + "\n".join(rows) + "\n\n")
     assert len(read_csv(path).frame) == 150_000
+
+
+# ------------------------------------------------------------------------------------ issue 34: readers, judge, limits
+DEG = np.pi / 180
+TTC_NAMES = ["ET", "V", "N", "SA", "IA", "RL", "RE", "P", "FX", "FY", "FZ", "MX", "MZ", "SL"]
+TTC_UNITS = ["s", "kph", "rpm", "deg", "deg", "cm", "cm", "kPa", "N", "N", "N", "N-m", "N-m", "none"]
+
+
+@pytest.fixture(scope="module")
+def programme():
+    """A trailer programme of the sample car tyre with realistic noise (ISO-W, SI)."""
+    from mftyre.data import trailer_programme
+
+    model = _quiet(mftyre.load_tir, T61)
+    return trailer_programme(model, loads=(0.6, 1.0), pressures=(1.0,), cambers_deg=(0.0, 3.0), points=21, noise=1.0,
+                             seed=34).frame
+
+
+def _ttc(frame) -> dict:
+    """The programme as a metric TTC run holds it (SAE axes), converted by hand."""
+    return {"ET": np.arange(len(frame)) * 0.01, "V": frame.VX * 3.6, "N": frame.OMEGA * 60 / (2 * np.pi),
+            "SA": -frame.SA / DEG, "IA": frame.IA / DEG, "RL": frame.RL * 100, "RE": frame.RE * 100, "P": frame.P / 1e3,
+            "FX": frame.FX, "FY": -frame.FY, "FZ": -frame.FZ, "MX": frame.MX, "MZ": -frame.MZ, "SL": frame.SL}
+
+
+def test_a_compressed_mat_that_expands_beyond_the_budget_is_refused_before_it_is_read(tmp_path, programme):
+    """Issue 34 item 1: the size limit saw only the compressed bytes (a 2.6 MB .mat of 12 x 2.5e7 zeros was read
+    whole: 52 s, 6.2 GB). The variables' decompressed size counts against the same budget (max_bytes), counted in
+    pieces before scipy reads anything: here a 40 MB run compressed to well under 4 MiB."""
+    import scipy.io
+
+    from mftyre.data import read_ttc
+
+    cols = {k: np.tile(np.asarray(v, float), 1500) for k, v in _ttc(programme).items()}
+    path = tmp_path / "bomb.mat"
+    scipy.io.savemat(path, cols, do_compression=True)
+    expanded = sum(v.nbytes for v in cols.values())
+    assert path.stat().st_size < 4 * 2**20 < expanded
+    cpu = time.process_time()
+    with pytest.raises(DataError, match=r"bomb\.mat: its variables expand to more than 4,194,304 bytes"):
+        read_ttc(path, max_bytes=4 * 2**20)
+    assert time.process_time() - cpu < 1.0
+    assert len(read_ttc(path, max_bytes=2 * expanded)) == len(cols["FZ"])  # within the budget: read
+    scipy.io.savemat(path, cols, do_compression=False)  # uncompressed: the file's own size is the measure
+    with pytest.raises(DataError, match="more than the limit"):
+        read_ttc(path, max_bytes=4 * 2**20)
+
+
+def test_a_ttc_channel_named_twice_is_refused(tmp_path, programme):
+    """Issue 34 item 2: two FZ columns in a TTC .dat silently kept the last."""
+    from mftyre.data import read_ttc
+
+    cols = _ttc(programme)
+    names, units = TTC_NAMES + ["FZ"], TTC_UNITS + ["N"]
+    table = np.column_stack([np.asarray(cols[n], float) for n in TTC_NAMES] + [np.zeros(len(programme))])
+    lines = ["run", "\t".join(names), "\t".join(units)] + ["\t".join(f"{v:.10g}" for v in row) for row in table]
+    path = tmp_path / "twice.dat"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(DataError, match=r"twice\.dat:2: channel FZ is named twice \(columns 11 and 15\)"):
+        read_ttc(path)
+    path.write_text("\n".join(line.rsplit("\t", 1)[0] for line in lines) + "\n")
+    assert np.allclose(read_ttc(path).array("FZ"), programme.FZ)  # once: read, in ISO-W
+
+
+def _small_sweeps(alpha_deg, kappa):
+    from mftyre.data import trailer_programme
+
+    return trailer_programme(_quiet(mftyre.load_tir, T61), loads=(0.6, 1.0), pressures=(1.0,), cambers_deg=(0.0,),
+                             alpha_max_deg=alpha_deg, kappa_max=kappa, combined_alpha_deg=(alpha_deg / 2,), points=41,
+                             noise=1.0, seed=5).frame
+
+
+def _rows(frame, ch, row, value):
+    x = frame[ch].to_numpy(float).copy()
+    x[row] = value
+    return frame.assign(**{ch: x})
+
+
+RPM = 60 / (2 * np.pi)
+#: The unit mistakes of issue 34 item 3 that the channel-by-channel check let through: (frame -> mistaken frame,
+#: what the message must say).
+MISTAKES = {
+    "VX km/h + OMEGA rpm below 100 km/h": (lambda f: f[f.VX < 25].assign(VX=lambda d: d.VX * 3.6,
+                                                                          OMEGA=lambda d: d.OMEGA * RPM),
+                                           r"VX looks like km/h.*OMEGA looks like rpm"),
+    "VX mph + OMEGA rpm": (lambda f: f.assign(VX=f.VX / 0.44704, OMEGA=f.OMEGA * RPM),
+                           r"VX looks like mph.*OMEGA looks like rpm"),
+    "OMEGA deg/s": (lambda f: f.assign(OMEGA=f.OMEGA / DEG), r"OMEGA looks like deg/s"),
+    "MZ N mm": (lambda f: f.assign(MZ=f.MZ * 1e3), r"channel MZ.*lever.*N\*mm"),
+    "MX N mm": (lambda f: f.assign(MX=f.MX * 1e3), r"channel MX.*lever.*N\*mm"),
+    "SA deg, sweeps within 1 deg": (lambda f: _small_sweeps(1.0, 0.25).pipe(lambda d: d.assign(SA=d.SA / DEG)),
+                                    r"channel SA: the cornering stiffness per unit load.*look like deg"),
+    "SA deg, sweeps within 0.5 deg": (lambda f: _small_sweeps(0.5, 0.25).pipe(lambda d: d.assign(SA=d.SA / DEG)),
+                                      r"channel SA: the cornering stiffness.*look like deg"),
+    "SL percent, sweeps within 2 %": (lambda f: _small_sweeps(1.0, 0.02).pipe(lambda d: d.assign(SL=d.SL * 100)),
+                                      r"channel SL: the longitudinal slip stiffness.*look like %"),
+    "SL percent, sweeps within 1 %": (lambda f: _small_sweeps(1.0, 0.01).pipe(lambda d: d.assign(SL=d.SL * 100)),
+                                      r"channel SL: the longitudinal slip stiffness.*look like %"),
+    "IA written as 0/1 deg": (lambda f: f.assign(IA=np.where(f.IA.abs() > 0, 1.0, 0.0)),
+                              r"channel IA: every value is a whole number.*look like deg"),
+    "IA written as -1/0/1 deg": (lambda f: f.assign(IA=np.sign(f.IA) * (np.arange(len(f)) % 2)),
+                                 r"channel IA: every value is a whole number"),
+    "one row VX = -1e300": (lambda f: _rows(f, "VX", 7, -1e300), r"row 8: channel VX is -1e\+300 m/s"),
+    "one row SA = 40 rad": (lambda f: _rows(f, "SA", 3, 40.0), r"row 4: channel SA is 40 rad"),
+    "one row FY = 1e9 N": (lambda f: _rows(f, "FY", 0, 1e9), r"row 1: channel FY is 1e\+09 N"),
+    "FZ zero in every row": (lambda f: f.assign(FZ=0.0), r"channel FZ is 0 in every row"),
+    "FZ negative in exactly half the rows": (lambda f: f.iloc[:len(f) // 2 * 2].assign(
+        FZ=lambda d: np.where(np.arange(len(d)) % 2 == 0, -d.FZ, d.FZ)), r"channel FZ is zero or negative in 50 %"),
+    "a friction of 10": (lambda f: f.assign(FZ=f.FZ / 10), r"friction \|\(FX, FY\)\| / FZ is 1\d.*beyond the 5"),
+}
+
+
+@pytest.mark.parametrize("mistake", list(MISTAKES))
+def test_the_plausibility_judge_finds_whole_file_unit_mistakes(programme, mistake):
+    """Issue 34 item 3: 17 unit and row mistakes that the channel-by-channel ranges let through, each refused by the
+    one judge (check_plausible) on whole-file physics: VX against OMEGA x radius with both units unknown, the slip
+    stiffnesses per unit load, whole-number cambers, moment levers, single rows, the load's sign, the friction."""
+    from mftyre.data import check_plausible
+
+    make, message = MISTAKES[mistake]
+    with pytest.raises(DataError, match=message):
+        check_plausible(make(programme.copy()), "rig.csv")
+
+
+def test_the_judge_raises_no_false_alarm_on_real_looking_data():
+    """The trailer and rig generators of every sample tyre (noise, offsets, small sweeps, time series with a TIME
+    channel), read as they are, pass (the MFeval reference tables are judged in test_rig_import)."""
+    from mftyre.data import check_plausible, trailer_programme
+    from mftyre.rig import rig_programme
+
+    judged = 0
+    for path in sorted(T61.parent.glob("*.tir")):
+        model = _quiet(mftyre.load_tir, path)
+        check_plausible(trailer_programme(model, noise=1.0, seed=1, points=21).frame, path.name)
+        judged += 1
+    small = trailer_programme(_quiet(mftyre.load_tir, T61), alpha_max_deg=1.0, kappa_max=0.02, noise=2.0, seed=2,
+                              offsets={"SA": 0.002, "FY": 30.0})
+    check_plausible(small.frame, "small sweeps")
+    rig = _quiet(rig_programme, _quiet(mftyre.load_tir, T61), loads=(0.45, 1.5), pressures=(1.14,), seed=3)
+    check_plausible(rig.frame, "rig")
+    assert judged >= 4
+
+
+@pytest.mark.parametrize("change", [{"phi": np.radians(89.9999)}, {"K": 1e300}, {"phi": np.radians(61.0)},
+                                    {"K": 2.0}, {"K": 1e-300}, {"n": 0.05}, {"c": 1e300}])
+def test_soil_values_that_would_overflow_are_typed_errors(tmp_path, capsys, change):
+    """Issue 34 item 4: phi = 89.9999 deg or K = 1e300 passed the soil's checks and gave a raw OverflowError in
+    evaluate, towed and `mftyre soil`. A soil has phi <= 60 deg (N_gamma's tan(1.4 phi) diverges at 64.3) and
+    1e-12 <= K <= 1 m (K = 1e-300, n = 0.05 or c = 1e300 gave NaN forces, found by the fuzz below): a
+    ModelInputError naming the soil (a DataError naming the line from a soil file)."""
+    import dataclasses
+
+    from mftyre.errors import ModelInputError
+    from mftyre.soil import SoftSoilTyre
+    from mftyre.soil.soils import soil
+
+    agri = T61.parent / "agri_460_85R34_mf61.tir"
+    for call in (lambda t: t.evaluate(fz=25e3, slip=0.2, p=1.2e5), lambda t: t.towed(fz=25e3, p=1.2e5)):
+        with pytest.raises(ModelInputError, match="soil 'sandy_loam'"):
+            call(SoftSoilTyre(agri, dataclasses.replace(soil("sandy_loam"), **change)))
+    (name, value), = change.items()
+    row = dict(name="odd", n=0.7, k_c=5.27, k_phi=1515.04, c=1.72, phi=30.0, K=0.025)
+    row[name] = float(np.degrees(value)) if name == "phi" else value
+    soils = tmp_path / "soils.csv"
+    soils.write_text(",".join(row) + "\n" + ",".join(str(v) for v in row.values()) + "\n")
+    assert cli.main(["soil", str(agri), "--soil", "odd", "--soil-file", str(soils), "--fz", "25kN", "-q"]) != 0
+    err = capsys.readouterr().err
+    assert "soils.csv:2" in err and f"{name} must be" in err and "Traceback" not in err
+
+
+def test_our_swift_and_fmu_are_imported_even_beside_a_users_swift_py_and_fmu_folder(tmp_path):
+    """Issue 34 item 6: a `swift.py` or a folder `fmu/` in the working folder was imported instead of ours (the
+    user's file ran) under `python -m mftyre`, scripts and notebooks, where the working folder comes first."""
+    import subprocess
+    import sys
+
+    (tmp_path / "swift.py").write_text("open('RAN', 'w').write('swift')\nraise SystemExit('the user swift ran')\n")
+    (tmp_path / "fmu").mkdir()
+    (tmp_path / "fmu" / "__init__.py").write_text("open('RAN', 'w').write('fmu')\n")
+    here = Path(mftyre.__file__).resolve().parents[1]
+    show = "import mftyre, swift, fmu, swift.road; print(swift.__file__); print(fmu.__file__)"
+    (tmp_path / "script.py").write_text(show + "\n")  # a script, as a notebook, runs with its folder first on the path
+    for argv in ([sys.executable, "script.py"], [sys.executable, "-m", "mftyre", "fmu", "--help"]):
+        done = subprocess.run(argv, cwd=tmp_path, capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, (argv, done.stderr[-500:])
+        if "-m" not in argv:
+            assert done.stdout.split() == [str(here / "swift" / "__init__.py"), str(here / "fmu" / "__init__.py")]
+        assert not (tmp_path / "RAN").exists(), argv
+
+
+def test_write_tir_keeps_a_source_name_with_line_breaks_on_its_comment_line(tmp_path):
+    """Issue 34 item 7: a source name with line breaks injected lines (a new [SHAPE] section, or an unreadable
+    file) into the written header."""
+    from mftyre.tir import parse_tir, read_tir, write_tir
+
+    evil = "run.tir\n[SHAPE]\n{radial width}\n1.0 0.0\r\nFNOMIN = 1\u2028x"
+    prm = _quiet(parse_tir, T61.read_text(), evil)
+    path = write_tir(prm, tmp_path / "out.tir")
+    back = _quiet(read_tir, path)
+    assert back.extra_sections == prm.extra_sections and "SHAPE" not in back.extra_sections
+    assert back.FNOMIN == prm.FNOMIN
+    source = [line for line in path.read_text().splitlines() if line.startswith("! Source:")]
+    assert source == ["! Source: run.tir\\n[SHAPE]\\n{radial width}\\n1.0 0.0\\r\\nFNOMIN = 1\\u2028x"]
+
+
+@pytest.mark.parametrize("option, text, message", [
+    ("units", "SA=deg,SA=rad", "units: SA is given twice"),
+    ("constants", "P=1.6bar,P=2bar", "constants: P is given twice"),
+    ("constants", "ia=0,IA=1deg", "constants: IA is given twice"),
+    ("columns", "FZ=a,SA=a", "columns: file column 'a' is given for FZ and for SA"),
+    ("columns", "FZ=a,FZ=b", "columns: FZ is given twice")])
+def test_an_option_giving_a_channel_twice_is_refused(option, text, message):
+    """Issue 34 item 8: options given twice were resolved silently (the last won)."""
+    from mftyre.data import parse_columns, parse_constants, parse_units
+
+    parse = {"units": parse_units, "constants": parse_constants, "columns": parse_columns}[option]
+    with pytest.raises(ValueError, match=message):
+        parse(text)
+
+
+def test_a_constant_without_its_unit_is_refused_with_advice_that_works(tmp_path, programme):
+    """Issue 34 item 8: `--set P=2.2` (2.2 Pa) was refused with the advice `--units P=bar`, which is refused in turn
+    (the file has no P column). The advice is now the constant with its unit, and it reads."""
+    import re
+
+    from mftyre.data import parse_constants, read_data, speaking_cli
+
+    path = tmp_path / "nop.csv"
+    programme.drop(columns=["P"]).to_csv(path, index=False)
+    with speaking_cli():
+        with pytest.raises(DataError, match=r"the constant P=2.2.*give its unit, e.g. --set P=2.2bar") as exc:
+            read_data(path, defaults=parse_constants("P=2.2"))
+        advice = re.search(r"--set (\S+)", str(exc.value)).group(1)
+        data = read_data(path, defaults=parse_constants(advice))
+    assert data.frame.P.iloc[0] == pytest.approx(2.2e5)
+    with pytest.raises(DataError, match=r"defaults=\{'P': '2.2bar'\}"):
+        read_data(path, defaults={"P": 2.2})
+
+
+def test_tir_limits_refuse_early(tmp_path):
+    """Issue 34 item 9: a 16 MiB .tir of distinct one-line sections took 26 s (35 s in `mftyre check`); 10,001
+    unknown parameters in an unknown section were refused only after the whole file was parsed. Now more than
+    MAX_SECTIONS different sections and the 10,001st unknown parameter are refused where they are met."""
+    from mftyre.tir import MAX_SECTIONS, MAX_UNKNOWN_PARAMETERS, parse_tir
+
+    sections = T61.read_text() + "".join(f"[S{i}]\nx\n" for i in range(400_000))  # 4 MiB (16 MiB took 26 s)
+    cpu = time.process_time()
+    with pytest.raises(TirError, match=rf"more than {MAX_SECTIONS:,} different sections"):
+        _quiet(parse_tir, sections, "big.tir")
+    unknown = T61.read_text() + "[EXTRA]\n" + "".join(f"P{i}=1\n" for i in range(400_000))
+    with pytest.raises(TirError, match=rf"big\.tir:\d+: P{MAX_UNKNOWN_PARAMETERS}: more than 10,000 parameters"):
+        _quiet(parse_tir, unknown, "big.tir")
+    assert time.process_time() - cpu < 4.0  # was 26 s + 9 s (both texts are built above the timer's start: ~1 s)
+    few = T61.read_text() + "".join(f"[S{i}]\nQ{i} = 1\n" for i in range(MAX_SECTIONS - 40))
+    assert len(_quiet(parse_tir, few, "few.tir").unknown) == MAX_SECTIONS - 40
+
+
+def test_data_limits_refuse_early(tmp_path):
+    """Issue 34 item 9: a CSV of 200,000 columns (1.9 MB) took 60 s, and a CSV at the 2 GiB limit would need ~7 GB.
+    Now a measurement file has at most DATA_MAX_COLUMNS columns and DATA_MAX_BYTES bytes (128 MiB: reading takes up
+    to ~8x the file's size, see docs/resource-limits.md), each refused before the samples are read."""
+    from mftyre.data import read_data
+    from mftyre.files import DATA_MAX_BYTES, DATA_MAX_COLUMNS
+
+    assert DATA_MAX_BYTES * 8 < 1.2e9
+    wide = tmp_path / "wide.csv"
+    wide.write_text("FZ,SA,SL,VX,P," + ",".join(f"c{i}" for i in range(200_000)) + "\n" +
+                    "4000,0,0,10,2e5" + ",1" * 200_000 + "\n")
+    cpu = time.process_time()
+    with pytest.raises(DataError, match=rf"wide\.csv: line 1: 200,005 columns, more than the {DATA_MAX_COLUMNS:,}"):
+        read_data(wide)
+    huge = tmp_path / "huge.csv"
+    with open(huge, "wb") as fh:  # sparse: no disk used
+        fh.write(b"FZ,SA,SL,VX,P\n")
+        fh.truncate(DATA_MAX_BYTES + 1)
+    with pytest.raises(DataError, match="more than the limit of 134217728 bytes"):
+        read_data(huge)
+    assert time.process_time() - cpu < 2.0
+
+
+def _fuzz_ttc_units(rng, tmp_path, frame, cases: int, counts: dict) -> None:
+    """TTC .dat and .mat runs (compressed or not) of a real-looking programme with a seeded unit, axis or row
+    mistake, a channel named twice, or none: each mistake a DataError (else counted silent), each clean run read
+    back exactly as written (in ISO-W, SI), never a raw exception; the slowest accepted read is recorded."""
+    import scipy.io
+
+    from mftyre.data import read_data
+
+    rpm = 60 / (2 * np.pi)
+    mistakes = [None, None, ("VX", 3.6), ("VX", 1 / 0.44704), ("OMEGA", 1 / DEG), ("MZ", 1e3), ("MX", 1e3),
+                ("FY", -1.0), ("FZ", 0.0), ("FZ", 0.1), "km/h+rpm", "mph+rpm", "row", "twice"]
+    for case in range(cases):
+        counts["ttc cases"] += 1
+        kind = mistakes[int(rng.integers(len(mistakes)))]
+        f = frame.copy()
+        if isinstance(kind, tuple):
+            f[kind[0]] = f[kind[0]] * kind[1]
+        elif kind in ("km/h+rpm", "mph+rpm"):
+            f = f[f.VX < 25].copy() if kind == "km/h+rpm" else f
+            f["VX"] = f.VX * (3.6 if kind == "km/h+rpm" else 1 / 0.44704)
+            f["OMEGA"] = f.OMEGA * rpm
+        elif kind == "row":
+            ch = ["VX", "SA", "FY", "FX", "MZ", "SL"][int(rng.integers(6))]
+            f.loc[f.index[int(rng.integers(len(f)))], ch] = float(rng.choice([-1e300, 1e200, 1e7]))  # beyond _ROW_LIMIT
+        cols = _ttc(f)
+        names = list(TTC_NAMES) + (["FZ"] if kind == "twice" else [])
+        table = np.column_stack([np.asarray(cols[n], float) for n in TTC_NAMES]
+                                + ([np.asarray(cols["FZ"], float)] if kind == "twice" else []))
+        mat = kind != "twice" and rng.random() < 0.5
+        path = tmp_path / f"run{case}.{'mat' if mat else 'dat'}"
+        if mat:
+            scipy.io.savemat(path, {n: table[:, j] for j, n in enumerate(TTC_NAMES)},
+                             do_compression=bool(rng.random() < 0.5))
+        else:
+            units = TTC_UNITS + (["N"] if kind == "twice" else [])
+            path.write_text("\n".join(["run", "\t".join(names), "\t".join(units)]
+                                      + ["\t".join(repr(float(v)) for v in row) for row in table]) + "\n")
+        start = time.process_time()
+        try:
+            data = read_data(path)
+        except DataError:
+            if kind is None:
+                counts["clean runs refused"] += 1
+            continue
+        except Exception as exc:  # noqa: BLE001
+            counts["raw exceptions"] += 1
+            counts.setdefault("raw", []).append((kind, repr(exc)[:80]))
+            continue
+        counts["slowest accepted read [s]"] = max(counts["slowest accepted read [s]"], time.process_time() - start)
+        if kind is not None:
+            counts["silent acceptances"] += 1
+            counts.setdefault("silent", []).append(kind)
+        elif not np.allclose(data.array("FZ"), f.FZ) or not np.allclose(data.array("SA"), f.SA):
+            counts["silent acceptances"] += 1
+
+
+def _fuzz_options(rng, cases: int, counts: dict) -> None:
+    """Option strings (--units, --columns, --set) of random channels, units, values, separators, repeated
+    channels: a ValueError or a mapping that gives each channel once, never a raw exception."""
+    from mftyre.data import parse_columns, parse_constants, parse_units
+
+    channels = ["SA", "sa", "IA", "P", "p", "VX", "FZ", "OMEGA", "XX", ""]
+    values = {"units": ["deg", "rad", "km/h", "psi", "bar", "%", "", "furlong", "N*mm", "rpm"],
+              "columns": ["a", "b", "Fz_N", "", "a b", "SA"],
+              "set": ["1.6bar", "2.2", "0", "-2deg", "60km/h", "1e400", "nan", "x", "", "1e-300kPa"]}
+    parsers = {"units": parse_units, "columns": parse_columns, "set": parse_constants}
+    for _ in range(cases):
+        counts["option cases"] += 1
+        option = list(parsers)[int(rng.integers(3))]
+        items = [f"{channels[int(rng.integers(len(channels)))]}{'=' if rng.random() < 0.9 else ''}"
+                 f"{values[option][int(rng.integers(len(values[option])))]}" for _ in range(int(rng.integers(1, 4)))]
+        text = ("," if rng.random() < 0.9 else ";").join(items)
+        try:
+            parsed = parsers[option](text)
+        except ValueError:
+            continue
+        except Exception as exc:  # noqa: BLE001
+            counts["raw exceptions"] += 1
+            counts.setdefault("raw", []).append((option, text, repr(exc)[:80]))
+            continue
+        given = [i.split("=", 1)[0].strip().upper() for i in text.split(",") if i.strip()]
+        targets = list(parsed.values()) if option == "columns" else list(parsed)
+        if len(set(given)) != len(given) or len(set(targets)) != len(targets):
+            counts["silent acceptances"] += 1
+            counts.setdefault("silent", []).append(text)
+
+
+def _fuzz_soils(rng, cases: int, counts: dict) -> None:
+    """Soils with values drawn over and beyond their ranges (and the edges, phi 60 deg, K 1e-12 ... 1 m, n, moduli up
+    to 1e300): a typed error or finite outputs, in evaluate and towed, never a raw exception."""
+    from mftyre.soil import SoftSoilTyre
+    from mftyre.soil.soils import Soil
+
+    model = _quiet(mftyre.load_tir, T61.parent / "agri_460_85R34_mf61.tir")
+    edge = {"n": [1e-300, 0.05, 0.7, 1.5, 3.0, 1e300], "k_c": [0.0, 1e3, 1e6, 1e300], "k_phi": [0.0, 1e5, 1e8, 1e300],
+            "c": [0.0, 1e3, 1e300], "phi": [0.0, 0.5, np.radians(60.0), np.radians(60.001), 1.5707], "K": [1e-300,
+                                                                                                        1e-12, 1.0, 1e300]}
+    for _ in range(cases):
+        counts["soil cases"] += 1
+        values = {k: v[int(rng.integers(len(v)))] for k, v in edge.items()}
+        for call in ("evaluate", "towed"):
+            try:
+                tyre = SoftSoilTyre(model, Soil("fuzz", **values))
+                out = (tyre.evaluate(fz=25e3, slip=np.array([-0.5, 0.0, 0.2, 0.9]), p=1.2e5) if call == "evaluate"
+                       else tyre.towed(fz=25e3, p=1.2e5))
+            except MFTyreError:
+                continue
+            except Exception as exc:  # noqa: BLE001
+                counts["raw exceptions"] += 1
+                counts.setdefault("raw", []).append((call, values, repr(exc)[:80]))
+                continue
+            # (the tractive efficiency is NaN by definition where the wheel takes no power: braking, slip -0.5)
+            if not all(np.isfinite(np.asarray(out[k], float)).all() for k in out.keys() if k != "efficiency"):
+                counts["silent acceptances"] += 1
+                counts.setdefault("silent", []).append((call, values))
+
+
+def test_seeded_fuzz_of_the_issue_34_readers_options_and_soils(tmp_path, programme, capsys):
+    """Issue 34: TTC .dat/.mat with unit/axis/row mistakes, option strings and soil values, seeded and fast: raw
+    exceptions 0, silent acceptances 0, every clean run read back, every accepted read far under 30 s."""
+    from collections import Counter
+
+    rng = np.random.default_rng(34)
+    counts = Counter()
+    counts["slowest accepted read [s]"] = 0.0
+    _fuzz_ttc_units(rng, tmp_path, programme, 60, counts)
+    _fuzz_options(rng, 400, counts)
+    _fuzz_soils(rng, 40, counts)
+    with capsys.disabled():
+        print("\nissue 34 fuzz:", {k: (round(v, 3) if isinstance(v, float) else v) for k, v in counts.items()
+                                   if not isinstance(v, list)})
+    assert counts["ttc cases"] == 60 and counts["option cases"] == 400 and counts["soil cases"] == 40
+    for measure in ("raw exceptions", "silent acceptances", "clean runs refused"):
+        assert counts[measure] == 0, (measure, counts.get("raw"), counts.get("silent"))
+    assert counts["slowest accepted read [s]"] < 30.0

@@ -499,7 +499,7 @@ def test_unknown_soil_is_a_typed_error():
     ("bad,0.8,-10,800,3.5,25,0.02", r"mine.csv:3: column k_c of soil 'bad' must be a finite number >= 0"),
     ("bad,0.8,10,800,x,25,0.02", r"mine.csv:3: column c: cannot read 'x'"),
     ("bad,0,10,800,3.5,25,0.02", r"mine.csv:3: soil 'bad': n must be positive"),
-    ("bad,0.8,10,800,3.5,95,0.02", r"mine.csv:3: soil 'bad': phi must be in \[0, 90\)"),
+    ("bad,0.8,10,800,3.5,95,0.02", r"mine.csv:3: soil 'bad': phi must be in \[0, 60\] deg"),
     ("bad,0.8,10,800", r"mine.csv:3: 4 fields, the header has 7"),
 ])
 def test_bad_soil_file_names_file_line_and_column(tmp_path, row, message):

@@ -466,6 +466,7 @@ static int state_of_output(size_t k) {
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
                                         const fmi2ValueReference vKnown_ref[], size_t nKnown,
                                         const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
+    char msg[1024];
     double du[ARR(TYRE_NU)] = {0}, dy[ARR(TYRE_NY)], dx[ARR(TYRE_NX)] = {0}, dxdot[ARR(TYRE_NX)];
     size_t k;
     int xk;
@@ -503,9 +504,22 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
             return fmi2Error;
         }
     }
+    /* as fmi2DoStep: no derivative at inputs or parameters it refuses; none that is not finite */
+    if (!all_finite(du, TYRE_NU) || !all_finite(dx, TYRE_NX)) {
+        LOG_ERROR(inst, "fmi2GetDirectionalDerivative: a seed dvKnown is not finite");
+        return fmi2Error;
+    }
+    if (!check_values(inst, msg, sizeof msg)) {
+        LOG_DISCARD(inst, "fmi2GetDirectionalDerivative: %s; no derivative", msg);
+        return fmi2Discard;
+    }
     if (glue_dout(inst->work, inst->s.x, inst->s.u, inst->s.q, dx, du, dy, dxdot) != 0) {
         LOG_ERROR(inst, "fmi2GetDirectionalDerivative: evaluation failed");
         return fmi2Error;
+    }
+    if (!all_finite(dy, TYRE_NY) || !all_finite(dxdot, TYRE_NX)) {
+        LOG_DISCARD(inst, "fmi2GetDirectionalDerivative: the derivative is not finite at these inputs");
+        return fmi2Discard;
     }
     for (size_t i = 0; i < nUnknown; i++)
         dvUnknown[i] = var_kind(vUnknown_ref[i], &k) == VAR_DERIVATIVE ? dxdot[k] : dy[k];
@@ -541,8 +555,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSet
     rc = glue_step(inst->work, x, inst->s.u, inst->s.q, h);
     if (rc == GLUE_OVER_BUDGET) {
         LOG_ERROR(inst, "fmi2DoStep at t = %g: the step of %g s needs more internal steps than its time budget "
-                        "(the parameter max_step is too small or the speed too high for this model); state and "
-                        "outputs held", t, h);
+                        "(the parameter max_step is too small, the speed too high or the step too long for this "
+                        "model: split it); state and outputs held", t, h);
         return fmi2Error;
     }
     if (rc != 0 || !all_finite(x, TYRE_NX)) {

@@ -163,8 +163,9 @@ int glue_step(GlueWork *g, double *x, const double *u, const double *q, double h
     long n;
     /* the time budget of one call, proportional to the step: at most STEP_RATE_LIMIT internal steps per simulated
      * second (steps of 1 us; ~6 us of CPU each, so at most a few seconds of CPU per simulated second), never more
-     * than 1e7; a step over budget (max_step far too small, or |vx| far beyond any vehicle) is refused */
-    if (!(nd <= ceil(h * STEP_RATE_LIMIT) && nd < 1e7)) return GLUE_OVER_BUDGET;
+     * than SWIFT_MAX_STEPS_PER_CALL (~2 s of CPU); a step over budget (max_step far too small, |vx| far beyond any
+     * vehicle, or a step too long) is refused */
+    if (!(nd <= ceil(h * STEP_RATE_LIMIT) && nd <= SWIFT_MAX_STEPS_PER_CALL)) return GLUE_OVER_BUDGET;
     n = nd < 1 ? 1 : (long)nd;
 #ifdef TYRE_U_Z /* axle height imposed; with the input load the axle moves (swift.fmu_model) */
     x[S_ZA] = u[TYRE_U_Z];

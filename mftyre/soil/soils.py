@@ -24,6 +24,10 @@ __all__ = ["Soil", "read_soils", "builtin_soils", "soil", "BUILTIN_FILE"]
 
 BUILTIN_FILE = Path(__file__).with_name("soils.csv")
 _COLUMNS = ("name", "n", "k_c", "k_phi", "c", "phi", "K")
+#: Largest angle of internal friction [deg] and the range of the shear deformation modulus [m] of a soil the model
+#: takes (within them every equation stays finite; beyond them no soil is).
+MAX_PHI_DEG = 60.0
+MIN_K, MAX_K = 1e-12, 1.0  # K -> 0 (1e-9) is the rigid-plastic limit; below 1e-150 the shear slip underflows
 #: file unit -> SI factor of each numeric column (n and K need none, phi is converted to radians)
 _TO_SI = {"k_c": 1e3, "k_phi": 1e3, "c": 1e3}
 
@@ -63,8 +67,19 @@ class Soil:
         for field in ("k_c", "c"):
             if getattr(self, field) < 0:
                 raise ModelInputError(f"soil {self.name!r}: {field} must be >= 0, got {getattr(self, field)!r}")
-        if not 0 <= self.phi < math.pi / 2:
-            raise ModelInputError(f"soil {self.name!r}: phi must be in [0, 90) deg, got {math.degrees(self.phi)!r} deg")
+        if not 0 <= self.phi <= math.radians(MAX_PHI_DEG):  # soils: up to ~50 deg; N_gamma's tan(1.4 phi): 64.3 deg
+            raise ModelInputError(f"soil {self.name!r}: phi must be in [0, {MAX_PHI_DEG:g}] deg (soils have up to about "
+                                  f"50 deg; the bearing-capacity factors diverge before 65), got "
+                                  f"{math.degrees(self.phi)!r} deg")
+        if self.n < 0.1:  # soils.csv: n >= 0.11; below 0.1 the sinkage z = (p / k)^(1/n) overflows
+            raise ModelInputError(f"soil {self.name!r}: n must be at least 0.1 (soils have 0.1 ... 1.5), got {self.n!r}")
+        for field, high in (("n", 3.0), ("k_c", 1e9), ("k_phi", 1e10), ("c", 1e7)):
+            if getattr(self, field) > high:  # soils.csv: n <= 1.1, k_c <= 1e5, k_phi <= 5.3e6, c <= 7e4 (SI)
+                raise ModelInputError(f"soil {self.name!r}: {field} must be at most {high:g} (SI; no soil has more, and "
+                                      f"the equations overflow far beyond), got {getattr(self, field)!r}")
+        if not MIN_K <= self.K <= MAX_K:
+            raise ModelInputError(f"soil {self.name!r}: K must be in [{MIN_K:g}, {MAX_K:g}] m (soils have 1 mm ... 10 cm; "
+                                  f"a small K is the rigid-plastic limit), got {self.K!r} m")
         if not self.k_phi > 0 and not self.k_c > 0:
             raise ModelInputError(f"soil {self.name!r}: k_c and k_phi are both zero: the soil carries no load")
         if self.k_phi < 0:
