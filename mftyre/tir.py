@@ -32,6 +32,7 @@ from typing import Any
 from .errors import ModelInputError, TirError, spelled
 from .files import TIR_MAX_BYTES, read_user_file, same_file, write_atomically
 from .inputs import load_factor_problems, pressure_factor_edges
+from .geometry import geometry_problems
 from .params import (
     CORE_PARAMETERS,
     PARAMETERS,
@@ -647,6 +648,8 @@ def check_tir(path) -> list[Finding]:
                        "the wrong sign (the evaluator and SWIFT warn when used there)"))
     for name, message in load_factor_problems(v):
         checks.append((True, "warning", name, message))
+    for name, message in geometry_problems(v):
+        checks.append((True, "error" if name == "RIM_RADIUS" else "warning", name, message))
     for cond, sev, name, msg in checks:
         if cond:
             add(sev, name, msg)
