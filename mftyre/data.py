@@ -574,6 +574,33 @@ class TyreData:
         return TyreData(frame, first.tyre, first.source, dict(first.units), dict(first.constants),
                         list(first.history), first.sha256)
 
+    @staticmethod
+    def pool(runs: list["TyreData"], gap: float = 10.0) -> "TyreData":
+        """Several runs of one tyre (cornering, drive/brake, vertical...) as one: the rows one after the other with
+        a RUN column (0, 1, ...), TIME of each run shifted to start ``gap`` seconds after the previous one ends (so
+        the programme recogniser sees one time series), the channels one run lacks NaN ("not measured"), the
+        sources, SHA-256 and histories joined, the constants the runs agree on, the first tyre description."""
+        if len(runs) == 1:
+            return runs[0]
+        frames, t0 = [], 0.0
+        for k, run in enumerate(runs):
+            f = run.frame.assign(RUN=k)
+            if "TIME" in f.columns:
+                t = f["TIME"].to_numpy(float)
+                f["TIME"] = t - t[0] + t0
+                t0 = float(f["TIME"].iloc[-1]) + gap
+            frames.append(f)
+        if any("TIME" in f.columns for f in frames) and not all("TIME" in f.columns for f in frames):
+            raise DataError("pooled runs: some runs are time series (TIME) and others not: pool runs of one kind")
+        constants = {k: v for k, v in runs[0].constants.items() if all(r.constants.get(k) == v for r in runs)}
+        tyre = next((r.tyre for r in runs if r.tyre), "")
+        names = " + ".join(Path(r.source).name if r.source else "(in memory)" for r in runs)
+        history = [f"run {k} ({Path(r.source).name if r.source else 'in memory'}): {h}" for k, r in enumerate(runs)
+                   for h in r.history]
+        units = {k: v for r in runs for k, v in r.units.items()}
+        return TyreData(pd.concat(frames, ignore_index=True), tyre, names, units, constants,
+                        history + [f"{len(runs)} runs pooled"], " ".join(r.sha256 for r in runs if r.sha256))
+
     def inputs(self) -> dict:
         """Keyword arguments fz kappa alpha gamma phit vx p for :meth:`mftyre.MFModel.evaluate`."""
         return dict(fz=self.array("FZ"), kappa=self.array("SL"), alpha=self.array("SA"), gamma=self.array("IA"),

@@ -36,7 +36,7 @@ from .data import TyreData
 from .programme import Programme, recognise
 
 __all__ = ["reduce_sweeps", "Reduction", "relaxed_slip", "relaxation_length", "hysteresis", "both_ways",
-           "effective_samples", "needs_reduction", "lag_one_correlation"]
+           "effective_samples", "needs_reduction", "lag_one_correlation", "scatter_about_bins"]
 
 _SWEPT = {"slip_angle": "SA", "slip_ratio": "SL", "speed": "VX", "load": "FZ"}
 _RESPONSE = ("FX", "FY", "MX", "MY", "MZ", "RL", "RHO", "RE")
@@ -350,3 +350,49 @@ def effective_samples(residuals, groups=None) -> float:
         rho = min(max(lag_one_correlation(r), 0.0), 0.999)
         total += max(1.0, r.size * (1.0 - rho) / (1.0 + rho))
     return total
+
+
+def scatter_about_bins(data: TyreData, programme: Programme, channel: str, *, bins: int = 40,
+                       by_branch: bool = False) -> np.ndarray:
+    """Per sample of the sweeps (NaN elsewhere): ``channel`` minus the plane fitted to it in its bin over the swept
+    slip and the measured load, the bins ``bins`` equal parts of the swept slip's range within each sweep (a plane,
+    not a mean: neither the slope of the characteristic within a bin nor the load control's scatter is scatter of
+    the measurement), both branches together (``by_branch=False``: the scatter at equal load, pressure, camber and
+    slip, the data's repeatability) or each branch apart (``True``: the residual about the sweep's smooth trend,
+    the measurement noise, hysteresis left out). Scaled by sqrt(n / (n - 3)) for the three coefficients fitted to
+    the bin's n samples; bins of fewer than 6 samples give NaN."""
+    rows = programme.rows
+    sweep, branch, kind = (rows[c].to_numpy() for c in ("SWEEP", "BRANCH", "KIND"))
+    y, fz = data.array(channel), data.array("FZ")
+    out = np.full(len(data), np.nan)
+    for s in np.unique(sweep[sweep >= 0]):
+        idx = np.flatnonzero(sweep == s)
+        swept = _SWEPT.get(kind[idx[0]], "SA")
+        slip = data.array(swept)[idx]
+        lo, hi = float(np.min(slip)), float(np.max(slip))
+        b = np.clip(((slip - lo) / max(hi - lo, 1e-300) * bins).astype(int), 0, bins - 1)
+        key = b * 3 + (np.sign(branch[idx]).astype(int) + 1 if by_branch else 0)
+        ys, load = y[idx], fz[idx]
+        ok = np.isfinite(ys) & np.isfinite(slip) & np.isfinite(load)
+        k = key[ok]
+        n = np.bincount(k, minlength=3 * bins)
+        # regressors centred per bin (well conditioned): 1, slip, load (the load itself when the sweep is in load)
+        cols = [slip[ok], load[ok]] if swept != "FZ" else [slip[ok]]
+        centred = [c - (np.bincount(k, c, minlength=3 * bins) / np.maximum(n, 1))[k] for c in cols]
+        yc = ys[ok] - (np.bincount(k, ys[ok], minlength=3 * bins) / np.maximum(n, 1))[k]
+        p = len(centred)
+        gram = np.zeros((3 * bins, p, p))
+        rhs = np.zeros((3 * bins, p))
+        for i in range(p):
+            rhs[:, i] = np.bincount(k, centred[i] * yc, minlength=3 * bins)
+            for j in range(p):
+                gram[:, i, j] = np.bincount(k, centred[i] * centred[j], minlength=3 * bins)
+        scale = np.sqrt(np.einsum("kii->ki", gram)) + 1e-300
+        normed = gram / scale[:, :, None] / scale[:, None, :] + 1e-9 * np.eye(p)
+        beta = np.linalg.solve(normed, (rhs / scale)[..., None])[..., 0] / scale
+        fitted = sum(beta[k, i] * centred[i] for i in range(p))
+        dev = np.full(idx.size, np.nan)
+        dof = p + 1
+        dev[ok] = np.where(n[k] >= 2 * dof, (yc - fitted) * np.sqrt(n[k] / np.maximum(n[k] - dof, 1)), np.nan)
+        out[idx] = dev
+    return out

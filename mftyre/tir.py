@@ -502,9 +502,11 @@ def _line(name: str, value: str, comment: str = "") -> str:
     return text
 
 
-def tir_text(params: TyreParameters, comments=()) -> str:
+def tir_text(params: TyreParameters, comments=(), *, notes: dict | None = None, closing=()) -> str:
     """The text :func:`write_tir` writes for ``params``; ``comments``: lines added to the header as ``!``
-    comments (e.g. the provenance of fitted values)."""
+    comments (e.g. the provenance of fitted values); ``notes``: parameter -> a comment written after its
+    description (``! fitted +- 0.02 (pure_fy)``); ``closing``: ``!`` comment lines at the end of the file."""
+    notes = notes or {}
     version = params.version
     missing = set(params.missing)
     out: list[str] = []
@@ -516,7 +518,10 @@ def tir_text(params: TyreParameters, comments=()) -> str:
         non_default = value != spec.default
         if not (present or relevant or non_default or name == "FITTYP"):
             continue
-        by_section[spec.section].append(_line(name, _format_value(value, spec.is_string, name), spec.description))
+        line = _line(name, _format_value(value, spec.is_string, name), spec.description)
+        if name in notes:
+            line = f"{line:<95} ! " + " ".join(str(notes[name]).split())
+        by_section[spec.section].append(line)
     extra_param_sections: dict[str, list[str]] = {}
     for name, (section, value) in params.unknown.items():
         line = _line(name, _format_value(value, False, name))
@@ -550,12 +555,16 @@ def tir_text(params: TyreParameters, comments=()) -> str:
         out.append(f"[{section}]")
         if body:
             out.append(body)
+    if closing:
+        out.append("$" + "-" * 50 + "summary")
+        out.extend("! " + str(c).rstrip() for c in closing)
     return "\n".join(out) + "\n"
 
 
-def write_tir(params: TyreParameters, path, *, overwrite: bool = False, comments=()) -> Path:
+def write_tir(params: TyreParameters, path, *, overwrite: bool = False, comments=(), notes: dict | None = None,
+              closing=()) -> Path:
     """Write ``params`` to ``path`` as a .tir file in SI units; returns the path written. ``comments``: lines for
-    the file's header (``!`` comments, read back as comments).
+    the file's header (``!`` comments, read back as comments); ``notes`` and ``closing``: see :func:`tir_text`.
 
     Refuses to overwrite an existing file unless ``overwrite=True``, and never overwrites the file the
     parameters were read from (``params.source``).
@@ -573,7 +582,7 @@ def write_tir(params: TyreParameters, path, *, overwrite: bool = False, comments
     if p.is_dir():
         raise _err(str(p), None, None, "is a directory: expected a file path")
     _validate(params, str(p))
-    write_atomically(p, tir_text(params, comments))
+    write_atomically(p, tir_text(params, comments, notes=notes, closing=closing))
     return p
 
 
