@@ -1465,6 +1465,11 @@ def read_data(path, *, columns: dict | None = None, units: dict | None = None, a
 def _read_dropping(path, drop, drop_implausible, check, **options) -> TyreData:
     """:func:`read_data` leaving out the channels ``drop`` and, with ``drop_implausible``, those of
     :data:`OPTIONAL_CHANNELS` the plausibility check refuses (each named in a warning with its diagnosis)."""
+    required = [c for c in drop if c in REQUIRED]
+    if required:
+        raise DataError(f"{path}: cannot drop {', '.join(required)}: a fit needs the channels {', '.join(REQUIRED)} "
+                        "as inputs (missing channel otherwise; a constant channel is given with "
+                        f"{spelled('defaults=', '--set')})")
     data = read_data(path, check=False, **options)
     data.history = [h for h in data.history if h != UNCHECKED]
     present = [c for c in drop if c in data.frame.columns]

@@ -354,13 +354,14 @@ def effective_samples(residuals, groups=None) -> float:
 
 def scatter_about_bins(data: TyreData, programme: Programme, channel: str, *, bins: int = 40,
                        by_branch: bool = False) -> np.ndarray:
-    """Per sample of the sweeps (NaN elsewhere): ``channel`` minus the plane fitted to it in its bin over the swept
-    slip and the measured load, the bins ``bins`` equal parts of the swept slip's range within each sweep (a plane,
-    not a mean: neither the slope of the characteristic within a bin nor the load control's scatter is scatter of
-    the measurement), both branches together (``by_branch=False``: the scatter at equal load, pressure, camber and
-    slip, the data's repeatability) or each branch apart (``True``: the residual about the sweep's smooth trend,
-    the measurement noise, hysteresis left out). Scaled by sqrt(n / (n - 3)) for the three coefficients fitted to
-    the bin's n samples; bins of fewer than 6 samples give NaN."""
+    """Per sample of the sweeps (NaN elsewhere): ``channel``, scaled to the bin's mean load (a force about
+    proportional to the load: the load control's scatter is no scatter of the measurement), minus the line fitted
+    to it over the swept slip in its bin (a line, not a mean: the characteristic's slope within a bin is no scatter
+    either); the bins are ``bins`` equal parts of the swept slip's range within each sweep, both branches together
+    (``by_branch=False``: the scatter at equal load, pressure, camber and slip, the data's repeatability) or each
+    branch apart (``True``: the residual about the sweep's smooth trend, the measurement noise, hysteresis left
+    out). Scaled by sqrt(n / (n - 2)) for the two coefficients fitted to the bin's n samples; bins of fewer than 6
+    samples give NaN."""
     rows = programme.rows
     sweep, branch, kind = (rows[c].to_numpy() for c in ("SWEEP", "BRANCH", "KIND"))
     y, fz = data.array(channel), data.array("FZ")
@@ -374,25 +375,19 @@ def scatter_about_bins(data: TyreData, programme: Programme, channel: str, *, bi
         key = b * 3 + (np.sign(branch[idx]).astype(int) + 1 if by_branch else 0)
         ys, load = y[idx], fz[idx]
         ok = np.isfinite(ys) & np.isfinite(slip) & np.isfinite(load)
-        k = key[ok]
+        k, x, v = key[ok], slip[ok], ys[ok]
         n = np.bincount(k, minlength=3 * bins)
-        # regressors centred per bin (well conditioned): 1, slip, load (the load itself when the sweep is in load)
-        cols = [slip[ok], load[ok]] if swept != "FZ" else [slip[ok]]
-        centred = [c - (np.bincount(k, c, minlength=3 * bins) / np.maximum(n, 1))[k] for c in cols]
-        yc = ys[ok] - (np.bincount(k, ys[ok], minlength=3 * bins) / np.maximum(n, 1))[k]
-        p = len(centred)
-        gram = np.zeros((3 * bins, p, p))
-        rhs = np.zeros((3 * bins, p))
-        for i in range(p):
-            rhs[:, i] = np.bincount(k, centred[i] * yc, minlength=3 * bins)
-            for j in range(p):
-                gram[:, i, j] = np.bincount(k, centred[i] * centred[j], minlength=3 * bins)
-        scale = np.sqrt(np.einsum("kii->ki", gram)) + 1e-300
-        normed = gram / scale[:, :, None] / scale[:, None, :] + 1e-9 * np.eye(p)
-        beta = np.linalg.solve(normed, (rhs / scale)[..., None])[..., 0] / scale
-        fitted = sum(beta[k, i] * centred[i] for i in range(p))
+
+        def bin_mean(c):
+            return (np.bincount(k, c, minlength=3 * bins) / np.maximum(n, 1))[k]
+
+        if swept != "FZ":  # at equal load: the force scaled to the bin's mean load (about proportional to it)
+            v = v * bin_mean(load[ok]) / np.where(load[ok] != 0, load[ok], np.nan)
+        xc, yc = x - bin_mean(x), v - bin_mean(v)
+        sxx = np.bincount(k, xc * xc, minlength=3 * bins)
+        slope = np.bincount(k, xc * yc, minlength=3 * bins) / np.where(sxx > 0, sxx, 1.0)
+        resid = yc - slope[k] * xc
         dev = np.full(idx.size, np.nan)
-        dof = p + 1
-        dev[ok] = np.where(n[k] >= 2 * dof, (yc - fitted) * np.sqrt(n[k] / np.maximum(n[k] - dof, 1)), np.nan)
+        dev[ok] = np.where(n[k] >= 6, resid * np.sqrt(n[k] / np.maximum(n[k] - 2, 1)), np.nan)
         out[idx] = dev
     return out
