@@ -1470,6 +1470,13 @@ def _read_dropping(path, drop, drop_implausible, check, **options) -> TyreData:
         raise DataError(f"{path}: cannot drop {', '.join(required)}: a fit needs the channels {', '.join(REQUIRED)} "
                         "as inputs (missing channel otherwise; a constant channel is given with "
                         f"{spelled('defaults=', '--set')})")
+    if not drop:  # the reader's own check first: its messages name the file's columns and where it states units
+        try:
+            return read_data(path, check=check, **options)
+        except DataError as exc:
+            failed = getattr(exc, "channels", {})
+            if not (check and failed and set(failed) <= set(OPTIONAL_CHANNELS)):
+                raise
     data = read_data(path, check=False, **options)
     data.history = [h for h in data.history if h != UNCHECKED]
     present = [c for c in drop if c in data.frame.columns]

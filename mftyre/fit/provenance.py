@@ -152,6 +152,7 @@ def closing_summary(result) -> list[str]:
         lines.append(f"  range: {origin[n]} ({n}..{n.replace('MIN', 'MAX')})")
     unknown = unidentified(result)
     if unknown:
-        lines.append("NOT DETERMINED by the data (presented with their values, not to be trusted): "
+        lines.append("NOT DETERMINED by the data (held at their start values, or fitted at a bound or with a "
+                     "standard error above the value; the comment of each says which): "
                      + " ".join(n for n, _, _ in unknown))
     return lines
