@@ -26,7 +26,7 @@ from .catalogue import CATALOGUE, PARAM_STAGE, Effect, effect_state, parameter_n
 from .drift import FRICTION_DRIFT, tyre_of, with_progress
 from .locate import locate
 from .refit import FAIR_STAGES, SWEEP_REASONS, at_neutral, active_parameters, covariance, standard_errors, stage_data, data_conditions, needs_met, refit, refit_stages
-from .residuals import Evaluator, sweep_labels, holdout_mask, noise_levels, noise_of_means
+from .residuals import Evaluator, sweep_labels, holdout_mask, noise_floor_of, noise_levels, noise_of_means
 from .transient import sweep_hysteresis
 from .small import SMALL_DATA, aicc, fit_all, loo_errors, weighted_rss
 
@@ -540,10 +540,12 @@ def _noise(run: _Run, start) -> dict:
     """Channel -> (sigma, method): the measurement noise (of the binned means for a reduced time series)."""
     sigma = noise_levels(run.ev_train, run.ev_train.residuals(start))
     if run.reduction is not None:
-        kind = run.programme.rows["KIND"].to_numpy()
-        segments = np.where(kind != "transition", run.programme.rows["SEGMENT"].to_numpy(), -1)
+        rows = run.programme.rows
+        sweep = rows["SWEEP"].to_numpy()
+        segments = np.where(sweep >= 0, 3 * sweep + np.sign(rows["BRANCH"].to_numpy()).astype(int) + 1, -1)
+        rate = run.programme.sample_rate if run.programme.sample_rate else 100.0
         sigma.update(noise_of_means(run.raw, segments, run.data, run.ev_train.channels,
-                                    float(run.given.VERTICAL_STIFFNESS)))
+                                    float(run.given.VERTICAL_STIFFNESS), window=int(round(rate))))
     run.say("noise: " + ", ".join(f"{c} {s:.3g}" for c, (s, _) in sigma.items()))
     return sigma
 
@@ -758,11 +760,30 @@ class _Search:
                     a.parameters[k].update(value=float(self.prm[k]), stderr=se.get(k))
 
 
-def _verdict(findings_before, added, findings_after, transient, nuisances=()) -> str:
-    """The outcome in one sentence."""
-    if not findings_before:
-        message = ("the model already explains the data: no residual structure beyond measurement noise; "
+#: The held-out error a model may have, as a multiple of the error the measurement noise alone gives (the noise
+#: floor), for the verdict "the model explains the data".
+NOISE_MULTIPLE = 2.0
+
+
+def _beyond_noise(errors: dict, floor: dict) -> dict:
+    """Channel -> (held-out error, floor) [%] where the error exceeds :data:`NOISE_MULTIPLE` x the noise floor."""
+    return {c: (e, floor[c]) for c, e in errors.items()
+            if c in floor and np.isfinite(e) and e > NOISE_MULTIPLE * floor[c]}
+
+
+def _verdict(findings_before, added, findings_after, transient, nuisances=(), beyond=None) -> str:
+    """The outcome in one sentence. ``beyond``: channel -> (held-out error, noise floor) [%] where the error is
+    more than :data:`NOISE_MULTIPLE` x the floor: then the data are not explained, whatever the residual tests say
+    (their noise may be misjudged, or the structure too smooth for them)."""
+    beyond = beyond or {}
+    gap = ", ".join(f"{c} {e:.3g} % against a noise floor of {f:.3g} %" for c, (e, f) in beyond.items())
+    if not findings_before and beyond:
+        message = (f"no residual structure found by the tests, but the held-out error is more than "
+                   f"{NOISE_MULTIPLE:g}x what the noise explains ({gap}): the model does NOT explain the data; "
                    "nothing added")
+    elif not findings_before:
+        message = ("the model already explains the data: no residual structure beyond measurement noise, the "
+                   f"held-out error within {NOISE_MULTIPLE:g}x the noise floor in every channel; nothing added")
     elif not added:
         message = "residual structure found, but no catalogue effect explains it significantly on held-out data; " \
                   "nothing added" + ("" if not nuisances else " to the tyre")
@@ -822,7 +843,8 @@ def _report(run: _Run, start, search: _Search, findings_before, transient, untes
     findings_after = locate(ev_train, ev_train.residuals(prm), search.sigma, run.alpha)
     added = [a for a in search.added if a.name != FRICTION_DRIFT.name]
     nuisances = [a for a in search.added if a.name == FRICTION_DRIFT.name]
-    message = _verdict(findings_before, added, findings_after, transient, nuisances)
+    beyond = _beyond_noise(_errors(ev_test, prm), noise_floor_of(run.ev_all, run.test_mask, search.sigma))
+    message = _verdict(findings_before, added, findings_after, transient, nuisances, beyond)
     run.say(message)
     return GapReport(
         model_given=MFModel(run.given), model_start=MFModel(start), model=MFModel(tyre_of(prm)),

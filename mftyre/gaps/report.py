@@ -133,14 +133,9 @@ def _error_heading(rep) -> list:
 
 def noise_floor(rep) -> dict:
     """Channel -> the normalised RMS error [%] that the noise alone gives on the held-out data."""
-    ev = rep.evaluator
-    out = {}
-    for c in rep.error_before:
-        rows = ev.rows[c] & rep.test_mask
-        meas = ev.data.array(c)[rows]
-        if meas.size:
-            out[c] = 100.0 * rep.noise[c][0] / math.sqrt(float(np.mean(meas**2)))
-    return out
+    from .residuals import noise_floor_of
+
+    return noise_floor_of(rep.evaluator, rep.test_mask, {c: rep.noise[c] for c in rep.error_before if c in rep.noise})
 
 
 def _figure(**kw):
