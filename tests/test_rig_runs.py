@@ -311,3 +311,22 @@ def test_explains_the_data_only_within_a_multiple_of_the_noise():
     said = _verdict([], [], [], [], beyond=_beyond_noise({"FY": 13.0, "MZ": 35.0}, floor))
     assert "does NOT explain the data" in said and "MZ 35 % against a noise floor of 2 %" in said
     assert "already explains" in _verdict([], [], [], [], beyond={})
+
+
+def test_nothing_added_writes_the_given_file_unchanged_with_its_provenance(tmp_path, tyre):
+    """The gap finder's fair-start refit only judges candidates: with nothing added, the written file is the given
+    one (every value), its header's provenance kept; the refit values are not written."""
+    from mftyre.gaps.core import GapReport
+
+    given_path = tmp_path / "given.tir"
+    mftyre.write_tir(tyre.params, given_path, comments=["Fitted by mftyre on a run (provenance line)"])
+    given = mftyre.load_tir(given_path)
+    refit = given.with_params(PKY1=given.params.PKY1 * 1.1, QDZ1=given.params.QDZ1 * 0.9)
+    rep = GapReport(model_given=given, model=refit, effects_added=[], nuisances=[])
+    out = rep.write_tir(tmp_path / "gaps.tir")
+    again = mftyre.read_tir(out)
+    for name in ("PKY1", "QDZ1", "RIM_RADIUS", "FNOMIN"):
+        assert again[name] == given.params[name], name
+    text = out.read_text()
+    assert "nothing added; the parameters of given.tir unchanged" in text
+    assert "Fitted by mftyre on a run (provenance line)" in text

@@ -145,11 +145,39 @@ class GapReport:
         return save_report(self, directory)
 
     def write_tir(self, path, *, overwrite: bool = False) -> Path:
-        return write_tir(self.model.params, path, overwrite=overwrite)
+        """Write the improved .tir; when nothing was added, the parameters as given, unchanged (not the fair-start
+        refit the search started from: it only served to judge candidates), with the given file's header comments
+        (a fitted file's provenance) kept."""
+        given = self.model_given.params
+        if not self.effects_added and not self.nuisances:
+            header = _header_comments(given.source)
+            return write_tir(given, path, overwrite=overwrite, comments=[
+                f"mftyre gaps: nothing added; the parameters of {Path(str(given.source)).name if given.source else 'the given model'}"
+                " unchanged", *header])
+        return write_tir(self.model.params, path, overwrite=overwrite, comments=[
+            "mftyre gaps: effects added to " + (Path(str(given.source)).name if given.source else "the given model")
+            + ": " + ", ".join(self.effect_names + [e.name for e in self.nuisances])])
 
     def __repr__(self):
         return f"GapReport(effects_added={self.effect_names}, error_before={_round(self.error_before)}, " \
                f"error_after={_round(self.error_after)})"
+
+
+def _header_comments(source) -> list:
+    """The ``!`` comment lines of a .tir file's header (before its first section after [MDI_HEADER]): the provenance
+    a fitted file carries; [] when there is no readable file."""
+    try:
+        lines = Path(str(source)).read_text(encoding="utf-8", errors="replace").splitlines()
+    except (OSError, TypeError, ValueError):
+        return []
+    out = []
+    for line in lines[:200]:
+        if line.startswith("[") and "MDI_HEADER" not in line.upper():
+            break
+        if line.startswith("!") and line.strip("! ") and "Written by mftyre" not in line and \
+                not line.startswith(("! Source:", "! Model:")):
+            out.append(line[1:].strip())
+    return out
 
 
 def _round(d):
