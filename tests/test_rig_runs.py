@@ -59,7 +59,7 @@ def pooled_fit(runs, tmp_path_factory):
     stdout, stderr = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
         status = main(["fit", str(paths[0]), str(paths[1]), "-o", str(out), "--quiet",
-                       "--stages", "pure_fx,pure_fy,mz,mx,vertical"])
+                       "--stages", "pure_fx,pure_fy,mz,mx,vertical", "--report", str(out.with_suffix(".md"))])
     return status, stdout.getvalue(), stderr.getvalue(), out
 
 
@@ -222,6 +222,10 @@ def test_undetermined_parameters_are_named_with_the_measurement_that_pins_them(p
         assert need and ("held at its start value" in why or "bound" in why or "standard error" in why)
         assert re.search(rf"^{name}\s*=.*! .*(not fitted|fitted)", text, re.M), name
     assert "NOT DETERMINED by the data" in text
+    report = path.with_suffix(".md").read_text()
+    assert "## Not determined by the data" in report and "## Errors on the samples as recorded" in report
+    for name, why, need in named:
+        assert f"| {name} | " in report and need in report
 
 
 # --------------------------------------------------------------------------------------- D: sign-safe files
