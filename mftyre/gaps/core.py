@@ -100,6 +100,9 @@ class GapReport:
     def effect_names(self) -> list:
         return [e.name for e in self.effects_added]
 
+    #: channels the model has no equations for (its output 0 everywhere): "not fitted", never an error of 100 %
+    not_modelled: tuple = ()
+
     def shrink(self) -> dict:
         """Channel -> relative decrease of the held-out error, (before - after) / before."""
         return {c: (self.error_before[c] - self.error_after[c]) / self.error_before[c]
@@ -871,7 +874,10 @@ def _report(run: _Run, start, search: _Search, findings_before, transient, untes
     findings_after = locate(ev_train, ev_train.residuals(prm), search.sigma, run.alpha)
     added = [a for a in search.added if a.name != FRICTION_DRIFT.name]
     nuisances = [a for a in search.added if a.name == FRICTION_DRIFT.name]
-    beyond = _beyond_noise(_errors(ev_test, prm), noise_floor_of(run.ev_all, run.test_mask, search.sigma))
+    pred = ev_test.predict(prm)
+    not_modelled = [c for c in pred if pred[c].size and not np.any(pred[c])]  # the model gives 0: no model of it
+    errors = {c: e for c, e in _errors(ev_test, prm).items() if c not in not_modelled}
+    beyond = _beyond_noise(errors, noise_floor_of(run.ev_all, run.test_mask, search.sigma))
     message = _verdict(findings_before, added, findings_after, transient, nuisances, beyond)
     run.say(message)
     return GapReport(
@@ -883,4 +889,4 @@ def _report(run: _Run, start, search: _Search, findings_before, transient, untes
         rejected=search.rejected, message=message, data=run.data, test_mask=run.test_mask, transient=transient,
         programme=run.programme.summary(), reduction=run.reduction.summary() if run.reduction else None,
         evaluator=run.ev_all, data_summary=_summary(run.data), seconds=time.perf_counter() - run.t0,
-        turn_slip=run.ts, small_data=False)
+        turn_slip=run.ts, small_data=False, not_modelled=not_modelled)

@@ -39,6 +39,9 @@ def markdown_report(rep, plot_names: dict | None = None) -> str:
     shrink = rep.shrink()
     floor = noise_floor(rep)
     for c in rep.error_before:
+        if c in getattr(rep, "not_modelled", ()):
+            lines.append(f"| {c} | not fitted (no model) | | | | | |")
+            continue
         lines.append(f"| {c} | {_f(rep.error_given[c], '{:.3f}')} | {_f(rep.error_before[c], '{:.3f}')} | "
                      f"{_f(rep.error_after[c], '{:.3f}')} | {_f(100 * shrink.get(c, float('nan')), '{:.0f} %')} | "
                      f"{_f(floor.get(c), '{:.3f}')} | {rep.noise[c][0]:.3g} {UNITS[c]} ({rep.noise[c][1]}) |")
