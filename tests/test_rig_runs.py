@@ -278,34 +278,7 @@ def test_scatter_about_bins_recovers_a_known_noise():
     assert np.sqrt(np.nanmean(both**2)) == pytest.approx(math.hypot(12.0, 20.0), rel=0.1)
 
 
-# ---------------------------------------------------------------- I: the gap finder's noise at 100 Hz, slow sweeps
-def test_noise_of_binned_means_holds_for_coloured_noise_under_slow_sweeps(tyre):
-    """A 100 Hz run with slow sweeps (2 deg/s, 0.04 /s), AR(1) noise of 100 ms correlation time (lag-one 0.905),
-    friction drift and load scatter: the noise of a binned mean is the generator's, sigma sqrt(Var-factor of a mean
-    of N AR(1) samples), within 15 % (the second differences gave 32x for FX with "lag-one correlation 0.99")."""
-    from mftyre.data import NOISE, noise_scales
-    from mftyre.gaps.residuals import noise_of_means
-    from mftyre.programme import recognise
-    from mftyre.timeseries import reduce_sweeps
-
-    run = rig_programme(tyre, loads=(0.5, 1.0), pressures=(1.0,), cambers_deg=(0.0,), alpha_max_deg=8.0,
-                        slip_angle_rate_deg=2.0, combined_alpha_deg=(3.0,), kappa_max=0.12, slip_ratio_rate=0.04,
-                        free_rolling=False, vertical_sweeps=False, noise_time=0.1, friction_drift=0.05, seed=1)
-    programme = recognise(run)
-    reduced = reduce_sweeps(run, programme).mean
-    rows = programme.rows
-    sweep = rows["SWEEP"].to_numpy()
-    branches = np.where(sweep >= 0, 3 * sweep + np.sign(rows["BRANCH"].to_numpy()).astype(int) + 1, -1)
-    found = noise_of_means(run, branches, reduced, ("FX", "FY", "MZ"), tyre.params.VERTICAL_STIFFNESS, window=100)
-    n = int(np.median(reduced.array("N")))
-    rho = math.exp(-0.01 / 0.1)
-    k = np.arange(1, n)
-    factor = (1 + 2 * np.sum((1 - k / n) * rho**k)) / n  # variance of a mean of n AR(1) samples / sigma^2
-    scale = noise_scales(tyre.params)
-    for ch in ("FX", "FY", "MZ"):
-        assert found[ch][0] == pytest.approx(NOISE[ch] * scale[ch] * math.sqrt(factor), rel=0.15), (ch, found[ch])
-
-
+# ------------------------------------------------------------------------ I: the gap finder's verdict
 def test_explains_the_data_only_within_a_multiple_of_the_noise():
     from mftyre.gaps.core import NOISE_MULTIPLE, _beyond_noise, _verdict
 

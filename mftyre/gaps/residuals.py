@@ -10,8 +10,8 @@ smooth missing effect cancel from. Channels without enough repeats use neighbour
 second difference d_i = r_i - (r_{i-1} + r_{i+1})/2 along each sweep, var(d) = 1.5 sigma^2 for white noise.
 
 Reduced time series (:func:`noise_of_means`): the noise of a binned mean of N raw samples follows from the raw
-noise (sigma and lag-one correlation of the residual about a smooth trend within each branch of each sweep, which
-holds for coloured 100 Hz noise under slow sweeps and drift), never from the reduced curve's neighbours.
+AR(1) noise (sigma and lag-one correlation from the second differences of the samples within sweeps, where the
+swept signal's own curvature is negligible), never from the reduced curve's neighbours.
 
 Held-out data (:func:`holdout_mask`): whole sweeps, a quarter of the sweeps of each kind of test (``TEST`` when
 present, else pure lateral / pure longitudinal / combined / free rolling / other from the slip values), stratified
@@ -229,60 +229,43 @@ def holdout_mask(data: TyreData, fraction: float = 0.25, seed: int = 0) -> np.nd
     return np.isin(sweep, np.asarray(ids)[held])
 
 
-def _ar1_about_trend(x: np.ndarray, segments: np.ndarray, window: int):
-    """(sigma, rho) of the measurement noise of a sampled channel from its residual about a smooth trend within
-    each contiguous run of a segment (a sweep's branch): a quadratic Savitzky-Golay smooth over ``window`` samples
-    (about a second: much longer than the noise's correlation, short against a slow sweep's curvature), so that
-    neither the swept signal nor a slow drift enters; sigma the residual's RMS, rho its lag-one correlation. (The
-    second differences of the samples, used before, see the noise alone only when it is white enough: low-pass
-    filtered or coloured 100 Hz noise made their ratio flat in rho, giving rho 0.99 and sigma many times too large.)
-    None with fewer than 20 residuals."""
-    from scipy.signal import savgol_filter
-
-    window = max(int(window) | 1, 7)
-    parts = []
-    for s in np.unique(segments[segments >= 0]):
-        idx = np.flatnonzero(segments == s)
-        for run in np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1):
-            xs = x[run]
-            if run.size < window + 2 or not np.all(np.isfinite(xs)):
-                continue
-            parts.append(xs - savgol_filter(xs, window, 2))
-    if sum(p.size for p in parts) < 20:
+def _ar1_from_second_differences(x: np.ndarray, segments: np.ndarray):
+    """(sigma, rho) of AR(1) noise from the second differences of a sampled channel within segments: the swept
+    signal's own second difference over one sample is negligible at rig sample rates. For AR(1) noise with
+    autocovariance sigma^2 rho^|k|, d_t = x_t - 2 x_(t-1) + x_(t-2) has variance sigma^2 (6 - 8 rho + 2 rho^2)
+    and lag-one autocovariance sigma^2 (-4 + 7 rho - 4 rho^2 + rho^3); rho solves the measured ratio."""
+    same = (segments[2:] == segments[1:-1]) & (segments[1:-1] == segments[:-2]) & (segments[2:] >= 0)
+    d = (x[2:] - 2.0 * x[1:-1] + x[:-2])
+    ok = same & np.isfinite(d)
+    if ok.sum() < 20:
         return None
-    r = np.concatenate(parts)
-    var = float(np.mean(r**2))
-    if var <= 0:
-        return 0.0, 0.0
-    rho = float(np.sum(np.concatenate([p[1:] * p[:-1] for p in parts])) / np.sum(r**2))
-    return math.sqrt(var), min(max(rho, 0.0), 0.999)
+    dd = d[ok]
+    var = float(np.mean(dd**2))
+    pair = ok[1:] & ok[:-1]
+    r1 = float(np.mean(d[1:][pair] * d[:-1][pair]) / var) if pair.any() else -2.0 / 3.0
+    grid = np.linspace(0.0, 0.995, 2000)
+    ratio = (-4 + 7 * grid - 4 * grid**2 + grid**3) / (6 - 8 * grid + 2 * grid**2)   # rises from -2/3 to -1/2
+    rho = float(grid[np.argmin(np.abs(ratio - r1))])
+    return math.sqrt(var / (6 - 8 * rho + 2 * rho**2)), rho
 
 
-def _mean_variance_factor(rho: float, n: float) -> float:
-    """Var(mean of n AR(1) samples) / sigma^2 = (1 + 2 sum_k (1 - k/n) rho^k) / n, k = 1..n-1."""
-    n = max(int(round(n)), 1)
-    k = np.arange(1, n)
-    return float((1.0 + 2.0 * np.sum((1.0 - k / n) * rho**k)) / n)
-
-
-def noise_of_means(raw: TyreData, segments: np.ndarray, reduced: TyreData, channels, vertical_stiffness: float,
-                   window: int = 101):
+def noise_of_means(raw: TyreData, segments: np.ndarray, reduced: TyreData, channels, vertical_stiffness: float):
     """Channel -> (sigma, method): the measurement noise of a *reduced* point (the mean of N raw samples) from
-    the raw time series: sigma and rho of its noise about a smooth trend within each segment (a sweep's branch;
-    :func:`_ar1_about_trend` over ``window`` samples, about a second) and the median N of the reduced points,
-    sigma_mean^2 = sigma^2 (1 + 2 sum_k (1 - k/N) rho^k) / N (the variance of a mean of N AR(1) samples). FZ (from
-    the loaded radius) combines the noise of FZ and of RL x the vertical stiffness."""
+    the raw time series: sigma and rho of its AR(1) noise (:func:`_ar1_from_second_differences`) and the median
+    N of the reduced points, sigma_mean^2 = sigma^2 (1 + rho) / ((1 - rho) N) (the variance of a mean of N
+    AR(1) samples when N is large against the correlation time). FZ (from the loaded radius) combines the noise
+    of FZ and of RL x the vertical stiffness."""
     n_med = float(np.median(reduced.array("N"))) if "N" in reduced else 1.0
     out = {}
 
     def of(ch):
         if not raw.has(ch):
             return None
-        est = _ar1_about_trend(raw.array(ch), segments, window)
+        est = _ar1_from_second_differences(raw.array(ch), segments)
         if est is None:
             return None
         s, rho = est
-        return s * math.sqrt(_mean_variance_factor(rho, n_med)), rho
+        return s * math.sqrt((1 + rho) / ((1 - rho) * n_med)), rho
 
     for c in channels:
         if c == "FZ":
@@ -290,12 +273,12 @@ def noise_of_means(raw: TyreData, segments: np.ndarray, reduced: TyreData, chann
             if a is None or b is None:
                 continue
             out[c] = (math.hypot(a[0], vertical_stiffness * b[0]),
-                      f"noise of FZ and RL about the sweeps' trend (lag-one correlation {a[1]:.2f}, {b[1]:.2f}) over the median "
+                      f"raw AR(1) noise of FZ and RL (lag-one correlation {a[1]:.2f}, {b[1]:.2f}) over the median "
                       f"{n_med:.0f} samples per point")
         else:
             e = of(c)
             if e is not None:
-                out[c] = (max(e[0], 1e-9), f"noise about the sweeps' trend (lag-one correlation {e[1]:.2f}) over the median "
+                out[c] = (max(e[0], 1e-9), f"raw AR(1) noise (lag-one correlation {e[1]:.2f}) over the median "
                                            f"{n_med:.0f} samples per point")
     return out
 
