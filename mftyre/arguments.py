@@ -13,7 +13,8 @@ import numpy as np
 
 __all__ = ["SWEEP_UNITS", "MAX_POINTS", "Sweep", "parse_sweep", "sweep_type", "number_type", "SweepAction",
            "sweep_option", "join_negative_values", "DATA_HELP", "add_data_options", "data_epilog", "read_data_args",
-           "progress_printer", "command_parser", "closing_options", "command_error", "refused_outputs"]
+           "progress_printer", "command_parser", "closing_options", "command_error", "refused_outputs",
+           "set_parameters"]
 
 
 # Sweep inputs of `mftyre eval`: name -> (SI unit, {accepted unit (lower case): factor to SI}).
@@ -211,7 +212,7 @@ def option_type(parse, name):
 def add_data_options(parser) -> None:
     """The options that say how to read a measurement file (``--columns``, ``--units``, ``--axes``, ``--set``);
     :func:`read_data_args` reads DATA with them (:func:`mftyre.data.read_data`)."""
-    from .data import AXES, parse_columns, parse_constants, parse_units
+    from .data import AXES, parse_channels, parse_columns, parse_constants, parse_units
 
     group = parser.add_argument_group("reading DATA (see the DATA section below)")
     group.add_argument("--columns", type=option_type(parse_columns, "column map"), metavar="CH=COLUMN,...",
@@ -222,6 +223,9 @@ def add_data_options(parser) -> None:
                        help="axis system of the file (default ISO-W; SAE for TTC files); see below")
     group.add_argument("--set", dest="constants", type=option_type(parse_constants, "constant channels"),
                        metavar="CH=VALUE,...", help="constant channels the file lacks, e.g. P=1.6bar,IA=0")
+    group.add_argument("--drop", type=option_type(parse_channels, "channels"), default=(), metavar="CH,...",
+                       help="leave these channels of the file out, e.g. RE (a garbage channel); a fit also leaves "
+                            "out, with a warning, a channel it does not need as an input that fails the check")
     group.add_argument("--no-check", action="store_true",
                        help="skip the plausibility check of the values (for tyres outside its ranges, e.g. aircraft "
                             "tyres above 100 m/s); units and axes are then as the options say, unchecked")
@@ -233,14 +237,24 @@ def data_epilog() -> str:
     return DATA_HELP + "\n" + AXES_HELP
 
 
-def read_data_args(args, path=None):
+def read_data_args(args, path=None, drop_implausible: bool = False):
     """DATA (``args.data`` or ``path``) read with the options of :func:`add_data_options`; messages name the
-    command-line options."""
-    from .data import read_data, speaking_cli
+    command-line options. ``--set`` values of .tir parameters (e.g. RIM_RADIUS=5in) are not channels: they are
+    left for the command (:func:`set_parameters`)."""
+    from .data import CHANNELS, read_data, speaking_cli
 
+    constants = {k: v for k, v in (args.constants or {}).items() if k in CHANNELS} or None
     with speaking_cli():
         return read_data(path or args.data, columns=args.columns, units=args.units, axes=args.axes,
-                         defaults=args.constants, check=not args.no_check)
+                         defaults=constants, check=not args.no_check, drop=getattr(args, "drop", ()) or (),
+                         drop_implausible=drop_implausible)
+
+
+def set_parameters(args) -> dict:
+    """The .tir parameters given with ``--set`` (name -> SI value), e.g. ``--set RIM_RADIUS=5in``."""
+    from .data import CHANNELS
+
+    return {k: v for k, v in (args.constants or {}).items() if k not in CHANNELS}
 
 
 def progress_printer(quiet: bool):

@@ -13,7 +13,7 @@ is a folder or a ``.csv`` manifest):
 
 Each tyre's runs are read here with the one reader (:func:`mftyre.data.read_data`, the command's data options) and
 sent with the start's text and the options (plain data) to a worker, which fits them
-(:func:`mftyre.fit.fit_tir` on the runs joined, :meth:`mftyre.data.TyreData.concat`) exactly as ``mftyre fit RUN``
+(:func:`mftyre.fit.fit_tir` on the runs joined, :meth:`mftyre.data.TyreData.pool`) exactly as ``mftyre fit RUN1 RUN2 ...``
 fits one tyre alone: the fitted values are the same bit for bit. OUTDIR gets ``<tyre>.tir``, the report
 ``<tyre>.md`` with its plots (``<tyre>_<stage>.png``), ``summary.csv`` (one row per tyre: status, the fit error
 [%] per stage and channel, the flags: rejected stages, verification problems and warnings, parameters not
@@ -147,7 +147,7 @@ def fit_tyre(tyre: str, runs: list, start_text: str | None, start_source: str | 
 
     parts = [TyreData(r["frame"], r["tyre"], r["source"], r["units"], r["constants"], r["history"], r["sha256"])
              for r in runs]
-    data = parts[0] if len(parts) == 1 else TyreData.concat(parts)
+    data = TyreData.pool(parts)  # as `mftyre fit RUN1 RUN2 ...`
     start = parse_tir(start_text, start_source) if start_text is not None else None
     result = fit_tir(data, start=start, stages=stages, fit_pressure=not no_pressure, weighting=weighting,
                      bins=bins, max_nfev=max_nfev)

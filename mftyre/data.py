@@ -305,9 +305,53 @@ def constant_value(channel: str, value) -> float:
 
 
 def parse_constants(text: str) -> dict:
-    """``"P=1.6bar,IA=0"`` -> ``{"P": 160000.0, "IA": 0.0}`` (SI; the ``defaults=`` of the readers)."""
-    return {(ch := _channel(name, "set")): constant_value(ch, value)
-            for name, value in _assignments(text, "constants")}
+    """``"P=1.6bar,IA=0"`` -> ``{"P": 160000.0, "IA": 0.0}`` (SI; the ``defaults=`` of the readers); a .tir
+    parameter of a quantity with units (``RIM_RADIUS=5in``, :func:`parameter_value`) is kept under its name."""
+    out = {}
+    for name, value in _assignments(text, "constants"):
+        key = name.strip().upper()
+        if key not in CHANNELS and _parameter_kind(key):
+            out[key] = parameter_value(key, value)
+        else:
+            ch = _channel(name, "set")
+            out[ch] = constant_value(ch, value)
+    return out
+
+
+def parse_channels(text: str) -> tuple:
+    """``"RE,OMEGA"`` -> ``("RE", "OMEGA")``, each a known channel."""
+    names = tuple(_channel(c, "drop") for c in str(text).split(",") if c.strip())
+    if not names:
+        raise ValueError("drop: empty; expected CHANNEL,... (e.g. RE)")
+    return names
+
+
+def _parameter_kind(name: str) -> str | None:
+    from .params import PARAMETERS
+
+    spec = PARAMETERS.get(name)
+    if spec is None or spec.is_string:
+        return None
+    return spec.unit if spec.unit in UNITS else "ratio"
+
+
+def parameter_value(name: str, value) -> float:
+    """The SI value of .tir parameter ``name`` from a number (SI) or text with a unit of its kind (``5in``,
+    ``0.8bar``); ValueError naming what was expected."""
+    kind = _parameter_kind(name)
+    if kind is None:
+        raise ValueError(f"set: unknown parameter or channel {name!r}")
+    m = _QUANTITY.fullmatch(str(value))
+    if not m:
+        raise ValueError(f"set: {name}: cannot read {value!r} as a number with an optional unit (e.g. 5in, 0.127)")
+    unit = m.group(2).strip().lower().replace(" ", "")
+    if unit and unit not in UNITS[kind]:
+        raise ValueError(f"set: {name}: unknown unit {m.group(2)!r} for a {kind}; e.g. "
+                         + ", ".join(list(dict.fromkeys(UNITS[kind]))[:8]))
+    number = float(m.group(1)) * (UNITS[kind][unit] if unit else 1.0)
+    if not math.isfinite(number):
+        raise ValueError(f"set: {name}: {value!r} is not finite")
+    return number
 
 
 # -------------------------------------------------------------------------------------- plausibility
@@ -344,6 +388,43 @@ _SPIN_UNITS = {"rad/s": 1.0, "rpm": 2 * math.pi / 60, "deg/s": math.pi / 180}
 _MAX_FRICTION = 5.0
 #: Longest lever |M| / FZ [m] of any tyre moment (aligning ~ 0.05 m, overturning ~ 0.1 m, rolling ~ 0.01 m).
 _MAX_LEVER = 1.0
+
+
+#: Measured channels no fit stage needs as an input (each is the output of one stage): a channel among them that
+#: fails the plausibility check can be left out (:func:`read_data` ``drop=``, or ``drop_implausible``).
+OPTIONAL_CHANNELS = ("RL", "RE", "RHO", "OMEGA", "MY", "MX")
+
+
+def garbage(frame, ch: str) -> str:
+    """Why channel ``ch`` of ``frame`` (SI) measures nothing, or "" when it may: a spin that stays near 0 while the
+    wheel rolls (VX above 1 m/s), or a radius whose values scatter over more than a decade (10th to 90th percentile),
+    which no unit mistaken for another explains (a unit is one factor: the values keep their spread)."""
+    x = frame[ch].to_numpy(dtype=float)
+    ok = np.isfinite(x)
+    if ch == "OMEGA" and "VX" in frame.columns:
+        rolling = ok & (np.abs(frame["VX"].to_numpy(dtype=float)) > 1.0)
+        if rolling.sum() >= 10 and float(np.median(np.abs(x[rolling]))) < 0.5:
+            return (f"median spin {float(np.median(np.abs(x[rolling]))):.3g} rad/s while the wheel rolls at a median "
+                    f"{float(np.median(np.abs(frame['VX'].to_numpy(float)[rolling]))):.3g} m/s: a dead spin sensor "
+                    "(garbage, not a unit)")
+        return ""
+    a = np.abs(x[ok])
+    if a.size < 10:
+        return ""
+    p10, p90 = (float(v) for v in np.quantile(a, [0.1, 0.9]))
+    if p10 <= 0 or p90 / p10 > 10.0:
+        return (f"the values scatter over {math.log10(p90 / p10) if p10 > 0 else float('inf'):.2g} decades (10th "
+                f"to 90th percentile {p10:.3g} .. {p90:.3g} m): garbage, not a unit mistaken (a unit is one factor "
+                "and keeps the spread of a radius, a few percent)")
+    return ""
+
+
+def _channel_error(text: str, channels: dict) -> DataError:
+    """A DataError whose ``channels`` (channel -> the likely unit or axis system, None for garbage) say which
+    channels failed."""
+    exc = DataError(text)
+    exc.channels = dict(channels)
+    return exc
 
 
 def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of: dict | None = None,
@@ -387,24 +468,28 @@ def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of:
         return x[np.isfinite(x)]
 
     def refuse(problems, fixes, sae=""):
+        """DataError (its ``channels``: channel -> likely unit, None for garbage) with the remedy for the units."""
         axes = f". Also {sae}" if sae else ""
-        constant = {ch: u for ch, u in fixes.items() if ch in given}
+        units = {ch: u for ch, u in fixes.items() if u}
+        constant = {ch: u for ch, u in units.items() if ch in given}
         if constant:  # a number without a unit is SI: the remedy is the unit on the constant
             fix = ", ".join(remedy("constants", ch, f"{_QUANTITY.fullmatch(str(given[ch])).group(1)}{u}")
                             if _QUANTITY.fullmatch(str(given[ch])) else remedy("constants", ch, f"VALUE{u}")
                             for ch, u in constant.items())
-            raise DataError(f"{where}: {'; '.join(problems)}. A constant without a unit is in SI units: give its unit, "
-                            f"e.g. {fix}{axes}")
+            raise _channel_error(f"{where}: {'; '.join(problems)}. A constant without a unit is in SI units: give "
+                                 f"its unit, e.g. {fix}{axes}", fixes)
         if stated:
-            likely = ", ".join(f"{column_of.get(ch, ch)} looks like {u}" for ch, u in fixes.items())
-            raise DataError(f"{where}: {'; '.join(problems)}. The file states its units ({stated}): correct the "
-                            f"wrong ones in a copy of the file ({likely}), or read it unchecked with "
-                            f"{spelled('check=False', '--no-check')}{axes}")
+            likely = ", ".join(f"{column_of.get(ch, ch)} looks like {u}" if u else f"{column_of.get(ch, ch)} is "
+                               "garbage" for ch, u in fixes.items())
+            raise _channel_error(f"{where}: {'; '.join(problems)}. The file states its units ({stated}): correct "
+                                 f"the wrong ones in a copy of the file ({likely}), leave a channel out "
+                                 f"({spelled('drop=(...)', '--drop CH')}), or read it unchecked with "
+                                 f"{spelled('check=False', '--no-check')}{axes}", fixes)
         if speaking() == "cli":
-            fix = "--units " + ",".join(f"{ch}={u}" for ch, u in fixes.items())
+            fix = "--units " + ",".join(f"{ch}={u}" for ch, u in units.items())
         else:
-            fix = "units={" + ", ".join(f"{ch!r}: {u!r}" for ch, u in fixes.items()) + "}"
-        raise DataError(f"{where}: {'; '.join(problems)}. Give the file's units, e.g. {fix}{axes}")
+            fix = "units={" + ", ".join(f"{ch!r}: {u!r}" for ch, u in units.items()) + "}"
+        raise _channel_error(f"{where}: {'; '.join(problems)}. Give the file's units, e.g. {fix}{axes}", fixes)
 
     # 1. ranges, and speed against spin
     problems, fixes = [], {}
@@ -420,6 +505,10 @@ def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of:
         if low <= typical <= high:
             continue
         lo, hi = _TYPICAL[ch]
+        if ch in OPTIONAL_CHANNELS and (dead := garbage(frame, ch)):
+            fixes[ch] = None
+            problems.append(f"{name(ch)}: {dead}")
+            continue
         likely = [u for u in candidates if lo <= typical * unit_to_si(ch, u) <= hi]
         shown = {"SA": "99th percentile of |SA|", "IA": "99th percentile of |IA|", "SL": "99th percentile of |SL|",
                  "VX": "99th percentile of |VX|", "P": "median P", "FZ": "largest |FZ|"}.get(ch, f"99th percentile of {ch}")
@@ -430,6 +519,9 @@ def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of:
         fixes[ch] = (likely or candidates)[0]
         problems.append(f"{name(ch)}: {shown} is {typical:.4g} {si}, {side} the {expected} {si} of any tyre "
                         f"measurement in SI units: {guess}")
+    if "OMEGA" in present and (dead := garbage(frame, "OMEGA")):
+        fixes["OMEGA"] = None
+        problems.append(f"{name('OMEGA')}: {dead}")
     _speed_and_spin(frame, fixes, problems, name)
     sae = ""  # the load's sign is independent of the units: named in the same error
     if "FZ" in present:
@@ -438,6 +530,10 @@ def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of:
             sae = (f"{name('FZ')}: {100 * np.mean(fz < 0):.0f} % of the values are negative (median "
                    f"{np.median(fz):.4g} N): the load is positive in ISO-W; the file is probably in SAE axes (z down): "
                    f"{remedy('axes', 'FZ', 'SAE')}")
+    if problems and all(u is None for u in fixes.values()):
+        raise _channel_error(f"{where}: {'; '.join(problems)}. Leave the channel out "
+                             f"({spelled('drop=' + repr(tuple(fixes)), '--drop ' + ','.join(fixes))})"
+                             + (f". Also {sae}" if sae else ""), fixes)
     if problems:
         refuse(problems, fixes, sae)
     # 2. single rows no tyre has
@@ -453,7 +549,7 @@ def check_plausible(data: "TyreData | pd.DataFrame", where: str = "", column_of:
                                 f"remove the row or read the file unchecked ({spelled('check=False', '--no-check')})")
     # 3. stiffnesses, camber and moments against the load
     if sae:
-        raise DataError(f"{where}: {sae}")
+        raise _channel_error(f"{where}: {sae}", {"FZ": "SAE"})
     _slip_stiffness_units(frame, fixes, problems, name)
     if "IA" in present:
         ia = values("IA")
@@ -512,7 +608,7 @@ def _speed_and_spin(frame, fixes, problems, name) -> None:
     every pair of speed and spin units: the pair whose ratio is within 15 % names the wrong channels (both at once,
     e.g. km/h and rpm: 0.377). Skipped when the radius or VX is already found in a wrong unit."""
     lever = "RE" if "RE" in frame.columns else "RL"
-    if not {"VX", "OMEGA", lever} <= set(frame.columns) or {"VX", lever} & set(fixes):
+    if not {"VX", "OMEGA", lever} <= set(frame.columns) or {"VX", "OMEGA", lever} & set(fixes):
         return
     radius = frame[lever].to_numpy(float)
     vx, omega = frame["VX"].to_numpy(float), frame["OMEGA"].to_numpy(float)
@@ -653,6 +749,33 @@ class TyreData:
         frame = pd.concat([p.frame for p in parts], ignore_index=True)
         return TyreData(frame, first.tyre, first.source, dict(first.units), dict(first.constants),
                         list(first.history), first.sha256)
+
+    @staticmethod
+    def pool(runs: list["TyreData"], gap: float = 10.0) -> "TyreData":
+        """Several runs of one tyre (cornering, drive/brake, vertical...) as one: the rows one after the other with
+        a RUN column (0, 1, ...), TIME of each run shifted to start ``gap`` seconds after the previous one ends (so
+        the programme recogniser sees one time series), the channels one run lacks NaN ("not measured"), the
+        sources, SHA-256 and histories joined, the constants the runs agree on, the first tyre description."""
+        if len(runs) == 1:
+            return runs[0]
+        frames, t0 = [], 0.0
+        for k, run in enumerate(runs):
+            f = run.frame.assign(RUN=k)
+            if "TIME" in f.columns:
+                t = f["TIME"].to_numpy(float)
+                f["TIME"] = t - t[0] + t0
+                t0 = float(f["TIME"].iloc[-1]) + gap
+            frames.append(f)
+        if any("TIME" in f.columns for f in frames) and not all("TIME" in f.columns for f in frames):
+            raise DataError("pooled runs: some runs are time series (TIME) and others not: pool runs of one kind")
+        constants = {k: v for k, v in runs[0].constants.items() if all(r.constants.get(k) == v for r in runs)}
+        tyre = next((r.tyre for r in runs if r.tyre), "")
+        names = " + ".join(Path(r.source).name if r.source else "(in memory)" for r in runs)
+        history = [f"run {k} ({Path(r.source).name if r.source else 'in memory'}): {h}" for k, r in enumerate(runs)
+                   for h in r.history]
+        units = {k: v for r in runs for k, v in r.units.items()}
+        return TyreData(pd.concat(frames, ignore_index=True), tyre, names, units, constants,
+                        history + [f"{len(runs)} runs pooled"], " ".join(r.sha256 for r in runs if r.sha256))
 
     def inputs(self) -> dict:
         """Keyword arguments fz kappa alpha gamma phit vx p for :meth:`mftyre.MFModel.evaluate`."""
@@ -1315,10 +1438,10 @@ def read_ttc(path, *, columns: dict | None = None, axes: str = "SAE", defaults: 
     path = Path(path)
     raw = read_user_file(path, max_bytes=max_bytes, what="TTC data file", error=DataError)
     if raw.startswith(b"MATLAB"):
-        channels, units = _ttc_mat(raw, path, max_bytes)
+        channels, units, description = _ttc_mat(raw, path, max_bytes)
         locate = lambda row: f"{path}: sample {row + 1}"  # noqa: E731
     else:
-        channels, units, first = _ttc_dat(raw, path)
+        channels, units, first, description = _ttc_dat(raw, path)
         locate = lambda row: f"{path}:{first + row}"  # noqa: E731
     mapping = _ttc_mapping(list(channels), columns, path)
     out, column_of, unit_record = {}, {}, {}
@@ -1356,7 +1479,7 @@ def read_ttc(path, *, columns: dict | None = None, axes: str = "SAE", defaults: 
     if check:
         check_plausible(frame, str(path), column_of, constants=defaults, stated="the channel struct of the .mat file, else the metric TTC "
                         "units" if raw.startswith(b"MATLAB") else "the units row below the channel names")
-    return TyreData(frame, tyre=path.stem, source=str(path), units=unit_record,
+    return TyreData(frame, tyre=description or path.stem, source=str(path), units=unit_record,
                     history=[f"TTC run read from {path.name}"] + _import_notes(axes, None, defaults, check))
 
 
@@ -1422,7 +1545,7 @@ def _ttc_dat(raw: bytes, path):
     for j, name in enumerate(names):
         columns[name] = _numeric_column(table[j], lambda row, txt: f"{path}: sample {row + 1} (after line {at + 2}): "
                                                                  f"channel {name}: non-numeric value {txt!r}")
-    return columns, dict(zip(names, units)), first
+    return columns, dict(zip(names, units)), first, " ".join(ln.strip() for ln in lines[:at] if ln.strip())
 
 
 def _ttc_fields(line: str) -> list[str]:
@@ -1521,7 +1644,8 @@ def _ttc_mat(raw: bytes, path, max_bytes: int = DATA_MAX_BYTES):
     if "FZ" not in {n.upper() for n in columns}:
         raise DataError(f"{path}: no channel FZ among the .mat variables ({', '.join(columns) or 'none'}): "
                         "expected a TTC run (vectors ET, V, N, SA, IA, ..., FZ)")
-    return columns, units
+    text = [str(mat[k]).strip() for k in ("tireid", "testid") if isinstance(mat.get(k), str) and str(mat[k]).strip()]
+    return columns, units, "; ".join(text)
 
 
 def data_format(path) -> str:
@@ -1546,12 +1670,20 @@ def data_format(path) -> str:
 
 
 def read_data(path, *, columns: dict | None = None, units: dict | None = None, axes: str | None = None,
-              defaults: dict | None = None, check: bool = True, max_bytes: int = DATA_MAX_BYTES) -> TyreData:
+              defaults: dict | None = None, check: bool = True, max_bytes: int = DATA_MAX_BYTES, drop=(),
+              drop_implausible: bool = False) -> TyreData:
     """Read a measurement file of any supported format (recognised by content, :func:`data_format`): TYDEX,
     TTC (.dat / .mat) or CSV. ``columns`` is for CSV and TTC, ``units`` for CSV (the other formats name their
     channels and units); ``axes`` is the file's axis system (default: ISO-W, SAE for TTC files); ``defaults`` are
     constant channels; ``check`` refuses implausible values (:func:`check_plausible`). The one home of the
-    options of ``mftyre fit``, ``gaps`` and ``plot`` (``--columns``, ``--units``, ``--axes``, ``--set``)."""
+    options of ``mftyre fit``, ``gaps`` and ``plot`` (``--columns``, ``--units``, ``--axes``, ``--set``).
+    ``drop``: channels left out before the check (``--drop RE``); ``drop_implausible``: a channel of
+    :data:`OPTIONAL_CHANNELS` that fails the check is left out with a warning in ``history`` (``"warning: ..."``,
+    the diagnosis: garbage or the unit it looks like) instead of refusing the file."""
+    drop = tuple(_channel(c, "drop") for c in drop)
+    if drop or drop_implausible:
+        return _read_dropping(path, drop, drop_implausible, columns=columns, units=units, axes=axes,
+                              defaults=defaults, check=check, max_bytes=max_bytes)
     kind = data_format(path)
     if kind == "tydex" and (columns or units) or kind == "ttc" and units:
         which = ("--columns/--units" if kind == "tydex" else "--units") if speaking() == "cli" else \
@@ -1568,6 +1700,43 @@ def read_data(path, *, columns: dict | None = None, units: dict | None = None, a
         data = read_csv(path, columns=columns, units=units, defaults=defaults, axes=axes or "ISO-W", check=check,
                         max_bytes=max_bytes)
     data.sha256 = file_sha256(path)
+    return data
+
+
+def _read_dropping(path, drop, drop_implausible, check, **options) -> TyreData:
+    """:func:`read_data` leaving out the channels ``drop`` and, with ``drop_implausible``, those of
+    :data:`OPTIONAL_CHANNELS` the plausibility check refuses (each named in a warning with its diagnosis)."""
+    required = [c for c in drop if c in REQUIRED]
+    if required:
+        raise DataError(f"{path}: cannot drop {', '.join(required)}: a fit needs the channels {', '.join(REQUIRED)} "
+                        "as inputs (missing channel otherwise; a constant channel is given with "
+                        f"{spelled('defaults=', '--set')})")
+    if not drop:  # the reader's own check first: its messages name the file's columns and where it states units
+        try:
+            return read_data(path, check=check, **options)
+        except DataError as exc:
+            failed = getattr(exc, "channels", {})
+            if not (check and failed and set(failed) <= set(OPTIONAL_CHANNELS)):
+                raise
+    data = read_data(path, check=False, **options)
+    data.history = [h for h in data.history if h != UNCHECKED]
+    present = [c for c in drop if c in data.frame.columns]
+    if present:
+        data.frame = data.frame.drop(columns=present)
+        data.history.append(f"channel(s) {', '.join(present)} left out on request")
+    while check:
+        try:
+            check_plausible(data)
+            break
+        except DataError as exc:
+            failed = getattr(exc, "channels", {})
+            if not (drop_implausible and failed and set(failed) <= set(OPTIONAL_CHANNELS)):
+                raise
+            data.frame = data.frame.drop(columns=list(failed))
+            data.history.append(f"warning: channel(s) {', '.join(failed)} left out (no fit stage needs them as an "
+                                f"input; their stages are not fitted): {exc}")
+    if not check:
+        data.history.append(UNCHECKED)
     return data
 
 

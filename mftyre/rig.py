@@ -28,6 +28,7 @@ The run is deterministic for a given ``seed``. Recorded channels: TIME [s], TEST
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -35,7 +36,7 @@ import pandas as pd
 from .data import CHANNELS, NOISE, TyreData, noise_scales, record_outputs, synthetic_data
 from .timeseries import relaxed_slip
 
-__all__ = ["rig_programme"]
+__all__ = ["rig_programme", "formula_student_tyre", "write_ttc_mat"]
 
 _SLOW_SPEED = 1.0  # m/s, rolling speed of the vertical load sweeps
 
@@ -73,7 +74,8 @@ def rig_programme(model, *, loads=(0.45, 0.8, 1.15, 1.5), pressures=(0.86, 1.0, 
                   sample_rate: float = 100.0, speed_range=(1.0, 40.0), speed_ramp: float = 5.0,
                   vertical_range=(0.1, 2.0), noise: float = 1.0, noise_time: float = 0.03,
                   load_scatter: float = 0.02, friction_drift: float = 0.03, relaxation: bool = True,
-                  longitudinal: bool = True, seed=0) -> TyreData:
+                  longitudinal: bool = True, lateral: bool = True, free_rolling: bool = True,
+                  vertical_sweeps: bool = True, seed=0) -> TyreData:
     """A day of rig testing of ``model`` sampled at ``sample_rate`` [Hz] (see the module text for what it holds).
 
     Per pressure (fractions of NOMPRES) and load (fractions of FNOMIN), levels jittered: slip-angle sweeps at
@@ -81,6 +83,9 @@ def rig_programme(model, *, loads=(0.45, 0.8, 1.15, 1.5), pressures=(0.86, 1.0, 
     ``combined_alpha_deg``; a free-rolling speed sweep ``speed_range`` [m/s] at camber 0 (accelerating at
     ``speed_ramp`` m/s^2). Per pressure: one vertical load sweep up and down, ``vertical_range`` x FNOMIN.
     Slip tests run at ``speed`` (default LONGVL). ``relaxation=False`` removes the slip lag (no hysteresis).
+    ``lateral=False`` leaves out the slip-angle sweeps, ``free_rolling=False`` the speed sweeps,
+    ``vertical_sweeps=False`` the load sweeps (a drive/brake run: ``lateral=False`` with ``combined_alpha_deg``
+    of one sign, as the slip-ratio sweeps of the TTC runs at three slip angles).
     """
     for name, value in (("sample_rate", sample_rate), ("slip_angle_rate_deg", slip_angle_rate_deg),
                         ("slip_ratio_rate", slip_ratio_rate), ("speed_ramp", speed_ramp)):
@@ -108,26 +113,29 @@ def rig_programme(model, *, loads=(0.45, 0.8, 1.15, 1.5), pressures=(0.86, 1.0, 
         path.move(t, test, **{channel: 0.0})
 
     for p in press_levels:
-        path.move(2.0, "transition", P=p, FZ=0.6 * fz0, SA=0.0, SL=0.0, IA=0.0, VX=_SLOW_SPEED)
-        path.move(1.0, "transition", FZ=vertical_range[0] * fz0)
-        path.move(2 * (vertical_range[1] - vertical_range[0]), "vertical", FZ=vertical_range[1] * fz0)
-        path.move(2 * (vertical_range[1] - vertical_range[0]), "vertical", FZ=vertical_range[0] * fz0)
+        path.move(2.0, "transition", P=p, FZ=0.6 * fz0, SA=0.0, SL=0.0, IA=0.0,
+                  VX=_SLOW_SPEED if vertical_sweeps else vx0)
+        if vertical_sweeps:
+            path.move(1.0, "transition", FZ=vertical_range[0] * fz0)
+            path.move(2 * (vertical_range[1] - vertical_range[0]), "vertical", FZ=vertical_range[1] * fz0)
+            path.move(2 * (vertical_range[1] - vertical_range[0]), "vertical", FZ=vertical_range[0] * fz0)
         for fz in load_levels:
             path.move(1.5, "transition", FZ=fz, IA=0.0, VX=vx0, SA=0.0, SL=0.0)
-            for g in camber_levels:
+            for g in camber_levels if lateral else ():
                 path.move(1.0, "transition", IA=g)
                 path.move(0.5, "transition")
                 sweep("SA", a_max, a_rate, "pure_lateral")
             path.move(1.0, "transition", IA=0.0)
             if longitudinal:
-                for a in (0.0, *combined_alpha_deg):
+                for a in (*((0.0,) if 0.0 not in combined_alpha_deg else ()), *combined_alpha_deg):
                     path.move(1.0, "transition", SA=math.radians(a))
                     path.move(0.5, "transition")
                     sweep("SL", kappa_max, slip_ratio_rate, "pure_longitudinal" if a == 0.0 else "combined")
                 path.move(1.0, "transition", SA=0.0)
-            path.move(2.0, "transition", VX=speed_range[0])
-            path.move((speed_range[1] - speed_range[0]) / speed_ramp, "free_rolling", VX=speed_range[1])
-            path.move(2.0, "transition", VX=vx0)
+            if free_rolling:
+                path.move(2.0, "transition", VX=speed_range[0])
+                path.move((speed_range[1] - speed_range[0]) / speed_ramp, "free_rolling", VX=speed_range[1])
+                path.move(2.0, "transition", VX=vx0)
     frame = path.frame()
     n = len(frame)
     time = np.arange(n) * dt
@@ -175,3 +183,75 @@ def rig_programme(model, *, loads=(0.45, 0.8, 1.15, 1.5), pressures=(0.86, 1.0, 
             f"noise {noise:g} (AR(1), {noise_time * 1e3:g} ms), load scatter {load_scatter:g}, friction drift "
             f"{friction_drift:g}, relaxation {relaxation}, seed {seed}")
     return synthetic_data(rec[order], prm, vx0, "rig_programme", note)
+
+
+def formula_student_tyre(size: str = "16x7.5-10", *, fnomin: float = 1100.0, nompres: float = 0.83e5,
+                         longvl: float = 40 / 3.6, vertical_stiffness: float = 1.1e5):
+    """A Formula Student tyre (an :class:`mftyre.MFModel`) of the tyre ``size`` (:func:`mftyre.geometry.tyre_size`,
+    default a 16x7.5-10 on a 10-inch rim: R0 0.2032 m, rim radius 0.127 m): the sample car tyre's Magic Formula
+    coefficients (dimensionless, normalised by FNOMIN and R0) on the small tyre's geometry, nominal load and
+    pressure, vertical stiffness, mass and inertias. A stand-in for the small tyres of the TTC runs, for tests and
+    examples; not a measured tyre."""
+    from .files import sample_tir
+    from .geometry import tyre_size
+    from .model import load_tir
+
+    car = load_tir(sample_tir("car_205_60R15_mf61.tir"))
+    geo = tyre_size(size)
+    mass = 4.5 * (geo.width / 0.1905) * (geo.unloaded_radius / 0.2032) ** 2
+    return car.with_params(**geo.parameters(), FNOMIN=fnomin, NOMPRES=nompres, INFLPRES=nompres, LONGVL=longvl,
+                           VERTICAL_STIFFNESS=vertical_stiffness, BOTTOM_STIFF=10 * vertical_stiffness,
+                           FZMIN=0.0, FZMAX=3.0 * fnomin, PRESMIN=0.5 * nompres, PRESMAX=1.5 * nompres,
+                           MASS=mass, IYY=0.6 * mass * geo.unloaded_radius**2, BELT_MASS=0.75 * mass,
+                           BELT_IYY=0.5 * mass * geo.unloaded_radius**2,
+                           LONGITUDINAL_STIFFNESS=0.35 * car.params.LONGITUDINAL_STIFFNESS * fnomin / car.params.FNOMIN,
+                           LATERAL_STIFFNESS=car.params.LATERAL_STIFFNESS * fnomin / car.params.FNOMIN)
+
+
+#: The channels of a metric TTC run in the order written by :func:`write_ttc_mat`, with their units.
+TTC_LAYOUT = (("ET", "s"), ("V", "kph"), ("N", "rpm"), ("SA", "deg"), ("IA", "deg"), ("RL", "cm"), ("RE", "cm"),
+              ("P", "kPa"), ("FX", "N"), ("FY", "N"), ("FZ", "N"), ("MX", "N-m"), ("MZ", "N-m"), ("NFX", "none"),
+              ("NFY", "none"), ("SL", "none"), ("TSTC", "degC"))
+
+
+def write_ttc_mat(data: TyreData, path, *, tireid: str = "", dead_spin: bool = False, seed=0,
+                  overwrite: bool = False):
+    """Write ``data`` (a :func:`rig_programme` run) as the Calspan tyre test consortium delivers its runs: a MATLAB
+    ``.mat`` file of vectors ET V N SA IA RL RE P FX FY FZ MX MZ NFX NFY SL TSTC in metric units and SAE axes (FY,
+    FZ, MZ and SA turned half a turn about x), a ``channel`` struct array with each name and unit, and the
+    ``tireid`` (the tyre description, e.g. ``"Hoosier 43075 16x7.5-10 R25B, 7 in rim"``). ``dead_spin``: the wheel
+    spin sensor reads about 0 rpm (|N| < 1 rpm, noise), so the RE the rig computes from it, V / N, is garbage (as in
+    a real cornering run). Refuses to replace an existing file without ``overwrite``."""
+    import io
+
+    import scipy.io
+
+    from .errors import DataError
+    from .files import write_atomically
+
+    path = Path(path)
+    if path.exists() and not overwrite:
+        raise DataError(f"{path}: file exists: pass overwrite=True to replace it")
+    f = data.frame
+    n = len(f)
+    omega = f["OMEGA"].to_numpy(float)
+    vx = f["VX"].to_numpy(float)
+    re = f["RE"].to_numpy(float) if "RE" in f else vx / np.maximum(omega, 1e-9)
+    if dead_spin:
+        rng = np.random.default_rng(seed)
+        omega = np.abs(rng.normal(0.0, 0.5, n)) * 2 * math.pi / 60 + 1e-4  # < 1 rpm
+        re = vx / omega
+    fz = -f["FZ"].to_numpy(float)  # SAE: z down
+    cols = {"ET": f["TIME"].to_numpy(float) if "TIME" in f else np.arange(n) * 0.01, "V": vx * 3.6,
+            "N": omega * 60 / (2 * math.pi), "SA": -np.degrees(f["SA"].to_numpy(float)),
+            "IA": np.degrees(f["IA"].to_numpy(float)), "RL": 100 * f["RL"].to_numpy(float), "RE": 100 * re,
+            "P": f["P"].to_numpy(float) / 1e3, "FX": f["FX"].to_numpy(float), "FY": -f["FY"].to_numpy(float),
+            "FZ": fz, "MX": f["MX"].to_numpy(float), "MZ": -f["MZ"].to_numpy(float),
+            "SL": f["SL"].to_numpy(float), "TSTC": np.full(n, 55.0)}
+    cols["NFX"], cols["NFY"] = cols["FX"] / fz, cols["FY"] / fz
+    channel = np.array([(name, unit) for name, unit in TTC_LAYOUT], dtype=[("name", object), ("units", object)])
+    buffer = io.BytesIO()
+    scipy.io.savemat(buffer, {name: np.asarray(cols[name], float) for name, _ in TTC_LAYOUT}
+                     | {"channel": channel, "tireid": tireid, "testid": "Drive/Brake/Combined" if np.ptp(cols["SL"]) > 0.02 else
+                        "Cornering"})
+    return write_atomically(path, buffer.getvalue())

@@ -36,7 +36,7 @@ from .data import TyreData
 from .programme import Programme, recognise
 
 __all__ = ["reduce_sweeps", "Reduction", "relaxed_slip", "relaxation_length", "hysteresis", "both_ways",
-           "effective_samples", "needs_reduction", "lag_one_correlation"]
+           "effective_samples", "needs_reduction", "lag_one_correlation", "scatter_about_bins"]
 
 _SWEPT = {"slip_angle": "SA", "slip_ratio": "SL", "speed": "VX", "load": "FZ"}
 _RESPONSE = ("FX", "FY", "MX", "MY", "MZ", "RL", "RHO", "RE")
@@ -350,3 +350,44 @@ def effective_samples(residuals, groups=None) -> float:
         rho = min(max(lag_one_correlation(r), 0.0), 0.999)
         total += max(1.0, r.size * (1.0 - rho) / (1.0 + rho))
     return total
+
+
+def scatter_about_bins(data: TyreData, programme: Programme, channel: str, *, bins: int = 40,
+                       by_branch: bool = False) -> np.ndarray:
+    """Per sample of the sweeps (NaN elsewhere): ``channel``, scaled to the bin's mean load (a force about
+    proportional to the load: the load control's scatter is no scatter of the measurement), minus the line fitted
+    to it over the swept slip in its bin (a line, not a mean: the characteristic's slope within a bin is no scatter
+    either); the bins are ``bins`` equal parts of the swept slip's range within each sweep, both branches together
+    (``by_branch=False``: the scatter at equal load, pressure, camber and slip, the data's repeatability) or each
+    branch apart (``True``: the residual about the sweep's smooth trend, the measurement noise, hysteresis left
+    out). Scaled by sqrt(n / (n - 2)) for the two coefficients fitted to the bin's n samples; bins of fewer than 6
+    samples give NaN."""
+    rows = programme.rows
+    sweep, branch, kind = (rows[c].to_numpy() for c in ("SWEEP", "BRANCH", "KIND"))
+    y, fz = data.array(channel), data.array("FZ")
+    out = np.full(len(data), np.nan)
+    for s in np.unique(sweep[sweep >= 0]):
+        idx = np.flatnonzero(sweep == s)
+        swept = _SWEPT.get(kind[idx[0]], "SA")
+        slip = data.array(swept)[idx]
+        lo, hi = float(np.min(slip)), float(np.max(slip))
+        b = np.clip(((slip - lo) / max(hi - lo, 1e-300) * bins).astype(int), 0, bins - 1)
+        key = b * 3 + (np.sign(branch[idx]).astype(int) + 1 if by_branch else 0)
+        ys, load = y[idx], fz[idx]
+        ok = np.isfinite(ys) & np.isfinite(slip) & np.isfinite(load)
+        k, x, v = key[ok], slip[ok], ys[ok]
+        n = np.bincount(k, minlength=3 * bins)
+
+        def bin_mean(c):
+            return (np.bincount(k, c, minlength=3 * bins) / np.maximum(n, 1))[k]
+
+        if swept != "FZ":  # at equal load: the force scaled to the bin's mean load (about proportional to it)
+            v = v * bin_mean(load[ok]) / np.where(load[ok] != 0, load[ok], np.nan)
+        xc, yc = x - bin_mean(x), v - bin_mean(v)
+        sxx = np.bincount(k, xc * xc, minlength=3 * bins)
+        slope = np.bincount(k, xc * yc, minlength=3 * bins) / np.where(sxx > 0, sxx, 1.0)
+        resid = yc - slope[k] * xc
+        dev = np.full(idx.size, np.nan)
+        dev[ok] = np.where(n[k] >= 6, resid * np.sqrt(n[k] / np.maximum(n[k] - 2, 1)), np.nan)
+        out[idx] = dev
+    return out

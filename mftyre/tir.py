@@ -32,6 +32,7 @@ from typing import Any
 from .errors import ModelInputError, TirError, spelled
 from .files import TIR_MAX_BYTES, read_user_file, same_file, write_atomically
 from .inputs import load_factor_problems, pressure_factor_edges
+from .geometry import geometry_problems
 from .params import (
     CORE_PARAMETERS,
     PARAMETERS,
@@ -527,9 +528,11 @@ def _one_line(text) -> str:
     return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in str(text))
 
 
-def tir_text(params: TyreParameters, comments=()) -> str:
+def tir_text(params: TyreParameters, comments=(), *, notes: dict | None = None, closing=()) -> str:
     """The text :func:`write_tir` writes for ``params``; ``comments``: lines added to the header as ``!``
-    comments (e.g. the provenance of fitted values)."""
+    comments (e.g. the provenance of fitted values); ``notes``: parameter -> a comment written after its
+    description (``! fitted +- 0.02 (pure_fy)``); ``closing``: ``!`` comment lines at the end of the file."""
+    notes = notes or {}
     version = params.version
     missing = set(params.missing)
     out: list[str] = []
@@ -541,7 +544,10 @@ def tir_text(params: TyreParameters, comments=()) -> str:
         non_default = value != spec.default
         if not (present or relevant or non_default or name == "FITTYP"):
             continue
-        by_section[spec.section].append(_line(name, _format_value(value, spec.is_string, name), spec.description))
+        line = _line(name, _format_value(value, spec.is_string, name), spec.description)
+        if name in notes:
+            line = f"{line:<95} ! " + _one_line(" ".join(str(notes[name]).split()))
+        by_section[spec.section].append(line)
     extra_param_sections: dict[str, list[str]] = {}
     for name, (section, value) in params.unknown.items():
         line = _line(name, _format_value(value, False, name))
@@ -575,12 +581,16 @@ def tir_text(params: TyreParameters, comments=()) -> str:
         out.append(f"[{section}]")
         if body:
             out.append(body)
+    if closing:
+        out.append("$" + "-" * 50 + "summary")
+        out.extend("! " + _one_line(str(c).rstrip()) for c in closing)
     return "\n".join(out) + "\n"
 
 
-def write_tir(params: TyreParameters, path, *, overwrite: bool = False, comments=()) -> Path:
+def write_tir(params: TyreParameters, path, *, overwrite: bool = False, comments=(), notes: dict | None = None,
+              closing=()) -> Path:
     """Write ``params`` to ``path`` as a .tir file in SI units; returns the path written. ``comments``: lines for
-    the file's header (``!`` comments, read back as comments).
+    the file's header (``!`` comments, read back as comments); ``notes`` and ``closing``: see :func:`tir_text`.
 
     Refuses to overwrite an existing file unless ``overwrite=True``, and never overwrites the file the
     parameters were read from (``params.source``).
@@ -598,7 +608,7 @@ def write_tir(params: TyreParameters, path, *, overwrite: bool = False, comments
     if p.is_dir():
         raise _err(str(p), None, None, "is a directory: expected a file path")
     _validate(params, str(p))
-    write_atomically(p, tir_text(params, comments))
+    write_atomically(p, tir_text(params, comments, notes=notes, closing=closing))
     return p
 
 
@@ -673,6 +683,8 @@ def check_tir(path) -> list[Finding]:
                        "the wrong sign (the evaluator and SWIFT warn when used there)"))
     for name, message in load_factor_problems(v):
         checks.append((True, "warning", name, message))
+    for name, message in geometry_problems(v):
+        checks.append((True, "error" if name == "RIM_RADIUS" else "warning", name, message))
     for cond, sev, name, msg in checks:
         if cond:
             add(sev, name, msg)

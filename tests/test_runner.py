@@ -126,7 +126,7 @@ def test_campaign_is_bitwise_the_fit_of_each_tyre_alone(cluster, tmp_path):
 
     for tyre, runs in (("tyreA", ["tyreA.tdx"]), ("tyreB", ["tyreB/run1.tdx", "tyreB/run2.tdx"])):
         parts = [read_data(source / run) for run in runs]
-        alone = fit_tir(parts[0] if len(parts) == 1 else TyreData.concat(parts), stages=["pure_fx"])
+        alone = fit_tir(TyreData.pool(parts), stages=["pure_fx"])
         written = read_tir(out / f"{tyre}.tir")  # the campaign's file, read back
         assert all(repr(written[k]) == repr(alone.params[k]) for k in alone.params), tyre
         assert summary.loc[summary["tyre"] == tyre, "pure_fx FX [%]"].iloc[0] == alone.fit_errors["pure_fx"]

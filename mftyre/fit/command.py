@@ -41,8 +41,13 @@ def register(subparsers) -> None:
                     "the physical checks are rejected with their reason. Writes the .tir file and optionally a "
                     "Markdown report with plots. Time series (100 Hz and more) are reduced per sweep to binned means, "
                     "up and down branches averaged.")
-    p.add_argument("data", help="measurement file: TYDEX, TTC (.dat/.mat) or CSV (see DATA below); or a campaign: a "
-                                "folder of runs or a CSV manifest (tyre, runs, ...; see mftyre.campaign)")
+    p.add_argument("data", nargs="+", help="measurement file(s): TYDEX, TTC (.dat/.mat) or CSV (see DATA below); "
+                                           "several runs of one tyre (cornering, drive/brake, vertical) are pooled "
+                                           "into one fit; or a campaign: one folder of runs or a CSV manifest (tyre, "
+                                           "runs, ...; see mftyre.campaign)")
+    p.add_argument("--size", help="the tyre size, e.g. 16x7.5-10 or 205/60R15: rim radius, width and aspect ratio "
+                                  "(default: a size found in the file's tyre description or name; without one the "
+                                  "rim radius is estimated and said so; --set RIM_RADIUS=5in gives one value)")
     p.add_argument("-o", "--output", required=True, help="the .tir file to write (a campaign: the output folder)")
     p.add_argument("--start", help="start parameters from this .tir file (default: neutral values and estimates "
                                    "from the data)")
@@ -63,8 +68,9 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    from ..arguments import command_error, read_data_args, refused_outputs
-    from ..data import speaking_cli
+    from ..arguments import command_error, read_data_args, refused_outputs, set_parameters
+    from ..data import TyreData, speaking_cli
+    from .provenance import unidentified
     from ..errors import MFTyreError
     from .core import fit_tir
     from .stages import STAGE_NAMES
@@ -75,16 +81,25 @@ def run(args) -> int:
     unknown = [s for s in stages if s not in STAGE_NAMES]
     if unknown:
         return command_error("fit", f"unknown stage(s) {', '.join(unknown)}; stages: {', '.join(STAGE_NAMES)}")
-    if is_campaign(args.data):  # a folder or manifest: many tyres (mftyre.campaign)
+    if len(args.data) == 1 and is_campaign(args.data[0]):  # a folder or manifest: many tyres (mftyre.campaign)
         from ..campaign import run_command
 
+        args.data = args.data[0]
         return run_command(args)
     outputs = {"-o": out, "--report": args.report}
     if args.report:  # the report's plots beside it (mftyre.fit.report.save_report)
         report = Path(args.report)
         outputs.update({f"--report plot of {s}": report.with_name(f"{report.stem}_{s}.png") for s in stages})
-    if refused := refused_outputs("fit", outputs, {"DATA": args.data, "--start": args.start}, overwrite=args.overwrite):
+    inputs = {f"DATA {k + 1}" if len(args.data) > 1 else "DATA": d for k, d in enumerate(args.data)}
+    if refused := refused_outputs("fit", outputs, {**inputs, "--start": args.start}, overwrite=args.overwrite):
         return refused
+    if args.size:
+        from ..geometry import tyre_size
+
+        try:
+            tyre_size(args.size)
+        except ValueError as exc:
+            return command_error("fit", f"--size: {exc}")
     t0 = time.perf_counter()
 
     terminal = sys.stderr.isatty()
@@ -97,10 +112,11 @@ def run(args) -> int:
                   flush=True)
 
     try:
-        data = read_data_args(args)
+        data = TyreData.pool([read_data_args(args, path, drop_implausible=True) for path in args.data])
         with speaking_cli():
             result = fit_tir(data, start=args.start, stages=stages, fit_pressure=not args.no_pressure,
-                             weighting=args.weighting, progress=progress, bins=args.bins, max_nfev=args.max_nfev)
+                             weighting=args.weighting, progress=progress, bins=args.bins, max_nfev=args.max_nfev,
+                             size=args.size, given=set_parameters(args))
         if not args.quiet and terminal:
             print(file=sys.stderr)
         print(f"test programme: {result.programme.summary()}")
@@ -116,10 +132,25 @@ def run(args) -> int:
     fitted = (f"{len(data)} rows ({len(result.data)} points after reduction)" if result.reduction is not None
               else f"{len(data)} points")
     print(f"fitted {fitted} in {result.seconds:.1f} s; wrote {out}" + (f" and {args.report}" if args.report else ""))
+    raw = result.raw_errors
+    if raw:
+        print("  fit error on the binned points; on the samples as recorded; the samples' own scatter at equal load, "
+              "pressure, camber and slip (repeatability floor)")
     for name, st in result.stages.items():
+        samples = (f"  samples {raw[name][0]:7.3f} %  floor {raw[name][1]:6.3f} % "
+                   f"({raw[name][0] / raw[name][1]:.2g}x)" if name in raw and raw[name][1] > 0 else "")
         print(f"  {name:<15} {st.n_points:6d} points  {len(st.fitted):3d} parameters  fit error "
-              f"{st.fit_error:7.3f} %" + (f"  REJECTED: {'; '.join(st.rejected)}" if st.rejected else "")
+              f"{st.fit_error:7.3f} %" + samples + (f"  REJECTED: {'; '.join(st.rejected)}" if st.rejected else "")
               + (f"  reset (not determined): {', '.join(st.reset)}" if st.reset else ""))
+    for text in data.history:
+        if "warning: " in text:
+            print(text[text.index("warning: "):], file=sys.stderr)
+    unknown = unidentified(result)
+    if unknown:
+        print("not determined by the data (at a bound of the fit, or standard error above the value; see the .tir's "
+              "comments and the report for the measurement that would pin each):", file=sys.stderr)
+        for name, why, need in unknown:
+            print(f"  {name}: {why}; needs {need}", file=sys.stderr)
     for why, names in result.undetermined.items():
         print(f"warning: held at their start values, not determined by the data ({why}): {' '.join(names)}",
               file=sys.stderr)

@@ -107,6 +107,8 @@ class FitResult:
         self.raw_data = data  # the data as given (``data``: what was fitted, reduced when a time series)
         self.problems = []  # what verification finds in the final parameters (and the start did not have)
         self.warnings = []  # what it finds beyond the data's domain, or shares with the start
+        self.sources, self.generic = {}, True  # where the start values come from (mftyre.fit.provenance)
+        self.raw_errors = {}  # stage -> (error on the samples as recorded, repeatability floor) [%]
 
     @property
     def fit_errors(self) -> dict:
@@ -151,7 +153,10 @@ class FitResult:
         if self.problems:
             raise TirError(f"{path}: not written: the fitted parameters fail verification: "
                            + "; ".join(self.problems))
-        return write_tir(self.params, path, overwrite=overwrite, comments=self.provenance())
+        from .provenance import closing_summary, provenance_of
+
+        return write_tir(self.params, path, overwrite=overwrite, comments=self.provenance(),
+                         notes=provenance_of(self), closing=closing_summary(self))
 
     def provenance(self) -> list[str]:
         """Header lines of the fitted .tir: mftyre version and date, the data (file name, SHA-256, rows), the
@@ -187,14 +192,21 @@ def load_data(source) -> TyreData:
     return read_data(source)
 
 
-def _start(data: TyreData, start):
+def _start(data: TyreData, start, size=None, given=None, sources=None):
+    """(start parameters, generic?): the generic start (:func:`mftyre.fit.start_parameters`, its provenance in
+    ``sources``) or the given file, with the ``given`` parameters (and the ``size``'s geometry) set."""
+    given = dict(given or {})
     if start is None:
-        return start_parameters(data), True
-    if isinstance(start, MFModel):
-        return start.params, False
-    if isinstance(start, TyreParameters):
-        return start, False
-    return read_tir(start), False
+        return start_parameters(data, size=size, sources=sources, **given), True
+    prm = start.params if isinstance(start, MFModel) else start if isinstance(start, TyreParameters) else \
+        read_tir(start)
+    if size:
+        from ..geometry import tyre_size
+
+        given = {**tyre_size(size).parameters(), **given}
+    if sources is not None:
+        sources.update(dict.fromkeys(given, "given"))
+    return (prm.replace(**given) if given else prm), False
 
 
 class _BatchPredictor:
@@ -461,6 +473,14 @@ def _undetermined(names, values, stderr, corr, needed=frozenset()):
     return out
 
 
+def _bound_hit(param, value: float):
+    """The bound of lmfit parameter ``param`` that ``value`` lies on (within 1e-6 relative), or None."""
+    for b in (param.min, param.max):
+        if np.isfinite(b) and abs(value - b) <= 1e-6 * max(abs(b), 1e-3):
+            return float(b)
+    return None
+
+
 #: Significance level at which a reset that raises the stage's residual sum of squares is refused.
 RESET_ALPHA = 1e-3
 
@@ -511,13 +531,15 @@ def _vertical_consistency(prm, data: TyreData, radius_given: bool):
 
 
 def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progress, max_nfev, baseline,
-               radius_given=False):
+               radius_given=False, held=frozenset()):
     rows = stage_rows(stage, data)
     sub = data.select(rows)
     cond = conditions(sub)
     groups, skipped = stage_parameters(stage, cond, fit_pressure)
     groups, capped = supported_parameters(stage, groups, sub)
     skipped.update(capped)
+    skipped.update({n: "given by the user" for g in groups.values() for n in g if n in held})
+    groups = {k: [n for n in g if n not in held] for k, g in groups.items()}
     names_all = groups["base"] + groups["pressure"] + groups["camber"]
     t0 = time.perf_counter()
 
@@ -582,6 +604,9 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
         values = {n: float(prm[n]) for n in free}
         stderr, corr, n_eff = _uncertainties(problem, prm, sub)
         drop = _undetermined(free, values, stderr, corr, needed)
+        if not drop:  # a parameter ending on a bound of the fit: the data push it beyond what a tyre has
+            drop = {n: f"at its bound {_bound_hit(problem.params[n], values[n]):g} of the fit" for n in free
+                    if n not in needed and _bound_hit(problem.params[n], values[n]) is not None}
         if not drop:
             break
         rest = [n for n in free if n not in drop]
@@ -590,6 +615,16 @@ def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progres
             trial, trial_res, trial_problem = _fit_pass(stage, trial, side, sub, rest, weighting, progress,
                                                         "after resetting undetermined", max_nfev, bounds)
         pairs = {n: w.split(" with ")[1] for n, w in drop.items() if w.startswith("correlated")}
+        bound = [n for n, w in drop.items() if w.startswith("at its bound")]
+        if bound and rest:
+            rss = [float(np.sum(pr.residuals(np.array([[float(p_[n]) for n in pr.names]]))[0][:pr.n_data] ** 2))
+                   for pr, p_ in ((problem, prm), (trial_problem, trial))]
+            if _reset_costs(rss[0], rss[1], len(sub), n_eff, len(free), len(drop)):
+                needed |= set(bound)
+                notes.append(f"kept at a bound of the fit (resetting raised the residual sum of squares from "
+                             f"{rss[0]:.4g} to {rss[1]:.4g}, significant; its value is not determined): "
+                             + ", ".join(bound))
+                continue
         if pairs and rest:
             rss = [float(np.sum(pr.residuals(np.array([[float(p_[n]) for n in pr.names]]))[0][:pr.n_data] ** 2))
                    for pr, p_ in ((problem, prm), (trial_problem, trial))]
@@ -641,24 +676,24 @@ _ROWS_NEEDED = {"pure_lateral": "no rows with slip angle at zero longitudinal sl
 
 
 def _fit_stages(data, prm, side, stages, fit_pressure, generic, weighting, progress, max_nfev, baseline,
-                radius_given=False):
+                radius_given=False, held=frozenset()):
     results = {}
     for name in stages:
         if name not in STAGES:
             raise ValueError(f"unknown stage {name!r}; stages are {', '.join(STAGE_NAMES)}")
         prm, results[name] = _fit_stage(STAGES[name], prm, side, data, fit_pressure, generic, weighting, progress,
-                                        max_nfev, baseline, radius_given)
+                                        max_nfev, baseline, radius_given, held)
         if name == "mz_combined" and results[name].fitted and "mz" in results and results["mz"].fitted:
             # the pure-Mz stage ran with the moment arm s = 0 and took the moment s Fx (paper A56) of the small
             # Fx at zero slip into the trail and residual torque; refit it now that s is known
             prm, results["mz"] = _fit_stage(STAGES["mz"], prm, side, data, fit_pressure, False, weighting, progress,
-                                            max_nfev, baseline, radius_given)
+                                            max_nfev, baseline, radius_given, held)
     return prm, results
 
 
 def fit_tir(data, start=None, stages=STAGE_NAMES, fit_pressure: bool = True, *, weighting: str = "uniform",
             compare: bool | None = None, progress=None, max_nfev: int | None = None, reduce: bool | None = None,
-            bins: int = 40) -> FitResult:
+            bins: int = 40, size: str | None = None, given: dict | None = None) -> FitResult:
     """Fit MF 6.1 parameters to tyre measurements, stage by stage.
 
     ``data``: :class:`mftyre.data.TyreData` or a ``.tdx``/``.csv`` path. ``start``: None (neutral parameters
@@ -671,7 +706,10 @@ def fit_tir(data, start=None, stages=STAGE_NAMES, fit_pressure: bool = True, *, 
     (stage, pass, evaluations, cost) called every 25 residual evaluations and after each pass.
     ``max_nfev``: evaluations per pass (default 30 x (parameters + 1)). ``reduce``: reduce a time series to
     binned means per sweep first (:func:`mftyre.timeseries.reduce_sweeps`, ``bins`` per sweep; default: when
-    the data are dense enough, :func:`mftyre.timeseries.needs_reduction`).
+    the data are dense enough, :func:`mftyre.timeseries.needs_reduction`). ``size``: the tyre size designation
+    (e.g. ``"16x7.5-10"``: R0, rim radius, width, aspect ratio); ``given``: parameters set by the user (e.g.
+    ``{"RIM_RADIUS": 0.127}``), held, never fitted. Where each value of the result comes from is
+    ``result.provenance_of`` (written beside each parameter of the .tir).
 
     The test programme is recognised first (:func:`mftyre.programme.recognise`, in ``result.programme``).
     In every stage: physical bounds (:func:`physical_bounds`), only the parameters the data's distinct
@@ -698,13 +736,16 @@ def fit_tir(data, start=None, stages=STAGE_NAMES, fit_pressure: bool = True, *, 
         fit_data = reduction.mean
     else:
         fit_data = programme.annotate(data)
-    radius_given = start is not None or isinstance(data.constants.get("RFREE"), float)
-    prm, generic = _start(fit_data, start)
+    radius_given = start is not None or isinstance(data.constants.get("RFREE"), float) \
+        or "UNLOADED_RADIUS" in (given or {})
+    sources = {}
+    prm, generic = _start(fit_data, start, size, given, sources)
+    held = frozenset(given or ())
     warn_data_outside(MFModel(prm), fit_data.inputs(), f"{data.source or 'the data'} against the start values")
     side = None
     start_prm = prm
     prm, results = _fit_stages(fit_data, prm, side, stages, fit_pressure, generic, weighting, progress, max_nfev,
-                               start_prm, radius_given)
+                               start_prm, radius_given, held)
     n_p = programme.levels["P"].size
     if compare is None:
         compare = fit_pressure and n_p >= 2
@@ -718,9 +759,39 @@ def fit_tir(data, start=None, stages=STAGE_NAMES, fit_pressure: bool = True, *, 
     result = FitResult(prm.replace(INFLPRES=prm.NOMPRES), fit_data, start_prm, results, comparison, notes,
                        time.perf_counter() - t0)
     result.programme, result.reduction, result.raw_data = programme, reduction, data
+    result.sources, result.generic = sources, generic
+    if reduction is not None:
+        result.raw_errors = _sample_errors(result.model, programme.annotate(data), programme, results, bins)
     checked = verification(result.model, data, baseline=MFModel(start_prm, side=side))
     result.problems, result.warnings = checked.problems, checked.warnings
     return result
+
+
+def _sample_errors(model, data, programme, results, bins) -> dict:
+    """Stage -> (fit error on the samples as recorded [%], the data's repeatability floor [%]) for the fitted
+    stages of a reduced time series: the normalised RMS (:func:`normalised_rms`) of the model on every sample of the
+    sweeps in the stage's rows, and the same measure of the samples' scatter about their bin mean at equal load,
+    pressure, camber and slip (:func:`mftyre.timeseries.scatter_about_bins`, both branches): no model of the
+    steady state fits the samples better than that."""
+    from ..timeseries import scatter_about_bins
+
+    out = {}
+    in_sweep = programme.rows["SWEEP"].to_numpy() >= 0
+    for name, st in results.items():
+        if not st.fitted or STAGES[name].output == "fz_from_rl":
+            continue
+        stage = STAGES[name]
+        rows = stage_rows(stage, data) & in_sweep
+        if rows.sum() < 10:
+            continue
+        sub = data.select(rows)
+        measured = sub.array(stage.channel)
+        err = normalised_rms(predict_stage(stage, model, sub, sub.inputs()), measured)
+        dev = scatter_about_bins(data, programme, stage.channel, bins=bins)[rows]
+        ok = np.isfinite(dev) & np.isfinite(measured)
+        floor = 100.0 * float(np.sqrt(np.sum(dev[ok] ** 2) / np.sum(measured[ok] ** 2))) if ok.any() else float("nan")
+        out[name] = (err, floor)
+    return out
 
 
 def _pressure_comparison(data, start_prm, generic, side, compared, extended, weighting, progress, max_nfev):

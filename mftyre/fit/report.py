@@ -13,6 +13,7 @@ from ..files import make_output_folder, write_atomically, write_figure
 from ..programme import cluster_levels
 from ..model import MFModel
 from .predict import predict_stage
+from .provenance import unidentified
 from .stages import STAGES, stage_rows
 
 __all__ = ["markdown_report", "save_report", "plot_stage", "stage_figure"]
@@ -68,6 +69,26 @@ def markdown_report(result, plot_names: dict | None = None) -> str:
     for st in result.stages.values():
         lines.append(f"| {st.title} | {st.channel} | {st.n_points} | {len(st.fitted)} | {_fmt(st.fit_error)} |")
     lines.append("")
+    if result.raw_errors:
+        lines += ["## Errors on the samples as recorded", "",
+                  "The same measure on every sample of the sweeps (not the binned means), beside the samples' own "
+                  "scatter at equal load, pressure, camber and slip (the repeatability floor: about each bin's line in "
+                  "the slip, the force scaled to the bin's mean load; no steady-state model fits the samples better).",
+                  "", "| stage | binned points [%] | samples [%] | repeatability floor [%] | samples / floor |",
+                  "| --- | ---: | ---: | ---: | ---: |"]
+        for name, (err, floor) in result.raw_errors.items():
+            ratio = err / floor if floor > 0 else float("nan")
+            lines.append(f"| {name} | {_fmt(result.stages[name].fit_error)} | {_fmt(err)} | {_fmt(floor)} | "
+                         f"{_fmt(ratio)} |")
+        lines.append("")
+    unknown = unidentified(result)
+    if unknown:
+        lines += ["## Not determined by the data", "",
+                  "At a bound of the fit, or with a standard error above the value (held at the start value unless "
+                  "the data need them), and the measurement that would pin each.", "",
+                  "| parameter | why | measurement that would pin it |", "| --- | --- | --- |"]
+        lines += [f"| {n} | {why} | {need} |" for n, why, need in unknown]
+        lines.append("")
     if result.comparison is not None:
         lines += ["## Inflation pressure: lower bound, upper bound, extended fit", "",
                   "As Table 2 of Schmeitz et al. (2005): lower bound = mean fit error of separate fits at each "

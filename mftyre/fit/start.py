@@ -14,8 +14,11 @@ import math
 
 import numpy as np
 
+from pathlib import Path
+
 from ..data import TyreData
 from ..errors import DataError
+from ..geometry import find_size, tyre_size
 from ..params import TyreParameters
 from ..programme import cluster_levels
 from .stages import level_labels
@@ -30,8 +33,13 @@ def _level_centres(x):
     return centres if centres.size else np.array([float(np.median(x))])
 
 
-def start_parameters(data: TyreData, fittyp: int = 61, **given) -> TyreParameters:
-    """A neutral MF 6.1 (or 6.2) parameter set for the tyre measured in ``data``; ``given`` overrides."""
+def start_parameters(data: TyreData, fittyp: int = 61, *, size: str | None = None, sources: dict | None = None,
+                     **given) -> TyreParameters:
+    """A neutral MF 6.1 (or 6.2) parameter set for the tyre measured in ``data``; ``given`` overrides. ``size``: the
+    tyre size designation (``"16x7.5-10"``, :func:`mftyre.geometry.tyre_size`; default: one found in the data's tyre
+    description or file name). ``sources``: a dict filled with parameter -> where its value comes from (the
+    provenance the fitted .tir states)."""
+    sources = {} if sources is None else sources
     c = data.constants
     fz_levels = _level_centres(data.array("FZ"))
     p_levels = _level_centres(data.array("P"))
@@ -40,49 +48,123 @@ def start_parameters(data: TyreData, fittyp: int = 61, **given) -> TyreParameter
         NOMPRES=float(c.get("NOMPRES") or p_levels[len(p_levels) // 2]),
         LONGVL=float(c.get("LONGVEL") or np.median(data.array("VX"))),
     )
+    sources.update(FNOMIN="the data's constants" if c.get("FNOMIN") else "estimated from the data (median load level)",
+                   NOMPRES="the data's constants" if c.get("NOMPRES") else "estimated from the data (middle pressure "
+                                                                             "level)",
+                   LONGVL="the data's constants" if c.get("LONGVEL") else "estimated from the data (median speed)")
+    geo = tyre_size(size) if size else find_size(data.tyre, Path(data.source or "").name)
+    where = "given (--size)" if size else f"the tyre size {geo.text!r} in the data's description" if geo else ""
+    if geo is not None:
+        values.update(RIM_RADIUS=geo.rim_radius, WIDTH=geo.width, ASPECT_RATIO=geo.aspect_ratio)
+        sources.update(dict.fromkeys(("RIM_RADIUS", "WIDTH", "ASPECT_RATIO"), f"from {where}"))
     if isinstance(c.get("NOMWIDTH"), float):
         values["WIDTH"] = c["NOMWIDTH"]
+        sources["WIDTH"] = "the data's constants (NOMWIDTH)"
     r0 = c.get("RFREE")
+    sources["UNLOADED_RADIUS"] = "the data's constants (RFREE)"
     if not isinstance(r0, float):
-        r0 = _free_radius_from_data(data)
+        r0, sources["UNLOADED_RADIUS"] = _free_radius_from_data(data, geo)
     values["UNLOADED_RADIUS"] = r0
     values["INFLPRES"] = values["NOMPRES"]
-    values.update(_ranges(data))
+    sources["INFLPRES"] = "= NOMPRES"
+    ranges, said = _ranges(data)
+    values.update(ranges)
+    sources.update(said)
     cz = _vertical_stiffness(data, values["FNOMIN"], values["NOMPRES"])
     if cz:
         values["VERTICAL_STIFFNESS"] = cz
-    values.update({k.upper(): v for k, v in given.items()})
+        sources["VERTICAL_STIFFNESS"] = "estimated from the data (Fz / deflection at the nominal load)"
+    given = {k.upper(): v for k, v in given.items()}
+    values.update(given)
+    sources.update(dict.fromkeys(given, "given"))
+    if "RIM_RADIUS" not in values:
+        values["RIM_RADIUS"] = _RIM_RATIO * values["UNLOADED_RADIUS"]
+        sources["RIM_RADIUS"] = (f"estimated as {_RIM_RATIO:g} x UNLOADED_RADIUS (no tyre size in the data: give "
+                                 "--size or --set RIM_RADIUS=...)")
+    values.update(_bottoming(data, values, sources))
     return TyreParameters.from_defaults(fittyp=fittyp, **values)
 
 
-def _free_radius_from_data(data: TyreData) -> float:
+#: RIM_RADIUS / UNLOADED_RADIUS of the tyres that are measured when the size is not known (car 205/60R15 0.61,
+#: Formula Student 16x7.5-10 0.63): a stated estimate, never a silent car value.
+_RIM_RATIO = 0.62
+
+
+def _bottoming(data: TyreData, values: dict, sources: dict) -> dict:
+    """BOTTOM_OFFST such that bottoming starts below the smallest loaded radius measured (RL at load); DataError
+    when the rim radius itself lies above it (a rim of another tyre)."""
+    from ..params import PARAMETERS
+
+    if not data.has("RL"):
+        return {}
+    rl, fz = data.array("RL"), data.array("FZ")
+    ok = np.isfinite(rl) & (fz > 0)
+    if not ok.any():
+        return {}
+    rl_min = float(np.quantile(rl[ok], 0.001))
+    rim = float(values["RIM_RADIUS"])
+    offset = float(values.get("BOTTOM_OFFST", PARAMETERS["BOTTOM_OFFST"].default))
+    if rim >= rl_min:
+        raise DataError(f"{data.source or 'the data'}: RIM_RADIUS {rim:.4g} m ({sources.get('RIM_RADIUS', 'default')})"
+                        f" lies above the smallest loaded radius measured, {rl_min:.4g} m: the rim would be in the "
+                        "road; give the tyre's size (--size, e.g. 16x7.5-10) or --set RIM_RADIUS=...")
+    if rim + offset < 0.98 * rl_min:
+        return {}
+    sources["BOTTOM_OFFST"] = (f"lowered from {offset:g} m so that bottoming starts below the smallest loaded radius "
+                               f"measured ({rl_min:.4g} m)")
+    return {"BOTTOM_OFFST": 0.5 * (rl_min - rim)}
+
+
+def _free_radius_from_data(data: TyreData, geo=None):
     if data.has("RL"):
         rl, fz = data.array("RL"), data.array("FZ")
         ok = np.isfinite(rl)
         low = ok & (fz <= np.quantile(fz[ok], 0.3))
         if low.sum() >= 2 and np.ptp(fz[low]) > 0:
             slope, intercept = np.polyfit(fz[low], rl[low], 1)
-            return float(intercept)
+            return float(intercept), "estimated from the data (loaded radius extrapolated to zero load)"
+    if geo is not None:
+        return geo.unloaded_radius, f"from the tyre size {geo.text!r}"
     if data.has("RE"):
-        return float(np.nanmax(data.array("RE")) * 1.03)
+        return float(np.nanmax(data.array("RE")) * 1.03), "estimated from the data (1.03 x the largest RE)"
     raise DataError(f"{data.source}: the unloaded radius is unknown: no RFREE constant, no RL/RE channel; give "
                     "UNLOADED_RADIUS (e.g. fit_tir(..., start=start_parameters(data, UNLOADED_RADIUS=0.31)))")
 
 
-def _ranges(data: TyreData) -> dict:
+def _ranges(data: TyreData) -> tuple[dict, dict]:
+    """(ranges, sources): the declared ranges where the model is verified: the data's, padded by 2 % of the span.
+    A slip measured with one sign only (slip angle beyond 1 deg, slip ratio beyond 0.01 on one side) gives a
+    one-sided range (the other bound just across 0); a slip not measured keeps a placeholder range of +-0.05, said
+    so."""
     def span(x, pad, floor):
         lo, hi = float(np.min(x)), float(np.max(x))
         w = max(hi - lo, floor)
         return lo - pad * w, hi + pad * w
 
-    kmin, kmax = span(data.array("SL"), 0.02, 0.1)
-    amin, amax = span(data.array("SA"), 0.02, 0.1)
+    out, said = {}, {}
+    for ch, lo_name, hi_name, small, what in (("SL", "KPUMIN", "KPUMAX", 0.01, "slip ratio"),
+                                             ("SA", "ALPMIN", "ALPMAX", math.radians(1.0), "slip angle")):
+        x = data.array(ch)
+        lo, hi = span(x, 0.02, 0.1)
+        neg, pos = float(np.min(x)) < -small, float(np.max(x)) > small
+        if neg and pos:
+            out[lo_name], out[hi_name] = min(lo, -0.05), max(hi, 0.05)
+            said[lo_name] = said[hi_name] = f"the data's {what} range"
+        elif neg or pos:
+            out[lo_name], out[hi_name] = (lo, 0.5 * small) if neg else (-0.5 * small, hi)
+            said[lo_name] = said[hi_name] = (f"the data's {what} range, ONE-SIDED: the data have {what}s of one sign "
+                                             "only; the model is not verified for the other sign")
+        else:
+            out[lo_name], out[hi_name] = -0.05, 0.05
+            said[lo_name] = said[hi_name] = f"placeholder: no {what} in the data"
     gmin, gmax = span(data.array("IA"), 0.02, 0.1)
     pmin, pmax = span(data.array("P"), 0.01, 0.1 * float(np.max(data.array("P"))))
     fz = data.array("FZ")
-    return dict(KPUMIN=min(kmin, -0.05), KPUMAX=max(kmax, 0.05), ALPMIN=min(amin, -0.05), ALPMAX=max(amax, 0.05),
-                CAMMIN=min(gmin, -0.05), CAMMAX=max(gmax, 0.05), PRESMIN=pmin, PRESMAX=pmax,
-                FZMIN=0.0, FZMAX=float(1.1 * np.max(fz)))
+    out.update(CAMMIN=min(gmin, -0.05), CAMMAX=max(gmax, 0.05), PRESMIN=pmin, PRESMAX=pmax, FZMIN=0.0,
+               FZMAX=float(1.1 * np.max(fz)))
+    said.update(dict.fromkeys(("CAMMIN", "CAMMAX", "PRESMIN", "PRESMAX"), "the data's range"),
+                FZMAX="1.1 x the largest load in the data")
+    return out, said
 
 
 def _vertical_stiffness(data: TyreData, fz0: float, p0: float) -> float | None:

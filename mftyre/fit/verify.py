@@ -44,6 +44,7 @@ import numpy as np
 
 from ..backend import NUMPY
 from ..formula import vertical
+from ..inputs import load_factor_edges, pressure_factor_edges
 from ..params import PHYSICAL_PRESSURE_SPAN
 
 __all__ = ["verify_tir", "verification", "Verification", "Problem", "Domain", "physical_domain", "data_domain",
@@ -235,6 +236,32 @@ def problems_in(model, dom: Domain) -> list:
                "shifts PHX*/PVX*")
     _pure_slip(run, problems, prm, loads, pressures, "fy", dom.alpha, np.radians([3.0, 6.0]), math.radians(3.0),
                "alpha", math.degrees(1.0), "shifts PHY*/PVY*")
+    # the properties that must keep their sign over the domain: the pressure and load factors (closed forms) and the
+    # aligning moment at small slip angles (Mz with the sign of alpha in ISO-W: a positive trail)
+    for edge, side, names, what in pressure_factor_edges(prm):
+        if dom.pressures[0] <= edge <= dom.pressures[1]:
+            problems.append(Problem("pressure_sign", f"{names} makes the {what} change sign at p = {edge:.6g} Pa "
+                                                     f"({edge / 1e5:.3g} bar), inside the pressures "
+                                                     f"{dom.pressures[0] / 1e5:.3g}..{dom.pressures[1] / 1e5:.3g} bar: "
+                                                     "expected the same sign over the whole range"))
+    for lo_p in sorted(set(pressures)):
+        for edge, names, what in load_factor_edges(prm, float(vertical.pressure_increment(prm, lo_p))):
+            if dom.loads[0] <= edge <= dom.loads[1]:
+                problems.append(Problem("load_sign", f"{names} make the {what} change sign at Fz = {edge:.6g} N, "
+                                                     f"inside the loads {dom.loads[0]:.0f}..{dom.loads[1]:.0f} N"))
+                break
+    a1, a2 = max(dom.alpha[0], -math.radians(0.5)), min(dom.alpha[1], math.radians(0.5))
+    if a2 - a1 > math.radians(0.1):  # the slope of Mz at zero slip (positive trail: Mz rises with alpha in ISO-W)
+        Fm, Pm, Am = np.meshgrid(loads, pressures, [a1, a2], indexing="ij")
+        out = run(Fm, 0.0, Am, 0.0, prm.LONGVL, Pm, "aligning moment at small slip angles")
+        if out is not None:
+            slope = (out.mz[..., 1] - out.mz[..., 0]) / (a2 - a1)
+            if np.any(slope <= 0):
+                i = np.unravel_index(np.argmin(slope), slope.shape)
+                problems.append(Problem("mz_sign", f"the Mz slope at zero slip angle is {slope[i] * math.pi / 180:.3g} "
+                                                   f"N m/deg at Fz {Fm[i][0]:.0f} N, p {Pm[i][0]:.0f} Pa: the "
+                                                   "pneumatic trail is negative (expected Mz rising with alpha, ISO-W; "
+                                                   "QDZ1/QDZ2, PPZ1, QBZ*)"))
     # speed: free rolling up to the top speed
     Fs, Ps, Vs = np.meshgrid(loads, pressures, speeds, indexing="ij")
     out = run(Fs, 0.0, 0.0, 0.0, Vs, Ps, f"free rolling up to {speeds[-1]:.0f} m/s")

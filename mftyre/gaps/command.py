@@ -101,8 +101,9 @@ def run(args) -> int:
         print(f"  rejected {name}: {why}")
     if rep.untestable:
         print(f"  {len(rep.untestable)} effects the data cannot test (listed with the reason in the report)")
-    print(("  leave-one-out" if rep.small_data else "  held-out") + " error [%]:  " + "  ".join(f"{c} {rep.error_before[c]:.3f} -> {rep.error_after[c]:.3f}"
-                                              for c in rep.error_before))
+    print(("  leave-one-out" if rep.small_data else "  held-out") + " error [%]:  " + "  ".join(
+        f"{c} not fitted (no model)" if c in rep.not_modelled else f"{c} {rep.error_before[c]:.3f} -> "
+        f"{rep.error_after[c]:.3f}" for c in rep.error_before))
     written = [x for x in (args.output, args.report, args.json) if x]
     if written:
         print("  wrote " + ", ".join(written))

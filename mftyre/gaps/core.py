@@ -26,7 +26,7 @@ from .catalogue import CATALOGUE, PARAM_STAGE, Effect, effect_state, parameter_n
 from .drift import FRICTION_DRIFT, tyre_of, with_progress
 from .locate import locate
 from .refit import FAIR_STAGES, SWEEP_REASONS, at_neutral, active_parameters, covariance, standard_errors, stage_data, data_conditions, needs_met, refit, refit_stages
-from .residuals import Evaluator, sweep_labels, holdout_mask, noise_levels, noise_of_means
+from .residuals import Evaluator, sweep_labels, holdout_mask, noise_floor_of, noise_levels, noise_of_means
 from .transient import sweep_hysteresis
 from .small import SMALL_DATA, aicc, fit_all, loo_errors, weighted_rss
 
@@ -100,6 +100,9 @@ class GapReport:
     def effect_names(self) -> list:
         return [e.name for e in self.effects_added]
 
+    #: channels the model has no equations for (its output 0 everywhere): "not fitted", never an error of 100 %
+    not_modelled: tuple = ()
+
     def shrink(self) -> dict:
         """Channel -> relative decrease of the held-out error, (before - after) / before."""
         return {c: (self.error_before[c] - self.error_after[c]) / self.error_before[c]
@@ -145,11 +148,39 @@ class GapReport:
         return save_report(self, directory)
 
     def write_tir(self, path, *, overwrite: bool = False) -> Path:
-        return write_tir(self.model.params, path, overwrite=overwrite)
+        """Write the improved .tir; when nothing was added, the parameters as given, unchanged (not the fair-start
+        refit the search started from: it only served to judge candidates), with the given file's header comments
+        (a fitted file's provenance) kept."""
+        given = self.model_given.params
+        if not self.effects_added and not self.nuisances:
+            header = _header_comments(given.source)
+            return write_tir(given, path, overwrite=overwrite, comments=[
+                f"mftyre gaps: nothing added; the parameters of {Path(str(given.source)).name if given.source else 'the given model'}"
+                " unchanged", *header])
+        return write_tir(self.model.params, path, overwrite=overwrite, comments=[
+            "mftyre gaps: effects added to " + (Path(str(given.source)).name if given.source else "the given model")
+            + ": " + ", ".join(self.effect_names + [e.name for e in self.nuisances])])
 
     def __repr__(self):
         return f"GapReport(effects_added={self.effect_names}, error_before={_round(self.error_before)}, " \
                f"error_after={_round(self.error_after)})"
+
+
+def _header_comments(source) -> list:
+    """The ``!`` comment lines of a .tir file's header (before its first section after [MDI_HEADER]): the provenance
+    a fitted file carries; [] when there is no readable file."""
+    try:
+        lines = Path(str(source)).read_text(encoding="utf-8", errors="replace").splitlines()
+    except (OSError, TypeError, ValueError):
+        return []
+    out = []
+    for line in lines[:200]:
+        if line.startswith("[") and "MDI_HEADER" not in line.upper():
+            break
+        if line.startswith("!") and line.strip("! ") and "Written by mftyre" not in line and \
+                not line.startswith(("! Source:", "! Model:")):
+            out.append(line[1:].strip())
+    return out
 
 
 def _round(d):
@@ -758,11 +789,30 @@ class _Search:
                     a.parameters[k].update(value=float(self.prm[k]), stderr=se.get(k))
 
 
-def _verdict(findings_before, added, findings_after, transient, nuisances=()) -> str:
-    """The outcome in one sentence."""
-    if not findings_before:
-        message = ("the model already explains the data: no residual structure beyond measurement noise; "
+#: The held-out error a model may have, as a multiple of the error the measurement noise alone gives (the noise
+#: floor), for the verdict "the model explains the data".
+NOISE_MULTIPLE = 2.0
+
+
+def _beyond_noise(errors: dict, floor: dict) -> dict:
+    """Channel -> (held-out error, floor) [%] where the error exceeds :data:`NOISE_MULTIPLE` x the noise floor."""
+    return {c: (e, floor[c]) for c, e in errors.items()
+            if c in floor and np.isfinite(e) and e > NOISE_MULTIPLE * floor[c]}
+
+
+def _verdict(findings_before, added, findings_after, transient, nuisances=(), beyond=None) -> str:
+    """The outcome in one sentence. ``beyond``: channel -> (held-out error, noise floor) [%] where the error is
+    more than :data:`NOISE_MULTIPLE` x the floor: then the data are not explained, whatever the residual tests say
+    (their noise may be misjudged, or the structure too smooth for them)."""
+    beyond = beyond or {}
+    gap = ", ".join(f"{c} {e:.3g} % against a noise floor of {f:.3g} %" for c, (e, f) in beyond.items())
+    if not findings_before and beyond:
+        message = (f"no residual structure found by the tests, but the held-out error is more than "
+                   f"{NOISE_MULTIPLE:g}x what the noise explains ({gap}): the model does NOT explain the data; "
                    "nothing added")
+    elif not findings_before:
+        message = ("the model already explains the data: no residual structure beyond measurement noise, the "
+                   f"held-out error within {NOISE_MULTIPLE:g}x the noise floor in every channel; nothing added")
     elif not added:
         message = "residual structure found, but no catalogue effect explains it significantly on held-out data; " \
                   "nothing added" + ("" if not nuisances else " to the tyre")
@@ -822,7 +872,11 @@ def _report(run: _Run, start, search: _Search, findings_before, transient, untes
     findings_after = locate(ev_train, ev_train.residuals(prm), search.sigma, run.alpha)
     added = [a for a in search.added if a.name != FRICTION_DRIFT.name]
     nuisances = [a for a in search.added if a.name == FRICTION_DRIFT.name]
-    message = _verdict(findings_before, added, findings_after, transient, nuisances)
+    pred = ev_test.predict(prm)
+    not_modelled = [c for c in pred if pred[c].size and not np.any(pred[c])]  # the model gives 0: no model of it
+    errors = {c: e for c, e in _errors(ev_test, prm).items() if c not in not_modelled}
+    beyond = _beyond_noise(errors, noise_floor_of(run.ev_all, run.test_mask, search.sigma))
+    message = _verdict(findings_before, added, findings_after, transient, nuisances, beyond)
     run.say(message)
     return GapReport(
         model_given=MFModel(run.given), model_start=MFModel(start), model=MFModel(tyre_of(prm)),
@@ -833,4 +887,4 @@ def _report(run: _Run, start, search: _Search, findings_before, transient, untes
         rejected=search.rejected, message=message, data=run.data, test_mask=run.test_mask, transient=transient,
         programme=run.programme.summary(), reduction=run.reduction.summary() if run.reduction else None,
         evaluator=run.ev_all, data_summary=_summary(run.data), seconds=time.perf_counter() - run.t0,
-        turn_slip=run.ts, small_data=False)
+        turn_slip=run.ts, small_data=False, not_modelled=not_modelled)

@@ -39,6 +39,9 @@ def markdown_report(rep, plot_names: dict | None = None) -> str:
     shrink = rep.shrink()
     floor = noise_floor(rep)
     for c in rep.error_before:
+        if c in getattr(rep, "not_modelled", ()):
+            lines.append(f"| {c} | not fitted (no model) | | | | | |")
+            continue
         lines.append(f"| {c} | {_f(rep.error_given[c], '{:.3f}')} | {_f(rep.error_before[c], '{:.3f}')} | "
                      f"{_f(rep.error_after[c], '{:.3f}')} | {_f(100 * shrink.get(c, float('nan')), '{:.0f} %')} | "
                      f"{_f(floor.get(c), '{:.3f}')} | {rep.noise[c][0]:.3g} {UNITS[c]} ({rep.noise[c][1]}) |")
@@ -133,14 +136,9 @@ def _error_heading(rep) -> list:
 
 def noise_floor(rep) -> dict:
     """Channel -> the normalised RMS error [%] that the noise alone gives on the held-out data."""
-    ev = rep.evaluator
-    out = {}
-    for c in rep.error_before:
-        rows = ev.rows[c] & rep.test_mask
-        meas = ev.data.array(c)[rows]
-        if meas.size:
-            out[c] = 100.0 * rep.noise[c][0] / math.sqrt(float(np.mean(meas**2)))
-    return out
+    from .residuals import noise_floor_of
+
+    return noise_floor_of(rep.evaluator, rep.test_mask, {c: rep.noise[c] for c in rep.error_before if c in rep.noise})
 
 
 def _figure(**kw):

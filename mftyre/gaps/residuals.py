@@ -29,7 +29,8 @@ from ..fit.predict import predict
 from ..model import MFModel
 from .drift import Drifting, predict_drifting
 
-__all__ = ["CHANNELS", "UNITS", "Evaluator", "noise_levels", "noise_of_means", "holdout_mask", "test_kind"]
+__all__ = ["CHANNELS", "UNITS", "Evaluator", "noise_levels", "noise_of_means", "noise_floor_of", "holdout_mask",
+           "test_kind"]
 
 #: Channels the gap finder maps, in report order.
 CHANNELS = ("FX", "FY", "MZ", "MX", "MY", "FZ")
@@ -279,4 +280,17 @@ def noise_of_means(raw: TyreData, segments: np.ndarray, reduced: TyreData, chann
             if e is not None:
                 out[c] = (max(e[0], 1e-9), f"raw AR(1) noise (lag-one correlation {e[1]:.2f}) over the median "
                                            f"{n_med:.0f} samples per point")
+    return out
+
+
+def noise_floor_of(ev, test_mask, sigma: dict) -> dict:
+    """Channel -> the normalised RMS error [%] the noise ``sigma`` alone gives on the held-out rows of ``ev``."""
+    out = {}
+    for c in sigma:
+        if c not in ev.rows:
+            continue
+        rows = ev.rows[c] & test_mask
+        meas = ev.data.array(c)[rows]
+        if meas.size and np.any(meas):
+            out[c] = 100.0 * sigma[c][0] / math.sqrt(float(np.mean(meas**2)))
     return out
