@@ -515,6 +515,8 @@ def tir_text(params: TyreParameters, comments=()) -> str:
         non_default = value != spec.default
         if not (present or relevant or non_default or name == "FITTYP"):
             continue
+        if not present and spec.optional:  # absent = "effect as the file's equations say", not the default's
+            continue                       # number (SWIFT_PSTIFF absent is PFZ1, not 0): it stays absent
         by_section[spec.section].append(_line(name, _format_value(value, spec.is_string, name), spec.description))
     extra_param_sections: dict[str, list[str]] = {}
     for name, (section, value) in params.unknown.items():
