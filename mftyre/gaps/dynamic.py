@@ -237,8 +237,9 @@ def _holdout(runs, fraction, seed):
     roads = sorted({r.road for r in runs})
     level.append(np.array([roads.index(r.road) for r in runs]))
     # whole runs are few and long: the fraction rounded up (4 runs at 0.34: 2 held out), two kept for training
+    # where there are three or more, and one of two held out (a manoeuvre run twice is tested on one)
     held = stratified_holdout(np.stack(level, axis=1), np.array([r.kind for r in runs]), fraction, seed,
-                              lambda n, f: min(math.ceil(n * f), n - 2))
+                              lambda n, f: min(math.ceil(n * f), n - 2), min_units=2)
     return {r.name for r, h in zip(runs, held) if h}
 
 

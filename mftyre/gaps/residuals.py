@@ -212,10 +212,10 @@ def condition_levels(values: np.ndarray, absolute: float, relative: float) -> np
 
 
 def stratified_holdout(level: np.ndarray, kind_of: np.ndarray, fraction: float, seed: int = 0,
-                       count=lambda n, fraction: round(n * fraction)) -> np.ndarray:
+                       count=lambda n, fraction: round(n * fraction), min_units: int = 3) -> np.ndarray:
     """The one rule of held-out evidence, for steady sweeps (:func:`holdout_mask`) and dynamic runs
     (:mod:`mftyre.gaps.dynamic`): ``level`` (units x factors) level indices of each unit's conditions, ``kind_of``
-    each unit's kind of test; boolean per unit, held out. Per kind with at least three units a ``fraction`` of
+    each unit's kind of test; boolean per unit, held out. Per kind with at least ``min_units`` units a ``fraction`` of
     them (``count(units of the kind, fraction)``: how many; at least one), unit by unit by the priorities of
     :func:`holdout_mask`."""
     level = np.asarray(level)
@@ -231,7 +231,7 @@ def stratified_holdout(level: np.ndarray, kind_of: np.ndarray, fraction: float, 
     train_count = [dict(zip(*np.unique(level[:, f], return_counts=True))) for f in range(n_factors)]
     for k in sorted(set(kind_of)):
         pool = list(np.flatnonzero(kind_of == k))
-        if len(pool) < 3:
+        if len(pool) < min_units:
             continue
         for _ in range(max(1, int(count(len(pool), fraction)))):
             def priority(i):
