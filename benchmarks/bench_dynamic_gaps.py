@@ -12,6 +12,16 @@ the changed effect (control: nothing) and every channel whose held-out RMS error
 ends within 1.3 x of it; a change that leaves every channel within 1.1 x the noise floor is reported "invisible"
 (no run shows it). A changed file must pass verify_tir like the base file (else the case is not a tyre). Time: CPU seconds of this process plus its children (the C compiler), i.e. on one core.
 Default file: ../shared/reference/tir/TNO_car205_60R15.tir, else tir_files/car_205_60R15_mf62_swift.tir.
+
+    python benchmarks/bench_dynamic_gaps.py --rig [--duration 0.6] [--cases NAME,...]
+
+The rig suite (issue 33; :data:`RIG_CASES`): cases the finder was not tuned to, on two property files (the TNO
+file and the sample SWIFT file), each with its own measurement chain drawn from the rig ranges of the issue (a
+causal 4th-order anti-alias filter at 90-300 Hz below Nyquist, 3.5-12 ms delay, 500 Hz-2 kHz sampling, AR(1)
+sensor noise, load-cell gains off by 1-2 %, a slow offset drift), obstacles beyond cleats (trapezoid, step up,
+pothole) and manoeuvres (step steer, braking step), one and two effects at a time, and controls. The finder gets
+the unchanged file and the whole catalogue; the pass rule is the one above, with "named" meaning exactly the
+changed effects (in any order).
 """
 from __future__ import annotations
 
@@ -57,6 +67,82 @@ CASES = {
 }
 
 
+SAMPLE = ROOT / "tir_files" / "car_205_60R15_mf62_swift.tir"
+TNO = ROOT.parent / "shared" / "reference" / "tir" / "TNO_car205_60R15.tir"
+#: Obstacles of the rig suite ({x0}: the leading edge).
+TRAPEZOID = "trapezoid(x0={x0}, top_length=0.05, height=0.015, ramp=0.03)"
+STEP = "step({x0}, 0.012)"
+POTHOLE = "cleat(x0={x0}, length=0.12, height=-0.015)"
+CLEAT = "cleat(x0={x0}, length=0.02, height=0.01)"
+_OBSTACLES = dict(speeds=(20.0, 60.0), pressures=(1.9e5, 2.5e5), steer_speeds=())
+_STEERS = dict(speeds=(), steer_speeds=(25.0, 45.0, 65.0, 85.0))
+#: name -> (file, runs, {parameter: factor or ("=", value)}, the changed effects' parameters, chain seed)
+RIG_CASES = {
+    "rig control: trapezoid + pothole (TNO)": (TNO, dict(_OBSTACLES, roads=(TRAPEZOID, POTHOLE)), {}, (), 1),
+    "rig control: step + cleat (sample)": (SAMPLE, dict(_OBSTACLES, roads=(STEP, CLEAT)), {}, (), 2),
+    "rig control: step steer (sample)": (SAMPLE, _STEERS, {}, (), 3),
+    "rig: contact length on trapezoid (sample)": (SAMPLE, dict(_OBSTACLES, roads=(TRAPEZOID, POTHOLE)),
+                                                  {"Q_RA1": 1.25}, ("Q_RA1",), 4),
+    "rig: sidewall over pressure on a step (TNO)": (TNO, dict(_OBSTACLES, roads=(STEP, CLEAT)),
+                                                    {"SWIFT_PSTIFF": ("=", 1.4)}, ("SWIFT_PSTIFF",), 5),
+    "rig: in-plane damping on a pothole (TNO)": (TNO, dict(_OBSTACLES, roads=(POTHOLE, CLEAT)),
+                                                 {"DAMP_LONG": 2.0}, ("DAMP_LONG",), 6),
+    "rig: lateral relaxation on step steer (TNO)": (TNO, _STEERS, {"LATERAL_STIFFNESS": 0.7}, ("LATERAL_STIFFNESS",),
+                                                  7),
+    "rig: two at once: contact length + damping (TNO)": (TNO, dict(_OBSTACLES, roads=(TRAPEZOID, CLEAT)),
+                                                         {"Q_RA1": 1.2, "DAMP_LONG": 2.0}, ("Q_RA1", "DAMP_LONG"), 8),
+    "rig relaxed: braking step longitudinal relaxation (sample)": (
+        SAMPLE, dict(speeds=(), steer_speeds=(), brake_speeds=(20.0, 50.0, 80.0), loads=(3000.0, 5000.0),
+                     model_kind="relaxed"), {"LONGITUDINAL_STIFFNESS": 1.4}, ("LONGITUDINAL_STIFFNESS",), 9),
+}
+
+
+def rig_chain(seed: int) -> dict:
+    """A measurement chain drawn from the issue's rig ranges (``synthetic_runs`` settings)."""
+    import numpy as np
+
+    rng = np.random.default_rng(1000 + seed)
+    rate = float(rng.choice((500.0, 1000.0, 2000.0)))
+    cutoff = float(min(rng.uniform(90.0, 300.0), 0.4 * rate))
+    gain = {c: 1.0 + float(rng.choice((-1, 1)) * rng.uniform(0.01, 0.02)) for c in ("FX", "FY", "FZ", "MZ")}
+    drift = {c: float(rng.uniform(-1, 1)) * (2.0 if c == "MZ" else 60.0) for c in ("FX", "FY", "FZ", "MZ")}
+    return dict(dt=1.0 / rate, cutoff=cutoff, delay=float(rng.uniform(3.5e-3, 12e-3)), ar=float(rng.uniform(0.3, 0.8)),
+                gain=gain, drift=drift)
+
+
+def run_rig_case(name, duration, seed=11):
+    tir, setting, change, params, chain_seed = RIG_CASES[name]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = mftyre.load_tir(tir)
+    values = {p: (v[1] if isinstance(v, tuple) else model.params[p] * v) for p, v in change.items()}
+    truth = model.with_params(**values)
+    new_problems = [p for p in verify_tir(truth) if p not in verify_tir(model)]
+    if new_problems:
+        raise SystemExit(f"case {name!r}: the changed file fails verification: {new_problems[0]}")
+    chain = rig_chain(chain_seed)
+    runs = synthetic_runs(model, truth=truth, duration=duration, lead=0.3, seed=seed, **setting, **chain)
+    t0, w0 = cpu(), time.perf_counter()
+    rep = find_dynamic_gaps(runs, model, model_kind=setting.get("model_kind", "auto"))
+    seconds, wall = cpu() - t0, time.perf_counter() - w0
+    found = sorted(p for c in rep.effects_added for p in c.parameters)
+    named = (found == [] if not params else all(any(p in c.parameters for c in rep.effects_added) for p in params)
+             and len(rep.effects_added) == len(params))
+    shrunk = all(rep.error_after[c] <= 1.3 * rep.noise_floor[c] for c in rep.error_before
+                 if rep.error_before[c] > 1.5 * rep.noise_floor[c])
+    visible = not params or any(rep.error_before[c] > 1.1 * rep.noise_floor[c] for c in rep.error_before)
+    ok = (named and shrunk) if visible else "invisible"
+    return dict(case=name, runs=len(runs), named=", ".join(rep.effect_names) or "-", ok=ok, cpu=seconds, wall=wall,
+                evaluations=rep.evaluations,
+                rig=f"{1 / chain['dt']:.0f} Hz, {chain['cutoff']:.0f} Hz, {1e3 * chain['delay']:.1f} ms, AR "
+                    f"{chain['ar']:.2f}, gain " + " ".join(f"{c} {chain['gain'][c]:.3f}" for c in sorted(rep.chain.gain)),
+                fitted=f"{1e3 * rep.chain.delay:.1f} ms, "
+                       + ("no filter" if rep.chain.cutoff is None else f"{rep.chain.cutoff:.0f} Hz/{rep.chain.order}")
+                       + ", gain " + " ".join(f"{c} {g:.3f}" for c, g in rep.chain.gain.items()),
+                errors=", ".join(f"{c} {rep.error_before[c]:.3g}->{rep.error_after[c]:.3g} ({rep.noise_floor[c]:.2g})"
+                                 for c in rep.error_before))
+
+
 def cpu() -> float:
     s, c = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
     return s.ru_utime + s.ru_stime + c.ru_utime + c.ru_stime
@@ -98,7 +184,25 @@ def main(argv=None) -> int:
     ap.add_argument("--duration", type=float, default=2.0)
     ap.add_argument("--cases", help="comma-separated case names (default: all)")
     ap.add_argument("--quick", action="store_true", help="0.6 s runs")
+    ap.add_argument("--rig", action="store_true", help="the rig suite (RIG_CASES) instead")
     a = ap.parse_args(argv)
+    if a.rig:
+        warnings.simplefilter("ignore")
+        names = [n.strip() for n in a.cases.split(",")] if a.cases else list(RIG_CASES)
+        print(f"rig suite; runs of {a.duration:g} s")
+        print("| case | runs | pass | CPU s | wall s | rig chain (rate, cutoff, delay, AR(1), gains) | fitted chain | named | "
+              "held-out RMS before -> after (noise) |")
+        print("|---|---|---|---|---|---|---|---|---|")
+        rows = []
+        for n in names:
+            r = run_rig_case(n, a.duration)
+            rows.append(r)
+            status = r["ok"] if isinstance(r["ok"], str) else ("yes" if r["ok"] else "NO")
+            print(f"| {r['case']} | {r['runs']} | {status} | {r['cpu']:.0f} | {r['wall']:.0f} | {r['rig']} | "
+                  f"{r['fitted']} | {r['named']} | {r['errors']} |", flush=True)
+        seen = [r for r in rows if r["ok"] != "invisible"]
+        print(f"passed {sum(r['ok'] is True for r in seen)} of {len(seen)} ({len(rows) - len(seen)} invisible)")
+        return 0
     shared = ROOT.parent / "shared" / "reference" / "tir" / "TNO_car205_60R15.tir"
     tir = Path(a.tir) if a.tir else (shared if shared.exists() else ROOT / "tir_files" / "car_205_60R15_mf62_swift.tir")
     with warnings.catch_warnings():

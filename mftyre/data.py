@@ -101,7 +101,7 @@ from .lazy import LazyModule
 pd = LazyModule("pandas")  # imported when first used: the command line starts without it
 
 __all__ = [
-    "CHANNELS", "REQUIRED", "INPUTS", "OUTPUTS", "UNITS", "TyreData", "read_csv", "read_tydex", "write_tydex",
+    "CHANNELS", "TIME_CHANNELS", "read_time_histories", "REQUIRED", "INPUTS", "OUTPUTS", "UNITS", "TyreData", "read_csv", "read_tydex", "write_tydex",
     "read_ttc", "read_data", "data_format", "check_plausible", "AXES", "AXES_HELP", "to_iso_w", "speaking_cli",
     "parse_columns", "parse_units", "parse_constants", "constant_value", "TTC_CHANNELS",
     "unit_to_si", "levels", "split_conditions", "split_sweeps", "bin_sweeps", "resample_sweeps",
@@ -127,13 +127,24 @@ CHANNELS: dict[str, tuple[str, str]] = {
     "RHO": ("length", "vertical deflection"),
     "RE": ("length", "effective rolling radius"),
 }
+#: The further channels of time histories (dynamic tyre tests, :func:`read_time_histories`; their layout:
+#: :mod:`mftyre.gaps.dynamic_runs`): channel -> (physical kind, meaning).
+TIME_CHANNELS: dict[str, tuple[str, str]] = {
+    "TIME": ("time", "sample time"),
+    "X": ("length", "axle travel along the road"),
+    "Z": ("length", "axle height above the road's zero"),
+    "LOAD": ("force", "downward force on the axle"),
+    "TORQUE": ("moment", "drive/brake torque on the rim"),
+    "PSI": ("angle", "yaw of the wheel"),
+    "SPIN": ("angular_speed", "measured rim spin"),
+}
 #: Input channels of the model, in the order of :meth:`mftyre.MFModel.evaluate`.
 INPUTS = ("FZ", "SL", "SA", "IA", "PHIT", "VX", "P")
 REQUIRED = ("FZ", "SA", "SL", "VX", "P")
 OUTPUTS = ("FX", "FY", "MX", "MY", "MZ", "OMEGA", "RL", "RHO", "RE")
 _ZERO_DEFAULT = ("IA", "PHIT")
 _SI_NAME = {"force": "N", "moment": "N*m", "ratio": "-", "angle": "rad", "curvature": "1/m", "speed": "m/s",
-            "pressure": "Pa", "angular_speed": "rad/s", "length": "m"}
+            "pressure": "Pa", "angular_speed": "rad/s", "length": "m", "time": "s"}
 
 
 def _unit_table() -> dict[str, dict[str, float]]:
@@ -161,7 +172,7 @@ def _unit_table() -> dict[str, dict[str, float]]:
                 moment.setdefault(f"{f}{sep}{ln}", ff * fl)
     ratio = {"-": 1.0, "": 1.0, "1": 1.0, "%": 0.01, "percent": 0.01, "none": 1.0, "unitless": 1.0}
     return {"force": force, "moment": moment, "ratio": ratio, "angle": angle, "curvature": curvature,
-            "speed": speed, "pressure": pressure, "angular_speed": angular, "length": length}
+            "speed": speed, "pressure": pressure, "angular_speed": angular, "length": length, "time": time}
 
 
 #: Accepted unit spellings per kind (case-insensitive, blanks ignored) -> factor to SI.
@@ -170,7 +181,7 @@ UNITS: dict[str, dict[str, float]] = _unit_table()
 
 def unit_to_si(channel: str, unit: str) -> float:
     """Factor that converts values of ``channel`` in ``unit`` to SI; ValueError naming the accepted units."""
-    kind = CHANNELS[channel][0]
+    kind = (CHANNELS.get(channel) or TIME_CHANNELS[channel])[0]
     key = str(unit).strip().lower().replace(" ", "")
     table = UNITS[kind]
     if key not in table:
@@ -184,7 +195,7 @@ def unit_to_si(channel: str, unit: str) -> float:
 #: channels not listed keep their sign. See :data:`AXES_HELP`.
 AXES: dict[str, dict[str, float]] = {
     "ISO-W": {},
-    "SAE": {"FY": -1.0, "FZ": -1.0, "MY": -1.0, "MZ": -1.0, "SA": -1.0, "PHIT": -1.0},
+    "SAE": {"FY": -1.0, "FZ": -1.0, "MY": -1.0, "MZ": -1.0, "SA": -1.0, "PHIT": -1.0, "PSI": -1.0},
     "adapted-SAE": {"FY": -1.0, "MY": -1.0, "MZ": -1.0, "PHIT": -1.0},
     "adapted-ISO": {"SA": -1.0},
 }
@@ -197,7 +208,8 @@ Axis systems (the sign of each channel as the file writes it; mftyre works in IS
   adapted-SAE  SAE with the load positive and the slip angle reversed (Pacejka, Tyre and Vehicle Dynamics):
                FZ > 0, SA > 0 gives FY > 0; against ISO-W FY, MY, MZ and turn slip change sign.
   adapted-ISO  ISO-W with the slip angle reversed (Pacejka): SA > 0 gives FY > 0; only SA changes sign.
-Wheel spin OMEGA, radii and pressure are taken as magnitudes (forward rolling positive) in every system."""
+Wheel spin OMEGA, radii and pressure are taken as magnitudes (forward rolling positive) in every system; so are
+the time histories' axle height Z, axle load LOAD and rim torque TORQUE; their yaw PSI turns sign with z (SAE)."""
 
 
 def to_iso_w(frame: pd.DataFrame, axes: str) -> pd.DataFrame:
@@ -258,8 +270,9 @@ _EXAMPLE_OPTION = {"columns": "FZ=Fz_N,SA=alpha", "units": "SA=deg,P=psi,VX=km/h
 
 def _channel(name: str, what: str) -> str:
     ch = name.strip().upper()
-    if ch not in CHANNELS:
-        raise ValueError(f"{what}: unknown channel {name!r}; channels: {', '.join(CHANNELS)}")
+    if ch not in CHANNELS and ch not in TIME_CHANNELS:
+        raise ValueError(f"{what}: unknown channel {name!r}; channels: {', '.join(CHANNELS)} (time histories also "
+                         f"{', '.join(TIME_CHANNELS)})")
     return ch
 
 
@@ -805,11 +818,47 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
     an error. Files larger than ``max_bytes`` are refused.
     """
     path = Path(path)
+    frame, units, notes = _csv_frame(path, columns, units, defaults, axes, check, max_bytes, CHANNELS, REQUIRED)
+    return TyreData(frame, tyre=tyre or path.stem, source=str(path), units=units, history=notes)
+
+
+def read_time_histories(path, *, columns: dict | None = None, units: dict | None = None,
+                        defaults: dict | None = None, axes: str = "ISO-W", check: bool = True,
+                        max_bytes: int = DATA_MAX_BYTES) -> tuple[pd.DataFrame, dict, list]:
+    """Read a CSV file of time histories (dynamic tyre tests: layout in :mod:`mftyre.gaps.dynamic_runs`) by the
+    rules of :func:`read_csv` (the same checks: only regular files, field counts per line, one column per channel,
+    numbers in channel columns, no infinite value, units, axes, constants, plausibility), with the channels of
+    :data:`TIME_CHANNELS` beside :data:`CHANNELS` and TIME and VX required; further: the axle load LOAD positive,
+    the yaw PSI within 1 rad (degrees?). (frame: channels in SI and ISO-W, other columns as text, index = line - 2;
+    units: channel -> unit as read; notes)."""
+    path = Path(path)
+    known = {**CHANNELS, **TIME_CHANNELS}
+    frame, units_read, notes = _csv_frame(path, columns, units, defaults, axes, check, max_bytes, known,
+                                          ("TIME", "VX"))
+    if check and "LOAD" in frame.columns:
+        load = frame["LOAD"].to_numpy(float)
+        bad = np.flatnonzero(load <= 0)
+        if bad.size:
+            hint = (f" ({100 * bad.size / load.size:.0f} % of the rows: SAE axes? the axle load is a magnitude in "
+                    f"every axis system)" if bad.size > load.size / 2 else "")
+            raise DataError(f"{path}: line {int(bad[0]) + 2}: channel LOAD: {load[bad[0]]:.6g} N: expected the "
+                            f"downward force on the axle, positive{hint}")
+    if check and "PSI" in frame.columns:
+        psi = np.abs(frame["PSI"].to_numpy(float))
+        if psi.size and np.nanmax(psi) > 1.0:
+            raise DataError(f"{path}: channel PSI: |yaw| up to {np.nanmax(psi):.4g} rad, above the 1 rad of a "
+                            f"steer step: the values look like degrees; give {remedy('units', 'PSI', 'deg')}")
+    return frame, units_read, notes
+
+
+def _csv_frame(path, columns, units, defaults, axes, check, max_bytes, known, required):
+    """(frame, units read, notes) of the CSV file ``path``: the reading and checks of :func:`read_csv` with the
+    channel table ``known`` and the ``required`` channels."""
     with open_user_file(path, max_bytes=max_bytes, what="CSV data file", error=DataError) as fh:
         data = fh.read()
     header = _csv_header(data, path)
     _refuse_wide(len(header), path, "line 1: ")
-    if len(header) == 1 and header[0].upper() not in CHANNELS:
+    if len(header) == 1 and header[0].upper() not in known:
         for sep, name in ((";", "semicolons"), ("\t", "tabs"), (" ", "blanks")):
             if len(header[0].split(sep)) > 2:
                 raise DataError(f"{path}: line 1: one column named {header[0][:60]!r}: the columns look separated "
@@ -828,13 +877,13 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
     if len(raw) == 0:
         raise DataError(f"{path}: no data rows: expected a header line followed by one line per sample")
     _refuse_units_row(raw, header, path)
-    mapping = {c: c.upper() for c in header if c.upper() in CHANNELS}
+    mapping = {c: c.upper() for c in header if c.upper() in known}
     for col, ch in (columns or {}).items():
         if col not in header:
             raise DataError(f"{path}: line 1: column {col!r} (for {ch}) not in the header; columns are "
                             f"{', '.join(header)}")
-        if ch.upper() not in CHANNELS:
-            raise DataError(f"{path}: unknown channel {ch!r} for column {col!r}; channels: {', '.join(CHANNELS)}")
+        if ch.upper() not in known:
+            raise DataError(f"{path}: unknown channel {ch!r} for column {col!r}; channels: {', '.join(known)}")
         mapping[col] = ch.upper()
     _refuse_duplicates(header, mapping, path)
     units = {k.upper(): v for k, v in (units or {}).items()}
@@ -862,13 +911,12 @@ def read_csv(path, *, columns: dict | None = None, units: dict | None = None, de
         raise DataError(f"{path}: unit given for {', '.join(unknown_units)}, which the file has no column for "
                         f"(columns: {', '.join(header)})")
     _convert_axes(frame, axes, path)
-    _apply_defaults(frame, defaults, path, column_of)
-    _check_required(frame, path, lambda row: f"{path}: line {row + 2}", column_of)
+    _apply_defaults(frame, defaults, path, column_of, known)
+    _check_required(frame, path, lambda row: f"{path}: line {row + 2}", column_of, required, known)
     if check:
         check_plausible(frame, str(path), column_of, constants=defaults)
-    unit_record = {ch: units.get(ch, _SI_NAME[CHANNELS[ch][0]]) for ch in CHANNELS if ch in frame.columns}
-    return TyreData(frame, tyre=tyre or path.stem, source=str(path), units=unit_record,
-                    history=_import_notes(axes, units, defaults, check))
+    unit_record = {ch: units.get(ch, _SI_NAME[known[ch][0]]) for ch in known if ch in frame.columns}
+    return frame, unit_record, _import_notes(axes, units, defaults, check)
 
 
 def _refuse_wide(count: int, path, where: str = "") -> None:
@@ -1017,13 +1065,13 @@ def _import_notes(axes, units, defaults, check=True) -> list[str]:
     return notes
 
 
-def _apply_defaults(frame, defaults, path, column_of=None):
+def _apply_defaults(frame, defaults, path, column_of=None, known=CHANNELS):
     """Constant channels (``defaults``: channel -> SI number or text with a unit) for channels the file lacks;
     a DataError for a channel the file measures (a constant never replaces a measurement silently)."""
     for name, value in (defaults or {}).items():
         ch = str(name).strip().upper()
-        if ch not in CHANNELS:
-            raise DataError(f"{path}: constant for unknown channel {name!r}; channels: {', '.join(CHANNELS)}")
+        if ch not in known:
+            raise DataError(f"{path}: constant for unknown channel {name!r}; channels: {', '.join(known)}")
         try:
             number = constant_value(ch, value)
         except ValueError as exc:
@@ -1035,24 +1083,24 @@ def _apply_defaults(frame, defaults, path, column_of=None):
         frame[ch] = number
 
 
-def _check_required(frame, path, locate, column_of=None):
-    missing = [c for c in REQUIRED if c not in frame.columns]
+def _check_required(frame, path, locate, column_of=None, required=REQUIRED, known=CHANNELS):
+    missing = [c for c in required if c not in frame.columns]
     if missing:
-        raise DataError(f"{path}: missing channel(s) {', '.join(missing)} (required: {', '.join(REQUIRED)}); name "
+        raise DataError(f"{path}: missing channel(s) {', '.join(missing)} (required: {', '.join(required)}); name "
                         f"the file's column ({remedy('columns', missing[0], 'COLUMN')}) or give a constant "
                         f"({remedy('constants', missing[0], 'VALUE')})")
-    _check_values(frame, locate, column_of)
+    _check_values(frame, locate, column_of, required, known)
 
 
-def _check_values(frame, locate, column_of=None):
+def _check_values(frame, locate, column_of=None, required_channels=REQUIRED, known=CHANNELS):
     """DataError at the first value no measurement can have: NaN or +-inf in a required channel (and in IA,
     PHIT when present), +-inf in any other channel (NaN there means "not measured"). ``locate(row)`` says
     where that row is; ``column_of``: channel -> the file's column name, when they differ."""
-    for ch in CHANNELS:
+    for ch in known:
         if ch not in frame.columns:
             continue
         values = frame[ch].to_numpy(dtype=float)
-        required = ch in REQUIRED or ch in _ZERO_DEFAULT
+        required = ch in required_channels or ch in _ZERO_DEFAULT
         bad = ~np.isfinite(values) if required else np.isinf(values)
         if not bad.any():
             continue

@@ -544,6 +544,8 @@ def tir_text(params: TyreParameters, comments=(), *, notes: dict | None = None, 
         non_default = value != spec.default
         if not (present or relevant or non_default or name == "FITTYP"):
             continue
+        if not present and spec.optional:  # absent = "effect as the file's equations say", not the default's
+            continue                       # number (SWIFT_PSTIFF absent is PFZ1, not 0): it stays absent
         line = _line(name, _format_value(value, spec.is_string, name), spec.description)
         if name in notes:
             line = f"{line:<95} ! " + _one_line(" ".join(str(notes[name]).split()))

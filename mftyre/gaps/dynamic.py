@@ -10,8 +10,11 @@ Command line: ``mftyre gaps --dynamic DATA.csv --model BASE.tir [-o improved.tir
 :mod:`mftyre.gaps.dynamic_runs`.
 
 1. *Align*: the measurement chain, common to all runs (one rig): a time delay of the outputs relative to the
-   inputs and a causal 4th-order Butterworth anti-alias filter (cutoff from a grid including "none": the data
-   say which), both fitted by least squares to the given model's prediction.
+   inputs, a causal Butterworth anti-alias filter (order 2 or 4, cutoff from a grid below Nyquist including
+   "none": the data say which) and per channel the load cell's gain and offset drift (linear, :class:`Chain`),
+   fitted by least squares to the given model's prediction. They are nuisances: refitted with every candidate
+   (the delay and a continuous cutoff jointly with its parameters, the calibration projected out of every trial),
+   so a candidate is credited only with what the chain cannot explain.
    One delay for all runs on purpose: a delay per run would absorb the very lags (relaxation, enveloping) the
    finder must see. Refitted after every effect added (the given model's errors bend it).
 2. *Noise* from the data: in the quiet lead-in of every run (before the model's response departs from its level)
@@ -24,7 +27,8 @@ Command line: ``mftyre gaps --dynamic DATA.csv --model BASE.tir [-o improved.tir
 4. *Name* (:mod:`mftyre.gaps.dynamic_catalogue`): the effects the runs can test (the rest listed with the
    reason) whose kinds and channels show a gap are screened by one Gauss-Newton step on the training runs
    (finite-difference sensitivity of the simulated histories); the most promising are refitted.
-5. *Add*: whole runs are held out (stratified over kind and condition). A candidate is accepted when its
+5. *Add*: whole runs are held out by the steady finder's rule (:func:`mftyre.gaps.residuals.stratified_holdout`:
+   every manoeuvre, speed, load, pressure and road held out somewhere, none lost from the training runs). A candidate is accepted when its
    training chi-square decrease is significant (chi2(k), Bonferroni over the candidates screened), its held-out
    decrease is significant too (chi2(k) at the same level) and material (at least :data:`MATERIAL` of the held-out
    chi-square above the noise), and the improved model is verified: it builds,
@@ -41,9 +45,10 @@ import json
 import math
 import time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+import lmfit
 import numpy as np
 from scipy import stats
 
@@ -52,59 +57,118 @@ from .dynamic_catalogue import DYNAMIC_CATALOGUE, testable_effects
 from .dynamic_locate import compare, features
 from .dynamic_runs import MODEL_KINDS, DynamicRun, SwiftTyres, measurement_chain, read_runs, simulate
 
-__all__ = ["find_dynamic_gaps", "DynamicGapReport", "Chain", "align", "noise_from_data", "model_kind_for"]
+__all__ = ["find_dynamic_gaps", "DynamicGapReport", "Chain", "align", "noise_from_data", "model_kind_for",
+           "precision", "calibration", "values_text"]
 
 #: Cutoffs [Hz] tried for the anti-alias filter (None: no filter).
 CUTOFFS = (None, 400.0, 300.0, 250.0, 200.0, 150.0, 120.0, 100.0, 80.0, 60.0)
+#: Highest cutoff of the anti-alias filter, as a share of the Nyquist frequency (a Butterworth design needs it below 1).
+NYQUIST_SHARE = 0.95
 #: Share of the held-out chi-square above the noise (chi2 - n/tau) an effect must explain to be added.
 MATERIAL = 0.1
 #: Candidates refitted fully per round (after the linearised screening).
 REFIT_TOP = 3
 
 
+#: Filter orders the alignment tries (causal Butterworth), and the largest calibration error of a load cell's gain
+#: the chain may correct (1 +- GAIN_RANGE): beyond it a "gain" would be the tyre's, not the rig's.
+ORDERS = (2, 4)
+GAIN_RANGE = 0.05
+
+
 @dataclass
 class Chain:
-    """The measurement chain fitted in the alignment: ``delay`` [s], ``cutoff`` [Hz] or None."""
+    """The measurement chain, the nuisances fitted with every candidate: ``delay`` [s], ``cutoff`` [Hz] or None and
+    ``order`` of the causal anti-alias filter (common to all runs: one rig), and per channel the calibration: the
+    recorded signal is ``gain`` x (filtered, delayed true signal) + ``drift`` x (time since the run's start) (a
+    load cell zeroed before the run whose offset drifts slowly; a constant offset would take the static load
+    that sets the gain)."""
 
     delay: float = 0.0
     cutoff: float | None = None
+    order: int = 4
+    gain: dict = field(default_factory=dict)
+    drift: dict = field(default_factory=dict)
 
-    def __call__(self, y, dt):
-        return measurement_chain(y, dt, self.cutoff, self.delay)
+    def dynamics(self, y, dt):
+        """The filter and the delay (no calibration)."""
+        return measurement_chain(y, dt, self.cutoff, self.delay, self.order)
+
+    def __call__(self, y, run, channel):
+        """What the chain records of the true signal ``y`` of ``channel`` in ``run``."""
+        return self.calibrate(self.dynamics(y, run.dt), run, channel)
+
+    def calibrate(self, f, run, channel):
+        return self.gain.get(channel, 1.0) * f + self.drift.get(channel, 0.0) * (run.t - run.t[0])
+
+    def calibrated(self, runs, pred) -> "Chain":
+        """This chain with each channel's gain and drift fitted to ``runs`` against the prediction
+        ``pred`` (run -> channel -> array) by linear least squares (the gain kept within :data:`GAIN_RANGE`)."""
+        return replace(self, **calibration([(r, c, self.dynamics(pred[r.name][c], r.dt)) for r in runs
+                                            for c in r.measured]))
 
 
-def _sse_delay(meas, pred, dt, cutoff, delays, weights):
-    total = np.zeros(len(delays))
-    for r, ch in meas:
-        for c, y in ch.items():
-            f = measurement_chain(pred[r][c], dt[r], cutoff, 0.0)
-            k = np.arange(y.size)
-            for j, d in enumerate(delays):
-                total[j] += np.nansum((np.interp(k - d / dt[r], k, f) - y) ** 2) / weights[c]
-    return total
+def calibration(filtered: list) -> dict:
+    """dict(gain=, drift=) per channel from ``filtered`` ((run, channel, filtered and delayed model)):
+    measured = gain f + drift (t - t0) in least squares; a gain beyond 1 +- :data:`GAIN_RANGE` is held at the bound
+    and the drift refitted."""
+    out = dict(gain={}, drift={})
+    for c in sorted({c for _, c, _ in filtered}):
+        keys = [k for k in filtered if k[1] == c]
+        f = np.concatenate([k[2] for k in keys])
+        y = np.concatenate([k[0].measured[c] for k in keys])
+        t = np.concatenate([k[0].t - k[0].t[0] for k in keys])
+        ok = np.isfinite(y) & np.isfinite(f)
+        a = np.column_stack([f, t])[ok]
+        coef = np.linalg.lstsq(a, y[ok], rcond=None)[0]
+        if not abs(coef[0] - 1.0) <= GAIN_RANGE:
+            g = float(np.clip(coef[0], 1.0 - GAIN_RANGE, 1.0 + GAIN_RANGE)) if np.isfinite(coef[0]) else 1.0
+            coef = np.r_[g, np.linalg.lstsq(a[:, 1:], y[ok] - g * f[ok], rcond=None)[0]]
+        out["gain"][c], out["drift"][c] = (float(v) for v in coef)
+    return out
+
+
+def cutoffs_below_nyquist(runs, grid=CUTOFFS) -> tuple:
+    """The cutoffs of ``grid`` a causal filter can have at the runs' slowest sample rate: below
+    :data:`NYQUIST_SHARE` of its Nyquist frequency (None, no filter, always)."""
+    top = NYQUIST_SHARE * 0.5 / max(r.dt for r in runs)
+    return tuple(c for c in grid if c is None or c < top)
+
+
+def _sse(runs, pred, chain, weights) -> float:
+    """Channel-weighted sum of squares of measured less ``chain`` (calibrated afresh) of the prediction."""
+    filtered = [(r, c, chain.dynamics(pred[r.name][c], r.dt)) for r in runs for c in r.measured]
+    chain = replace(chain, **calibration(filtered))
+    return float(sum(np.nansum((chain.calibrate(f, r, c) - r.measured[c]) ** 2) / weights[c] for r, c, f in filtered))
 
 
 def align(runs, pred) -> tuple:
-    """(Chain, {cutoff: chi-square}) fitted to the model prediction ``pred`` (run -> channel -> array)."""
-    meas = [(r.name, r.measured) for r in runs]
-    dt = {r.name: r.dt for r in runs}
+    """(Chain, {(order, cutoff): weighted sum of squares}) fitted to the model prediction ``pred`` (run -> channel
+    -> array): per filter order (:data:`ORDERS`) and cutoff (:data:`CUTOFFS` below Nyquist,
+    :func:`cutoffs_below_nyquist`) the delay on a 2 ms grid refined by a parabola, each with the channels'
+    calibration (:meth:`Chain.calibrated`) fitted; the cutoff is refined further with every candidate
+    (:func:`_refit`)."""
     weights = {c: max(np.var(np.concatenate([r.measured[c] for r in runs if c in r.measured])), 1e-12)
                for r in runs for c in r.measured}
-    delays = np.arange(-0.005, 0.0301, 0.001)
+    delays = np.arange(-0.004, 0.0301, 0.002)
     best, table = None, {}
-    for cutoff in CUTOFFS:
-        sse = _sse_delay(meas, pred, dt, cutoff, delays, weights)
-        j = int(np.argmin(sse))
-        d = delays[j]
-        if 0 < j < len(delays) - 1:  # parabola through the three best
-            a, b, c = sse[j - 1], sse[j], sse[j + 1]
-            den = a - 2 * b + c
-            if den > 0:
-                d = d + 0.5 * (a - c) / den * (delays[1] - delays[0])
-        fine = _sse_delay(meas, pred, dt, cutoff, [d], weights)[0]
-        table[cutoff] = fine
-        if best is None or fine < best[0]:
-            best = (fine, Chain(float(d), cutoff))
+    for order in ORDERS:
+        for cutoff in cutoffs_below_nyquist(runs):
+            if cutoff is None and order != ORDERS[-1]:
+                continue
+            sse = np.array([_sse(runs, pred, Chain(d, cutoff, order), weights) for d in delays])
+            j = int(np.argmin(sse))
+            d = delays[j]
+            if 0 < j < len(delays) - 1:  # parabola through the three best
+                a, b, c = sse[j - 1], sse[j], sse[j + 1]
+                den = a - 2 * b + c
+                if den > 0:
+                    d = d + 0.5 * (a - c) / den * (delays[1] - delays[0])
+            chain = Chain(float(d), cutoff, order)
+            fine = _sse(runs, pred, chain, weights)
+            table[(order, cutoff)] = fine
+            if best is None or fine < best[0]:
+                best = (fine, chain.calibrated(runs, pred))
     return best[1], table
 
 
@@ -140,8 +204,8 @@ def noise_from_data(runs, pred, chain) -> dict:
     parts = {}
     for r in runs:
         for c, y in r.measured.items():
-            model_y = chain(pred[r.name][c], r.dt)
-            q = _quiet(model_y, r.dt)
+            model_y = chain(pred[r.name][c], r, c)
+            q = _quiet(chain.dynamics(pred[r.name][c], r.dt), r.dt)  # the tyre's event, not the cell's drift
             if q >= 30:  # measured less the model (any slow settling), less the mean (a static model error)
                 e = np.asarray(y[:q], float) - model_y[:q]
                 parts.setdefault(c, []).append(e - np.mean(e))
@@ -157,20 +221,26 @@ def noise_from_data(runs, pred, chain) -> dict:
     return out
 
 
+#: Level steps of the run conditions (absolute, relative to the largest): speed [km/h], load [N], pressure [bar].
+_RUN_LEVELS = {"speed": (1.0, 0.03), "load": (0.0, 0.05), "pressure": (0.0, 0.03)}
+
+
 def _holdout(runs, fraction, seed):
-    """Names of the held-out runs: per kind, runs ordered by condition, every 1/fraction-th from an offset set
-    by ``seed``; each kind keeps at least one training run."""
-    out = set()
-    for kind in sorted({r.kind for r in runs}):
-        group = sorted([r for r in runs if r.kind == kind],
-                       key=lambda r: (r.condition["speed"], r.condition["pressure"], r.condition["load"]))
-        if len(group) < 2:
-            continue
-        step = max(2, int(round(1 / fraction)))
-        start = seed % step
-        picks = group[start::step] or group[-1:]
-        out |= {r.name for r in picks[:len(group) - 1]}
-    return out
+    """Names of the held-out runs: the steady finder's rule (:func:`mftyre.gaps.residuals.stratified_holdout`) over
+    the runs as units, their kind (cleat, steer, brake, flat) as the kind of test and as conditions the levels
+    of speed, load and pressure and the road (which obstacle): every condition and manoeuvre present is held out
+    somewhere when the runs allow it, and none vanishes from the training runs."""
+    from .residuals import condition_levels, stratified_holdout
+
+    cond = [r.condition for r in runs]
+    level = [condition_levels(np.nan_to_num([c[k] for c in cond]), *step) for k, step in _RUN_LEVELS.items()]
+    roads = sorted({r.road for r in runs})
+    level.append(np.array([roads.index(r.road) for r in runs]))
+    # whole runs are few and long: the fraction rounded up (4 runs at 0.34: 2 held out), two kept for training
+    # where there are three or more, and one of two held out (a manoeuvre run twice is tested on one)
+    held = stratified_holdout(np.stack(level, axis=1), np.array([r.kind for r in runs]), fraction, seed,
+                              lambda n, f: min(math.ceil(n * f), n - 2), min_units=2)
+    return {r.name for r, h in zip(runs, held) if h}
 
 
 class _Problem:
@@ -181,7 +251,7 @@ class _Problem:
 
     def weighted(self, run, channel, pred):
         n = self.noise[channel]
-        return (self.chain(pred, run.dt) - run.measured[channel]) / (n["sigma"] * math.sqrt(n["tau"]))
+        return (self.chain(pred, run, channel) - run.measured[channel]) / (n["sigma"] * math.sqrt(n["tau"]))
 
     def residuals(self, pred, names=None) -> dict:
         """(run, channel) -> weighted residual array."""
@@ -209,6 +279,7 @@ class DynamicCandidate:
     p_test: float = math.nan
     values: dict = field(default_factory=dict)
     stderr: dict = field(default_factory=dict)
+    correlation: dict = field(default_factory=dict)  # "A~B" -> correlation of a pair too close to separate
     accepted: bool = False
     note: str = ""
 
@@ -226,6 +297,12 @@ class DynamicGapReport:
     def __init__(self, **kw):
         self.__dict__.update(kw)
 
+    def evaluate(self, model) -> dict:
+        """channel -> RMS error of ``model`` (e.g. the written file read back) on the runs the errors were reported
+        for (held out, else training), through the fitted measurement chain: :attr:`error_after` for
+        :attr:`model`."""
+        return _rms(self.runs, _Sim(self.runs, self.model_kind)(model), self.chain, self.held_out or self.trained)
+
     @property
     def effect_names(self) -> list:
         return [c.name for c in self.effects_added]
@@ -233,7 +310,7 @@ class DynamicGapReport:
     def to_dict(self) -> dict:
         return _jsonable(dict(message=self.message, model_kind=self.model_kind, effects_added=[c.to_dict() for c in self.effects_added],
                               rounds=[[c.to_dict() for c in r] for r in self.rounds], untestable=self.untestable,
-                              chain=dict(delay=self.chain.delay, cutoff=self.chain.cutoff), noise=self.noise,
+                              chain=self.chain.__dict__, noise=self.noise,
                               held_out=sorted(self.held_out), error_before=self.error_before,
                               error_after=self.error_after, noise_floor=self.noise_floor,
                               by_condition=self.by_condition, findings=self.findings, seconds=self.seconds))
@@ -256,8 +333,10 @@ class DynamicGapReport:
     def markdown(self) -> str:
         L = ["# Dynamic gap report", "", self.message, "",
              f"Dynamic model: the {self.model_kind} wheel. "
-             f"Measurement chain fitted to the given model: delay {1e3 * self.chain.delay:.2f} ms, anti-alias "
-             f"filter {'none' if self.chain.cutoff is None else f'{self.chain.cutoff:g} Hz (4th-order Butterworth)'}.",
+             f"Measurement chain fitted with the final model: delay {1e3 * self.chain.delay:.2f} ms, anti-alias "
+             f"filter {'none' if self.chain.cutoff is None else f'{self.chain.cutoff:.4g} Hz ({self.chain.order}-pole Butterworth)'}; "
+             "calibration " + ", ".join(f"{c} gain {g:.4f} drift {self.chain.drift[c]:.3g}/s"
+                                        for c, g in self.chain.gain.items()) + ".",
              "", "## Noise (quiet lead-ins)", "", "| channel | sigma | tau [samples] | samples |", "|---|---|---|---|"]
         L += [f"| {c} | {n['sigma']:.3g} | {n['tau']:.2f} | {n['samples']} |" for c, n in self.noise.items()]
         L += ["", "## Held-out error (RMS) before -> after, noise floor", "", "| channel | before | after | noise |",
@@ -274,7 +353,7 @@ class DynamicGapReport:
               f"{f['z']:.1f} |" for f in self.findings[:40]]
         L += ["", "## Effects added", ""]
         for c in self.effects_added:
-            vals = ", ".join(f"{k} = {v:.5g} +- {c.stderr.get(k, math.nan):.2g}" for k, v in c.values.items())
+            vals = values_text(c)
             L.append(f"* **{c.name}**: {vals}; training chi2 {c.chi2_train_before:.0f} -> {c.chi2_train_after:.0f} "
                      f"(p {c.p_train:.2g}), held-out chi2 {c.chi2_test_before:.0f} -> {c.chi2_test_after:.0f} "
                      f"(p {c.p_test:.2g})")
@@ -301,32 +380,43 @@ class DynamicGapReport:
         import matplotlib.pyplot as plt
 
         runs = runs or [r for r in self.runs if r.name in self.held_out] or self.runs
+        from ..files import write_figure
+
         rows = [(r, c) for r in runs for c in r.measured]
-        fig, axes = plt.subplots(len(rows), 1, figsize=(7, 1.8 * len(rows)), squeeze=False)
+        fig, axes = plt.subplots(len(rows), 1, figsize=(7, 1.8 * len(rows)), squeeze=False, dpi=70)
         for ax, (r, c) in zip(axes[:, 0], rows):
             ax.plot(r.t, r.measured[c], color="0.6", lw=0.8, label="measured")
-            ax.plot(r.t, self.chain(self.pred_before[r.name][c], r.dt), lw=1.0, label="given model")
-            ax.plot(r.t, self.chain(self.pred_after[r.name][c], r.dt), lw=1.0, ls="--", label="improved")
+            ax.plot(r.t, self.chain(self.pred_before[r.name][c], r, c), lw=1.0, label="given model")
+            ax.plot(r.t, self.chain(self.pred_after[r.name][c], r, c), lw=1.0, ls="--", label="improved")
             ax.set_ylabel(c)
             ax.set_title(r.label(), fontsize=8)
         axes[0, 0].legend(fontsize=7)
         axes[-1, 0].set_xlabel("time [s]")
         fig.tight_layout()
-        fig.savefig(path, dpi=70)
-        plt.close(fig)
-        return path
+        try:
+            return write_figure(fig, path)  # the one safe writer: never through a planted link
+        finally:
+            plt.close(fig)
 
     def save(self, folder, *, overwrite: bool = False) -> Path:
-        from ..files import write_atomically
+        from ..files import check_outputs, make_output_folder, write_atomically
 
         folder = Path(folder)
-        if folder.exists() and any(folder.iterdir()) and not overwrite:
-            raise DataError(f"{folder} exists and is not empty: pass overwrite=True")
-        folder.mkdir(parents=True, exist_ok=True)
+        check_outputs({}, folders={"report folder": folder}, overwrite=overwrite, option="overwrite=True")
+        make_output_folder(folder, "report folder")
         write_atomically(folder / "report.md", self.markdown() + "\n![held-out runs](histories.png)\n")
         write_atomically(folder / "gaps.json", json.dumps(self.to_dict(), indent=1))
         self.plot(folder / "histories.png")
         return folder
+
+
+def values_text(c) -> str:
+    """``A = 1.2 +- 0.03``, or without +- for a parameter the data do not separate from another (its correlation
+    said instead)."""
+    vals = ", ".join(f"{k} = {v:.5g}" + (f" +- {c.stderr[k]:.2g}" if math.isfinite(c.stderr.get(k, math.nan)) else
+                                          " (no +-)") for k, v in c.values.items())
+    return vals + "".join(f"; {pair.replace('~', ' and ')} not separated by these runs (correlation {rho:.3f})"
+                          for pair, rho in c.correlation.items())
 
 
 def _jsonable(x):
@@ -554,7 +644,7 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
         for cand in rnd[:refit_top]:
             e = next(x for x in candidates if x.name == cand.name)
             say(f"  refitting {e.name}")
-            out = _refit(e, model, pred, prob, sim, runs, train, keys_train, jac_cache[e.name])
+            out = _refit(e, model, pred, prob, sim, runs, train, keys_train)
             if out is None:
                 cand.note = "refit failed (the model could not be built or simulated)"
                 continue
@@ -567,8 +657,8 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
             cand.p_train = float(stats.chi2.sf(max(chi_train - cand.chi2_train_after, 0.0), k))
             cand.p_test = float(stats.chi2.sf(max(chi_test - cand.chi2_test_after, 0.0), k)) if held else math.nan
             cand.values = {p: float(new_model.params[p]) for p in e.parameters}
-            cand.stderr = {p: float(math.sqrt(max(cov[j, j], 0.0)) * _slope(e, p, cand.values[p], model.params[p]))
-                           for j, p in enumerate(e.parameters)}
+            cand.stderr, cand.correlation = precision(
+                cov, [_slope(e, p, cand.values[p], model.params[p]) for p in e.parameters], e.parameters)
             level = alpha / m_tests
             if not cand.p_train < level:
                 cand.note = f"training decrease not significant (p {cand.p_train:.2g} >= {level:.2g})"
@@ -614,26 +704,18 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
         say(f"  added {cand.name}; realigned: delay {1e3 * chain.delay:.2f} ms, filter {chain.cutoff} Hz")
         candidates = [e for e in candidates if e.name != cand.name]
 
-    # show
-    def rms(p, names):
-        out = {}
-        for c in noise:
-            e = [p[r.name][c] for r in runs if r.name in names and c in r.measured]
-            m = [r for r in runs if r.name in names and c in r.measured]
-            if m:
-                out[c] = float(np.sqrt(np.mean(np.concatenate([(chain(x, r.dt) - r.measured[c]) ** 2
-                                                               for x, r in zip(e, m)]))))
-        return out
-
+    # show: the improved model simulated afresh on every run (what is written is what is scored)
+    if added:
+        pred = sim(model)
     names_eval = held or train
     by_condition = []
     for r in runs:
         for c in r.measured:
-            b = float(np.sqrt(np.mean((chain(pred0[r.name][c], r.dt) - r.measured[c]) ** 2)))
-            a = float(np.sqrt(np.mean((chain(pred[r.name][c], r.dt) - r.measured[c]) ** 2)))
+            b = float(np.sqrt(np.mean((chain(pred0[r.name][c], r, c) - r.measured[c]) ** 2)))
+            a = float(np.sqrt(np.mean((chain(pred[r.name][c], r, c) - r.measured[c]) ** 2)))
             by_condition.append(dict(run=r.name, kind=r.kind, held_out=r.name in held, **r.condition, channel=c,
                                      rms_before=b, rms_after=a))
-    err_b, err_a = rms(pred0, names_eval), rms(pred, names_eval)
+    err_b, err_a = _rms(runs, pred0, chain, names_eval), _rms(runs, pred, chain, names_eval)
     floor = {c: n["sigma"] for c, n in noise.items()}
     if added:
         msg = (f"added {len(added)} effect(s): " + "; ".join(c.name for c in added) + ". Held-out RMS "
@@ -643,10 +725,22 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
                + ", ".join(f"{c} {err_b[c]:.3g} (noise {floor[c]:.3g})" for c in err_b))
     return DynamicGapReport(model_given=model_given, model=model, effects_added=added, rounds=rounds,
                             untestable=untestable, chain=chain, chain_table=chain_table, noise=noise, held_out=held,
+                            trained=train,
                             error_before=err_b, error_after=err_a, noise_floor=floor, by_condition=by_condition,
                             findings=findings, message=msg, runs=runs, pred_before=pred0, pred_after=pred,
                             evaluations=sim.evaluations, growth_given=growth_given, model_kind=model_kind,
                             seconds=time.perf_counter() - t_start)
+
+
+def _rms(runs, pred, chain, names) -> dict:
+    """channel -> RMS of measured less the chain's image of the prediction ``pred`` over the runs ``names``."""
+    out = {}
+    for c in sorted({c for r in runs for c in r.measured}):
+        m = [r for r in runs if r.name in names and c in r.measured]
+        if m:
+            out[c] = float(np.sqrt(np.mean(np.concatenate([(chain(pred[r.name][c], r, c) - r.measured[c]) ** 2
+                                                           for r in m]))))
+    return out
 
 
 def _gaps(runs, prob, pred, alpha) -> set:
@@ -674,25 +768,43 @@ _DELAY_RANGE, _CUTOFF_RANGE = (-0.005, 0.03), (20.0, 500.0)
 def _chain_at(chain0, dc) -> Chain:
     """``chain0`` moved by ``dc`` (delay in ms, the cutoff by exp(0.1 dc[1])), in :data:`_CHAIN_STEP` units."""
     cutoff = None if chain0.cutoff is None else chain0.cutoff * math.exp(_CHAIN_STEP[1] * dc[1])
-    return Chain(chain0.delay + _CHAIN_STEP[0] * dc[0], cutoff)
+    return replace(chain0, delay=chain0.delay + _CHAIN_STEP[0] * dc[0], cutoff=cutoff)
 
 
 def _chain_columns(prob, pred, train, keys_train, r0):
-    """Sensitivity of the weighted training residuals ``r0`` to the chain's delay and cutoff (no simulation)."""
+    """Sensitivity of the weighted training residuals ``r0`` to the chain's nuisances (no simulation): its delay and
+    cutoff (finite differences), and per channel its gain and drift (exact: linear)."""
     cols = []
     for j in range(1 if prob.chain.cutoff is None else 2):
         dc = np.zeros(2)
         dc[j] = 0.1
         rr = _Problem(prob.runs, _chain_at(prob.chain, dc), prob.noise).residuals(pred, train)
         cols.append((np.concatenate([rr[k] for k in keys_train]) - r0) / 0.1)
+    run = {r.name: r for r in prob.runs}
+    blocks = {k: prob.weighted(run[k[0]], k[1], pred[k[0]][k[1]]) for k in keys_train}
+    for c in sorted({k[1] for k in keys_train}):
+        n = prob.noise[c]
+        w = n["sigma"] * math.sqrt(n["tau"])
+        for part in ("gain", "drift"):
+            col = []
+            for k in keys_train:
+                r = run[k[0]]
+                if k[1] != c:
+                    col.append(np.zeros_like(blocks[k]))
+                elif part == "gain":
+                    col.append(prob.chain.dynamics(pred[k[0]][c], r.dt) / w)
+                else:
+                    col.append((r.t - r.t[0]) / w)
+            cols.append(np.concatenate(col))
     return np.column_stack(cols)
 
 
-def _refit(effect, model, pred, prob, sim, runs, train, keys_train, J):
-    """The effect's parameters refitted on the training runs of its kinds, in three stages: Gauss-Newton from the
-    screening sensitivity ``J`` with the measurement chain held; the chain aligned afresh to that candidate (the
-    grid of :func:`align`: the filter's presence and a start for the cutoff); then the parameters together with
-    the chain's delay and cutoff (nuisance parameters) by Levenberg-Marquardt with Broyden updates. Jointly because
+def _refit(effect, model, pred, prob, sim, runs, train, keys_train):
+    """The effect's parameters refitted on the training runs of its kinds, in three stages: the parameters alone
+    with the measurement chain held; the chain aligned afresh to that candidate (the grid of :func:`align`: the
+    filter's presence and a start for the cutoff); then the parameters together with the chain's delay and cutoff
+    (nuisance parameters). Each stage by lmfit's least squares (trust-region reflective) with the Jacobian of
+    finite differences (a parameter column: one simulation; a chain column: none). Jointly because
     a lag the model adds (a relaxation length, a softer sidewall) and the chain's lag trade off: fitted in turn,
     the chain kept part of the gap and the parameter stopped short (PTY1 of the MF 5.2 file: 1.31 +- 0.012 for a
     truth of 1.22). The parameters' covariance is the marginal one (chain included, :func:`_covariance`: model
@@ -702,8 +814,8 @@ def _refit(effect, model, pred, prob, sim, runs, train, keys_train, J):
     base = given_values(model, effect.parameters)
     sub = [r for r in runs if r.kind in effect.kinds]
     sub_train = [r for r in sub if r.name in train]
+    train_runs = [r for r in runs if r.name in train]
     simulated = {}
-    damping = [1e-3]
 
     def predict(dp):  # the candidate's training prediction, one simulation per parameter vector
         key = tuple(np.round(dp, 12))
@@ -719,14 +831,17 @@ def _refit(effect, model, pred, prob, sim, runs, train, keys_train, J):
             simulated[key] = p
         return simulated[key]
 
+    top = NYQUIST_SHARE * 0.5 / max(r.dt for r in runs)  # the filter's cutoff stays below Nyquist
+
     def resid(delta, chain0):
         chain = _chain_at(chain0, delta[k:])
         if not (_DELAY_RANGE[0] <= chain.delay <= _DELAY_RANGE[1]
-                and (chain.cutoff is None or _CUTOFF_RANGE[0] <= chain.cutoff <= _CUTOFF_RANGE[1])):
+                and (chain.cutoff is None or _CUTOFF_RANGE[0] <= chain.cutoff <= min(_CUTOFF_RANGE[1], top))):
             return None
         p = predict(delta[:k])
         if p is None:
             return None
+        chain = chain.calibrated(train_runs, p)  # the calibration fitted with every trial (linear: projected out)
         rr = _Problem(runs, chain, prob.noise).residuals(p, train)
         v = np.concatenate([rr[key] for key in keys_train])
         return v if np.all(np.isfinite(v)) else None
@@ -740,55 +855,57 @@ def _refit(effect, model, pred, prob, sim, runs, train, keys_train, J):
             cols.append(np.zeros_like(r) if rj is None else (rj - r) / 0.1)
         return np.column_stack(cols)
 
-    def fit(delta, r, J, chain0, free, iterations):  # Levenberg-Marquardt on the coordinates ``free``
-        fresh = False  # J from finite differences at delta (else the screening's or Broyden's)
-        damping[0] = 1e-3
-        for _ in range(iterations):
-            normal, gradient = J.T @ J, J.T @ r
-            scale = np.diag(normal).copy()
-            scale[scale <= 0] = 1.0
-            for _try in range(6):
-                step = np.zeros_like(delta)
-                step[free] = -np.linalg.lstsq(normal + damping[0] * np.diag(scale), gradient, rcond=None)[0]
-                r_new = resid(delta + step, chain0)
-                if r_new is not None and r_new @ r_new < r @ r:
-                    damping[0] = max(damping[0] / 10, 1e-6)
-                    break
-                damping[0] *= 10
-            else:
-                r_new = None
-            gain = 0.0 if r_new is None else (r @ r - r_new @ r_new) / max(r @ r, 1e-300)
-            if r_new is not None:
-                s = step[free]
-                J = J + np.outer(r_new - r - J @ s, s) / float(s @ s)  # Broyden
-                delta, r = delta + step, r_new
-            if gain < 1e-3:  # stalled: a stale Jacobian gets one refresh, a fresh one ends the search
-                if fresh:
-                    break
-                J, fresh = jacobian(delta, r, chain0, free), True
-                damping[0] = 1e-3
-            else:
-                fresh = False
-        return delta, r, J
+    def fit(delta, chain0, free, evaluations):  # lmfit's least squares on the coordinates ``free``, our Jacobian
+        lp = lmfit.Parameters()
+        d0, c0 = chain0.delay, chain0.cutoff
+        limits = {k: ((_DELAY_RANGE[0] - d0) / _CHAIN_STEP[0], (_DELAY_RANGE[1] - d0) / _CHAIN_STEP[0])}
+        if c0 is not None:
+            limits[k + 1] = (math.log(_CUTOFF_RANGE[0] / c0) / _CHAIN_STEP[1],
+                             math.log(min(_CUTOFF_RANGE[1], top) / c0) / _CHAIN_STEP[1])
+        for j in free:
+            lo, hi = limits.get(j, (-11.9, 11.9))
+            lp.add(f"d{j}", value=float(np.clip(delta[j], lo, hi)), min=lo, max=hi)
+
+        def full(p):
+            d = delta.copy()
+            d[free] = [p[f"d{j}"].value for j in free]
+            return d
+
+        def residual(p):
+            v = resid(full(p), chain0)
+            return np.full(size, 1e3) if v is None else v  # a tyre that cannot be built: far from any optimum
+
+        def jac(p):
+            d = full(p)
+            v = resid(d, chain0)
+            return np.zeros((size, len(free))) if v is None else jacobian(d, v, chain0, free)
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            out = lmfit.Minimizer(residual, lp).minimize(method="least_squares", jac=jac, max_nfev=evaluations,
+                                                         x_scale="jac", ftol=1e-3, xtol=1e-4)
+        d = full(out.params)
+        r = resid(d, chain0)
+        return (delta, resid(delta, chain0)) if r is None else (d, r)
 
     params = list(range(k))
     delta = np.zeros(k + 2)  # parameters, then the chain's delay and cutoff moves
     r = resid(delta, prob.chain)
     if r is None:
         return None
-    delta, r, _ = fit(delta, r, J.copy(), prob.chain, params, 8)
+    size = r.size
+    delta, r = fit(delta, prob.chain, params, 8)
     if not np.any(delta[:k]):
         return None
     try:  # the chain aligned afresh to this candidate
-        chain0, _ = align([x for x in runs if x.name in train],
-                          {**pred, **sim(_with(model, effect, base, delta[:k]), sub_train)})
+        chain0, _ = align(train_runs, {**pred, **sim(_with(model, effect, base, delta[:k]), sub_train)})
     except ModelInputError:
         return None
     free = params + [k] + ([k + 1] if chain0.cutoff is not None else [])
     r = resid(delta, chain0)
     if r is None:
         return None
-    delta, r, _ = fit(delta, r, jacobian(delta, r, chain0, free), chain0, free, 10)
+    delta, r = fit(delta, chain0, free, 10)
     J = jacobian(delta, r, chain0, free)  # the covariance from a fresh Jacobian at the optimum
     new_model = _with(model, effect, base, delta[:k])
     try:
@@ -796,7 +913,31 @@ def _refit(effect, model, pred, prob, sim, runs, train, keys_train, J):
     except ModelInputError:
         return None
     return new_model, full, delta[:k], _covariance(J, r, runs, keys_train, prob.n_eff(train))[:k, :k], \
-        _Problem(runs, _chain_at(chain0, delta[k:]), prob.noise)
+        _Problem(runs, _chain_at(chain0, delta[k:]).calibrated(train_runs, full), prob.noise)
+
+
+#: Correlation beyond which two refitted parameters are not separated by the data: their values are reported with
+#: the correlation and without standard errors.
+SINGULAR = 0.98
+
+
+def precision(cov, slopes, names) -> tuple:
+    """(standard errors, near-singular pairs) of parameters ``names`` from the covariance ``cov`` of their refit
+    coordinates and ``slopes`` (d value / d coordinate): a parameter in a pair correlated beyond :data:`SINGULAR`
+    (or with no finite variance) gets NaN, "no +-", and the pair its correlation ("A~B" -> rho): identifiability
+    before precision, the data fix only a combination of the two."""
+    cov = np.asarray(cov, float)
+    var = np.diag(cov)
+    stderr = {p: float(math.sqrt(v) * abs(s)) if np.isfinite(v) and v > 0 else math.nan
+              for p, v, s in zip(names, var, slopes)}
+    pairs = {}
+    for i in range(len(names)):
+        for j in range(i + 1, len(names)):
+            rho = cov[i, j] / math.sqrt(var[i] * var[j]) if var[i] > 0 and var[j] > 0 else math.nan
+            if not abs(rho) <= SINGULAR:
+                pairs[f"{names[i]}~{names[j]}"] = float(rho)
+                stderr[names[i]] = stderr[names[j]] = math.nan
+    return stderr, pairs
 
 
 def _covariance(J, r, runs, keys, n_eff):
@@ -829,8 +970,8 @@ def _findings(runs, pred, chain, noise) -> list:
     out = []
     for r in runs:
         for c, y in r.measured.items():
-            model_y = chain(pred[r.name][c], r.dt)
-            q = _quiet(model_y, r.dt)
+            model_y = chain(pred[r.name][c], r, c)
+            q = _quiet(chain.dynamics(pred[r.name][c], r.dt), r.dt)
             decay = None
             if r.kind == "cleat":
                 dev = np.abs(model_y - model_y[0])

@@ -16,7 +16,7 @@ LATERAL_STIFFNESS, PCFY1-3); MF 5.2 the PTX1-PTX3, PTY1-PTY2 formulas (:mod:`mft
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ..params import PARAMETERS
 
@@ -206,5 +206,21 @@ def testable_effects(runs, model, catalogue=DYNAMIC_CATALOGUE, model_kind: str =
         if missing:
             why[e.name] = f"the model has no {', '.join(missing)}"
             continue
-        ok.append(e)
+        ok.append(_separable(e, runs, kinds, why))
     return ok, why
+
+
+def _separable(e: DynamicEffect, runs, kinds, why: dict) -> DynamicEffect:
+    """``e`` with only the parameters the runs can separate: parameters acting along a condition (``needs``: a
+    slope, a curvature...) need one level more than there are of them (two loads give a load slope, not its
+    curvature as well); the others are left at the file's values, named in ``why``."""
+    for need in e.needs:
+        key = {"pressures": "pressure", "loads": "load", "speeds": "speed"}[need]
+        n = _levels(runs, kinds, key)
+        if len(e.parameters) > n - 1:
+            kept, dropped = e.parameters[:n - 1], e.parameters[n - 1:]
+            why[f"{e.name}: {', '.join(dropped)}"] = (
+                f"{len(e.parameters)} parameters along the {key} need {len(e.parameters) + 1} {need} in the "
+                f"{'/'.join(kinds)} runs to be separated; the runs have {n}: {', '.join(kept)} refitted alone")
+            e = replace(e, parameters=kept, absolute=tuple(p for p in e.absolute if p in kept))
+    return e

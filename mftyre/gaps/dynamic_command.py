@@ -1,6 +1,8 @@
 """``mftyre gaps --dynamic RUNS.csv --model BASE.tir [-o improved.tir] [--report DIR] [--json FILE]``: the handler
 of the dynamic gap finder (:func:`mftyre.gaps.dynamic.find_dynamic_gaps`); options shared with ``mftyre gaps``
-(``--holdout``, ``--seed``, ``--alpha``, ``--max-effects``, ``--overwrite``, ``--quiet``); ``--model-kind``."""
+(``--holdout``, ``--seed``, ``--alpha``, ``--max-effects``, ``--overwrite``, ``--quiet``) and the reading options of
+every data file (``--columns``, ``--units``, ``--axes``, ``--no-check``: :func:`mftyre.data.read_time_histories`);
+``--model-kind``."""
 from __future__ import annotations
 
 __all__ = ["run_dynamic"]
@@ -9,11 +11,15 @@ __all__ = ["run_dynamic"]
 def run_dynamic(args) -> int:
     """args -> exit status (0 done, 1 error, 2 usage)."""
     from ..arguments import command_error, progress_printer, refused_outputs
+    from ..data import speaking_cli
     from ..errors import MFTyreError
-    from .dynamic import find_dynamic_gaps
+    from .dynamic import find_dynamic_gaps, values_text
+    from .dynamic_runs import read_runs
 
     if args.channels:
         return command_error("gaps", "--channels is for steady data; dynamic runs use every measured channel")
+    if args.constants:
+        return command_error("gaps", "--set is for steady data; a dynamic run records each of its inputs")
     if refused := refused_outputs("gaps", {"-o": args.output, "--json": args.json},
                                   {"--dynamic": args.dynamic, "--model": args.model},
                                   folders={"--report": args.report}, overwrite=args.overwrite):
@@ -21,7 +27,10 @@ def run_dynamic(args) -> int:
     progress = progress_printer(args.quiet)
 
     try:
-        rep = find_dynamic_gaps(args.dynamic, args.model, holdout=args.holdout, seed=args.seed,
+        with speaking_cli():
+            runs = read_runs(args.dynamic, columns=args.columns, units=args.units, axes=args.axes,
+                             check=not args.no_check)
+        rep = find_dynamic_gaps(runs, args.model, holdout=args.holdout, seed=args.seed,
                                 alpha=args.alpha, max_effects=args.max_effects, model_kind=args.model_kind,
                                 progress=progress)
         if args.output:
@@ -34,13 +43,13 @@ def run_dynamic(args) -> int:
         return command_error("gaps", exc, 1)
     print(rep.message)
     print(f"  measurement chain: delay {1e3 * rep.chain.delay:.2f} ms, anti-alias filter "
-          f"{'none' if rep.chain.cutoff is None else f'{rep.chain.cutoff:g} Hz'}")
+          f"{'none' if rep.chain.cutoff is None else f'{rep.chain.cutoff:.4g} Hz, order {rep.chain.order}'}; gain "
+          + ", ".join(f"{c} {g:.4f}" for c, g in rep.chain.gain.items()))
     for f in rep.findings[:5]:
         print(f"  finding: {f['run']} {f['channel']} {f['feature']}: measured {f['measured']:.4g}, model "
               f"{f['model']:.4g} ({f['z']:+.1f} uncertainties)")
     for c in rep.effects_added:
-        vals = ", ".join(f"{k} = {v:.5g} +- {c.stderr.get(k, float('nan')):.2g}" for k, v in c.values.items())
-        print(f"  added {c.name}: {vals}")
+        print(f"  added {c.name}: {values_text(c)}")
     for rnd in rep.rounds:
         for c in rnd:
             if c.note and not c.accepted:

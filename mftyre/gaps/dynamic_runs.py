@@ -22,7 +22,9 @@ MZ         N m    model's ``fz`` output), self-aligning moment; any subset, at l
                   rim spin (torque mode)
 ========== ====== =================================================================================================
 
-Units SI, axes ISO-W. :func:`read_runs` reads one CSV (with RUN) or a folder of CSVs; :func:`write_runs` writes one;
+Units SI, axes ISO-W unless ``--units``/``--axes`` say otherwise. :func:`read_runs` reads one CSV (with RUN) or a
+folder of CSVs through the one reader of data files (:func:`mftyre.data.read_time_histories`); :func:`write_runs`
+writes one;
 :func:`simulate` drives the SWIFT wheel (:class:`swift.SwiftTyre`, compiled) with the runs' inputs and returns the
 model's outputs at the runs' sample times; :func:`synthetic_runs` builds cleat and step-steer programmes from a
 model with measurement noise, a causal anti-alias filter and a time offset.
@@ -113,14 +115,23 @@ class DynamicRun:
         return f"{self.name} ({self.kind}, {c['speed']:g} km/h, {c['load']:.0f} N, {c['pressure']:g} bar)"
 
 
-def _check_run(run: DynamicRun) -> None:
-    where = f"run {run.name!r}" + (f" in {run.source}" if run.source else "")
+#: The lowest sample rate [Hz] a run may have: the belt's in-plane modes (30-100 Hz) and an anti-alias filter below
+#: Nyquist need it.
+MIN_RATE = 200.0
+
+
+def _check_run(run: DynamicRun, line: int | None = None) -> None:
+    where = f"run {run.name!r}" + (f" in {run.source}" if run.source else "") + (
+        f" (from line {line})" if line is not None else "")
     t = np.asarray(run.t, float)
     if t.size < 20:
         raise DataError(f"{where}: {t.size} samples; a dynamic run needs at least 20")
     d = np.diff(t)
     if not (np.all(np.isfinite(t)) and d.min() > 0 and np.ptp(d) < 1e-3 * d.mean()):
         raise DataError(f"{where}: TIME must increase in equal steps (found steps {d.min():.3g} to {d.max():.3g} s)")
+    if 1.0 / d.mean() < MIN_RATE * (1 - 1e-6):
+        raise DataError(f"{where}: sampled at {1.0 / d.mean():.4g} Hz; dynamic runs need at least {MIN_RATE:g} Hz "
+                        f"(a TIME step of at most {1e3 / MIN_RATE:g} ms; TIME in ms? give --units TIME=ms)")
     if "VX" not in run.inputs:
         raise DataError(f"{where}: column VX (forward speed, m/s) is missing")
     if ("Z" in run.inputs) == ("LOAD" in run.inputs):
@@ -131,6 +142,8 @@ def _check_run(run: DynamicRun) -> None:
         if not np.all(np.isfinite(v)):
             raise DataError(f"{where}: column {k} has missing or non-finite values (first at TIME = "
                             f"{t[np.flatnonzero(~np.isfinite(v))[0]]:.4g} s)")
+    if "LOAD" in run.inputs and not np.all(run.inputs["LOAD"] > 0):
+        raise DataError(f"{where}: LOAD is the downward force on the axle, positive; found {run.inputs['LOAD'].min():.4g}")
     if "P" in run.inputs and not np.all(run.inputs["P"] > 1e4):
         raise DataError(f"{where}: P is the inflation pressure in Pa (e.g. 220000); found {run.inputs['P'].min():.4g}")
     if not run.measured:
@@ -141,19 +154,23 @@ def _check_run(run: DynamicRun) -> None:
 
 
 def runs_from_frame(frame: pd.DataFrame, source: str = "", name: str | None = None) -> list:
-    """Runs from a table in the documented layout (RUN column, or one run named ``name``)."""
-    frame = frame.rename(columns={c: c.strip().upper() for c in frame.columns})
-    if "TIME" not in frame:
-        raise DataError(f"{source or 'data'}: column TIME is missing (columns: {', '.join(frame.columns)})")
+    """Runs from a table in the documented layout, its channels in SI and ISO-W (:func:`mftyre.data.read_time_histories`;
+    index = line - 2: errors name the line), a RUN column, or one run named ``name``."""
+    where = source or "data"
     if "RUN" not in frame:
         if name is None:
-            raise DataError(f"{source or 'data'}: column RUN is missing (one file holding several runs needs it)")
+            raise DataError(f"{where}: column RUN is missing (one file holding several runs needs it)")
         frame = frame.assign(RUN=name)
+    empty = frame["RUN"].isna() | (frame["RUN"].astype(str).str.strip() == "")
+    if empty.any():
+        raise DataError(f"{where}: line {int(frame.index[np.flatnonzero(empty.to_numpy())[0]]) + 2}: column RUN is "
+                        f"empty ({int(empty.sum())} rows): every row names its run")
     runs = []
-    for run_name, grp in frame.groupby("RUN", sort=False):
-        road = grp["ROAD"].astype(object).fillna("").astype(str).unique() if "ROAD" in grp else np.array([""])
+    for run_name, grp in frame.groupby(frame["RUN"].astype(str).str.strip(), sort=False):
+        road = grp["ROAD"].astype(object).fillna("").astype(str).str.strip().unique() if "ROAD" in grp else \
+            np.array([""])
         if road.size != 1:
-            raise DataError(f"{source}: run {run_name!r} has {road.size} different ROAD values; a run is one road")
+            raise DataError(f"{where}: run {run_name!r} has {road.size} different ROAD values; a run is one road")
         # a column empty throughout a run is absent from it (a file mixing cleat runs and steer runs)
         inputs = {c: grp[c].to_numpy(float) for c in _INPUTS[1:] if c in grp and grp[c].notna().any()}
         t = grp["TIME"].to_numpy(float)
@@ -161,31 +178,26 @@ def runs_from_frame(frame: pd.DataFrame, source: str = "", name: str | None = No
             inputs["X"] = np.concatenate([[0.0], np.cumsum(0.5 * (inputs["VX"][1:] + inputs["VX"][:-1]) * np.diff(t))])
         measured = {c: grp[c].to_numpy(float) for c in OUTPUT_CHANNELS if c in grp and grp[c].notna().any()}
         run = DynamicRun(str(run_name), t, inputs, str(road[0]), measured, source=source)
-        _check_run(run)
+        _check_run(run, line=int(grp.index[0]) + 2)
         runs.append(run)
-    if not runs:
-        raise DataError(f"{source}: no rows")
     return runs
 
 
-def read_runs(path) -> list:
-    """Runs from one CSV file (with a RUN column) or a folder of CSV files (one run each, named by the file)."""
+def read_runs(path, *, columns: dict | None = None, units: dict | None = None, axes: str | None = None,
+              check: bool = True) -> list:
+    """Runs from one CSV file (with a RUN column) or a folder of CSV files (one run each, named by the file), read
+    by the one reader of data files (:func:`mftyre.data.read_time_histories`: ``columns`` file column -> channel,
+    ``units`` channel -> unit, ``axes`` the file's axis system, ``check`` plausibility)."""
+    from ..data import read_time_histories
+
+    options = dict(columns=columns, units=units, axes=axes or "ISO-W", check=check)
     path = Path(path)
     if path.is_dir():
-        files = sorted(path.glob("*.csv"))
+        files = sorted(f for f in path.glob("*.csv") if not f.name.startswith("."))
         if not files:
             raise DataError(f"{path}: no .csv files in the folder")
-        return [r for f in files for r in runs_from_frame(_read_csv(f), str(f), f.stem)]
-    if not path.is_file():
-        raise DataError(f"{path}: no such file or folder")
-    return runs_from_frame(_read_csv(path), str(path))
-
-
-def _read_csv(path) -> pd.DataFrame:
-    try:
-        return pd.read_csv(path, comment="#")
-    except (pd.errors.ParserError, UnicodeDecodeError, pd.errors.EmptyDataError) as exc:
-        raise DataError(f"{path}: not a readable CSV table ({exc})") from None
+        return [r for f in files for r in runs_from_frame(read_time_histories(f, **options)[0], str(f), f.stem)]
+    return runs_from_frame(read_time_histories(path, **options)[0], str(path))
 
 
 def runs_frame(runs) -> pd.DataFrame:
@@ -333,6 +345,9 @@ def measurement_chain(signal: np.ndarray, dt: float, cutoff: float | None, delay
     from scipy import signal as sps
 
     y = np.asarray(signal, float)
+    if cutoff and not cutoff < 0.5 / dt:
+        raise ModelInputError(f"anti-alias cutoff {cutoff:g} Hz at or above the Nyquist frequency {0.5 / dt:g} Hz of "
+                              f"data sampled at {1 / dt:g} Hz: a filter's cutoff lies below it")
     if cutoff:
         sos = sps.butter(order, cutoff, fs=1.0 / dt, output="sos")
         zi = sps.sosfilt_zi(sos) * y[0]
@@ -346,7 +361,8 @@ def measurement_chain(signal: np.ndarray, dt: float, cutoff: float | None, delay
 def synthetic_runs(model, *, speeds=(20.0, 40.0, 60.0), pressures=None, loads=None, steer_speeds=(40.0,),
                    steer_angle=2.0, cleat=(0.02, 0.01), duration=0.8, dt=1e-3, lead=0.3, noise=NOISE,
                    cutoff: float | None = 150.0, delay: float = 5e-3, seed: int = 0, truth=None, brake_speeds=(),
-                   brake_slip=-0.05, model_kind: str = "swift") -> list:
+                   brake_slip=-0.05, model_kind: str = "swift", order: int = 4, gain=None, drift=None,
+                   ar: float = 0.0, roads=None) -> list:
     """Cleat runs (every speed [km/h] x pressure [Pa] x load [N]; axle height fixed at the static loaded radius,
     rim spin at the free-rolling speed), step-steer runs (yaw step of ``steer_angle`` deg at every steer speed,
     nominal pressure and first load) and braking steps (the rim's slip ramped from free rolling to ``brake_slip``
@@ -354,7 +370,11 @@ def synthetic_runs(model, *, speeds=(20.0, 40.0, 60.0), pressures=None, loads=No
     ``model_kind`` (:data:`MODEL_KINDS`) through :func:`measurement_chain` (noise at the sensor, a causal
     anti-alias filter at ``cutoff`` Hz, a ``delay`` of the outputs in s); the obstacle, the steer step or the
     braking step comes ``lead`` s after the start. The inputs are recorded exactly; the ROAD column names the
-    cleat (``cleat`` = (length, height) m)."""
+    cleat (``cleat`` = (length, height) m). A rig's further errors: ``order`` of the filter, ``gain`` (channel ->
+    load-cell gain, e.g. 1.015), ``drift`` (channel -> offset drift per second since the run's start, the cell zeroed
+    before it), ``ar`` the AR(1) coefficient of the sensor noise (its standard deviation stays ``noise``);
+    ``roads``: obstacles instead of the cleat (texts of :func:`swift.road.parse_road` with ``{x0}`` for the position
+    of the leading edge), each driven at every speed, pressure and load."""
     truth = truth or model
     prm = truth.params
     rng = np.random.default_rng(seed)
@@ -369,26 +389,38 @@ def synthetic_runs(model, *, speeds=(20.0, 40.0, 60.0), pressures=None, loads=No
         re = float(np.squeeze(model.evaluate(load, 0.0, 0.0, 0.0, 0.0, v, p)["re"]))
         return rl, re
 
+    def sensor_noise(c):
+        e = rng.standard_normal(n)
+        if ar:  # AR(1): e_k = ar e_(k-1) + sqrt(1 - ar^2) w_k, unit variance
+            from scipy import signal as sps
+
+            e = sps.lfilter([math.sqrt(1 - ar**2)], [1.0, -ar], e)
+        return noise[c] * e
+
     def measure(name, inputs, road, channels):
         inputs = {k: np.asarray(v, float) for k, v in inputs.items()}
         run = DynamicRun(name, t.copy(), inputs, road, {c: np.zeros(n) for c in channels})
         true = simulate(truth, [run], model_kind=model_kind)[name]
-        d = delay
-        run.measured = {c: measurement_chain(true[c] + noise[c] * rng.standard_normal(n), dt, cutoff, d)
+        run.measured = {c: (gain or {}).get(c, 1.0) * measurement_chain(true[c] + sensor_noise(c), dt, cutoff, delay,
+                                                                        order) + (drift or {}).get(c, 0.0) * t
                         for c in channels}
-        run.meta = dict(delay=d, cutoff=cutoff)
+        run.meta = dict(delay=delay, cutoff=cutoff, order=order, gain=gain, drift=drift)
         return run
 
+    obstacles = roads or ("cleat(x0={x0}, length=%g, height=%g)" % cleat,)
     for v_kmh in speeds:
         v = v_kmh / 3.6
-        x0 = v * lead + 0.25  # the cleat's leading edge: the tyre's front reaches it about lead s after the start
-        road = f"cleat(x0={x0:.4f}, length={cleat[0]:g}, height={cleat[1]:g})"
-        for p in pressures:
-            for load in loads:
-                rl, re = static(load, p, v)
-                inputs = dict(X=v * t, VX=np.full(n, v), Z=np.full(n, rl), OMEGA=np.full(n, v / re), P=np.full(n, p))
-                runs.append(measure(f"cleat_{v_kmh:g}kmh_{p / 1e5:g}bar_{load:.0f}N", inputs, road,
-                                    ("FX", "FZ")))
+        x0 = v * lead + 0.25  # the obstacle's leading edge: the tyre's front reaches it about lead s after the start
+        for i, shape in enumerate(obstacles):
+            road = shape.format(x0=f"{x0:.4f}")
+            tag = "cleat" if roads is None else f"road{i}"
+            for p in pressures:
+                for load in loads:
+                    rl, re = static(load, p, v)
+                    inputs = dict(X=v * t, VX=np.full(n, v), Z=np.full(n, rl), OMEGA=np.full(n, v / re),
+                                  P=np.full(n, p))
+                    runs.append(measure(f"{tag}_{v_kmh:g}kmh_{p / 1e5:g}bar_{load:.0f}N", inputs, road,
+                                        ("FX", "FZ")))
     for v_kmh in steer_speeds:
         v = v_kmh / 3.6
         rl, re = static(loads[0], prm.NOMPRES, v)

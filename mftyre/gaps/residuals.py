@@ -30,7 +30,7 @@ from ..model import MFModel
 from .drift import Drifting, predict_drifting
 
 __all__ = ["CHANNELS", "UNITS", "Evaluator", "noise_levels", "noise_of_means", "noise_floor_of", "holdout_mask",
-           "test_kind"]
+           "stratified_holdout", "condition_levels", "test_kind"]
 
 #: Channels the gap finder maps, in report order.
 CHANNELS = ("FX", "FY", "MZ", "MX", "MY", "FZ")
@@ -196,24 +196,44 @@ def holdout_mask(data: TyreData, fraction: float = 0.25, seed: int = 0) -> np.nd
     from the training data."""
     sweep = sweep_labels(data)
     kind = test_kind(data)
-    mask = np.zeros(len(data), bool)
     if fraction <= 0:
-        return mask
+        return np.zeros(len(data), bool)
     ids = list(dict.fromkeys(sweep))
     level = _sweep_conditions(data, sweep, ids)
     kind_of = np.array([kind[np.argmax(sweep == s)] for s in ids])
-    rank = np.random.default_rng(seed).permutation(len(ids))
+    held = stratified_holdout(level, kind_of, fraction, seed)
+    return np.isin(sweep, np.asarray(ids)[held])
+
+
+def condition_levels(values: np.ndarray, absolute: float, relative: float) -> np.ndarray:
+    """Level index of each value (:func:`stratified_holdout`'s levels): sorted values split where neighbours
+    differ by more than ``absolute`` + ``relative`` x the largest magnitude."""
+    return _levels(np.asarray(values, float), absolute, relative)
+
+
+def stratified_holdout(level: np.ndarray, kind_of: np.ndarray, fraction: float, seed: int = 0,
+                       count=lambda n, fraction: round(n * fraction), min_units: int = 3) -> np.ndarray:
+    """The one rule of held-out evidence, for steady sweeps (:func:`holdout_mask`) and dynamic runs
+    (:mod:`mftyre.gaps.dynamic`): ``level`` (units x factors) level indices of each unit's conditions, ``kind_of``
+    each unit's kind of test; boolean per unit, held out. Per kind with at least ``min_units`` units a ``fraction`` of
+    them (``count(units of the kind, fraction)``: how many; at least one), unit by unit by the priorities of
+    :func:`holdout_mask`."""
+    level = np.asarray(level)
+    kind_of = np.asarray(kind_of)
+    held = np.zeros(len(kind_of), bool)
+    if fraction <= 0 or len(kind_of) == 0:
+        return held
+    rank = np.random.default_rng(seed).permutation(len(kind_of))
     n_factors = level.shape[1]
     # distance of each sweep's levels from the middle level of each condition (in levels)
     off_centre = np.sum(np.abs(level - 0.5 * level.max(axis=0)), axis=1)
     held_count = [dict() for _ in range(n_factors)]             # factor -> level -> held-out sweeps
     train_count = [dict(zip(*np.unique(level[:, f], return_counts=True))) for f in range(n_factors)]
-    held = np.zeros(len(ids), bool)
     for k in sorted(set(kind_of)):
         pool = list(np.flatnonzero(kind_of == k))
-        if len(pool) < 3:
+        if len(pool) < min_units:
             continue
-        for _ in range(max(1, int(round(len(pool) * fraction)))):
+        for _ in range(max(1, int(count(len(pool), fraction)))):
             def priority(i):
                 vanish = sum(train_count[f][level[i, f]] <= 1 for f in range(n_factors))
                 in_kind = sum(np.count_nonzero(held & (kind_of == k) & (level[:, f] == level[i, f]))
@@ -226,7 +246,7 @@ def holdout_mask(data: TyreData, fraction: float = 0.25, seed: int = 0) -> np.nd
             for f in range(n_factors):
                 held_count[f][level[best, f]] = held_count[f].get(level[best, f], 0) + 1
                 train_count[f][level[best, f]] -= 1
-    return np.isin(sweep, np.asarray(ids)[held])
+    return held
 
 
 def _ar1_from_second_differences(x: np.ndarray, segments: np.ndarray):
