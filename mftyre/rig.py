@@ -34,6 +34,7 @@ import numpy as np
 import pandas as pd
 
 from .data import CHANNELS, NOISE, TyreData, noise_scales, record_outputs, synthetic_data
+from .inputs import hard_limits
 from .timeseries import relaxed_slip
 
 __all__ = ["rig_programme", "formula_student_tyre", "write_ttc_mat"]
@@ -71,7 +72,7 @@ def _ar1(rng, n, phi):
 def rig_programme(model, *, loads=(0.45, 0.8, 1.15, 1.5), pressures=(0.86, 1.0, 1.14), cambers_deg=(-3.0, 0.0, 3.0),
                   speed: float | None = None, alpha_max_deg: float = 12.0, kappa_max: float = 0.2,
                   combined_alpha_deg=(3.0, 6.0), slip_angle_rate_deg: float = 6.0, slip_ratio_rate: float = 0.1,
-                  sample_rate: float = 100.0, speed_range=(1.0, 40.0), speed_ramp: float = 5.0,
+                  sample_rate: float = 100.0, speed_range=None, speed_ramp: float = 5.0,
                   vertical_range=(0.1, 2.0), noise: float = 1.0, noise_time: float = 0.03,
                   load_scatter: float = 0.02, friction_drift: float = 0.03, relaxation: bool = True,
                   longitudinal: bool = True, lateral: bool = True, free_rolling: bool = True,
@@ -80,7 +81,8 @@ def rig_programme(model, *, loads=(0.45, 0.8, 1.15, 1.5), pressures=(0.86, 1.0, 
 
     Per pressure (fractions of NOMPRES) and load (fractions of FNOMIN), levels jittered: slip-angle sweeps at
     every camber; when ``longitudinal``, slip-ratio sweeps at camber 0 and at each angle of
-    ``combined_alpha_deg``; a free-rolling speed sweep ``speed_range`` [m/s] at camber 0 (accelerating at
+    ``combined_alpha_deg``; a free-rolling speed sweep ``speed_range`` [m/s] (default 1 m/s to 40 m/s or 0.8 x the
+    speed limits of :func:`mftyre.inputs.hard_limits`, the lower) at camber 0 (accelerating at
     ``speed_ramp`` m/s^2). Per pressure: one vertical load sweep up and down, ``vertical_range`` x FNOMIN.
     Slip tests run at ``speed`` (default LONGVL). ``relaxation=False`` removes the slip lag (no hysteresis).
     ``lateral=False`` leaves out the slip-angle sweeps, ``free_rolling=False`` the speed sweeps,
@@ -99,6 +101,9 @@ def rig_programme(model, *, loads=(0.45, 0.8, 1.15, 1.5), pressures=(0.86, 1.0, 
     prm = model.params
     fz0, p0 = prm.FNOMIN, prm.NOMPRES
     vx0 = prm.LONGVL if speed is None else float(speed)
+    if speed_range is None:  # as a lab would: up to 40 m/s, not beyond what the tyre's own file makes of a speed
+        limits = hard_limits(prm)
+        speed_range = (1.0, min(40.0, 0.8 * limits["vx"][0], 0.8 * limits["rim"][0]))
     dt = 1.0 / float(sample_rate)
     load_levels = [f * fz0 * (1 + rng.uniform(-0.03, 0.03)) for f in loads]
     press_levels = [f * p0 * (1 + rng.uniform(-0.03, 0.03)) for f in pressures]

@@ -357,7 +357,7 @@ def soft_soil(prm, soil, fz, slip, alpha, p, vx, be, effects=SoilEffects()):
     bulldozing = width * (0.67 * soil.c * k_pc * wedge + gamma_term * wedge * wedge)
     resistance = compaction + bulldozing
     drawbar = traction - resistance
-    state = SimpleNamespace(Fz=load_t, vx=vx, gamma2=zero, p=p, ukappa=zero)
+    state = SimpleNamespace(Fz=load_t, uFz=load_t, vx=vx, gamma2=zero, p=p, ukappa=zero)  # My at the load as given
     hysteresis = -moments.rolling_resistance_moment(prm, state, zero, be)
     torque = t_arc + r_f * h_flat + hysteresis
     power = torque * omega
