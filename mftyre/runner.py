@@ -44,9 +44,11 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from .errors import MFTyreError
+from .lazy import LazyModule
+
+pd = LazyModule("pandas")  # imported when first used: the command line starts without it
 
 __all__ = ["Runner", "Outcome", "Failure", "RunnerError", "add_runner_options", "runner_from_args", "default_workers",
            "SCHEDULER_VARIABLE"]

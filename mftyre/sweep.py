@@ -33,9 +33,11 @@ import re
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from .errors import ModelInputError
+from .lazy import LazyModule
+
+pd = LazyModule("pandas")  # imported when first used: the command line starts without it
 
 __all__ = ["register", "run", "parse_distribution", "sweep_runs", "run_batch", "sweep", "MODELS", "INPUTS"]
 
