@@ -42,7 +42,7 @@ from .errors import InputClippedWarning, LoadFactorWarning, ModelInputError, Pre
 from .formula.vertical import pressure_increment
 
 __all__ = ["LOAD_MARGIN", "ROLLING_RESISTANCE_LIMIT", "FREE_RADIUS_GROWTH_LIMIT", "hard_limits", "check_limits",
-           "limit_problems", "beyond_limits", "check_tyre_outputs", "RANGE_PARAMETERS", "input_ranges", "saturate", "check_finite", "check_pressure", "warn_outside",
+           "limit_problems", "point_limit_checks", "beyond_limits", "check_tyre_outputs", "RANGE_PARAMETERS", "input_ranges", "saturate", "check_finite", "check_pressure", "warn_outside",
            "check_finite_outputs", "saturate_inputs", "warn_data_outside", "PRESSURE_FACTORS", "pressure_factor_edges",
            "PressureFactorCheck", "load_factor_edges", "load_factor_problems", "LoadFactorCheck"]
 
@@ -146,9 +146,29 @@ def limit_problems(params, arrays: dict, limits, omega_given=False, lim=None) ->
             shown = "" if rim is None else f" (rim speed {float(rim[i]):.6g} m/s)"
             where = ", ".join(str(int(j)) for j in i)
             count = f" at {int(bad.sum())} of {bad.size} points, first at point {where}," if bad.size > 1 else ""
-            found.append((name, f"input {name} = {value:.6g}{shown}{count} is beyond the limit of {source}: "
-                                f"{what} <= {limit[1]}"))
+            found.append((name, _limit_message(source, name, f"{value:.6g}{shown}{count}", what, limit[1])))
     return found
+
+
+def _limit_message(source, name, value, what, limit) -> str:
+    """The refusal of :func:`limit_problems` (``value``: the value as written, with the rim speed and count)."""
+    return f"input {name} = {value} is beyond the limit of {source}: {what} <= {limit}"
+
+
+def point_limit_checks(params, omega_given: bool) -> list[tuple[str, float, float, str]]:
+    """The speed limits of :func:`check_limits` at one point with the inputs vx and omega (no kappa: free rolling
+    where the spin is not given), for code that cannot call Python (the native FMUs' C): [(input, scale, limit,
+    message)], refused where scale |input| > limit, with the message printf-style of two doubles, the input's value
+    and scale |input| (C's ``%.6g`` is Python's ``.6g``): the text :func:`check_limits` raises, in its order."""
+    source = str(getattr(params, "source", None) or "the parameter set").replace("%", "%%")
+    lim = hard_limits(params)
+    checks = [("vx", 1.0, lim["vx"], "|vx|", "")]
+    rim = " (rim speed %.6g m/s)"
+    checks.append(("omega", float(params.UNLOADED_RADIUS), lim["rim"], "|omega R0|", rim) if omega_given else
+                  ("vx", 1.0, lim["rim"], "|(1 + kappa) vx|", rim))
+    return [(name, scale, float(limit[0]),
+             _limit_message(source, name, "%.6g" + shown, what, limit[1].replace("%", "%%")))
+            for name, scale, limit, what, shown in checks if np.isfinite(limit[0])]
 
 
 def check_limits(params, arrays: dict, limits, omega_given=False, lim=None) -> None:

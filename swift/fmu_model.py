@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mftyre.errors import ModelInputError
+from mftyre.inputs import check_limits, point_limit_checks
 from mftyre.transient import StateFunctions, start_inputs
 from mftyre.variables import pick
 
@@ -74,7 +75,8 @@ INPUTS = pick("input", "vx", "vy", "omega", "gamma", "z", "vz", "p", "road_z", "
     "road_z": "height of the whole road profile above the road datum (the tyre meets z - road_z)",
     "road_camber": "road camber angle about ISO-W x (> 0: the road rises to the left), added to the profile's own "
                    "multi-track camber"})
-#: speed: the rim spins at the input omega; torque: the input torque drives the rim (omega: its start guess).
+#: speed: the rim spins at the input omega; torque: the input torque drives the rim (from the static equilibrium
+#: started at free rolling, swift.simulate.free_rolling_spin; the input omega is not used).
 RIM_MODES = ("speed", "torque")
 #: height: the axle height z (and vz) imposed; load: the downward force Fz_in on the axle (mass AXLE_MASS) moves it.
 AXLE_MODES = ("height", "load")
@@ -87,8 +89,9 @@ def input_table(rim: str = "speed", axle: str = "height") -> dict:
     """The wheel's inputs (name -> Variable) with the rim mode ``rim`` and the axle mode ``axle``."""
     table = dict(INPUTS)
     if rim == "torque":
-        table["omega"] = INPUTS["omega"].but(description="rim spin speed at the start (static equilibrium); the "
-                                                         "torque drives it afterwards")
+        table["omega"] = INPUTS["omega"].but(description="not used: the rim starts in static equilibrium (the "
+                                                         "spin solved for from free rolling) and the torque "
+                                                         "drives it afterwards")
         table.update(pick("input", "torque"))
     if axle == "load":
         del table["z"], table["vz"]
@@ -115,6 +118,20 @@ OUTPUTS = pick(
         "Vsy": "lateral slip speed of the contact patch, tan(alpha) |Vcx|",
         "omega_used": "rim spin speed (the input, or driven by the torque)",
         "road_w": "effective road height (tandem cams)"})
+def limit_definitions(prm, rim: str) -> str:
+    """C definitions of the input policy's speed limits at the start (:func:`mftyre.inputs.point_limit_checks`, as
+    :meth:`SwiftWheel.initialise` and swift.simulate.SwiftTyre.initial_state apply :func:`mftyre.inputs.check_limits`;
+    the spin is given with ``rim="speed"``): SWIFT_LIMITS_N checks, refused where SWIFT_LIMIT_SCALE |u[SWIFT_LIMIT_U]|
+    > SWIFT_LIMIT (glue_swift.c), with the message SWIFT_LIMIT_TEXT of the value and the scaled value."""
+    checks = point_limit_checks(prm, rim == "speed")
+    rows = checks or [("vx", 0.0, 0.0, "")]  # (C has no empty arrays: one row never used)
+    return (f"#define SWIFT_LIMITS_N {len(checks)}\n"
+            "static const int SWIFT_LIMIT_U[] = {" + ", ".join(f"TYRE_U_{n.upper()}" for n, *_ in rows) + "};\n"
+            "static const double SWIFT_LIMIT_SCALE[] = {" + ", ".join(repr(c[1]) for c in rows) + "};\n"
+            "static const double SWIFT_LIMIT[] = {" + ", ".join(repr(c[2]) for c in rows) + "};\n"
+            "static const char *const SWIFT_LIMIT_TEXT[] = {" + ", ".join(json.dumps(c[3]) for c in rows) + "};\n")
+
+
 #: The outputs taken from the MF at the ring's contact state (the ring does not report them).
 _MF_EXTRAS = {"Mx_c": "mx", "My_c": "my", "contact_width": "b", "trail": "t", "mux": "mux", "muy": "muy"}
 _RING = {"Fx": "fx", "Fy": "fy", "Fz": "fz", "Mx": "mx", "My": "my", "Mz": "mz", "Fx_c": "fx_c", "Fy_c": "fy_c",
@@ -292,7 +309,8 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
                f"#define SWIFT_NEQ {len(residual_names)}\n"
                "static const char *const SWIFT_EQ_NAMES[SWIFT_NEQ] = {"
                + ", ".join(json.dumps(n) for n in residual_names) + "};\n"
-               f"#define SWIFT_NO_ROLLING_ROOT {json.dumps(root_message)}\n#define SWIFT_START_TEXT "
+               + limit_definitions(prm, rim)
+               + f"#define SWIFT_NO_ROLLING_ROOT {json.dumps(root_message)}\n#define SWIFT_START_TEXT "
                f"{json.dumps(start_form)}\n#define SWIFT_START_VALUES(u, q) "
                + ", ".join(f"{vec}[TYRE_{vec.upper()}_{name.upper()}]" for name, vec in described) + "\n")
     extra = (refusal + f"#define ROAD_N {table.h.size}\n#define ROAD_WINDOW {WINDOW}\n#define ROAD_X0 {table.x0!r}\n"
@@ -419,6 +437,9 @@ class SwiftWheel:
 
     def initialise(self):
         check_pressure(self._params, float(self.u[self.functions.input_names.index("p")]))
+        U = dict(zip(self.functions.input_names, self.u))  # the input policy's speed limits, as SwiftTyre's start
+        check_limits(self._params, {"vx": np.asarray(U["vx"]), "omega": np.asarray(U["omega"])}, False,
+                     omega_given=self.functions.rim == "speed")
         x = np.asarray(self.functions.init(self.u, self.q, *self._window(self.q[0])), dtype=float).ravel()
         if not np.all(np.isfinite(x)):
             raise ModelInputError("no static equilibrium found at the initial inputs")

@@ -657,7 +657,7 @@ class SwiftTyre:
         """:meth:`initial_state` as one CasADi function for code generation (FMU):
         ``(xa, za, vza, omega, u, x0w, grid, hw) -> x`` at the axle position ``xa``, height ``za`` (above the cam
         table's road; with ``axle="load"`` unused: the axle height is solved for from the input load, as
-        initial_state), vertical speed ``vza`` and spin ``omega`` (with ``rim="torque"`` its first guess), ring
+        initial_state), vertical speed ``vza`` and spin ``omega`` (with ``rim="torque"`` not used: free rolling, :func:`free_rolling_spin`), ring
         inputs ``u`` (INPUT_NAMES) and the window of :attr:`step_function`: the same start (the steady-state load
         at the deflection under the axle), ``iterations`` Newton steps (:func:`_newton_inverse`, as initial_state) on
         :attr:`equilibrium_unknowns`,
@@ -680,6 +680,8 @@ class SwiftTyre:
         else:
             rl = be.fmin(za - h, prm.UNLOADED_RADIUS)  # as initial_state: model.vertical_force at no spin or slip
             fz = vertical.vertical_force(prm, rl, r0, 0.0, 0.0, 0.0, 0.0, dpi, be)
+        if self.rim == "torque":  # as initial_state: the spin starts at free rolling (omega is not used)
+            omega = free_rolling_spin(prm, fz, U["vx"], dpi, be)
         guess = dict.fromkeys(STATE_NAMES, 0.0)
         guess.update(xa=xa, xb=xa, za=za, vza=vza, zb=za + be.fmax(fz, 0.0) / self.constants.cbx, vxb=U["vx"],
                      vyb=U["vy"], oma=omega, omb=omega, yb=U["y"], ya=U["y"], gb=U["gamma"], psb=U["psi"])
@@ -742,7 +744,8 @@ class SwiftTyre:
     def initial_state(self, inputs: StepInputs, iterations: int = 30) -> np.ndarray:
         """Static equilibrium (steady rolling at the input speeds) at the axle position of ``inputs``: Newton
         on the accelerations and patch rates, from the steady-state model's deflection. With ``rim="torque"`` the
-        spin is an unknown too (``inputs.omega`` its first guess): the rim torque balances the input torque.
+        spin is an unknown too, started at free rolling (:func:`free_rolling_spin`; ``inputs.omega`` is not used): the
+        rim torque balances the input torque.
         Raises :class:`~mftyre.errors.ModelInputError` where the iteration ends without equilibrium (residual above
         :data:`EQUILIBRIUM_TOL`), and where it ends at a root that is no rolling tyre (:attr:`rolling_root_function`,
         the rule the FMUs apply too): rolling (|vx| >= VXLOW), a slip outside KPUMIN..KPUMAX (the agricultural
@@ -771,7 +774,8 @@ class SwiftTyre:
             fz = float(self.model.vertical_force(min(inputs.z - h, prm.UNLOADED_RADIUS), p=p))
         s[_S["zb"]] = s[_S["za"]] + max(fz, 0.0) / c.cbx
         s[_S["vxb"]], s[_S["vyb"]] = inputs.vx, inputs.vy
-        s[_S["oma"]] = s[_S["omb"]] = inputs.omega
+        s[_S["oma"]] = s[_S["omb"]] = (inputs.omega if self.rim == "speed" else float(
+            free_rolling_spin(prm, fz, inputs.vx, vertical.pressure_increment(prm, p), NUMPY)))
         s[_S["yb"]] = s[_S["ya"]] = inputs.y
         s[_S["gb"]], s[_S["psb"]] = inputs.gamma, inputs.psi
         unknown, eqs = self.equilibrium_unknowns
@@ -881,6 +885,21 @@ def _structure(tyre) -> _Structure:
 #: against the squared singular values of the determined directions (away from standstill the step is Newton's: the
 #: equilibrium converges to round-off), large against the round-off of the normal equations (condition <= n / 1e-12).
 _TIKHONOV = 1e-12
+
+
+def free_rolling_spin(prm, fz, vx, dpi, be):
+    """The spin [rad/s] of free rolling (no slip) at the speed ``vx`` under the load ``fz`` (<= 0: none) with the
+    steady-state model's effective rolling radius (omega Re = vx, (2.5) with (1) and (7):
+    :func:`mftyre.formula.vertical.spin_and_radius`): where the static Newton iteration of a free rim
+    (:meth:`SwiftTyre.initial_state`, :meth:`SwiftTyre.equilibrium_function`) starts. A start spin given by the
+    caller is not used there: one 13 times free rolling (vx over the deflection instead of over Re; rim speed 273 m/s
+    on the agricultural sample file at 20 m/s, 8 times its rim-speed limit, free radius 6.1 m) put the first Newton
+    iterate 94 m into the belt (loads of MN, where My and Re at the load as given are steep), and the iteration
+    stalled at kappa = -5e6 (d(kappa)/dt = 1.5e-4 after 30 steps)."""
+    from types import SimpleNamespace
+
+    state = SimpleNamespace(uFz=be.fmax(fz, 0.0), dpi=dpi, ukappa=0.0, vx=vx)
+    return vertical.spin_and_radius(prm, state, 0.0, False, be)[0]
 
 
 def _newton_inverse(jac):
