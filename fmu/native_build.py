@@ -15,6 +15,7 @@ from __future__ import annotations
 import hashlib
 import importlib.resources
 import io
+import json
 import os
 import shutil
 import subprocess
@@ -28,6 +29,7 @@ from xml.sax.saxutils import escape
 
 from mftyre.errors import MFTyreError
 from mftyre.files import OutputError, check_outputs, make_output_folder, write_atomically
+from mftyre.inputs import point_limit_checks
 from mftyre.variables import UNIT_BASES
 
 #: The hand-written C files (package data of fmu, so installed wheels can build FMUs).
@@ -381,6 +383,26 @@ def generate_sources(spec, sources: Path, guid: str, fmi_version: int = 2) -> li
     return [*layers[::-1], spec.glue, "tyre_model.c"]
 
 
+def limit_definitions(prm, omega_given: bool, rim: bool = True) -> str:
+    """C of the input policy's speed limits (:func:`mftyre.inputs.point_limit_checks`, the checks and messages of
+    :func:`mftyre.inputs.check_limits` at one point): ``TYRE_LIMITS(u, msg, n)``, nonzero with the message where an
+    input is beyond them; the glue applies it where the Python wheels apply check_limits (the SWIFT start; every
+    start and step of the steady and transient wheels)."""
+    checks = point_limit_checks(prm, omega_given, rim)
+    rows = checks or [("vx", 0.0, 0.0, "")]  # (C has no empty arrays: one row never used)
+    return ("#include <math.h>\n#include <stdio.h>\n"
+            f"#define TYRE_LIMITS_N {len(checks)}\n"
+            "static const int TYRE_LIMIT_U[] = {" + ", ".join(f"TYRE_U_{c[0].upper()}" for c in rows) + "};\n"
+            "static const double TYRE_LIMIT_SCALE[] = {" + ", ".join(repr(c[1]) for c in rows) + "};\n"
+            "static const double TYRE_LIMIT[] = {" + ", ".join(repr(c[2]) for c in rows) + "};\n"
+            "static const char *const TYRE_LIMIT_TEXT[] = {" + ", ".join(json.dumps(c[3]) for c in rows) + "};\n"
+            "static inline int TYRE_LIMITS(const double *u, char *msg, size_t n) {\n"
+            "    for (int i = 0; i < TYRE_LIMITS_N; i++) {\n"
+            "        double value = u[TYRE_LIMIT_U[i]], scaled = TYRE_LIMIT_SCALE[i] * fabs(value);\n"
+            "        if (scaled > TYRE_LIMIT[i]) return snprintf(msg, n, TYRE_LIMIT_TEXT[i], value, scaled), 1;\n"
+            "    }\n    return 0;\n}\n")
+
+
 def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_start: float = 0.0,
                turn_slip: bool = False, input_mode: str = "vehicle", rim: str = "speed"):
     """What the FMU is made of: the CasADi functions (:mod:`mftyre.transient` for steady/transient,
@@ -394,7 +416,8 @@ def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_sta
             raise NativeBuildError("--rim torque is a mode of --model swift (the steady and transient wheels take the "
                                    "spin)")
         f = wheel_functions(model, kind, vertical, turn_slip=turn_slip, input_mode=input_mode)
-        glue, extra, directional = "glue_wheel.c", "", True
+        extra = limit_definitions(model.params, True, rim=input_mode == "vehicle")  # rig: the spin follows kappa_in
+        glue, directional = "glue_wheel.c", True
     elif kind == "swift":
         if input_mode != "vehicle":
             raise NativeBuildError("--input-mode rig is a mode of --model steady (the SWIFT ring takes the wheel's "
@@ -403,7 +426,8 @@ def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_sta
 
         f = swift_functions(model, road, x_start=x_start, rim=rim, axle="load" if vertical == "load" else "height",
                             turn_slip=turn_slip)
-        glue, extra, directional = "glue_swift.c", f.config_extra, False
+        extra = f.config_extra + limit_definitions(model.params, rim == "speed")
+        glue, directional = "glue_swift.c", False
     else:
         raise NativeBuildError(f"--model must be one of {', '.join(MODELS)}, got {kind!r}")
     functions = [f.init, f.step, f.out] + ([f.residual, f.root] if kind == "swift" else [])

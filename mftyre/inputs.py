@@ -155,17 +155,19 @@ def _limit_message(source, name, value, what, limit) -> str:
     return f"input {name} = {value} is beyond the limit of {source}: {what} <= {limit}"
 
 
-def point_limit_checks(params, omega_given: bool) -> list[tuple[str, float, float, str]]:
+def point_limit_checks(params, omega_given: bool, rim: bool = True) -> list[tuple[str, float, float, str]]:
     """The speed limits of :func:`check_limits` at one point with the inputs vx and omega (no kappa: free rolling
     where the spin is not given), for code that cannot call Python (the native FMUs' C): [(input, scale, limit,
     message)], refused where scale |input| > limit, with the message printf-style of two doubles, the input's value
-    and scale |input| (C's ``%.6g`` is Python's ``.6g``): the text :func:`check_limits` raises, in its order."""
+    and scale |input| (C's ``%.6g`` is Python's ``.6g``): the text :func:`check_limits` raises, in its order.
+    ``rim=False``: the wheel-centre speed only (where the spin follows from an input slip, which this form has not)."""
     source = str(getattr(params, "source", None) or "the parameter set").replace("%", "%%")
     lim = hard_limits(params)
     checks = [("vx", 1.0, lim["vx"], "|vx|", "")]
-    rim = " (rim speed %.6g m/s)"
-    checks.append(("omega", float(params.UNLOADED_RADIUS), lim["rim"], "|omega R0|", rim) if omega_given else
-                  ("vx", 1.0, lim["rim"], "|(1 + kappa) vx|", rim))
+    shown = " (rim speed %.6g m/s)"
+    if rim:
+        checks.append(("omega", float(params.UNLOADED_RADIUS), lim["rim"], "|omega R0|", shown) if omega_given else
+                      ("vx", 1.0, lim["rim"], "|(1 + kappa) vx|", shown))
     return [(name, scale, float(limit[0]),
              _limit_message(source, name, "%.6g" + shown, what, limit[1].replace("%", "%%")))
             for name, scale, limit, what, shown in checks if np.isfinite(limit[0])]

@@ -75,6 +75,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ModelInputError
+from .inputs import check_limits, hard_limits
 from .variables import WHEEL, pick
 
 __all__ = ["StateFunctions", "WheelFunctions", "wheel_functions", "free_rolling_start", "start_inputs", "WheelTyre", "KINDS",
@@ -474,6 +475,7 @@ class WheelTyre:
         if evaluator not in EVALUATORS:
             raise ModelInputError(f"evaluator must be one of {', '.join(EVALUATORS)}; got {evaluator!r}")
         self.functions = f = wheel_functions(model, kind, vertical, tau_vlow, turn_slip, input_mode)
+        self._params, self._limits = model.params, hard_limits(model.params)
         self.u = np.array(f.input_starts, dtype=float)
         self.q = np.array(f.parameter_starts, dtype=float)
         self.state = np.zeros(len(f.state_names))
@@ -508,12 +510,25 @@ class WheelTyre:
                 raise ModelInputError(f"unknown parameter {k!r}; parameters are {', '.join(names) or 'none'}")
             self.q[names.index(k)] = v
 
+    def _check_limits(self, error):
+        """The input policy's speed limits (:func:`mftyre.inputs.check_limits`; the native FMU's TYRE_LIMITS, from
+        :func:`mftyre.inputs.point_limit_checks`): vx, and the rim speed of the input spin (rig mode: vx only, the
+        spin follows from kappa_in), raised as ``error``."""
+        U = dict(zip(self.functions.input_names, self.u))
+        arrays = {"vx": np.asarray(U["vx"])} | ({"omega": np.asarray(U["omega"])} if "omega" in U else {})
+        try:
+            check_limits(self._params, arrays, False, omega_given=True, lim=self._limits)
+        except ModelInputError as exc:
+            raise error(str(exc)) from None
+
     def initialise(self):
+        self._check_limits(ModelInputError)
         self.state = np.asarray(self.functions.init(self.u, self.q), dtype=float).ravel()
 
     def step(self, h: float):
         if not (math.isfinite(h) and h > 0):
             raise StepError(f"step size must be positive and finite, got {h!r}")
+        self._check_limits(StepError)
         if self.state.size:
             self.state = np.asarray(self.functions.step(self.state, self.u, self.q, h), dtype=float).ravel()
 

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mftyre.errors import ModelInputError
-from mftyre.inputs import check_limits, point_limit_checks
+from mftyre.inputs import check_limits
 from mftyre.transient import StateFunctions, start_inputs
 from mftyre.variables import pick
 
@@ -118,20 +118,6 @@ OUTPUTS = pick(
         "Vsy": "lateral slip speed of the contact patch, tan(alpha) |Vcx|",
         "omega_used": "rim spin speed (the input, or driven by the torque)",
         "road_w": "effective road height (tandem cams)"})
-def limit_definitions(prm, rim: str) -> str:
-    """C definitions of the input policy's speed limits at the start (:func:`mftyre.inputs.point_limit_checks`, as
-    :meth:`SwiftWheel.initialise` and swift.simulate.SwiftTyre.initial_state apply :func:`mftyre.inputs.check_limits`;
-    the spin is given with ``rim="speed"``): SWIFT_LIMITS_N checks, refused where SWIFT_LIMIT_SCALE |u[SWIFT_LIMIT_U]|
-    > SWIFT_LIMIT (glue_swift.c), with the message SWIFT_LIMIT_TEXT of the value and the scaled value."""
-    checks = point_limit_checks(prm, rim == "speed")
-    rows = checks or [("vx", 0.0, 0.0, "")]  # (C has no empty arrays: one row never used)
-    return (f"#define SWIFT_LIMITS_N {len(checks)}\n"
-            "static const int SWIFT_LIMIT_U[] = {" + ", ".join(f"TYRE_U_{n.upper()}" for n, *_ in rows) + "};\n"
-            "static const double SWIFT_LIMIT_SCALE[] = {" + ", ".join(repr(c[1]) for c in rows) + "};\n"
-            "static const double SWIFT_LIMIT[] = {" + ", ".join(repr(c[2]) for c in rows) + "};\n"
-            "static const char *const SWIFT_LIMIT_TEXT[] = {" + ", ".join(json.dumps(c[3]) for c in rows) + "};\n")
-
-
 #: The outputs taken from the MF at the ring's contact state (the ring does not report them).
 _MF_EXTRAS = {"Mx_c": "mx", "My_c": "my", "contact_width": "b", "trail": "t", "mux": "mux", "muy": "muy"}
 _RING = {"Fx": "fx", "Fy": "fy", "Fz": "fz", "Mx": "mx", "My": "my", "Mz": "mz", "Fx_c": "fx_c", "Fy_c": "fy_c",
@@ -309,7 +295,6 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
                f"#define SWIFT_NEQ {len(residual_names)}\n"
                "static const char *const SWIFT_EQ_NAMES[SWIFT_NEQ] = {"
                + ", ".join(json.dumps(n) for n in residual_names) + "};\n"
-               + limit_definitions(prm, rim)
                + f"#define SWIFT_NO_ROLLING_ROOT {json.dumps(root_message)}\n#define SWIFT_START_TEXT "
                f"{json.dumps(start_form)}\n#define SWIFT_START_VALUES(u, q) "
                + ", ".join(f"{vec}[TYRE_{vec.upper()}_{name.upper()}]" for name, vec in described) + "\n")

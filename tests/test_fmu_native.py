@@ -928,3 +928,52 @@ def test_a_yawing_wheel_spins_like_an_inclined_one(models):
             by_yaw, by_camber = turning[name] - straight[name], inclined[name] - straight[name]
             assert by_yaw * by_camber > 0, (fz, name, by_yaw, by_camber)
         assert turning["Fy"] - straight["Fy"] < -5.0 and turning["Mz_c"] - straight["Mz_c"] < 0.0
+
+
+@pytest.mark.parametrize("kind", ["steady", "transient"])
+def test_the_input_policy_speed_limits_refuse_as_in_python(fmus, models, tmp_path, kind):
+    """The speed limits of mftyre.inputs.check_limits (this file: |vx| <= 173 m/s, rim speed |omega R0| <= 190 m/s)
+    in the native wheel FMU and mftyre.transient.WheelTyre, with the text MFModel.evaluate raises: a start beyond them
+    fails (fmi2Error), a step is discarded (fmi2Discard, state and outputs held) and the next valid step runs."""
+    from fmpy.fmi1 import FMICallException
+
+    from mftyre.transient import StepError, WheelTyre
+
+    model = models["61"]
+    cases = {"vx": dict(vx=200.0, omega=200.0 / RE0), "omega": dict(vx=150.0, omega=650.0)}
+    texts, wheel = {}, WheelTyre(model, kind)
+    for name, inputs in cases.items():
+        with pytest.raises(mftyre.ModelInputError) as policy:
+            model.evaluate(4000.0, 0.0, 0.0, **inputs)
+        texts[name] = str(policy.value)
+        assert texts[name].startswith(f"input {name} = "), texts[name]
+        wheel.set_inputs(**inputs)
+        with pytest.raises(mftyre.ModelInputError) as start:
+            wheel.initialise()
+        assert str(start.value) == texts[name]
+        s = Slave(fmus[kind], tmp_path)
+        with pytest.raises(FMICallException) as exc:
+            s.initialise(**inputs)
+        assert exc.value.status == 3 and [m for _, m in s.messages] == [f"initialisation failed: {texts[name]}"]
+        s.fmu.freeInstance()
+    wheel.set_inputs(vx=10.0, omega=10.0 / RE0)
+    wheel.initialise()
+    wheel.step(1e-3)
+    s = Slave(fmus[kind], tmp_path).initialise()
+    s.step()
+    held = s.get()
+    for name, inputs in cases.items():
+        wheel.set_inputs(**inputs)
+        with pytest.raises(StepError) as step:
+            wheel.step(1e-3)
+        assert str(step.value) == texts[name]
+        s.set(**inputs)
+        with pytest.raises(FMICallException) as exc:
+            s.fmu.doStep(s.t, 1e-3)
+        assert exc.value.status == 2 and s.messages[-1][1] == f"fmi2DoStep at t = {s.t:g}: {texts[name]}; state and " \
+                                                              "outputs held", s.messages[-1]
+        assert s.get(*held) == held
+    s.set(vx=10.0, omega=10.0 / RE0)
+    s.step()  # recovers with valid inputs
+    assert all(math.isfinite(v) for v in s.get().values())
+    s.close()

@@ -97,15 +97,9 @@ int glue_validate(const double *q, const double *u, char *msg, size_t n) {
 
 int glue_init(GlueWork *g, const double *u, const double *q, double *x, char *msg, size_t n) {
     double x0w;
-    /* the input policy's speed limits at the start (mftyre.inputs.point_limit_checks, generated into
-     * tyre_config.h), with its message, as SwiftTyre.initial_state's mftyre.inputs.check_limits */
-    for (int i = 0; i < SWIFT_LIMITS_N; i++) {
-        double value = u[SWIFT_LIMIT_U[i]], scaled = SWIFT_LIMIT_SCALE[i] * fabs(value);
-        if (scaled > SWIFT_LIMIT[i]) {
-            snprintf(msg, n, SWIFT_LIMIT_TEXT[i], value, scaled);
-            return 1;
-        }
-    }
+    /* the input policy's speed limits at the start (TYRE_LIMITS, fmu.native_build.limit_definitions), as
+     * SwiftTyre.initial_state's mftyre.inputs.check_limits */
+    if (TYRE_LIMITS(u, msg, n)) return 1;
     g->arg[0] = u;
     g->arg[1] = q;
     set_window(g, 2, q[TYRE_Q_X_START], &x0w);

@@ -50,6 +50,9 @@ int glue_validate(const double *q, const double *u, char *msg, size_t n) {
         snprintf(msg, n, "input p (inflation pressure) must be positive, got %g Pa", u[TYRE_U_P]);
         return 1;
     }
+    /* the input policy's speed limits (TYRE_LIMITS, fmu.native_build.limit_definitions), as
+     * mftyre.transient.WheelTyre applies mftyre.inputs.check_limits at every start and step */
+    if (TYRE_LIMITS(u, msg, n)) return 1;
     if (TYRE_NQ > 0 && !(q[0] >= 0.0)) {
         snprintf(msg, n, "parameter %s must be >= 0, got %g", TYRE_Q_NAMES[0], q[0]);
         return 1;
