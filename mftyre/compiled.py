@@ -357,6 +357,9 @@ def generate_c(function, checks=None, point_function=None) -> str:
     checks = checks or [{} for _ in range(n_in)]
     lo, hi = zip(*(c.get("range") or (-math.inf, math.inf) for c in checks))
     pos = [int(bool(c.get("positive"))) for c in checks]
+    # the rim speed |(1 + kappa) vx| of an estimated spin: flagged as input kappa outside (``"rim"`` with ``"vx"``)
+    rim_k = next((k for k, c in enumerate(checks) if "rim" in c and "rim_vx" in c), -1)
+    rim_vx, rim = (checks[rim_k]["rim_vx"], checks[rim_k]["rim"]) if rim_k >= 0 else (0, math.inf)
     n_w = f.sz_w()
     decl = "\n".join(f"extern double {name}({', '.join(['double'] * (2 if name in ('atan2', 'pow', 'hypot') else 1))})"
                      f" __attribute__((__simd__(\"notinbranch\")));" for name in sorted(used))
@@ -389,6 +392,9 @@ def generate_c(function, checks=None, point_function=None) -> str:
 static const double LO[N_IN] = {{{', '.join(map(_c_number, lo))}}};
 static const double HI[N_IN] = {{{', '.join(map(_c_number, hi))}}};
 static const int POSITIVE[N_IN] = {{{', '.join(map(str, pos))}}};
+#define RIM_KAPPA {rim_k}
+#define RIM_VX {rim_vx}
+static const double RIM_LIMIT = {_c_number(rim)};
 
 MFT_CLONES
 static void kernel(int64_t m, const double *const *in, double *const *out)
@@ -431,6 +437,8 @@ int64_t mft_point(double *xy)
     in[k] = x + k;
   }}
   if (flags & (((int64_t)1 << {2 * _FLAG_BITS}) - 1)) return flags;
+  if (RIM_KAPPA >= 0 && fabs((1.0 + x[RIM_KAPPA]) * x[RIM_VX]) > RIM_LIMIT)
+    flags |= (int64_t)1 << ({2 * _FLAG_BITS} + RIM_KAPPA);
   for (k = 0; k < N_OUT; ++k) out[k] = y + k;
   kernel_point(in, out);
   for (k = 0; k < N_OUT; ++k)
@@ -517,6 +525,13 @@ int mft_batch(int64_t n, const double *const *in, const int64_t *stride, double 
     fatal |= nonfinite || nonpositive;
   }}
   if (fatal) return 1;
+  if (RIM_KAPPA >= 0) {{ /* with the points outside kappa's range, those beyond the rim-speed limit */
+    const double *kap = in[RIM_KAPPA], *vx = in[RIM_VX];
+    const int64_t sk = stride[RIM_KAPPA], sv = stride[RIM_VX];
+    int64_t rim = 0;
+    for (i = 0; i < n; ++i) rim += fabs((1.0 + kap[i * sk]) * vx[i * sv]) > RIM_LIMIT;
+    counts[3 * RIM_KAPPA + 2] += rim;
+  }}
   for (start = 0; start < n; start += BLOCK) {{
     const int64_t m = n - start < BLOCK ? n - start : BLOCK;
     double buffer[N_IN][BLOCK];
@@ -808,7 +823,7 @@ class CompiledFunction:
                 if beyond.any():
                     raise ModelInputError(f"input {name} = {v[beyond][0]:.6g} at {int(np.sum(beyond))} of {n} "
                                           f"point(s) is beyond the limit of {describe}")
-        if "kappa" in self._ranges and "rim" in self._checks[self.inputs.index("kappa")]:
+        if "kappa" in self.inputs and "rim" in self._checks[self.inputs.index("kappa")]:
             k, check = self.inputs.index("kappa"), self._checks[self.inputs.index("kappa")]
             if count(k, 2):  # the rim speed of the estimated spin, omega Re = (1 + kappa) vx (2.5)
                 kappa = np.atleast_1d(np.asarray(values[k], dtype=float))
@@ -821,6 +836,11 @@ class CompiledFunction:
                                           f"{int(np.sum(beyond))} of {n} point(s) is beyond the limit of "
                                           f"{check['rim_describe']}")
         outside = {name: int(count(k, 2)) for k, name in enumerate(self.inputs) if name in self._ranges}
+        if "kappa" in outside and "rim" in self._checks[self.inputs.index("kappa")] and outside["kappa"]:
+            k = self.inputs.index("kappa")  # the C count includes the points beyond the rim speed (none left here)
+            lo, hi = self._ranges["kappa"][:2]
+            kappa = np.asarray(values[k], dtype=float)
+            outside["kappa"] = int(np.count_nonzero((kappa < lo) | (kappa > hi))) * (n // max(kappa.size, 1))
         warn_outside(outside, n, self._ranges, stacklevel=stacklevel)
 
 
@@ -977,8 +997,9 @@ def _key(model, options: dict) -> str:
 def _model_checks(model, inputs, limits: bool) -> list:
     """Per input: finite always; p positive; the .tir range where ``limits`` saturates it (warned); the limits of
     :func:`mftyre.inputs.hard_limits` (refused): vx and omega as hard ranges (``"hard": True``), fz's margin above
-    FZMAX checked where the C flags fz outside its range (``"limit"``). (The rim speed (1 + kappa) vx of an estimated
-    spin is checked where kappa is outside KPUMIN..KPUMAX (``"rim"``); inside, by evaluate only.)"""
+    FZMAX checked where the C flags fz outside its range (``"limit"``), the rim speed |(1 + kappa) vx| of an estimated
+    spin (no input omega) where the C flags kappa (``"rim"``, ``"rim_vx"`` the index of vx): outside KPUMIN..KPUMAX
+    or beyond the rim-speed limit, at any kappa, as evaluate."""
     ranges = input_ranges(model.params, model.mirrored) if limits else {}
     lim = hard_limits(model.params)
     source = getattr(model.params, "source", None) or "the parameter set"
@@ -994,11 +1015,12 @@ def _model_checks(model, inputs, limits: bool) -> list:
             check.update(range=list(ranges[name][:2]), describe=ranges[name][2])
             if name == "fz":
                 check.update(limit=lim["fz"][0], limit_describe=f"{source}: fz <= {lim['fz'][1]}")
-            if name == "kappa" and "vx" in inputs and np.isfinite(lim["rim"][0]):
-                check.update(rim=lim["rim"][0], rim_describe=f"{source}: |(1 + kappa) vx| <= {lim['rim'][1]}")
         elif name in hard and np.isfinite(hard[name][0]):
             check.update(range=[-hard[name][0], hard[name][0]], hard=True,
                          limit_describe=f"{source}: |{name}| <= {hard[name][1][1]}")
+        if name == "kappa" and "vx" in inputs and "omega" not in inputs and np.isfinite(lim["rim"][0]):
+            check.update(rim=lim["rim"][0], rim_vx=list(inputs).index("vx"),
+                         rim_describe=f"{source}: |(1 + kappa) vx| <= {lim['rim'][1]}")
         checks.append(check)
     return checks
 

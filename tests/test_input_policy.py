@@ -152,3 +152,25 @@ def test_compat_answers_beyond_the_limits_as_mfeval_does_with_a_warning():
     with pytest.warns(mftyre.ReferenceValueWarning, match="vx = 300 is beyond the limit"):
         row = mfeval(model, [[4000.0, 0.0, 0.0, 0.0, 0.0, 300.0]], 111)[0]
     assert row[MFEVAL_COLUMNS.index("Re")] > 1.15 * model.params.UNLOADED_RADIUS  # returned as MFeval returns it
+
+
+def test_the_compiled_model_checks_the_rim_speed_of_an_estimated_spin_at_any_slip(compiled61):
+    """vx = 150 m/s (inside 173 m/s) with kappa = 0.5 (inside KPUMIN..KPUMAX): rim speed 225 m/s beyond the file's
+    189.8 m/s, refused by evaluate; the compiled model (one point and batch) refused it only where kappa was outside
+    its range (old code: answered, without a warning). kappa = 0.2 (180 m/s) is answered by all, unwarned."""
+    model = _load(T61)
+    with pytest.raises(ModelInputError, match=r"input vx = 150 \(rim speed 225 m/s\) .*\|\(1 \+ kappa\) vx\| <= 189"):
+        model.evaluate(4000.0, 0.5, 0.0, vx=150.0)
+    with pytest.raises(ModelInputError, match=r"\(rim speed 225 m/s\) at 1 of 1 point\(s\) is beyond the limit of .*"
+                                              r"\|\(1 \+ kappa\) vx\| <= 189\.797"):
+        compiled61(4000.0, 0.5, 0.0, 0.0, 0.0, 150.0, 2.2e5)
+    with pytest.raises(ModelInputError, match=r"\(rim speed 225 m/s\) at 1 of 3 point\(s\)"):
+        compiled61.batch(4000.0, [0.0, 0.5, 0.2], 0.0, 0.0, 0.0, 150.0, 2.2e5)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        one = compiled61(4000.0, 0.2, 0.0, 0.0, 0.0, 150.0, 2.2e5)
+        many = compiled61.batch(4000.0, [0.0, 0.2], 0.0, 0.0, 0.0, 150.0, 2.2e5)
+        ref = model.evaluate(4000.0, 0.2, 0.0, vx=150.0)
+    assert one[0] == pytest.approx(float(ref.fx), rel=1e-9) and many.fx[1] == pytest.approx(float(ref.fx), rel=1e-9)
+    with pytest.warns(InputClippedWarning, match=r"kappa outside KPUMIN..KPUMAX = \[-1, 1\] - at 1 of 2 point"):
+        compiled61.batch(4000.0, [0.0, -1.5], 0.0, 0.0, 0.0, 30.0, 2.2e5)  # the count: kappa's range only
