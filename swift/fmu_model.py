@@ -295,7 +295,7 @@ def swift_functions(model, road=None, *, x_start: float = 0.0, rim: str = "speed
                f"#define SWIFT_NEQ {len(residual_names)}\n"
                "static const char *const SWIFT_EQ_NAMES[SWIFT_NEQ] = {"
                + ", ".join(json.dumps(n) for n in residual_names) + "};\n"
-               + f"#define SWIFT_NO_ROLLING_ROOT {json.dumps(root_message)}\n#define SWIFT_START_TEXT "
+               f"#define SWIFT_NO_ROLLING_ROOT {json.dumps(root_message)}\n#define SWIFT_START_TEXT "
                f"{json.dumps(start_form)}\n#define SWIFT_START_VALUES(u, q) "
                + ", ".join(f"{vec}[TYRE_{vec.upper()}_{name.upper()}]" for name, vec in described) + "\n")
     extra = (refusal + f"#define ROAD_N {table.h.size}\n#define ROAD_WINDOW {WINDOW}\n#define ROAD_X0 {table.x0!r}\n"

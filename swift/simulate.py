@@ -657,10 +657,10 @@ class SwiftTyre:
         """:meth:`initial_state` as one CasADi function for code generation (FMU):
         ``(xa, za, vza, omega, u, x0w, grid, hw) -> x`` at the axle position ``xa``, height ``za`` (above the cam
         table's road; with ``axle="load"`` unused: the axle height is solved for from the input load, as
-        initial_state), vertical speed ``vza`` and spin ``omega`` (with ``rim="torque"`` not used: free rolling, :func:`free_rolling_spin`), ring
-        inputs ``u`` (INPUT_NAMES) and the window of :attr:`step_function`: the same start (the steady-state load
-        at the deflection under the axle), ``iterations`` Newton steps (:func:`_newton_inverse`, as initial_state) on
-        :attr:`equilibrium_unknowns`,
+        initial_state), vertical speed ``vza`` and spin ``omega`` (with ``rim="torque"`` not used: the spin starts at
+        free rolling, :func:`free_rolling_spin`), ring inputs ``u`` (INPUT_NAMES) and the window of
+        :attr:`step_function`: the same start (the steady-state load at the deflection under the axle),
+        ``iterations`` Newton steps (:func:`_newton_inverse`, as initial_state) on :attr:`equilibrium_unknowns`,
         then the contact solution stored in the memory entries."""
         import casadi as ca
 
