@@ -385,22 +385,20 @@ def generate_sources(spec, sources: Path, guid: str, fmi_version: int = 2) -> li
 
 def limit_definitions(prm, omega_given: bool, rim: bool = True) -> str:
     """C of the input policy's speed limits (:func:`mftyre.inputs.point_limit_checks`, the checks and messages of
-    :func:`mftyre.inputs.check_limits` at one point): ``TYRE_LIMITS(u, msg, n)``, nonzero with the message where an
-    input is beyond them; the glue applies it where the Python wheels apply check_limits (the SWIFT start; every
-    start and step of the steady and transient wheels)."""
+    :func:`mftyre.inputs.check_limits` at one point): ``TYRE_LIMITS_REFUSE(u, msg, n);`` returns 1 from the glue
+    function with the message where an input is beyond them; the glue applies it where the Python wheels apply
+    check_limits (the SWIFT start; every start and step of the steady and transient wheels)."""
     checks = point_limit_checks(prm, omega_given, rim)
     rows = checks or [("vx", 0.0, 0.0, "")]  # (C has no empty arrays: one row never used)
-    return ("#include <math.h>\n#include <stdio.h>\n"
-            f"#define TYRE_LIMITS_N {len(checks)}\n"
+    return (f"#define TYRE_LIMITS_N {len(checks)}\n"
             "static const int TYRE_LIMIT_U[] = {" + ", ".join(f"TYRE_U_{c[0].upper()}" for c in rows) + "};\n"
             "static const double TYRE_LIMIT_SCALE[] = {" + ", ".join(repr(c[1]) for c in rows) + "};\n"
             "static const double TYRE_LIMIT[] = {" + ", ".join(repr(c[2]) for c in rows) + "};\n"
             "static const char *const TYRE_LIMIT_TEXT[] = {" + ", ".join(json.dumps(c[3]) for c in rows) + "};\n"
-            "static inline int TYRE_LIMITS(const double *u, char *msg, size_t n) {\n"
-            "    for (int i = 0; i < TYRE_LIMITS_N; i++) {\n"
-            "        double value = u[TYRE_LIMIT_U[i]], scaled = TYRE_LIMIT_SCALE[i] * fabs(value);\n"
-            "        if (scaled > TYRE_LIMIT[i]) return snprintf(msg, n, TYRE_LIMIT_TEXT[i], value, scaled), 1;\n"
-            "    }\n    return 0;\n}\n")
+            "/* in the glue (math.h, stdio.h): returns 1 from the caller with the message where an input is beyond */\n"
+            "#define TYRE_LIMITS_REFUSE(u, msg, n) do { for (int i_ = 0; i_ < TYRE_LIMITS_N; i_++) { \\\n"
+            "    double v_ = (u)[TYRE_LIMIT_U[i_]], s_ = TYRE_LIMIT_SCALE[i_] * fabs(v_); \\\n"
+            "    if (s_ > TYRE_LIMIT[i_]) { snprintf((msg), (n), TYRE_LIMIT_TEXT[i_], v_, s_); return 1; } } } while (0)\n")
 
 
 def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_start: float = 0.0,

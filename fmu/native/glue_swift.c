@@ -99,7 +99,7 @@ int glue_init(GlueWork *g, const double *u, const double *q, double *x, char *ms
     double x0w;
     /* the input policy's speed limits at the start (TYRE_LIMITS, fmu.native_build.limit_definitions), as
      * SwiftTyre.initial_state's mftyre.inputs.check_limits */
-    if (TYRE_LIMITS(u, msg, n)) return 1;
+    TYRE_LIMITS_REFUSE(u, msg, n);
     g->arg[0] = u;
     g->arg[1] = q;
     set_window(g, 2, q[TYRE_Q_X_START], &x0w);

@@ -52,7 +52,7 @@ int glue_validate(const double *q, const double *u, char *msg, size_t n) {
     }
     /* the input policy's speed limits (TYRE_LIMITS, fmu.native_build.limit_definitions), as
      * mftyre.transient.WheelTyre applies mftyre.inputs.check_limits at every start and step */
-    if (TYRE_LIMITS(u, msg, n)) return 1;
+    TYRE_LIMITS_REFUSE(u, msg, n);
     if (TYRE_NQ > 0 && !(q[0] >= 0.0)) {
         snprintf(msg, n, "parameter %s must be >= 0, got %g", TYRE_Q_NAMES[0], q[0]);
         return 1;
