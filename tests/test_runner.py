@@ -135,7 +135,8 @@ def scheduler(monkeypatch):
               "host='127.0.0.1', scheduler_port=0, dashboard_address=None) as cluster:\n"
               "    print(cluster.scheduler_address, flush=True)\n    sys.stdin.read()\n")
     env = {**os.environ, "PYTHONWARNINGS": "ignore", "DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED": "False",
-           "DASK_DISTRIBUTED__ADMIN__SYSTEM_MONITOR__GIL__ENABLED": "False"}
+           "DASK_DISTRIBUTED__ADMIN__SYSTEM_MONITOR__GIL__ENABLED": "False",
+           "DASK_DISTRIBUTED__ADMIN__TICK__INTERVAL": "500ms"}  # (mftyre.runner.QUIET, for a cluster's processes)
     process = subprocess.Popen([sys.executable, "-c", script], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                stderr=subprocess.DEVNULL, env=env, text=True)
     try:
