@@ -1,7 +1,8 @@
-"""The runner (mftyre.runner) on a 2-process LocalCluster and on a scheduler started in separate processes: plain
-tasks, failures reported while the others go on, --resume, results identical to serial; the campaign fit
-(mftyre.campaign) bitwise equal to fitting each tyre alone; sweeps (mftyre.sweep) against the models' own
-entry points; MFModel.evaluate_chunked against one compiled batch and evaluate()."""
+"""The runner (mftyre.runner) on a 2-process LocalCluster (one for the file, left without a process or thread at
+its end) and on a scheduler started in a separate process: plain tasks, failures reported while the others go on,
+--resume, results identical to serial; the campaign fit (mftyre.campaign, on that scheduler) bitwise equal to
+fitting each tyre alone; sweeps (mftyre.sweep) against the models' own entry points, their CSV and Parquet tables;
+MFModel.evaluate_chunked against one compiled batch and evaluate()."""
 from __future__ import annotations
 
 import json
