@@ -302,8 +302,8 @@ def run(args) -> int:
         try:
             import pyarrow  # noqa: F401  (pandas writes Parquet through it)
         except ImportError:
-            return command_error("sweep", f"-o {out}: writing Parquet needs pyarrow (pip install pyarrow); "
-                                          "or write .csv")
+            return command_error("sweep", f"-o {out}: writing Parquet needs pyarrow, which is not installed "
+                                          "(pip install \"mftyre[parquet]\" or pip install pyarrow); or write .csv")
     if args.model == "steady" and args.road:
         return command_error("sweep", "--road: the steady model has no road; use --model swift or transient")
     tasks = out.with_name(out.name + ".tasks")

@@ -1,7 +1,8 @@
-"""The runner (mftyre.runner) on a 2-process LocalCluster and on a scheduler started in separate processes: plain
-tasks, failures reported while the others go on, --resume, results identical to serial; the campaign fit
-(mftyre.campaign) bitwise equal to fitting each tyre alone; sweeps (mftyre.sweep) against the models' own
-entry points; MFModel.evaluate_chunked against one compiled batch and evaluate()."""
+"""The runner (mftyre.runner) on a 2-process LocalCluster (one for the file, left without a process or thread at
+its end) and on a scheduler started in a separate process: plain tasks, failures reported while the others go on,
+--resume, results identical to serial; the campaign fit (mftyre.campaign, on that scheduler) bitwise equal to
+fitting each tyre alone; sweeps (mftyre.sweep) against the models' own entry points, their CSV and Parquet tables;
+MFModel.evaluate_chunked against one compiled batch and evaluate()."""
 from __future__ import annotations
 
 import json
@@ -9,6 +10,7 @@ import math
 import os
 import subprocess
 import sys
+import threading
 import time
 
 import numpy as np
@@ -32,9 +34,23 @@ OPTIONS = {"axle": "height", "start": 0.0, "distance": 1.0, "dt": 1e-3}
 
 @pytest.fixture(scope="module")
 def cluster():
-    """A LocalCluster of 2 worker processes, shared by the tests of this file."""
+    """A LocalCluster of 2 worker processes, shared by the tests of this file; at the end no process or thread of
+    it is left (a worker left behind would hold the pytest-xdist process that runs this file)."""
+    import psutil
+
+    before = set(threading.enumerate())
     with Runner(workers=2) as runner:
+        workers = [psutil.Process(pid) for pid in runner.client().run(os.getpid).values()]
+        assert len(workers) == 2 and os.getpid() not in [w.pid for w in workers]  # processes, not threads
         yield runner
+    _, alive = psutil.wait_procs(workers, timeout=30)
+    assert not alive, f"worker processes left running: {alive}"
+    for _ in range(100):  # dask's threads end shortly after the client and cluster are closed
+        left = [t for t in set(threading.enumerate()) - before if t.is_alive() and not t.daemon]
+        if not left:
+            break
+        time.sleep(0.1)
+    assert not left, f"threads left running: {left}"
 
 
 def _steady_runs(n=6, seed=3):
@@ -110,15 +126,48 @@ def _campaign(folder):
     return folder
 
 
-def test_campaign_is_bitwise_the_fit_of_each_tyre_alone(cluster, tmp_path):
-    """The folder campaign on the cluster against each tyre fitted alone in this process, as ``mftyre fit RUN``
+@pytest.fixture
+def scheduler(monkeypatch):
+    """The address of a dask scheduler with one worker (a thread of it) started in a separate process, and named by
+    $MFTYRE_SCHEDULER; the process ends when its standard input closes (at the end of the test, or when this
+    process dies: nothing is left behind)."""
+    script = ("import sys\nfrom distributed import LocalCluster\n"
+              "with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol='tcp://', "
+              "host='127.0.0.1', scheduler_port=0, dashboard_address=None) as cluster:\n"
+              "    print(cluster.scheduler_address, flush=True)\n    sys.stdin.read()\n")
+    env = {**os.environ, "PYTHONWARNINGS": "ignore", "DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED": "False",
+           "DASK_DISTRIBUTED__ADMIN__SYSTEM_MONITOR__GIL__ENABLED": "False",
+           "DASK_DISTRIBUTED__ADMIN__TICK__INTERVAL": "500ms"}  # (mftyre.runner.QUIET, for a cluster's processes)
+    process = subprocess.Popen([sys.executable, "-c", script], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                               stderr=subprocess.DEVNULL, env=env, text=True)
+    try:
+        address = process.stdout.readline().strip()  # ("" when the process ended without starting)
+        assert address.startswith("tcp://127.0.0.1:"), f"the scheduler did not start (exit {process.poll()})"
+        monkeypatch.setenv("MFTYRE_SCHEDULER", address)
+        yield address
+    finally:
+        process.stdin.close()
+        try:
+            process.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait(timeout=30)
+            raise
+
+
+def test_campaign_on_a_scheduler_in_a_separate_process_is_bitwise_the_fit_of_each_tyre_alone(scheduler, tmp_path):
+    """The folder campaign on the cluster of a scheduler in another process ($MFTYRE_SCHEDULER: the variable names
+    the cluster when no address is given) against each tyre fitted alone in this process, as ``mftyre fit RUN``
     fits it (read_data, fit_tir; tyreB's two runs joined)."""
     source = _campaign(tmp_path / "campaign")
     defaults = {"start": None, "stages": ["pure_fx"], "weighting": "uniform", "bins": 40, "max_nfev": None,
                 "no_pressure": False}
     assert {k: len(v["runs"]) for k, v in campaign_tyres(source, defaults).items()} == {"tyreA": 1, "tyreB": 2}
     out = tmp_path / "out"
-    summary, failures = run_campaign(source, out, cluster, defaults=defaults, say=lambda text: None)
+    with Runner(workers=2) as runner:
+        assert runner.describe() == f"the cluster of scheduler {scheduler}"
+        runner.client().wait_for_workers(1, timeout=60)
+        summary, failures = run_campaign(source, out, runner, defaults=defaults, say=lambda text: None)
     assert not failures and list(summary["status"]) == ["fitted", "fitted"]
     assert pd.read_csv(out / "summary.csv")["tyre"].tolist() == ["tyreA", "tyreB"]
     for tyre in ("tyreA", "tyreB"):
@@ -152,42 +201,6 @@ def test_campaign_manifest_rows_and_a_tyre_that_cannot_be_read(tmp_path):
         campaign_tyres(source / "bad.csv", defaults)
 
 
-def test_scheduler_in_a_separate_process(tmp_path):
-    file = tmp_path / "scheduler.json"
-    env = {**os.environ, "PYTHONWARNINGS": "ignore", "DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED": "False",
-           "DASK_DISTRIBUTED__ADMIN__SYSTEM_MONITOR__GIL__ENABLED": "False"}
-    scheduler = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
-                                  "--port", "0", "--no-dashboard", "--scheduler-file", str(file)],
-                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
-    worker = None
-    try:
-        for _ in range(600):
-            if file.exists() and file.stat().st_size:
-                break
-            time.sleep(0.05)
-        address = json.loads(file.read_text())["address"]
-        worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nworkers", "1",
-                                   "--nthreads", "1", "--no-dashboard", "--no-nanny"], stdout=subprocess.DEVNULL,
-                                  stderr=subprocess.DEVNULL, env=env)
-        runs = _steady_runs(n=2)
-        os.environ["MFTYRE_SCHEDULER"] = address  # the variable names the cluster when no address is given
-        try:
-            with Runner(workers=2) as runner:
-                assert runner.describe() == f"the cluster of scheduler {address}"
-                runner.client().wait_for_workers(1, timeout=60)
-                remote, failed = sweep(SAMPLE, "steady", runs, runner, options=OPTIONS, batch=2)
-        finally:
-            del os.environ["MFTYRE_SCHEDULER"]
-        serial, _ = sweep(SAMPLE, "steady", runs, Runner(workers=0), options=OPTIONS, batch=2)
-        assert not failed
-        pd.testing.assert_frame_equal(remote, serial, check_exact=True)
-    finally:
-        for process in (worker, scheduler):
-            if process is not None:
-                process.terminate()
-                process.wait(timeout=30)
-
-
 def test_swift_and_transient_runs_on_a_flat_road_carry_the_load():
     """Axle height held at the loaded radius of fz on a flat road: the peak load is fz (the static equilibrium);
     the relaxed wheel's side force after a slip-angle step reaches the steady model's."""
@@ -215,8 +228,9 @@ def test_evaluate_chunked_is_one_compiled_batch_and_the_model(cluster):
 
     model = mftyre.load_tir(SAMPLE)
     rng = np.random.default_rng(5)
-    fz, kappa, alpha = rng.uniform(1500, 7000, 20_000), rng.uniform(-0.3, 0.3, 20_000), rng.uniform(-0.2, 0.2, 20_000)
-    out = model.evaluate_chunked(fz, kappa, alpha, outputs=("fy",), chunks=3000)
+    fz, kappa, alpha = rng.uniform(1500, 7000, 6000), rng.uniform(-0.3, 0.3, 6000), rng.uniform(-0.2, 0.2, 6000)
+    out = model.evaluate_chunked(fz, kappa, alpha, outputs=("fy",), chunks=1000)  # 6 chunks of 1024, the last short
+    assert out["fy"].numblocks == (6,)
     with cluster.client().as_current():  # the chunks on the workers
         fy, = dask.compute(out["fy"])
     kernel = compile_model(model, outputs=("fy",))
@@ -263,3 +277,33 @@ def test_fit_command_dispatches_a_folder_to_the_campaign(tmp_path, capsys):
     assert "tyre tyreX (runs " in captured.err and "run.csv" in captured.err
     assert pd.read_csv(out / "summary.csv")["status"].iloc[0].startswith("failed")
     assert main(["fit", str(tmp_path / "campaign"), "-o", str(out), "--workers", "0", "--quiet"]) == 2  # not empty
+
+
+def _steady_sweep_argv(out):
+    return ["sweep", str(SAMPLE), "--model", "steady", "--vary", "LMUY=normal(1, 0.05)", "--vary", "fz=values(3000, "
+            "5000)", "-n", "3", "--seed", "4", "-o", str(out), "--workers", "0", "--quiet"]
+
+
+def test_sweep_parquet_table_reads_back_as_the_csv_table(tmp_path):
+    pytest.importorskip("pyarrow", reason="pyarrow is not installed: the Parquet output (pip install "
+                                          "\"mftyre[parquet]\") is not tested; its error without pyarrow is")
+    from mftyre.cli import main
+
+    assert main(_steady_sweep_argv(tmp_path / "runs.parquet")) == 0
+    assert main(_steady_sweep_argv(tmp_path / "runs.csv")) == 0
+    table = pd.read_parquet(tmp_path / "runs.parquet")
+    assert len(table) == 6 and table["fz"].tolist() == [3000.0] * 3 + [5000.0] * 3
+    assert np.array_equal(table["LMUY"], np.random.default_rng(4).normal(1.0, 0.05, 6))
+    assert (table["error"] == "").all() and table["fy_peak"].notna().all()
+    pd.testing.assert_frame_equal(table, pd.read_csv(tmp_path / "runs.csv", keep_default_na=False),
+                                  check_exact=True)  # every column, type and bit
+
+
+def test_sweep_parquet_without_pyarrow_says_how_to_get_it(tmp_path, monkeypatch, capsys):
+    from mftyre.cli import main
+
+    monkeypatch.setitem(sys.modules, "pyarrow", None)  # `import pyarrow` raises ImportError, as when absent
+    assert main(_steady_sweep_argv(tmp_path / "runs.parquet")) == 2
+    err = capsys.readouterr().err
+    assert "writing Parquet needs pyarrow, which is not installed" in err and 'pip install "mftyre[parquet]"' in err
+    assert list(tmp_path.iterdir()) == []  # nothing run, nothing written
