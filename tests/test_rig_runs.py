@@ -307,3 +307,21 @@ def test_nothing_added_writes_the_given_file_unchanged_with_its_provenance(tmp_p
     text = out.read_text()
     assert "nothing added; the parameters of given.tir unchanged" in text
     assert "Fitted by mftyre on a run (provenance line)" in text
+
+
+# ------------------------------------------------------------- pooled runs: one setting made twice is one level
+def test_levels_of_pooled_runs_group_settings_a_few_percent_apart():
+    """Two runs at the nominal pressures 0.85 and 1.15 x 0.83 bar, each setting made again +-3 % off (the rig
+    generator's jitter), held with sensor noise: two pressures, not four (the gaps between the settings of one
+    level are far below the programme's step); three loads 1650 / 2200 / 2750 N stay three."""
+    from mftyre.programme import cluster_levels
+
+    rng = np.random.default_rng(1)
+    settings = [0.85 * 0.98, 0.85 * 1.015, 1.15 * 1.02, 1.15 * 0.985]
+    p = np.concatenate([np.full(3000, 0.83e5 * f) for f in settings]) + rng.normal(0.0, 200.0, 12000)
+    labels, centres = cluster_levels(p, scatter=200.0)
+    assert centres.size == 2, centres
+    np.testing.assert_allclose(centres, [0.83e5 * 0.85, 0.83e5 * 1.15], rtol=0.01)
+    assert np.all(labels >= 0) and np.all(labels[:6000] == 0) and np.all(labels[6000:] == 1)
+    loads = np.concatenate([np.full(2000, f) for f in (1650.0, 2200.0, 2750.0)]) + rng.normal(0.0, 20.0, 6000)
+    assert cluster_levels(loads, scatter=20.0)[1].size == 3
