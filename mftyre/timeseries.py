@@ -407,9 +407,12 @@ def _kms_apply(x: np.ndarray, rho: float) -> np.ndarray:
     return f + b - x
 
 
-def measurement_noise(data: TyreData, programme: Programme, channel: str, *, window: float = 0.2, degree: int = 3):
+def measurement_noise(data: TyreData, programme: Programme, channel: str, *, window: float = 0.2, degree: int = 3,
+                      values=None):
     """(sigma, rho) of the AR(1) measurement noise of ``channel`` in the swept rows of a time series, or None with
-    fewer than 3 blocks.
+    fewer than 3 blocks. ``values``: a series of the rows to take instead of the channel (no load regressor; e.g.
+    FZ + VERTICAL_STIFFNESS x RL, whose noise is the vertical force's from the loaded radius, the load control's
+    scatter cancelled).
 
     Each branch of each sweep (``programme.rows`` SWEEP and BRANCH, contiguous runs) is cut into blocks of
     ``window`` seconds (TIME; 20 samples without it), longer where the noise is correlated over more than a sixth
@@ -422,8 +425,8 @@ def measurement_noise(data: TyreData, programme: Programme, channel: str, *, win
     regressors' degrees of freedom counted for white and for correlated noise alike."""
     rows = programme.rows
     sweep, branch = rows["SWEEP"].to_numpy(), rows["BRANCH"].to_numpy()
-    y = data.array(channel)
-    cov = data.array("FZ") if channel != "FZ" and data.has("FZ") else None
+    y = data.array(channel) if values is None else np.asarray(values, float)
+    cov = data.array("FZ") if values is None and channel != "FZ" and data.has("FZ") else None
     ok = (sweep >= 0) & np.isfinite(y) & (np.isfinite(cov) if cov is not None else True)
     dt = np.diff(data.array("TIME")) if data.has("TIME") else np.array([])
     dt = dt[np.isfinite(dt) & (dt > 0)]

@@ -355,6 +355,10 @@ def test_measurement_noise_of_sampled_channels_is_the_injected_noise(case):
         injected = NOISE[ch] * scale[ch]
         assert 1 / 1.5 < sigma / injected < 1.5, (case, ch, sigma, injected, rho)
         assert rho == pytest.approx(math.exp(-1.0 / (0.03 * (100.0 if "100Hz" in case else 1000.0))), abs=0.1)
+    # the vertical force from the loaded radius: FZ + cz RL holds the noise of both, not the load control's scatter
+    cz = tyre.params.VERTICAL_STIFFNESS
+    sigma, _ = measurement_noise(data, programme, "FZ", values=data.array("FZ") + cz * data.array("RL"))
+    assert 1 / 1.5 < sigma / math.hypot(NOISE["FZ"] * scale["FZ"], cz * NOISE["RL"]) < 1.5
 
 
 def test_pooled_runs_state_mx_within_one_and_a_half_times_its_repeatability_floor(pooled_fit):

@@ -254,7 +254,8 @@ def noise_of_means(raw: TyreData, programme, reduced: TyreData, channels, vertic
     the raw time series: sigma and rho of its AR(1) noise about the sweeps' local trend
     (:func:`mftyre.timeseries.measurement_noise`) and the median N of the reduced points,
     sigma_mean^2 = sigma^2 (1 + 2 sum_k (1 - k/N) rho^k) / N (:func:`mftyre.timeseries.mean_variance_factor`).
-    FZ (from the loaded radius) combines the noise of FZ and of RL x the vertical stiffness."""
+    FZ (from the loaded radius): the noise of FZ + the vertical stiffness x RL (FZ - cz RHO), which holds the
+    noise of both and not the load control's scatter (a real load change the loaded radius follows)."""
     from ..timeseries import mean_variance_factor, measurement_noise
 
     n_med = float(np.median(reduced.array("N"))) if "N" in reduced else 1.0
@@ -270,13 +271,17 @@ def noise_of_means(raw: TyreData, programme, reduced: TyreData, channels, vertic
         return s * math.sqrt(mean_variance_factor(rho, n_med)), rho
 
     for c in channels:
-        if c == "FZ":
-            a, b = of("FZ"), of("RL") if raw.has("RL") else of("RHO")
-            if a is None or b is None:
+        if c == "FZ":  # FZ from the loaded radius: the noise of FZ + cz RL (or FZ - cz RHO), the load's own scatter out
+            deflection = "RL" if raw.has("RL") else "RHO" if raw.has("RHO") else None
+            if deflection is None or not raw.has("FZ"):
                 continue
-            out[c] = (math.hypot(a[0], vertical_stiffness * b[0]),
-                      f"noise of FZ and RL about the sweeps' local trend (AR(1), lag-one correlation {a[1]:.2f}, "
-                      f"{b[1]:.2f}) over the median {n_med:.0f} samples per point")
+            sign = 1.0 if deflection == "RL" else -1.0
+            est = measurement_noise(raw, programme, "FZ",
+                                    values=raw.array("FZ") + sign * vertical_stiffness * raw.array(deflection))
+            if est is not None:
+                out[c] = (max(est[0] * math.sqrt(mean_variance_factor(est[1], n_med)), 1e-9),
+                          f"noise of FZ {'+' if sign > 0 else '-'} cz {deflection} about the sweeps' local trend "
+                          f"(AR(1), lag-one correlation {est[1]:.2f}) over the median {n_med:.0f} samples per point")
         else:
             e = of(c)
             if e is not None:
