@@ -16,7 +16,9 @@ levels is no level. Samples far from every level (more than 4 robust standard de
 level, and more than the bin width; when an exact plateau sits beside visits that scatter, those visits'
 spread) are off-level (label -1): ramps, load sweeps, transients. With a handful
 of points (< 50) distinct values whose separations are far below the others (a jump of 8x in the sorted
-separations) are merged: repeated settings that scatter. Values in no order (50 or more) that form no groups and
+separations) are merged: repeated settings that scatter; so are levels of a sampled run at a jump of 4x (runs
+pooled, each setting its nominal pressure or load a few percent off: 0.69 / 0.71 / 0.93 / 0.96 bar are two
+pressures), the grouping relative to the programme's own steps, no fixed tolerance. Values in no order (50 or more) that form no groups and
 lie flat over their range (a table of random points) hold no level: :attr:`Programme.spread` gives their range,
 which determines load, pressure or camber terms as levels do.
 
@@ -205,8 +207,8 @@ def cluster_levels(values, *, scatter: float | None = None):
     # centre and spread of each level from the values nearest to it
     idx = _nearest(xs, centres_guess)
     centres = np.array([np.median(xs[idx == k]) for k in range(centres_guess.size)])
-    if xs.size < 50 and centres.size > 2:
-        centres = _merge_scatter(xs, centres)
+    if centres.size > 2:  # few points: repeated settings that scatter; a sampled run: one setting made twice
+        centres = _merge_scatter(xs, centres, 8.0 if xs.size < 50 else 4.0)
     idx = _nearest(xs, centres)
     lab = np.full(xs.size, -1, int)
     out_centres = []
@@ -310,14 +312,17 @@ def _merge_shallow(dens, peaks):
     return peaks
 
 
-def _merge_scatter(x, centres):
-    """Few values: merge neighbours whose separation is far (8x) below the next larger separation."""
+def _merge_scatter(x, centres, factor: float = 8.0):
+    """Merge neighbouring levels whose separation is far (``factor``) below the next larger separation: the
+    sorted separations break into the steps of the programme and the scatter of its settings (few points that
+    scatter, 8x; in sampled runs, e.g. two runs pooled, each setting a nominal level again a few percent off, 4x:
+    0.69 / 0.71 / 0.93 / 0.96 bar are two pressures)."""
     centres = np.sort(centres)
     sep = np.diff(centres)
     order = np.sort(sep)
     ratio = order[1:] / np.maximum(order[:-1], 1e-300)
     k = int(np.argmax(ratio))
-    if ratio[k] < 8.0:
+    if ratio[k] < factor:
         return centres
     limit = order[k]
     group = np.concatenate([[0], np.cumsum(sep > limit)])  # group of each centre

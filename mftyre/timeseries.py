@@ -20,6 +20,12 @@ independent samples.
 * :func:`effective_samples`: n_eff = sum over sweeps of n (1 - r) / (1 + r), r the lag-one autocorrelation of
   the residuals within the sweep (the AR(1) rule); use it for every significance test and uncertainty
   instead of the number of rows.
+* :func:`measurement_noise`: the standard deviation and lag-one correlation of a channel's AR(1) measurement noise
+  from its residual about a local trend within each branch of each sweep (blocks of 0.2 s: a cubic in time and
+  the measured load as regressors), the residual's expected sum of squares and lag-one sum for AR(1) noise
+  counted exactly for the fitted regressors (so right for white and coloured noise at 100 Hz and at kHz rates;
+  second differences of the samples see the sweep's own curvature once the noise is correlated over several
+  samples). The one noise estimate of sampled data: the gap finder's noise of binned means derives from it.
 * :func:`needs_reduction`: whether the data are dense enough (a time series) for the reduction to pay.
 """
 from __future__ import annotations
@@ -36,7 +42,8 @@ from .data import TyreData
 from .programme import Programme, recognise
 
 __all__ = ["reduce_sweeps", "Reduction", "relaxed_slip", "relaxation_length", "hysteresis", "both_ways",
-           "effective_samples", "needs_reduction", "lag_one_correlation", "scatter_about_bins"]
+           "effective_samples", "needs_reduction", "lag_one_correlation", "scatter_about_bins",
+           "measurement_noise", "mean_variance_factor"]
 
 _SWEPT = {"slip_angle": "SA", "slip_ratio": "SL", "speed": "VX", "load": "FZ"}
 _RESPONSE = ("FX", "FY", "MX", "MY", "MZ", "RL", "RHO", "RE")
@@ -391,3 +398,99 @@ def scatter_about_bins(data: TyreData, programme: Programme, channel: str, *, bi
         dev[ok] = np.where(n[k] >= 6, resid * np.sqrt(n[k] / np.maximum(n[k] - 2, 1)), np.nan)
         out[idx] = dev
     return out
+
+
+def _kms_apply(x: np.ndarray, rho: float) -> np.ndarray:
+    """R x along axis 1 for the AR(1) correlation matrix R_ij = rho^|i-j|: a forward and a backward recursion."""
+    f = lfilter([1.0], [1.0, -rho], x, axis=1)
+    b = lfilter([1.0], [1.0, -rho], x[:, ::-1], axis=1)[:, ::-1]
+    return f + b - x
+
+
+def measurement_noise(data: TyreData, programme: Programme, channel: str, *, window: float = 0.2, degree: int = 3,
+                      values=None):
+    """(sigma, rho) of the AR(1) measurement noise of ``channel`` in the swept rows of a time series, or None with
+    fewer than 3 blocks. ``values``: a series of the rows to take instead of the channel (no load regressor; e.g.
+    FZ + VERTICAL_STIFFNESS x RL, whose noise is the vertical force's from the loaded radius, the load control's
+    scatter cancelled).
+
+    Each branch of each sweep (``programme.rows`` SWEEP and BRANCH, contiguous runs) is cut into blocks of
+    ``window`` seconds (TIME; 20 samples without it), longer where the noise is correlated over more than a sixth
+    of that (6 (1 + rho) / (1 - rho) samples, from a first pass): in each block the samples are fitted by least
+    squares with a polynomial of ``degree`` in time and, for a channel other than FZ, the measured load FZ (the
+    load control's scatter is a real force change the model sees, not noise). For residuals r = M e,
+    M = I - Q Q^T (Q an orthonormal basis of the block's regressors) and noise e of variance sigma^2 and
+    correlation R(rho) (R_ij = rho^|i-j|): E[r.r] = sigma^2 tr(M R), E[sum r_t r_(t+1)] = sigma^2 tr(U M R M) (U the
+    shift). rho solves the measured ratio of the two sums (bisection), sigma^2 = sum r.r / sum tr(M R): the
+    regressors' degrees of freedom counted for white and for correlated noise alike."""
+    rows = programme.rows
+    sweep, branch = rows["SWEEP"].to_numpy(), rows["BRANCH"].to_numpy()
+    y = data.array(channel) if values is None else np.asarray(values, float)
+    cov = data.array("FZ") if values is None and channel != "FZ" and data.has("FZ") else None
+    ok = (sweep >= 0) & np.isfinite(y) & (np.isfinite(cov) if cov is not None else True)
+    dt = np.diff(data.array("TIME")) if data.has("TIME") else np.array([])
+    dt = dt[np.isfinite(dt) & (dt > 0)]
+    m = max(int(round(window / float(np.median(dt)))) if dt.size else 20, 2 * (degree + 3))
+    key = np.where(ok, sweep * 3 + branch + 1, -1)
+    runs = [r for r in np.split(np.arange(y.size), np.flatnonzero(key[1:] != key[:-1]) + 1) if key[r[0]] >= 0]
+    est = _noise_in_blocks(y, cov, runs, m, degree)
+    if est is not None:
+        longer = int(math.ceil(6.0 * (1.0 + est[1]) / (1.0 - est[1])))
+        if longer > m:
+            est = _noise_in_blocks(y, cov, runs, longer, degree) or est
+    return est
+
+
+def _noise_in_blocks(y, cov, runs, m, degree):
+    """(sigma, rho) of :func:`measurement_noise` with blocks of ``m`` samples, None with fewer than 3 blocks."""
+    starts = []
+    for run in runs:
+        if run.size >= m:
+            k = run.size // m
+            starts.extend(run[0] + (run.size - k * m) // 2 + m * np.arange(k))
+    if len(starts) < 3:
+        return None
+    idx = np.asarray(starts)[:, None] + np.arange(m)[None, :]
+    x = np.repeat(np.vander(np.linspace(-1.0, 1.0, m), degree + 1)[None], idx.shape[0], axis=0)
+    if cov is not None:
+        c = cov[idx] - cov[idx].mean(axis=1, keepdims=True)
+        x = np.concatenate([x, c[:, :, None]], axis=2)
+    q, tri = np.linalg.qr(x)
+    diag = np.abs(np.diagonal(tri, axis1=1, axis2=2))
+    q = q * (diag > 1e-9 * diag.max(axis=1, keepdims=True))[:, None, :]  # a load constant in the block: no column
+    v = y[idx]
+    res = v - np.einsum("bmk,bk->bm", q, np.einsum("bmk,bm->bk", q, v))
+    rss, lag = float(np.sum(res * res)), float(np.sum(res[:, 1:] * res[:, :-1]))
+    if rss <= 0:
+        return 0.0, 0.0
+    uq, utq = np.zeros_like(q), np.zeros_like(q)
+    uq[:, :-1], utq[:, 1:] = q[:, 1:], q[:, :-1]
+    qtuq = np.einsum("bmk,bml->bkl", q, uq)
+    nb = idx.shape[0]
+
+    def traces(rho):  # tr(M R), tr(U M R M), summed over the blocks
+        rq = _kms_apply(q, rho)
+        qtrq = np.einsum("bmk,bml->bkl", q, rq)
+        a = nb * m - float(np.trace(qtrq, axis1=1, axis2=2).sum())
+        b = nb * (m - 1) * rho - float(np.sum(rq * uq) + np.sum(utq * rq)) + float(np.einsum("bkl,blk->", qtuq, qtrq))
+        return a, b
+
+    target = lag / rss
+    lo, hi = 0.0, 0.999
+    for rho in (lo, hi):
+        a, b = traces(rho)
+        if (rho == lo and target <= b / a) or (rho == hi and target >= b / a):
+            return math.sqrt(rss / a), rho
+    for _ in range(16):
+        mid = 0.5 * (lo + hi)
+        a, b = traces(mid)
+        lo, hi = (mid, hi) if b / a < target else (lo, mid)
+    rho = 0.5 * (lo + hi)
+    return math.sqrt(rss / traces(rho)[0]), rho
+
+
+def mean_variance_factor(rho: float, n: float) -> float:
+    """Var(mean of n AR(1) samples) / sigma^2 = (1 + 2 sum_k (1 - k/n) rho^k) / n, k = 1 ... n - 1."""
+    n = max(int(round(n)), 1)
+    k = np.arange(1, n)
+    return float((1.0 + 2.0 * np.sum((1.0 - k / n) * rho**k)) / n)

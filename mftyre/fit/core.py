@@ -46,7 +46,8 @@ from ..programme import recognise
 from ..timeseries import effective_samples, needs_reduction, reduce_sweeps
 from ..tir import read_tir, write_tir
 from .metrics import normalised_rms
-from .stages import (STAGE_NAMES, STAGES, conditions, data_corners, level_labels, shape_violations,
+from .stages import (STAGE_NAMES, STAGES, combined_fy, conditions, data_corners,
+                     level_labels, shape_violations,
                      stage_parameters, stage_rows, supported_parameters)
 from .start import estimate_stage, start_parameters
 from .verify import check_speeds, physical_domain, verification, verify_tir
@@ -531,8 +532,8 @@ def _vertical_consistency(prm, data: TyreData, radius_given: bool):
 
 
 def _fit_stage(stage, prm, side, data, fit_pressure, generic, weighting, progress, max_nfev, baseline,
-               radius_given=False, held=frozenset()):
-    rows = stage_rows(stage, data)
+               radius_given=False, held=frozenset(), fy_combined=True):
+    rows = stage_rows(stage, data, fy_combined)
     sub = data.select(rows)
     cond = conditions(sub)
     groups, skipped = stage_parameters(stage, cond, fit_pressure)
@@ -682,7 +683,7 @@ def _fit_stages(data, prm, side, stages, fit_pressure, generic, weighting, progr
         if name not in STAGES:
             raise ValueError(f"unknown stage {name!r}; stages are {', '.join(STAGE_NAMES)}")
         prm, results[name] = _fit_stage(STAGES[name], prm, side, data, fit_pressure, generic, weighting, progress,
-                                        max_nfev, baseline, radius_given, held)
+                                        max_nfev, baseline, radius_given, held, combined_fy(results))
         if name == "mz_combined" and results[name].fitted and "mz" in results and results["mz"].fitted:
             # the pure-Mz stage ran with the moment arm s = 0 and took the moment s Fx (paper A56) of the small
             # Fx at zero slip into the trail and residual torque; refit it now that s is known
@@ -781,7 +782,7 @@ def _sample_errors(model, data, programme, results, bins) -> dict:
         if not st.fitted or STAGES[name].output == "fz_from_rl":
             continue
         stage = STAGES[name]
-        rows = stage_rows(stage, data) & in_sweep
+        rows = stage_rows(stage, data, combined_fy(results)) & in_sweep
         if rows.sum() < 10:
             continue
         sub = data.select(rows)

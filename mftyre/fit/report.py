@@ -14,7 +14,7 @@ from ..programme import cluster_levels
 from ..model import MFModel
 from .predict import predict_stage
 from .provenance import unidentified
-from .stages import STAGES, stage_rows
+from .stages import STAGES, combined_fy, stage_rows
 
 __all__ = ["markdown_report", "save_report", "plot_stage", "stage_figure"]
 
@@ -152,7 +152,7 @@ def stage_figure(result, name: str):
     st, stage = result.stages[name], STAGES[name]
     if not st.fitted:
         return None
-    data = result.data.select(stage_rows(stage, result.data))
+    data = result.data.select(stage_rows(stage, result.data, combined_fy(result.stages)))
     model = MFModel(result.params)
     fitted = predict_stage(stage, model, data, data.inputs())
     measured = data.array(stage.channel)

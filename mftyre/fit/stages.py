@@ -101,8 +101,16 @@ if _MISPLACED:  # pragma: no cover - guards the table: the schema's stage (mftyr
     raise RuntimeError(f"stage parameters not of that stage in the schema: {_MISPLACED}")
 
 
-def stage_rows(stage: Stage, data: TyreData) -> np.ndarray:
-    """Boolean mask of the rows a stage fits (by the slip values; the measured channel must be finite)."""
+def combined_fy(results) -> bool:
+    """Whether the combined-slip Fy stage is among the fitted stage ``results`` (so Mx may use combined slip)."""
+    return "combined_fy" in results and bool(results["combined_fy"].fitted)
+
+
+def stage_rows(stage: Stage, data: TyreData, combined_fy: bool = True) -> np.ndarray:
+    """Boolean mask of the rows a stage fits (by the slip values; the measured channel must be finite).
+    ``combined_fy=False`` (the combined-slip Fy not fitted): Mx, which follows the model's Fy, only where that Fy
+    is the pure-slip one (no slip ratio); on combined-slip rows the Mx stage would make up for an Fy it does not
+    describe (on a pooled drive/brake run: Fy 39-48 N RMS off, Mx 2x the repeatability floor)."""
     sl, sa = np.abs(data.array("SL")), np.abs(data.array("SA"))
     pure_kappa, pure_alpha = sl <= _KAPPA_TOL, sa <= _ALPHA_TOL
     kind = stage.rows
@@ -116,6 +124,8 @@ def stage_rows(stage: Stage, data: TyreData) -> np.ndarray:
         mask = ~pure_kappa
     elif kind == "slip":
         mask = ~(pure_alpha & pure_kappa)
+        if stage.name == "mx" and not combined_fy:
+            mask &= pure_kappa
     elif kind in ("free_rolling", "free_rolling_re"):
         mask = pure_alpha & pure_kappa
     elif kind == "all_rl":  # the loaded radius, or else the deflection, measured

@@ -571,9 +571,7 @@ def _noise(run: _Run, start) -> dict:
     """Channel -> (sigma, method): the measurement noise (of the binned means for a reduced time series)."""
     sigma = noise_levels(run.ev_train, run.ev_train.residuals(start))
     if run.reduction is not None:
-        kind = run.programme.rows["KIND"].to_numpy()
-        segments = np.where(kind != "transition", run.programme.rows["SEGMENT"].to_numpy(), -1)
-        sigma.update(noise_of_means(run.raw, segments, run.data, run.ev_train.channels,
+        sigma.update(noise_of_means(run.raw, run.programme, run.data, run.ev_train.channels,
                                     float(run.given.VERTICAL_STIFFNESS)))
     run.say("noise: " + ", ".join(f"{c} {s:.3g}" for c, (s, _) in sigma.items()))
     return sigma

@@ -10,8 +10,8 @@ smooth missing effect cancel from. Channels without enough repeats use neighbour
 second difference d_i = r_i - (r_{i-1} + r_{i+1})/2 along each sweep, var(d) = 1.5 sigma^2 for white noise.
 
 Reduced time series (:func:`noise_of_means`): the noise of a binned mean of N raw samples follows from the raw
-AR(1) noise (sigma and lag-one correlation from the second differences of the samples within sweeps, where the
-swept signal's own curvature is negligible), never from the reduced curve's neighbours.
+AR(1) noise (:func:`mftyre.timeseries.measurement_noise`: the residual about a local trend within each branch of
+each sweep, degrees of freedom counted for correlated noise), never from the reduced curve's neighbours.
 
 Held-out data (:func:`holdout_mask`): whole sweeps, a quarter of the sweeps of each kind of test (``TEST`` when
 present, else pure lateral / pure longitudinal / combined / free rolling / other from the slip values), stratified
@@ -249,57 +249,44 @@ def stratified_holdout(level: np.ndarray, kind_of: np.ndarray, fraction: float, 
     return held
 
 
-def _ar1_from_second_differences(x: np.ndarray, segments: np.ndarray):
-    """(sigma, rho) of AR(1) noise from the second differences of a sampled channel within segments: the swept
-    signal's own second difference over one sample is negligible at rig sample rates. For AR(1) noise with
-    autocovariance sigma^2 rho^|k|, d_t = x_t - 2 x_(t-1) + x_(t-2) has variance sigma^2 (6 - 8 rho + 2 rho^2)
-    and lag-one autocovariance sigma^2 (-4 + 7 rho - 4 rho^2 + rho^3); rho solves the measured ratio."""
-    same = (segments[2:] == segments[1:-1]) & (segments[1:-1] == segments[:-2]) & (segments[2:] >= 0)
-    d = (x[2:] - 2.0 * x[1:-1] + x[:-2])
-    ok = same & np.isfinite(d)
-    if ok.sum() < 20:
-        return None
-    dd = d[ok]
-    var = float(np.mean(dd**2))
-    pair = ok[1:] & ok[:-1]
-    r1 = float(np.mean(d[1:][pair] * d[:-1][pair]) / var) if pair.any() else -2.0 / 3.0
-    grid = np.linspace(0.0, 0.995, 2000)
-    ratio = (-4 + 7 * grid - 4 * grid**2 + grid**3) / (6 - 8 * grid + 2 * grid**2)   # rises from -2/3 to -1/2
-    rho = float(grid[np.argmin(np.abs(ratio - r1))])
-    return math.sqrt(var / (6 - 8 * rho + 2 * rho**2)), rho
-
-
-def noise_of_means(raw: TyreData, segments: np.ndarray, reduced: TyreData, channels, vertical_stiffness: float):
+def noise_of_means(raw: TyreData, programme, reduced: TyreData, channels, vertical_stiffness: float):
     """Channel -> (sigma, method): the measurement noise of a *reduced* point (the mean of N raw samples) from
-    the raw time series: sigma and rho of its AR(1) noise (:func:`_ar1_from_second_differences`) and the median
-    N of the reduced points, sigma_mean^2 = sigma^2 (1 + rho) / ((1 - rho) N) (the variance of a mean of N
-    AR(1) samples when N is large against the correlation time). FZ (from the loaded radius) combines the noise
-    of FZ and of RL x the vertical stiffness."""
+    the raw time series: sigma and rho of its AR(1) noise about the sweeps' local trend
+    (:func:`mftyre.timeseries.measurement_noise`) and the median N of the reduced points,
+    sigma_mean^2 = sigma^2 (1 + 2 sum_k (1 - k/N) rho^k) / N (:func:`mftyre.timeseries.mean_variance_factor`).
+    FZ (from the loaded radius): the noise of FZ + the vertical stiffness x RL (FZ - cz RHO), which holds the
+    noise of both and not the load control's scatter (a real load change the loaded radius follows)."""
+    from ..timeseries import mean_variance_factor, measurement_noise
+
     n_med = float(np.median(reduced.array("N"))) if "N" in reduced else 1.0
     out = {}
 
     def of(ch):
         if not raw.has(ch):
             return None
-        est = _ar1_from_second_differences(raw.array(ch), segments)
+        est = measurement_noise(raw, programme, ch)
         if est is None:
             return None
         s, rho = est
-        return s * math.sqrt((1 + rho) / ((1 - rho) * n_med)), rho
+        return s * math.sqrt(mean_variance_factor(rho, n_med)), rho
 
     for c in channels:
-        if c == "FZ":
-            a, b = of("FZ"), of("RL") if raw.has("RL") else of("RHO")
-            if a is None or b is None:
+        if c == "FZ":  # FZ from the loaded radius: the noise of FZ + cz RL (or FZ - cz RHO), the load's own scatter out
+            deflection = "RL" if raw.has("RL") else "RHO" if raw.has("RHO") else None
+            if deflection is None or not raw.has("FZ"):
                 continue
-            out[c] = (math.hypot(a[0], vertical_stiffness * b[0]),
-                      f"raw AR(1) noise of FZ and RL (lag-one correlation {a[1]:.2f}, {b[1]:.2f}) over the median "
-                      f"{n_med:.0f} samples per point")
+            sign = 1.0 if deflection == "RL" else -1.0
+            est = measurement_noise(raw, programme, "FZ",
+                                    values=raw.array("FZ") + sign * vertical_stiffness * raw.array(deflection))
+            if est is not None:
+                out[c] = (max(est[0] * math.sqrt(mean_variance_factor(est[1], n_med)), 1e-9),
+                          f"noise of FZ {'+' if sign > 0 else '-'} cz {deflection} about the sweeps' local trend "
+                          f"(AR(1), lag-one correlation {est[1]:.2f}) over the median {n_med:.0f} samples per point")
         else:
             e = of(c)
             if e is not None:
-                out[c] = (max(e[0], 1e-9), f"raw AR(1) noise (lag-one correlation {e[1]:.2f}) over the median "
-                                           f"{n_med:.0f} samples per point")
+                out[c] = (max(e[0], 1e-9), f"noise about the sweeps' local trend (AR(1), lag-one correlation "
+                                           f"{e[1]:.2f}) over the median {n_med:.0f} samples per point")
     return out
 
 
