@@ -11,7 +11,6 @@ its run-time input: a refit compiles nothing).
 from __future__ import annotations
 
 import math
-import warnings
 
 import numpy as np
 import pytest
@@ -23,26 +22,17 @@ from mftyre.gaps.dynamic import align, find_dynamic_gaps, noise_from_data
 from mftyre.gaps import dynamic_catalogue
 from mftyre.gaps.dynamic_runs import read_runs, simulate, synthetic_runs, write_runs
 
-from conftest import PROJECT, require_shared
+from conftest import PROJECT, SHORT_RUNS as SHORT, SWIFT_SAMPLE as SAMPLE, require_shared
 
-SAMPLE = PROJECT / "tir_files" / "car_205_60R15_mf62_swift.tir"
 TNO = PROJECT.parent / "shared" / "reference" / "tir" / "TNO_car205_60R15.tir"
-SHORT = dict(duration=0.45, lead=0.15)
-
-
-@pytest.fixture(scope="module")
-def sample():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return mftyre.load_tir(SAMPLE)
 
 
 def _effects(*names):
     return tuple(e for e in dynamic_catalogue.DYNAMIC_CATALOGUE if set(names) & set(e.parameters))
 
 
-def test_csv_round_trip_and_errors(sample, tmp_path):
-    runs = synthetic_runs(sample, speeds=(30.0,), steer_speeds=(40.0,), **SHORT)
+def test_csv_round_trip_and_errors(short_runs, tmp_path):
+    runs = short_runs
     path = write_runs(runs, tmp_path / "runs.csv")
     with pytest.raises(DataError, match="exists"):
         write_runs(runs, path)
@@ -98,10 +88,8 @@ def test_only_testable_effects_are_tried(sample):
     assert "relaxation lengths PTX1-PTX3, PTY1-PTY2" in why
 
 
-def test_control_adds_nothing(sample):
-    runs = synthetic_runs(sample, speeds=(20.0, 60.0), pressures=(1.9e5, 2.5e5), steer_speeds=(40.0,), seed=1,
-                          **SHORT)
-    rep = find_dynamic_gaps(runs, sample)
+def test_control_adds_nothing(dynamic_control):
+    _, rep = dynamic_control
     assert rep.effects_added == []
     for c, e in rep.error_after.items():  # the given model is at the noise floor already
         assert e < 1.25 * rep.noise_floor[c]
@@ -147,11 +135,10 @@ def test_lateral_relaxation_is_named_from_step_steer(sample):
     _assert_found(rep, truth, "LATERAL_STIFFNESS")
 
 
-def test_command_line(sample, tmp_path, capsys):
+def test_command_line(sample, short_runs, tmp_path, capsys):
     from mftyre.cli import main
 
-    runs = synthetic_runs(sample, speeds=(30.0,), steer_speeds=(40.0,), **SHORT)
-    data = write_runs(runs, tmp_path / "runs.csv")
+    data = write_runs(short_runs, tmp_path / "runs.csv")
     out = tmp_path / "improved.tir"
     assert main(["gaps", "--dynamic", str(data), "--model", str(SAMPLE), "-o", str(out), "--report",
                  str(tmp_path / "rep"), "--quiet"]) == 0
