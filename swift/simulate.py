@@ -338,6 +338,16 @@ class SwiftTyre:
                            ["x", "u", "dt", "x0w", "grid", "hw", *(["theta"] if parametric else [])],
                            ["x_next", "out"])
 
+    def share_equations(self, other: "SwiftTyre") -> None:
+        """Use the numeric graphs of ``other`` (built on first use), a tyre of the same model in the same modes on
+        another road: the graphs read the road through their window inputs only, so the tyres of one model on
+        several roads need them built once (the dynamic gap finder simulates each candidate on every run)."""
+        same = (other.model is self.model and (other.axle, other.rim, other.turn_slip, other.window, other.substeps)
+                == (self.axle, self.rim, self.turn_slip, self.window, self.substeps))
+        if not same:
+            raise ModelInputError("share_equations: the other tyre has another model or other modes")
+        self._numeric = other._numeric
+
     def _numeric_function(self, name):
         """The equations with this model's values in the graph, built on first use: ``rhs`` (exact model, contact
         solved afresh), ``warm`` (contact from the state's memory), ``step``."""

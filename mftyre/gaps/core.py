@@ -597,8 +597,9 @@ class _Search:
         sc = (c_te0 - c_te1) * n_eff_te / max(n_te, 1) - k * math.log(max(n_eff_te, 2.0))
         gain = (c_te0 - c_te1) / c_te0 if c_te0 > 0 else 0.0
         p_sweeps, n_sweeps = _sweep_test(ev_test, prm_test, new, sigma, ch)
-        sig = not judge(p, run.alpha / m, p_sweeps if n_sweeps >= MIN_HELD_OUT_SWEEPS else math.nan, HELD_OUT_ALPHA,
-                        sc)
+        # the test by whole sweeps where there are enough changed held-out sweeps (a rank test without a p: failed)
+        p_held = (p_sweeps if p_sweeps == p_sweeps else 1.0) if n_sweeps >= MIN_HELD_OUT_SWEEPS else math.nan
+        sig = not judge(p, run.alpha / m, p_held, HELD_OUT_ALPHA, sc)
         note = "; ".join([f"{k2} not freed ({v})" for k2, v in why.items()] + ([extra_note] if extra_note else []))
         return (Candidate(e.name, list(keep), c_tr0, c_tr1, c_te0, c_te1, n_tr, n_te, fstat, p, sc, gain, sig,
                           {k: float(new[k]) for k in keep}, stderr, note, n_eff, p_sweeps, n_sweeps,

@@ -21,22 +21,25 @@ Command line: ``mftyre gaps --dynamic DATA.csv --model BASE.tir [-o improved.tir
    the measured signal minus its mean is noise: its standard deviation per channel and its integrated
    autocorrelation time tau (samples), so that a run of n samples counts n/tau independent ones. Every
    chi-square below is sum(r^2)/(sigma^2 tau): from the noise, never from the residual being explained.
-3. *Locate* (:mod:`mftyre.gaps.dynamic_locate`): per run and channel the residual chi-square per independent
-   sample against the noise variance (F test with the noise's own independent samples) and the engineers' features (peaks, peak-to-peak, response length, lag and build-up distance,
-   decay frequency and damping) measured beside model.
-4. *Name* (:mod:`mftyre.gaps.dynamic_catalogue`): the effects the runs can test (the rest listed with the
-   reason) whose kinds and channels show a gap are screened by one Gauss-Newton step on the training runs
-   (finite-difference sensitivity of the simulated histories); the most promising are refitted.
-5. *Add*: whole runs are held out by the steady finder's rule (:func:`mftyre.gaps.residuals.stratified_holdout`:
-   every manoeuvre, speed, load, pressure and road held out somewhere, none lost from the training runs). A candidate is accepted when its
-   training chi-square decrease is significant (chi2(k), Bonferroni over the candidates screened), its held-out
-   decrease is significant too (chi2(k) at the same level) and material (at least :data:`MATERIAL` of the held-out
-   chi-square above the noise), and the improved model is verified: it builds,
-   :func:`mftyre.fit.verify.verify_tir` finds no new problem, every run simulates to finite values, and the
-   linearised SWIFT wheel at the static state of every condition has no mode growing faster than a damping ratio
-   of -1 % that the given model lacks (eigenvalues of :meth:`swift.SwiftTyre.jacobian`; the given model's own
-   growing modes are reported). The best accepted candidate (held-out decrease) is added; repeat.
-6. *Show*: RMS error per channel and condition before/after on the held-out runs beside the noise floor, features
+3. *Locate*: per run and channel the residual chi-square per independent sample against the noise variance (F test
+   with the noise's own independent samples): a :class:`mftyre.gaps.locate.Finding` whose variable is the run's
+   kind; the report also shows the engineers' features (:mod:`mftyre.gaps.dynamic_locate`: peaks, peak-to-peak,
+   response length, lag and build-up distance, decay frequency and damping) measured beside model.
+4. *Name and add*: the one search of the gap finder (:func:`mftyre.gaps.search.search`, the steady finder's loop)
+   on the evidence of the runs (:class:`_Runs`). Candidates are the catalogue effects the runs can test
+   (:mod:`mftyre.gaps.dynamic_catalogue`, the rest listed with the reason) whose run kinds and channels match a
+   finding; they are screened by one Gauss-Newton step on the training runs (finite-difference sensitivity of the
+   simulated histories), the most promising refitted with the chain. Whole runs are held out by the steady finder's
+   rule (:func:`mftyre.gaps.residuals.stratified_holdout`: every manoeuvre, speed, load, pressure and road held out
+   somewhere, none lost from the training runs). The acceptance rule is the steady finder's
+   (:func:`mftyre.gaps.search.judge`): the training chi-square decrease significant (chi2(k), Bonferroni over the
+   candidates screened), the held-out decrease significant too (chi2(k) at the same level) and material (at least
+   :data:`MATERIAL` of the held-out chi-square above the noise). The best accepted candidate (held-out decrease) is
+   verified: it builds, :func:`mftyre.fit.verify.verify_tir` finds no new problem, every run simulates to finite
+   values, and the linearised SWIFT wheel at the static state of every condition has no mode growing faster than a
+   damping ratio of -1 % that the given model lacks (eigenvalues of :meth:`swift.SwiftTyre.jacobian`; the given
+   model's own growing modes are reported); failing, the next. Repeat.
+5. *Show*: RMS error per channel and condition before/after on the held-out runs beside the noise floor, features
    before/after, overlaid time histories (PNG), the improved .tir (never overwriting without ``overwrite``).
 """
 from __future__ import annotations
@@ -430,11 +433,22 @@ def _load(data, model):
 
 
 class _Sim:
-    """Simulate a model on runs (``kind``: :data:`MODEL_KINDS`), building its SWIFT tyres once per parameter set;
-    counts evaluations."""
+    """Simulate a model on runs (``kind``: :data:`MODEL_KINDS`); counts evaluations. The SWIFT tyres of the last
+    few parameter sets are kept, built for every run (a refit simulates its result on the training runs, then on
+    all), their cam tables kept across parameter sets with the same cams (:class:`SwiftTyres`)."""
 
     def __init__(self, runs, kind="swift"):
         self.runs, self.kind, self.evaluations = runs, kind, 0
+        self._tables, self._tyres = {}, {}
+
+    def tyres(self, model) -> SwiftTyres:
+        prm = model.params
+        key = (tuple(repr(prm[k]) for k in prm), tuple(sorted(prm.missing)), model.side)
+        if key not in self._tyres:
+            if len(self._tyres) >= 6:
+                del self._tyres[next(iter(self._tyres))]
+            self._tyres[key] = SwiftTyres(model, self.runs, self._tables)
+        return self._tyres[key]
 
     def __call__(self, model, runs=None):
         runs = runs or self.runs
@@ -443,7 +457,7 @@ class _Sim:
             warnings.simplefilter("ignore")
             if self.kind == "relaxed":
                 return simulate(model, runs, model_kind="relaxed")
-            return simulate(model, runs, SwiftTyres(model, runs))
+            return simulate(model, runs, self.tyres(model))
 
 
 #: The parameters of the SWIFT wheel a file must have for model kind "auto" to choose it.
@@ -500,7 +514,7 @@ def _bounds_ok(effect, delta):
     return bool(np.all(np.abs(delta) < 12.0))  # at most a factor e^2.4 = 11 either way, or +-6 absolute
 
 
-def _growth(model, runs, model_kind="swift") -> dict:
+def _growth(model, runs, model_kind="swift", tyres=None) -> dict:
     """Condition label -> largest real part [1/s] of the eigenvalues of the linearised SWIFT wheel at its static
     state, for every distinct (speed, pressure, axle height or load) of the runs. The relaxed wheel: {} (first-order
     relaxation at the rate |vx|/sigma, sigma floored positive: stable whatever the parameters)."""
@@ -517,7 +531,7 @@ def _growth(model, runs, model_kind="swift") -> dict:
     out = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        tyres = SwiftTyres(model, list(seen.values()))
+        tyres = tyres or SwiftTyres(model, list(seen.values()))
         for r in seen.values():
             i = r.inputs
             first = {k.lower(): float(i[k][0]) for k in ("X", "VX", "Z", "LOAD", "OMEGA", "TORQUE", "P") if k in i}
@@ -724,9 +738,11 @@ class _Runs:
             return new, "verification: " + "; ".join(problems[:2])
         if not all(np.all(np.isfinite(v)) for ch in new_pred.values() for v in ch.values()):
             return new, "the improved model gives non-finite outputs"
-        growth = _growth(self.model, self.runs, self.model_kind)
+        kind = self.model_kind
+        growth = _growth(self.model, self.runs, kind, self.sim.tyres(self.model) if kind == "swift" else None)
         self.growth_given = self.growth_given or growth
-        unstable = _less_stable(_growth(new_model, self.runs, self.model_kind), growth)
+        unstable = _less_stable(_growth(new_model, self.runs, kind, self.sim.tyres(new_model) if kind == "swift"
+                                        else None), growth)
         return new, ("unstable: " + unstable) if unstable else ""
 
     def add(self, cand, new):
