@@ -222,7 +222,8 @@ def write_runs(runs, path, *, overwrite: bool = False) -> Path:
 # ---------------------------------------------------------------------------------------------------- the model
 class SwiftTyres:
     """SWIFT tyres of one model, one per (road, axle mode, rim mode): built once, reused by every run on that
-    road; the tyres of one mode share their equations (:meth:`swift.SwiftTyre.share_equations`). ``tables``: a dict
+    road; the tyres of one mode share their equations (:meth:`swift.SwiftTyre.share_equations`), their static
+    equilibrium the structure's (``equilibrium="structure"``: one graph for every parameter set). ``tables``: a dict
     of cam-height tables kept across models (road, range, cams -> :class:`swift.enveloping.CamTable`): a model with
     the same cams over a flat-track road reuses them."""
 
@@ -247,7 +248,7 @@ class SwiftTyres:
                     flat_track = not road.varies_with_y  # its table depends on the cams alone
                     tkey = (key[0], xr, cams)
                     tyre = SwiftTyre(model, tables.get(tkey, road) if flat_track else road, axle=key[1],
-                                     rim=key[2], x_range=xr)
+                                     rim=key[2], x_range=xr, equilibrium="structure")
                 except ModelInputError as exc:
                     raise ModelInputError(f"road {key[0]!r}: {exc}") from None
                 if flat_track:
