@@ -181,3 +181,31 @@ def test_stated_uncertainty_covers_the_truth_with_correlated_noise_and_model_err
         assert 0.85 <= np.mean(err < 2 * se) <= 0.995
         if spread:
             assert np.mean(err < 2 * plain) < 0.8
+
+
+def test_the_structures_equilibrium_is_the_models(sample):
+    """The gap finder's tyres take the static equilibrium's Jacobian from the structure's graph (built once for every
+    parameter set): the same root as the model's own graph, and the same run."""
+    from swift import StepInputs, SwiftTyre
+    from swift.road import parse_road
+
+    model = sample.with_params(FREQ_LONG=0.9 * sample.params.FREQ_LONG)
+    road, u = parse_road("cleat(x0=1.0, length=0.02, height=0.01)"), StepInputs(x=0.0, vx=12.0, z=0.29, omega=40.0)
+    ref, new = (SwiftTyre(model, road, x_range=(0.0, 4.0), equilibrium=kind) for kind in ("model", "structure"))
+    np.testing.assert_allclose(new.initial_state(u), ref.initial_state(u), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(new.run(0.2, u).outputs["fz"], ref.run(0.2, u).outputs["fz"], rtol=1e-12)
+    with pytest.raises(mftyre.errors.ModelInputError, match="equilibrium"):
+        SwiftTyre(model, road, equilibrium="fast")
+
+
+def test_one_acceptance_rule():
+    """mftyre.gaps.search.judge, the rule of both finders: training significance at the family-wise level, the
+    held-out test where there is one (NaN: none), and a held-out gain above the materiality bar."""
+    from mftyre.gaps.search import judge
+
+    assert judge(1e-6, 1e-4, math.nan, 0.05, 3.0) == ""
+    assert "training" in judge(1e-3, 1e-4, math.nan, 0.05, 3.0)
+    assert "held-out decrease" in judge(1e-6, 1e-4, 0.2, 0.05, 3.0)
+    assert "penalty" in judge(1e-6, 1e-4, 0.01, 0.05, -1.0)
+    assert "9.0 %" in judge(1e-6, 1e-4, 1e-6, 1e-4, 9.0, material=0.1, excess=100.0)
+    assert judge(1e-6, 1e-4, 1e-6, 1e-4, 11.0, material=0.1, excess=100.0) == ""
