@@ -193,10 +193,17 @@ class SwiftTyre:
     def __init__(self, model, road: Road | CamTable, *, axle: str = "height", rim: str = "speed",
                  x_range=(0.0, 10.0), table_dx: float = 1e-3, substeps: int = 2, window: int = 1024,
                  axle_mass: float = 30.0, rim_extra_inertia: float = 0.3, compiled: bool = True,
-                 turn_slip: bool = False):
+                 turn_slip: bool = False, equilibrium: str = "model"):
         if axle not in ("height", "load") or rim not in ("speed", "torque"):
             raise ModelInputError(f"axle must be 'height' or 'load', rim 'speed' or 'torque'; got {axle!r}, {rim!r}")
+        if equilibrium not in ("model", "structure"):
+            raise ModelInputError(f"equilibrium must be 'model' or 'structure'; got {equilibrium!r}")
         self.model, self.axle, self.rim, self.turn_slip = model, axle, rim, bool(turn_slip)
+        # the Jacobian of the static equilibrium from the graph with this model's values ("model", as the FMU's
+        # equilibrium_function), or ("structure", compiled only) from the structure's graph with the values as an
+        # input: built once for every parameter set of the structure (a refit simulating many); the same root, the
+        # Newton steps differing by round-off (at standstill, where the Jacobian is singular, by ~1e-7 m)
+        self._equilibrium_kind = equilibrium if compiled else "model"
         self._p_nominal = model.params.INFLPRES  # the default inflation pressure (the parameters are immutable)
         self._p_factors, self._p_range = model.pressure_factors, model.input_range("p")
         for name, message in swift_invalid_values(model.params):  # parameters built by hand skip the reader's check
@@ -338,6 +345,16 @@ class SwiftTyre:
                            ["x", "u", "dt", "x0w", "grid", "hw", *(["theta"] if parametric else [])],
                            ["x_next", "out"])
 
+    def share_equations(self, other: "SwiftTyre") -> None:
+        """Use the numeric graphs of ``other`` (built on first use), a tyre of the same model in the same modes on
+        another road: the graphs read the road through their window inputs only, so the tyres of one model on
+        several roads need them built once (the dynamic gap finder simulates each candidate on every run)."""
+        same = (other.model is self.model and (other.axle, other.rim, other.turn_slip, other.window, other.substeps)
+                == (self.axle, self.rim, self.turn_slip, self.window, self.substeps))
+        if not same:
+            raise ModelInputError("share_equations: the other tyre has another model or other modes")
+        self._numeric = other._numeric
+
     def _numeric_function(self, name):
         """The equations with this model's values in the graph, built on first use: ``rhs`` (exact model, contact
         solved afresh), ``warm`` (contact from the state's memory), ``step``."""
@@ -352,6 +369,9 @@ class SwiftTyre:
         :meth:`initial_state`; built on first use."""
         import casadi as ca
 
+        if self._equilibrium_kind == "structure":
+            fn = self._structure.equilibrium(self, tuple(unknown), tuple(eqs))
+            return lambda *args: fn(*args, self.theta)
         rhs = self._rhs_window
         with CASADI_LOCK:
             key = ("equilibrium", tuple(unknown), tuple(eqs))
@@ -866,6 +886,22 @@ class _Structure:
         self.key = key
         self.step = tyre._build_step(parametric=True)
         self.rhs = tyre._rhs(tyre.window, parametric=True)
+        self._equilibria = {}
+
+    def equilibrium(self, tyre, unknown: tuple, eqs: tuple):
+        """(x, u, x0w, grid, hw, theta) -> (the static equations, the Newton step's matrix in the unknowns): the
+        structure's :meth:`SwiftTyre._equilibrium_function`, built on first use."""
+        import casadi as ca
+
+        with CASADI_LOCK:
+            if (unknown, eqs) not in self._equilibria:
+                xs, us = ca.MX.sym("x", len(STATE_NAMES)), ca.MX.sym("u", len(INPUT_NAMES))
+                x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", tyre.window), ca.MX.sym("hw", 2 * tyre.window)
+                theta = ca.MX.sym("theta", len(tyre.theta))
+                d = self.rhs(xs, us, x0w, grid, hw, 0.0, theta)[0][list(eqs)]
+                self._equilibria[(unknown, eqs)] = ca.Function(
+                    "equilibrium", [xs, us, x0w, grid, hw, theta], [d, _newton_inverse(ca.jacobian(d, xs)[:, list(unknown)])])
+            return self._equilibria[(unknown, eqs)]
 
 
 #: Model structures built in this process (key -> :class:`_Structure`): a tyre of a known structure builds no

@@ -55,3 +55,43 @@ def built_fmu(tmp_path_factory):
         return built[key]
 
     return build
+
+
+#: The sample SWIFT file of the dynamic gap-finder tests (tests/test_gaps_dynamic*.py): it lacks SWIFT_PSTIFF and
+#: SWIFT_PDAMP, as the TNO file does.
+SWIFT_SAMPLE = TIR_FILES / "car_205_60R15_mf62_swift.tir"
+#: Short dynamic runs (s): a lead-in long enough for the noise estimate, the obstacle or step, its decay.
+SHORT_RUNS = dict(duration=0.45, lead=0.15)
+
+
+@pytest.fixture(scope="session")
+def sample():
+    """The sample SWIFT file as a model (read once per test process; tests derive changed copies, never change it)."""
+    import warnings
+
+    import mftyre
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return mftyre.load_tir(SWIFT_SAMPLE)
+
+
+@pytest.fixture(scope="session")
+def short_runs(sample):
+    """One short cleat run at 30 km/h and one step steer at 40 km/h of the sample file (the reader and command-line
+    tests share them: the runs are read, written and searched, never changed)."""
+    from mftyre.gaps.dynamic_runs import synthetic_runs
+
+    return synthetic_runs(sample, speeds=(30.0,), steer_speeds=(40.0,), **SHORT_RUNS)
+
+
+@pytest.fixture(scope="session")
+def dynamic_control(sample):
+    """(runs, report) of the dynamic gap finder on a control: runs of the sample file itself (nothing to add) at two
+    speeds, two pressures away from NOMPRES (where SWIFT_PSTIFF matters) and a step steer."""
+    from mftyre.gaps.dynamic import find_dynamic_gaps
+    from mftyre.gaps.dynamic_runs import synthetic_runs
+
+    runs = synthetic_runs(sample, speeds=(20.0, 60.0), pressures=(1.9e5, 2.5e5), steer_speeds=(40.0,), seed=1,
+                          **SHORT_RUNS)
+    return runs, find_dynamic_gaps(runs, sample)

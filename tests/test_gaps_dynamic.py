@@ -11,7 +11,6 @@ its run-time input: a refit compiles nothing).
 from __future__ import annotations
 
 import math
-import warnings
 
 import numpy as np
 import pytest
@@ -23,26 +22,17 @@ from mftyre.gaps.dynamic import align, find_dynamic_gaps, noise_from_data
 from mftyre.gaps import dynamic_catalogue
 from mftyre.gaps.dynamic_runs import read_runs, simulate, synthetic_runs, write_runs
 
-from conftest import PROJECT, require_shared
+from conftest import PROJECT, SHORT_RUNS as SHORT, SWIFT_SAMPLE as SAMPLE, require_shared
 
-SAMPLE = PROJECT / "tir_files" / "car_205_60R15_mf62_swift.tir"
 TNO = PROJECT.parent / "shared" / "reference" / "tir" / "TNO_car205_60R15.tir"
-SHORT = dict(duration=0.45, lead=0.15)
-
-
-@pytest.fixture(scope="module")
-def sample():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return mftyre.load_tir(SAMPLE)
 
 
 def _effects(*names):
     return tuple(e for e in dynamic_catalogue.DYNAMIC_CATALOGUE if set(names) & set(e.parameters))
 
 
-def test_csv_round_trip_and_errors(sample, tmp_path):
-    runs = synthetic_runs(sample, speeds=(30.0,), steer_speeds=(40.0,), **SHORT)
+def test_csv_round_trip_and_errors(short_runs, tmp_path):
+    runs = short_runs
     path = write_runs(runs, tmp_path / "runs.csv")
     with pytest.raises(DataError, match="exists"):
         write_runs(runs, path)
@@ -98,10 +88,8 @@ def test_only_testable_effects_are_tried(sample):
     assert "relaxation lengths PTX1-PTX3, PTY1-PTY2" in why
 
 
-def test_control_adds_nothing(sample):
-    runs = synthetic_runs(sample, speeds=(20.0, 60.0), pressures=(1.9e5, 2.5e5), steer_speeds=(40.0,), seed=1,
-                          **SHORT)
-    rep = find_dynamic_gaps(runs, sample)
+def test_control_adds_nothing(dynamic_control):
+    _, rep = dynamic_control
     assert rep.effects_added == []
     for c, e in rep.error_after.items():  # the given model is at the noise floor already
         assert e < 1.25 * rep.noise_floor[c]
@@ -147,11 +135,10 @@ def test_lateral_relaxation_is_named_from_step_steer(sample):
     _assert_found(rep, truth, "LATERAL_STIFFNESS")
 
 
-def test_command_line(sample, tmp_path, capsys):
+def test_command_line(sample, short_runs, tmp_path, capsys):
     from mftyre.cli import main
 
-    runs = synthetic_runs(sample, speeds=(30.0,), steer_speeds=(40.0,), **SHORT)
-    data = write_runs(runs, tmp_path / "runs.csv")
+    data = write_runs(short_runs, tmp_path / "runs.csv")
     out = tmp_path / "improved.tir"
     assert main(["gaps", "--dynamic", str(data), "--model", str(SAMPLE), "-o", str(out), "--report",
                  str(tmp_path / "rep"), "--quiet"]) == 0
@@ -194,3 +181,31 @@ def test_stated_uncertainty_covers_the_truth_with_correlated_noise_and_model_err
         assert 0.85 <= np.mean(err < 2 * se) <= 0.995
         if spread:
             assert np.mean(err < 2 * plain) < 0.8
+
+
+def test_the_structures_equilibrium_is_the_models(sample):
+    """The gap finder's tyres take the static equilibrium's Jacobian from the structure's graph (built once for every
+    parameter set): the same root as the model's own graph, and the same run."""
+    from swift import StepInputs, SwiftTyre
+    from swift.road import parse_road
+
+    model = sample.with_params(FREQ_LONG=0.9 * sample.params.FREQ_LONG)
+    road, u = parse_road("cleat(x0=1.0, length=0.02, height=0.01)"), StepInputs(x=0.0, vx=12.0, z=0.29, omega=40.0)
+    ref, new = (SwiftTyre(model, road, x_range=(0.0, 4.0), equilibrium=kind) for kind in ("model", "structure"))
+    np.testing.assert_allclose(new.initial_state(u), ref.initial_state(u), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(new.run(0.2, u).outputs["fz"], ref.run(0.2, u).outputs["fz"], rtol=1e-12)
+    with pytest.raises(mftyre.errors.ModelInputError, match="equilibrium"):
+        SwiftTyre(model, road, equilibrium="fast")
+
+
+def test_one_acceptance_rule():
+    """mftyre.gaps.search.judge, the rule of both finders: training significance at the family-wise level, the
+    held-out test where there is one (NaN: none), and a held-out gain above the materiality bar."""
+    from mftyre.gaps.search import judge
+
+    assert judge(1e-6, 1e-4, math.nan, 0.05, 3.0) == ""
+    assert "training" in judge(1e-3, 1e-4, math.nan, 0.05, 3.0)
+    assert "held-out decrease" in judge(1e-6, 1e-4, 0.2, 0.05, 3.0)
+    assert "penalty" in judge(1e-6, 1e-4, 0.01, 0.05, -1.0)
+    assert "9.0 %" in judge(1e-6, 1e-4, 1e-6, 1e-4, 9.0, material=0.1, excess=100.0)
+    assert judge(1e-6, 1e-4, 1e-6, 1e-4, 11.0, material=0.1, excess=100.0) == ""

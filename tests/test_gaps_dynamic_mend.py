@@ -21,29 +21,13 @@ from mftyre.files import OutputError
 from mftyre.gaps.dynamic import find_dynamic_gaps
 from mftyre.gaps.dynamic_runs import read_runs, synthetic_runs, write_runs
 
-from conftest import PROJECT
-
-SAMPLE = PROJECT / "tir_files" / "car_205_60R15_mf62_swift.tir"
-SHORT = dict(duration=0.45, lead=0.15)
-
-
-@pytest.fixture(scope="module")
-def sample():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return mftyre.load_tir(SAMPLE)
-
-
-@pytest.fixture(scope="module")
-def control(sample):
-    """A control (nothing to add) at two pressures away from NOMPRES, where SWIFT_PSTIFF matters."""
-    runs = synthetic_runs(sample, speeds=(30.0,), pressures=(1.9e5, 2.5e5), steer_speeds=(), seed=2, **SHORT)
-    return runs, find_dynamic_gaps(runs, sample, max_effects=0)
+from conftest import SWIFT_SAMPLE as SAMPLE
 
 
 # ------------------------------------------------------------------------------ item 1: written = scored
-def test_the_written_file_is_the_tyre_that_was_scored(sample, control, tmp_path):
-    runs, rep = control
+def test_the_written_file_is_the_tyre_that_was_scored(sample, dynamic_control, tmp_path):
+    """On the control of tests/conftest.py (two pressures away from NOMPRES, where SWIFT_PSTIFF matters)."""
+    runs, rep = dynamic_control
     assert "SWIFT_PSTIFF" in sample.params.missing and "SWIFT_PDAMP" in sample.params.missing
     path = rep.write_tir(tmp_path / "improved.tir")
     with warnings.catch_warnings():
@@ -143,11 +127,10 @@ def test_columns_units_and_axes(tmp_path):
         read_runs(_write(tmp_path / "sae.csv", good.assign(FZ=-good.FZ)))
 
 
-def test_cli_reads_runs_with_the_data_options(sample, tmp_path, capsys):
+def test_cli_reads_runs_with_the_data_options(short_runs, tmp_path, capsys):
     from mftyre.cli import main
 
-    runs = synthetic_runs(sample, speeds=(30.0,), steer_speeds=(), seed=3, **SHORT)
-    frame = pd.read_csv(write_runs(runs, tmp_path / "runs.csv"))
+    frame = pd.read_csv(write_runs(short_runs[:1], tmp_path / "runs.csv"))  # the cleat run
     frame.assign(VX=frame.VX * 3.6).rename(columns={"VX": "speed_kmh"}).to_csv(tmp_path / "rig.csv", index=False)
     args = ["gaps", "--dynamic", str(tmp_path / "rig.csv"), "--model", str(SAMPLE), "--max-effects", "0", "--quiet"]
     assert main(args) == 1
@@ -156,8 +139,8 @@ def test_cli_reads_runs_with_the_data_options(sample, tmp_path, capsys):
     assert "nothing added" in capsys.readouterr().out
 
 
-def test_report_never_written_through_a_planted_link(control, tmp_path):
-    _, rep = control
+def test_report_never_written_through_a_planted_link(dynamic_control, tmp_path):
+    _, rep = dynamic_control
     folder = tmp_path / "rep"
     folder.mkdir()
     target = tmp_path / "elsewhere.png"

@@ -50,7 +50,7 @@ __all__ = ["find_gaps", "GapReport", "AddedEffect", "Candidate", "CATALOGUE", "E
 export_lazily(__name__, {
     "BASE": "catalogue", "CATALOGUE": "catalogue", "Effect": "catalogue", "coverage": "catalogue",
     "effect_state": "catalogue", "neutralise": "catalogue",
-    "AddedEffect": "core", "Candidate": "core", "GapReport": "core", "find_gaps": "core",
+    "AddedEffect": "core", "Candidate": "search", "GapReport": "core", "find_gaps": "core",
     "Finding": "locate", "locate": "locate",
     "refit": "refit", "refit_stages": "refit",
     "CHANNELS": "residuals", "Evaluator": "residuals", "holdout_mask": "residuals", "noise_levels": "residuals"})

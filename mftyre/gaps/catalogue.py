@@ -45,6 +45,11 @@ class Effect:
     start: dict = field(default_factory=dict)   # start values when switching on (default: the neutral value)
     needs: tuple = ()          # extra data conditions (beyond the stage groups'): e.g. ("turn_slip",)
     with_stages: bool = False  # scored with its stages refitted around it when it passes alone (a nuisance)
+    # a dynamic effect (:mod:`mftyre.gaps.dynamic_catalogue`): ``variables`` are the run kinds it shows in, and
+    features: tuple = ()       # ... the features of its signature in the time histories
+    absolute: tuple = ()       # parameters refitted by absolute steps (neutral value 0)
+    models: tuple = ()         # the dynamic models it is a parameter of (() : a steady effect)
+    equations: tuple = ()      # MF versions whose equations use its parameters (() : where they all exist)
 
     def parameter_descriptions(self) -> dict:
         """Parameter -> its one-line meaning from the schema."""
@@ -57,8 +62,17 @@ class Effect:
         return prm
 
     @property
+    def kinds(self) -> tuple:
+        """The run kinds a dynamic effect shows in (its condition variables: a finding of a dynamic run names its
+        kind)."""
+        return self.variables
+
+    @property
     def versions(self) -> frozenset:
-        """Model versions in which every parameter of the effect exists."""
+        """Model versions in which every parameter of the effect exists (a dynamic effect's: those whose
+        equations use them)."""
+        if self.equations:
+            return frozenset(self.equations)
         out = frozenset({"61", "62"})
         for n in self.parameters:
             out &= PARAMETERS[n].versions

@@ -3,8 +3,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field, replace
-from types import SimpleNamespace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -28,38 +27,10 @@ from .locate import locate
 from .refit import FAIR_STAGES, SWEEP_REASONS, at_neutral, active_parameters, covariance, standard_errors, stage_data, data_conditions, needs_met, refit, refit_stages
 from .residuals import Evaluator, sweep_labels, holdout_mask, noise_floor_of, noise_levels, noise_of_means
 from .transient import sweep_hysteresis
+from .search import Candidate, judge, search
 from .small import SMALL_DATA, aicc, fit_all, loo_errors, weighted_rss
 
 __all__ = ["find_gaps", "GapReport", "AddedEffect", "Candidate"]
-
-
-@dataclass
-class Candidate:
-    """One effect tried in one round."""
-
-    name: str
-    parameters: list
-    chi2_train_before: float
-    chi2_train_after: float
-    chi2_test_before: float
-    chi2_test_after: float
-    n_train: int
-    n_test: int
-    f_statistic: float
-    p_value: float
-    score: float              # held-out chi2 decrease x n_eff/n minus k ln(n_eff) (a BIC-type penalty)
-    held_out_gain: float      # relative decrease of the held-out chi2 on the effect's channels
-    significant: bool
-    values: dict = field(default_factory=dict)
-    stderr: dict = field(default_factory=dict)
-    note: str = ""
-    n_eff: float = math.nan           # effective number of independent training residuals (from the noise)
-    held_out_p: float = math.nan      # one-sided signed-rank test of the chi-square decrease per held-out sweep
-    held_out_sweeps: int = 0
-    n_eff_residual: float = math.nan  # the AR(1) count from the residual lacking the effect (shown, not used)
-
-    def to_dict(self) -> dict:
-        return dict(self.__dict__)
 
 
 @dataclass
@@ -350,13 +321,6 @@ def _identifiable(effect: Effect, prm, data: TyreData, turn_slip: bool):
 SKIP_REASONS = dict(_STAGE_REASONS, **SWEEP_REASONS, turn_slip="no turn slip in the data")
 
 
-def _matches(effect: Effect, findings) -> bool:
-    for f in findings:
-        if f.channel in effect.channels and any(v in effect.variables for v in f.variables):
-            return True
-    return False
-
-
 def _numbered(reduced: TyreData) -> TyreData:
     """Reduced data with every steady point (SWEEP -1: one mean per steady segment) a sweep of its own, so that
     held-out sweeps and repeats are counted per test."""
@@ -607,7 +571,7 @@ class _Search:
             return polished
         return new
 
-    def score(self, e: Effect, keep, why, new, rr, m, extra_note="", ref=None, ref_test=None):
+    def score(self, e: Effect, keep, why, new, stderr, m, extra_note="", ref=None, ref_test=None):
         """Training F test and held-out score of a candidate model ``new`` against the current ``prm``.
 
         The training F test counts the effective number of independent residuals (n_eff, from the noise) rather
@@ -631,14 +595,16 @@ class _Search:
         sc = (c_te0 - c_te1) * n_eff_te / max(n_te, 1) - k * math.log(max(n_eff_te, 2.0))
         gain = (c_te0 - c_te1) / c_te0 if c_te0 > 0 else 0.0
         p_sweeps, n_sweeps = _sweep_test(ev_test, prm_test, new, sigma, ch)
-        sig = p < run.alpha / m and sc > 0 and (n_sweeps < MIN_HELD_OUT_SWEEPS or p_sweeps < HELD_OUT_ALPHA)
+        # the test by whole sweeps where there are enough changed held-out sweeps (a rank test without a p: failed)
+        p_held = (p_sweeps if p_sweeps == p_sweeps else 1.0) if n_sweeps >= MIN_HELD_OUT_SWEEPS else math.nan
+        sig = not judge(p, run.alpha / m, p_held, HELD_OUT_ALPHA, sc)
         note = "; ".join([f"{k2} not freed ({v})" for k2, v in why.items()] + ([extra_note] if extra_note else []))
         return (Candidate(e.name, list(keep), c_tr0, c_tr1, c_te0, c_te1, n_tr, n_te, fstat, p, sc, gain, sig,
-                          {k: float(new[k]) for k in keep}, rr.stderr, note, n_eff, p_sweeps, n_sweeps,
-                          _n_eff_of_residual(ev_train, prm, ch)), new, rr)
+                          {k: float(new[k]) for k in keep}, stderr, note, n_eff, p_sweeps, n_sweeps,
+                          _n_eff_of_residual(ev_train, prm, ch)), new)
 
-    def try_candidates(self, tried) -> list:
-        """(candidate, model, refit result) of every effect in ``tried`` refitted alone, best score first; when
+    def trials(self, tried, round_no: int) -> list:
+        """(candidate, model) of every effect in ``tried`` refitted alone, best score first; when
         none is significant, the strongest few again with their stages refitted around them (the fair start may
         have bent other parameters towards the missing effect), scored against the same stages refitted without
         them (what refitting alone gains is not the effect's)."""
@@ -647,32 +613,32 @@ class _Search:
         for i, (e, keep, why) in enumerate(tried):
             if not any(c in ev_train.channels for c in e.channels):
                 continue
-            run.say(f"round {len(self.rounds) + 1}: candidate {i + 1}/{len(tried)} {e.name} ({' '.join(keep)})")
+            run.say(f"round {round_no}: candidate {i + 1}/{len(tried)} {e.name} ({' '.join(keep)})")
             base = e.admit(self.prm)
             startv = {k: e.start.get(k, e.neutral.get(k, float(base[k]))) for k in keep}
             new, rr = refit(base, ev_train, keep, [c for c in e.channels if c in ev_train.channels],
                             self.sigma, start=startv, max_nfev=run.max_nfev)
-            result = self.score(e, keep, why, new, rr, len(tried))
+            result = self.score(e, keep, why, new, rr.stderr, len(tried))
             if e.with_stages and result[0].p_value < run.alpha / len(tried) and result[0].score > 0:
                 # worth the stages refitted around it: it explains the training data alone and gains held out
-                result = self._score_with_stages(e, keep, why, new, rr, len(tried))
+                result = self._score_with_stages(e, keep, why, new, rr.stderr, len(tried))
             results.append(result)
         if results and not any(r[0].significant for r in results):
             results.sort(key=lambda t: -t[0].score)
             deep = []
-            for cand, new, rr in results[:DEEP_RETRIES]:
+            for cand, new in results[:DEEP_RETRIES]:
                 e = self.candidates[cand.name][0]
                 if e.with_stages:
-                    deep.append((cand, new, rr))
+                    deep.append((cand, new))
                     continue
-                run.say(f"round {len(self.rounds) + 1}: {e.name} with its stages refitted")
-                deep.append(self._score_with_stages(e, cand.parameters, self.candidates[cand.name][2], new, rr,
-                                                    len(tried)))
+                run.say(f"round {round_no}: {e.name} with its stages refitted")
+                deep.append(self._score_with_stages(e, cand.parameters, self.candidates[cand.name][2], new,
+                                                    cand.stderr, len(tried)))
             results = deep + results[DEEP_RETRIES:]
         results.sort(key=lambda t: -t[0].score)
         return results
 
-    def _score_with_stages(self, e: Effect, keep, why, new, rr, m):
+    def _score_with_stages(self, e: Effect, keep, why, new, stderr, m):
         """:meth:`score` of ``new`` with the stages of the effect refitted around it, against the same stages
         refitted without it (the gain of refitting alone is not the effect's); on the held-out data against the
         better of those and the current model (stages refitted freely can lose there what they gain in training:
@@ -682,39 +648,40 @@ class _Search:
         ch = [c for c in e.channels if c in self.run.ev_test.channels]
         ev_test = self.run.ev_test
         better = base if _chi2(ev_test, base, self.sigma, ch) <= _chi2(ev_test, self.prm, self.sigma, ch) else self.prm
-        return self.score(e, keep, why, new, rr, m, "scored with its stages refitted, against them refitted "
+        return self.score(e, keep, why, new, stderr, m, "scored with its stages refitted, against them refitted "
                           "without it", ref=base, ref_test=better)
 
-    def accept(self, results, m: int):
-        """The best significant candidate whose determined parameters (:func:`_prune`) still explain the data and
-        whose .tir passes verification against the given one, or None; the others rejected with the reason."""
+    def verify(self, cand, new, m: int):
+        """(model, '') when the significant candidate's determined parameters (:func:`_prune`) still explain the data
+        and its .tir passes verification against the given one, else (model, the reason)."""
         run = self.run
-        for cand, new, rr in (r for r in results if r[0].significant):
-            e = self.candidates[cand.name][0]
-            if "stages refitted" not in cand.note:
-                new = self.polish(new, e, cand.parameters)
-            new, kept, why_not = _prune(new, self.prm, e, cand.parameters, run.ev_train, self.sigma, run.alpha,
-                                        run.series)
-            if kept and len(kept) < len(cand.parameters):
-                # a partial effect: the parameters the data determine are added when they still explain the
-                # training data significantly and gain on the held-out data (the effect as a whole passed the
-                # held-out test by sweeps; the rest stay at their values, the note says which)
-                again = self.score(e, kept, self.candidates[cand.name][2], new, rr, m, why_not)[0]
-                if not (again.p_value < run.alpha / m and again.score > 0):
-                    kept, why_not = [], why_not + "; what is left is not significant"
-                else:
-                    why_not = f"partly added ({' '.join(kept)}): " + why_not
-            problems = verify_tir(new, run.data, baseline=run.given) if kept else []
-            if not kept or problems:
-                reason = why_not if not kept else "the improved .tir fails verification: " + "; ".join(problems)
-                cand.significant, cand.note = False, "; ".join(x for x in (cand.note, "rejected: " + reason) if x)
-                self.rejected[e.name] = reason
-                del self.candidates[e.name]
-                run.say(f"rejected {e.name}: {reason}")
-                continue
-            cand.parameters, cand.note = kept, "; ".join(x for x in (cand.note, why_not) if x)
-            return cand, new, rr
-        return None
+        e = self.candidates[cand.name][0]
+        if "stages refitted" not in cand.note:
+            new = self.polish(new, e, cand.parameters)
+        new, kept, why_not = _prune(new, self.prm, e, cand.parameters, run.ev_train, self.sigma, run.alpha,
+                                    run.series)
+        if kept and len(kept) < len(cand.parameters):
+            # a partial effect: the parameters the data determine are added when they still pass the rule on what
+            # is left (the effect as a whole passed the held-out test by sweeps; the rest stay at their values,
+            # the note says which)
+            again = self.score(e, kept, self.candidates[cand.name][2], new, cand.stderr, m, why_not)[0]
+            if not judge(again.p_value, run.alpha / m, math.nan, HELD_OUT_ALPHA, again.score):
+                why_not = f"partly added ({' '.join(kept)}): " + why_not
+            else:
+                kept, why_not = [], why_not + "; what is left is not significant"
+        if not kept:
+            return new, why_not
+        problems = verify_tir(new, run.data, baseline=run.given)
+        if problems:
+            return new, "the improved .tir fails verification: " + "; ".join(problems)
+        cand.parameters, cand.note = kept, "; ".join(x for x in (cand.note, why_not) if x)
+        return new, ""
+
+    def locate(self):
+        return locate(self.run.ev_train, self.run.ev_train.residuals(self.prm), self.sigma, self.run.alpha)
+
+    def say(self, text):
+        self.run.say(text)
 
     def add(self, cand, new):
         """Make ``new`` the current model and record the effect with its held-out gain per channel."""
@@ -734,7 +701,6 @@ class _Search:
         run.say(f"added {e.name}: held-out chi2 {cand.chi2_test_before:.0f} -> {cand.chi2_test_after:.0f}")
         self.added_effects[e.name] = e
         self.active |= set(cand.parameters)
-        del self.candidates[e.name]
 
     def recheck(self):
         """Backward check of forward selection: an effect added before others is taken out again when, with the
@@ -747,7 +713,7 @@ class _Search:
             names = list(a.parameters)
             without = self.prm.replace(**{k: e.neutral[k] if k in e.neutral else float(self.start[k]) for k in names})
             without = self.polish(without, e, names, free=False, active=self.active - set(names))
-            cand = self.score(e, names, {}, self.prm, SimpleNamespace(stderr={}), 1, ref=without)[0]
+            cand = self.score(e, names, {}, self.prm, {}, 1, ref=without)[0]
             if cand.significant:
                 continue
             self.prm = without
@@ -759,22 +725,10 @@ class _Search:
             run.say(f"taken out {e.name}: {self.rejected[e.name]}")
 
     def search(self, findings, max_effects: int):
-        """Rounds until no finding is left, none is explained, or ``max_effects`` are added."""
+        """The one search (:func:`mftyre.gaps.search.search`) on this evidence, then the backward check and the
+        final values and standard errors."""
         run = self.run
-        while findings and len(self.added) < max_effects:
-            tried = [(e, keep, why) for e, keep, why in self.candidates.values() if _matches(e, findings)]
-            if not tried:
-                run.say("no catalogue effect matches the findings")
-                break
-            results = self.try_candidates(tried)
-            self.rounds.append([r[0] for r in results])
-            best = self.accept(results, len(tried))
-            if best is None:
-                run.say("no candidate is significant on the held-out data"
-                        + (" and passes verification" if self.rejected else ""))
-                break
-            self.add(best[0], best[1])
-            findings = locate(run.ev_train, run.ev_train.residuals(self.prm), self.sigma, run.alpha)
+        search(self, self.candidates, findings, max_effects)
         self.recheck()
         if self.added:
             # final values and standard errors of every added parameter, jointly at the final model

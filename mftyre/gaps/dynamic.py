@@ -21,22 +21,25 @@ Command line: ``mftyre gaps --dynamic DATA.csv --model BASE.tir [-o improved.tir
    the measured signal minus its mean is noise: its standard deviation per channel and its integrated
    autocorrelation time tau (samples), so that a run of n samples counts n/tau independent ones. Every
    chi-square below is sum(r^2)/(sigma^2 tau): from the noise, never from the residual being explained.
-3. *Locate* (:mod:`mftyre.gaps.dynamic_locate`): per run and channel the residual chi-square per independent
-   sample against the noise variance (F test with the noise's own independent samples) and the engineers' features (peaks, peak-to-peak, response length, lag and build-up distance,
-   decay frequency and damping) measured beside model.
-4. *Name* (:mod:`mftyre.gaps.dynamic_catalogue`): the effects the runs can test (the rest listed with the
-   reason) whose kinds and channels show a gap are screened by one Gauss-Newton step on the training runs
-   (finite-difference sensitivity of the simulated histories); the most promising are refitted.
-5. *Add*: whole runs are held out by the steady finder's rule (:func:`mftyre.gaps.residuals.stratified_holdout`:
-   every manoeuvre, speed, load, pressure and road held out somewhere, none lost from the training runs). A candidate is accepted when its
-   training chi-square decrease is significant (chi2(k), Bonferroni over the candidates screened), its held-out
-   decrease is significant too (chi2(k) at the same level) and material (at least :data:`MATERIAL` of the held-out
-   chi-square above the noise), and the improved model is verified: it builds,
-   :func:`mftyre.fit.verify.verify_tir` finds no new problem, every run simulates to finite values, and the
-   linearised SWIFT wheel at the static state of every condition has no mode growing faster than a damping ratio
-   of -1 % that the given model lacks (eigenvalues of :meth:`swift.SwiftTyre.jacobian`; the given model's own
-   growing modes are reported). The best accepted candidate (held-out decrease) is added; repeat.
-6. *Show*: RMS error per channel and condition before/after on the held-out runs beside the noise floor, features
+3. *Locate*: per run and channel the residual chi-square per independent sample against the noise variance (F test
+   with the noise's own independent samples): a :class:`mftyre.gaps.locate.Finding` whose variable is the run's
+   kind; the report also shows the engineers' features (:mod:`mftyre.gaps.dynamic_locate`: peaks, peak-to-peak,
+   response length, lag and build-up distance, decay frequency and damping) measured beside model.
+4. *Name and add*: the one search of the gap finder (:func:`mftyre.gaps.search.search`, the steady finder's loop)
+   on the evidence of the runs (:class:`_Runs`). Candidates are the catalogue effects the runs can test
+   (:mod:`mftyre.gaps.dynamic_catalogue`, the rest listed with the reason) whose run kinds and channels match a
+   finding; they are screened by one Gauss-Newton step on the training runs (finite-difference sensitivity of the
+   simulated histories), the most promising refitted with the chain. Whole runs are held out by the steady finder's
+   rule (:func:`mftyre.gaps.residuals.stratified_holdout`: every manoeuvre, speed, load, pressure and road held out
+   somewhere, none lost from the training runs). The acceptance rule is the steady finder's
+   (:func:`mftyre.gaps.search.judge`): the training chi-square decrease significant (chi2(k), Bonferroni over the
+   candidates screened), the held-out decrease significant too (chi2(k) at the same level) and material (at least
+   :data:`MATERIAL` of the held-out chi-square above the noise). The best accepted candidate (held-out decrease) is
+   verified: it builds, :func:`mftyre.fit.verify.verify_tir` finds no new problem, every run simulates to finite
+   values, and the linearised SWIFT wheel at the static state of every condition has no mode growing faster than a
+   damping ratio of -1 % that the given model lacks (eigenvalues of :meth:`swift.SwiftTyre.jacobian`; the given
+   model's own growing modes are reported); failing, the next. Repeat.
+5. *Show*: RMS error per channel and condition before/after on the held-out runs beside the noise floor, features
    before/after, overlaid time histories (PNG), the improved .tir (never overwriting without ``overwrite``).
 """
 from __future__ import annotations
@@ -56,6 +59,8 @@ from ..errors import DataError, ModelInputError
 from .dynamic_catalogue import DYNAMIC_CATALOGUE, testable_effects
 from .dynamic_locate import compare, features
 from .dynamic_runs import MODEL_KINDS, DynamicRun, SwiftTyres, measurement_chain, read_runs, simulate
+from .locate import Finding
+from .search import Candidate, judge, matches, search
 
 __all__ = ["find_dynamic_gaps", "DynamicGapReport", "Chain", "align", "noise_from_data", "model_kind_for",
            "precision", "calibration", "values_text"]
@@ -135,11 +140,12 @@ def cutoffs_below_nyquist(runs, grid=CUTOFFS) -> tuple:
     return tuple(c for c in grid if c is None or c < top)
 
 
-def _sse(runs, pred, chain, weights) -> float:
-    """Channel-weighted sum of squares of measured less ``chain`` (calibrated afresh) of the prediction."""
-    filtered = [(r, c, chain.dynamics(pred[r.name][c], r.dt)) for r in runs for c in r.measured]
-    chain = replace(chain, **calibration(filtered))
-    return float(sum(np.nansum((chain.calibrate(f, r, c) - r.measured[c]) ** 2) / weights[c] for r, c, f in filtered))
+def _sse(filtered, delay, weights) -> float:
+    """Channel-weighted sum of squares of measured less the calibrated (afresh), ``delay``-ed ``filtered`` model
+    ((run, channel, filtered prediction))."""
+    delayed = [(r, c, measurement_chain(f, r.dt, None, delay)) for r, c, f in filtered]
+    chain = Chain(delay, **calibration(delayed))
+    return float(sum(np.nansum((chain.calibrate(f, r, c) - r.measured[c]) ** 2) / weights[c] for r, c, f in delayed))
 
 
 def align(runs, pred) -> tuple:
@@ -147,7 +153,7 @@ def align(runs, pred) -> tuple:
     -> array): per filter order (:data:`ORDERS`) and cutoff (:data:`CUTOFFS` below Nyquist,
     :func:`cutoffs_below_nyquist`) the delay on a 2 ms grid refined by a parabola, each with the channels'
     calibration (:meth:`Chain.calibrated`) fitted; the cutoff is refined further with every candidate
-    (:func:`_refit`)."""
+    (:func:`_refit`). Each prediction is filtered once per order and cutoff, the delays applied to that."""
     weights = {c: max(np.var(np.concatenate([r.measured[c] for r in runs if c in r.measured])), 1e-12)
                for r in runs for c in r.measured}
     delays = np.arange(-0.004, 0.0301, 0.002)
@@ -156,7 +162,9 @@ def align(runs, pred) -> tuple:
         for cutoff in cutoffs_below_nyquist(runs):
             if cutoff is None and order != ORDERS[-1]:
                 continue
-            sse = np.array([_sse(runs, pred, Chain(d, cutoff, order), weights) for d in delays])
+            filtered = [(r, c, measurement_chain(pred[r.name][c], r.dt, cutoff, 0.0, order)) for r in runs
+                        for c in r.measured]
+            sse = np.array([_sse(filtered, d, weights) for d in delays])
             j = int(np.argmin(sse))
             d = delays[j]
             if 0 < j < len(delays) - 1:  # parabola through the three best
@@ -164,12 +172,11 @@ def align(runs, pred) -> tuple:
                 den = a - 2 * b + c
                 if den > 0:
                     d = d + 0.5 * (a - c) / den * (delays[1] - delays[0])
-            chain = Chain(float(d), cutoff, order)
-            fine = _sse(runs, pred, chain, weights)
+            fine = _sse(filtered, float(d), weights)
             table[(order, cutoff)] = fine
             if best is None or fine < best[0]:
-                best = (fine, chain.calibrated(runs, pred))
-    return best[1], table
+                best = (fine, Chain(float(d), cutoff, order))
+    return best[1].calibrated(runs, pred), table
 
 
 def _quiet(y, dt):
@@ -266,27 +273,6 @@ def _chi2(res: dict, keys=None) -> float:
     return float(sum(np.nansum(v**2) for k, v in res.items() if keys is None or k in keys))
 
 
-@dataclass
-class DynamicCandidate:
-    name: str
-    parameters: tuple
-    screened_decrease: float = math.nan  # linearised training chi-square decrease
-    chi2_train_before: float = math.nan
-    chi2_train_after: float = math.nan
-    chi2_test_before: float = math.nan
-    chi2_test_after: float = math.nan
-    p_train: float = math.nan
-    p_test: float = math.nan
-    values: dict = field(default_factory=dict)
-    stderr: dict = field(default_factory=dict)
-    correlation: dict = field(default_factory=dict)  # "A~B" -> correlation of a pair too close to separate
-    accepted: bool = False
-    note: str = ""
-
-    def to_dict(self):
-        return dict(self.__dict__)
-
-
 class DynamicGapReport:
     """The outcome of :func:`find_dynamic_gaps`: ``model_given``, ``model`` (improved), ``effects_added``
     (candidate list), ``rounds`` (per round the candidates), ``untestable`` (effect -> reason), ``chain``,
@@ -355,14 +341,14 @@ class DynamicGapReport:
         for c in self.effects_added:
             vals = values_text(c)
             L.append(f"* **{c.name}**: {vals}; training chi2 {c.chi2_train_before:.0f} -> {c.chi2_train_after:.0f} "
-                     f"(p {c.p_train:.2g}), held-out chi2 {c.chi2_test_before:.0f} -> {c.chi2_test_after:.0f} "
-                     f"(p {c.p_test:.2g})")
+                     f"(p {c.p_value:.2g}), held-out chi2 {c.chi2_test_before:.0f} -> {c.chi2_test_after:.0f} "
+                     f"(p {c.held_out_p:.2g})")
         if not self.effects_added:
             L.append("none")
         L += ["", "## Candidates per round", ""]
         for i, rnd in enumerate(self.rounds, 1):
             for c in rnd:
-                L.append(f"* round {i}: {c.name}: screened decrease {c.screened_decrease:.1f}"
+                L.append(f"* round {i}: {c.name}: screened decrease {c.screened:.1f}"
                          + (f", held-out chi2 {c.chi2_test_before:.0f} -> {c.chi2_test_after:.0f}"
                             if math.isfinite(c.chi2_test_after) else "") + (f"; {c.note}" if c.note else ""))
         unstable = {k: g for k, (g, _) in (self.growth_given or {}).items() if g > 1e-6}
@@ -447,11 +433,22 @@ def _load(data, model):
 
 
 class _Sim:
-    """Simulate a model on runs (``kind``: :data:`MODEL_KINDS`), building its SWIFT tyres once per parameter set;
-    counts evaluations."""
+    """Simulate a model on runs (``kind``: :data:`MODEL_KINDS`); counts evaluations. The SWIFT tyres of the last
+    few parameter sets are kept, built for every run (a refit simulates its result on the training runs, then on
+    all), their cam tables kept across parameter sets with the same cams (:class:`SwiftTyres`)."""
 
     def __init__(self, runs, kind="swift"):
         self.runs, self.kind, self.evaluations = runs, kind, 0
+        self._tables, self._tyres = {}, {}
+
+    def tyres(self, model) -> SwiftTyres:
+        prm = model.params
+        key = (tuple(repr(prm[k]) for k in prm), tuple(sorted(prm.missing)), model.side)
+        if key not in self._tyres:
+            if len(self._tyres) >= 6:
+                del self._tyres[next(iter(self._tyres))]
+            self._tyres[key] = SwiftTyres(model, self.runs, self._tables)
+        return self._tyres[key]
 
     def __call__(self, model, runs=None):
         runs = runs or self.runs
@@ -460,7 +457,7 @@ class _Sim:
             warnings.simplefilter("ignore")
             if self.kind == "relaxed":
                 return simulate(model, runs, model_kind="relaxed")
-            return simulate(model, runs, SwiftTyres(model, runs))
+            return simulate(model, runs, self.tyres(model))
 
 
 #: The parameters of the SWIFT wheel a file must have for model kind "auto" to choose it.
@@ -517,7 +514,7 @@ def _bounds_ok(effect, delta):
     return bool(np.all(np.abs(delta) < 12.0))  # at most a factor e^2.4 = 11 either way, or +-6 absolute
 
 
-def _growth(model, runs, model_kind="swift") -> dict:
+def _growth(model, runs, model_kind="swift", tyres=None) -> dict:
     """Condition label -> largest real part [1/s] of the eigenvalues of the linearised SWIFT wheel at its static
     state, for every distinct (speed, pressure, axle height or load) of the runs. The relaxed wheel: {} (first-order
     relaxation at the rate |vx|/sigma, sigma floored positive: stable whatever the parameters)."""
@@ -534,7 +531,7 @@ def _growth(model, runs, model_kind="swift") -> dict:
     out = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        tyres = SwiftTyres(model, list(seen.values()))
+        tyres = tyres or SwiftTyres(model, list(seen.values()))
         for r in seen.values():
             i = r.inputs
             first = {k.lower(): float(i[k][0]) for k in ("X", "VX", "Z", "LOAD", "OMEGA", "TORQUE", "P") if k in i}
@@ -569,11 +566,10 @@ def _less_stable(new: dict, given: dict) -> str:
 def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alpha: float = 1e-3,
                       max_effects: int = 3, catalogue=DYNAMIC_CATALOGUE, refit_top: int = REFIT_TOP,
                       model_kind: str = "auto", progress=None) -> DynamicGapReport:
-    """Locate, name and add the dynamic effects ``model`` misses in the runs ``data`` (module text);
+    """Locate, name and add the dynamic effects ``model`` misses in the runs ``data`` (module text): the one
+    search of the gap finder (:func:`mftyre.gaps.search.search`) on the evidence of the runs (:class:`_Runs`);
     ``refit_top``: candidates refitted per round after the screening; ``model_kind``: "swift", "relaxed" or
     "auto" (:func:`model_kind_for`)."""
-    from ..fit.verify import verify_tir
-
     t_start = time.perf_counter()
     say = progress or (lambda text: None)
     runs, model_given = _load(data, model)
@@ -583,127 +579,19 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
     pred0 = sim(model_given)
     held = _holdout(runs, holdout, seed)
     train = {r.name for r in runs} - held
-    train_runs = [r for r in runs if r.name in train]
-    chain, chain_table = align(train_runs, pred0)
-    noise = noise_from_data(runs, pred0, chain)
-    say(f"aligned: delay {1e3 * chain.delay:.2f} ms, filter {chain.cutoff} Hz; noise "
-        + ", ".join(f"{c} {n['sigma']:.3g} (tau {n['tau']:.1f})" for c, n in noise.items()))
-    prob = _Problem(runs, chain, noise)
+    ev = _Runs(runs, train, held, sim, model_given, pred0, alpha, refit_top, model_kind, say)
+    say(f"aligned: delay {1e3 * ev.chain.delay:.2f} ms, filter {ev.chain.cutoff} Hz; noise "
+        + ", ".join(f"{c} {n['sigma']:.3g} (tau {n['tau']:.1f})" for c, n in ev.noise.items()))
     testable, untestable = testable_effects(runs, model_given, catalogue, model_kind)
-
-    # locate: features of the given model against the measurement
-    findings = _findings(runs, pred0, chain, noise)
-    gap_kinds = _gaps(runs, prob, pred0, alpha)
-
-    model, pred, rounds, added = model_given, pred0, [], []
-    candidates = [e for e in testable if any((k, c) in gap_kinds for k in e.kinds for c in e.channels)]
+    # locate: features of the given model against the measurement (shown), runs beyond their noise (searched)
+    findings = _findings(runs, pred0, ev.chain, ev.noise)
+    gaps = ev.locate()
     for e in testable:
-        if e not in candidates:
+        if not matches(e, gaps):
             untestable.setdefault(e.name, "testable, but no run of its kinds shows a gap in its channels")
-    jac_cache, growth_given = {}, None
-    while candidates and len(added) < max_effects:
-        if added:  # only effects whose kinds and channels still show a gap beyond the noise
-            gap_kinds = _gaps(runs, prob, pred, alpha)
-            candidates = [e for e in candidates if any((k, c) in gap_kinds for k in e.kinds for c in e.channels)]
-            if not candidates:
-                break
-        res = prob.residuals(pred)
-        keys_train = [k for k in res if k[0] in train]
-        r_train = np.concatenate([res[k] for k in keys_train])
-        chi_train, chi_test = _chi2(res, set(keys_train)), _chi2(res, set(res) - set(keys_train))
-        rnd = []
-        say(f"round {len(rounds) + 1}: screening {len(candidates)} effects")
-        # ranked by what each explains beyond the measurement chain's own freedom (its delay and cutoff take up
-        # part of a lag or a frequency gap, differently for each effect: screened with the chain held, in the TNO
-        # case FREQ_LONG x 0.88 the three refitted were DAMP_RESIDUAL, the wind-up mode and BELT_IYY, not FREQ_LONG)
-        chain_cols = _chain_columns(prob, pred, train, keys_train, r_train)
-        step, *_ = np.linalg.lstsq(chain_cols, -r_train, rcond=None)
-        chain_only = float(r_train @ r_train - np.sum((r_train + chain_cols @ step) ** 2))
-        for e in candidates:
-            if e.name not in jac_cache:
-                base = given_values(model, e.parameters)
-                cols = []
-                for j in range(len(e.parameters)):
-                    d = np.zeros(len(e.parameters))
-                    d[j] = 0.25
-                    try:
-                        pj = sim(_with(model, e, base, d),
-                                 [r for r in runs if r.name in train and r.kind in e.kinds])
-                        rj = prob.residuals({**pred, **pj}, train)
-                        cols.append((np.concatenate([rj[k] for k in keys_train]) - r_train) / 0.25)
-                    except ModelInputError:
-                        cols.append(np.zeros_like(r_train))
-                jac_cache[e.name] = np.column_stack(cols)
-            J = np.column_stack([jac_cache[e.name], chain_cols])
-            step, *_ = np.linalg.lstsq(J, -r_train, rcond=None)
-            dec = float(r_train @ r_train - np.sum((r_train + J @ step) ** 2)) - chain_only
-            rnd.append(DynamicCandidate(e.name, e.parameters, screened_decrease=dec))
-        rnd.sort(key=lambda c: -c.screened_decrease)
-        m_tests = len(rnd)
-        best, growth = None, None
-        for cand in rnd[:refit_top]:
-            e = next(x for x in candidates if x.name == cand.name)
-            say(f"  refitting {e.name}")
-            out = _refit(e, model, pred, prob, sim, runs, train, keys_train)
-            if out is None:
-                cand.note = "refit failed (the model could not be built or simulated)"
-                continue
-            new_model, new_pred, delta, cov, prob_new = out
-            res_new = prob_new.residuals(new_pred)
-            k = len(e.parameters)
-            cand.chi2_train_before, cand.chi2_test_before = chi_train, chi_test
-            cand.chi2_train_after = _chi2(res_new, set(keys_train))
-            cand.chi2_test_after = _chi2(res_new, set(res_new) - set(keys_train))
-            cand.p_train = float(stats.chi2.sf(max(chi_train - cand.chi2_train_after, 0.0), k))
-            cand.p_test = float(stats.chi2.sf(max(chi_test - cand.chi2_test_after, 0.0), k)) if held else math.nan
-            cand.values = {p: float(new_model.params[p]) for p in e.parameters}
-            cand.stderr, cand.correlation = precision(
-                cov, [_slope(e, p, cand.values[p], model.params[p]) for p in e.parameters], e.parameters)
-            level = alpha / m_tests
-            if not cand.p_train < level:
-                cand.note = f"training decrease not significant (p {cand.p_train:.2g} >= {level:.2g})"
-                continue
-            if held and not cand.p_test < level:
-                cand.note = f"held-out decrease not significant (p {cand.p_test:.2g} >= {level:.2g})"
-                continue
-            # and material: beside a large unexplained gap a tiny improvement is significant but names nothing
-            excess = (chi_test - prob.n_eff(held)) if held else (chi_train - prob.n_eff(train))
-            done = (chi_test - cand.chi2_test_after) if held else (chi_train - cand.chi2_train_after)
-            if done < MATERIAL * excess:
-                cand.note = (f"explains {100 * done / max(excess, 1e-300):.1f} % of the held-out chi-square above "
-                             f"the noise (needs {100 * MATERIAL:g} %)")
-                continue
-            problems = [p for p in verify_tir(new_model) if p not in verify_tir(model)]
-            if problems:
-                cand.note = "verification: " + "; ".join(problems[:2])
-                continue
-            if not all(np.all(np.isfinite(v)) for ch in new_pred.values() for v in ch.values()):
-                cand.note = "the improved model gives non-finite outputs"
-                continue
-            if growth is None:
-                growth = _growth(model, runs, model_kind)
-                growth_given = growth_given or growth
-            unstable = _less_stable(_growth(new_model, runs, model_kind), growth)
-            if unstable:
-                cand.note = "unstable: " + unstable
-                continue
-            cand.accepted = True
-            gain = chi_test - cand.chi2_test_after if held else chi_train - cand.chi2_train_after
-            if best is None or gain > best[0]:
-                best = (gain, cand, new_model, new_pred)
-        rounds.append(rnd)
-        if best is None:
-            break
-        _, cand, model, pred = best
-        added.append(cand)
-        # the measurement chain again, now fitted to the improved model (the given model's errors bent it)
-        chain, chain_table = align(train_runs, pred)
-        noise = noise_from_data(runs, pred, chain)
-        prob = _Problem(runs, chain, noise)
-        jac_cache.clear()
-        say(f"  added {cand.name}; realigned: delay {1e3 * chain.delay:.2f} ms, filter {chain.cutoff} Hz")
-        candidates = [e for e in candidates if e.name != cand.name]
+    search(ev, {e.name: (e, e.parameters, {}) for e in testable}, gaps, max_effects)
 
+    model, pred, chain, noise, added = ev.model, ev.pred, ev.chain, ev.noise, ev.added
     # show: the improved model simulated afresh on every run (what is written is what is scored)
     if added:
         pred = sim(model)
@@ -723,13 +611,145 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
     else:
         msg = ("nothing added: no effect lowered the held-out error significantly. Held-out RMS "
                + ", ".join(f"{c} {err_b[c]:.3g} (noise {floor[c]:.3g})" for c in err_b))
-    return DynamicGapReport(model_given=model_given, model=model, effects_added=added, rounds=rounds,
-                            untestable=untestable, chain=chain, chain_table=chain_table, noise=noise, held_out=held,
-                            trained=train,
-                            error_before=err_b, error_after=err_a, noise_floor=floor, by_condition=by_condition,
-                            findings=findings, message=msg, runs=runs, pred_before=pred0, pred_after=pred,
-                            evaluations=sim.evaluations, growth_given=growth_given, model_kind=model_kind,
+    return DynamicGapReport(model_given=model_given, model=model, effects_added=added, rounds=ev.rounds,
+                            untestable=untestable, rejected=ev.rejected, chain=chain, chain_table=ev.chain_table,
+                            noise=noise, held_out=held, trained=train, error_before=err_b, error_after=err_a,
+                            noise_floor=floor, by_condition=by_condition, findings=findings, gaps=gaps,
+                            message=msg, runs=runs, pred_before=pred0, pred_after=pred, evaluations=sim.evaluations,
+                            growth_given=ev.growth_given, model_kind=model_kind,
                             seconds=time.perf_counter() - t_start)
+
+
+class _Runs:
+    """The evidence of dynamic runs for the one search (:func:`mftyre.gaps.search.search`): the wheel simulated
+    on the runs (``sim``), the measurement chain aligned to the current model on the training runs, the noise of the
+    quiet lead-ins; the current ``model`` and its prediction ``pred``."""
+
+    def __init__(self, runs, train, held, sim, model, pred, alpha, refit_top, model_kind, say):
+        self.runs, self.train, self.held, self.sim = runs, train, held, sim
+        self.train_runs = [r for r in runs if r.name in train]
+        self.alpha, self.refit_top, self.model_kind, self.say = alpha, refit_top, model_kind, say
+        self.rounds, self.rejected, self.added = [], {}, []
+        self.growth_given, self._verified = None, {}
+        self._align(model, pred)
+
+    def _align(self, model, pred):
+        """The current model: the measurement chain and the noise fitted to it (the given model's errors bent
+        them), the linearised screening's Jacobians dropped."""
+        self.model, self.pred = model, pred
+        self.chain, self.chain_table = align(self.train_runs, pred)
+        self.noise = noise_from_data(self.runs, pred, self.chain)
+        self.prob = _Problem(self.runs, self.chain, self.noise)
+        self._jac = {}
+
+    def locate(self) -> list:
+        return _gaps(self.runs, self.prob, self.pred, self.alpha)
+
+    def trials(self, tried, round_no: int) -> list:
+        """The candidates ranked by a linearised step on the training runs (finite-difference sensitivity of the
+        simulated histories, beyond what the chain's own freedom explains); the best :attr:`refit_top` refitted
+        with the chain (:func:`_refit`) and judged (:func:`mftyre.gaps.search.judge`); (candidate, (model,
+        prediction)) pairs, the refitted by held-out decrease first."""
+        prob, pred, train, held, runs = self.prob, self.pred, self.train, self.held, self.runs
+        res = prob.residuals(pred)
+        keys_train = [k for k in res if k[0] in train]
+        r_train = np.concatenate([res[k] for k in keys_train])
+        chi_train, chi_test = _chi2(res, set(keys_train)), _chi2(res, set(res) - set(keys_train))
+        self.say(f"round {round_no}: screening {len(tried)} effects")
+        # ranked by what each explains beyond the measurement chain's own freedom (its delay and cutoff take up
+        # part of a lag or a frequency gap, differently for each effect: screened with the chain held, in the TNO
+        # case FREQ_LONG x 0.88 the three refitted were DAMP_RESIDUAL, the wind-up mode and BELT_IYY, not FREQ_LONG)
+        chain_cols = _chain_columns(prob, pred, train, keys_train, r_train)
+        step, *_ = np.linalg.lstsq(chain_cols, -r_train, rcond=None)
+        chain_only = float(r_train @ r_train - np.sum((r_train + chain_cols @ step) ** 2))
+        screened = []
+        for e, keep, _ in tried:
+            J = np.column_stack([self._sensitivity(e, keys_train, r_train), chain_cols])
+            step, *_ = np.linalg.lstsq(J, -r_train, rcond=None)
+            dec = float(r_train @ r_train - np.sum((r_train + J @ step) ** 2)) - chain_only
+            screened.append((Candidate(e.name, e.parameters, screened=dec), e))
+        screened.sort(key=lambda t: -t[0].screened)
+        level = self.alpha / len(screened)
+        refitted, rest = [], []
+        for cand, e in screened:
+            if len(refitted) + len(rest) >= self.refit_top:
+                rest.append((cand, None))
+                continue
+            self.say(f"  refitting {e.name}")
+            out = _refit(e, self.model, pred, prob, self.sim, runs, train, keys_train)
+            if out is None:
+                cand.note = "refit failed (the model could not be built or simulated)"
+                rest.append((cand, None))
+                continue
+            new_model, new_pred, delta, cov, prob_new = out
+            res_new = prob_new.residuals(new_pred)
+            k = len(e.parameters)
+            cand.chi2_train_before, cand.chi2_test_before = chi_train, chi_test
+            cand.chi2_train_after = _chi2(res_new, set(keys_train))
+            cand.chi2_test_after = _chi2(res_new, set(res_new) - set(keys_train))
+            cand.n_eff = prob.n_eff(train)
+            cand.p_value = float(stats.chi2.sf(max(chi_train - cand.chi2_train_after, 0.0), k))
+            cand.held_out_p = float(stats.chi2.sf(max(chi_test - cand.chi2_test_after, 0.0), k)) if held \
+                else math.nan
+            cand.values = {p: float(new_model.params[p]) for p in e.parameters}
+            cand.stderr, cand.correlation = precision(
+                cov, [_slope(e, p, cand.values[p], self.model.params[p]) for p in e.parameters], e.parameters)
+            # the held-out decrease, material against what the noise does not explain
+            before, after, n_eff = (chi_test, cand.chi2_test_after, prob.n_eff(held)) if held else \
+                (chi_train, cand.chi2_train_after, cand.n_eff)
+            cand.score, cand.held_out_gain = before - after, (before - after) / before if before > 0 else 0.0
+            cand.note = judge(cand.p_value, level, cand.held_out_p, level, cand.score, material=MATERIAL,
+                              excess=before - n_eff)
+            cand.significant = not cand.note
+            refitted.append((cand, (new_model, new_pred)))
+        refitted.sort(key=lambda t: -t[0].score)
+        return refitted + rest
+
+    def _sensitivity(self, e, keys_train, r_train):
+        """d (weighted training residuals) / d (refit coordinates) of effect ``e`` by finite differences (one
+        simulation of its training runs per parameter), kept until the model changes."""
+        if e.name not in self._jac:
+            base = given_values(self.model, e.parameters)
+            sub = [r for r in self.train_runs if r.kind in e.kinds]
+            cols = []
+            for j in range(len(e.parameters)):
+                d = np.zeros(len(e.parameters))
+                d[j] = 0.25
+                try:
+                    rj = self.prob.residuals({**self.pred, **self.sim(_with(self.model, e, base, d), sub)},
+                                             self.train)
+                    cols.append((np.concatenate([rj[k] for k in keys_train]) - r_train) / 0.25)
+                except ModelInputError:
+                    cols.append(np.zeros_like(r_train))
+            self._jac[e.name] = np.column_stack(cols)
+        return self._jac[e.name]
+
+    def verify(self, cand, new, m: int):
+        """(new, '') when the improved model builds, :func:`mftyre.fit.verify.verify_tir` finds no problem the
+        current one lacks, every run simulates to finite values and the linearised wheel grows no faster mode than
+        the current one (:func:`_less_stable`); else (new, the reason)."""
+        from ..fit.verify import verify_tir
+
+        new_model, new_pred = new
+        if id(self.model) not in self._verified:
+            self._verified[id(self.model)] = verify_tir(self.model)
+        problems = [p for p in verify_tir(new_model) if p not in self._verified[id(self.model)]]
+        if problems:
+            return new, "verification: " + "; ".join(problems[:2])
+        if not all(np.all(np.isfinite(v)) for ch in new_pred.values() for v in ch.values()):
+            return new, "the improved model gives non-finite outputs"
+        kind = self.model_kind
+        growth = _growth(self.model, self.runs, kind, self.sim.tyres(self.model) if kind == "swift" else None)
+        self.growth_given = self.growth_given or growth
+        unstable = _less_stable(_growth(new_model, self.runs, kind, self.sim.tyres(new_model) if kind == "swift"
+                                        else None), growth)
+        return new, ("unstable: " + unstable) if unstable else ""
+
+    def add(self, cand, new):
+        self.added.append(cand)
+        self._align(*new)
+        self.say(f"  added {cand.name}; realigned: delay {1e3 * self.chain.delay:.2f} ms, filter "
+                 f"{self.chain.cutoff} Hz")
 
 
 def _rms(runs, pred, chain, names) -> dict:
@@ -743,19 +763,24 @@ def _rms(runs, pred, chain, names) -> dict:
     return out
 
 
-def _gaps(runs, prob, pred, alpha) -> set:
-    """(run kind, channel) pairs with a run whose residual exceeds the noise at ``alpha``: an F test of its
-    chi-square per independent sample against the noise variance, which is itself estimated from the quiet
-    lead-ins (samples/tau independent samples), so a noise level known from few samples claims no gap."""
+def _gaps(runs, prob, pred, alpha) -> list:
+    """The findings (:class:`mftyre.gaps.locate.Finding`, variable: the run's kind) of a run and channel whose
+    residual exceeds the noise at ``alpha``: an F test of its chi-square per independent sample against the noise
+    variance, which is itself estimated from the quiet lead-ins (samples/tau independent samples), so a noise level
+    known from few samples claims no gap. Largest excess first."""
     res = prob.residuals(pred)
-    out = set()
+    out = []
     for r in runs:
         for c in r.measured:
             noise = prob.noise[c]
             n_eff = r.t.size / noise["tau"]
-            ratio = _chi2(res, {(r.name, c)}) / n_eff
-            if stats.f.sf(ratio, n_eff, max(noise["samples"] / noise["tau"], 1.0)) < alpha:
-                out.add((r.kind, c))
+            chi2 = _chi2(res, {(r.name, c)})
+            p = float(stats.f.sf(chi2 / n_eff, n_eff, max(noise["samples"] / noise["tau"], 1.0)))
+            if p < alpha:
+                rms = float(np.sqrt(np.mean((prob.chain(pred[r.name][c], r, c) - r.measured[c]) ** 2)))
+                out.append(Finding(c, (r.kind,), chi2, int(round(n_eff)), p, 1.0 - n_eff / chi2, chi2 - n_eff,
+                                   where=f"run {r.name}", rms=rms, sigma=noise["sigma"]))
+    out.sort(key=lambda f: -f.excess)
     return out
 
 

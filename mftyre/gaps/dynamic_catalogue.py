@@ -16,127 +16,120 @@ LATERAL_STIFFNESS, PCFY1-3); MF 5.2 the PTX1-PTX3, PTY1-PTY2 formulas (:mod:`mft
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 from ..params import PARAMETERS
+from .catalogue import Effect
 
-__all__ = ["DynamicEffect", "DYNAMIC_CATALOGUE", "NOT_TRIED", "NOT_TRIED_RELAXED", "testable_effects"]
+__all__ = ["DYNAMIC_CATALOGUE", "NOT_TRIED", "NOT_TRIED_RELAXED", "testable_effects"]
 
 
-@dataclass(frozen=True)
-class DynamicEffect:
-    name: str
-    parameters: tuple          # .tir names refitted together
-    kinds: tuple               # run kinds in which the effect shows (any of them)
-    channels: tuple            # channels it changes
-    features: tuple            # features of the signature (dynamic_locate.FEATURES)
-    description: str
-    needs: tuple = ()          # "pressures", "loads", "speeds": at least two levels in the runs of ``kinds``
-    absolute: tuple = ()       # parameters whose refit step is absolute (neutral value 0)
-    lower: float = 0.0         # lower bound of the parameters (positive quantities) unless absolute
-    models: tuple = ("swift",)  # dynamic models with these parameters
-    versions: tuple = ()       # MF versions ("52", "61", "62") whose equations use them; () all
-
-    def meaning(self) -> dict:
-        return {p: PARAMETERS[p].description for p in self.parameters}
+def _d(name, parameters, kinds, channels, features, description, *, needs=(), absolute=(), models=("swift",),
+       versions=()) -> Effect:
+    """A dynamic effect: the one effect record (:class:`mftyre.gaps.catalogue.Effect`) with the run ``kinds`` as
+    its condition variables (a dynamic finding names the kind of run it is in), no switch (``neutral``: the
+    parameters refine values the wheel always uses), its signature's ``features``, the parameters refitted by
+    absolute steps, the dynamic ``models`` and the MF ``versions`` whose equations use the parameters."""
+    return Effect(name, description, tuple(parameters), {}, tuple(channels), tuple(kinds), needs=tuple(needs),
+                  features=tuple(features), absolute=tuple(absolute), models=tuple(models), equations=tuple(versions))
 
 
 _IN_PLANE = ("FX", "FZ")
 _LAT = ("FY", "MZ")
 _MF6 = ("61", "62")
 DYNAMIC_CATALOGUE = (
-    DynamicEffect("longitudinal carcass stiffness (relaxation length K_xk/C_x)", ("LONGITUDINAL_STIFFNESS",),
+    _d("longitudinal carcass stiffness (relaxation length K_xk/C_x)", ("LONGITUDINAL_STIFFNESS",),
                   ("cleat",), ("FX",), ("peak_to_peak", "peak"),
                   "the carcass compliance behind the patch sets the longitudinal relaxation length sigma_x = "
                   "K_xk/C_x of the SWIFT wheel: Fx over an obstacle builds up and decays with it"),
-    DynamicEffect("lateral carcass stiffness (relaxation length K_ya/C_y)", ("LATERAL_STIFFNESS",),
+    _d("lateral carcass stiffness (relaxation length K_ya/C_y)", ("LATERAL_STIFFNESS",),
                   ("steer",), _LAT, ("lag", "build_up", "peak"),
                   "sigma_y = K_ya/C_y of the SWIFT wheel: the build-up distance and phase lag of Fy after a steer "
                   "step"),
-    DynamicEffect("yaw stiffness of the carcass", ("YAW_STIFFNESS",), ("steer",), ("MZ", "FY"),
+    _d("yaw stiffness of the carcass", ("YAW_STIFFNESS",), ("steer",), ("MZ", "FY"),
                   ("lag", "peak"), "the residual yaw compliance: the lag of Mz after a steer step"),
-    DynamicEffect("contact length (Q_RA1)", ("Q_RA1",), ("cleat",), _IN_PLANE,
+    _d("contact length (Q_RA1)", ("Q_RA1",), ("cleat",), _IN_PLANE,
                   ("response_length", "peak", "peak_to_peak"),
                   "the half contact length a sets the tandem base l_s = ELLIPS_SHIFT 2a: the length of the cleat "
                   "response and the height of its peaks"),
-    DynamicEffect("contact length over load (Q_RA2)", ("Q_RA2",), ("cleat",), _IN_PLANE,
+    _d("contact length over load (Q_RA2)", ("Q_RA2",), ("cleat",), _IN_PLANE,
                   ("response_length", "peak"), "the growth of the contact length with the deflection: response "
                   "lengths and peaks differ between loads", needs=("loads",), absolute=("Q_RA2",)),
-    DynamicEffect("vertical stiffness over pressure (PFZ1)", ("PFZ1",), ("cleat",), _IN_PLANE,
+    _d("vertical stiffness over pressure (PFZ1)", ("PFZ1",), ("cleat",), _IN_PLANE,
                   ("level", "peak", "response_length"),
                   "the pressure dependence of the vertical stiffness (and of the contact length through F_z/C_z): "
                   "static load, peaks and response length change with pressure", needs=("pressures",),
                   absolute=("PFZ1",)),
-    DynamicEffect("tandem base (ELLIPS_SHIFT)", ("ELLIPS_SHIFT",), ("cleat",), _IN_PLANE,
+    _d("tandem base (ELLIPS_SHIFT)", ("ELLIPS_SHIFT",), ("cleat",), _IN_PLANE,
                   ("response_length", "peak_to_peak"),
                   "the distance between the front and rear cams: the length of the enveloped response"),
-    DynamicEffect("cam shape (ELLIPS_LENGTH, ELLIPS_HEIGHT)", ("ELLIPS_LENGTH", "ELLIPS_HEIGHT"), ("cleat",),
+    _d("cam shape (ELLIPS_LENGTH, ELLIPS_HEIGHT)", ("ELLIPS_LENGTH", "ELLIPS_HEIGHT"), ("cleat",),
                   _IN_PLANE, ("response_length", "peak"),
                   "the elliptical cam's semi-axes: how early the tyre feels the obstacle and how its edges are "
                   "rounded"),
-    DynamicEffect("cam order (ELLIPS_ORDER)", ("ELLIPS_ORDER",), ("cleat",), _IN_PLANE,
+    _d("cam order (ELLIPS_ORDER)", ("ELLIPS_ORDER",), ("cleat",), _IN_PLANE,
                   ("response_length", "peak"), "the cam's exponent: how square the enveloped edge is"),
-    DynamicEffect("in-plane sidewall stiffness (FREQ_LONG)", ("FREQ_LONG",), ("cleat",), _IN_PLANE,
+    _d("in-plane sidewall stiffness (FREQ_LONG)", ("FREQ_LONG",), ("cleat",), _IN_PLANE,
                   ("frequency", "peak"), "the belt's longitudinal and vertical mode: frequency of the free decay "
                   "after the obstacle"),
-    DynamicEffect("in-plane sidewall damping (DAMP_LONG)", ("DAMP_LONG",), ("cleat",), _IN_PLANE,
+    _d("in-plane sidewall damping (DAMP_LONG)", ("DAMP_LONG",), ("cleat",), _IN_PLANE,
                   ("damping", "peak"), "the damping ratio of the belt's in-plane mode: the decay after the "
                   "obstacle"),
-    DynamicEffect("wind-up mode (FREQ_WINDUP, DAMP_WINDUP)", ("FREQ_WINDUP", "DAMP_WINDUP"), ("cleat",), ("FX",),
+    _d("wind-up mode (FREQ_WINDUP, DAMP_WINDUP)", ("FREQ_WINDUP", "DAMP_WINDUP"), ("cleat",), ("FX",),
                   ("frequency", "damping", "peak_to_peak"),
                   "the belt's rotation against the rim: the second frequency of the Fx decay"),
-    DynamicEffect("sidewall stiffness over pressure (SWIFT_PSTIFF)", ("SWIFT_PSTIFF",), ("cleat",), _IN_PLANE,
+    _d("sidewall stiffness over pressure (SWIFT_PSTIFF)", ("SWIFT_PSTIFF",), ("cleat",), _IN_PLANE,
                   ("frequency", "peak"), "the belt mode frequencies change with pressure",
                   needs=("pressures",), absolute=("SWIFT_PSTIFF",)),
-    DynamicEffect("sidewall damping over pressure (SWIFT_PDAMP)", ("SWIFT_PDAMP",), ("cleat",), _IN_PLANE,
+    _d("sidewall damping over pressure (SWIFT_PDAMP)", ("SWIFT_PDAMP",), ("cleat",), _IN_PLANE,
                   ("damping",), "the belt mode damping changes with pressure", needs=("pressures",),
                   absolute=("SWIFT_PDAMP",)),
-    DynamicEffect("belt mass (BELT_MASS)", ("BELT_MASS",), ("cleat",), _IN_PLANE, ("frequency", "peak"),
+    _d("belt mass (BELT_MASS)", ("BELT_MASS",), ("cleat",), _IN_PLANE, ("frequency", "peak"),
                   "the ring's mass at fixed sidewall stiffness: lower frequency of the decay and higher force "
                   "peaks at speed", needs=("speeds",)),
-    DynamicEffect("belt polar inertia (BELT_IYY)", ("BELT_IYY",), ("cleat",), ("FX",), ("frequency", "peak"),
+    _d("belt polar inertia (BELT_IYY)", ("BELT_IYY",), ("cleat",), ("FX",), ("frequency", "peak"),
                   "the ring's rotational inertia: the wind-up frequency and the Fx peaks"),
-    DynamicEffect("rolling radius variation (SWIFT_REVAR)", ("SWIFT_REVAR",), ("cleat",), ("FX",),
+    _d("rolling radius variation (SWIFT_REVAR)", ("SWIFT_REVAR",), ("cleat",), ("FX",),
                   ("peak_to_peak", "peak"),
                   "the effective rolling radius follows the effective road curvature: the belt spins up and down "
                   "over the obstacle, Fx grows at low speed", absolute=("SWIFT_REVAR",)),
-    DynamicEffect("residual (patch) damping (DAMP_RESIDUAL)", ("DAMP_RESIDUAL",), ("cleat", "steer"),
+    _d("residual (patch) damping (DAMP_RESIDUAL)", ("DAMP_RESIDUAL",), ("cleat", "steer"),
                   ("FX", "FY"), ("peak", "damping"), "the damping of the contact patch's residual springs"),
-    DynamicEffect("lateral belt mode (FREQ_LAT, DAMP_LAT)", ("FREQ_LAT", "DAMP_LAT"), ("steer",), _LAT,
+    _d("lateral belt mode (FREQ_LAT, DAMP_LAT)", ("FREQ_LAT", "DAMP_LAT"), ("steer",), _LAT,
                   ("frequency", "peak", "lag"), "the belt's lateral mode: the overshoot of Fy after a steer step"),
-    DynamicEffect("yaw and camber belt mode (FREQ_YAW, DAMP_YAW)", ("FREQ_YAW", "DAMP_YAW"), ("steer",), _LAT,
+    _d("yaw and camber belt mode (FREQ_YAW, DAMP_YAW)", ("FREQ_YAW", "DAMP_YAW"), ("steer",), _LAT,
                   ("peak", "lag"), "the belt's yaw mode: the overshoot of Mz after a steer step"),
     # the relaxed wheel: MF 6.1/6.2 relaxation lengths K/C (carcass stiffness, its load and pressure terms)
-    DynamicEffect("longitudinal relaxation length (LONGITUDINAL_STIFFNESS)", ("LONGITUDINAL_STIFFNESS",),
+    _d("longitudinal relaxation length (LONGITUDINAL_STIFFNESS)", ("LONGITUDINAL_STIFFNESS",),
                   ("brake",), ("FX",), ("lag", "build_up"),
                   "sigma_x = K_xk/C_x: the lag and build-up distance of Fx after a braking step",
                   models=("relaxed",), versions=_MF6),
-    DynamicEffect("longitudinal relaxation length over load (PCFX1, PCFX2)", ("PCFX1", "PCFX2"), ("brake",),
+    _d("longitudinal relaxation length over load (PCFX1, PCFX2)", ("PCFX1", "PCFX2"), ("brake",),
                   ("FX",), ("lag", "build_up"), "C_x over load: the Fx lag differs between loads",
                   needs=("loads",), absolute=("PCFX1", "PCFX2"), models=("relaxed",), versions=_MF6),
-    DynamicEffect("longitudinal relaxation length over pressure (PCFX3)", ("PCFX3",), ("brake",), ("FX",),
+    _d("longitudinal relaxation length over pressure (PCFX3)", ("PCFX3",), ("brake",), ("FX",),
                   ("lag", "build_up"), "C_x over pressure: the Fx lag differs between pressures",
                   needs=("pressures",), absolute=("PCFX3",), models=("relaxed",), versions=_MF6),
-    DynamicEffect("lateral relaxation length (LATERAL_STIFFNESS)", ("LATERAL_STIFFNESS",), ("steer",), _LAT,
+    _d("lateral relaxation length (LATERAL_STIFFNESS)", ("LATERAL_STIFFNESS",), ("steer",), _LAT,
                   ("lag", "build_up"), "sigma_y = K_ya/C_y: the lag and build-up distance of Fy and Mz after a "
                   "steer step", models=("relaxed",), versions=_MF6),
-    DynamicEffect("lateral relaxation length over load (PCFY1, PCFY2)", ("PCFY1", "PCFY2"), ("steer",), _LAT,
+    _d("lateral relaxation length over load (PCFY1, PCFY2)", ("PCFY1", "PCFY2"), ("steer",), _LAT,
                   ("lag", "build_up"), "C_y over load: the Fy lag differs between loads", needs=("loads",),
                   absolute=("PCFY1", "PCFY2"), models=("relaxed",), versions=_MF6),
-    DynamicEffect("lateral relaxation length over pressure (PCFY3)", ("PCFY3",), ("steer",), _LAT,
+    _d("lateral relaxation length over pressure (PCFY3)", ("PCFY3",), ("steer",), _LAT,
                   ("lag", "build_up"), "C_y over pressure: the Fy lag differs between pressures",
                   needs=("pressures",), absolute=("PCFY3",), models=("relaxed",), versions=_MF6),
     # MF 5.2: the relaxation lengths' own formulas
-    DynamicEffect("longitudinal relaxation length (PTX1)", ("PTX1",), ("brake",), ("FX",), ("lag", "build_up"),
+    _d("longitudinal relaxation length (PTX1)", ("PTX1",), ("brake",), ("FX",), ("lag", "build_up"),
                   "sigma_x at the nominal load: the lag and build-up distance of Fx after a braking step",
                   models=("relaxed",), versions=("52",)),
-    DynamicEffect("longitudinal relaxation length over load (PTX2, PTX3)", ("PTX2", "PTX3"), ("brake",), ("FX",),
+    _d("longitudinal relaxation length over load (PTX2, PTX3)", ("PTX2", "PTX3"), ("brake",), ("FX",),
                   ("lag", "build_up"), "sigma_x over load: the Fx lag differs between loads", needs=("loads",),
                   absolute=("PTX2", "PTX3"), models=("relaxed",), versions=("52",)),
-    DynamicEffect("lateral relaxation length (PTY1)", ("PTY1",), ("steer",), _LAT, ("lag", "build_up"),
+    _d("lateral relaxation length (PTY1)", ("PTY1",), ("steer",), _LAT, ("lag", "build_up"),
                   "the peak of sigma_y/R0 over load: the lag and build-up distance of Fy after a steer step",
                   models=("relaxed",), versions=("52",)),
-    DynamicEffect("lateral relaxation length over load (PTY2)", ("PTY2",), ("steer",), _LAT, ("lag", "build_up"),
+    _d("lateral relaxation length over load (PTY2)", ("PTY2",), ("steer",), _LAT, ("lag", "build_up"),
                   "the load (Fz/Fz0) of the largest sigma_y: the Fy lag differs between loads", needs=("loads",),
                   models=("relaxed",), versions=("52",)),
 )
@@ -186,8 +179,8 @@ def testable_effects(runs, model, catalogue=DYNAMIC_CATALOGUE, model_kind: str =
     for e in catalogue:
         if model_kind not in e.models:
             continue
-        if e.versions and version not in e.versions:
-            why[e.name] = (f"MF {'/'.join(v[0] + '.' + v[1] for v in e.versions)} only; the file is MF "
+        if e.equations and version not in e.equations:
+            why[e.name] = (f"MF {'/'.join(v[0] + '.' + v[1] for v in e.equations)} only; the file is MF "
                            f"{version[0]}.{version[1]}")
             continue
         kinds = [k for k in e.kinds if k in kinds_present]
@@ -210,7 +203,7 @@ def testable_effects(runs, model, catalogue=DYNAMIC_CATALOGUE, model_kind: str =
     return ok, why
 
 
-def _separable(e: DynamicEffect, runs, kinds, why: dict) -> DynamicEffect:
+def _separable(e: Effect, runs, kinds, why: dict) -> Effect:
     """``e`` with only the parameters the runs can separate: parameters acting along a condition (``needs``: a
     slope, a curvature...) need one level more than there are of them (two loads give a load slope, not its
     curvature as well); the others are left at the file's values, named in ``why``."""

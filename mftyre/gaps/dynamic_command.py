@@ -52,7 +52,7 @@ def run_dynamic(args) -> int:
         print(f"  added {c.name}: {values_text(c)}")
     for rnd in rep.rounds:
         for c in rnd:
-            if c.note and not c.accepted:
+            if c.note and not c.significant:
                 print(f"  rejected {c.name}: {c.note}")
     print(f"  {len(rep.untestable)} effects not tried (listed with the reason in the report)")
     written = [x for x in (args.output, args.report, args.json) if x]

@@ -222,13 +222,18 @@ def write_runs(runs, path, *, overwrite: bool = False) -> Path:
 # ---------------------------------------------------------------------------------------------------- the model
 class SwiftTyres:
     """SWIFT tyres of one model, one per (road, axle mode, rim mode): built once, reused by every run on that
-    road."""
+    road; the tyres of one mode share their equations (:meth:`swift.SwiftTyre.share_equations`), their static
+    equilibrium the structure's (``equilibrium="structure"``: one graph for every parameter set). ``tables``: a dict
+    of cam-height tables kept across models (road, range, cams -> :class:`swift.enveloping.CamTable`): a model with
+    the same cams over a flat-track road reuses them."""
 
-    def __init__(self, model, runs):
+    def __init__(self, model, runs, tables: dict | None = None):
         from swift import SwiftTyre
+        from swift.enveloping import Cams
         from swift.road import parse_road
 
         self.tyres = {}
+        tables = {} if tables is None else tables
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the .tir's unmodelled parameters: said once by the caller
             for r in runs:
@@ -236,11 +241,21 @@ class SwiftTyres:
                 lo, hi = self.tyres.get(key, (None, (math.inf, -math.inf)))[1]
                 x = r.inputs["X"]
                 self.tyres[key] = (None, (min(lo, float(x.min()) - 1.0), max(hi, float(x.max()) + 1.0)))
+            cams, modes = Cams.from_params(model.params, warn=False), {}
             for key, (_, xr) in list(self.tyres.items()):
                 try:
-                    tyre = SwiftTyre(model, parse_road(key[0]), axle=key[1], rim=key[2], x_range=xr)
+                    road = parse_road(key[0])
+                    flat_track = not road.varies_with_y  # its table depends on the cams alone
+                    tkey = (key[0], xr, cams)
+                    tyre = SwiftTyre(model, tables.get(tkey, road) if flat_track else road, axle=key[1],
+                                     rim=key[2], x_range=xr, equilibrium="structure")
                 except ModelInputError as exc:
                     raise ModelInputError(f"road {key[0]!r}: {exc}") from None
+                if flat_track:
+                    tables[tkey] = tyre.table
+                if key[1:] in modes:
+                    tyre.share_equations(modes[key[1:]])
+                modes.setdefault(key[1:], tyre)
                 self.tyres[key] = (tyre, xr)
 
     def tyre(self, run):

@@ -47,6 +47,9 @@ _NAMES = {"load": "load", "pressure": "pressure", "camber": "camber", "speed": "
           "slip": "slip", "free_rolling": "free rolling", "slip_angle": "slip angle", "slip_ratio": "longitudinal slip",
           "combined": "combined slip", "deflection": "deflection"}
 
+#: The kinds of dynamic run (:attr:`mftyre.gaps.dynamic_runs.DynamicRun.kind`): the variable of a dynamic finding.
+RUN_KINDS = {"cleat": "an obstacle run", "steer": "a step steer", "brake": "a braking step", "flat": "a flat-road run"}
+
 
 @dataclass
 class Finding:
@@ -67,6 +70,11 @@ class Finding:
 
     @property
     def text(self) -> str:
+        if self.variables[0] in RUN_KINDS:  # a dynamic run's residual beyond its noise (mftyre.gaps.dynamic)
+            p = f"p = {self.p_value:.1e}" if self.p_value > 0 else "p < 1e-300"
+            return (f"{self.channel}: residual beyond the noise in {RUN_KINDS[self.variables[0]]} {self.where} "
+                    f"(chi2 {self.statistic:.0f} on {self.dof} independent samples, {p}; residual RMS "
+                    f"{self.rms:.3g}, noise {self.sigma:.3g})")
         var = " x ".join(_NAMES[v] for v in self.variables)
         shape = self.variables[0] in ("free_rolling", "slip_angle", "slip_ratio", "combined", "deflection")
         base = "deflection" if self.channel == "FZ" else "slip"
