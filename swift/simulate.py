@@ -367,8 +367,6 @@ class SwiftTyre:
     def _equilibrium_function(self, unknown, eqs):
         """(x, u, x0w, grid, hw) -> (the static equations, the Newton step's matrix in the unknowns), for
         :meth:`initial_state`; built on first use."""
-        import casadi as ca
-
         if self._equilibrium_kind == "structure":
             fn = self._structure.equilibrium(self, tuple(unknown), tuple(eqs))
             return lambda *args: fn(*args, self.theta)
@@ -376,11 +374,7 @@ class SwiftTyre:
         with CASADI_LOCK:
             key = ("equilibrium", tuple(unknown), tuple(eqs))
             if key not in self._numeric:
-                xs, us = ca.MX.sym("x", len(STATE_NAMES)), ca.MX.sym("u", len(INPUT_NAMES))
-                x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", self.window), ca.MX.sym("hw", 2 * self.window)
-                d = rhs(xs, us, x0w, grid, hw, 0.0)[0][eqs]
-                self._numeric[key] = ca.Function("equilibrium", [xs, us, x0w, grid, hw],
-                                                 [d, _newton_inverse(ca.jacobian(d, xs)[:, unknown])])
+                self._numeric[key] = _equilibrium_graph(rhs, self.window, unknown, eqs)
             return self._numeric[key]
 
     @functools.cached_property
@@ -891,16 +885,10 @@ class _Structure:
     def equilibrium(self, tyre, unknown: tuple, eqs: tuple):
         """(x, u, x0w, grid, hw, theta) -> (the static equations, the Newton step's matrix in the unknowns): the
         structure's :meth:`SwiftTyre._equilibrium_function`, built on first use."""
-        import casadi as ca
-
         with CASADI_LOCK:
             if (unknown, eqs) not in self._equilibria:
-                xs, us = ca.MX.sym("x", len(STATE_NAMES)), ca.MX.sym("u", len(INPUT_NAMES))
-                x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", tyre.window), ca.MX.sym("hw", 2 * tyre.window)
-                theta = ca.MX.sym("theta", len(tyre.theta))
-                d = self.rhs(xs, us, x0w, grid, hw, 0.0, theta)[0][list(eqs)]
-                self._equilibria[(unknown, eqs)] = ca.Function(
-                    "equilibrium", [xs, us, x0w, grid, hw, theta], [d, _newton_inverse(ca.jacobian(d, xs)[:, list(unknown)])])
+                self._equilibria[(unknown, eqs)] = _equilibrium_graph(self.rhs, tyre.window, unknown, eqs,
+                                                                      len(tyre.theta))
             return self._equilibria[(unknown, eqs)]
 
 
@@ -936,6 +924,20 @@ def free_rolling_spin(prm, fz, vx, dpi, be):
 
     state = SimpleNamespace(uFz=be.fmax(fz, 0.0), dpi=dpi, ukappa=0.0, vx=vx)
     return vertical.spin_and_radius(prm, state, 0.0, False, be)[0]
+
+
+def _equilibrium_graph(rhs, window: int, unknown, eqs, n_theta: int | None = None):
+    """(x, u, x0w, grid, hw[, theta]) -> (the static equations ``eqs`` of the right-hand side ``rhs``, the Newton
+    step's matrix in the ``unknown`` states, :func:`_newton_inverse`): with ``n_theta`` the parameter values are the
+    last input (the structure's graph), without them in the graph (the model's)."""
+    import casadi as ca
+
+    xs, us = ca.MX.sym("x", len(STATE_NAMES)), ca.MX.sym("u", len(INPUT_NAMES))
+    x0w, grid, hw = ca.MX.sym("x0w"), ca.MX.sym("grid", window), ca.MX.sym("hw", 2 * window)
+    theta = [] if n_theta is None else [ca.MX.sym("theta", n_theta)]
+    d = rhs(xs, us, x0w, grid, hw, 0.0, *theta)[0][list(eqs)]
+    return ca.Function("equilibrium", [xs, us, x0w, grid, hw, *theta],
+                       [d, _newton_inverse(ca.jacobian(d, xs)[:, list(unknown)])])
 
 
 def _newton_inverse(jac):
