@@ -42,7 +42,7 @@ from .errors import InputClippedWarning, LoadFactorWarning, ModelInputError, Pre
 from .formula.vertical import pressure_increment
 
 __all__ = ["LOAD_MARGIN", "ROLLING_RESISTANCE_LIMIT", "FREE_RADIUS_GROWTH_LIMIT", "hard_limits", "check_limits",
-           "limit_problems", "point_limit_checks", "beyond_limits", "check_tyre_outputs", "RANGE_PARAMETERS", "input_ranges", "saturate", "check_finite", "check_pressure", "warn_outside",
+           "limit_problems", "point_limit_checks", "check_speed_limits", "beyond_limits", "check_tyre_outputs", "RANGE_PARAMETERS", "input_ranges", "saturate", "check_finite", "check_pressure", "warn_outside",
            "check_finite_outputs", "saturate_inputs", "warn_data_outside", "PRESSURE_FACTORS", "pressure_factor_edges",
            "PressureFactorCheck", "load_factor_edges", "load_factor_problems", "LoadFactorCheck"]
 
@@ -189,6 +189,14 @@ def check_limits(params, arrays: dict, limits, omega_given=False, lim=None) -> N
     problems = limit_problems(params, arrays, limits, omega_given, lim)
     if problems:
         raise ModelInputError(problems[0][1])
+
+
+def check_speed_limits(params, vx, omega=None, omega_given: bool = True, lim=None) -> None:
+    """:func:`check_limits` at one point of the wheel's speeds (the starts and steps of the SWIFT tyre and the wheels,
+    whose C twin is :func:`point_limit_checks`): ``vx`` and, where given, the spin ``omega`` (``omega_given``: the rim
+    spins at it; else the spin is free rolling's)."""
+    arrays = {"vx": np.asarray(float(vx))} | ({} if omega is None else {"omega": np.asarray(float(omega))})
+    check_limits(params, arrays, False, omega_given=omega_given, lim=lim)
 
 
 def check_tyre_outputs(out: dict, arrays: dict, params=None, lim=None) -> None:

@@ -75,7 +75,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ModelInputError
-from .inputs import check_limits, hard_limits
+from .inputs import check_speed_limits, hard_limits
 from .variables import WHEEL, pick
 
 __all__ = ["StateFunctions", "WheelFunctions", "wheel_functions", "free_rolling_start", "start_inputs", "WheelTyre", "KINDS",
@@ -515,9 +515,8 @@ class WheelTyre:
         :func:`mftyre.inputs.point_limit_checks`): vx, and the rim speed of the input spin (rig mode: vx only, the
         spin follows from kappa_in), raised as ``error``."""
         U = dict(zip(self.functions.input_names, self.u))
-        arrays = {"vx": np.asarray(U["vx"])} | ({"omega": np.asarray(U["omega"])} if "omega" in U else {})
         try:
-            check_limits(self._params, arrays, False, omega_given=True, lim=self._limits)
+            check_speed_limits(self._params, U["vx"], U.get("omega"), lim=self._limits)
         except ModelInputError as exc:
             raise error(str(exc)) from None
 

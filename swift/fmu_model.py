@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mftyre.errors import ModelInputError
-from mftyre.inputs import check_limits
+from mftyre.inputs import check_speed_limits
 from mftyre.transient import StateFunctions, start_inputs
 from mftyre.variables import pick
 
@@ -423,8 +423,7 @@ class SwiftWheel:
     def initialise(self):
         check_pressure(self._params, float(self.u[self.functions.input_names.index("p")]))
         U = dict(zip(self.functions.input_names, self.u))  # the input policy's speed limits, as SwiftTyre's start
-        check_limits(self._params, {"vx": np.asarray(U["vx"]), "omega": np.asarray(U["omega"])}, False,
-                     omega_given=self.functions.rim == "speed")
+        check_speed_limits(self._params, U["vx"], U["omega"], omega_given=self.functions.rim == "speed")
         x = np.asarray(self.functions.init(self.u, self.q, *self._window(self.q[0])), dtype=float).ravel()
         if not np.all(np.isfinite(x)):
             raise ModelInputError("no static equilibrium found at the initial inputs")

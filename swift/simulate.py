@@ -67,7 +67,7 @@ import numpy as np
 from mftyre.compiled import CASADI_LOCK, cached_library  # the verified cache of every compiled library
 from mftyre.backend import NUMPY
 from mftyre.errors import ModelInputError, TurnSlipWarning
-from mftyre.inputs import check_limits
+from mftyre.inputs import check_speed_limits
 from mftyre.model import SymbolicParameters
 from mftyre.params import SELECTS_FORM, swift_invalid_values
 from mftyre.formula import vertical
@@ -773,8 +773,7 @@ class SwiftTyre:
         p = prm.INFLPRES if inputs.p is None else inputs.p
         check_pressure(prm, p)
         # the model's speed limits (mftyre.inputs.check_limits): beyond them no tyre rolls (docs/model-input-policy.md)
-        check_limits(prm, {"vx": np.asarray(float(inputs.vx)), "omega": np.asarray(float(inputs.omega))}, False,
-                     omega_given=self.rim == "speed")
+        check_speed_limits(prm, inputs.vx, inputs.omega, omega_given=self.rim == "speed")
         self._warn_pressure(p, p)
         s = np.zeros(len(STATE_NAMES))
         s[_S["xa"]] = s[_S["xb"]] = inputs.x
