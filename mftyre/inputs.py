@@ -33,6 +33,7 @@ which warns where they are outside these limits.
 """
 from __future__ import annotations
 
+import math
 import threading
 import warnings
 
@@ -258,6 +259,18 @@ PRESSURE_FACTORS = (
 )
 
 
+def _real_roots(c2: float, c1: float) -> np.ndarray:
+    """The real roots of c2 x^2 + c1 x + 1 = 0, sorted (none when c1 = c2 = 0), in the closed forms that keep their
+    digits: q = -(c1 + sign(c1) sqrt(c1^2 - 4 c2)) / 2, x = q / c2 and 1 / q (no cancellation)."""
+    if c2 == 0.0:
+        return np.array([-1.0 / c1]) if c1 else np.array([])
+    disc = c1 * c1 - 4.0 * c2
+    if disc < 0.0:
+        return np.array([])
+    q = -0.5 * (c1 + math.copysign(math.sqrt(disc), c1))
+    return np.sort(np.array([1.0 / q, q / c2])) if q else np.array([])
+
+
 def pressure_factor_edges(params) -> list[tuple[float, int, str, str]]:
     """[(p_edge [Pa], side, parameters, what)]: the pressures nearest NOMPRES, above (side +1) or below (side -1),
     at which a factor of :data:`PRESSURE_FACTORS` reaches zero (at NOMPRES every factor is 1); beyond p_edge on
@@ -266,8 +279,7 @@ def pressure_factor_edges(params) -> list[tuple[float, int, str, str]]:
     for c1_name, c2_name, sign, what in PRESSURE_FACTORS:
         c1 = sign * float(params[c1_name]) if c1_name in params else 0.0
         c2 = sign * float(params[c2_name]) if c2_name is not None and c2_name in params else 0.0
-        roots = np.roots([c2, c1, 1.0]) if (c1 or c2) else np.array([])  # c2 dpi^2 + c1 dpi + 1 = 0
-        real = np.sort(roots[np.abs(np.imag(roots)) <= 1e-12 * np.abs(roots)].real)
+        real = _real_roots(c2, c1)  # c2 dpi^2 + c1 dpi + 1 = 0
         names = f"{c1_name} = {params[c1_name]:g}" + (f", {c2_name} = {params[c2_name]:g}" if c2 else "")
         for side, candidates in ((1, real[real > 0]), (-1, real[(real < 0) & (real > -1)][::-1])):
             if candidates.size:

@@ -998,25 +998,29 @@ class TyreParameters(Mapping):
 
     # -- derived objects ---------------------------------------------------------------------------------
     def replace(self, **changes) -> "TyreParameters":
-        """A new object with ``changes`` applied (schema names only; values checked against their kind)."""
+        """A new object with ``changes`` applied (schema names only; values checked against their kind). The
+        values not changed are this object's, already checked: only the changes are coerced."""
         values = dict(self._values)
+        changed = set()
         for key, val in changes.items():
             name = key.upper()
             spec = PARAMETERS.get(name)
             if spec is None:
                 raise ModelInputError(f"unknown parameter {key!r}: not in the mftyre parameter schema")
             values[name] = _coerce(spec, val)
-        changed = {k.upper() for k in changes}
+            changed.add(name)
+        version = version_of_fittyp(values["FITTYP"])
         missing = tuple(n for n in self.missing if n not in changed)
-        return TyreParameters(
-            values,
-            source=self.source,
-            missing=missing,
-            unknown=self.unknown,
-            extra_sections=self.extra_sections,
-            units_as_read=self.units_as_read,
-            lines=self.lines,
-        )
+        new = object.__new__(TyreParameters)
+        _set = object.__setattr__
+        _set(new, "_values", values)
+        _set(new, "source", self.source)
+        _set(new, "missing", missing)
+        _set(new, "missing_reported", tuple(n for n in missing if version in PARAMETERS[n].versions
+                                            and not PARAMETERS[n].optional))
+        for name in ("unknown", "extra_sections", "units_as_read", "lines"):
+            _set(new, name, dict(getattr(self, name)))
+        return new
 
     def to_dict(self) -> dict:
         """name -> value for every schema parameter, in canonical order (unknown ones not included)."""

@@ -15,7 +15,7 @@ import mftyre
 from mftyre.data import TyreData, trailer_programme
 from mftyre.errors import TirError
 from mftyre.fit import fit_tir, normalised_rms
-from mftyre.fit.core import _BatchPredictor
+from mftyre.fit.predict import BatchPredictor
 from mftyre.fit.stages import STAGES, conditions, supported_parameters, stage_parameters
 from mftyre.fit.verify import verify_tir
 from mftyre.rig import rig_programme
@@ -132,7 +132,11 @@ def test_batched_jacobian_matches_casadi(truth):
     data = trailer_programme(truth, loads=(0.5, 1.0), pressures=(1.0,), cambers_deg=(0.0,), points=9)
     sub = data.select(np.abs(data.array("SA")) > 0.01)
     names = ["PKY1", "PDY1", "PCY1", "PEY1", "PHY1"]
-    predict = _BatchPredictor(STAGES["pure_fy"], truth.params, sub, names, None)
+    batch = BatchPredictor(truth.params, sub, ("FY",), names)
+
+    def predict(values):
+        return batch(values)["FY"]
+
     x = np.array([truth.params[n] for n in names])
     step = 1.5e-8 * np.maximum(np.abs(x), 1e-2)
     fd = (predict(x[None, :] + np.diag(step)) - predict(x[None, :])) / step[:, None]

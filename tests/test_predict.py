@@ -8,7 +8,7 @@ import pytest
 
 import mftyre
 from mftyre.data import TyreData
-from mftyre.fit.core import _BatchPredictor
+from mftyre.fit.predict import BatchPredictor
 from mftyre.fit.predict import predict, predict_stage, wheel_spin
 from mftyre.fit.stages import STAGES, stage_rows
 from mftyre.gaps import Evaluator
@@ -45,8 +45,8 @@ def test_fit_and_gap_finder_predict_the_same(model, omega):
     stage = STAGES["vertical"]
     sub = data.select(stage_rows(STAGES["vertical"], data))
     fit_rule = predict_stage(stage, model, sub, sub.inputs())
-    batch = _BatchPredictor(stage, model.params, sub, ["VERTICAL_STIFFNESS"], None)
-    batch_rule = batch(np.array([[float(model.params.VERTICAL_STIFFNESS)]]))[0]
+    batch = BatchPredictor(model.params, sub, ("FZ",), ["VERTICAL_STIFFNESS"])
+    batch_rule = batch(np.array([[float(model.params.VERTICAL_STIFFNESS)]]))["FZ"][0]
     ev = Evaluator(sub, channels=["FZ", "FX", "FY", "MZ"])
     gaps_rule = ev.predict(model)
     np.testing.assert_allclose(gaps_rule["FZ"], fit_rule[ev.rows["FZ"]], rtol=1e-12)

@@ -12,7 +12,7 @@ violation, at the corners of the data's load, pressure and camber range; a weak 
 near its start value (:data:`PRIOR_WEIGHT`: worth 1e-4 of what the data say of it alone, so that directions the
 data hardly see stay put instead of following the optimiser's path). Model outputs that are not finite
 give the residual 10 (the step is rejected). The model is evaluated for all parameter vectors of a
-finite-difference Jacobian at once (:class:`_BatchPredictor`: parameters as column vectors against the data as
+finite-difference Jacobian at once (:class:`mftyre.fit.predict.BatchPredictor`: parameters as column vectors against the data as
 a row), the optimiser stops on a relative cost change of 1e-6, BLAS runs on one thread.
 
 After each stage: undetermined parameters go back to their start values (:func:`_undetermined`), standard errors
@@ -35,13 +35,12 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ..backend import NUMPY
 from ..data import UNCHECKED, TyreData, check_plausible, read_data
-from ..formula import Modes, steady_state, vertical
+from ..formula import vertical
 from ..inputs import warn_data_outside
 from ..model import MFModel
-from ..params import FIT_BOUNDS, SELECTS_FORM, SIGN_SYMMETRIC, TyreParameters
-from .predict import predict_stage
+from ..params import FIT_BOUNDS, SIGN_SYMMETRIC, TyreParameters
+from .predict import BatchParameters, BatchPredictor, predict_stage
 from ..programme import recognise
 from ..timeseries import effective_samples, needs_reduction, reduce_sweeps
 from ..tir import read_tir, write_tir
@@ -210,83 +209,6 @@ def _start(data: TyreData, start, size=None, given=None, sources=None):
     return (prm.replace(**given) if given else prm), False
 
 
-class _BatchPredictor:
-    """The stage's model output for many parameter vectors at once: the equations evaluated once with the varied
-    parameters as column vectors (shape (K, 1)) against the data as a row (shape (1, N)), so a finite-difference
-    Jacobian of K parameters costs one vectorised evaluation instead of K. Falls back to a loop when a varied
-    parameter selects the form of the equations (:data:`mftyre.params.SELECTS_FORM`) in a way a batch
-    could switch."""
-
-    def __init__(self, stage, prm, data, names, side):
-        self.stage, self.prm, self.data, self.names, self.side = stage, prm, data, list(names), side
-        structural = set(names) & SELECTS_FORM
-        self.loop = (side is not None or bool(structural and any(prm[f"QSX{i}"] != 0 for i in (12, 13, 14)))
-                     or (stage.output == "fz_from_rl" and prm.version == "62"))  # 6.2: branches on Q_FCY
-        inp = data.inputs()
-        self.inputs = inp
-        row = {k: np.asarray(v, float)[None, :] for k, v in inp.items()}
-        self.row = row
-        if stage.output == "fz_from_rl":
-            def chan(name):
-                return np.nan_to_num(data.array(name))[None, :] if name in data else np.zeros((1, len(data)))
-            # the spin: OMEGA, else the model's estimate (wheel_spin), per parameter set in __call__
-            self.spin_measured = data.has("OMEGA") and bool(np.all(np.isfinite(data.array("OMEGA"))))
-            self.vertical = dict(omega=chan("OMEGA"), fx=chan("FX"), fy=chan("FY"))
-            self.loop |= data.has("OMEGA") and not self.spin_measured   # partly measured: the rule row by row
-            if data.has("RL"):
-                self.vertical["rl"] = data.array("RL")[None, :]
-            else:
-                self.vertical["rho"] = data.array("RHO")[None, :]
-        self.omega_given = stage.output == "re" and data.has("OMEGA")
-        self.omega = data.array("OMEGA")[None, :] if self.omega_given else np.zeros((1, len(data)))
-
-    def __call__(self, values: np.ndarray) -> np.ndarray:
-        """(K, N) predictions for the (K, P) parameter values (P = len(names))."""
-        values = np.atleast_2d(values)
-        if self.loop:
-            return np.stack([predict_stage(self.stage, MFModel(self.prm.replace(**dict(zip(self.names, v))), side=self.side),
-                                      self.data, self.inputs) for v in values])
-        prm = _BatchParameters(self.prm, {n: values[:, j:j + 1] for j, n in enumerate(self.names)})
-        r = self.row
-        with np.errstate(all="ignore"):
-            if self.stage.output == "fz_from_rl":
-                v = self.vertical
-                omega = v["omega"] if self.spin_measured else \
-                    steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
-                                 self.omega, False, Modes(), NUMPY)["omega"]
-                dpi = vertical.pressure_increment(prm, r["p"])
-                r_omega = vertical.free_radius(prm, omega, NUMPY)
-                rl = v["rl"] if "rl" in v else r_omega - v["rho"]
-                out = vertical.vertical_force(prm, rl, r_omega, omega, v["fx"], v["fy"], r["gamma"], dpi, NUMPY)
-            else:
-                out = steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
-                                   self.omega, self.omega_given, Modes(), NUMPY)[self.stage.output]
-        return np.broadcast_to(out, (values.shape[0], len(self.data)))
-
-
-class _BatchParameters:
-    """Parameters of which some are column vectors (one row per parameter set); ``prm[name]`` of a structural
-    parameter (a choice of equation form) gives the first row's value (the rows of a batch differ by small
-    steps that, as :class:`_BatchPredictor` ensures, do not switch the form)."""
-
-    def __init__(self, params, columns: dict):
-        self._params, self._columns = params, columns
-        self.version, self.fittyp = params.version, params.fittyp
-
-    def __getattr__(self, name):
-        columns = self.__dict__["_columns"]
-        return columns[name] if name in columns else getattr(self.__dict__["_params"], name)
-
-    def __getitem__(self, name):
-        if name in self._columns:
-            value = self._columns[name]
-            return float(np.ravel(value)[0]) if name in SELECTS_FORM else value
-        return self._params[name]
-
-    def __contains__(self, name):
-        return name in self._params
-
-
 def physical_bounds(prm, data: TyreData) -> dict:
     """Bounds that follow from physics and the data's range, tighter than :data:`BOUNDS` where they apply:
     free-radius growth with speed (Q_V1) at most 3 % and the speed stiffening (Q_V2) at most 40 % at the top
@@ -353,7 +275,7 @@ class _Problem:
         self.corners = data_corners(data, prm)
         self.penalty = 10.0 * math.sqrt(len(data))
         self.params = bounded_parameters(prm, names, bounds)
-        self.predict = _BatchPredictor(stage, prm, data, names, side)
+        self.predict = BatchPredictor(prm, data, (stage.channel,), names, side=side)
         self.hi = np.array([self.params[n].max for n in names])
         self.n_data = len(data)
         self.shaped = shape_violations(stage.name, prm, self.corners).size > 0
@@ -365,12 +287,12 @@ class _Problem:
     def residuals(self, values):
         """Rows of residuals for the parameter vectors ``values`` (K, p): the data's, the shape-condition
         penalties (when the stage has shape conditions), the prior's (:data:`PRIOR_WEIGHT`)."""
-        pred = self.predict(values)
+        pred = self.predict(values)[self.stage.channel]
         r = self.weights * (pred - self.measured) / self.scale
         r = np.where(np.isfinite(r), r, 10.0)
         parts = [r]
         if self.shaped:
-            parts.append(np.stack([self.penalty * shape_violations(self.stage.name, _BatchParameters(self.prm, dict(
+            parts.append(np.stack([self.penalty * shape_violations(self.stage.name, BatchParameters(self.prm, dict(
                 zip(self.names, v))), self.corners) for v in values]))
         parts.append(self.prior * (np.asarray(values, float) - self.start))
         return np.concatenate(parts, axis=1)
@@ -385,7 +307,7 @@ class _Problem:
 def _fit_pass(stage, prm, side, data, names, weighting, progress, label, max_nfev, bounds):
     """One least-squares pass over ``data`` varying ``names``; returns (new parameters, lmfit result, problem).
 
-    The Jacobian is a forward difference computed in one batched evaluation (:class:`_BatchPredictor`); the
+    The Jacobian is a forward difference computed in one batched evaluation (:class:`mftyre.fit.predict.BatchPredictor`); the
     optimiser stops when the cost changes by less than 1e-6 relative (ftol)."""
     problem = _Problem(stage, prm, side, data, names, weighting, bounds)
 

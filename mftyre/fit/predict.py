@@ -6,6 +6,10 @@ the spin estimated by the model from kappa and Vx. RE: the effective rolling rad
 FZ: the vertical force of the load-deflection relation at the measured loaded radius RL (or, without RL, at
 RL = R_omega - RHO, the measured deflection), the measured Fx, Fy, camber and pressure, and the wheel spin
 (:func:`wheel_spin`: OMEGA, or without it the model's own estimate from kappa and Vx, as for the forces).
+
+:class:`BatchPredictor` applies the same rule to many parameter sets at once (a finite-difference Jacobian, the
+refits of the fit and the gap finder): the equations evaluated once with the varied parameters as column vectors
+(shape (K, 1)) against the data as a row (shape (1, N)).
 """
 from __future__ import annotations
 
@@ -13,11 +17,12 @@ import numpy as np
 
 from ..backend import NUMPY
 from ..data import TyreData
-from ..formula import vertical
-from ..inputs import saturate_inputs
+from ..formula import Modes, steady_state, vertical
+from ..inputs import RANGE_PARAMETERS, saturate_inputs
 from ..model import MFModel
+from ..params import SELECTS_FORM
 
-__all__ = ["predict", "predict_stage", "wheel_spin", "OUTPUT_OF_CHANNEL"]
+__all__ = ["predict", "predict_stage", "wheel_spin", "OUTPUT_OF_CHANNEL", "BatchPredictor", "BatchParameters"]
 
 #: measured channel -> the model output it is compared with ("fz_from_rl": the vertical-force relation)
 OUTPUT_OF_CHANNEL = {"FX": "fx", "FY": "fy", "MZ": "mz", "MX": "mx", "MY": "my", "RE": "re", "FZ": "fz_from_rl"}
@@ -79,3 +84,106 @@ def predict(model: MFModel, data: TyreData, channels, inputs: dict | None = None
 def predict_stage(stage, model: MFModel, data: TyreData, inputs: dict) -> np.ndarray:
     """What ``model`` predicts for the measured channel of a fitting ``stage`` (:func:`predict`)."""
     return predict(model, data, (stage.channel,), inputs)[stage.channel]
+
+
+class BatchParameters:
+    """Parameters of which some are column vectors (one row per parameter set); ``prm[name]`` of a structural
+    parameter (a choice of equation form) gives the first row's value (the rows of a batch differ by small
+    steps that, as :class:`BatchPredictor` ensures, do not switch the form)."""
+
+    def __init__(self, params, columns: dict):
+        self._params, self._columns = params, columns
+        self.version, self.fittyp = params.version, params.fittyp
+
+    def __getattr__(self, name):
+        columns = self.__dict__["_columns"]
+        return columns[name] if name in columns else getattr(self.__dict__["_params"], name)
+
+    def __getitem__(self, name):
+        if name in self._columns:
+            value = self._columns[name]
+            return float(np.ravel(value)[0]) if name in SELECTS_FORM else value
+        return self._params[name]
+
+    def __contains__(self, name):
+        return name in self._params
+
+
+class BatchPredictor:
+    """:func:`predict` of the measured ``channels`` for many parameter sets at once: ``prm`` with ``names`` set to
+    the values of each row of a (K, len(names)) array; channel -> (K, N) predictions of every row of ``data``.
+
+    The force and moment channels share one evaluation of the equations with the varied parameters as column
+    vectors against the (saturated, as :func:`predict`) inputs as a row, so a finite-difference Jacobian of K
+    parameters costs one vectorised evaluation instead of K. A channel falls back to one :func:`predict` per set
+    where a batch could switch the form of the equations (a varied parameter of :data:`mftyre.params.SELECTS_FORM`
+    with the QSX12-14 moment on, a varied .tir range, the MF 6.2 vertical relation's branches on Q_FCY, a spin
+    measured on some rows only) or where the model is mirrored (``side``)."""
+
+    def __init__(self, prm, data: TyreData, channels, names, inputs: dict | None = None, *, side=None,
+                 turn_slip: bool = False):
+        self.prm, self.data, self.names, self.side, self.turn_slip = prm, data, list(names), side, bool(turn_slip)
+        self.channels = tuple(channels)
+        self.inputs = data.inputs() if inputs is None else inputs
+        model = MFModel(prm, side=side)
+        self.row = {k: np.asarray(v, float)[None, :] for k, v in saturate_inputs(model, self.inputs).items()}
+        self.measured_row = {k: np.asarray(v, float)[None, :] for k, v in self.inputs.items()}  # FZ's: as measured
+        self.modes = Modes(turn_slip=self.turn_slip)
+        ranges = {n for lo, hi, _ in RANGE_PARAMETERS.values() for n in (lo, hi) if n}
+        structural = set(names) & SELECTS_FORM
+        loop_all = (side is not None or bool(set(names) & ranges)
+                    or bool(structural and any(prm[f"QSX{i}"] != 0 for i in (12, 13, 14))))
+        self.loop = {c: loop_all for c in self.channels}
+        if "FZ" in self.channels:
+            def chan(name):
+                return np.nan_to_num(data.array(name))[None, :] if name in data else np.zeros((1, len(data)))
+            # the spin: OMEGA, else the model's estimate (wheel_spin), per parameter set in __call__
+            self.spin_measured = data.has("OMEGA") and bool(np.all(np.isfinite(data.array("OMEGA"))))
+            self.vertical = dict(omega=chan("OMEGA"), fx=chan("FX"), fy=chan("FY"))
+            self.loop["FZ"] = (loop_all or prm.version == "62"          # 6.2: branches on Q_FCY
+                               or (data.has("OMEGA") and not self.spin_measured))   # partly measured: row by row
+            if data.has("RL"):
+                self.vertical["rl"] = data.array("RL")[None, :]
+            else:
+                self.vertical["rho"] = data.array("RHO")[None, :]
+        self.omega_measured = data.array("OMEGA")[None, :] if data.has("OMEGA") else None
+        self.no_omega = np.zeros((1, len(data)))
+
+    def __call__(self, values: np.ndarray) -> dict:
+        """Channel -> (K, N) predictions for the (K, P) parameter values (P = len(names))."""
+        values = np.atleast_2d(np.asarray(values, float))
+        k, n = values.shape[0], len(self.data)
+        out = {}
+        looped = [c for c in self.channels if self.loop[c]]
+        if looped:
+            each = [predict(MFModel(self.prm.replace(**dict(zip(self.names, v))), side=self.side), self.data, looped,
+                            self.inputs, turn_slip=self.turn_slip) for v in values]
+            out.update({c: np.stack([e[c] for e in each]) for c in looped})
+        batched = [c for c in self.channels if not self.loop[c]]
+        if not batched:
+            return out
+        prm = BatchParameters(self.prm, {nm: values[:, j:j + 1] for j, nm in enumerate(self.names)})
+        r = self.row
+        forces = [c for c in batched if c not in ("FZ", "RE")]
+        with np.errstate(all="ignore"):
+            if forces:
+                res = steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
+                                   self.no_omega, False, self.modes, NUMPY)
+                out.update({c: np.broadcast_to(res[OUTPUT_OF_CHANNEL[c]], (k, n)) for c in forces})
+            if "RE" in batched:
+                given = self.omega_measured is not None
+                res = steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
+                                   self.omega_measured if given else self.no_omega, given, self.modes, NUMPY)
+                out["RE"] = np.broadcast_to(res["re"], (k, n))
+            if "FZ" in batched:
+                v = self.vertical
+                omega = v["omega"] if self.spin_measured else \
+                    steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
+                                 self.no_omega, False, self.modes, NUMPY)["omega"]
+                m = self.measured_row
+                dpi = vertical.pressure_increment(prm, m["p"])
+                r_omega = vertical.free_radius(prm, omega, NUMPY)
+                rl = v["rl"] if "rl" in v else r_omega - v["rho"]
+                fz = vertical.vertical_force(prm, rl, r_omega, omega, v["fx"], v["fy"], m["gamma"], dpi, NUMPY)
+                out["FZ"] = np.broadcast_to(fz, (k, n))
+        return out

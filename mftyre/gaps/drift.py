@@ -33,7 +33,7 @@ from ..params import TyreParameters
 from .catalogue import Effect
 
 __all__ = ["PROGRESS", "DEGREE", "NAMES", "FRICTION_DRIFT", "Drifting", "with_progress", "drift_factor",
-           "predict_drifting", "tyre_of", "BOUNDS"]
+           "predict_drifting", "friction_nodes", "FORCE_CHANNELS", "tyre_of", "BOUNDS"]
 
 #: Column of the run's progress u in [0, 1] that the gap finder adds to the data it reads (mean per bin when a
 #: time series is reduced).
@@ -44,7 +44,8 @@ DEGREE = 3
 NAMES = tuple(f"DRIFT{k}" for k in range(1, DEGREE + 1))
 #: a friction change of more than +-25 % over a run is no drift
 BOUNDS = {n: (-0.25, 0.25) for n in NAMES}
-_FORCE_CHANNELS = ("FX", "FY", "MZ", "MX", "MY")
+#: the channels the friction drift scales (FZ, from the loaded radius, has no friction in it)
+FORCE_CHANNELS = ("FX", "FY", "MZ", "MX", "MY")
 
 
 @dataclass(frozen=True)
@@ -139,26 +140,32 @@ def drift_factor(drift: dict, u) -> np.ndarray:
     return 1.0 + legendre.legval(2.0 * np.asarray(u, float) - 1.0, coef)
 
 
+def friction_nodes(drift: dict, data: TyreData):
+    """(nodes, weights): the least, middle and greatest drift factor of the rows of ``data`` (one node where the
+    factor is constant) and each row's Lagrange weights of the nodes, so that a prediction quadratic in the
+    factor is sum_i weights[i] x prediction(nodes[i]) (:func:`predict_drifting`)."""
+    mu = drift_factor(drift, data.array(PROGRESS)) if PROGRESS in data else np.ones(len(data))
+    lo, hi = float(np.min(mu, initial=1.0)), float(np.max(mu, initial=1.0))
+    if hi - lo < 1e-12:
+        return (lo,), [np.ones(len(data))]
+    nodes = (lo, 0.5 * (lo + hi), hi)
+    weights = [np.prod([(mu - nodes[j]) / (nodes[i] - nodes[j]) for j in range(3) if j != i], axis=0)
+               for i in range(3)]
+    return nodes, weights
+
+
 def predict_drifting(predict, prm: Drifting, data: TyreData, channels) -> dict:
     """Channel -> prediction of every row of ``data`` with the friction scaled row by row by the drift factor:
     ``predict(params, channels)`` is the plain prediction; the force channels are evaluated at the least, middle and
-    greatest factor and interpolated quadratically in it (exact at those three; the drift is a few percent, the
-    third-order remainder far below the noise), FZ (no friction in it) once."""
+    greatest factor and interpolated quadratically in it (:func:`friction_nodes`: exact at those three; the drift
+    is a few percent, the third-order remainder far below the noise), FZ (no friction in it) once."""
     tyre = prm.tyre
-    forces = [c for c in channels if c in _FORCE_CHANNELS]
+    forces = [c for c in channels if c in FORCE_CHANNELS]
     out = predict(tyre, [c for c in channels if c not in forces]) if len(forces) < len(channels) else {}
     if not forces:
         return out
-    mu = drift_factor(prm.drift, data.array(PROGRESS)) if PROGRESS in data else np.ones(len(data))
-    lo, hi = float(np.min(mu, initial=1.0)), float(np.max(mu, initial=1.0))
-    if hi - lo < 1e-12:
-        scaled = tyre.replace(LMUX=tyre.LMUX * lo, LMUY=tyre.LMUY * lo)
-        out.update(predict(scaled, forces))
-        return out
-    nodes = (lo, 0.5 * (lo + hi), hi)
+    nodes, weights = friction_nodes(prm.drift, data)
     values = [predict(tyre.replace(LMUX=tyre.LMUX * m, LMUY=tyre.LMUY * m), forces) for m in nodes]
-    # Lagrange weights of the three nodes at every row's factor
-    w = [np.prod([(mu - nodes[j]) / (nodes[i] - nodes[j]) for j in range(3) if j != i], axis=0) for i in range(3)]
     for c in forces:
-        out[c] = w[0] * values[0][c] + w[1] * values[1][c] + w[2] * values[2][c]
+        out[c] = sum(w * v[c] for w, v in zip(weights, values))
     return out

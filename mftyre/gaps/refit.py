@@ -28,6 +28,7 @@ import numpy as np
 
 from ..data import TyreData, levels
 from ..fit.core import BOUNDS, bounded_parameters, physical_bounds, sign_in_bounds
+from ..fit.predict import BatchParameters
 from ..fit.verify import verify_tir
 from ..fit.stages import STAGES, data_corners, need_met, conditions, shape_violations, stage_rows  # need_met: the stages' own rule
 from ..model import MFModel
@@ -86,18 +87,35 @@ def refit(params, ev: Evaluator, names, channels=None, sigma: dict | None = None
     corners = data_corners(ev.data, prm)
     penalty = 10.0 * math.sqrt(max(n, 1)) * max(1.0, float(np.sqrt(np.mean(r0**2))))
     lp = bounded_parameters(prm, names, bounds)
+    batch = ev.batch(prm, names, channels)
+    hi = np.array([lp[k].max for k in names])
 
-    def residual(p):
-        trial = prm.replace(**{k: p[k].value for k in names})
-        r = resid_vec(trial)
-        pen = [penalty * shape_violations(s, trial, corners) for s in stage_set]
-        return np.concatenate([r, *pen]) if pen else r
+    def residual_rows(values):
+        """(K, residuals) of the parameter vectors ``values``: the data's, then the shape-condition penalties."""
+        pred = batch(values)
+        r = np.concatenate([(pred[c] - ev.measured[c]) / scale[c] for c in channels], axis=1)
+        r = np.where(np.isfinite(r), r, 1e3)
+        if not stage_set:
+            return r
+        pen = np.stack([np.concatenate([penalty * shape_violations(s, BatchParameters(prm, dict(zip(names, v))),
+                                                                   corners) for s in stage_set]) for v in values])
+        return np.concatenate([r, pen], axis=1)
+
+    def vector(p):
+        return np.array([p[k].value for k in names], float)
+
+    def jacobian(p):   # forward differences, every column in one batched evaluation (as the fit's)
+        x = vector(p)
+        step = 1.5e-8 * np.maximum(np.abs(x), 1e-2)
+        step = np.where(x + step > hi, -step, step)
+        rows = residual_rows(np.vstack([x, x + np.diag(step)]))
+        return ((rows[1:] - rows[0]) / step[:, None]).T
 
     nfev = max_nfev or 40 * (len(names) + 1)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        out = lmfit.Minimizer(residual, lp).minimize(method="least_squares", max_nfev=nfev, x_scale="jac",
-                                                     ftol=1e-8, xtol=1e-8)
+        out = lmfit.Minimizer(lambda p: residual_rows(vector(p)[None, :])[0], lp).minimize(
+            method="least_squares", max_nfev=nfev, x_scale="jac", ftol=1e-6, xtol=1e-8, Dfun=jacobian)
     values = {k: float(out.params[k].value) for k in names}
     new = prm.replace(**values)
     chi2_after = float(np.sum(resid_vec(new) ** 2))
@@ -126,16 +144,14 @@ def covariance(params, ev: Evaluator, names, channels, sigma: dict, n_eff: float
     if not channels or not names:
         return none
 
-    def vec(p):
-        res = ev.residuals(p, channels)
-        return np.concatenate([res[c] / scale[c] for c in channels])
-
-    r0 = vec(prm)
-    cols = []
-    for k in names:
-        v = float(prm[k])
-        h = 1e-5 * max(abs(v), 1e-2)
-        cols.append((vec(prm.replace(**{k: v + h})) - vec(prm.replace(**{k: v - h}))) / (2 * h))
+    values = np.array([float(prm[k]) for k in names])
+    steps = 1e-5 * np.maximum(np.abs(values), 1e-2)
+    sets = np.vstack([values, values + np.diag(steps), values - np.diag(steps)])
+    pred = ev.batch(prm, names, channels)(sets)
+    rows = np.concatenate([(pred[c] - ev.measured[c]) / scale[c] for c in channels], axis=1)
+    r0 = rows[0]
+    k = len(names)
+    cols = [(rows[1 + i] - rows[1 + k + i]) / (2 * steps[i]) for i in range(k)]
     jac = np.stack(cols, axis=1)
     ok = np.all(np.isfinite(jac), axis=1) & np.isfinite(r0)
     jac, r0 = jac[ok], r0[ok]

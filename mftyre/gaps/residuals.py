@@ -25,9 +25,9 @@ import math
 import numpy as np
 
 from ..data import TyreData, split_sweeps
-from ..fit.predict import predict
+from ..fit.predict import BatchPredictor, predict
 from ..model import MFModel
-from .drift import Drifting, predict_drifting
+from .drift import FORCE_CHANNELS, Drifting, friction_nodes, predict_drifting
 
 __all__ = ["CHANNELS", "UNITS", "Evaluator", "noise_levels", "noise_of_means", "noise_floor_of", "holdout_mask",
            "stratified_holdout", "condition_levels", "test_kind"]
@@ -84,6 +84,55 @@ class Evaluator:
         pred = predict_drifting(plain, prm, self.data, channels) if isinstance(prm, Drifting) else \
             plain(params, channels)
         return {c: pred[c][self.rows[c]] for c in channels}
+
+    def batch(self, params, names, channels=None):
+        """A function of (K, len(names)) values: channel -> (K, rows of the channel) predictions of ``params`` with
+        ``names`` set to each row's values, the K sets in one vectorised evaluation
+        (:class:`mftyre.fit.predict.BatchPredictor`; :meth:`predict`'s values). With :class:`Drifting`
+        parameters (``names`` may hold drift coefficients) the force channels are evaluated at each set's friction
+        nodes (:func:`mftyre.gaps.drift.friction_nodes`), all sets' nodes in the same evaluation."""
+        channels = self.channels if channels is None else [c for c in channels if c in self.channels]
+        prm = params.params if isinstance(params, MFModel) else params
+        names = list(names)
+        if not isinstance(prm, Drifting):
+            plain = BatchPredictor(prm, self.data, channels, names, self.inputs, turn_slip=self.turn_slip)
+            return lambda values: {c: v[:, self.rows[c]] for c, v in plain(values).items()}
+        tyre = prm.tyre
+        tyre_names = [n for n in names if n not in prm.drift]
+        forces = [c for c in channels if c in FORCE_CHANNELS]
+        others = [c for c in channels if c not in forces]
+        scaled = tyre_names + [n for n in ("LMUX", "LMUY") if n not in tyre_names]
+        at_nodes = BatchPredictor(tyre, self.data, forces, scaled, self.inputs, turn_slip=self.turn_slip) \
+            if forces else None
+        plain = BatchPredictor(tyre, self.data, others, tyre_names, self.inputs, turn_slip=self.turn_slip) \
+            if others else None
+        tyre_col = [names.index(n) for n in tyre_names]
+        friction = [scaled.index(n) for n in ("LMUX", "LMUY")]
+        fixed = np.array([float(tyre[n]) for n in scaled])
+
+        def run(values):
+            values = np.atleast_2d(np.asarray(values, float))
+            out = plain(values[:, tyre_col]) if plain is not None else {}
+            if at_nodes is not None:
+                sets, rows = [], []
+                for v in values:
+                    drift = {**prm.drift, **{n: x for n, x in zip(names, v) if n in prm.drift}}
+                    nodes, weights = friction_nodes(drift, self.data)
+                    base = fixed.copy()
+                    base[:len(tyre_names)] = v[tyre_col]
+                    for m in nodes:
+                        row = base.copy()
+                        row[friction] *= m
+                        rows.append(row)
+                    sets.append(weights)
+                pred = at_nodes(np.array(rows))
+                start = np.cumsum([0] + [len(w) for w in sets])
+                for c in forces:
+                    out[c] = np.stack([sum(w * pred[c][i0 + j] for j, w in enumerate(ws))
+                                       for i0, ws in zip(start, sets)])
+            return {c: out[c][:, self.rows[c]] for c in channels}
+
+        return run
 
     def residuals(self, params, channels=None) -> dict:
         """Channel -> model - measured at the channel's rows."""
