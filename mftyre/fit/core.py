@@ -51,7 +51,7 @@ from .stages import (STAGE_NAMES, STAGES, combined_fy, conditions, data_corners,
 from .start import estimate_stage, start_parameters
 from .verify import check_speeds, physical_domain, verification, verify_tir
 
-__all__ = ["fit_tir", "FitResult", "StageResult", "load_data", "COMPARED_STAGES", "BOUNDS", "bounded_parameters"]
+__all__ = ["fit_tir", "FitResult", "StageResult", "load_data", "COMPARED_STAGES", "BOUNDS", "bounded_parameters", "one_blas_thread"]
 
 #: Bounds (min, max) of fitted parameters, the schema's (:data:`mftyre.params.FIT_BOUNDS`); parameters not listed
 #: are free.
@@ -323,7 +323,7 @@ def _fit_pass(stage, prm, side, data, names, weighting, progress, label, max_nfe
 
     nfev = max_nfev or 30 * (len(names) + 1)
     minimizer = lmfit.Minimizer(lambda p: problem.residuals(vector(p)[None, :])[0], problem.params, iter_cb=iter_cb)
-    with warnings.catch_warnings(), _one_blas_thread():
+    with warnings.catch_warnings(), one_blas_thread():
         warnings.simplefilter("ignore", RuntimeWarning)  # a singular covariance: lmfit's errors undefined
         result = minimizer.minimize(method="least_squares", max_nfev=nfev, x_scale="jac", ftol=1e-6, xtol=1e-8,
                                     gtol=1e-8, Dfun=lambda p: problem.jacobian(vector(p)))
@@ -333,7 +333,7 @@ def _fit_pass(stage, prm, side, data, names, weighting, progress, label, max_nfe
     return new, result, problem
 
 
-def _one_blas_thread():
+def one_blas_thread():
     """BLAS limited to one thread: the small dense factorisations of the optimiser run 10-100x slower when
     OpenBLAS spreads them over the cores of a busy machine."""
     try:
@@ -362,7 +362,7 @@ def _uncertainties(problem, prm, data):
     stderr, corr = {n: None for n in names}, {}
     if live.any():
         unit = jac[:, live] / col[live]  # columns of unit length: the covariance of parameters of any size
-        with _one_blas_thread():
+        with one_blas_thread():
             cov = s2 * np.linalg.pinv(unit.T @ unit) / np.outer(col[live], col[live])
         sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
         idx = np.flatnonzero(live)

@@ -89,15 +89,17 @@ def predict_stage(stage, model: MFModel, data: TyreData, inputs: dict) -> np.nda
 class BatchParameters:
     """Parameters of which some are column vectors (one row per parameter set); ``prm[name]`` of a structural
     parameter (a choice of equation form) gives the first row's value (the rows of a batch differ by small
-    steps that, as :class:`BatchPredictor` ensures, do not switch the form)."""
+    steps that, as :class:`BatchPredictor` ensures, do not switch the form). Every parameter is a plain attribute
+    (the equations read hundreds per evaluation); other attributes are those of ``params``."""
 
     def __init__(self, params, columns: dict):
+        self.__dict__.update(params.to_dict())
+        self.__dict__.update(columns)
         self._params, self._columns = params, columns
         self.version, self.fittyp = params.version, params.fittyp
 
-    def __getattr__(self, name):
-        columns = self.__dict__["_columns"]
-        return columns[name] if name in columns else getattr(self.__dict__["_params"], name)
+    def __getattr__(self, name):   # not a parameter: an attribute of the parameter set
+        return getattr(self.__dict__["_params"], name)
 
     def __getitem__(self, name):
         if name in self._columns:

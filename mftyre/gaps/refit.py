@@ -27,7 +27,7 @@ import lmfit
 import numpy as np
 
 from ..data import TyreData, levels
-from ..fit.core import BOUNDS, bounded_parameters, physical_bounds, sign_in_bounds
+from ..fit.core import BOUNDS, bounded_parameters, one_blas_thread, physical_bounds, sign_in_bounds
 from ..fit.predict import BatchParameters
 from ..fit.verify import verify_tir
 from ..fit.stages import STAGES, data_corners, need_met, conditions, shape_violations, stage_rows  # need_met: the stages' own rule
@@ -112,7 +112,7 @@ def refit(params, ev: Evaluator, names, channels=None, sigma: dict | None = None
         return ((rows[1:] - rows[0]) / step[:, None]).T
 
     nfev = max_nfev or 40 * (len(names) + 1)
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), one_blas_thread():
         warnings.simplefilter("ignore", RuntimeWarning)
         out = lmfit.Minimizer(lambda p: residual_rows(vector(p)[None, :])[0], lp).minimize(
             method="least_squares", max_nfev=nfev, x_scale="jac", ftol=1e-6, xtol=1e-8, Dfun=jacobian)
