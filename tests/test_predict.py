@@ -81,3 +81,26 @@ def test_rows_without_loaded_radius_are_not_predicted(model):
     assert np.isnan(fz[:4]).all() and np.isfinite(fz[4:]).all()
     ev = Evaluator(data, channels=["FZ"])
     assert ev.residuals(model)["FZ"].size == len(data) - 4
+
+
+@pytest.mark.parametrize("turn_slip", [False, True], ids=["plain", "turn slip"])
+def test_outputs_asked_for_are_the_full_evaluation_bit_for_bit(model, turn_slip):
+    """steady_state(outputs=...) skips the parts no asked output needs (the batched refits ask for one channel's):
+    every output alone, and the channels' groups, equal the full evaluation exactly, on 6.1 and 6.2 files."""
+    from mftyre.backend import NUMPY
+    from mftyre.formula import Modes, steady_state
+    from mftyre.formula.steady_state import OUTPUT_NAMES
+
+    rng = np.random.default_rng(3)
+    for prm in (model.params, mftyre.load_tir(TIR_FILES / "car_205_60R15_mf62_swift.tir").params):
+        n = 300
+        args = (rng.uniform(0.2, 1.8, n) * prm.FNOMIN, rng.uniform(-0.3, 0.3, n), rng.uniform(-0.3, 0.3, n),
+                rng.uniform(-0.1, 0.1, n), rng.uniform(-0.5, 0.5, n), rng.uniform(1.0, 40.0, n),
+                rng.uniform(0.8, 1.2, n) * prm.NOMPRES, np.zeros(n), False, Modes(turn_slip=turn_slip), NUMPY)
+        with np.errstate(all="ignore"):
+            full = steady_state(prm, *args)
+            for asked in [(name,) for name in OUTPUT_NAMES] + [("fx", "my"), ("fy", "mz", "mx"), ("omega",)]:
+                part = steady_state(prm, *args, outputs=asked)
+                assert sorted(part) == sorted(asked), asked
+                for name in asked:
+                    np.testing.assert_array_equal(part[name], full[name], err_msg=f"{name} of {asked}")

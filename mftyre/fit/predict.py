@@ -170,18 +170,20 @@ class BatchPredictor:
         with np.errstate(all="ignore"):
             if forces:
                 res = steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
-                                   self.no_omega, False, self.modes, NUMPY)
+                                   self.no_omega, False, self.modes, NUMPY,
+                                   outputs=[OUTPUT_OF_CHANNEL[c] for c in forces])
                 out.update({c: np.broadcast_to(res[OUTPUT_OF_CHANNEL[c]], (k, n)) for c in forces})
             if "RE" in batched:
                 given = self.omega_measured is not None
                 res = steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
-                                   self.omega_measured if given else self.no_omega, given, self.modes, NUMPY)
+                                   self.omega_measured if given else self.no_omega, given, self.modes, NUMPY,
+                                   outputs=("re",))
                 out["RE"] = np.broadcast_to(res["re"], (k, n))
             if "FZ" in batched:
                 v = self.vertical
                 omega = v["omega"] if self.spin_measured else \
                     steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
-                                 self.no_omega, False, self.modes, NUMPY)["omega"]
+                                 self.no_omega, False, self.modes, NUMPY, outputs=("omega",))["omega"]
                 m = self.measured_row
                 dpi = vertical.pressure_increment(prm, m["p"])
                 r_omega = vertical.free_radius(prm, omega, NUMPY)

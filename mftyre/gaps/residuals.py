@@ -110,14 +110,20 @@ class Evaluator:
         friction = [scaled.index(n) for n in ("LMUX", "LMUY")]
         fixed = np.array([float(tyre[n]) for n in scaled])
 
+        drift_col = [i for i, n in enumerate(names) if n in prm.drift]
+        nodes_of = {}   # drift coefficients -> their friction nodes (the same for every set of a tyre refit)
+
         def run(values):
             values = np.atleast_2d(np.asarray(values, float))
             out = plain(values[:, tyre_col]) if plain is not None else {}
             if at_nodes is not None:
                 sets, rows = [], []
                 for v in values:
-                    drift = {**prm.drift, **{n: x for n, x in zip(names, v) if n in prm.drift}}
-                    nodes, weights = friction_nodes(drift, self.data)
+                    key = tuple(v[drift_col])
+                    if key not in nodes_of:
+                        nodes_of[key] = friction_nodes({**prm.drift, **{names[i]: v[i] for i in drift_col}},
+                                                       self.data)
+                    nodes, weights = nodes_of[key]
                     base = fixed.copy()
                     base[:len(tyre_names)] = v[tyre_col]
                     for m in nodes:
