@@ -124,12 +124,14 @@ def test_free_vibration_decays(model):
 
 
 def test_fixed_step_agrees_with_adaptive(model):
+    """The fixed-step run over a cleat within 2 % of the force spans of the adaptive reference (DOP853 at rtol 1e-6:
+    within 3e-5 of the spans of one at 1e-7, at half its cost)."""
     rl, _ = model.loaded_radius(4000.0)
     V = 40 / 3.6
     tyre = SwiftTyre(model, Cleat(0.2, 0.05, 0.01), axle="height", rim="speed", x_range=(0.0, 1.5))
     u = StepInputs(x=0.0, vx=V, z=float(rl), omega=V / 0.3044)
     fixed = tyre.run(0.04, u)
-    ref = tyre.run_adaptive(0.04, u, rtol=1e-7, atol=1e-9)
+    ref = tyre.run_adaptive(0.04, u, rtol=1e-6, atol=1e-8)
     for name in ("fz", "fx"):
         span = np.ptp(ref[name])
         assert span > 100.0
