@@ -104,3 +104,28 @@ def test_outputs_asked_for_are_the_full_evaluation_bit_for_bit(model, turn_slip)
                 assert sorted(part) == sorted(asked), asked
                 for name in asked:
                     np.testing.assert_array_equal(part[name], full[name], err_msg=f"{name} of {asked}")
+
+
+def test_batched_sets_are_the_gap_finders_one_rule_set_by_set(model):
+    """Evaluator.batch (the gap finder's refits and covariances: K parameter sets in one evaluation, the friction
+    drift's nodes of every set in the same one) gives each set what Evaluator.predict gives that set alone, the
+    vertical channel, a structural parameter (looped) and drift coefficients included."""
+    from mftyre.data import trailer_programme
+    from mftyre.gaps.drift import Drifting, with_progress
+
+    data = with_progress(trailer_programme(model, loads=(0.6, 1.2), pressures=(0.9, 1.1), cambers_deg=(0.0, 3.0),
+                                           points=7, noise=1.0, seed=2))
+    ev = Evaluator(data)
+    assert {"FX", "FY", "MZ", "MX", "MY", "FZ"} <= set(ev.channels)
+    rng = np.random.default_rng(5)
+    drifting = Drifting.of(model.params, {"DRIFT1": 0.03, "DRIFT2": -0.01, "DRIFT3": 0.0})
+    for prm, names in ((model.params, ["PKY1", "PDY1", "QSX3", "VERTICAL_STIFFNESS", "PKX1"]),
+                       (model.params.replace(QSX12=0.05, QSX13=0.1), ["QSX12", "QSX1"]),  # the form: set by set
+                       (drifting, ["PKY1", "DRIFT1", "DRIFT3", "LMUY"])):
+        x = np.array([float(prm[n]) for n in names])
+        values = x * (1.0 + 0.02 * rng.standard_normal((4, len(names)))) + 1e-3 * rng.standard_normal((4, len(names)))
+        batch = ev.batch(prm, names)(values)
+        for row, v in enumerate(values):
+            alone = ev.predict(prm.replace(**dict(zip(names, v))))
+            for c in ev.channels:
+                np.testing.assert_allclose(batch[c][row], alone[c], rtol=1e-12, atol=1e-9, err_msg=f"{names} {c}")

@@ -6,7 +6,10 @@ and the Magic Formula shape conditions of :func:`mftyre.fit.stages.shape_violati
 corners of the data's load, pressure and camber range. Unlike a fitting stage it may span several channels at
 once (an effect on Fy also moves Mz and Mx) and weighs each channel's residual by its measurement-noise level
 (sigma), so that the cost is a chi-square and differences of costs are likelihood-ratio statistics; without
-sigma each channel is normalised by its RMS as in the fit.
+sigma each channel is normalised by its RMS as in the fit. As in the fit, the Jacobian is a forward difference of
+all its columns in one batched evaluation (:meth:`mftyre.gaps.residuals.Evaluator.batch`, the fit's
+:class:`mftyre.fit.predict.BatchPredictor`), the search stops on a relative cost change of 1e-6 (a chi-square
+cost: far below a difference the tests could see) and BLAS runs on one thread.
 
 Bounds are the fit's (:data:`mftyre.fit.core.BOUNDS` tightened by :func:`mftyre.fit.core.physical_bounds`).
 
