@@ -370,7 +370,7 @@ class MFModel:
         omega_given = "omega" in inputs or "omega" in (fixed or {})
         out = steady_state(equations_prm, values["fz"], values["kappa"], values["alpha"], values["gamma"],
                            values["phit"], values["vx"], values["p"], values["omega"], omega_given, modes,
-                           casadi_backend(smooth, early_stop))
+                           casadi_backend(smooth, early_stop), outputs=outputs)
         sign = {k: (-1.0 if self.mirrored and k in _MIRRORED_OUTPUTS else 1.0) for k in outputs}
         out_names = [f"{k}_used" if k in allowed else k for k in outputs]
         return ca.Function(name, [symbols[n] for n in inputs] + list(parameter_symbols.values()),
