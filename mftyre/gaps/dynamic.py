@@ -50,6 +50,7 @@ import time
 import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from types import MappingProxyType
 
 import lmfit
 import numpy as np
@@ -433,31 +434,49 @@ def _load(data, model):
 
 
 class _Sim:
-    """Simulate a model on runs (``kind``: :data:`MODEL_KINDS`); counts evaluations. The SWIFT tyres of the last
-    few parameter sets are kept, built for every run (a refit simulates its result on the training runs, then on
-    all), their cam tables kept across parameter sets with the same cams (:class:`SwiftTyres`)."""
+    """Simulate a model on runs (``kind``: :data:`MODEL_KINDS`); counts evaluations. What the last few parameter
+    sets gave on each run is kept (a refit simulates its result on the training runs, then on all: only the
+    held-out runs are simulated again; the outputs are read-only, channel -> array per run), and so are their SWIFT tyres, built for every
+    run, their cam tables kept across parameter sets with the same cams (:class:`SwiftTyres`)."""
+
+    KEPT = 6
 
     def __init__(self, runs, kind="swift"):
         self.runs, self.kind, self.evaluations = runs, kind, 0
-        self._tables, self._tyres = {}, {}
+        self._tables, self._tyres, self._outputs = {}, {}, {}
+
+    @staticmethod
+    def _key(model):
+        prm = model.params
+        return tuple(repr(prm[k]) for k in prm), tuple(sorted(prm.missing)), model.side
+
+    @classmethod
+    def _kept(cls, cache: dict, key, make):
+        if key not in cache:
+            if len(cache) >= cls.KEPT:
+                del cache[next(iter(cache))]
+            cache[key] = make()
+        return cache[key]
 
     def tyres(self, model) -> SwiftTyres:
-        prm = model.params
-        key = (tuple(repr(prm[k]) for k in prm), tuple(sorted(prm.missing)), model.side)
-        if key not in self._tyres:
-            if len(self._tyres) >= 6:
-                del self._tyres[next(iter(self._tyres))]
-            self._tyres[key] = SwiftTyres(model, self.runs, self._tables)
-        return self._tyres[key]
+        return self._kept(self._tyres, self._key(model), lambda: SwiftTyres(model, self.runs, self._tables))
 
     def __call__(self, model, runs=None):
         runs = runs or self.runs
         self.evaluations += 1
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            if self.kind == "relaxed":
-                return simulate(model, runs, model_kind="relaxed")
-            return simulate(model, runs, self.tyres(model))
+        key = self._key(model)
+        done = self._kept(self._outputs, key, dict)
+        todo = [r for r in runs if r.name not in done]
+        if todo:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                new = simulate(model, todo, model_kind="relaxed") if self.kind == "relaxed" else \
+                    simulate(model, todo, self.tyres(model))
+            for name, channels in new.items():
+                for values in channels.values():
+                    values.setflags(write=False)
+                done[name] = MappingProxyType(channels)
+        return {r.name: done[r.name] for r in runs}
 
 
 #: The parameters of the SWIFT wheel a file must have for model kind "auto" to choose it.
