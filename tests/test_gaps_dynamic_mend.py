@@ -248,3 +248,34 @@ def test_near_singular_pairs_report_their_correlation_and_no_error():
     b = np.array([[1.0, 0.5], [0.5, 1.0]]) * 4e-4
     se, pairs = precision(b, [0.5, 2.0], ("A", "B"))
     assert pairs == {} and se == pytest.approx({"A": 0.01, "B": 0.04})
+
+
+def test_a_parameter_set_simulated_again_reuses_its_runs_and_they_stay_read_only(sample, short_runs, monkeypatch):
+    """The finder's simulator keeps what the last parameter sets gave on each run: the training runs of a refit's
+    result are not simulated again when it is simulated on all runs, the outputs equal a fresh simulation and
+    cannot be changed in place (a caller that did would change the kept ones)."""
+    import mftyre.gaps.dynamic as dynamic
+    from mftyre.gaps.dynamic_runs import simulate
+
+    calls = []
+
+    def counting(model, runs, *args, **kwargs):
+        calls.append([r.name for r in runs])
+        return simulate(model, runs, *args, **kwargs)
+
+    monkeypatch.setattr(dynamic, "simulate", counting)
+    sim = dynamic._Sim(short_runs)
+    first, *_ = short_runs
+    some = sim(sample, [first])
+    every = sim(sample)
+    assert calls == [[first.name], [r.name for r in short_runs[1:]]]
+    assert every[first.name] is some[first.name]
+    fresh = simulate(sample, short_runs)
+    for r in short_runs:
+        for c, values in every[r.name].items():
+            np.testing.assert_array_equal(values, fresh[r.name][c])
+            with pytest.raises(ValueError):
+                values[0] = 0.0
+    changed = sample.with_params(BELT_MASS=1.1 * sample.params.BELT_MASS)
+    sim(changed, [first])
+    assert calls[-1] == [first.name]          # another parameter set: simulated
