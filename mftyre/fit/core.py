@@ -51,7 +51,8 @@ from .stages import (STAGE_NAMES, STAGES, combined_fy, conditions, data_corners,
 from .start import estimate_stage, start_parameters
 from .verify import check_speeds, physical_domain, verification, verify_tir
 
-__all__ = ["fit_tir", "FitResult", "StageResult", "load_data", "COMPARED_STAGES", "BOUNDS", "bounded_parameters", "one_blas_thread"]
+__all__ = ["fit_tir", "FitResult", "StageResult", "load_data", "COMPARED_STAGES", "BOUNDS", "bounded_parameters", "one_blas_thread",
+           "forward_jacobian"]
 
 #: Bounds (min, max) of fitted parameters, the schema's (:data:`mftyre.params.FIT_BOUNDS`); parameters not listed
 #: are free.
@@ -298,10 +299,17 @@ class _Problem:
         return np.concatenate(parts, axis=1)
 
     def jacobian(self, x):
-        step = 1.5e-8 * np.maximum(np.abs(x), 1e-2)
-        step = np.where(x + step > self.hi, -step, step)
-        base = self.residuals(np.vstack([x, x + np.diag(step)]))
-        return ((base[1:] - base[0]) / step[:, None]).T
+        return forward_jacobian(self.residuals, x, self.hi)
+
+
+def forward_jacobian(rows, x, upper) -> np.ndarray:
+    """The forward-difference Jacobian (residuals x parameters) at the parameter vector ``x`` of ``rows`` ((K, p)
+    parameter vectors -> (K, residuals)), every column from one call with x and x + h_j e_j: h_j = 1.5e-8
+    max(|x_j|, 0.01), taken backwards where the step would pass the ``upper`` bound."""
+    step = 1.5e-8 * np.maximum(np.abs(x), 1e-2)
+    step = np.where(x + step > upper, -step, step)
+    base = rows(np.vstack([x, x + np.diag(step)]))
+    return ((base[1:] - base[0]) / step[:, None]).T
 
 
 def _fit_pass(stage, prm, side, data, names, weighting, progress, label, max_nfev, bounds):

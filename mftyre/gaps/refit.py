@@ -30,7 +30,8 @@ import lmfit
 import numpy as np
 
 from ..data import TyreData, levels
-from ..fit.core import BOUNDS, bounded_parameters, one_blas_thread, physical_bounds, sign_in_bounds
+from ..fit.core import (BOUNDS, bounded_parameters, forward_jacobian, one_blas_thread, physical_bounds,
+                        sign_in_bounds)
 from ..fit.predict import BatchParameters
 from ..fit.verify import verify_tir
 from ..fit.stages import STAGES, data_corners, need_met, conditions, shape_violations, stage_rows  # need_met: the stages' own rule
@@ -107,18 +108,12 @@ def refit(params, ev: Evaluator, names, channels=None, sigma: dict | None = None
     def vector(p):
         return np.array([p[k].value for k in names], float)
 
-    def jacobian(p):   # forward differences, every column in one batched evaluation (as the fit's)
-        x = vector(p)
-        step = 1.5e-8 * np.maximum(np.abs(x), 1e-2)
-        step = np.where(x + step > hi, -step, step)
-        rows = residual_rows(np.vstack([x, x + np.diag(step)]))
-        return ((rows[1:] - rows[0]) / step[:, None]).T
-
     nfev = max_nfev or 40 * (len(names) + 1)
     with warnings.catch_warnings(), one_blas_thread():
         warnings.simplefilter("ignore", RuntimeWarning)
         out = lmfit.Minimizer(lambda p: residual_rows(vector(p)[None, :])[0], lp).minimize(
-            method="least_squares", max_nfev=nfev, x_scale="jac", ftol=1e-6, xtol=1e-8, Dfun=jacobian)
+            method="least_squares", max_nfev=nfev, x_scale="jac", ftol=1e-6, xtol=1e-8,
+            Dfun=lambda p: forward_jacobian(residual_rows, vector(p), hi))  # every column in one batch
     values = {k: float(out.params[k].value) for k in names}
     new = prm.replace(**values)
     chi2_after = float(np.sum(resid_vec(new) ** 2))
