@@ -166,24 +166,22 @@ class BatchPredictor:
             return out
         prm = BatchParameters(self.prm, {nm: values[:, j:j + 1] for j, nm in enumerate(self.names)})
         r = self.row
+
+        def evaluate(outputs, omega=None):   # the equations at the saturated inputs (the spin estimated, or given)
+            given = omega is not None
+            return steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
+                                omega if given else self.no_omega, given, self.modes, NUMPY, outputs=outputs)
+
         forces = [c for c in batched if c not in ("FZ", "RE")]
         with np.errstate(all="ignore"):
             if forces:
-                res = steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
-                                   self.no_omega, False, self.modes, NUMPY,
-                                   outputs=[OUTPUT_OF_CHANNEL[c] for c in forces])
+                res = evaluate([OUTPUT_OF_CHANNEL[c] for c in forces])
                 out.update({c: np.broadcast_to(res[OUTPUT_OF_CHANNEL[c]], (k, n)) for c in forces})
             if "RE" in batched:
-                given = self.omega_measured is not None
-                res = steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
-                                   self.omega_measured if given else self.no_omega, given, self.modes, NUMPY,
-                                   outputs=("re",))
-                out["RE"] = np.broadcast_to(res["re"], (k, n))
+                out["RE"] = np.broadcast_to(evaluate(("re",), self.omega_measured)["re"], (k, n))
             if "FZ" in batched:
                 v = self.vertical
-                omega = v["omega"] if self.spin_measured else \
-                    steady_state(prm, r["fz"], r["kappa"], r["alpha"], r["gamma"], r["phit"], r["vx"], r["p"],
-                                 self.no_omega, False, self.modes, NUMPY, outputs=("omega",))["omega"]
+                omega = v["omega"] if self.spin_measured else evaluate(("omega",))["omega"]
                 m = self.measured_row
                 dpi = vertical.pressure_increment(prm, m["p"])
                 r_omega = vertical.free_radius(prm, omega, NUMPY)
