@@ -12,7 +12,6 @@ fmpy's validator, and time/memory over a long run.
 from __future__ import annotations
 
 import math
-import warnings
 
 import numpy as np
 import pytest
@@ -20,11 +19,11 @@ import pytest
 pytest.importorskip("pythonfmu")
 fmpy = pytest.importorskip("fmpy")
 
-import mftyre  # noqa: E402
 from swift import Cleat, Flat, StepInputs, SwiftTyre  # noqa: E402
 from swift.fmu_model import SUBSTEPS  # noqa: E402  (the FMUs' RK4 substeps: one stepping rule)
 from swift.ring import STATE_NAMES  # noqa: E402
 
+from conftest import SWIFT_SAMPLE  # noqa: E402
 from test_fmu import TIR61, TIR62, Slave, _build, assert_no_time_drift, run_long  # noqa: E402
 
 S = {n: i for i, n in enumerate(STATE_NAMES)}
@@ -38,10 +37,10 @@ OUT = ("Fx", "Fy", "Fz", "Mx", "My", "Mz", "Mx_c", "My_c", "Mz_c", "kappa", "alp
 
 
 @pytest.fixture(scope="module")
-def model():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return mftyre.load_tir(TIR62)
+def model(sample):
+    """The SWIFT FMU's file as a model (conftest's ``sample``: TIR62 is that file)."""
+    assert TIR62.resolve() == SWIFT_SAMPLE.resolve()
+    return sample
 
 
 @pytest.fixture(scope="module")
