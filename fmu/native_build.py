@@ -34,6 +34,14 @@ from mftyre.variables import UNIT_BASES
 
 #: The hand-written C files (package data of fmu, so installed wheels can build FMUs).
 C_DIR = importlib.resources.files("fmu") / "native"
+#: The generated C of the wheel: its step, outputs (and derivatives) in MODEL_SOURCE, what runs once per start (the
+#: initial state: for SWIFT the static equilibrium's Newton steps with their dense Jacobian, most of the generated
+#: code) in START_SOURCE.
+MODEL_SOURCE, START_SOURCE = "tyre_model.c", "tyre_start.c"
+#: Optimisation per source (default -O2). The start's functions run once per start (fmi2ExitInitializationMode,
+#: a reset): unoptimised. The SWIFT start (its Jacobian one function of ~20 000 lines) then compiles in ~4 s
+#: instead of ~20 s at -O2 (~10 s at -O1) and a reset and start of the SWIFT FMU take ~6 ms instead of ~2 ms.
+OPTIMISATION = {START_SOURCE: "-O0"}
 MODELS = ("steady", "transient", "swift")
 #: FMI interfaces: co-simulation (the FMU integrates), model exchange (the host's integrator takes the states).
 INTERFACES = ("cs", "me")
@@ -113,17 +121,18 @@ def toolchains() -> dict:
 def compile_sources(sources_dir: Path, library: Path) -> None:
     """Compile every .c in ``sources_dir`` into ``library``, for the platform its folder names
     (``binaries/<platform>/``, :data:`PLATFORMS`, FMI 2 or 3 names) with that platform's compiler
-    (:func:`toolchains`): each source to an object (-O2; cached in the compile cache by its text, the headers it
-    includes, compiler and flags: the generated tyre equations compile once for every variant), then linked
-    -shared (win64: the C runtime of gcc linked in)."""
+    (:func:`toolchains`): each source to an object (at its :data:`OPTIMISATION`; cached in the compile cache by
+    its text, the headers it includes, compiler and flags: the generated tyre equations compile once for every
+    variant), then linked -shared (win64: the C runtime of gcc linked in)."""
     fmi2_name = {v[0]: k for k, v in PLATFORMS.items()}.get(library.parent.name, library.parent.name)
     compiler, why = toolchains().get(fmi2_name, (None, f"unknown platform {fmi2_name}"))
     if compiler is None:
         raise NativeBuildError(f"cannot build {fmi2_name}: {why}")
     library.parent.mkdir(parents=True, exist_ok=True)
     windows = fmi2_name == "win64"
-    cflags = ["-O2", "-fvisibility=hidden", "-I", "."] + ([] if windows else ["-fPIC"])
-    objects = [_object(compiler, cflags, Path(src)) for src in sorted(Path(sources_dir).glob("*.c"))]
+    cflags = ["-fvisibility=hidden", "-I", "."] + ([] if windows else ["-fPIC"])
+    objects = [_object(compiler, [OPTIMISATION.get(src.name, "-O2"), *cflags], src)
+               for src in sorted(Path(sources_dir).glob("*.c"))]
     cmd = [compiler, "-shared", *objects, "-o", str(library)] + (["-static-libgcc"] if windows else ["-lm"])
     res = subprocess.run(cmd, capture_output=True, text=True)
     if res.returncode != 0:
@@ -368,10 +377,11 @@ def generate_sources(spec, sources: Path, guid: str, fmi_version: int = 2) -> li
     import casadi as ca
 
     sources.mkdir(parents=True, exist_ok=True)
-    gen = ca.CodeGenerator("tyre_model.c", {"with_header": True})
-    for f in spec.functions:
-        gen.add(f)
-    gen.generate(str(sources) + os.sep)
+    for name, functions in ((MODEL_SOURCE, spec.functions), (START_SOURCE, spec.start_functions)):
+        gen = ca.CodeGenerator(name, {"with_header": True})
+        for f in functions:
+            gen.add(f)
+        gen.generate(str(sources) + os.sep)
     write_config(sources / "tyre_config.h", spec, guid, spec.config_extra)
     layers = ["fmi2_tyre.c"] + (["fmi3_tyre.c"] if fmi_version == 3 else [])
     for name in (*layers, "tyre_glue.h", spec.glue):
@@ -380,7 +390,7 @@ def generate_sources(spec, sources: Path, guid: str, fmi_version: int = 2) -> li
         folder, names = fmi_headers(version)
         for name in names:
             shutil.copy2(folder / name, sources / name)
-    return [*layers[::-1], spec.glue, "tyre_model.c"]
+    return [*layers[::-1], spec.glue, MODEL_SOURCE, START_SOURCE]
 
 
 def limit_definitions(prm, omega_given: bool, rim: bool = True) -> str:
@@ -428,7 +438,7 @@ def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_sta
         glue, directional = "glue_swift.c", False
     else:
         raise NativeBuildError(f"--model must be one of {', '.join(MODELS)}, got {kind!r}")
-    functions = [f.init, f.step, f.out] + ([f.residual, f.root] if kind == "swift" else [])
+    functions, start_functions = [f.step, f.out], [f.init] + ([f.residual, f.root] if kind == "swift" else [])
     me = directional  # the wheels have their state equations as derivatives (WheelFunctions.deriv); SWIFT not
     state_deps = derivative_deps = []
     if directional:  # d(y, dx/dt) / d(x, u) (dy/du for co-simulation, the whole Jacobian for model exchange)
@@ -449,12 +459,13 @@ def model_spec(model, kind: str, *, vertical: str = "position", road=None, x_sta
     else:
         deps = f.output_dependencies
     return SimpleNamespace(
-        functions=functions, state_names=f.state_names, glue=glue, config_extra=extra, directional=directional,
-        me=me, event_names=f.event_names if me else (), kind=kind,
+        functions=functions, start_functions=start_functions, state_names=f.state_names, glue=glue,
+        config_extra=extra, directional=directional, me=me, event_names=f.event_names if me else (), kind=kind,
         parameters=f.parameters, inputs=f.inputs, outputs=f.outputs, input_names=f.input_names,
         parameter_names=f.parameter_names, output_names=f.output_names, output_dependencies=deps,
         output_state_dependencies=state_deps, derivative_dependencies=derivative_deps,
-        fingerprint=hashlib.sha256("".join(fn.serialize() for fn in functions).encode()).hexdigest() + extra)
+        fingerprint=hashlib.sha256("".join(fn.serialize() for fn in (*start_functions, *functions)).encode()
+                                   ).hexdigest() + extra)
 
 
 #: The environment variable whose value (comma-separated platforms) replaces the default of ``--platforms``.

@@ -144,7 +144,7 @@ def test_validate_and_describe(fmus):
         with zipfile.ZipFile(path) as zf:
             files = zf.namelist()
         assert f"binaries/linux64/mftyre_{kind}.so" in files
-        assert {"sources/buildDescription.xml", "sources/fmi2_tyre.c", "sources/tyre_model.c"} <= set(files)
+        assert {"sources/buildDescription.xml", "sources/fmi2_tyre.c", "sources/tyre_model.c", "sources/tyre_start.c"} <= set(files)
         assert not any(f.endswith(".py") for f in files)  # no Python at run time
         deps = {u.variable.name: {d.name for d in (u.dependencies or [])} for u in md.outputs}
         if kind == "swift":  # belt forces through the sidewall: rim speed inputs act directly, the height not

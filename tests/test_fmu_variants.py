@@ -63,7 +63,7 @@ def test_one_fmu_holds_every_platform_it_could_build_and_its_sources(fmus):
             names = set(zf.namelist())
         assert f"binaries/{folders[0]}/mftyre_transient.so" in names
         assert (f"binaries/{folders[1]}/mftyre_transient.dll" in names) == bool(MINGW), names
-        assert {"sources/buildDescription.xml", "sources/tyre_model.c", "sources/fmi2_tyre.c"} <= names
+        assert {"sources/buildDescription.xml", "sources/tyre_model.c", "sources/tyre_start.c", "sources/fmi2_tyre.c"} <= names
         assert ("sources/fmi3_tyre.c" in names) == (version == 3)
         assert not any(n.startswith("binaries/aarch64") or n.startswith("binaries/darwin") for n in names)
 

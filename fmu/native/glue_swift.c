@@ -1,5 +1,5 @@
 /* SWIFT tyre (swift.fmu_model): the rigid ring stepped over the road table built into tyre_config.h, with the
- * functions CasADi generated in tyre_model.c (swift_init, swift_substep, swift_out, swift_residual,
+ * functions CasADi generated in tyre_model.c (swift_substep, swift_out) and tyre_start.c (swift_init, swift_residual,
  * swift_root). Mirrors
  * swift.fmu_model.SwiftWheel line by line: window placement, imposed axle height and spin, step splitting. */
 #include <math.h>
@@ -9,6 +9,7 @@
 #include "tyre_config.h"
 #include "tyre_glue.h"
 #include "tyre_model.h"
+#include "tyre_start.h"
 
 #define NFUN 5
 typedef int (*WorkFn)(casadi_int *, casadi_int *, casadi_int *, casadi_int *);

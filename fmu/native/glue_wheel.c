@@ -1,4 +1,5 @@
-/* Steady and transient tyre (mftyre.transient): the six functions CasADi generated in tyre_model.c. */
+/* Steady and transient tyre (mftyre.transient): the functions CasADi generated in tyre_model.c and tyre_start.c
+ * (tyre_init). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -6,6 +7,7 @@
 #include "tyre_config.h"
 #include "tyre_glue.h"
 #include "tyre_model.h"
+#include "tyre_start.h"
 
 #define NFUN 6
 typedef int (*WorkFn)(casadi_int *, casadi_int *, casadi_int *, casadi_int *);
