@@ -400,11 +400,36 @@ def scatter_about_bins(data: TyreData, programme: Programme, channel: str, *, bi
     return out
 
 
-def _kms_apply(x: np.ndarray, rho: float) -> np.ndarray:
-    """R x along axis 1 for the AR(1) correlation matrix R_ij = rho^|i-j|: a forward and a backward recursion."""
-    f = lfilter([1.0], [1.0, -rho], x, axis=1)
-    b = lfilter([1.0], [1.0, -rho], x[:, ::-1], axis=1)[:, ::-1]
-    return f + b - x
+def _lag_sums(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """sum over blocks and columns of x . (T_d y) for d = 0..m-1, where T_0 = I and T_d = S^d + S^-d (S the shift
+    along axis 1, m = x.shape[1]): the coefficients of the AR(1) correlation matrix R(rho) = sum_d rho^d T_d
+    (R_ij = rho^|i-j|) in sum x . (R y)."""
+    m = x.shape[1]
+    out = np.empty(m)
+    out[0] = np.einsum("bmk,bmk->", x, y)
+    for d in range(1, m):
+        out[d] = np.einsum("bmk,bmk->", x[:, d:], y[:, :-d]) + np.einsum("bmk,bmk->", x[:, :-d], y[:, d:])
+    return out
+
+
+def _ar1_traces(q: np.ndarray):
+    """traces(rho) -> (sum over blocks of tr(M R), of tr(U M R M)) for blocks of regressors ``q`` (blocks, m, k;
+    orthonormal columns or zero ones), M = I - Q Q^T, U the shift (U x)_i = x_(i+1), R = R(rho) the AR(1)
+    correlation matrix. tr(M R) = m - tr(Q^T R Q) and tr(U M R M) = (m - 1) rho - sum (U + U^T) Q . R Q
+    + tr(Q^T U Q Q^T R Q), each linear in R = sum_d rho^d T_d: polynomials in rho whose coefficients are lag sums."""
+    nb, m, _ = q.shape
+    uq, utq = np.zeros_like(q), np.zeros_like(q)
+    uq[:, :-1], utq[:, 1:] = q[:, 1:], q[:, :-1]
+    qtuq = np.einsum("bmk,bml->bkl", q, uq)
+    trace_qrq = _lag_sums(q, q)
+    trace_umrm = _lag_sums(np.einsum("bml,bkl->bmk", q, qtuq) - uq - utq, q)
+    powers = np.arange(m)
+
+    def traces(rho):
+        rho_d = rho ** powers
+        return nb * m - float(rho_d @ trace_qrq), nb * (m - 1) * rho + float(rho_d @ trace_umrm)
+
+    return traces
 
 
 def measurement_noise(data: TyreData, programme: Programme, channel: str, *, window: float = 0.2, degree: int = 3,
@@ -463,17 +488,7 @@ def _noise_in_blocks(y, cov, runs, m, degree):
     rss, lag = float(np.sum(res * res)), float(np.sum(res[:, 1:] * res[:, :-1]))
     if rss <= 0:
         return 0.0, 0.0
-    uq, utq = np.zeros_like(q), np.zeros_like(q)
-    uq[:, :-1], utq[:, 1:] = q[:, 1:], q[:, :-1]
-    qtuq = np.einsum("bmk,bml->bkl", q, uq)
-    nb = idx.shape[0]
-
-    def traces(rho):  # tr(M R), tr(U M R M), summed over the blocks
-        rq = _kms_apply(q, rho)
-        qtrq = np.einsum("bmk,bml->bkl", q, rq)
-        a = nb * m - float(np.trace(qtrq, axis1=1, axis2=2).sum())
-        b = nb * (m - 1) * rho - float(np.sum(rq * uq) + np.sum(utq * rq)) + float(np.einsum("bkl,blk->", qtuq, qtrq))
-        return a, b
+    traces = _ar1_traces(q)
 
     target = lag / rss
     lo, hi = 0.0, 0.999

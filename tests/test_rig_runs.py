@@ -328,6 +328,26 @@ def test_levels_of_pooled_runs_group_settings_a_few_percent_apart():
 
 
 # ------------------------------------------------------------- the measurement noise of sampled channels (item 6)
+def test_noise_traces_equal_the_dense_matrix_traces():
+    """The AR(1) estimator's traces tr(M R) and tr(U M R M), summed over blocks (polynomials in rho from lag
+    sums), equal the products of the dense m x m matrices, for blocks with a zeroed regressor column too."""
+    from mftyre.timeseries import _ar1_traces
+
+    rng = np.random.default_rng(3)
+    for m, k in ((7, 2), (20, 5), (45, 4)):
+        q = np.linalg.qr(rng.normal(size=(6, m, k)))[0]
+        q[0, :, -1] = 0.0  # a regressor constant in the block: no column
+        traces = _ar1_traces(q)
+        shift = np.eye(m, k=1)
+        for rho in (0.0, 0.3, 0.9, 0.999):
+            r = rho ** np.abs(np.subtract.outer(np.arange(m), np.arange(m)))
+            dense = np.zeros(2)
+            for block in q:
+                mm = np.eye(m) - block @ block.T
+                dense += np.trace(mm @ r), np.trace(shift @ mm @ r @ mm)
+            assert traces(rho) == pytest.approx(dense, rel=1e-12, abs=1e-12 * m), (m, k, rho)
+
+
 @pytest.mark.parametrize("case", ["drive-100Hz-fs", "corner-1kHz-car"])
 def test_measurement_noise_of_sampled_channels_is_the_injected_noise(case):
     """Generated runs with known AR(1) measurement noise (30 ms: lag-one correlation 0.72 at 100 Hz, 0.97 at
