@@ -66,6 +66,30 @@ def test_verify_rejects_invented_asymmetry(truth):
     assert verify_tir(truth.with_params(PVY1=0.05 * shift)) == []  # a small shift is within the bound
 
 
+
+def test_a_baseline_is_checked_once_and_excuses_only_what_it_has(truth, monkeypatch):
+    """verify_tir(model, baseline=given): the given file's problems are found once per file and domain (a search
+    checks many candidates against one given file) and a problem the given file shares is not the candidate's;
+    another file of the same values (another object), another side or another domain is checked again."""
+    from mftyre.fit import verify
+
+    asymmetric = truth.with_params(PVX1=0.55, PHX1=-0.03)
+    calls = []
+    real = verify.problems_in
+    monkeypatch.setattr(verify, "problems_in", lambda model, dom: calls.append(model.params) or real(model, dom))
+    worse = asymmetric.with_params(PKY1=abs(truth.params.PKY1))
+    first = verify_tir(worse, baseline=asymmetric.params)
+    assert any("wrong sign" in p for p in first) and not any("Fx asymmetry" in p for p in first), first
+    assert len(calls) == 2  # the candidate and the baseline
+    assert verify_tir(worse, baseline=asymmetric.params) == first and len(calls) == 3  # the baseline's kinds kept
+    assert verify_tir(worse, baseline=asymmetric) == first and len(calls) == 4  # the model of those parameters
+    assert any("Fx asymmetry" in p for p in verify_tir(worse, baseline=truth)) and len(calls) == 6
+    copy = mftyre.MFModel(asymmetric.params.replace(PVX1=0.55))  # equal values, another object: checked again
+    assert verify_tir(worse, baseline=copy) == first and len(calls) == 8
+    verify_tir(worse, {"VX": 40.0}, baseline=asymmetric)
+    assert len(calls) == 10  # another domain (the speeds of other data)
+
+
 def test_a_failing_parameter_set_is_not_written(truth, tmp_path, rig_fit):
     _, result = rig_fit
     result.params, result.problems = truth.params.replace(Q_V1=-1433.0), ["free radius grows by -100 %"]

@@ -38,6 +38,7 @@ Checks (each a physical property of a pneumatic tyre, not of the data):
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -339,11 +340,38 @@ def _pure_slip(run, problems, prm, loads, pressures, force, slip_range, levels, 
                                 f"{ratio[i]:.2f}, expected within 1/{_ASYMMETRY}..{_ASYMMETRY}; {shifts})"))
 
 
-def verification(model, data=None, baseline=None) -> Verification:
+#: The kinds of problem of baselines (the given file of a search, checked against every candidate of it): the
+#: parameters (immutable) by identity, the side and the domain -> (parameters, kinds); the last few, shared by
+#: threads.
+_BASELINE_KINDS: dict = {}
+_BASELINE_LOCK = threading.Lock()
+
+
+def _baseline_kinds(baseline, dom: Domain) -> set:
+    """The kinds of :func:`problems_in` of ``baseline`` (model or parameters) over ``dom``, computed once."""
+    from ..model import MFModel
+
+    base = baseline if isinstance(baseline, MFModel) else MFModel(baseline)
+    prm = base.params
+    key = (id(prm), base.side, dom)
+    with _BASELINE_LOCK:
+        found = _BASELINE_KINDS.get(key)
+    if found is not None and found[0] is prm:
+        return found[1]
+    kinds = frozenset(q.kind for q in problems_in(base, dom))
+    with _BASELINE_LOCK:
+        while len(_BASELINE_KINDS) >= 8:
+            del _BASELINE_KINDS[next(iter(_BASELINE_KINDS))]
+        _BASELINE_KINDS[key] = (prm, kinds)
+    return kinds
+
+
+def verification(model, data=None, baseline=None, *, beyond_the_data: bool = True) -> Verification:
     """Problems and warnings of ``model`` (an :class:`mftyre.MFModel` or parameters) over the checked and the
     physical domain, relative to ``baseline`` (model or parameters; None: no baseline). ``data``: the measured
     data (:class:`mftyre.data.TyreData`), or a dict with ``"VX"`` (speeds or the top speed, m/s), or None (a
-    standard programme stands in for the data). See the module text."""
+    standard programme stands in for the data). ``beyond_the_data=False``: no check of the physical domain beyond
+    the data's (no warnings of it). See the module text."""
     from ..model import MFModel
 
     model = model if isinstance(model, MFModel) else MFModel(model)
@@ -352,11 +380,8 @@ def verification(model, data=None, baseline=None) -> Verification:
     if not hasattr(data, "array") and data is not None:   # a dict of speeds only: the standard programme's domain
         dom = Domain(dom.loads, dom.pressures, dom.kappa, dom.alpha, dom.gamma, phys.top_speed)
     inside = problems_in(model, dom)
-    beyond = problems_in(model, phys) if phys != dom else []
-    shared = set()
-    if baseline is not None:
-        base = baseline if isinstance(baseline, MFModel) else MFModel(baseline)
-        shared = {q.kind for q in problems_in(base, dom)}
+    beyond = problems_in(model, phys) if beyond_the_data and phys != dom else []
+    shared = set() if baseline is None else _baseline_kinds(baseline, dom)
     problems = [q for q in inside if q.kind not in shared]
     kinds = {q.kind for q in inside}
     warnings = [Problem(q.kind, f"the given file has it too, in the data's domain ({dom.describe()}): {q}")
@@ -370,4 +395,4 @@ def verify_tir(model, data_ranges=None, baseline=None) -> list:
     """Problems of ``model`` (an :class:`mftyre.MFModel`, or parameters) in the domain that matters (the data's
     range with a margin within the physical domain) that ``baseline`` does not have; [] when none
     (:func:`verification`'s ``problems``)."""
-    return verification(model, data_ranges, baseline).problems
+    return verification(model, data_ranges, baseline, beyond_the_data=False).problems
