@@ -78,6 +78,24 @@ def test_alignment_and_noise_recover_the_generators_chain(sample):
         assert est[c]["tau"] > 1.5  # the filter correlates the noise: fewer independent samples than rows
 
 
+
+@pytest.mark.parametrize("phase", [0.0, 1.5, 3.0, -2.9])
+def test_a_free_decay_gives_its_frequency_and_damping_for_any_starting_phase(phase):
+    """The cleat's free decay (150 ms at 1 kHz, noise 2 % of its amplitude): the damped sine's frequency and damping
+    are found whatever the phase it starts with. A decay starting near the opposite phase (a negative first swing)
+    took the fit thousands of iterations from phase 0 and then gave none (nan)."""
+    from mftyre.gaps.dynamic_locate import _decay
+
+    rng = np.random.default_rng(4)
+    dt, f, zeta, amp = 1e-3, 78.0, 0.11, 200.0
+    t = dt * np.arange(150)
+    w = 2 * math.pi * f
+    y = amp * np.exp(-zeta * w * t) * np.cos(w * math.sqrt(1 - zeta**2) * t + phase) + 40.0
+    got_f, got_zeta, f_se, zeta_se = _decay(y + rng.normal(0.0, 0.02 * amp, t.size), dt)
+    assert abs(got_f - f) < 3 * f_se + 0.5 and abs(got_zeta - zeta) < 3 * zeta_se + 0.01, (got_f, got_zeta)
+    assert f_se < 0.01 * f and zeta_se < 0.1 * zeta
+
+
 def test_only_testable_effects_are_tried(sample):
     runs = synthetic_runs(sample, speeds=(30.0,), steer_speeds=(), **SHORT)  # one pressure, one load, cleat only
     ok, why = dynamic_catalogue.testable_effects(runs, sample)

@@ -40,8 +40,16 @@ def _decay(y, dt):
         w = 2 * math.pi * fr
         return a * np.exp(-zeta * w * t) * np.cos(w * math.sqrt(max(1 - zeta**2, 1e-6)) * t + phi) + c
 
+    # the start: amplitude and phase at f0 and damping 0.1 by linear least squares (a phase near pi from 0, with the
+    # amplitude kept positive, took thousands of iterations)
+    w0, zeta0 = 2 * math.pi * f0, 0.1
+    decay0 = np.exp(-zeta0 * w0 * t)
+    basis = np.column_stack([decay0 * np.cos(w0 * math.sqrt(1 - zeta0**2) * t),
+                             decay0 * np.sin(w0 * math.sqrt(1 - zeta0**2) * t), np.ones_like(t)])
+    cos_part, sin_part, c0 = np.linalg.lstsq(basis, y, rcond=None)[0]
+    start = (math.hypot(cos_part, sin_part), zeta0, f0, math.atan2(-sin_part, cos_part), c0)
     try:
-        p, cov = curve_fit(model, t, y, p0=(np.max(np.abs(y)), 0.1, f0, 0.0, 0.0),
+        p, cov = curve_fit(model, t, y, p0=start,
                            bounds=([0, 0, 5, -10, -np.inf], [np.inf, 0.9, 300, 10, np.inf]), maxfev=2000)
     except (RuntimeError, ValueError):
         return (math.nan,) * 4
