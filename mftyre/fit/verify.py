@@ -347,7 +347,7 @@ _BASELINE_KINDS: dict = {}
 _BASELINE_LOCK = threading.Lock()
 
 
-def _baseline_kinds(baseline, dom: Domain) -> set:
+def _baseline_kinds(baseline, dom: Domain) -> frozenset:
     """The kinds of :func:`problems_in` of ``baseline`` (model or parameters) over ``dom``, computed once."""
     from ..model import MFModel
 

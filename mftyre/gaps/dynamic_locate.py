@@ -43,9 +43,8 @@ def _decay(y, dt):
     # the start: amplitude and phase at f0 and damping 0.1 by linear least squares (a phase near pi from 0, with the
     # amplitude kept positive, took thousands of iterations)
     w0, zeta0 = 2 * math.pi * f0, 0.1
-    decay0 = np.exp(-zeta0 * w0 * t)
-    basis = np.column_stack([decay0 * np.cos(w0 * math.sqrt(1 - zeta0**2) * t),
-                             decay0 * np.sin(w0 * math.sqrt(1 - zeta0**2) * t), np.ones_like(t)])
+    decay0, wd0 = np.exp(-zeta0 * w0 * t), w0 * math.sqrt(1 - zeta0**2)
+    basis = np.column_stack([decay0 * np.cos(wd0 * t), decay0 * np.sin(wd0 * t), np.ones_like(t)])
     cos_part, sin_part, c0 = np.linalg.lstsq(basis, y, rcond=None)[0]
     start = (math.hypot(cos_part, sin_part), zeta0, f0, math.atan2(-sin_part, cos_part), c0)
     try:
