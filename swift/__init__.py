@@ -13,9 +13,9 @@ from .enveloping import Cams, CamTable, EffectiveRoad, QuasiStatic, cam_height, 
     quasi_static, tandem_base
 from .ring import INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, RingConstants
 from .road import CircularBump, Cleat, Flat, Road, Sampled, Sine, Step, Trapezoid, TwoTrack
-from .simulate import SimResult, StepInputs, SwiftTyre
+from .simulate import SimResult, StepInputs, StepSeries, SwiftTyre
 
 __all__ = ["Road", "Flat", "Step", "Cleat", "Trapezoid", "CircularBump", "Sine", "Sampled", "TwoTrack",
            "Cams", "CamTable", "EffectiveRoad", "QuasiStatic", "cam_height", "effective_road", "effective_road_3d",
            "quasi_static", "tandem_base", "RingConstants", "STATE_NAMES", "INPUT_NAMES", "OUTPUT_NAMES",
-           "SwiftTyre", "StepInputs", "SimResult"]
+           "SwiftTyre", "StepInputs", "StepSeries", "SimResult"]

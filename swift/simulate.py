@@ -77,7 +77,7 @@ from .ring import CONTACT_PASSES, INPUT_NAMES, OUTPUT_NAMES, STATE_NAMES, RingCo
     check_pressure, contact_start, pressure_coefficients, ring_equations, turn_slip_warning
 from .road import Road
 
-__all__ = ["StepInputs", "SwiftTyre", "SimResult", "Outputs"]
+__all__ = ["StepInputs", "StepSeries", "SwiftTyre", "SimResult", "Outputs"]
 
 _S = {n: i for i, n in enumerate(STATE_NAMES)}
 #: The compiled functions' cache key includes the equations' source, so an edit never reuses an old library.
@@ -158,6 +158,45 @@ class StepInputs:
         d = self.__dict__
         d["x"], d["vx"], d["z"], d["vz"], d["load"], d["omega"], d["torque"] = x, vx, z, vz, load, omega, torque
         d["p"], d["y"], d["vy"], d["gamma"], d["psi"], d["road_camber"] = p, y, vy, gamma, psi, road_camber
+
+
+class StepSeries:
+    """The inputs of every step of a run as columns: ``name -> array`` (one value per step, at t = k dt; the fields
+    of :class:`StepInputs`, a field not given: its default); for :meth:`SwiftTyre.run`, which builds the compiled
+    loop's input rows from the columns at once instead of one :class:`StepInputs` per step (a measured run of a
+    gap search: 2 000 steps per run, 12 runs per simulation). Past its last step the last one holds."""
+
+    FIELDS = ("x", "vx", "z", "vz", "load", "omega", "torque", "p", "y", "vy", "gamma", "psi", "road_camber")
+
+    def __init__(self, **columns):
+        bad = sorted(set(columns) - set(self.FIELDS))
+        if bad:
+            raise ModelInputError(f"StepSeries: unknown input(s) {', '.join(bad)}; expected some of "
+                                  f"{', '.join(self.FIELDS)}")
+        self.columns = {k: np.asarray(v, dtype=float) for k, v in columns.items()}
+        sizes = {v.shape for v in self.columns.values()}
+        if len(sizes) != 1 or len(next(iter(sizes))) != 1 or not next(iter(sizes))[0]:
+            raise ModelInputError(f"StepSeries: every column one value per step, all of one length; got shapes "
+                                  f"{sorted(sizes)}")
+        self.steps = next(iter(sizes))[0]
+
+    def at(self, k: int) -> StepInputs:
+        k = min(k, self.steps - 1)
+        return StepInputs(**{name: float(v[k]) for name, v in self.columns.items()})
+
+    def rows(self, n: int, p_nominal: float) -> np.ndarray:
+        """The compiled loop's rows (:data:`_ROW`) of steps 0 .. n-1: the values :meth:`SwiftTyre._row` gives for
+        :meth:`at` of each step."""
+        idx = np.minimum(np.arange(n), self.steps - 1)
+        default = StepInputs()
+        rows = np.empty((n, _NI))
+        for i, name in enumerate(_ROW):
+            if name in self.columns:
+                rows[:, i] = self.columns[name][idx]
+            else:
+                value = getattr(default, name)
+                rows[:, i] = p_nominal if name == "p" and value is None else value
+        return rows
 
 
 @dataclass
@@ -573,10 +612,15 @@ class SwiftTyre:
 
     def run(self, t_end: float, inputs, dt: float = 1e-3) -> SimResult:
         """Fixed-step run from the static equilibrium. ``inputs``: a :class:`StepInputs` (constant speeds; the
-        imposed positions advance with them) or a callable ``t -> StepInputs``; outputs every ``dt``. Each step
-        is :meth:`step` with the inputs at its start; compiled, the whole loop runs in C."""
+        imposed positions advance with them), a callable ``t -> StepInputs`` or a :class:`StepSeries` (the inputs
+        of each step); outputs every ``dt``. Each step is :meth:`step` with the inputs at its start; compiled, the
+        whole loop runs in C."""
         n = int(round(t_end / dt))
-        get = inputs if callable(inputs) else _advancing(inputs)
+        series = inputs if isinstance(inputs, StepSeries) else None
+        if series is not None:
+            get = lambda t: series.at(int(round(t / dt)))  # noqa: E731
+        else:
+            get = inputs if callable(inputs) else _advancing(inputs)
         first = get(0.0)
         state = self.initial_state(first)
         states, outs = np.empty((n + 1, len(STATE_NAMES))), np.empty((n + 1, len(OUTPUT_NAMES)))
@@ -586,7 +630,9 @@ class SwiftTyre:
                 state, out = self.step(state, get(k * dt), dt)
                 states[k + 1], outs[k + 1] = state, out.array
         else:
-            if callable(inputs):
+            if series is not None:
+                rows = series.rows(n, self._p_nominal)
+            elif callable(inputs):
                 rows = np.array([self._row(get(k * dt)) for k in range(n)], dtype=float).reshape(n, _NI)
             else:  # constant speeds: the imposed positions advance as in _advancing
                 t = dt * np.arange(n)

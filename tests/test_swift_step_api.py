@@ -135,3 +135,25 @@ def test_step_inputs_stay_an_immutable_dataclass():
         u.vx = 5.0
     with pytest.raises(TypeError):
         StepInputs(omgea=3.0)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_a_step_series_runs_as_its_steps_one_by_one(tyres, compiled):
+    """run() with a StepSeries (columns, past the last step the last one holds; the pressure of a step without
+    one: the file's INFLPRES, as StepInputs(p=None)) gives, bit for bit, run() with ``t -> StepInputs`` of the same
+    steps; bad columns are named."""
+    from swift import StepSeries
+
+    tyre, n = tyres[compiled], 300 if compiled else 12
+    k = np.arange(n - 5)
+    cols = dict(x=V * k * 1e-3, vx=np.full(k.size, V), z=Z + 1e-3 * np.sin(k / 7.0), omega=np.full(k.size, V / 0.3044))
+    series = StepSeries(**cols)
+    steps = [StepInputs(**{c: float(v[i]) for c, v in cols.items()}) for i in range(k.size)]
+    by_steps = tyre.run(n * 1e-3, lambda t: steps[min(int(round(t / 1e-3)), len(steps) - 1)])
+    by_series = tyre.run(n * 1e-3, series)
+    assert np.array_equal(by_series.states, by_steps.states)
+    assert all(np.array_equal(by_series[o], by_steps[o]) for o in OUTPUT_NAMES)
+    with pytest.raises(ModelInputError, match="unknown input.*speed"):
+        StepSeries(speed=[1.0, 2.0])
+    with pytest.raises(ModelInputError, match="one length"):
+        StepSeries(x=[0.0, 1.0], vx=[1.0])
