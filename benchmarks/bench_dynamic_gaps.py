@@ -1,6 +1,6 @@
 """Hidden-effect cases of the dynamic gap finder: the pass table (and the time per case).
 
-    python benchmarks/bench_dynamic_gaps.py [--tir FILE] [--duration 2.0] [--cases NAME,...] [--quick]
+    python benchmarks/bench_dynamic_gaps.py [--tir FILE] [--duration 2.0] [--cases NAME,...] [--quick] [--workers N]
 
 Each case generates runs from the file with ONE parameter changed (the truth), with noise, a causal 4th-order
 anti-alias filter at 150 Hz and a 5 ms delay, and gives the finder the unchanged file and the whole catalogue.
@@ -12,6 +12,9 @@ the changed effect (control: nothing) and every channel whose held-out RMS error
 ends within 1.3 x of it; a change that leaves every channel within 1.1 x the noise floor is reported "invisible"
 (no run shows it). A changed file must pass verify_tir like the base file (else the case is not a tyre). Time: CPU seconds of this process plus its children (the C compiler), i.e. on one core.
 Default file: ../shared/reference/tir/TNO_car205_60R15.tir, else tir_files/car_205_60R15_mf62_swift.tir.
+``--workers N``: the simulations on a local cluster of N worker processes (mftyre.runner), started before the first
+case; CPU then counts the workers too. Serial and parallel side by side in one run:
+``for w in 0 2; do python benchmarks/bench_dynamic_gaps.py --cases "sidewall over pressure" --workers $w; done``.
 
     python benchmarks/bench_dynamic_gaps.py --rig [--duration 0.6] [--cases NAME,...]
 
@@ -123,7 +126,7 @@ def run_rig_case(name, duration, seed=11):
     chain = rig_chain(chain_seed)
     runs = synthetic_runs(model, truth=truth, duration=duration, lead=0.3, seed=seed, **setting, **chain)
     t0, w0 = cpu(), time.perf_counter()
-    rep = find_dynamic_gaps(runs, model, model_kind=setting.get("model_kind", "auto"))
+    rep = find_dynamic_gaps(runs, model, model_kind=setting.get("model_kind", "auto"), runner=RUNNER)
     seconds, wall = cpu() - t0, time.perf_counter() - w0
     found = sorted(p for c in rep.effects_added for p in c.parameters)
     named = (found == [] if not params else all(any(p in c.parameters for c in rep.effects_added) for p in params)
@@ -144,8 +147,23 @@ def run_rig_case(name, duration, seed=11):
 
 
 def cpu() -> float:
+    """CPU seconds of this process, its finished children (the C compiler) and its live ones (the runner's worker
+    processes and their nannies)."""
+    import psutil
+
     s, c = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
-    return s.ru_utime + s.ru_stime + c.ru_utime + c.ru_stime
+    live = 0.0
+    for child in psutil.Process().children(recursive=True):
+        try:
+            t = child.cpu_times()
+            live += t.user + t.system
+        except psutil.Error:
+            pass
+    return s.ru_utime + s.ru_stime + c.ru_utime + c.ru_stime + live
+
+
+#: The runner of --workers (None: serially in this process).
+RUNNER = None
 
 
 def run_case(model, name, duration, seed=11):
@@ -162,7 +180,7 @@ def run_case(model, name, duration, seed=11):
         raise SystemExit(f"case {name!r}: the changed file fails verification: {new_problems[0]}")
     runs = synthetic_runs(model, truth=truth, duration=duration, lead=0.3, seed=seed, **setting)
     t0, w0 = cpu(), time.perf_counter()
-    rep = find_dynamic_gaps(runs, model, model_kind=setting.get("model_kind", "auto"))
+    rep = find_dynamic_gaps(runs, model, model_kind=setting.get("model_kind", "auto"), runner=RUNNER)
     seconds, wall = cpu() - t0, time.perf_counter() - w0
     names = rep.effect_names
     named = (names == [] if param is None else len(names) == 1 and f"{param}" in " ".join(
@@ -185,7 +203,27 @@ def main(argv=None) -> int:
     ap.add_argument("--cases", help="comma-separated case names (default: all)")
     ap.add_argument("--quick", action="store_true", help="0.6 s runs")
     ap.add_argument("--rig", action="store_true", help="the rig suite (RIG_CASES) instead")
+    ap.add_argument("--workers", type=int, default=0,
+                    help="simulate on a local cluster of N worker processes (mftyre.runner; default 0: serially "
+                         "in this process); the cluster is started before the first case (its start is printed)")
     a = ap.parse_args(argv)
+    global RUNNER
+    if a.workers:
+        from mftyre.runner import Runner, default_workers
+
+        RUNNER = Runner(workers=a.workers)
+        w0 = time.perf_counter()
+        RUNNER.run(default_workers, {"start": {}})  # a task that does nothing: the cluster up, its workers ready
+        print(f"a local cluster of {a.workers} worker processes started in {time.perf_counter() - w0:.1f} s; CPU "
+              "below: this process and every worker")
+    try:
+        return _main(a)
+    finally:
+        if RUNNER is not None:
+            RUNNER.close()
+
+
+def _main(a) -> int:
     if a.rig:
         warnings.simplefilter("ignore")
         names = [n.strip() for n in a.cases.split(",")] if a.cases else list(RIG_CASES)

@@ -153,6 +153,15 @@ class Runner:
             self._client = Client(self._cluster)
         return self._client
 
+    def slots(self) -> int:
+        """How many tasks run at once: 1 when serial, else the worker threads of the cluster (starting it)."""
+        if self.serial:
+            return 1
+        if self.scheduler is None:
+            return self.workers
+        workers = self.client().scheduler_info().get("workers", {})
+        return max(1, sum(int(w.get("nthreads", 1)) for w in workers.values()))
+
     def close(self) -> None:
         for part in (self._client, self._cluster):
             if part is not None:
@@ -364,17 +373,20 @@ class _Progress:
 
 
 # ------------------------------------------------------------------------------------------ command line
-def add_runner_options(parser) -> None:
-    """``--workers N``, ``--scheduler ADDRESS``, ``--resume`` (for the commands that run tasks)."""
+def add_runner_options(parser, *, resume: bool = True, what: str = "") -> None:
+    """``--workers N``, ``--scheduler ADDRESS`` and (``resume``) ``--resume``, for the commands that run tasks;
+    ``what``: what runs in parallel, said in the group's title."""
     from .arguments import number_type
 
-    group = parser.add_argument_group("parallel work (dask.distributed)")
+    group = parser.add_argument_group("parallel work (dask.distributed)" + (f": {what}" if what else ""))
     group.add_argument("--workers", type=number_type(0, integer=True), default=None, metavar="N",
                        help=f"worker processes of a local cluster (default: the cores, {default_workers()}; 0: "
                             "serially in this process; ignored with a scheduler)")
     group.add_argument("--scheduler", metavar="ADDRESS", default=None,
                        help=f"use the running dask scheduler at ADDRESS (tcp://host:8786) and its workers instead "
                             f"(default: ${SCHEDULER_VARIABLE} when set)")
+    if not resume:
+        return
     group.add_argument("--resume", action="store_true",
                        help="keep the tasks already done (same inputs) in the tasks folder of the outputs, run the "
                             "rest and write the outputs again")

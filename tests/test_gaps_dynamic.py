@@ -10,6 +10,7 @@ its run-time input: a refit compiles nothing).
 """
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -140,12 +141,6 @@ def test_sidewall_pressure_effect_is_named_on_the_tno_file():
     _assert_found(rep, truth, "SWIFT_PSTIFF")
 
 
-def test_rolling_radius_variation_is_named_on_the_sample_file(sample):
-    rep, truth = _hidden_case(sample, {"SWIFT_REVAR": 0.4},
-                              ("SWIFT_REVAR", "LONGITUDINAL_STIFFNESS"))
-    _assert_found(rep, truth, "SWIFT_REVAR")
-
-
 def test_lateral_relaxation_is_named_from_step_steer(sample):
     rep, truth = _hidden_case(sample, {"LATERAL_STIFFNESS": 0.7 * sample.params.LATERAL_STIFFNESS},
                               ("LATERAL_STIFFNESS", "YAW_STIFFNESS", "FREQ_LAT"), speeds=(), pressures=None,
@@ -153,19 +148,74 @@ def test_lateral_relaxation_is_named_from_step_steer(sample):
     _assert_found(rep, truth, "LATERAL_STIFFNESS")
 
 
-def test_command_line(sample, short_runs, tmp_path, capsys):
+def test_command_line(sample, short_runs, tmp_path, capsys, monkeypatch):
     from mftyre.cli import main
 
     data = write_runs(short_runs, tmp_path / "runs.csv")
     out = tmp_path / "improved.tir"
+    import mftyre.gaps.dynamic as dynamic
+
+    given = []
+
+    def recorded(*args, runner=None, **kw):  # the runner the options made (its cluster not started), then the search
+        given.append(runner.describe())
+        return find_dynamic_gaps(*args, **kw)
+
+    monkeypatch.setattr(dynamic, "find_dynamic_gaps", recorded)
     assert main(["gaps", "--dynamic", str(data), "--model", str(SAMPLE), "-o", str(out), "--report",
-                 str(tmp_path / "rep"), "--quiet"]) == 0
+                 str(tmp_path / "rep"), "--quiet", "--workers", "3"]) == 0
+    assert given == ["a local cluster of 3 worker processes"]
     text = capsys.readouterr().out
     assert "nothing added" in text and out.exists() and (tmp_path / "rep" / "histories.png").exists()
     assert mftyre.load_tir(out).params.SWIFT_REVAR == sample.params.SWIFT_REVAR
     # an existing output needs --overwrite; DATA and --dynamic exclude each other
     assert main(["gaps", "--dynamic", str(data), "--model", str(SAMPLE), "-o", str(out), "--quiet"]) == 2
     assert main(["gaps", str(data), "--dynamic", str(data), "--model", str(SAMPLE)]) == 2
+
+
+def test_rolling_radius_variation_is_named_and_on_the_runner_the_search_is_the_serial_one_bit_for_bit(sample,
+                                                                                                        tmp_path):
+    """The sample file's rolling radius variation is named; on a local cluster of 2 worker processes
+    (mftyre.runner: the runs of each simulation and the parameter sets of each Jacobian as tasks, the model sent as
+    its .tir text with the road layout of all the runs) the search is the serial one: the same effect added, every
+    candidate's refitted values and chi-squares, every error and every simulated history equal to the last bit, the
+    same file written."""
+    from mftyre.runner import Runner
+
+    truth = sample.with_params(SWIFT_REVAR=0.4)
+    runs = synthetic_runs(sample, truth=truth, speeds=(20.0, 60.0), pressures=(1.9e5, 2.5e5), steer_speeds=(),
+                          seed=7, **SHORT)
+    options = dict(catalogue=_effects("SWIFT_REVAR", "LONGITUDINAL_STIFFNESS"), refit_top=2)
+    serial = find_dynamic_gaps(runs, sample, **options)
+    _assert_found(serial, truth, "SWIFT_REVAR")
+    with Runner(workers=2) as runner:
+        parallel = find_dynamic_gaps(runs, sample, runner=runner, **options)
+    assert sum(math.isfinite(c.chi2_train_after) for r in serial.rounds for c in r) >= 2  # refits ran
+    as_json = [json.dumps({k: v for k, v in rep.to_dict().items() if k != "seconds"}) for rep in (serial, parallel)]
+    assert as_json[1] == as_json[0]
+    for r in runs:
+        for c in r.measured:
+            assert np.array_equal(parallel.pred_after[r.name][c], serial.pred_after[r.name][c])
+    for name, rep in (("serial", serial), ("parallel", parallel)):
+        rep.write_tir(tmp_path / f"{name}.tir")
+    assert (tmp_path / "parallel.tir").read_text() == (tmp_path / "serial.tir").read_text()
+
+
+def test_a_simulation_task_is_the_simulation_and_returns_what_went_wrong(sample, short_runs):
+    """simulate_task (what a worker runs: the model from its .tir text, the tyres from the road layout) gives the
+    in-process simulation's outputs exactly; a run beyond its road table comes back as the model's error, not a
+    crash of the task."""
+    from mftyre.gaps.dynamic_runs import road_layout, run_data, simulate_task
+    from mftyre.tir import tir_text
+
+    layout = [[*key, *xr] for key, xr in road_layout(short_runs).items()]
+    got = simulate_task(tir_text(sample.params), sample.side, "swift", layout, [run_data(r) for r in short_runs])
+    want = simulate(sample, short_runs)
+    assert set(got["outputs"]) == set(want)
+    for name, channels in want.items():
+        assert all(np.array_equal(np.asarray(got["outputs"][name][c]), v) for c, v in channels.items())
+    short = [[*row[:3], row[3], row[3] + 0.5] for row in layout]
+    assert "error" in simulate_task(tir_text(sample.params), sample.side, "swift", short, [run_data(short_runs[0])])
 
 
 def test_stated_uncertainty_covers_the_truth_with_correlated_noise_and_model_error():

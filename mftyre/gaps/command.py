@@ -13,6 +13,7 @@ __all__ = ["register", "run"]
 
 def register(subparsers) -> None:
     from ..arguments import closing_options, command_parser, number_type
+    from ..runner import add_runner_options
 
     p = command_parser(
         subparsers, "gaps", run, data=True, help="find the effects a .tir model misses in measured data, add them, show the gap shrink",
@@ -40,6 +41,7 @@ def register(subparsers) -> None:
                    help="family-wise significance level (default 1e-3)")
     p.add_argument("--max-effects", type=number_type(0, integer=True), default=5,
                    help="add at most this many effects (default 5)")
+    add_runner_options(p, resume=False, what="the SWIFT simulations of --dynamic")
     p.add_argument("--channels", help="comma-separated channels to use (default: all measured of FX,FY,MZ,MX,MY,FZ)")
     closing_options(p, overwrite="replace existing output files", quiet="no progress output", data=True)
 

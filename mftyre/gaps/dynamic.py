@@ -59,7 +59,7 @@ from scipy import stats
 from ..errors import DataError, ModelInputError
 from .dynamic_catalogue import DYNAMIC_CATALOGUE, testable_effects
 from .dynamic_locate import compare, features
-from .dynamic_runs import MODEL_KINDS, DynamicRun, SwiftTyres, measurement_chain, read_runs, simulate
+from .dynamic_runs import MODEL_KINDS, DynamicRun, SwiftTyres, measurement_chain, read_runs, road_layout, simulate
 from .locate import Finding
 from .search import Candidate, judge, matches, search
 
@@ -436,14 +436,22 @@ def _load(data, model):
 class _Sim:
     """Simulate a model on runs (``kind``: :data:`MODEL_KINDS`); counts evaluations. What the last few parameter
     sets gave on each run is kept (a refit simulates its result on the training runs, then on all: only the
-    held-out runs are simulated again; the outputs are read-only, channel -> array per run), and so are their SWIFT tyres, built for every
-    run, their cam tables kept across parameter sets with the same cams (:class:`SwiftTyres`)."""
+    held-out runs are simulated again; the outputs are read-only, channel -> array per run), and so are their SWIFT
+    tyres, built for every run, their cam tables kept across parameter sets with the same cams (:class:`SwiftTyres`).
+
+    ``runner`` (:class:`mftyre.runner.Runner`, not serial; the SWIFT wheel: the relaxed one is a few vectorised
+    CasADi calls): the runs of every model asked for at once (:meth:`many`) go out as tasks (:func:`simulate_task`:
+    the model's .tir text, the road layout of all the runs, some of its runs), so the runs of one simulation and
+    the models of one Jacobian run in parallel; each worker keeps the tyres it built. The outputs are those of the
+    serial simulation, bit for bit."""
 
     KEPT = 6
 
-    def __init__(self, runs, kind="swift"):
+    def __init__(self, runs, kind="swift", runner=None):
         self.runs, self.kind, self.evaluations = runs, kind, 0
+        self.runner = None if runner is None or runner.serial or kind != "swift" else runner
         self._tables, self._tyres, self._outputs = {}, {}, {}
+        self._layout = [[*key, *xr] for key, xr in road_layout(runs).items()] if kind == "swift" else []
 
     @staticmethod
     def _key(model):
@@ -462,21 +470,85 @@ class _Sim:
         return self._kept(self._tyres, self._key(model), lambda: SwiftTyres(model, self.runs, self._tables))
 
     def __call__(self, model, runs=None):
+        out, = self.many([model], runs)
+        if isinstance(out, ModelInputError):
+            raise out
+        return out
+
+    def many(self, models, runs=None) -> list:
+        """Each of ``models`` simulated on ``runs`` (default: all): per model, run name -> channel -> output, or the
+        :class:`ModelInputError` that model raised."""
         runs = runs or self.runs
-        self.evaluations += 1
-        key = self._key(model)
-        done = self._kept(self._outputs, key, dict)
-        todo = [r for r in runs if r.name not in done]
-        if todo:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                new = simulate(model, todo, model_kind="relaxed") if self.kind == "relaxed" else \
-                    simulate(model, todo, self.tyres(model))
-            for name, channels in new.items():
-                for values in channels.values():
-                    values.setflags(write=False)
-                done[name] = MappingProxyType(channels)
-        return {r.name: done[r.name] for r in runs}
+        self.evaluations += len(models)
+        keys = [self._key(m) for m in models]
+        found = {}  # model key -> run name -> outputs, or the error
+        for key in keys:
+            if key not in found:
+                found[key] = dict(self._outputs.get(key, {}))
+        todo = {key: (m, [r for r in runs if r.name not in found[key]]) for key, m in zip(keys, models)}
+        todo = {key: job for key, job in todo.items() if job[1]}
+        if self.runner is None:
+            for key, (model, missing) in todo.items():
+                try:
+                    with warnings.catch_warnings():
+                        warnings.simplefilter("ignore")
+                        found[key].update(simulate(model, missing, model_kind="relaxed") if self.kind == "relaxed"
+                                          else simulate(model, missing, self.tyres(model)))
+                except ModelInputError as exc:
+                    found[key] = exc
+        elif todo:
+            self._on_runner(todo, found)
+        answers = []
+        for key in keys:
+            done = found[key]
+            if isinstance(done, ModelInputError):
+                answers.append(done)
+                continue
+            kept = self._kept(self._outputs, key, dict)
+            for name, channels in done.items():
+                if name not in kept:
+                    for values in channels.values():
+                        values.setflags(write=False)
+                    kept[name] = MappingProxyType(channels)
+            answers.append({r.name: kept[r.name] for r in runs})
+        return answers
+
+    def _on_runner(self, todo: dict, found: dict) -> None:
+        """The (model, run) pairs of ``todo`` cut into as many equal stretches as the runner has workers, one task
+        per model of each stretch (:func:`simulate_task`): a model's tyres are built once per task, a batch of
+        models spreads over the workers by model, the runs of one model by run."""
+        from ..runner import RunnerError
+        from ..tir import tir_text
+        from .dynamic_runs import run_data, simulate_task
+
+        pairs = [(key, r) for key, (_, missing) in todo.items() for r in missing]
+        size = -(-len(pairs) // max(1, min(self.runner.slots(), len(pairs))))
+        texts, tasks, owner = {}, {}, {}
+        for start in range(0, len(pairs), size):
+            pieces = {}
+            for key, r in pairs[start:start + size]:
+                pieces.setdefault(key, []).append(r)
+            for key, piece in pieces.items():
+                model = todo[key][0]
+                if key not in texts:
+                    texts[key] = tir_text(model.params)
+                name = f"s{len(tasks)}"
+                tasks[name] = dict(tir=texts[key], side=model.side, model_kind=self.kind, layout=self._layout,
+                                   runs=[run_data(r) for r in piece])
+                owner[name] = key
+        outcome = self.runner.run(simulate_task, tasks)
+        if outcome.failures:
+            raise RunnerError("a simulation task failed: " + outcome.failures[0].summary()
+                              + "\n" + outcome.failures[0].error)
+        for name, result in outcome.results.items():
+            key = owner[name]
+            if isinstance(found[key], ModelInputError):
+                continue
+            if "error" in result:
+                found[key] = ModelInputError(result["error"])
+                continue
+            for run, channels in result["outputs"].items():
+                found[key][run] = {c: np.asarray(v, float) for c, v in channels.items()}
 
 
 #: The parameters of the SWIFT wheel a file must have for model kind "auto" to choose it.
@@ -584,16 +656,17 @@ def _less_stable(new: dict, given: dict) -> str:
 
 def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alpha: float = 1e-3,
                       max_effects: int = 3, catalogue=DYNAMIC_CATALOGUE, refit_top: int = REFIT_TOP,
-                      model_kind: str = "auto", progress=None) -> DynamicGapReport:
+                      model_kind: str = "auto", progress=None, runner=None) -> DynamicGapReport:
     """Locate, name and add the dynamic effects ``model`` misses in the runs ``data`` (module text): the one
     search of the gap finder (:func:`mftyre.gaps.search.search`) on the evidence of the runs (:class:`_Runs`);
     ``refit_top``: candidates refitted per round after the screening; ``model_kind``: "swift", "relaxed" or
-    "auto" (:func:`model_kind_for`)."""
+    "auto" (:func:`model_kind_for`); ``runner``: a :class:`mftyre.runner.Runner` to simulate the SWIFT wheel's runs
+    in parallel on (:class:`_Sim`; the same report as without)."""
     t_start = time.perf_counter()
     say = progress or (lambda text: None)
     runs, model_given = _load(data, model)
     model_kind = model_kind_for(model_given, runs, model_kind)
-    sim = _Sim(runs, model_kind)
+    sim = _Sim(runs, model_kind, runner)
     say(f"{len(runs)} runs; simulating the given model ({model_kind} wheel)")
     pred0 = sim(model_given)
     held = _holdout(runs, holdout, seed)
@@ -682,8 +755,9 @@ class _Runs:
         step, *_ = np.linalg.lstsq(chain_cols, -r_train, rcond=None)
         chain_only = float(r_train @ r_train - np.sum((r_train + chain_cols @ step) ** 2))
         screened = []
+        self._sensitivity([e for e, *_ in tried], keys_train, r_train)
         for e, keep, _ in tried:
-            J = np.column_stack([self._sensitivity(e, keys_train, r_train), chain_cols])
+            J = np.column_stack([self._jac[e.name], chain_cols])
             step, *_ = np.linalg.lstsq(J, -r_train, rcond=None)
             dec = float(r_train @ r_train - np.sum((r_train + J @ step) ** 2)) - chain_only
             screened.append((Candidate(e.name, e.parameters, screened=dec), e))
@@ -724,24 +798,32 @@ class _Runs:
         refitted.sort(key=lambda t: -t[0].score)
         return refitted + rest
 
-    def _sensitivity(self, e, keys_train, r_train):
-        """d (weighted training residuals) / d (refit coordinates) of effect ``e`` by finite differences (one
-        simulation of its training runs per parameter), kept until the model changes."""
-        if e.name not in self._jac:
+    def _sensitivity(self, effects, keys_train, r_train) -> None:
+        """d (weighted training residuals) / d (refit coordinates) of each of ``effects`` by finite differences
+        (one simulation of its training runs per parameter, all of them at once: :meth:`_Sim.many`), kept in
+        ``_jac`` until the model changes."""
+        todo = [e for e in effects if e.name not in self._jac]
+        by_runs, cols = {}, {}  # the effects' training runs -> [(effect, column, model)]; (effect, column) -> column
+        for e in todo:
             base = given_values(self.model, e.parameters)
-            sub = [r for r in self.train_runs if r.kind in e.kinds]
-            cols = []
+            sub = tuple(r.name for r in self.train_runs if r.kind in e.kinds)
             for j in range(len(e.parameters)):
                 d = np.zeros(len(e.parameters))
                 d[j] = 0.25
                 try:
-                    rj = self.prob.residuals({**self.pred, **self.sim(_with(self.model, e, base, d), sub)},
-                                             self.train)
-                    cols.append((np.concatenate([rj[k] for k in keys_train]) - r_train) / 0.25)
+                    by_runs.setdefault(sub, []).append((e, j, _with(self.model, e, base, d)))
                 except ModelInputError:
-                    cols.append(np.zeros_like(r_train))
-            self._jac[e.name] = np.column_stack(cols)
-        return self._jac[e.name]
+                    cols[e.name, j] = np.zeros_like(r_train)  # no model there: no sensitivity
+        for sub, jobs in by_runs.items():
+            sub_runs = [r for r in self.train_runs if r.name in sub]
+            for (e, j, _), out in zip(jobs, self.sim.many([m for *_, m in jobs], sub_runs)):
+                if isinstance(out, ModelInputError):
+                    cols[e.name, j] = np.zeros_like(r_train)
+                    continue
+                rj = self.prob.residuals({**self.pred, **out}, self.train)
+                cols[e.name, j] = (np.concatenate([rj[k] for k in keys_train]) - r_train) / 0.25
+        for e in todo:
+            self._jac[e.name] = np.column_stack([cols[e.name, j] for j in range(len(e.parameters))])
 
     def verify(self, cand, new, m: int):
         """(new, '') when the improved model builds, :func:`mftyre.fit.verify.verify_tir` finds no problem the
@@ -861,19 +943,27 @@ def _refit(effect, model, pred, prob, sim, runs, train, keys_train):
     train_runs = [r for r in runs if r.name in train]
     simulated = {}
 
-    def predict(dp):  # the candidate's training prediction, one simulation per parameter vector
-        key = tuple(np.round(dp, 12))
-        if key not in simulated:
-            if len(simulated) > 2 * k + 4:
-                simulated.clear()
-            p = None
+    def prefetch(dps):  # the candidate's training predictions, one simulation per parameter vector, at once
+        keys = {tuple(np.round(dp, 12)): dp for dp in dps}
+        new = {key: dp for key, dp in keys.items() if key not in simulated}
+        if len(simulated) + len(new) > 2 * k + 4:
+            kept = {key: simulated[key] for key in keys if key in simulated}
+            simulated.clear()
+            simulated.update(kept)
+        models = {}
+        for key, dp in new.items():
+            simulated[key] = None  # out of bounds, or the model cannot be built or simulated
             if _bounds_ok(effect, dp):
                 try:
-                    p = {**pred, **sim(_with(model, effect, base, dp), sub_train)}
+                    models[key] = _with(model, effect, base, dp)
                 except ModelInputError:
-                    p = None
-            simulated[key] = p
-        return simulated[key]
+                    pass
+        for key, out in zip(models, sim.many(list(models.values()), sub_train) if models else []):
+            simulated[key] = None if isinstance(out, ModelInputError) else {**pred, **out}
+        return [simulated[key] for key in keys]
+
+    def predict(dp):
+        return prefetch([dp])[0]
 
     top = NYQUIST_SHARE * 0.5 / max(r.dt for r in runs)  # the filter's cutoff stays below Nyquist
 
@@ -891,6 +981,7 @@ def _refit(effect, model, pred, prob, sim, runs, train, keys_train):
         return v if np.all(np.isfinite(v)) else None
 
     def jacobian(delta, r, chain0, free):  # finite differences (a parameter column: one simulation; chain: none)
+        prefetch([delta[:k] + 0.1 * (np.arange(k) == j) for j in free if j < k])
         cols = []
         for j in free:
             d = delta.copy()

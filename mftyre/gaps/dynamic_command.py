@@ -2,7 +2,7 @@
 of the dynamic gap finder (:func:`mftyre.gaps.dynamic.find_dynamic_gaps`); options shared with ``mftyre gaps``
 (``--holdout``, ``--seed``, ``--alpha``, ``--max-effects``, ``--overwrite``, ``--quiet``) and the reading options of
 every data file (``--columns``, ``--units``, ``--axes``, ``--no-check``: :func:`mftyre.data.read_time_histories`);
-``--model-kind``."""
+``--model-kind``; ``--workers``, ``--scheduler`` (:mod:`mftyre.runner`: the SWIFT simulations in parallel)."""
 from __future__ import annotations
 
 __all__ = ["run_dynamic"]
@@ -13,6 +13,7 @@ def run_dynamic(args) -> int:
     from ..arguments import command_error, progress_printer, refused_outputs
     from ..data import speaking_cli
     from ..errors import MFTyreError
+    from ..runner import runner_from_args
     from .dynamic import find_dynamic_gaps, values_text
     from .dynamic_runs import read_runs
 
@@ -30,9 +31,10 @@ def run_dynamic(args) -> int:
         with speaking_cli():
             runs = read_runs(args.dynamic, columns=args.columns, units=args.units, axes=args.axes,
                              check=not args.no_check)
-        rep = find_dynamic_gaps(runs, args.model, holdout=args.holdout, seed=args.seed,
-                                alpha=args.alpha, max_effects=args.max_effects, model_kind=args.model_kind,
-                                progress=progress)
+        with runner_from_args(args) as runner:
+            rep = find_dynamic_gaps(runs, args.model, holdout=args.holdout, seed=args.seed,
+                                    alpha=args.alpha, max_effects=args.max_effects, model_kind=args.model_kind,
+                                    progress=progress, runner=runner)
         if args.output:
             rep.write_tir(args.output, overwrite=args.overwrite)
         if args.json:

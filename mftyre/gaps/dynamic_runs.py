@@ -31,8 +31,11 @@ model with measurement noise, a causal anti-alias filter and a time offset.
 """
 from __future__ import annotations
 
+import functools
 import math
+import threading
 import warnings
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -220,14 +223,27 @@ def write_runs(runs, path, *, overwrite: bool = False) -> Path:
 
 
 # ---------------------------------------------------------------------------------------------------- the model
-class SwiftTyres:
-    """SWIFT tyres of one model, one per (road, axle mode, rim mode): built once, reused by every run on that
-    road; the tyres of one mode share their equations (:meth:`swift.SwiftTyre.share_equations`), their static
-    equilibrium the structure's (``equilibrium="structure"``: one graph for every parameter set). ``tables``: a dict
-    of cam-height tables kept across models (road, range, cams -> :class:`swift.enveloping.CamTable`): a model with
-    the same cams over a flat-track road reuses them."""
+def road_layout(runs) -> dict:
+    """(road, axle mode, rim mode) -> the x range (m) its SWIFT tyre's road table must cover: the runs on that
+    road, 1 m either side. Plain data: a worker given it builds the tyres :class:`SwiftTyres` builds here."""
+    layout = {}
+    for r in runs:
+        key = (r.road, r.axle, r.rim)
+        lo, hi = layout.get(key, (math.inf, -math.inf))
+        x = r.inputs["X"]
+        layout[key] = (min(lo, float(x.min()) - 1.0), max(hi, float(x.max()) + 1.0))
+    return layout
 
-    def __init__(self, model, runs, tables: dict | None = None):
+
+class SwiftTyres:
+    """SWIFT tyres of one model, one per (road, axle mode, rim mode) of :func:`road_layout` (of ``runs``, or
+    ``layout`` as given): built once, reused by every run on that road; the tyres of one mode share their equations
+    (:meth:`swift.SwiftTyre.share_equations`), their static equilibrium the structure's (``equilibrium="structure"``:
+    one graph for every parameter set). ``tables``: the cam-height tables kept across models (a dict, or anything with
+    its ``get`` and item assignment; (road, range, cams) -> :class:`swift.enveloping.CamTable`): a model with the same
+    cams over a flat-track road reuses them."""
+
+    def __init__(self, model, runs=(), tables: dict | None = None, *, layout: dict | None = None):
         from swift import SwiftTyre
         from swift.enveloping import Cams
         from swift.road import parse_road
@@ -236,13 +252,8 @@ class SwiftTyres:
         tables = {} if tables is None else tables
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the .tir's unmodelled parameters: said once by the caller
-            for r in runs:
-                key = (r.road, r.axle, r.rim)
-                lo, hi = self.tyres.get(key, (None, (math.inf, -math.inf)))[1]
-                x = r.inputs["X"]
-                self.tyres[key] = (None, (min(lo, float(x.min()) - 1.0), max(hi, float(x.max()) + 1.0)))
             cams, modes = Cams.from_params(model.params, warn=False), {}
-            for key, (_, xr) in list(self.tyres.items()):
+            for key, xr in (road_layout(runs) if layout is None else layout).items():
                 try:
                     road = parse_road(key[0])
                     flat_track = not road.varies_with_y  # its table depends on the cams alone
@@ -263,18 +274,18 @@ class SwiftTyres:
 
 
 def _step_inputs(run: DynamicRun, p_nominal: float):
-    from swift import StepInputs
+    """The run's inputs per sample as the SWIFT wheel's :class:`swift.StepSeries` (the axle's vertical speed from
+    its height by central differences; the pressure ``p_nominal`` where the run has none)."""
+    from swift import StepSeries
 
     i = run.inputs
-    n = run.t.size
     z = i.get("Z")
-    vz = np.gradient(z, run.t) if z is not None else None
-    cols = dict(x=i["X"], vx=i["VX"], z=z, vz=vz, load=i.get("LOAD"), omega=i.get("OMEGA"), torque=i.get("TORQUE"),
-                psi=i.get("PSI"), p=i.get("P"))
+    cols = dict(x=i["X"], vx=i["VX"], z=z, vz=np.gradient(z, run.t) if z is not None else None, load=i.get("LOAD"),
+                omega=i.get("OMEGA"), torque=i.get("TORQUE"), psi=i.get("PSI"), p=i.get("P"))
     cols = {k: v for k, v in cols.items() if v is not None}
     if "p" not in cols:
-        cols["p"] = np.full(n, p_nominal)
-    return [StepInputs(**{k: float(v[k_]) for k, v in cols.items()}) for k_ in range(n)]
+        cols["p"] = np.full(run.t.size, float(p_nominal))
+    return StepSeries(**cols)
 
 
 def simulate(model, runs, tyres: SwiftTyres | None = None, *, model_kind: str = "swift") -> dict:
@@ -290,9 +301,7 @@ def simulate(model, runs, tyres: SwiftTyres | None = None, *, model_kind: str = 
     out = {}
     for r in runs:
         tyre = tyres.tyre(r)
-        rows = _step_inputs(r, model.params.NOMPRES)
-        res = tyre.run(r.t[-1] - r.t[0], lambda t, rows=rows, dt=r.dt: rows[min(int(round(t / dt)), len(rows) - 1)],
-                       dt=r.dt)
+        res = tyre.run(r.t[-1] - r.t[0], _step_inputs(r, model.params.NOMPRES), dt=r.dt)
         n = r.t.size
         out[r.name] = {c: np.asarray(res[MODEL_OUTPUT[c]][:n], float) for c in r.measured}
     return out
@@ -348,9 +357,90 @@ def simulate_relaxed(model, runs) -> dict:
     return out
 
 
+# ------------------------------------------------------------------------------- simulation tasks (mftyre.runner)
+def run_data(run: DynamicRun) -> dict:
+    """A run as the plain data of a task (:mod:`mftyre.runner`): what :func:`simulate_task` rebuilds it from."""
+    return dict(name=run.name, t=run.t, inputs=dict(run.inputs), road=run.road, measured=dict(run.measured))
+
+
+#: Per process: (the .tir text's SHA-256, side, road layout) -> (model, SwiftTyres), the last few kept; the cam
+#: tables of the process, the most recently used kept (as :class:`SwiftTyres` keeps them).
+_TASK_TYRES: dict = {}
+_TASK_TABLES: "OrderedDict" = OrderedDict()
+_TASK_KEPT, _TABLES_KEPT = 6, 64
+_TASK_LOCK = threading.Lock()
+
+
+class _RecentTables:
+    """The process's cam tables as :class:`SwiftTyres` reads and writes them (``get``, ``[key] = table``): a read
+    marks a table recently used, a write beyond :data:`_TABLES_KEPT` drops the least recently used."""
+
+    def get(self, key, default=None):
+        with _TASK_LOCK:
+            if key in _TASK_TABLES:
+                _TASK_TABLES.move_to_end(key)
+                return _TASK_TABLES[key]
+        return default
+
+    def __setitem__(self, key, table):
+        with _TASK_LOCK:
+            _TASK_TABLES[key] = table
+            _TASK_TABLES.move_to_end(key)
+            while len(_TASK_TABLES) > _TABLES_KEPT:
+                _TASK_TABLES.popitem(last=False)
+
+
+def simulate_task(tir: str, side: str, model_kind: str, layout: list, runs: list) -> dict:
+    """Runs of one model simulated where a task lands (a worker of :mod:`mftyre.runner`): the model built from its
+    .tir text (``tir``, written by :func:`mftyre.tir.tir_text`: every value with all its digits) on ``side``, its
+    SWIFT tyres from ``layout`` (:func:`road_layout` of every run of the search, as ``[road, axle, rim, x_lo,
+    x_hi]`` rows: the same tyres as in the process that sent it, so the same outputs bit for bit) and kept for the
+    model's next runs; ``runs``: :func:`run_data` of each. ``{"outputs": run name -> channel -> list of floats}``,
+    or ``{"error": the message}`` when the model cannot be built or simulated on a run (:class:`ModelInputError`)."""
+    import hashlib
+
+    from ..model import MFModel
+    from ..tir import parse_tir
+
+    todo = [DynamicRun(**r) for r in runs]
+    key = (hashlib.sha256(tir.encode()).hexdigest(), side, model_kind, tuple(map(tuple, layout)))
+    try:
+        with _TASK_LOCK:
+            built = _TASK_TYRES.get(key)
+        if built is None:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # the file's unmodelled parameters: said once by the caller
+                model = MFModel(parse_tir(tir, "<task>"), side=side)
+                tyres = None if model_kind != "swift" else SwiftTyres(
+                    model, tables=_RecentTables(), layout={(road, axle, rim): (lo, hi) for road, axle, rim, lo, hi
+                                                           in layout})
+            built = (model, tyres)
+            with _TASK_LOCK:
+                if len(_TASK_TYRES) >= _TASK_KEPT:
+                    del _TASK_TYRES[next(iter(_TASK_TYRES))]
+                _TASK_TYRES[key] = built
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            out = simulate(built[0], todo, built[1], model_kind=model_kind)
+    except ModelInputError as exc:
+        return {"error": str(exc)}
+    return {"outputs": {name: {c: v.tolist() for c, v in channels.items()} for name, channels in out.items()}}
+
+
 # ---------------------------------------------------------------------------------------------------- synthetic
 #: Measurement noise (standard deviation at the sensor, before the anti-alias filter) of the generator.
 NOISE = {"FX": 20.0, "FY": 20.0, "FZ": 30.0, "MZ": 1.5, "SPIN": 0.05}
+
+
+@functools.lru_cache(maxsize=256)
+def _butterworth(order: int, cutoff: float, rate: float):
+    """The Butterworth low-pass as second-order sections and its unit-step initial state (designed once per
+    order, cutoff and sample rate: a gap search filters every channel of every run at each evaluation); shared: never
+    written to (scipy's sosfilt reads the sections, and the caller scales the state into a new array)."""
+    from scipy import signal as sps
+
+    sos = sps.butter(order, cutoff, fs=rate, output="sos")
+    return sos, sps.sosfilt_zi(sos)
 
 
 def measurement_chain(signal: np.ndarray, dt: float, cutoff: float | None, delay: float, order: int = 4):
@@ -364,8 +454,8 @@ def measurement_chain(signal: np.ndarray, dt: float, cutoff: float | None, delay
         raise ModelInputError(f"anti-alias cutoff {cutoff:g} Hz at or above the Nyquist frequency {0.5 / dt:g} Hz of "
                               f"data sampled at {1 / dt:g} Hz: a filter's cutoff lies below it")
     if cutoff:
-        sos = sps.butter(order, cutoff, fs=1.0 / dt, output="sos")
-        zi = sps.sosfilt_zi(sos) * y[0]
+        sos, zi_unit = _butterworth(order, float(cutoff), 1.0 / dt)
+        zi = zi_unit * y[0]
         y = sps.sosfilt(sos, y, zi=zi)[0]
     if delay:
         k = np.arange(y.size) - delay / dt
