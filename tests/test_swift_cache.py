@@ -6,6 +6,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import shutil
 import threading
 import warnings
 
@@ -29,11 +30,30 @@ def model():
         return mftyre.load_tir(TIR_FILES / "car_205_60R15_mf62_swift.tir")
 
 
+@pytest.fixture(scope="module")
+def base_library(model, tmp_path_factory):
+    """The sample file's SWIFT step library (the one most tests here use), built once into a cache of its own."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("MFTYRE_CACHE", str(tmp_path_factory.mktemp("seed") / "cache"))
+        return _build(_tyre(model))
+
+
 @pytest.fixture
-def cache(tmp_path, monkeypatch):
+def empty_cache(tmp_path, monkeypatch):
     folder = tmp_path / "cache"
     monkeypatch.setenv("MFTYRE_CACHE", str(folder))
     return folder
+
+
+@pytest.fixture
+def cache(empty_cache, base_library):
+    """A fresh cache holding a copy of :func:`base_library` (and its description): what a test does to its files
+    stays in the test; a test that must see a library compiled takes :func:`empty_cache`."""
+    empty_cache.mkdir(mode=0o700)
+    for source in (base_library, base_library.with_suffix(".json")):
+        shutil.copyfile(source, empty_cache / source.name)
+        (empty_cache / source.name).chmod(0o644)
+    return empty_cache
 
 
 def _tyre(model, compiled=False, **kwargs):  # compiled=False: nothing loaded into this process
@@ -151,7 +171,7 @@ def test_a_banked_road_gets_its_own_library_and_steps_as_the_virtual_machine(mod
         assert out[name] == pytest.approx(ref_out[name], rel=1e-9, abs=1e-9)
 
 
-def test_two_threads_building_one_swift_model_both_succeed(model, cache):
+def test_two_threads_building_one_swift_model_both_succeed(model, empty_cache):
     """Compiled into one library at once; and the CasADi graphs built at once, three times over (old: CasADi's
     shared nodes were corrupted now and then, a crash)."""
     barrier, results, errors = threading.Barrier(2), [None, None], []
@@ -173,9 +193,9 @@ def test_two_threads_building_one_swift_model_both_succeed(model, cache):
         t.join()
     assert not errors, errors
     np.testing.assert_array_equal(results[0], results[1])
-    libraries = list(cache.glob("swift_*.so"))
+    libraries = list(empty_cache.glob("swift_*.so"))
     assert libraries and all(_intact(p) for p in libraries)
-    assert not [p for p in cache.iterdir() if p.name.startswith(".") or p.is_dir()]  # no temporary leftovers
+    assert not [p for p in empty_cache.iterdir() if p.name.startswith(".") or p.is_dir()]  # no temporary leftovers
 
 
 def test_separate_tyres_sharing_one_library_step_from_threads_at_once(model, cache):
