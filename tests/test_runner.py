@@ -42,6 +42,7 @@ def cluster():
     with Runner(workers=2) as runner:
         workers = [psutil.Process(pid) for pid in runner.client().run(os.getpid).values()]
         assert len(workers) == 2 and os.getpid() not in [w.pid for w in workers]  # processes, not threads
+        assert runner.slots() == 2 and Runner(workers=0).slots() == 1
         yield runner
     _, alive = psutil.wait_procs(workers, timeout=30)
     assert not alive, f"worker processes left running: {alive}"
@@ -167,6 +168,7 @@ def test_campaign_on_a_scheduler_in_a_separate_process_is_bitwise_the_fit_of_eac
     with Runner(workers=2) as runner:
         assert runner.describe() == f"the cluster of scheduler {scheduler}"
         runner.client().wait_for_workers(1, timeout=60)
+        assert runner.slots() == 1  # the scheduler's worker threads, not the 2 asked of a local cluster
         summary, failures = run_campaign(source, out, runner, defaults=defaults, say=lambda text: None)
     assert not failures and list(summary["status"]) == ["fitted", "fitted"]
     assert pd.read_csv(out / "summary.csv")["tyre"].tolist() == ["tyreA", "tyreB"]
