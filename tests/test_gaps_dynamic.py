@@ -171,6 +171,8 @@ def test_command_line(sample, short_runs, tmp_path, capsys, monkeypatch):
     # an existing output needs --overwrite; DATA and --dynamic exclude each other
     assert main(["gaps", "--dynamic", str(data), "--model", str(SAMPLE), "-o", str(out), "--quiet"]) == 2
     assert main(["gaps", str(data), "--dynamic", str(data), "--model", str(SAMPLE)]) == 2
+    assert main(["gaps", str(data), "--model", str(SAMPLE), "--workers", "2"]) == 2  # steady: no runner
+    assert "--workers and --scheduler are for --dynamic" in capsys.readouterr().err
 
 
 def test_rolling_radius_variation_is_named_and_on_the_runner_the_search_is_the_serial_one_bit_for_bit(sample,

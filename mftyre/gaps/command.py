@@ -57,6 +57,9 @@ def run(args) -> int:
     if args.dynamic is not None:
         from .dynamic_command import run_dynamic
         return run_dynamic(args)
+    if args.workers is not None or args.scheduler is not None:
+        return command_error("gaps", "--workers and --scheduler are for --dynamic (its SWIFT simulations); the steady "
+                                     "search runs in this process")
 
     if refused := refused_outputs("gaps", {"-o": args.output, "--json": args.json},
                                   {"DATA": args.data, "--model": args.model}, folders={"--report": args.report},
