@@ -59,7 +59,7 @@ import struct
 import threading
 import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -166,7 +166,7 @@ class StepSeries:
     loop's input rows from the columns at once instead of one :class:`StepInputs` per step (a measured run of a
     gap search: 2 000 steps per run, 12 runs per simulation). Past its last step the last one holds."""
 
-    FIELDS = ("x", "vx", "z", "vz", "load", "omega", "torque", "p", "y", "vy", "gamma", "psi", "road_camber")
+    FIELDS = tuple(f.name for f in fields(StepInputs))
 
     def __init__(self, **columns):
         bad = sorted(set(columns) - set(self.FIELDS))
@@ -184,18 +184,14 @@ class StepSeries:
         k = min(k, self.steps - 1)
         return StepInputs(**{name: float(v[k]) for name, v in self.columns.items()})
 
-    def rows(self, n: int, p_nominal: float) -> np.ndarray:
-        """The compiled loop's rows (:data:`_ROW`) of steps 0 .. n-1: the values :meth:`SwiftTyre._row` gives for
-        :meth:`at` of each step."""
+    def rows(self, n: int, default_row) -> np.ndarray:
+        """The compiled loop's rows (:data:`_ROW`) of steps 0 .. n-1: the columns given, and where a column is
+        not given the entry of ``default_row`` (:meth:`SwiftTyre._row` of ``StepInputs()``): the rows ``_row`` gives
+        for :meth:`at` of each step."""
         idx = np.minimum(np.arange(n), self.steps - 1)
-        default = StepInputs()
         rows = np.empty((n, _NI))
         for i, name in enumerate(_ROW):
-            if name in self.columns:
-                rows[:, i] = self.columns[name][idx]
-            else:
-                value = getattr(default, name)
-                rows[:, i] = p_nominal if name == "p" and value is None else value
+            rows[:, i] = self.columns[name][idx] if name in self.columns else default_row[i]
         return rows
 
 
@@ -631,7 +627,7 @@ class SwiftTyre:
                 states[k + 1], outs[k + 1] = state, out.array
         else:
             if series is not None:
-                rows = series.rows(n, self._p_nominal)
+                rows = series.rows(n, self._row(StepInputs()))
             elif callable(inputs):
                 rows = np.array([self._row(get(k * dt)) for k in range(n)], dtype=float).reshape(n, _NI)
             else:  # constant speeds: the imposed positions advance as in _advancing

@@ -451,7 +451,7 @@ class _Sim:
         self.runs, self.kind, self.evaluations = runs, kind, 0
         self.runner = None if runner is None or runner.serial or kind != "swift" else runner
         self._tables, self._tyres, self._outputs = {}, {}, {}
-        self._layout = [[*key, *xr] for key, xr in road_layout(runs).items()] if kind == "swift" else []
+        self._roads = road_layout(runs) if kind == "swift" else {}  # the tyres' roads, here and on the workers
 
     @staticmethod
     def _key(model):
@@ -467,7 +467,8 @@ class _Sim:
         return cache[key]
 
     def tyres(self, model) -> SwiftTyres:
-        return self._kept(self._tyres, self._key(model), lambda: SwiftTyres(model, self.runs, self._tables))
+        return self._kept(self._tyres, self._key(model),
+                          lambda: SwiftTyres(model, tables=self._tables, layout=self._roads))
 
     def __call__(self, model, runs=None):
         out, = self.many([model], runs)
@@ -523,6 +524,7 @@ class _Sim:
 
         pairs = [(key, r) for key, (_, missing) in todo.items() for r in missing]
         size = -(-len(pairs) // max(1, min(self.runner.slots(), len(pairs))))
+        layout = [[*key, *xr] for key, xr in self._roads.items()]
         texts, tasks, owner = {}, {}, {}
         for start in range(0, len(pairs), size):
             pieces = {}
@@ -533,7 +535,7 @@ class _Sim:
                 if key not in texts:
                     texts[key] = tir_text(model.params)
                 name = f"s{len(tasks)}"
-                tasks[name] = dict(tir=texts[key], side=model.side, model_kind=self.kind, layout=self._layout,
+                tasks[name] = dict(tir=texts[key], side=model.side, model_kind=self.kind, layout=layout,
                                    runs=[run_data(r) for r in piece])
                 owner[name] = key
         outcome = self.runner.run(simulate_task, tasks)

@@ -363,31 +363,34 @@ def run_data(run: DynamicRun) -> dict:
     return dict(name=run.name, t=run.t, inputs=dict(run.inputs), road=run.road, measured=dict(run.measured))
 
 
-#: Per process: (the .tir text's SHA-256, side, road layout) -> (model, SwiftTyres), the last few kept; the cam
-#: tables of the process, the most recently used kept (as :class:`SwiftTyres` keeps them).
-_TASK_TYRES: dict = {}
-_TASK_TABLES: "OrderedDict" = OrderedDict()
-_TASK_KEPT, _TABLES_KEPT = 6, 64
-_TASK_LOCK = threading.Lock()
-
-
 class _RecentTables:
-    """The process's cam tables as :class:`SwiftTyres` reads and writes them (``get``, ``[key] = table``): a read
-    marks a table recently used, a write beyond :data:`_TABLES_KEPT` drops the least recently used."""
+    """Cam tables as :class:`SwiftTyres` reads and writes them (``get``, ``[key] = table``), the ``kept`` most
+    recently used: a read marks a table used, a write beyond ``kept`` drops the least recently used. Thread-safe."""
+
+    def __init__(self, kept: int):
+        self.kept, self._tables, self._lock = kept, OrderedDict(), threading.Lock()
 
     def get(self, key, default=None):
-        with _TASK_LOCK:
-            if key in _TASK_TABLES:
-                _TASK_TABLES.move_to_end(key)
-                return _TASK_TABLES[key]
+        with self._lock:
+            if key in self._tables:
+                self._tables.move_to_end(key)
+                return self._tables[key]
         return default
 
     def __setitem__(self, key, table):
-        with _TASK_LOCK:
-            _TASK_TABLES[key] = table
-            _TASK_TABLES.move_to_end(key)
-            while len(_TASK_TABLES) > _TABLES_KEPT:
-                _TASK_TABLES.popitem(last=False)
+        with self._lock:
+            self._tables[key] = table
+            self._tables.move_to_end(key)
+            while len(self._tables) > self.kept:
+                self._tables.popitem(last=False)
+
+
+#: Per process: (the .tir text's SHA-256, side, road layout) -> (model, SwiftTyres), the last few kept; the cam
+#: tables of the process's tasks.
+_TASK_TYRES: dict = {}
+_TASK_KEPT = 6
+_TASK_LOCK = threading.Lock()
+_TASK_TABLES = _RecentTables(64)
 
 
 def simulate_task(tir: str, side: str, model_kind: str, layout: list, runs: list) -> dict:
@@ -412,7 +415,7 @@ def simulate_task(tir: str, side: str, model_kind: str, layout: list, runs: list
                 warnings.simplefilter("ignore")  # the file's unmodelled parameters: said once by the caller
                 model = MFModel(parse_tir(tir, "<task>"), side=side)
                 tyres = None if model_kind != "swift" else SwiftTyres(
-                    model, tables=_RecentTables(), layout={(road, axle, rim): (lo, hi) for road, axle, rim, lo, hi
+                    model, tables=_TASK_TABLES, layout={(road, axle, rim): (lo, hi) for road, axle, rim, lo, hi
                                                            in layout})
             built = (model, tyres)
             with _TASK_LOCK:
