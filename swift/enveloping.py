@@ -35,7 +35,9 @@ through their lowest points give the effective road height w and forward slope b
 Numerics: the max over xi runs over a uniform grid (``dx``, default 0.5 mm) restricted to |xi| <= l_b(H_road),
 with H_road the height range of the profile (outside, z_c > H_road, so no such xi can win: the restriction is
 exact), plus every road breakpoint inside the window evaluated exactly, so flat parts and cleat edges carry no
-sampling error.
+sampling error. Where the whole window lies on a level part of the road (``Road.level_spans``) the max is that
+level (z_c >= 0, z_c(0) = 0) and the search is skipped: the same numbers, without the search on the floor between
+obstacles.
 
 Quasi-static tyre (:func:`quasi_static`): the MF vertical spring Fz(rho, p) normal to the effective plane,
 rho = R_Omega - d with d the normal distance from the wheel centre to the plane; the tandem is centred under the
@@ -64,6 +66,9 @@ __all__ = ["Cams", "cam_height", "CamTable", "tandem_base", "EffectiveRoad", "ef
 #: Step [m] of the central difference that gives the effective curvature d beta_y / dx.
 CURVATURE_STEP = 2e-3
 _CHUNK = 4096
+#: Clearance [m] between a cam's window and the edge of a level span for the search to be skipped there (rounding
+#: of x + xi is below 1e-9 m for |x| <= MAX_DISTANCE).
+_LEVEL_MARGIN = 1e-6
 
 #: Largest cam half length / height [m] and ELLIPS_SHIFT: a hundred metres is no tyre's (real: ~0.3 m, shift ~0.8).
 _CAM_LIMIT = 100.0
@@ -143,8 +148,11 @@ def cam_height(road: Road, x, cams: Cams, *, y=0.0, dx: float = 5e-4):
     zc = cams.contour(xi)
     bp = np.asarray(sorted(road.breakpoints), dtype=float)
     out = np.empty(xf.size)
-    for start in range(0, xf.size, _CHUNK):
-        xc = xf[start:start + _CHUNK]
+    level = _level_windows(road, xf, window)
+    out[level] = road.height(xf[level], y)  # z_c >= 0 with z_c(0) = 0: the max is the level height itself
+    searched = np.flatnonzero(~level)
+    for start in range(0, searched.size, _CHUNK):
+        xc = xf[searched[start:start + _CHUNK]]
         h = np.max(road.height(xc[:, None] + xi[None, :], y) - zc[None, :], axis=1)
         if bp.size and window > 0:  # breakpoints inside the window, exactly
             i0 = np.searchsorted(bp, xc - window, side="left")
@@ -156,8 +164,18 @@ def cam_height(road: Road, x, cams: Cams, *, y=0.0, dx: float = 5e-4):
                 xb = bp[np.minimum(idx, bp.size - 1)]
                 cand = road.height(xb, y) - cams.contour(xb - xc[:, None])
                 h = np.maximum(h, np.max(np.where(valid, cand, -np.inf), axis=1))
-        out[start:start + _CHUNK] = h
+        out[searched[start:start + _CHUNK]] = h
     return out.reshape(shape)
+
+
+def _level_windows(road: Road, x, window):
+    """True where the whole window [x - window, x + window] lies inside one of the road's level spans, with
+    ``_LEVEL_MARGIN`` to spare (so that rounding in x + xi cannot reach the span's edge)."""
+    spans = np.asarray(road.level_spans(), dtype=float).reshape(-1, 2)
+    if not spans.size:
+        return np.zeros(x.shape, dtype=bool)
+    j = np.maximum(np.searchsorted(spans[:, 0], x - window, side="right") - 1, 0)
+    return (x - window > spans[j, 0] + _LEVEL_MARGIN) & (x + window < spans[j, 1] - _LEVEL_MARGIN)
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,9 @@ Every road has a vectorised ``height(x, y=0.0)``; 2D profiles ignore ``y`` (the 
 width), :class:`TwoTrack` varies across ``y`` for road camber (banking) input. Piecewise roads also list their
 ``breakpoints`` (abscissae of kinks and jumps): the cam search in :mod:`swift.enveloping` evaluates them
 exactly, so a cleat edge is not smeared by the sampling grid. At a jump ``height`` returns the higher side
-(the value a cam resting on the edge touches).
+(the value a cam resting on the edge touches). They also list their ``level_spans``, the open intervals on which
+the height is one number (the floor before and after an obstacle, a cleat's top): a cam whose window lies inside
+one rests at that height, so the search there is skipped.
 
     >>> from swift.road import Cleat, Sine, Flat
     >>> road = Flat() + Cleat(x0=1.0, length=0.05, height=0.01)      # roads add up
@@ -51,6 +53,11 @@ class Road:
         """(lowest, highest) height of the profile; bounds the cam search window in :mod:`swift.enveloping`."""
         raise NotImplementedError
 
+    def level_spans(self) -> tuple[tuple[float, float], ...]:
+        """Open intervals (a, b), increasing and disjoint, on which ``height`` returns the same number at every x
+        (for each y). None by default: the cam search then runs everywhere."""
+        return ()
+
     def __add__(self, other: "Road") -> "Road":
         return _Sum(self, other)
 
@@ -73,6 +80,9 @@ class Flat(Road):
     def height_range(self):
         return self.z, self.z
 
+    def level_spans(self):
+        return ((-np.inf, np.inf),)
+
 
 class Step(Road):
     """Step of ``height`` (negative: step down) at ``x0``; 0 before."""
@@ -88,6 +98,9 @@ class Step(Road):
     def height_range(self):
         return min(0.0, self.h), max(0.0, self.h)
 
+    def level_spans(self):
+        return (-np.inf, self.x0), (self.x0, np.inf)
+
 
 class Cleat(Road):
     """Rectangular cleat (bar across the road) from ``x0`` to ``x0 + length`` of ``height``."""
@@ -101,6 +114,9 @@ class Cleat(Road):
 
     def height_range(self):
         return min(0.0, self.h), max(0.0, self.h)
+
+    def level_spans(self):
+        return (-np.inf, self.x0), (self.x0, self.x0 + self.length), (self.x0 + self.length, np.inf)
 
 
 class Trapezoid(Road):
@@ -122,6 +138,10 @@ class Trapezoid(Road):
     def height_range(self):
         return min(0.0, self.h), max(0.0, self.h)
 
+    def level_spans(self):
+        x0, x1, x2, x3 = self.breakpoints
+        return ((-np.inf, x0),) + (((x1, x2),) if x2 > x1 else ()) + ((x3, np.inf),)
+
 
 class CircularBump(Road):
     """Circular-segment bump of chord ``length`` and ``height`` (its radius follows), starting at ``x0``."""
@@ -142,6 +162,9 @@ class CircularBump(Road):
     def height_range(self):
         return 0.0, self.h
 
+    def level_spans(self):
+        return (-np.inf, self.x0), (self.x0 + self.length, np.inf)
+
 
 class Sine(Road):
     """A * sin(2 pi (x - x0) / wavelength), optionally only on ``x0 <= x <= x_end``."""
@@ -158,6 +181,9 @@ class Sine(Road):
 
     def height_range(self):
         return -abs(self.A), abs(self.A)
+
+    def level_spans(self):
+        return ((-np.inf, self.x0),) + (() if self.x_end is None else ((self.x_end, np.inf),))
 
 
 class Sampled(Road):
@@ -197,6 +223,13 @@ class Sampled(Road):
     def height_range(self):
         return float(self.z.min()), float(self.z.max())
 
+    def level_spans(self):
+        """Before the first and after the last sample, and along runs of equal samples."""
+        equal = np.concatenate(([False], self.z[1:] == self.z[:-1], [False]))
+        starts, ends = np.flatnonzero(~equal[:-1] & equal[1:]), np.flatnonzero(equal[:-1] & ~equal[1:])
+        runs = tuple((float(self.x[i]), float(self.x[j])) for i, j in zip(starts, ends))
+        return ((-np.inf, float(self.x[0])),) + runs + ((float(self.x[-1]), np.inf),)
+
 
 class TwoTrack(Road):
     """Left and right profiles at ``y = +spacing/2`` and ``-spacing/2`` (ISO-W: y left), linear in between and
@@ -216,6 +249,9 @@ class TwoTrack(Road):
         lo = [self.left.height_range(), self.right.height_range()]
         return min(r[0] for r in lo), max(r[1] for r in lo)
 
+    def level_spans(self):
+        return _common_spans(self.left.level_spans(), self.right.level_spans())
+
 
 class _Sum(Road):
     def __init__(self, a: Road, b: Road):
@@ -229,6 +265,23 @@ class _Sum(Road):
     def height_range(self):
         (a0, a1), (b0, b1) = self.a.height_range(), self.b.height_range()
         return a0 + b0, a1 + b1
+
+    def level_spans(self):
+        return _common_spans(self.a.level_spans(), self.b.level_spans())
+
+
+def _common_spans(first, second):
+    """The intersections of two increasing lists of disjoint open intervals (where both profiles are level)."""
+    common, i, j = [], 0, 0
+    while i < len(first) and j < len(second):
+        a, b = max(first[i][0], second[j][0]), min(first[i][1], second[j][1])
+        if b > a:
+            common.append((a, b))
+        if first[i][1] < second[j][1]:
+            i += 1
+        else:
+            j += 1
+    return tuple(common)
 
 
 _EXPRESSION_ARGS = {  # name in a road expression -> (class, argument names)

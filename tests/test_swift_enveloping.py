@@ -8,6 +8,7 @@ import pytest
 import mftyre
 from swift import Cams, Cleat, Flat, Sampled, Sine, Step, TwoTrack, cam_height, effective_road, \
     effective_road_3d, quasi_static, tandem_base
+from swift.road import CircularBump, Road, Trapezoid
 
 from conftest import TIR_FILES
 
@@ -83,6 +84,25 @@ def test_cleat_enveloped_closed_forms(cams):
     xm = L / 2 + np.linspace(-0.15, 0.15, 301)
     e1, e2 = effective_road(Cleat(0.0, L, H), xm, ls, cams), effective_road(Cleat(0.0, L, H), xm[::-1], ls, cams)
     assert np.allclose(e1.w, e2.w, atol=1e-9) and np.allclose(e1.beta, -e2.beta, atol=1e-9)
+
+
+@pytest.mark.parametrize("road", [
+    Step(1.0, 0.02), Step(1.0, -0.02), Cleat(2.0, 0.02, 0.015), Trapezoid(1.0, 0.1, -0.03, 0.05),
+    Trapezoid(1.0, 0.0, 0.03, 0.05), CircularBump(1.2, 0.3, 0.02), Sine(0.01, 0.5, 1.0, 3.0), Sine(0.01, 0.5, 1.0),
+    Sampled([0, 1, 1.5, 2, 2.5, 3], [0, 0, 0.01, 0.01, 0.01, 0]), Flat(0.003) + Cleat(1.0, 0.05, 0.01) + Step(2.5, 0.02),
+    TwoTrack(Cleat(1, 0.02, 0.01), Flat() + Step(2, 0.01), 1.5)], ids=lambda road: type(road).__name__)
+def test_skipping_the_search_on_level_spans_changes_no_bit(road, cams, monkeypatch):
+    """On a level part of the road the cam rests at that level; elsewhere it searches. The heights equal the search
+    everywhere (the spans switched off) bit for bit, and the level parts are skipped."""
+    x = np.linspace(-1.0, 5.0, 12001)
+    ys = (-0.3, 0.1) if road.varies_with_y else (0.0,)
+    skipped = np.asarray(road.level_spans()).reshape(-1, 2)
+    assert skipped.size and np.all(skipped[:, 1] > skipped[:, 0]) and np.all(skipped[1:, 0] >= skipped[:-1, 1])
+    fast = [cam_height(road, x, cams, y=y) for y in ys]
+    monkeypatch.setattr(type(road), "level_spans", Road.level_spans)
+    searched = [cam_height(road, x, cams, y=y) for y in ys]
+    for a, b in zip(fast, searched):
+        assert np.array_equal(a.view(np.int64), b.view(np.int64))
 
 
 def test_point_cams_are_two_point_follower():
