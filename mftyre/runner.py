@@ -19,7 +19,9 @@ from the text, and its compiled libraries come from the compile cache (:func:`mf
 under a unique temporary name and renamed atomically, so the processes of one machine share one cache and build a
 library once; a worker on another machine builds into its own ``$MFTYRE_CACHE``). A result must be JSON data (dicts,
 lists, strings, numbers; floats are written with all their digits and read back bit for bit); it is sent back as
-JSON text, so that a result read from the results folder equals a fresh one.
+JSON text, so that a result read from the results folder equals a fresh one. A long array in a result goes as
+:func:`pack` text (its float64 bytes in base64: exact, and 20x cheaper to write and read than a JSON list of
+numbers), read back with :func:`unpack`.
 
 Failures. A task that raises is reported (:class:`Failure`: its key, its inputs' summary and the traceback) and the
 others go on; so is a worker that dies. Warnings a task gives are collected per task (``outcome.warnings``).
@@ -31,6 +33,7 @@ inputs is not run again (a changed task is). Progress: one line on stderr, rewri
 """
 from __future__ import annotations
 
+import base64
 import dataclasses
 import hashlib
 import json
@@ -51,7 +54,7 @@ from .lazy import LazyModule
 pd = LazyModule("pandas")  # imported when first used: the command line starts without it
 
 __all__ = ["Runner", "Outcome", "Failure", "RunnerError", "add_runner_options", "runner_from_args", "default_workers",
-           "SCHEDULER_VARIABLE"]
+           "SCHEDULER_VARIABLE", "pack", "unpack"]
 
 #: The environment variable naming a scheduler's address (``tcp://host:8786``) when none is given.
 SCHEDULER_VARIABLE = "MFTYRE_SCHEDULER"
@@ -241,6 +244,16 @@ class Runner:
         ordered = {k: done[k] for k in tasks if k in done}
         return Outcome(ordered, sorted(failures, key=lambda f: list(tasks).index(f.key)), resumed, notes,
                        time.perf_counter() - t0)
+
+
+def pack(values) -> str:
+    """An array of floats as text for a task's JSON result: its float64 bytes (little-endian) in base64."""
+    return base64.b64encode(np.ascontiguousarray(values, dtype="<f8").tobytes()).decode("ascii")
+
+
+def unpack(text: str) -> np.ndarray:
+    """The 1-D float64 array :func:`pack` made ``text`` of (a new, writable array)."""
+    return np.frombuffer(base64.b64decode(text, validate=True), dtype="<f8").astype(float)
 
 
 def call_task(function, inputs: dict):

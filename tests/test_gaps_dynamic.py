@@ -208,6 +208,7 @@ def test_a_simulation_task_is_the_simulation_and_returns_what_went_wrong(sample,
     in-process simulation's outputs exactly; a run beyond its road table comes back as the model's error, not a
     crash of the task."""
     from mftyre.gaps.dynamic_runs import road_layout, run_data, simulate_task
+    from mftyre.runner import unpack
     from mftyre.tir import tir_text
 
     layout = [[*key, *xr] for key, xr in road_layout(short_runs).items()]
@@ -215,7 +216,7 @@ def test_a_simulation_task_is_the_simulation_and_returns_what_went_wrong(sample,
     want = simulate(sample, short_runs)
     assert set(got["outputs"]) == set(want)
     for name, channels in want.items():
-        assert all(np.array_equal(np.asarray(got["outputs"][name][c]), v) for c, v in channels.items())
+        assert all(np.array_equal(unpack(got["outputs"][name][c]), v) for c, v in channels.items())
     short = [[*row[:3], row[3], row[3] + 0.5] for row in layout]
     assert "error" in simulate_task(tir_text(sample.params), sample.side, "swift", short, [run_data(short_runs[0])])
 

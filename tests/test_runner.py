@@ -73,6 +73,20 @@ def test_tasks_carry_plain_data_only():
         runner.run(run_batch, {"a/b": {}})
 
 
+def test_packed_arrays_come_back_bit_for_bit_through_a_json_result():
+    """pack / unpack: a result's long arrays as text (float64 bytes in base64) that survive the JSON round trip
+    exactly, signed zeros, subnormals, infinities and NaN payloads included; text that is not base64 is refused."""
+    from mftyre.runner import pack, unpack
+
+    values = np.array([0.1, -0.0, 5e-324, np.inf, -np.inf, np.nan, 1e308, -1.2345678901234567e-100])
+    back = unpack(json.loads(json.dumps({"v": pack(values)}))["v"])
+    assert back.dtype == np.float64 and back.flags.writeable
+    assert np.array_equal(back.view(np.int64), values.view(np.int64))
+    assert np.array_equal(unpack(pack(np.arange(3, dtype=np.float32))), [0.0, 1.0, 2.0])
+    with pytest.raises(ValueError):
+        unpack("not base64!")
+
+
 def test_draws_are_the_seeded_generators_and_recorded():
     runs = _steady_runs(n=5, seed=11)
     expected = np.random.default_rng(11).normal(1.0, 0.05, (2, 5))  # two conditions (fz grid), five samples

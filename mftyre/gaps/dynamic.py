@@ -63,8 +63,8 @@ from .dynamic_runs import MODEL_KINDS, DynamicRun, SwiftTyres, measurement_chain
 from .locate import Finding
 from .search import Candidate, judge, matches, search
 
-__all__ = ["find_dynamic_gaps", "DynamicGapReport", "Chain", "align", "noise_from_data", "model_kind_for",
-           "precision", "calibration", "values_text"]
+__all__ = ["find_dynamic_gaps", "DynamicGapReport", "Chain", "align", "align_task", "noise_from_data",
+           "model_kind_for", "precision", "calibration", "values_text"]
 
 #: Cutoffs [Hz] tried for the anti-alias filter (None: no filter).
 CUTOFFS = (None, 400.0, 300.0, 250.0, 200.0, 150.0, 120.0, 100.0, 80.0, 60.0)
@@ -125,11 +125,13 @@ def calibration(filtered: list) -> dict:
         y = np.concatenate([k[0].measured[c] for k in keys])
         t = np.concatenate([k[0].t - k[0].t[0] for k in keys])
         ok = np.isfinite(y) & np.isfinite(f)
-        a = np.column_stack([f, t])[ok]
-        coef = np.linalg.lstsq(a, y[ok], rcond=None)[0]
+        if not ok.all():  # (masking only where needed: it costs 4x the least squares)
+            f, y, t = f[ok], y[ok], t[ok]
+        a = np.column_stack([f, t])
+        coef = np.linalg.lstsq(a, y, rcond=None)[0]
         if not abs(coef[0] - 1.0) <= GAIN_RANGE:
             g = float(np.clip(coef[0], 1.0 - GAIN_RANGE, 1.0 + GAIN_RANGE)) if np.isfinite(coef[0]) else 1.0
-            coef = np.r_[g, np.linalg.lstsq(a[:, 1:], y[ok] - g * f[ok], rcond=None)[0]]
+            coef = np.r_[g, np.linalg.lstsq(a[:, 1:], y - g * f, rcond=None)[0]]
         out["gain"][c], out["drift"][c] = (float(v) for v in coef)
     return out
 
@@ -149,35 +151,76 @@ def _sse(filtered, delay, weights) -> float:
     return float(sum(np.nansum((chain.calibrate(f, r, c) - r.measured[c]) ** 2) / weights[c] for r, c, f in delayed))
 
 
-def align(runs, pred) -> tuple:
+#: Delays [s] of the alignment's grid (refined by a parabola through the three best).
+DELAYS = np.arange(-0.004, 0.0301, 0.002)
+
+
+def align(runs, pred, runner=None) -> tuple:
     """(Chain, {(order, cutoff): weighted sum of squares}) fitted to the model prediction ``pred`` (run -> channel
     -> array): per filter order (:data:`ORDERS`) and cutoff (:data:`CUTOFFS` below Nyquist,
     :func:`cutoffs_below_nyquist`) the delay on a 2 ms grid refined by a parabola, each with the channels'
     calibration (:meth:`Chain.calibrated`) fitted; the cutoff is refined further with every candidate
-    (:func:`_refit`). Each prediction is filtered once per order and cutoff, the delays applied to that."""
+    (:func:`_refit`). Each prediction is filtered once per order and cutoff, the delays applied to that.
+    ``runner`` (:class:`mftyre.runner.Runner`, not serial): the (order, cutoff) cells in as many tasks as it has
+    slots (:func:`align_task`), the same numbers as here."""
+    cells = [(order, cutoff) for order in ORDERS for cutoff in cutoffs_below_nyquist(runs)
+             if cutoff is not None or order == ORDERS[-1]]
+    if runner is None or runner.serial:
+        found = _aligned_cells(runs, pred, cells)
+    else:
+        found = _aligned_cells_on(runner, runs, pred, cells)
+    best, table = None, {}
+    for cell in cells:  # the first of equal sums wins, as in a loop over the cells
+        delay, fine = found[cell]
+        table[cell] = fine
+        if best is None or fine < best[0]:
+            best = (fine, Chain(delay, cell[1], cell[0]))
+    return best[1].calibrated(runs, pred), table
+
+
+def _aligned_cells(runs, pred, cells) -> dict:
+    """(order, cutoff) -> (delay, weighted sum of squares at it) for each of ``cells`` (:func:`align`)."""
     weights = {c: max(np.var(np.concatenate([r.measured[c] for r in runs if c in r.measured])), 1e-12)
                for r in runs for c in r.measured}
-    delays = np.arange(-0.004, 0.0301, 0.002)
-    best, table = None, {}
-    for order in ORDERS:
-        for cutoff in cutoffs_below_nyquist(runs):
-            if cutoff is None and order != ORDERS[-1]:
-                continue
-            filtered = [(r, c, measurement_chain(pred[r.name][c], r.dt, cutoff, 0.0, order)) for r in runs
-                        for c in r.measured]
-            sse = np.array([_sse(filtered, d, weights) for d in delays])
-            j = int(np.argmin(sse))
-            d = delays[j]
-            if 0 < j < len(delays) - 1:  # parabola through the three best
-                a, b, c = sse[j - 1], sse[j], sse[j + 1]
-                den = a - 2 * b + c
-                if den > 0:
-                    d = d + 0.5 * (a - c) / den * (delays[1] - delays[0])
-            fine = _sse(filtered, float(d), weights)
-            table[(order, cutoff)] = fine
-            if best is None or fine < best[0]:
-                best = (fine, Chain(float(d), cutoff, order))
-    return best[1].calibrated(runs, pred), table
+    out = {}
+    for order, cutoff in cells:
+        filtered = [(r, c, measurement_chain(pred[r.name][c], r.dt, cutoff, 0.0, order)) for r in runs
+                    for c in r.measured]
+        sse = np.array([_sse(filtered, d, weights) for d in DELAYS])
+        j = int(np.argmin(sse))
+        d = DELAYS[j]
+        if 0 < j < len(DELAYS) - 1:  # parabola through the three best
+            a, b, c = sse[j - 1], sse[j], sse[j + 1]
+            den = a - 2 * b + c
+            if den > 0:
+                d = d + 0.5 * (a - c) / den * (DELAYS[1] - DELAYS[0])
+        out[order, cutoff] = (float(d), _sse(filtered, float(d), weights))
+    return out
+
+
+def _aligned_cells_on(runner, runs, pred, cells) -> dict:
+    from ..runner import RunnerError
+    from .dynamic_runs import run_data
+
+    data = [run_data(r) for r in runs]
+    seen = {r.name: {c: np.asarray(pred[r.name][c], float) for c in r.measured} for r in runs}
+    size = -(-len(cells) // max(1, min(runner.slots(), len(cells))))
+    tasks = {f"a{i}": dict(runs=data, pred=seen, cells=[list(c) for c in cells[i:i + size]])
+             for i in range(0, len(cells), size)}
+    outcome = runner.run(align_task, tasks)
+    if outcome.failures:
+        raise RunnerError("an alignment task failed: " + outcome.failures[0].summary() + "\n"
+                          + outcome.failures[0].error)
+    return {(order, cutoff): (delay, fine) for result in outcome.results.values()
+            for order, cutoff, delay, fine in result["cells"]}
+
+
+def align_task(runs: list, pred: dict, cells: list) -> dict:
+    """:func:`align`'s ``cells`` ([order, cutoff] pairs) where a task lands (:mod:`mftyre.runner`): ``runs`` as
+    :func:`~mftyre.gaps.dynamic_runs.run_data`, ``pred`` run -> channel -> array. ``{"cells": [[order, cutoff,
+    delay, weighted sum of squares], ...]}``."""
+    found = _aligned_cells([DynamicRun(**r) for r in runs], pred, [(int(o), c) for o, c in cells])
+    return {"cells": [[order, cutoff, delay, fine] for (order, cutoff), (delay, fine) in found.items()]}
 
 
 def _quiet(y, dt):
@@ -518,7 +561,7 @@ class _Sim:
         """The (model, run) pairs of ``todo`` cut into as many equal stretches as the runner has workers, one task
         per model of each stretch (:func:`simulate_task`): a model's tyres are built once per task, a batch of
         models spreads over the workers by model, the runs of one model by run."""
-        from ..runner import RunnerError
+        from ..runner import RunnerError, unpack
         from ..tir import tir_text
         from .dynamic_runs import run_data, simulate_task
 
@@ -550,7 +593,7 @@ class _Sim:
                 found[key] = ModelInputError(result["error"])
                 continue
             for run, channels in result["outputs"].items():
-                found[key][run] = {c: np.asarray(v, float) for c, v in channels.items()}
+                found[key][run] = {c: unpack(v) for c, v in channels.items()}
 
 
 #: The parameters of the SWIFT wheel a file must have for model kind "auto" to choose it.
@@ -731,7 +774,7 @@ class _Runs:
         """The current model: the measurement chain and the noise fitted to it (the given model's errors bent
         them), the linearised screening's Jacobians dropped."""
         self.model, self.pred = model, pred
-        self.chain, self.chain_table = align(self.train_runs, pred)
+        self.chain, self.chain_table = align(self.train_runs, pred, self.sim.runner)
         self.noise = noise_from_data(self.runs, pred, self.chain)
         self.prob = _Problem(self.runs, self.chain, self.noise)
         self._jac = {}
@@ -1035,7 +1078,8 @@ def _refit(effect, model, pred, prob, sim, runs, train, keys_train):
     if not np.any(delta[:k]):
         return None
     try:  # the chain aligned afresh to this candidate
-        chain0, _ = align(train_runs, {**pred, **sim(_with(model, effect, base, delta[:k]), sub_train)})
+        chain0, _ = align(train_runs, {**pred, **sim(_with(model, effect, base, delta[:k]), sub_train)},
+                          sim.runner)
     except ModelInputError:
         return None
     free = params + [k] + ([k + 1] if chain0.cutoff is not None else [])

@@ -398,11 +398,13 @@ def simulate_task(tir: str, side: str, model_kind: str, layout: list, runs: list
     .tir text (``tir``, written by :func:`mftyre.tir.tir_text`: every value with all its digits) on ``side``, its
     SWIFT tyres from ``layout`` (:func:`road_layout` of every run of the search, as ``[road, axle, rim, x_lo,
     x_hi]`` rows: the same tyres as in the process that sent it, so the same outputs bit for bit) and kept for the
-    model's next runs; ``runs``: :func:`run_data` of each. ``{"outputs": run name -> channel -> list of floats}``,
+    model's next runs; ``runs``: :func:`run_data` of each. ``{"outputs": run name -> channel -> the history as
+    :func:`mftyre.runner.pack` text}``,
     or ``{"error": the message}`` when the model cannot be built or simulated on a run (:class:`ModelInputError`)."""
     import hashlib
 
     from ..model import MFModel
+    from ..runner import pack
     from ..tir import parse_tir
 
     todo = [DynamicRun(**r) for r in runs]
@@ -427,7 +429,7 @@ def simulate_task(tir: str, side: str, model_kind: str, layout: list, runs: list
             out = simulate(built[0], todo, built[1], model_kind=model_kind)
     except ModelInputError as exc:
         return {"error": str(exc)}
-    return {"outputs": {name: {c: v.tolist() for c, v in channels.items()} for name, channels in out.items()}}
+    return {"outputs": {name: {c: pack(v) for c, v in channels.items()} for name, channels in out.items()}}
 
 
 # ---------------------------------------------------------------------------------------------------- synthetic
