@@ -55,7 +55,7 @@ class Road:
 
     def level_spans(self) -> tuple[tuple[float, float], ...]:
         """Open intervals (a, b), increasing and disjoint, on which ``height`` returns the same number at every x
-        (for each y). None by default: the cam search then runs everywhere."""
+        (for each y). No spans by default: the cam search then runs everywhere."""
         return ()
 
     def __add__(self, other: "Road") -> "Road":

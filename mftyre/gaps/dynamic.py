@@ -199,6 +199,7 @@ def _aligned_cells(runs, pred, cells) -> dict:
 
 
 def _aligned_cells_on(runner, runs, pred, cells) -> dict:
+    """:func:`_aligned_cells` with ``cells`` cut into as many tasks as ``runner`` has slots (:func:`align_task`)."""
     from ..runner import RunnerError
     from .dynamic_runs import run_data
 
