@@ -878,9 +878,9 @@ class _Runs:
         from ..fit.verify import verify_tir
 
         new_model, new_pred = new
-        if id(self.model) not in self._verified:
-            self._verified[id(self.model)] = verify_tir(self.model)
-        problems = [p for p in verify_tir(new_model) if p not in self._verified[id(self.model)]]
+        if id(self.model) not in self._verified:  # (the model kept beside its problems: its id is not reused)
+            self._verified[id(self.model)] = (self.model, verify_tir(self.model))
+        problems = [p for p in verify_tir(new_model) if p not in self._verified[id(self.model)][1]]
         if problems:
             return new, "verification: " + "; ".join(problems[:2])
         if not all(np.all(np.isfinite(v)) for ch in new_pred.values() for v in ch.values()):
