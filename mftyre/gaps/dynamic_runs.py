@@ -363,34 +363,32 @@ def run_data(run: DynamicRun) -> dict:
     return dict(name=run.name, t=run.t, inputs=dict(run.inputs), road=run.road, measured=dict(run.measured))
 
 
-class _RecentTables:
-    """Cam tables as :class:`SwiftTyres` reads and writes them (``get``, ``[key] = table``), the ``kept`` most
-    recently used: a read marks a table used, a write beyond ``kept`` drops the least recently used. Thread-safe."""
+class _Recent:
+    """The ``kept`` most recently used entries of a cache (``get``, ``[key] = value``): a read marks an entry used, a
+    write beyond ``kept`` drops the least recently used. Thread-safe."""
 
     def __init__(self, kept: int):
-        self.kept, self._tables, self._lock = kept, OrderedDict(), threading.Lock()
+        self.kept, self._entries, self._lock = kept, OrderedDict(), threading.Lock()
 
     def get(self, key, default=None):
         with self._lock:
-            if key in self._tables:
-                self._tables.move_to_end(key)
-                return self._tables[key]
+            if key in self._entries:
+                self._entries.move_to_end(key)
+                return self._entries[key]
         return default
 
-    def __setitem__(self, key, table):
+    def __setitem__(self, key, value):
         with self._lock:
-            self._tables[key] = table
-            self._tables.move_to_end(key)
-            while len(self._tables) > self.kept:
-                self._tables.popitem(last=False)
+            self._entries[key] = value
+            self._entries.move_to_end(key)
+            while len(self._entries) > self.kept:
+                self._entries.popitem(last=False)
 
 
-#: Per process: (the .tir text's SHA-256, side, road layout) -> (model, SwiftTyres), the last few kept; the cam
-#: tables of the process's tasks.
-_TASK_TYRES: dict = {}
-_TASK_KEPT = 6
-_TASK_LOCK = threading.Lock()
-_TASK_TABLES = _RecentTables(64)
+#: Per process: (the .tir text's SHA-256, side, model kind, road layout) -> (model, SwiftTyres) of the last few
+#: models, and the cam tables (as :class:`SwiftTyres` reads and writes them) of the process's tasks.
+_TASK_TYRES = _Recent(6)
+_TASK_TABLES = _Recent(64)
 
 
 def simulate_task(tir: str, side: str, model_kind: str, layout: list, runs: list) -> dict:
@@ -410,8 +408,7 @@ def simulate_task(tir: str, side: str, model_kind: str, layout: list, runs: list
     todo = [DynamicRun(**r) for r in runs]
     key = (hashlib.sha256(tir.encode()).hexdigest(), side, model_kind, tuple(map(tuple, layout)))
     try:
-        with _TASK_LOCK:
-            built = _TASK_TYRES.get(key)
+        built = _TASK_TYRES.get(key)
         if built is None:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # the file's unmodelled parameters: said once by the caller
@@ -419,11 +416,7 @@ def simulate_task(tir: str, side: str, model_kind: str, layout: list, runs: list
                 tyres = None if model_kind != "swift" else SwiftTyres(
                     model, tables=_TASK_TABLES, layout={(road, axle, rim): (lo, hi) for road, axle, rim, lo, hi
                                                            in layout})
-            built = (model, tyres)
-            with _TASK_LOCK:
-                if len(_TASK_TYRES) >= _TASK_KEPT:
-                    del _TASK_TYRES[next(iter(_TASK_TYRES))]
-                _TASK_TYRES[key] = built
+            built = _TASK_TYRES[key] = (model, tyres)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             out = simulate(built[0], todo, built[1], model_kind=model_kind)
