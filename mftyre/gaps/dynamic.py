@@ -198,21 +198,33 @@ def _aligned_cells(runs, pred, cells) -> dict:
     return out
 
 
+def _stretch(runner, n: int) -> int:
+    """How many of ``n`` items go into one task so that the tasks fill ``runner``'s slots once."""
+    return -(-n // max(1, min(runner.slots(), n)))
+
+
+def _results(runner, function, tasks: dict, what: str) -> dict:
+    """``runner.run(function, tasks)``'s results (task key -> result); the first failure raised as a
+    :class:`mftyre.runner.RunnerError` naming ``what`` failed, with its inputs and traceback."""
+    from ..runner import RunnerError
+
+    outcome = runner.run(function, tasks)
+    if outcome.failures:
+        raise RunnerError(f"{what} failed: {outcome.failures[0].summary()}\n{outcome.failures[0].error}")
+    return outcome.results
+
+
 def _aligned_cells_on(runner, runs, pred, cells) -> dict:
     """:func:`_aligned_cells` with ``cells`` cut into as many tasks as ``runner`` has slots (:func:`align_task`)."""
-    from ..runner import RunnerError
     from .dynamic_runs import run_data
 
     data = [run_data(r) for r in runs]
     seen = {r.name: {c: np.asarray(pred[r.name][c], float) for c in r.measured} for r in runs}
-    size = -(-len(cells) // max(1, min(runner.slots(), len(cells))))
+    size = _stretch(runner, len(cells))
     tasks = {f"a{i}": dict(runs=data, pred=seen, cells=[list(c) for c in cells[i:i + size]])
              for i in range(0, len(cells), size)}
-    outcome = runner.run(align_task, tasks)
-    if outcome.failures:
-        raise RunnerError("an alignment task failed: " + outcome.failures[0].summary() + "\n"
-                          + outcome.failures[0].error)
-    return {(order, cutoff): (delay, fine) for result in outcome.results.values()
+    results = _results(runner, align_task, tasks, "an alignment task")
+    return {(order, cutoff): (delay, fine) for result in results.values()
             for order, cutoff, delay, fine in result["cells"]}
 
 
@@ -562,12 +574,12 @@ class _Sim:
         """The (model, run) pairs of ``todo`` cut into as many equal stretches as the runner has workers, one task
         per model of each stretch (:func:`simulate_task`): a model's tyres are built once per task, a batch of
         models spreads over the workers by model, the runs of one model by run."""
-        from ..runner import RunnerError, unpack
+        from ..runner import unpack
         from ..tir import tir_text
         from .dynamic_runs import run_data, simulate_task
 
         pairs = [(key, r) for key, (_, missing) in todo.items() for r in missing]
-        size = -(-len(pairs) // max(1, min(self.runner.slots(), len(pairs))))
+        size = _stretch(self.runner, len(pairs))
         layout = [[*key, *xr] for key, xr in self._roads.items()]
         texts, tasks, owner = {}, {}, {}
         for start in range(0, len(pairs), size):
@@ -582,11 +594,7 @@ class _Sim:
                 tasks[name] = dict(tir=texts[key], side=model.side, model_kind=self.kind, layout=layout,
                                    runs=[run_data(r) for r in piece])
                 owner[name] = key
-        outcome = self.runner.run(simulate_task, tasks)
-        if outcome.failures:
-            raise RunnerError("a simulation task failed: " + outcome.failures[0].summary()
-                              + "\n" + outcome.failures[0].error)
-        for name, result in outcome.results.items():
+        for name, result in _results(self.runner, simulate_task, tasks, "a simulation task").items():
             key = owner[name]
             if isinstance(found[key], ModelInputError):
                 continue
