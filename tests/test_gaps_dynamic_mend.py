@@ -208,6 +208,65 @@ def test_alignment_recovers_gain_drift_filter_order_and_delay(sample):
         assert rms < 1.2 * noise[c]["sigma"]
 
 
+def _in_plane_case(change):
+    """Four cleat runs of the TNO file (40 km/h, two pressures, two loads, 0.8 s) from a truth with ``change``
+    (factors of the file's values), through the generator's default chain (a 4th-order filter at 150 Hz, 5 ms)."""
+    from conftest import PROJECT, require_shared
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = mftyre.load_tir(require_shared(PROJECT.parent / "shared" / "reference" / "tir" /
+                                               "TNO_car205_60R15.tir"))
+    truth = model.with_params(**{k: f * model.params[k] for k, f in change.items()})
+    runs = synthetic_runs(model, truth=truth, speeds=(40.0,), pressures=(1.8e5, 2.6e5), loads=(3000.0, 5000.0),
+                          steer_speeds=(), duration=0.8, lead=0.3, seed=11)
+    return model, truth, runs
+
+
+def _rivals(*names):
+    from mftyre.gaps.dynamic_catalogue import DYNAMIC_CATALOGUE
+
+    return tuple(e for e in DYNAMIC_CATALOGUE if set(names) & set(e.parameters))
+
+
+def test_the_alignment_weighs_each_channel_by_its_noise_and_the_damping_comes_back():
+    """Twice the in-plane damping, the given file's own as the start: the alignment chose its filter by sums of
+    squares weighted by each channel's variance, and against a model lacking damping that took a 2nd-order filter
+    at 200 Hz for the rig's 4th order at 150 Hz. The damping refitted through that chain stopped at 0.089 for a
+    truth of 0.098 (and on 8 runs a second effect, SWIFT_PDAMP, took the rest). Weighted by the noise, as the
+    chi-square is, the chain is the rig's and DAMP_LONG the truth's."""
+    from mftyre.gaps.dynamic import _aligned, _Problem, _chi2, align, noise_from_data
+    from mftyre.gaps.dynamic_runs import simulate
+
+    model, truth, runs = _in_plane_case({"DAMP_LONG": 2.0})
+    # against the given model the chosen cell is the one of least chi-square, as the refits weigh it
+    pred = simulate(model, runs)
+    chain, _ = align(runs, pred)
+    noise = noise_from_data(runs, pred, chain)
+    chi2 = {(c.order, c.cutoff): _chi2(_Problem(runs, c.calibrated(runs, pred), noise).residuals(pred))
+            for _, c in _aligned(runs, pred)}
+    assert chi2[chain.order, chain.cutoff] <= 1.001 * min(chi2.values())
+    rep = find_dynamic_gaps(runs, model, catalogue=_rivals("DAMP_LONG", "SWIFT_PDAMP", "FREQ_LONG",
+                                                           "DAMP_RESIDUAL"), refit_top=2)
+    assert [c.parameters for c in rep.effects_added] == [("DAMP_LONG",)], rep.effect_names
+    assert (rep.chain.order, rep.chain.cutoff) == (4, 150.0)
+    assert rep.model.params.DAMP_LONG == pytest.approx(truth.params.DAMP_LONG, rel=0.03)
+
+
+def test_an_effect_added_first_is_taken_out_when_a_later_one_explains_it():
+    """A softer in-plane sidewall (FREQ_LONG x 0.88) among rivals that also shift the in-plane response: the
+    residual damping wins the first round, FREQ_LONG the second; with FREQ_LONG in, the damping explains nothing
+    and is taken out (the steady finder's backward check), leaving the truth alone at its value."""
+    model, truth, runs = _in_plane_case({"FREQ_LONG": 0.88})
+    rep = find_dynamic_gaps(runs, model, catalogue=_rivals("FREQ_LONG", "FREQ_WINDUP", "DAMP_RESIDUAL",
+                                                           "DAMP_LONG"), refit_top=2)
+    assert [c.parameters for c in rep.effects_added] == [("FREQ_LONG",)], (rep.effect_names, rep.rejected)
+    assert rep.model.params.FREQ_LONG == pytest.approx(truth.params.FREQ_LONG, rel=0.005)
+    assert rep.model.params.DAMP_RESIDUAL == model.params.DAMP_RESIDUAL
+    for c, e in rep.error_after.items():
+        assert e < 1.1 * rep.noise_floor[c]
+
+
 # ------------------------------------------------------------------------------ item 4: identifiability
 def _brakes(loads):
     from mftyre.gaps.dynamic_runs import DynamicRun
