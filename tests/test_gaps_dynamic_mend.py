@@ -208,9 +208,10 @@ def test_alignment_recovers_gain_drift_filter_order_and_delay(sample):
         assert rms < 1.2 * noise[c]["sigma"]
 
 
-def _in_plane_case(change):
-    """Four cleat runs of the TNO file (40 km/h, two pressures, two loads, 0.8 s) from a truth with ``change``
-    (factors of the file's values), through the generator's default chain (a 4th-order filter at 150 Hz, 5 ms)."""
+def _in_plane_case(change, speeds=(40.0,)):
+    """Cleat runs of the TNO file (each of ``speeds`` [km/h] at two pressures and two loads, 0.8 s) from a truth
+    with ``change`` (factors of the file's values), through the generator's default chain (a 4th-order filter at
+    150 Hz, 5 ms)."""
     from conftest import PROJECT, require_shared
 
     with warnings.catch_warnings():
@@ -218,7 +219,7 @@ def _in_plane_case(change):
         model = mftyre.load_tir(require_shared(PROJECT.parent / "shared" / "reference" / "tir" /
                                                "TNO_car205_60R15.tir"))
     truth = model.with_params(**{k: f * model.params[k] for k, f in change.items()})
-    runs = synthetic_runs(model, truth=truth, speeds=(40.0,), pressures=(1.8e5, 2.6e5), loads=(3000.0, 5000.0),
+    runs = synthetic_runs(model, truth=truth, speeds=speeds, pressures=(1.8e5, 2.6e5), loads=(3000.0, 5000.0),
                           steer_speeds=(), duration=0.8, lead=0.3, seed=11)
     return model, truth, runs
 
@@ -232,13 +233,14 @@ def _rivals(*names):
 def test_the_alignment_weighs_each_channel_by_its_noise_and_the_damping_comes_back():
     """Twice the in-plane damping, the given file's own as the start: the alignment chose its filter by sums of
     squares weighted by each channel's variance, and against a model lacking damping that took a 2nd-order filter
-    at 200 Hz for the rig's 4th order at 150 Hz. The damping refitted through that chain stopped at 0.089 for a
-    truth of 0.098 (and on 8 runs a second effect, SWIFT_PDAMP, took the rest). Weighted by the noise, as the
-    chi-square is, the chain is the rig's and DAMP_LONG the truth's."""
-    from mftyre.gaps.dynamic import _aligned, _Problem, _chi2, align, noise_from_data
+    at 200 Hz for the rig's 4th order at 150 Hz. The damping refitted through that chain stopped at 0.088 for a
+    truth of 0.098, and a second effect, SWIFT_PDAMP, took the rest. Weighted by the noise, as the chi-square is,
+    the chain is the rig's and DAMP_LONG the truth's. (At one speed the data hardly separate the filter from the
+    damping: two speeds.)"""
+    from mftyre.gaps.dynamic import _aligned, _chi2, _Problem, align, noise_from_data
     from mftyre.gaps.dynamic_runs import simulate
 
-    model, truth, runs = _in_plane_case({"DAMP_LONG": 2.0})
+    model, truth, runs = _in_plane_case({"DAMP_LONG": 2.0}, speeds=(10.0, 70.0))
     # against the given model the chosen cell is the one of least chi-square, as the refits weigh it
     pred = simulate(model, runs)
     chain, _ = align(runs, pred)
@@ -249,7 +251,7 @@ def test_the_alignment_weighs_each_channel_by_its_noise_and_the_damping_comes_ba
     rep = find_dynamic_gaps(runs, model, catalogue=_rivals("DAMP_LONG", "SWIFT_PDAMP", "FREQ_LONG",
                                                            "DAMP_RESIDUAL"), refit_top=2)
     assert [c.parameters for c in rep.effects_added] == [("DAMP_LONG",)], rep.effect_names
-    assert (rep.chain.order, rep.chain.cutoff) == (4, 150.0)
+    assert rep.chain.order == 4 and rep.chain.cutoff == pytest.approx(150.0, rel=0.05)
     assert rep.model.params.DAMP_LONG == pytest.approx(truth.params.DAMP_LONG, rel=0.03)
 
 
@@ -265,6 +267,30 @@ def test_an_effect_added_first_is_taken_out_when_a_later_one_explains_it():
     assert rep.model.params.DAMP_RESIDUAL == model.params.DAMP_RESIDUAL
     for c, e in rep.error_after.items():
         assert e < 1.1 * rep.noise_floor[c]
+
+
+def test_a_cutoff_between_the_grids_cells_is_refined_before_any_candidate_is_credited():
+    """A control on a rig whose anti-alias filter (93 Hz) lies between the alignment's cells (80, 100 Hz), its load
+    cells 1.2 % high and drifting: aligned on the grid alone, the given (true) model kept a misfit and an FX gain
+    of 1.002, and a contact-length change, refitted with the continuous cutoff every candidate has, was credited
+    with the chain's own refinement and added. The current model's chain is refined as every candidate's is."""
+    from conftest import PROJECT, require_shared
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = mftyre.load_tir(require_shared(PROJECT.parent / "shared" / "reference" / "tir" /
+                                               "TNO_car205_60R15.tir"))
+    gain = {"FX": 1.0119, "FZ": 1.0120}
+    runs = synthetic_runs(model, speeds=(20.0, 60.0), pressures=(1.9e5, 2.5e5), steer_speeds=(), duration=2.0,
+                          lead=0.3, seed=11, dt=5e-4, cutoff=93.3, delay=0.010, ar=0.43, gain=gain,
+                          drift={"FX": -41.7, "FZ": -44.2},
+                          roads=("trapezoid(x0={x0}, top_length=0.05, height=0.015, ramp=0.03)",
+                                 "cleat(x0={x0}, length=0.12, height=-0.015)"))
+    rep = find_dynamic_gaps(runs, model)
+    assert rep.effects_added == [], rep.effect_names
+    assert rep.chain.cutoff == pytest.approx(93.3, rel=0.02) and rep.chain.delay == pytest.approx(0.010, abs=3e-4)
+    for c, g in gain.items():
+        assert rep.chain.gain[c] == pytest.approx(g, abs=0.003)
 
 
 # ------------------------------------------------------------------------------ item 4: identifiability
