@@ -316,6 +316,30 @@ def test_two_loads_give_a_load_slope_not_its_curvature(sample):
     assert load_terms((3000.0, 4000.0, 5000.0))[0] == ("PCFX1", "PCFX2")
 
 
+def test_a_load_read_from_the_measured_fz_is_one_level_whatever_its_noise_and_gain(sample):
+    """Cleat runs at one axle height per pressure: the load is read from the measured FZ before the obstacle, which
+    moves with the noise and a load cell 1.8 % high. Counted as distinct values those were several loads, the
+    contact length's load slope Q_RA2 was refitted from them and named in place of Q_RA1; one load and two
+    pressures now, so Q_RA2 is not testable, and the hold-out groups the runs by the same levels."""
+    from mftyre.gaps.dynamic import _holdout
+    from mftyre.gaps.dynamic_catalogue import testable_effects
+    from mftyre.gaps.dynamic_runs import DynamicRun, run_levels
+
+    rng = np.random.default_rng(2)
+    t = 1e-3 * np.arange(100)
+    runs = [DynamicRun(f"c{v}_{p}", t, dict(VX=np.full(100, v / 3.6), Z=np.full(100, 0.3), OMEGA=np.full(100, 30.0),
+                                           P=np.full(100, p)), "cleat(x0=1, length=0.02, height=0.01)",
+                       {"FX": rng.normal(0.0, 20.0, 100), "FZ": 1.018 * 4000.0 + rng.normal(0.0, 30.0, 100)})
+            for v in (20.0, 60.0) for p in (1.9e5, 2.5e5)]
+    assert len({r.condition["load"] for r in runs}) > 1  # the values the old count took for loads
+    assert set(run_levels(runs, "load").tolist()) == {0}
+    assert set(run_levels(runs, "pressure").tolist()) == {0, 1}
+    ok, why = testable_effects(runs, sample)
+    assert not any("Q_RA2" in e.parameters for e in ok)
+    assert "two loads" in why["contact length over load (Q_RA2)"]
+    assert len(_holdout(runs, 0.34, 0)) == 2
+
+
 def test_near_singular_pairs_report_their_correlation_and_no_error():
     """precision(): a pair correlated at 0.999 (one combination fixed by the data) gets NaN standard errors and its
     correlation; a pair at 0.5 keeps sqrt(diag) x slope."""

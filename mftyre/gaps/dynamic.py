@@ -63,7 +63,8 @@ from scipy import stats
 from ..errors import DataError, ModelInputError
 from .dynamic_catalogue import DYNAMIC_CATALOGUE, testable_effects
 from .dynamic_locate import compare, features
-from .dynamic_runs import MODEL_KINDS, DynamicRun, SwiftTyres, measurement_chain, read_runs, road_layout, simulate
+from .dynamic_runs import (MODEL_KINDS, RUN_LEVELS, DynamicRun, SwiftTyres, measurement_chain, read_runs,
+                           road_layout, run_levels, simulate)
 from .locate import Finding
 from .search import Candidate, judge, matches, search
 
@@ -302,19 +303,14 @@ def noise_from_data(runs, pred, chain) -> dict:
     return out
 
 
-#: Level steps of the run conditions (absolute, relative to the largest): speed [km/h], load [N], pressure [bar].
-_RUN_LEVELS = {"speed": (1.0, 0.03), "load": (0.0, 0.05), "pressure": (0.0, 0.03)}
-
-
 def _holdout(runs, fraction, seed):
     """Names of the held-out runs: the steady finder's rule (:func:`mftyre.gaps.residuals.stratified_holdout`) over
     the runs as units, their kind (cleat, steer, brake, flat) as the kind of test and as conditions the levels
     of speed, load and pressure and the road (which obstacle): every condition and manoeuvre present is held out
     somewhere when the runs allow it, and none vanishes from the training runs."""
-    from .residuals import condition_levels, stratified_holdout
+    from .residuals import stratified_holdout
 
-    cond = [r.condition for r in runs]
-    level = [condition_levels(np.nan_to_num([c[k] for c in cond]), *step) for k, step in _RUN_LEVELS.items()]
+    level = [run_levels(runs, key) for key in RUN_LEVELS]
     roads = sorted({r.road for r in runs})
     level.append(np.array([roads.index(r.road) for r in runs]))
     # whole runs are few and long: the fraction rounded up (4 runs at 0.34: 2 held out), two kept for training

@@ -20,6 +20,7 @@ from dataclasses import replace
 
 from ..params import PARAMETERS
 from .catalogue import Effect
+from .dynamic_runs import run_levels
 
 __all__ = ["DYNAMIC_CATALOGUE", "NOT_TRIED", "NOT_TRIED_RELAXED", "testable_effects"]
 
@@ -165,8 +166,9 @@ for _e in DYNAMIC_CATALOGUE:
 
 
 def _levels(runs, kinds, key):
-    vals = {r.condition[key] for r in runs if r.kind in kinds}
-    return len({v for v in vals if v == v})
+    """How many levels of the condition ``key`` the runs of ``kinds`` hold (:func:`run_levels`)."""
+    known = [r for r in runs if r.kind in kinds and r.condition[key] == r.condition[key]]
+    return len(set(run_levels(known, key).tolist())) if known else 0
 
 
 def testable_effects(runs, model, catalogue=DYNAMIC_CATALOGUE, model_kind: str = "swift"):

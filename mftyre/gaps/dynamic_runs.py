@@ -45,7 +45,8 @@ import pandas as pd
 from ..errors import DataError, ModelInputError
 
 __all__ = ["DynamicRun", "SwiftTyres", "read_runs", "write_runs", "runs_frame", "simulate", "simulate_relaxed",
-           "synthetic_runs", "OUTPUT_CHANNELS", "MODEL_OUTPUT", "RELAXED_OUTPUT", "MODEL_KINDS"]
+           "synthetic_runs", "OUTPUT_CHANNELS", "MODEL_OUTPUT", "RELAXED_OUTPUT", "MODEL_KINDS", "RUN_LEVELS",
+           "run_levels"]
 
 #: Measured channels the dynamic gap finder compares, and the SWIFT output each one is.
 MODEL_OUTPUT = {"FX": "fx", "FY": "fy", "FZ": "fz", "MZ": "mz", "SPIN": "omb"}
@@ -116,6 +117,20 @@ class DynamicRun:
     def label(self) -> str:
         c = self.condition
         return f"{self.name} ({self.kind}, {c['speed']:g} km/h, {c['load']:.0f} N, {c['pressure']:g} bar)"
+
+
+#: Level steps of the run conditions (absolute, relative to the largest): speed [km/h], load [N], pressure [bar].
+#: Values closer than this are one level: a load read from the measured FZ moves with the noise and the load cell's
+#: gain (distinct values counted as levels found eight loads in runs at one, and let a load slope be refitted).
+RUN_LEVELS = {"speed": (1.0, 0.03), "load": (0.0, 0.05), "pressure": (0.0, 0.03)}
+
+
+def run_levels(runs, key: str) -> np.ndarray:
+    """Level index of each run's condition ``key`` (:data:`RUN_LEVELS`; grouped by the steady finder's rule,
+    :func:`mftyre.gaps.residuals.condition_levels`; a missing value counts as 0)."""
+    from .residuals import condition_levels
+
+    return condition_levels(np.nan_to_num([r.condition[key] for r in runs]), *RUN_LEVELS[key])
 
 
 #: The lowest sample rate [Hz] a run may have: the belt's in-plane modes (30-100 Hz) and an anti-alias filter below
