@@ -16,7 +16,7 @@ Default file: ../shared/reference/tir/TNO_car205_60R15.tir, else tir_files/car_2
 case; CPU then counts the workers too. Serial and parallel side by side in one run:
 ``for w in 0 2; do python benchmarks/bench_dynamic_gaps.py --cases "sidewall over pressure" --workers $w; done``.
 
-    python benchmarks/bench_dynamic_gaps.py --rig [--duration 0.6] [--cases NAME,...]
+    python benchmarks/bench_dynamic_gaps.py --rig [--duration 0.6] [--cases NAME,...] [--seed 12 --chain-offset 20]
 
 The rig suite (issue 33; :data:`RIG_CASES`): cases the finder was not tuned to, on two property files (the TNO
 file and the sample SWIFT file), each with its own measurement chain drawn from the rig ranges of the issue (a
@@ -113,8 +113,9 @@ def rig_chain(seed: int) -> dict:
                 gain=gain, drift=drift)
 
 
-def run_rig_case(name, duration, seed=11):
+def run_rig_case(name, duration, seed=11, chain_offset=0):
     tir, setting, change, params, chain_seed = RIG_CASES[name]
+    chain_seed += chain_offset
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         model = mftyre.load_tir(tir)
@@ -203,6 +204,9 @@ def main(argv=None) -> int:
     ap.add_argument("--cases", help="comma-separated case names (default: all)")
     ap.add_argument("--quick", action="store_true", help="0.6 s runs")
     ap.add_argument("--rig", action="store_true", help="the rig suite (RIG_CASES) instead")
+    ap.add_argument("--seed", type=int, default=11, help="the rig suite's sensor-noise seed (default 11)")
+    ap.add_argument("--chain-offset", type=int, default=0,
+                    help="added to every rig case's chain seed: other chains drawn from the same ranges (default 0)")
     ap.add_argument("--workers", type=int, default=0,
                     help="simulate on a local cluster of N worker processes (mftyre.runner; default 0: serially "
                          "in this process); the cluster is started before the first case (its start is printed)")
@@ -227,13 +231,13 @@ def _main(a) -> int:
     if a.rig:
         warnings.simplefilter("ignore")
         names = [n.strip() for n in a.cases.split(",")] if a.cases else list(RIG_CASES)
-        print(f"rig suite; runs of {a.duration:g} s")
+        print(f"rig suite; runs of {a.duration:g} s; noise seed {a.seed}, chain seeds + {a.chain_offset}")
         print("| case | runs | pass | CPU s | wall s | rig chain (rate, cutoff, delay, AR(1), gains) | fitted chain | named | "
               "held-out RMS before -> after (noise) |")
         print("|---|---|---|---|---|---|---|---|---|")
         rows = []
         for n in names:
-            r = run_rig_case(n, a.duration)
+            r = run_rig_case(n, a.duration, a.seed, a.chain_offset)
             rows.append(r)
             status = r["ok"] if isinstance(r["ok"], str) else ("yes" if r["ok"] else "NO")
             print(f"| {r['case']} | {r['runs']} | {status} | {r['cpu']:.0f} | {r['wall']:.0f} | {r['rig']} | "

@@ -805,6 +805,12 @@ class _Runs:
         self.prob = _Problem(self.runs, self.chain, self.noise)
         self._jac = {}
 
+    def _problem(self, pred) -> _Problem:
+        """The residuals of ``pred`` through a chain fitted to it as the current model's is (aligned, refined), with
+        the current noise."""
+        chain = refined(align(self.train_runs, pred, self.sim.runner)[0], self.runs, pred, self.noise, self.train)
+        return _Problem(self.runs, chain, self.noise)
+
     def locate(self) -> list:
         return _gaps(self.runs, self.prob, self.pred, self.alpha)
 
@@ -977,12 +983,12 @@ class _Runs:
             rest = [c for c in self.added if c is not cand]
             model = self.given.with_params(**{p: float(self.model.params[p]) for c in rest for p in c.parameters})
             pred = self.sim(model)
-            prob = _Problem(self.runs, align(self.train_runs, pred, self.sim.runner)[0], self.noise)
+            prob = self._problem(pred)
             saved = [(c.values, c.stderr, c.correlation) for c in rest]
             out = self._together(rest, model, pred, prob)
             if out is not None:
                 model, pred = out
-                prob = _Problem(self.runs, align(self.train_runs, pred, self.sim.runner)[0], self.noise)
+                prob = self._problem(pred)
             without, with_it = prob.residuals(pred), self.prob.residuals(self.pred)
             train = {k for k in with_it if k[0] in self.train}
             held = set(with_it) - train
