@@ -339,6 +339,20 @@ class _Problem:
         return sum(r.t.size / self.noise[c]["tau"] for r in self.runs if r.name in names for c in r.measured)
 
 
+@dataclass(frozen=True)
+class _Scored:
+    """A change of model judged by the search's rule (:meth:`_Runs._scored`): training and held-out chi-square
+    (before, after), their chi2(k) p-values, the chi-square the materiality is measured against (``before``), the
+    decrease there (``score``) and :func:`judge`'s reason ('' when it passes)."""
+    train: tuple
+    held: tuple
+    p_train: float
+    p_held: float
+    before: float
+    score: float
+    note: str
+
+
 def _chi2(res: dict, keys=None) -> float:
     return float(sum(np.nansum(v**2) for k, v in res.items() if keys is None or k in keys))
 
@@ -819,11 +833,10 @@ class _Runs:
         simulated histories, beyond what the chain's own freedom explains); the best :attr:`refit_top` refitted
         with the chain (:func:`_refit`) and judged (:func:`mftyre.gaps.search.judge`); (candidate, (model,
         prediction)) pairs, the refitted by held-out decrease first."""
-        prob, pred, train, held, runs = self.prob, self.pred, self.train, self.held, self.runs
+        prob, pred, train, runs = self.prob, self.pred, self.train, self.runs
         res = prob.residuals(pred)
         keys_train = [k for k in res if k[0] in train]
         r_train = np.concatenate([res[k] for k in keys_train])
-        chi_train, chi_test = _chi2(res, set(keys_train)), _chi2(res, set(res) - set(keys_train))
         self.say(f"round {round_no}: screening {len(tried)} effects")
         # ranked by what each explains beyond the measurement chain's own freedom (its delay and cutoff take up
         # part of a lag or a frequency gap, differently for each effect: screened with the chain held, in the TNO
@@ -853,28 +866,35 @@ class _Runs:
                 rest.append((cand, None))
                 continue
             new_model, new_pred, delta, cov, prob_new = out
-            res_new = prob_new.residuals(new_pred)
-            k = len(e.parameters)
-            cand.chi2_train_before, cand.chi2_test_before = chi_train, chi_test
-            cand.chi2_train_after = _chi2(res_new, set(keys_train))
-            cand.chi2_test_after = _chi2(res_new, set(res_new) - set(keys_train))
-            cand.n_eff = prob.n_eff(train)
-            cand.p_value = float(stats.chi2.sf(max(chi_train - cand.chi2_train_after, 0.0), k))
-            cand.held_out_p = float(stats.chi2.sf(max(chi_test - cand.chi2_test_after, 0.0), k)) if held \
-                else math.nan
+            sc = self._scored(res, prob_new.residuals(new_pred), prob, len(e.parameters), level)
+            (cand.chi2_train_before, cand.chi2_train_after), (cand.chi2_test_before, cand.chi2_test_after) = \
+                sc.train, sc.held
+            cand.n_eff, cand.p_value, cand.held_out_p = prob.n_eff(train), sc.p_train, sc.p_held
             cand.values = {p: float(new_model.params[p]) for p in e.parameters}
             cand.stderr, cand.correlation = precision(
                 cov, [_slope(e, p, cand.values[p], self.model.params[p]) for p in e.parameters], e.parameters)
-            # the held-out decrease, material against what the noise does not explain
-            before, after, n_eff = (chi_test, cand.chi2_test_after, prob.n_eff(held)) if held else \
-                (chi_train, cand.chi2_train_after, cand.n_eff)
-            cand.score, cand.held_out_gain = before - after, (before - after) / before if before > 0 else 0.0
-            cand.note = judge(cand.p_value, level, cand.held_out_p, level, cand.score, material=MATERIAL,
-                              excess=before - n_eff)
+            cand.score, cand.held_out_gain = sc.score, sc.score / sc.before if sc.before > 0 else 0.0
+            cand.note = sc.note
             cand.significant = not cand.note
             refitted.append((cand, (new_model, new_pred)))
         refitted.sort(key=lambda t: -t[0].score)
         return refitted + rest
+
+    def _scored(self, before: dict, after: dict, prob, k: int, level: float) -> _Scored:
+        """The search's rule (:func:`mftyre.gaps.search.judge`) for a change of model of ``k`` parameters, from
+        weighted residuals ``before`` (problem ``prob``) to ``after``: the training and held-out chi2(k) p-values
+        at ``level``, and the decrease material against what the noise does not explain, held-out where there is a
+        hold-out (else training). One rule for adding a candidate (:meth:`trials`) and for keeping one
+        (:meth:`recheck`)."""
+        train = {key for key in after if key[0] in self.train}
+        chi = {part: (_chi2(before, keys), _chi2(after, keys)) for part, keys in (("train", train),
+                                                                                   ("held", set(after) - train))}
+        p_train = float(stats.chi2.sf(max(chi["train"][0] - chi["train"][1], 0.0), k))
+        p_held = float(stats.chi2.sf(max(chi["held"][0] - chi["held"][1], 0.0), k)) if self.held else math.nan
+        b, a = chi["held"] if self.held else chi["train"]
+        note = judge(p_train, level, p_held, level, b - a, material=MATERIAL,
+                     excess=b - prob.n_eff(self.held or self.train))
+        return _Scored(chi["train"], chi["held"], p_train, p_held, b, b - a, note)
 
     def _sensitivity(self, effects, keys_train, r_train) -> None:
         """d (weighted training residuals) / d (refit coordinates) of each of ``effects`` by finite differences
@@ -989,17 +1009,8 @@ class _Runs:
             if out is not None:
                 model, pred = out
                 prob = self._problem(pred)
-            without, with_it = prob.residuals(pred), self.prob.residuals(self.pred)
-            train = {k for k in with_it if k[0] in self.train}
-            held = set(with_it) - train
-            k = len(cand.parameters)
-            p_train = float(stats.chi2.sf(max(_chi2(without, train) - _chi2(with_it, train), 0.0), k))
-            p_held = float(stats.chi2.sf(max(_chi2(without, held) - _chi2(with_it, held), 0.0), k)) \
-                if self.held else math.nan
-            keys, names = (held, self.held) if self.held else (train, self.train)
-            before = _chi2(without, keys)
-            why = judge(p_train, self.alpha, p_held, self.alpha, before - _chi2(with_it, keys), material=MATERIAL,
-                        excess=before - prob.n_eff(names))
+            why = self._scored(prob.residuals(pred), self.prob.residuals(self.pred), prob, len(cand.parameters),
+                               self.alpha).note
             if not why:
                 for c, (values, stderr, correlation) in zip(rest, saved):
                     c.values, c.stderr, c.correlation = values, stderr, correlation
