@@ -94,10 +94,12 @@ _OUTPUT_FLAG = 1 << (3 * _FLAG_BITS)
 _PYTHON_ABI = sysconfig.get_config_var("EXT_SUFFIX") if platform.python_implementation() == "CPython" else None
 
 
-#: the hash of this module, the backend and the equations: part of every cache key, so that a changed generator or
-#: equation (e.g. fewer unrolled solver steps) never meets an old library
+#: the hash of this module, the backend, the graph's builder (model.py: casadi_function, the run-time parameters) and
+#: the equations: part of every cache key, so that a changed generator or equation (e.g. fewer unrolled solver
+#: steps) never meets an old library
 _GENERATOR = hashlib.sha256(b"".join(path.read_bytes() for path in (
-    Path(__file__), Path(__file__).with_name("backend.py"), *sorted(Path(__file__).with_name("formula").glob("*.py"))
+    Path(__file__), *(Path(__file__).with_name(n) for n in ("backend.py", "model.py")),
+    *sorted(Path(__file__).with_name("formula").glob("*.py"))
 ))).hexdigest()
 
 

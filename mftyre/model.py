@@ -28,7 +28,8 @@ from .backend import NUMPY, NUMPY_FOLDING
 from .params import SELECTS_FORM
 from .variables import MF_OUTPUTS, unit_table
 
-__all__ = ["MFModel", "MFOutputs", "load_tir", "OUTPUT_UNITS", "SymbolicParameters"]
+__all__ = ["MFModel", "MFOutputs", "load_tir", "OUTPUT_UNITS", "SymbolicParameters", "ParametricModel",
+           "FORM_PARAMETERS", "run_time_parameter_names", "structure_of"]
 
 #: Unit and meaning of every output (the table :data:`mftyre.variables.MF_OUTPUTS`).
 OUTPUT_UNITS = unit_table(MF_OUTPUTS)
@@ -473,6 +474,45 @@ class SymbolicParameters:
 
     def __iter__(self):
         return iter(self._params)
+
+
+#: Parameters whose values choose a form of the equations (Python branches): numbers in any graph built with
+#: run-time parameters (:data:`mftyre.params.SELECTS_FORM` and those the MF 6.2 loaded-radius solver branches on).
+FORM_PARAMETERS = SELECTS_FORM | vertical.MF62_SOLVER_FORM_PARAMETERS
+
+
+def run_time_parameter_names(params) -> list:
+    """The .tir parameters a graph built with run-time parameters takes as inputs (in the file's order): every real
+    number except those that select a form of the equations (:data:`FORM_PARAMETERS`) and those at 0. A parameter
+    at 0 switches its effect off (the equations test some for 0, e.g. Q_FCY, and a compiler drops the terms they
+    multiply), so which are 0 is part of the graph's structure (:func:`structure_of`)."""
+    return [n for n in params if isinstance(params[n], float) and params[n] != 0.0 and n not in FORM_PARAMETERS]
+
+
+def structure_of(model, names) -> dict:
+    """What shapes a graph of ``model`` built with the run-time parameters ``names``: the values of the others, the
+    absent ones, the version and the mounted side (a JSON-able mapping; equal mappings, one graph)."""
+    prm = model.params
+    return {"fixed": {k: repr(prm[k]) for k in prm if k not in names}, "run_time": list(names),
+            "missing": sorted(prm.missing), "version": prm.version, "side": model.side}
+
+
+class ParametricModel:
+    """Stands in for an MFModel while a graph is built with run-time parameters: ``params`` the model's parameters
+    with those of ``names`` as the CasADi ``symbols`` (:class:`SymbolicParameters`), ``casadi_function`` the model's
+    with those parameters bound to the same symbols; the side as the model's."""
+
+    def __init__(self, model, names, symbols):
+        self._model, self._names, self._symbols = model, list(names), list(symbols)
+        self.side, self.mirrored = model.side, model.mirrored
+        self.params = SymbolicParameters(model.params, dict(zip(self._names, self._symbols)))
+
+    def casadi_function(self, *, parameters=(), **options):
+        """The model's function of its inputs and ``parameters`` (further symbolic parameters, after the inputs as
+        :meth:`MFModel.casadi_function` takes them), the other run-time parameters bound to their symbols."""
+        bound = [(n, symbol) for n, symbol in zip(self._names, self._symbols) if n not in parameters]
+        function = self._model.casadi_function(parameters=(*parameters, *(n for n, _ in bound)), **options)
+        return lambda *arguments: function(*arguments, *(symbol for _, symbol in bound))
 
 
 def _own_arrays(values: dict, n: int, inputs: list) -> dict:

@@ -256,18 +256,27 @@ class WheelFunctions(StateFunctions):
     deriv: object = None
     events: object = None
     event_names: tuple = ()
+    #: the .tir parameters the functions take at run time, the entries of q after :attr:`parameters`
+    #: (``run_time=True`` of :func:`wheel_functions`; empty: the model's values are numbers in the graph)
+    run_time: tuple = ()
 
 
 def wheel_functions(model, kind: str = "steady", vertical: str = "position",
                     tau_vlow: float | None = None, turn_slip: bool = False,
-                    input_mode: str = "vehicle") -> WheelFunctions:
+                    input_mode: str = "vehicle", run_time=()) -> WheelFunctions:
     """CasADi functions of the ``kind`` ("steady" or "transient") tyre with the ``vertical`` input mode;
     ``turn_slip``: the MF with turn slip (input ``yaw_rate``, module notes); ``input_mode`` "rig": the steady tyre
     with the load ``Fz_in`` and the slips ``kappa_in`` (relative to the direction of travel, as the MF takes it),
-    ``alpha_in`` imposed, the spin estimated by the MF from kappa and vx (``vertical`` is then "load")."""
+    ``alpha_in`` imposed, the spin estimated by the MF from kappa and vx (``vertical`` is then "load").
+    ``run_time``: names of .tir parameters made entries of ``q`` after the wheel's own
+    (:attr:`WheelFunctions.run_time`; real, non-zero, none that selects a form of the equations: see
+    :func:`mftyre.model.run_time_parameter_names`), so the functions serve every model of the same structure
+    (:func:`mftyre.model.structure_of`), each with its values in q; the input and parameter starts stay
+    ``model``'s."""
     import casadi as ca
 
     from .backend import casadi_backend
+    from .model import ParametricModel, run_time_parameter_names
 
     if kind not in KINDS:
         raise ModelInputError(f"model must be one of {', '.join(KINDS)}; got {kind!r}")
@@ -291,7 +300,16 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
     if kind == "transient":
         tau_start = default_tau_vlow(model) if tau_vlow is None else float(tau_vlow)
         parameters = (PARAMETERS["tau_vlow"].but(start=tau_start),)
-    q = ca.SX.sym("q", len(parameters))
+    names = list(run_time)
+    bad = [n for n in names if n not in run_time_parameter_names(model.params)]
+    if bad:
+        raise ModelInputError(f"run-time parameter(s) {bad} of the wheel must be real, non-zero .tir parameters that "
+                              f"select no form of the equations")
+    q = ca.SX.sym("q", len(parameters) + len(names))
+    couples = vertical_couples_forces(prm)  # (a form of the equations: from the numbers)
+    if names:  # the equations read the run-time parameters as the entries of q after the wheel's own
+        model = ParametricModel(model, names, [q[len(parameters) + i] for i in range(len(names))])
+        prm = model.params
     nx = 2 if kind == "transient" else 0
     x = ca.SX.sym("x", nx)
     h = ca.SX.sym("h")
@@ -307,7 +325,7 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
     gamma = U["gamma"] - U["road_camber"]
     lmux, lmuy = prm.LMUX * U["mu_scale"], prm.LMUY * U["mu_scale"]
     if rig:
-        return _rig_functions(model, u, U, q, x, h, gamma, lmux, lmuy, inputs, parameters)
+        return _rig_functions(model, u, U, q, x, h, gamma, lmux, lmuy, inputs, parameters, tuple(names))
     vy, omega = U["vy"], U["omega"]
 
     # turn slip: phit = +psi_dot / Vc', Vc' = max(Vc, VXLOW) (module notes: the sign of the camber spin in ISO-W);
@@ -359,13 +377,13 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
 
         def coupled_load(start):  # Fz = Fz(Rl, Fx(Fz), Fy(Fz)) (A3.3 with Q_FCX, Q_FCY): LOAD_PASSES passes
             fz, r_omega = road_load(0.0, 0.0)
-            for _ in range(LOAD_PASSES if vertical_couples_forces(prm) else 0):
+            for _ in range(LOAD_PASSES if couples else 0):
                 fx_k, fy_k = tyre_at(fz, start)[1][:2]
                 fz, r_omega = road_load(fx_k, fy_k)
             return fz, r_omega
 
         fz, ro = coupled_load(False)
-        fz_start = coupled_load(True)[0] if kind == "transient" and vertical_couples_forces(prm) else fz
+        fz_start = coupled_load(True)[0] if kind == "transient" and couples else fz
         contact = ro - rl_geo  # > 0 in contact (contact_load)
     else:
         fz = fz_start = be.fmax(U["Fz_in"], 0.0)
@@ -384,7 +402,8 @@ def wheel_functions(model, kind: str = "steady", vertical: str = "position",
     # the switches: direction of travel (mf_slip, vx_mf), the low-speed fade at VXLOW (the transient's damping; the
     # steady MF's own fade-out), the contact (lift-off)
     events = {"vx": vx, "low_speed": be.abs(vx) - prm.VXLOW, "contact": contact}
-    return _wheel(x, u, q, h, x0, x_next, y, inputs, parameters, xdot, events, kind=kind, vertical=vertical)
+    return _wheel(x, u, q, h, x0, x_next, y, inputs, parameters, xdot, events, kind=kind, vertical=vertical,
+                  run_time=tuple(names))
 
 
 def _wheel(x, u, q, h, x0, x_next, y: dict, inputs, parameters, xdot, events: dict, **mode) -> WheelFunctions:
@@ -402,7 +421,7 @@ def _wheel(x, u, q, h, x0, x_next, y: dict, inputs, parameters, xdot, events: di
                           event_names=tuple(events), **mode)
 
 
-def _rig_functions(model, u, U, q, x, h, gamma, lmux, lmuy, inputs, parameters) -> WheelFunctions:
+def _rig_functions(model, u, U, q, x, h, gamma, lmux, lmuy, inputs, parameters, run_time) -> WheelFunctions:
     """The steady tyre on a rig: the MF at the imposed load and slips (kappa_in relative to the direction of
     travel, as MFModel.evaluate takes it), its spin estimated from kappa and vx; Rl, rho and Re the MF's."""
     import casadi as ca
@@ -423,7 +442,7 @@ def _rig_functions(model, u, U, q, x, h, gamma, lmux, lmuy, inputs, parameters) 
          "mux": mux, "muy": muy, "u_x": none, "u_y": none, "omega_used": omega, "contact_width": 2.0 * b}
     y["Vsx"], y["Vsy"] = slip_speeds(kappa, alpha, U["vx"], be)
     return _wheel(x, u, q, h, ca.SX(0, 1), ca.SX(0, 1), y, inputs, parameters, ca.SX(0, 1), {"contact": U["Fz_in"]},
-                  kind="steady", vertical="load", input_mode="rig")
+                  kind="steady", vertical="load", input_mode="rig", run_time=run_time)
 
 
 class StepError(ModelInputError):

@@ -68,8 +68,8 @@ from mftyre.compiled import CASADI_LOCK, cached_library  # the verified cache of
 from mftyre.backend import NUMPY
 from mftyre.errors import ModelInputError, TurnSlipWarning
 from mftyre.inputs import check_speed_limits
-from mftyre.model import SymbolicParameters
-from mftyre.params import SELECTS_FORM, swift_invalid_values
+from mftyre.model import ParametricModel, run_time_parameter_names
+from mftyre.params import swift_invalid_values
 from mftyre.formula import vertical
 
 from .enveloping import Cams, CamTable
@@ -875,21 +875,13 @@ class SwiftTyre:
         return s
 
 
-class _ParametricModel:
-    """Stands in for the MFModel while the SWIFT equations are built with run-time parameters: ``params`` the
-    model's parameters with those of ``names`` as the entries of ``theta`` (:class:`mftyre.model.SymbolicParameters`),
-    ``casadi_function`` the model's with those parameters bound to the same symbols; ``constants`` the ring
-    constants as the entries of ``theta`` after the parameters."""
+class _ParametricModel(ParametricModel):
+    """The model with run-time parameters (:class:`mftyre.model.ParametricModel`, the entries of ``theta`` for
+    ``names``) and the ring constants as the entries of ``theta`` after the parameters (``constants``)."""
 
     def __init__(self, model, names, constants, theta):
-        self._model, self._names, self.side = model, list(names), model.side
-        self._symbols = [theta[i] for i in range(len(names))]
-        self.params = SymbolicParameters(model.params, dict(zip(self._names, self._symbols)))
+        super().__init__(model, names, [theta[i] for i in range(len(names))])
         self.constants = replace(constants, **{f: theta[len(names) + i] for i, f in enumerate(_RING_FIELDS)})
-
-    def casadi_function(self, **options):
-        function = self._model.casadi_function(parameters=self._names, **options)
-        return lambda *inputs: function(*inputs, *self._symbols)
 
 
 #: The numeric fields of :class:`swift.ring.RingConstants`, run-time parameters after the .tir's.
@@ -897,18 +889,12 @@ _RING_FIELDS = ("mb", "ibx", "iby", "cbx", "cby", "cbg", "cbth", "kbx", "kby", "
                 "rim_inertia")
 
 
-#: Parameters whose values choose a form of the equations (Python branches): numbers in the compiled code (keyed).
-#: :data:`mftyre.params.SELECTS_FORM` (the schema's fact) and those the MF 6.2 loaded-radius solver branches on.
-_FORM_PARAMETERS = SELECTS_FORM | vertical.MF62_SOLVER_FORM_PARAMETERS
-
-
 def _run_time_parameters(params, constants):
-    """(names, values): the .tir parameters the compiled step takes at run time and their values, followed by the
-    ring constants (:data:`_RING_FIELDS`). Every real number except those that select a form of the equations
-    (:data:`_FORM_PARAMETERS`) and those at 0: a parameter at 0 switches its effect off (the
-    equations test some for 0, e.g. Q_FCY; and the compiler drops the terms they multiply), so which are 0 is part
-    of the structure (:meth:`SwiftTyre._key`): a refit that moves one away from 0 builds one more library."""
-    names = [n for n in params if isinstance(params[n], float) and params[n] != 0.0 and n not in _FORM_PARAMETERS]
+    """(names, values): the .tir parameters the compiled step takes at run time
+    (:func:`mftyre.model.run_time_parameter_names`; which are 0 is part of the structure, :meth:`SwiftTyre._key`: a
+    refit that moves one away from 0 builds one more library) and their values, followed by the ring constants
+    (:data:`_RING_FIELDS`)."""
+    names = run_time_parameter_names(params)
     values = [params[n] for n in names] + [float(getattr(constants, f)) for f in _RING_FIELDS]
     return names, np.ascontiguousarray(values, dtype=float)
 

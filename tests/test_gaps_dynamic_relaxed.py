@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -17,7 +18,7 @@ import pytest
 import mftyre
 from mftyre.errors import ModelInputError
 from mftyre.gaps.dynamic import find_dynamic_gaps, model_kind_for
-from mftyre.gaps.dynamic_runs import simulate, synthetic_runs
+from mftyre.gaps.dynamic_runs import RelaxedWheels, simulate, simulate_relaxed, synthetic_runs
 
 from conftest import MFEVAL_DIR, PROJECT, require_shared
 
@@ -61,6 +62,49 @@ def test_relaxed_step_steer_follows_the_relaxation_length_of_the_mf(mf52):
     use = gap > 0.05
     slope = np.polyfit(x[use], np.log(gap[use]), 1)[0]
     assert -1.0 / slope == pytest.approx(sigma, rel=0.03)
+
+
+@pytest.mark.parametrize("path", [MF52, MFEVAL_DIR / "MagicFormula62_Parameters.tir", SWIFT_FILE],
+                         ids=lambda p: p.stem)
+def test_models_of_one_refit_share_a_graph_and_give_what_their_own_graphs_give(path):
+    """RelaxedWheels (the finder's graphs): the parameters a model moves from the reference are run-time entries of
+    q, so two trials of one refit share one graph; each gives its own graph's outputs (the model's values as
+    numbers) to 1e-12, with the axle height (MF 6.2: Fz from the loaded radius with the Fx, Fy terms) and with the
+    load imposed. A parameter at 0 in the reference moved off 0 (a term switched on) stays a number: another
+    graph, the same outputs as its own."""
+    ref = _load(require_shared(path))
+    runs = synthetic_runs(ref, speeds=(), steer_speeds=(40.0,), brake_speeds=(40.0,), duration=0.3, lead=0.1,
+                          noise=QUIET, cutoff=None, delay=0.0, model_kind="relaxed")
+    by_load = [replace(r, inputs={**{k: v for k, v in r.inputs.items() if k != "Z"},
+                                  "LOAD": r.measured["FZ"]}) for r in runs]
+    p = ref.params
+    trials = [ref.with_params(PTX1=1.3 * p.PTX1 if "PTX1" in p and p.PTX1 else p.PTX1, PKY1=0.9 * p.PKY1,
+                              FNOMIN=1.05 * p.FNOMIN),
+              ref.with_params(PTX1=1.1 * p.PTX1 if "PTX1" in p and p.PTX1 else p.PTX1, PKY1=0.8 * p.PKY1,
+                              FNOMIN=0.97 * p.FNOMIN)]
+    zero = next(n for n in ("PCFX3", "PDXP3", "PHY3", "PPX4") if n in p and p[n] == 0.0)
+    switched = ref.with_params(**{zero: 0.05})
+    wheels = RelaxedWheels(ref)
+    for vertical, cases in (("position", runs), ("load", by_load)):
+        shared = [wheels.functions(m, vertical) for m in trials]
+        assert shared[0] is shared[1] and {"PKY1", "FNOMIN"} <= set(shared[0].run_time)
+        assert zero not in wheels.functions(switched, vertical).run_time
+        assert wheels.functions(switched, vertical) is not shared[0]
+        for m in (*trials, switched):
+            got, own = simulate_relaxed(m, cases, wheels), simulate_relaxed(m, cases)
+            for name, channels in own.items():
+                for c, values in channels.items():
+                    scale = 1.0 + np.max(np.abs(values))
+                    assert np.max(np.abs(got[name][c] - values)) < 1e-12 * scale, (path.name, vertical, name, c)
+
+
+def test_a_parameter_that_cannot_be_a_run_time_input_is_refused(mf52):
+    from mftyre.transient import wheel_functions
+
+    zero = next(n for n in mf52.params if mf52.params[n] == 0.0)
+    for name in (zero, "FITTYP", "NO_SUCH_PARAMETER"):
+        with pytest.raises(ModelInputError, match=name):
+            wheel_functions(mf52, "transient", "load", run_time=(name,))
 
 
 def test_relaxed_hidden_lateral_relaxation_length_is_named_and_refitted(mf52):

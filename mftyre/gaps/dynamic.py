@@ -63,8 +63,8 @@ from scipy import stats
 from ..errors import DataError, ModelInputError
 from .dynamic_catalogue import DYNAMIC_CATALOGUE, testable_effects
 from .dynamic_locate import compare, features
-from .dynamic_runs import (MODEL_KINDS, RUN_LEVELS, DynamicRun, SwiftTyres, measurement_chain, read_runs,
-                           road_layout, run_levels, simulate)
+from .dynamic_runs import (MODEL_KINDS, RUN_LEVELS, DynamicRun, RelaxedWheels, SwiftTyres, measurement_chain,
+                           read_runs, road_layout, run_levels, simulate)
 from .locate import Finding
 from .search import Candidate, judge, matches, search
 
@@ -526,12 +526,14 @@ class _Sim:
     CasADi calls): the runs of every model asked for at once (:meth:`many`) go out as tasks (:func:`simulate_task`:
     the model's .tir text, the road layout of all the runs, some of its runs), so the runs of one simulation and
     the models of one Jacobian run in parallel; each worker keeps the tyres it built. The outputs are those of the
-    serial simulation, bit for bit."""
+    serial simulation, bit for bit. The relaxed wheel's graphs are built for models near ``reference`` (the given
+    model: :class:`RelaxedWheels`, one graph per refit, not per trial)."""
 
     KEPT = 6
 
-    def __init__(self, runs, kind="swift", runner=None):
+    def __init__(self, runs, kind="swift", runner=None, reference=None):
         self.runs, self.kind, self.evaluations = runs, kind, 0
+        self._wheels = RelaxedWheels(reference) if kind == "relaxed" and reference is not None else None
         self.runner = None if runner is None or runner.serial or kind != "swift" else runner
         self._tables, self._tyres, self._outputs = {}, {}, {}
         self._roads = road_layout(runs) if kind == "swift" else {}  # the tyres' roads, here and on the workers
@@ -576,8 +578,8 @@ class _Sim:
                 try:
                     with warnings.catch_warnings():
                         warnings.simplefilter("ignore")
-                        found[key].update(simulate(model, missing, model_kind="relaxed") if self.kind == "relaxed"
-                                          else simulate(model, missing, self.tyres(model)))
+                        found[key].update(simulate(model, missing, self._wheels, model_kind="relaxed")
+                                          if self.kind == "relaxed" else simulate(model, missing, self.tyres(model)))
                 except ModelInputError as exc:
                     found[key] = exc
         elif todo:
@@ -747,7 +749,7 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
     say = progress or (lambda text: None)
     runs, model_given = _load(data, model)
     model_kind = model_kind_for(model_given, runs, model_kind)
-    sim = _Sim(runs, model_kind, runner)
+    sim = _Sim(runs, model_kind, runner, model_given)
     say(f"{len(runs)} runs; simulating the given model ({model_kind} wheel)")
     pred0 = sim(model_given)
     held = _holdout(runs, holdout, seed)

@@ -44,7 +44,7 @@ import pandas as pd
 
 from ..errors import DataError, ModelInputError
 
-__all__ = ["DynamicRun", "SwiftTyres", "read_runs", "write_runs", "runs_frame", "simulate", "simulate_relaxed",
+__all__ = ["DynamicRun", "SwiftTyres", "RelaxedWheels", "read_runs", "write_runs", "runs_frame", "simulate", "simulate_relaxed",
            "synthetic_runs", "OUTPUT_CHANNELS", "MODEL_OUTPUT", "RELAXED_OUTPUT", "MODEL_KINDS", "RUN_LEVELS",
            "run_levels"]
 
@@ -303,13 +303,14 @@ def _step_inputs(run: DynamicRun, p_nominal: float):
     return StepSeries(**cols)
 
 
-def simulate(model, runs, tyres: SwiftTyres | None = None, *, model_kind: str = "swift") -> dict:
+def simulate(model, runs, tyres: SwiftTyres | RelaxedWheels | None = None, *, model_kind: str = "swift") -> dict:
     """The SWIFT wheel (or with ``model_kind="relaxed"`` the relaxed wheel, :func:`simulate_relaxed`) driven by
     each run's inputs: run name -> channel -> model output at the run's sample times (the channels the run
-    measured). ``model``: an :class:`mftyre.MFModel` with [STRUCTURAL] and [CONTACT_PATCH] sections. Raises
-    :class:`ModelInputError` when the model cannot be built or a run leaves the road table."""
+    measured). ``model``: an :class:`mftyre.MFModel` with [STRUCTURAL] and [CONTACT_PATCH] sections; ``tyres``: its
+    :class:`SwiftTyres`, or for the relaxed wheel the :class:`RelaxedWheels` to build through (default: the model's
+    own). Raises :class:`ModelInputError` when the model cannot be built or a run leaves the road table."""
     if model_kind == "relaxed":
-        return simulate_relaxed(model, runs)
+        return simulate_relaxed(model, runs, tyres)
     if model_kind != "swift":
         raise ModelInputError(f"model kind must be one of {', '.join(MODEL_KINDS)}; got {model_kind!r}")
     tyres = tyres or SwiftTyres(model, runs)
@@ -337,38 +338,82 @@ def relaxed_inputs(run: DynamicRun, names, p_nominal: float) -> np.ndarray:
     return np.array([cols[k] for k in names], dtype=float)
 
 
-def simulate_relaxed(model, runs) -> dict:
+class RelaxedWheels:
+    """The relaxed wheel's functions (:func:`mftyre.transient.wheel_functions`, kind "transient") for models near
+    ``reference``: the parameters in which a model differs from the reference are run-time parameters (entries of
+    q), the others numbers in the graph, so the models of one refit (which move the same few parameters) share one
+    graph per vertical mode and structure (:func:`mftyre.model.structure_of`): one build, not one per trial (the
+    build took about two thirds of a relaxed search's simulation time). Not every parameter at run time: the
+    graph's constants unfolded, it evaluated ten times slower. A parameter at 0 in the model or the reference stays a
+    number (it switches a form on or off). The ``kept`` most recent graphs are kept; thread-safe."""
+
+    def __init__(self, reference, kept: int = 8):
+        from ..model import run_time_parameter_names
+
+        self.reference = reference
+        self._runtime = set(run_time_parameter_names(reference.params))
+        self._built = _Recent(kept)
+
+    def functions(self, model, vertical: str):
+        """The functions for ``model`` with the ``vertical`` input mode ("position" or "load")."""
+        import json
+
+        from ..model import run_time_parameter_names, structure_of
+        from ..transient import wheel_functions
+
+        ref = self.reference.params
+        names = tuple(n for n in run_time_parameter_names(model.params) if n in self._runtime
+                      and model.params[n] != ref[n])
+        key = json.dumps([structure_of(model, names), vertical], sort_keys=True)
+        found = self._built.get(key)
+        if found is None:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # the file's unmodelled parameters: said once by the caller
+                found = self._built[key] = wheel_functions(model, "transient", vertical, run_time=names)
+        return found
+
+    @staticmethod
+    def parameters(functions, model) -> np.ndarray:
+        """The q of ``model`` for its ``functions``: the low-speed damping time of the model
+        (:func:`mftyre.transient.default_tau_vlow`), then its values of the run-time parameters."""
+        from ..transient import default_tau_vlow
+
+        return np.array([default_tau_vlow(model), *(model.params[n] for n in functions.run_time)], dtype=float)
+
+
+def simulate_relaxed(model, runs, wheels: RelaxedWheels | None = None) -> dict:
     """The relaxed wheel (:func:`mftyre.transient.wheel_functions`, kind "transient": the same state functions as
     its FMU) driven by each run's inputs, started in its steady state at the first sample, inputs held over each
     step: run name -> channel -> output (:data:`RELAXED_OUTPUT`) at the run's sample times. Flat-road runs with
-    the rim speed imposed only (it has no road enveloping and no rim dynamics): else :class:`ModelInputError`."""
+    the rim speed imposed only (it has no road enveloping and no rim dynamics): else :class:`ModelInputError`.
+    ``wheels``: the functions of models near one reference, shared (:class:`RelaxedWheels`; default: this model's
+    own, its values in the graph). CasADi is called under :data:`mftyre.compiled.CASADI_LOCK` (thread-safe)."""
     import casadi as ca
 
-    from ..transient import wheel_functions
+    from ..compiled import CASADI_LOCK
 
     bad = [r.name for r in runs if r.kind == "cleat" or "OMEGA" not in r.inputs]
     if bad:
         raise ModelInputError(f"the relaxed wheel runs on a flat road with the rim speed (OMEGA) imposed; run(s) "
                               f"{', '.join(bad[:3])} have an obstacle or a rim torque: use the SWIFT model")
-    funcs, out = {}, {}
     for r in runs:
-        vertical = "position" if "Z" in r.inputs else "load"
-        if vertical not in funcs:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")  # the file's unmodelled parameters: said once by the caller
-                funcs[vertical] = wheel_functions(model, "transient", vertical)
-        f = funcs[vertical]
-        u = relaxed_inputs(r, f.input_names, model.params.NOMPRES)
-        n = r.t.size
-        q = np.array(f.parameter_starts, dtype=float)
-        x0 = f.init(u[:, 0], q)
-        xs = f.step.mapaccum(n - 1)(x0, u[:, :-1], ca.repmat(q, 1, n - 1), r.dt)  # the state after each step
-        ys = np.asarray(f.out.map(n)(ca.horzcat(x0, xs), u, ca.repmat(q, 1, n)))
-        names = list(f.output_names)
-        out[r.name] = {c: ys[names.index(RELAXED_OUTPUT[c])].copy() for c in r.measured if c in RELAXED_OUTPUT}
         missing = [c for c in r.measured if c not in RELAXED_OUTPUT]
         if missing:
-            raise ModelInputError(f"run {r.name!r}: the relaxed wheel has no output for {', '.join(missing)}")
+            raise ModelInputError(f"run {r.name!r}: the relaxed wheel has no output for {', '.join(missing)} (it has "
+                                  f"{', '.join(RELAXED_OUTPUT)})")
+    wheels = wheels or RelaxedWheels(model)
+    out = {}
+    with CASADI_LOCK:
+        for r in runs:
+            f = wheels.functions(model, "position" if "Z" in r.inputs else "load")
+            u = relaxed_inputs(r, f.input_names, model.params.NOMPRES)
+            n = r.t.size
+            q = wheels.parameters(f, model)
+            x0 = f.init(u[:, 0], q)
+            xs = f.step.mapaccum(n - 1)(x0, u[:, :-1], ca.repmat(q, 1, n - 1), r.dt)  # the state after each step
+            ys = np.asarray(f.out.map(n)(ca.horzcat(x0, xs), u, ca.repmat(q, 1, n)))
+            names = list(f.output_names)
+            out[r.name] = {c: ys[names.index(RELAXED_OUTPUT[c])].copy() for c in r.measured}
     return out
 
 
