@@ -257,7 +257,7 @@ class WheelFunctions(StateFunctions):
     events: object = None
     event_names: tuple = ()
     #: the .tir parameters the functions take at run time, the entries of q after :attr:`parameters`
-    #: (``run_time=True`` of :func:`wheel_functions`; empty: the model's values are numbers in the graph)
+    #: (``run_time`` of :func:`wheel_functions`; empty: the model's values are numbers in the graph)
     run_time: tuple = ()
 
 

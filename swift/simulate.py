@@ -68,7 +68,7 @@ from mftyre.compiled import CASADI_LOCK, cached_library  # the verified cache of
 from mftyre.backend import NUMPY
 from mftyre.errors import ModelInputError, TurnSlipWarning
 from mftyre.inputs import check_speed_limits
-from mftyre.model import ParametricModel, run_time_parameter_names
+from mftyre.model import ParametricModel, run_time_parameter_names, structure_of
 from mftyre.params import swift_invalid_values
 from mftyre.formula import vertical
 
@@ -447,12 +447,9 @@ class SwiftTyre:
         integration, the equations' source, CasADi, the compiler flags), not the run-time values :attr:`theta`."""
         import casadi as ca
 
-        prm = self.model.params
-        payload = {"fixed": {k: repr(prm[k]) for k in prm if k not in self._names}, "theta": self._names,
-                   "missing": sorted(prm.missing), "version": prm.version, "side": self.model.side,
+        payload = {**structure_of(self.model, self._names),  # (the values of the parameters not at run time...)
                    "axle": self.axle, "rim": self.rim, "turn_slip": self.turn_slip, "window": self.window,
-                   "road_camber": self._road_camber,
-                   "substeps": self.substeps,
+                   "road_camber": self._road_camber, "substeps": self.substeps,
                    "lever": (self.constants.lever_x, self.constants.lever_y), "kind": kind,
                    "passes": (CONTACT_PASSES, WARM_PASSES), "cflags": COMPILER_FLAGS,
                    "equations": _SOURCE_HASH, "casadi": ca.__version__}
