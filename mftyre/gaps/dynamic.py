@@ -100,6 +100,9 @@ class Chain:
     order: int = 4
     gain: dict = field(default_factory=dict)
     drift: dict = field(default_factory=dict)
+    #: channel -> the least-squares gain where it lay beyond 1 +- :data:`GAIN_RANGE` and the gain was held at the
+    #: bound (said in the report: the rest of the difference is left to the model)
+    held: dict = field(default_factory=dict)
 
     def dynamics(self, y, dt):
         """The filter and the delay (no calibration)."""
@@ -122,8 +125,8 @@ class Chain:
 def calibration(filtered: list) -> dict:
     """dict(gain=, drift=) per channel from ``filtered`` ((run, channel, filtered and delayed model)):
     measured = gain f + drift (t - t0) in least squares; a gain beyond 1 +- :data:`GAIN_RANGE` is held at the bound
-    and the drift refitted."""
-    out = dict(gain={}, drift={})
+    and the drift refitted (``held``: channel -> the gain least squares gave there)."""
+    out = dict(gain={}, drift={}, held={})
     for c in sorted({c for _, c, _ in filtered}):
         keys = [k for k in filtered if k[1] == c]
         f = np.concatenate([k[2] for k in keys])
@@ -135,10 +138,33 @@ def calibration(filtered: list) -> dict:
         a = np.column_stack([f, t])
         coef = np.linalg.lstsq(a, y, rcond=None)[0]
         if not abs(coef[0] - 1.0) <= GAIN_RANGE:
+            out["held"][c] = float(coef[0])
             g = float(np.clip(coef[0], 1.0 - GAIN_RANGE, 1.0 + GAIN_RANGE)) if np.isfinite(coef[0]) else 1.0
             coef = np.r_[g, np.linalg.lstsq(a[:, 1:], y - g * f, rcond=None)[0]]
         out["gain"][c], out["drift"][c] = (float(v) for v in coef)
     return out
+
+
+#: Gains of a channel against the model beyond which it is no load cell's calibration but a wrong unit, axis,
+#: channel or tyre file (:func:`check_scales`): an error, not a search.
+PLAUSIBLE_GAIN = (0.5, 2.0)
+
+
+def check_scales(chain) -> None:
+    """:class:`DataError` where a channel's calibration in the aligned ``chain`` (its least-squares gain over the
+    runs, :func:`calibration`, before it is held at 1 +- :data:`GAIN_RANGE`) lies outside :data:`PLAUSIBLE_GAIN`:
+    a negative gain (the other axis system: ``--axes``), about 4.45 (lbf read as N: ``--units``), 0 (a dead or
+    unconnected channel) are no tyre's dynamics, and the search would fit them as such. Pooled over the runs as the
+    calibration is (one run's gain against the given model, its drift free, came out 0.2-0.3 on good runs of the
+    benchmark's controls), so one bad run among many good ones is not caught here."""
+    bad = {c: g for c, g in chain.held.items() if not PLAUSIBLE_GAIN[0] <= g <= PLAUSIBLE_GAIN[1]}
+    if bad:
+        raise DataError("measured channels are not the model's outputs at any load cell's calibration (gain "
+                        f"{PLAUSIBLE_GAIN[0]:g}-{PLAUSIBLE_GAIN[1]:g} expected): "
+                        + "; ".join(f"{c} is {g:.3g} x the model's" for c, g in bad.items())
+                        + ". A negative gain: the file's axes (give --axes SAE for SAE axes); about 4.45: a force in "
+                          "lbf (--units FX=lbf); 0: a dead or unconnected channel (drop the column); else another "
+                          "tyre's file or the channel mapped to the wrong column (--columns)")
 
 
 def cutoffs_below_nyquist(runs, grid=CUTOFFS) -> tuple:
@@ -288,8 +314,9 @@ def noise_from_data(runs, pred, chain) -> dict:
         for c, y in r.measured.items():
             model_y = chain(pred[r.name][c], r, c)
             q = _quiet(chain.dynamics(pred[r.name][c], r.dt), r.dt)  # the tyre's event, not the cell's drift
-            if q >= 30:  # measured less the model (any slow settling), less the mean (a static model error)
-                e = np.asarray(y[:q], float) - model_y[:q]
+            e = np.asarray(y[:q], float) - model_y[:q]
+            e = e[~np.isnan(y[:q])]  # (a sample missing: left out)
+            if e.size >= 30:  # measured less the model (any slow settling), less the mean (a static model error)
                 parts.setdefault(c, []).append(e - np.mean(e))
     out = {}
     for c in {c for r in runs for c in r.measured}:
@@ -298,8 +325,14 @@ def noise_from_data(runs, pred, chain) -> dict:
             raise DataError(f"channel {c}: no run has a quiet lead-in of 30 samples before the event, so the "
                             f"measurement noise cannot be estimated; start the runs earlier")
         e = np.concatenate(segs)
-        out[c] = dict(sigma=float(np.sqrt(np.mean(e**2))), tau=float(np.median([_tau(s) for s in segs])),
-                      samples=int(e.size), runs=len(segs))
+        sigma = float(np.sqrt(np.mean(e**2)))
+        if not sigma > 1e-12 * max(float(np.nanmax(np.abs(np.concatenate([r.measured[c] for r in runs
+                                                                           if c in r.measured])))), 1e-300):
+            raise DataError(f"channel {c}: no noise in the quiet lead-ins (the measured value follows the model to "
+                            f"the last digit or holds still): no sensor measures so; a held, dead or computed "
+                            f"channel? Drop the column or give the raw measurement")
+        out[c] = dict(sigma=sigma, tau=float(np.median([_tau(s) for s in segs])), samples=int(e.size),
+                      runs=len(segs))
     return out
 
 
@@ -327,8 +360,12 @@ class _Problem:
         self.runs, self.chain, self.noise = runs, chain, noise
 
     def weighted(self, run, channel, pred):
-        n = self.noise[channel]
-        return (self.chain(pred, run, channel) - run.measured[channel]) / (n["sigma"] * math.sqrt(n["tau"]))
+        """The noise-weighted residual of ``channel`` of ``run``; 0 at the samples the run lacks (a measured value
+        missing: up to 10 % of a channel, :func:`mftyre.gaps.dynamic_runs.read_runs`), so that every sum, fit and
+        finite difference leaves them out (a model's non-finite output stays non-finite)."""
+        n, measured = self.noise[channel], run.measured[channel]
+        r = (self.chain(pred, run, channel) - measured) / (n["sigma"] * math.sqrt(n["tau"]))
+        return np.where(np.isnan(measured), 0.0, r)
 
     def residuals(self, pred, names=None) -> dict:
         """(run, channel) -> weighted residual array."""
@@ -336,7 +373,10 @@ class _Problem:
                 if names is None or r.name in names for c in r.measured}
 
     def n_eff(self, names) -> float:
-        return sum(r.t.size / self.noise[c]["tau"] for r in self.runs if r.name in names for c in r.measured)
+        """The independent samples of the runs ``names``: the measured samples over each channel's noise
+        correlation time."""
+        return sum(np.count_nonzero(~np.isnan(v)) / self.noise[c]["tau"] for r in self.runs if r.name in names
+                   for c, v in r.measured.items())
 
 
 @dataclass(frozen=True)
@@ -406,7 +446,10 @@ class DynamicGapReport:
              f"Measurement chain fitted with the final model: delay {1e3 * self.chain.delay:.2f} ms, anti-alias "
              f"filter {'none' if self.chain.cutoff is None else f'{self.chain.cutoff:.4g} Hz ({self.chain.order}-pole Butterworth)'}; "
              "calibration " + ", ".join(f"{c} gain {g:.4f} drift {self.chain.drift[c]:.3g}/s"
-                                        for c, g in self.chain.gain.items()) + ".",
+                                        for c, g in self.chain.gain.items()) + "."
+             + "".join(f" The {c} gain is held at its bound (1 +- {GAIN_RANGE:g}): least squares gave {g:.4g}, more "
+                       f"than a load cell's calibration error, so the rest is left to the model."
+                       for c, g in self.chain.held.items()),
              "", "## Noise (quiet lead-ins)", "", "| channel | sigma | tau [samples] | samples |", "|---|---|---|---|"]
         L += [f"| {c} | {n['sigma']:.3g} | {n['tau']:.2f} | {n['samples']} |" for c, n in self.noise.items()]
         L += ["", "## Held-out error (RMS) before -> after, noise floor", "", "| channel | before | after | noise |",
@@ -755,6 +798,7 @@ def find_dynamic_gaps(data, model, *, holdout: float = 0.34, seed: int = 0, alph
     held = _holdout(runs, holdout, seed)
     train = {r.name for r in runs} - held
     ev = _Runs(runs, train, held, sim, model_given, pred0, alpha, refit_top, model_kind, say)
+    check_scales(ev.chain)
     say(f"aligned: delay {1e3 * ev.chain.delay:.2f} ms, filter {_cutoff_text(ev.chain)}; noise "
         + ", ".join(f"{c} {n['sigma']:.3g} (tau {n['tau']:.1f})" for c, n in ev.noise.items()))
     testable, untestable = testable_effects(runs, model_given, catalogue, model_kind)
@@ -1029,13 +1073,14 @@ def _cutoff_text(chain) -> str:
 
 
 def _rms(runs, pred, chain, names) -> dict:
-    """channel -> RMS of measured less the chain's image of the prediction ``pred`` over the runs ``names``."""
+    """channel -> RMS of measured less the chain's image of the prediction ``pred`` over the runs ``names`` (the
+    samples measured)."""
     out = {}
     for c in sorted({c for r in runs for c in r.measured}):
         m = [r for r in runs if r.name in names and c in r.measured]
         if m:
-            out[c] = float(np.sqrt(np.mean(np.concatenate([(chain(pred[r.name][c], r, c) - r.measured[c]) ** 2
-                                                           for r in m]))))
+            e = np.concatenate([chain(pred[r.name][c], r, c) - r.measured[c] for r in m])
+            out[c] = float(np.sqrt(np.mean(e[~np.isnan(np.concatenate([r.measured[c] for r in m]))] ** 2)))
     return out
 
 
@@ -1049,11 +1094,11 @@ def _gaps(runs, prob, pred, alpha) -> list:
     for r in runs:
         for c in r.measured:
             noise = prob.noise[c]
-            n_eff = r.t.size / noise["tau"]
+            n_eff = np.count_nonzero(~np.isnan(r.measured[c])) / noise["tau"]
             chi2 = _chi2(res, {(r.name, c)})
             p = float(stats.f.sf(chi2 / n_eff, n_eff, max(noise["samples"] / noise["tau"], 1.0)))
             if p < alpha:
-                rms = float(np.sqrt(np.mean((prob.chain(pred[r.name][c], r, c) - r.measured[c]) ** 2)))
+                rms = _rms([r], pred, prob.chain, {r.name})[c]
                 out.append(Finding(c, (r.kind,), chi2, int(round(n_eff)), p, 1.0 - n_eff / chi2, chi2 - n_eff,
                                    where=f"run {r.name}", rms=rms, sigma=noise["sigma"]))
     out.sort(key=lambda f: -f.excess)

@@ -46,7 +46,8 @@ def run_dynamic(args) -> int:
     print(rep.message)
     print(f"  measurement chain: delay {1e3 * rep.chain.delay:.2f} ms, anti-alias filter "
           f"{'none' if rep.chain.cutoff is None else f'{rep.chain.cutoff:.4g} Hz, order {rep.chain.order}'}; gain "
-          + ", ".join(f"{c} {g:.4f}" for c, g in rep.chain.gain.items()))
+          + ", ".join(f"{c} {g:.4f}" + (f" (held at the bound; least squares: {rep.chain.held[c]:.4g})"
+                                        if c in rep.chain.held else "") for c, g in rep.chain.gain.items()))
     for f in rep.findings[:5]:
         print(f"  finding: {f['run']} {f['channel']} {f['feature']}: measured {f['measured']:.4g}, model "
               f"{f['model']:.4g} ({f['z']:+.1f} uncertainties)")

@@ -60,28 +60,29 @@ def features(y, t, x, kind: str, quiet: int, *, decay_from: int | None = None, s
     """Features of signal ``y`` over time ``t`` and axle travel ``x``; ``quiet``: samples before the event;
     ``decay_from``: first sample of the free decay (cleat runs; None: none); ``sigma``: the noise (the response
     length counts departures beyond 4 sigma; frequency and damping only from a decay 10 sigma high, with their
-    standard errors ``frequency_se``, ``damping_se``)."""
+    standard errors ``frequency_se``, ``damping_se``). Samples missing in ``y`` (NaN) are left out; the lag and
+    build-up only where the step's change is 10 sigma high (below, noise decides where 63 % of it is reached)."""
     y = np.asarray(y, float)
     dt = float(t[1] - t[0])
     q = max(quiet, 3)
-    level = float(np.mean(y[:q]))
+    level = float(np.nanmean(y[:q]))
     dev = y - level
-    out = dict(level=level, peak=float(y[np.argmax(np.abs(dev))]), peak_to_peak=float(np.ptp(y[q:]) if y.size > q
-                                                                                      else math.nan))
-    big = np.flatnonzero(np.abs(dev) > max(0.1 * np.max(np.abs(dev)), 4 * sigma))
+    out = dict(level=level, peak=float(y[np.nanargmax(np.abs(dev))]),
+               peak_to_peak=float(np.nanmax(y[q:]) - np.nanmin(y[q:])) if y.size > q else math.nan)
+    big = np.flatnonzero(np.abs(dev) > max(0.1 * np.nanmax(np.abs(dev)), 4 * sigma))
     out["response_length"] = float(x[big[-1]] - x[big[0]]) if big.size > 1 else math.nan
     out["lag"] = out["build_up"] = math.nan
     if kind in ("steer", "brake"):
-        final = float(np.mean(y[-max(10, y.size // 10):]))
+        final = float(np.nanmean(y[-max(10, y.size // 10):]))
         change = final - level
         after = np.flatnonzero(np.sign(change) * (y[q:] - level) >= 0.632 * abs(change))
-        if after.size and abs(change) > 0:
+        if after.size and abs(change) > 10 * sigma:
             out["lag"] = 1e3 * dt * float(after[0])
             out["build_up"] = float(x[q + after[0]] - x[q])
     out["frequency"] = out["damping"] = out["frequency_se"] = out["damping_se"] = math.nan
     if decay_from is not None and y.size - decay_from > 30:
         tail = y[decay_from:decay_from + int(0.15 / dt)]
-        if np.ptp(tail) > 10 * sigma:
+        if np.all(np.isfinite(tail)) and np.ptp(tail) > 10 * sigma:
             f, z, fe, ze = _decay(tail, dt)
             if fe < 0.2 * f and ze < 0.5:
                 out.update(frequency=f, damping=z, frequency_se=fe, damping_se=ze)
