@@ -65,12 +65,12 @@ def test_samples_missing_in_a_channel_are_left_out_not_fitted(mf52, hidden_ptx1)
     assert rep.error_after["FX"] < 1.3 * rep.noise_floor["FX"]
 
 
-@pytest.mark.parametrize("change, what", [(lambda v: -v, "axes"), (lambda v: 4.448 * v, "lbf"),
-                                          (lambda v: 0.0 * v, "dead")], ids=["sign", "lbf", "dead"])
+@pytest.mark.parametrize("change, what", [(lambda v: -v, "--axes SAE"), (lambda v: v / 4.4482216, "--units FX=lbf"),
+                                          (lambda v: 0.0 * v, "--drop FX")], ids=["sign", "lbf", "dead"])
 def test_a_channel_in_other_axes_units_or_dead_is_refused_naming_it(mf52, hidden_ptx1, change, what):
     """FX of the braking runs negated (SAE axes read as ISO-W), in lbf read as N, or dead: the chain's calibration
-    (its least-squares gain) is -1, 4.45 or 0 x the model's: an error naming the channel and the fixes, before
-    any search (the gain used to be held at 1 +- 0.05 in silence and the search fitted the rest)."""
+    (its least-squares gain) is -1, 0.22 or 0 x the model's: an error naming the channel and the option that mends
+    it, before any search (the gain used to be held at 1 +- 0.05 in silence and the search fitted the rest)."""
     bad = _with(hidden_ptx1, "brake", "FX", change)
     with pytest.raises(DataError, match=r"FX is -?[0-9.e-]+ x the model's") as err:
         find_dynamic_gaps(bad, mf52, model_kind="relaxed")
@@ -114,3 +114,23 @@ def test_the_lag_of_a_step_below_ten_sigma_is_not_a_feature():
         assert np.isfinite(lag) == found
         if found:
             assert lag == pytest.approx(20.0, abs=4.0)
+
+
+def test_the_command_line_names_the_option_and_the_option_mends_it(mf52, hidden_ptx1, tmp_path, capsys):
+    """FX of the braking runs in lbf: refused with ``--units FX=lbf`` named, which then reads them; a dead FX:
+    ``--drop FX`` named, which leaves it out (``--drop`` of an input is refused: the inputs drive the model)."""
+    from mftyre.cli import main
+    from mftyre.gaps.dynamic_runs import write_runs
+
+    tir = str(MFEVAL_DIR / "MagicFormula52_Parameters.tir")
+    for name, change, fix in (("lbf", lambda v: v / 4.4482216152605, ["--units", "FX=lbf"]),
+                              ("dead", lambda v: 0.0 * v, ["--drop", "FX"])):
+        path = write_runs(_with(hidden_ptx1, "brake", "FX", change), tmp_path / f"{name}.csv")
+        args = ["gaps", "--dynamic", str(path), "--model", tir, "--model-kind", "relaxed", "--max-effects", "0",
+                "--quiet"]
+        assert main(args) == 1
+        assert " ".join(fix) in capsys.readouterr().err
+        assert main(args + fix) == 0
+        assert "nothing added" in capsys.readouterr().out
+    assert main(args + ["--drop", "VX"]) == 1
+    assert "cannot drop VX" in capsys.readouterr().err

@@ -153,8 +153,9 @@ PLAUSIBLE_GAIN = (0.5, 2.0)
 def check_scales(chain) -> None:
     """:class:`DataError` where a channel's calibration in the aligned ``chain`` (its least-squares gain over the
     runs, :func:`calibration`, before it is held at 1 +- :data:`GAIN_RANGE`) lies outside :data:`PLAUSIBLE_GAIN`:
-    a negative gain (the other axis system: ``--axes``), about 4.45 (lbf read as N: ``--units``), 0 (a dead or
-    unconnected channel) are no tyre's dynamics, and the search would fit them as such. Pooled over the runs as the
+    a negative gain (the other axis system: ``--axes``), about 0.22, 0.10 or 0.001 (lbf, kgf or kN read as N:
+    ``--units``), about 0 (a dead or unconnected channel: ``--drop``) are no tyre's dynamics, and the search would fit
+    them as such. Pooled over the runs as the
     calibration is (one run's gain against the given model, its drift free, came out 0.2-0.3 on good runs of the
     benchmark's controls), so one bad run among many good ones is not caught here."""
     bad = {c: g for c, g in chain.held.items() if not PLAUSIBLE_GAIN[0] <= g <= PLAUSIBLE_GAIN[1]}
@@ -162,9 +163,10 @@ def check_scales(chain) -> None:
         raise DataError("measured channels are not the model's outputs at any load cell's calibration (gain "
                         f"{PLAUSIBLE_GAIN[0]:g}-{PLAUSIBLE_GAIN[1]:g} expected): "
                         + "; ".join(f"{c} is {g:.3g} x the model's" for c, g in bad.items())
-                        + ". A negative gain: the file's axes (give --axes SAE for SAE axes); about 4.45: a force in "
-                          "lbf (--units FX=lbf); 0: a dead or unconnected channel (drop the column); else another "
-                          "tyre's file or the channel mapped to the wrong column (--columns)")
+                        + ". A negative gain: the file's axes (--axes SAE for SAE axes); about 0.22, 0.10 or 0.001: "
+                          "forces in lbf, kgf or kN read as N (e.g. --units FX=lbf); about 0: a dead or unconnected "
+                          "channel (--drop FX); else another tyre's file or a channel read from the wrong column "
+                          "(--columns)")
 
 
 def cutoffs_below_nyquist(runs, grid=CUTOFFS) -> tuple:

@@ -1,7 +1,8 @@
 """``mftyre gaps --dynamic RUNS.csv --model BASE.tir [-o improved.tir] [--report DIR] [--json FILE]``: the handler
 of the dynamic gap finder (:func:`mftyre.gaps.dynamic.find_dynamic_gaps`); options shared with ``mftyre gaps``
 (``--holdout``, ``--seed``, ``--alpha``, ``--max-effects``, ``--overwrite``, ``--quiet``) and the reading options of
-every data file (``--columns``, ``--units``, ``--axes``, ``--no-check``: :func:`mftyre.data.read_time_histories`);
+every data file (``--columns``, ``--units``, ``--axes``, ``--no-check``: :func:`mftyre.data.read_time_histories`;
+``--drop`` a measured channel);
 ``--model-kind``; ``--workers``, ``--scheduler`` (:mod:`mftyre.runner`: the SWIFT simulations in parallel)."""
 from __future__ import annotations
 
@@ -30,7 +31,7 @@ def run_dynamic(args) -> int:
     try:
         with speaking_cli():
             runs = read_runs(args.dynamic, columns=args.columns, units=args.units, axes=args.axes,
-                             check=not args.no_check)
+                             check=not args.no_check, drop=args.drop)
         with runner_from_args(args) as runner:
             rep = find_dynamic_gaps(runs, args.model, holdout=args.holdout, seed=args.seed,
                                     alpha=args.alpha, max_effects=args.max_effects, model_kind=args.model_kind,

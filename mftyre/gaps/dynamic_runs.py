@@ -202,20 +202,31 @@ def runs_from_frame(frame: pd.DataFrame, source: str = "", name: str | None = No
 
 
 def read_runs(path, *, columns: dict | None = None, units: dict | None = None, axes: str | None = None,
-              check: bool = True) -> list:
+              check: bool = True, drop=()) -> list:
     """Runs from one CSV file (with a RUN column) or a folder of CSV files (one run each, named by the file), read
     by the one reader of data files (:func:`mftyre.data.read_time_histories`: ``columns`` file column -> channel,
-    ``units`` channel -> unit, ``axes`` the file's axis system, ``check`` plausibility)."""
+    ``units`` channel -> unit, ``axes`` the file's axis system, ``check`` plausibility); ``drop``: measured
+    channels (:data:`OUTPUT_CHANNELS`) to leave out, e.g. a dead load cell (the inputs drive the model: none of
+    them can be left out)."""
     from ..data import read_time_histories
 
+    inputs = [c for c in drop if c not in OUTPUT_CHANNELS]
+    if inputs:
+        raise DataError(f"{path}: cannot drop {', '.join(inputs)}: only measured outputs "
+                        f"({', '.join(OUTPUT_CHANNELS)}) can be left out of dynamic runs; the inputs drive the model")
     options = dict(columns=columns, units=units, axes=axes or "ISO-W", check=check)
+
+    def frame(f):
+        table = read_time_histories(f, **options)[0]
+        return table.drop(columns=[c for c in drop if c in table.columns])
+
     path = Path(path)
     if path.is_dir():
         files = sorted(f for f in path.glob("*.csv") if not f.name.startswith("."))
         if not files:
             raise DataError(f"{path}: no .csv files in the folder")
-        return [r for f in files for r in runs_from_frame(read_time_histories(f, **options)[0], str(f), f.stem)]
-    return runs_from_frame(read_time_histories(path, **options)[0], str(path))
+        return [r for f in files for r in runs_from_frame(frame(f), str(f), f.stem)]
+    return runs_from_frame(frame(path), str(path))
 
 
 def runs_frame(runs) -> pd.DataFrame:
